@@ -1,0 +1,234 @@
+"""The part (tube) in Drake: its compliant hydroelastic top ring, and the tool/ring contact law it yields.
+
+The normal contact force of the paper's eq. (4) (R7: c2*delta_dot + c1*delta + c0)
+is not modelled by hand: it emerges from Drake's hydroelastic contact between the
+rigid cutter and this compliant ring (DESIGN.md §5, §8). `measure_normal_force`
+measures that force as a function of the radial depth, for calibration and tests.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pydrake.geometry import (
+    AddCompliantHydroelasticProperties, AddContactMaterial, AddRigidHydroelasticProperties, Cylinder,
+    GeometryInstance, MakePhongIllustrationProperties, Mesh, ProximityProperties)
+from pydrake.math import RigidTransform
+from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, ContactModel, CoulombFriction
+from pydrake.systems.framework import DiagramBuilder
+
+from deburr_drake.models import POINT_MASS_URL, make_parser
+from deburr_drake.tube_mesh import ring_mesh_path, ring_surface_path
+
+__all__ = [
+    "CALIBRATED_HYDROELASTIC_MODULUS", "CALIBRATED_FORCE_AT_HALF_MM",
+    "register_compliant_ring", "register_cutter", "add_cartesian_tool", "RingContactProbe", "measure_normal_force",
+    "local_stiffness", "power_law_exponent", "calibrate_hydroelastic_modulus", "force_ripple"]
+
+# Calibration by scripts/contact_stiffness.py (n_theta = 720, n_radial = n_z = 2, the
+# default geometry of measure_normal_force): with this modulus the local stiffness
+# dF/d(delta) at delta = 0.5 mm is about 10 N/mm; the force there is as stated.
+CALIBRATED_HYDROELASTIC_MODULUS = 4.5e6   # Pa
+CALIBRATED_FORCE_AT_HALF_MM = 3.72         # N
+
+
+def _check_positive(name, value):
+    if not (isinstance(value, (int, float, np.floating, np.integer)) and math.isfinite(value) and value > 0):
+        raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+
+
+def register_compliant_ring(plant, *, inner_radius, outer_radius, z_bottom, z_top, hydroelastic_modulus,
+                            hunt_crossley_dissipation, center_xy=(0.0, 0.0), n_theta=720, n_radial=2, n_z=2,
+                            name="tube_edge"):
+    """Register the ring inner_radius <= r <= outer_radius, z_bottom <= z <= z_top (m) about the
+    vertical axis through center_xy (m, world) on the world body.
+
+    Collision: the tetrahedral mesh of `tube_mesh.ring_mesh_path` (an n_theta-gon annulus)
+    as a compliant hydroelastic `Mesh` with modulus E = hydroelastic_modulus (Pa),
+    Hunt-Crossley dissipation (s/m) and zero friction (tool-part friction is 0: the
+    tangential force is the cutting process's, DESIGN.md §8). Visual: the ring's
+    surface as .obj (`tube_mesh.ring_surface_path`; Meshcat does not draw .vtk),
+    illustration role only. Call before plant.Finalize(). Returns the collision GeometryId.
+    """
+    if plant.is_finalized():
+        raise ValueError("plant must not be finalized yet (register the ring before Finalize())")
+    _check_positive("hydroelastic_modulus", hydroelastic_modulus)
+    if not (isinstance(hunt_crossley_dissipation, (int, float, np.floating, np.integer))
+            and math.isfinite(hunt_crossley_dissipation) and hunt_crossley_dissipation >= 0):
+        raise ValueError(f"hunt_crossley_dissipation must be a finite number >= 0, got {hunt_crossley_dissipation!r}")
+    path = ring_mesh_path(inner_radius, outer_radius, z_bottom, z_top, n_theta, n_radial, n_z)
+    mesh = Mesh(str(path))
+    props = ProximityProperties()
+    # The resolution hint is ignored for a Mesh (its tetrahedra are used as they are).
+    AddCompliantHydroelasticProperties(
+        resolution_hint=outer_radius - inner_radius, hydroelastic_modulus=hydroelastic_modulus,
+        properties=props)
+    AddContactMaterial(dissipation=hunt_crossley_dissipation, friction=CoulombFriction(0.0, 0.0),
+                       properties=props)
+    world = plant.world_body()
+    X_WG = RigidTransform([float(center_xy[0]), float(center_xy[1]), 0.0])
+    geometry_id = plant.RegisterCollisionGeometry(world, X_WG, mesh, name, props)
+    surface = ring_surface_path(inner_radius, outer_radius, z_bottom, z_top, n_theta)
+    visual = GeometryInstance(X_WG, Mesh(str(surface)), name + "_visual")
+    visual.set_illustration_properties(MakePhongIllustrationProperties(np.array([0.7, 0.6, 0.4, 1.0])))
+    plant.RegisterVisualGeometry(world, visual)
+    return geometry_id
+
+
+def register_cutter(plant, body, *, cutter_radius=0.003, cutter_length=0.020, resolution_hint=2e-4):
+    """The cylindrical cutter on `body`, tip at the body origin, axis +z (m): rigid hydroelastic,
+    frictionless (the tangential force is the cutting process's, DESIGN.md §8), with a visual.
+    The default resolution hint gives ceil(2 pi r / hint) = 95 side facets for r = 3 mm.
+    Call before Finalize. Returns the collision GeometryId."""
+    _check_positive("cutter_radius", cutter_radius)
+    _check_positive("cutter_length", cutter_length)
+    X_BG = RigidTransform([0.0, 0.0, cutter_length / 2])
+    shape = Cylinder(cutter_radius, cutter_length)
+    props = ProximityProperties()
+    AddRigidHydroelasticProperties(resolution_hint, props)
+    AddContactMaterial(friction=CoulombFriction(0.0, 0.0), properties=props)
+    geometry_id = plant.RegisterCollisionGeometry(body, X_BG, shape, "cutter", props)
+    plant.RegisterVisualGeometry(body, X_BG, shape, "cutter_visual", np.array([0.8, 0.8, 0.85, 1.0]))
+    return geometry_id
+
+
+def add_cartesian_tool(plant, *, cutter_radius=0.003, cutter_length=0.020):
+    """Add models/cartesian_tool.sdf (joints x, y, z, weld ft_sensor; body `tool` with origin at
+    the tool tip) and its cutter. Returns the model instance."""
+    (instance,) = make_parser(plant).AddModels(url=POINT_MASS_URL)
+    register_cutter(plant, plant.GetBodyByName("tool", instance), cutter_radius=cutter_radius,
+                    cutter_length=cutter_length)
+    return instance
+
+
+class RingContactProbe:
+    """A continuous plant with the cartesian tool and a compliant ring, to evaluate contact forces statically.
+
+    Contact model hydroelastic_with_fallback, time_step 0. The ring is
+    inner_radius <= r <= inner_radius + wall, z_top - layer_height <= z <= z_top.
+    """
+
+    def __init__(self, *, inner_radius=0.030, wall=0.005, layer_height=0.006, z_top=0.050,
+                 hydroelastic_modulus, hunt_crossley_dissipation=0.0, n_theta=720, n_radial=2, n_z=2):
+        for name, value in (("inner_radius", inner_radius), ("wall", wall), ("layer_height", layer_height)):
+            _check_positive(name, value)
+        builder = DiagramBuilder()
+        plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
+        plant.set_contact_model(ContactModel.kHydroelasticWithFallback)
+        self._instance = add_cartesian_tool(plant)
+        self.ring_id = register_compliant_ring(
+            plant, inner_radius=inner_radius, outer_radius=inner_radius + wall, z_bottom=z_top - layer_height,
+            z_top=z_top, hydroelastic_modulus=hydroelastic_modulus,
+            hunt_crossley_dissipation=hunt_crossley_dissipation, n_theta=n_theta, n_radial=n_radial, n_z=n_z)
+        plant.Finalize()
+        self.plant = plant
+        self.diagram = builder.Build()
+        self.context = self.diagram.CreateDefaultContext()
+        self.plant_context = plant.GetMyMutableContextFromRoot(self.context)
+        self.inner_radius, self.z_top = inner_radius, z_top
+        self.cutter_id = plant.GetCollisionGeometriesForBody(plant.GetBodyByName("tool", self._instance))[0]
+
+    def set_tip_position(self, p_WT):
+        """Place the tool tip at p_WT (m, world frame); joints x, y, z are the tip's coordinates."""
+        self.plant.SetPositions(self.plant_context, self._instance, np.asarray(p_WT, dtype=float))
+
+    def contact_force_on_tool(self, p_WT):
+        """Sum of the hydroelastic (and fallback point) contact forces ON the tool (N, world frame)."""
+        self.set_tip_position(p_WT)
+        results = self.plant.get_contact_results_output_port().Eval(self.plant_context)
+        f = np.zeros(3)
+        for i in range(results.num_hydroelastic_contacts()):
+            info = results.hydroelastic_contact_info(i)
+            # F_Ac_W acts on the body of geometry M of the contact surface.
+            sign = 1.0 if info.contact_surface().id_M() == self.cutter_id else -1.0
+            f += sign * info.F_Ac_W().translational()
+        tool = self.plant.GetBodyByName("tool", self._instance).index()
+        for i in range(results.num_point_pair_contacts()):
+            info = results.point_pair_contact_info(i)
+            sign = 1.0 if info.bodyB_index() == tool else -1.0  # contact_force(): on B
+            f += sign * info.contact_force()
+        return f
+
+    def radial_force(self, depth, angle=0.0, *, cutter_radius=0.003, engagement=0.002):
+        """Radial component magnitude (N) of the contact force on the tool.
+
+        The cutter axis is at rho = inner_radius - cutter_radius + depth, azimuth `angle`
+        (rad), tip at z = z_top - engagement: the cutter's side presses radially outward
+        into the wall by `depth` (m) and extends above the ring's top.
+        """
+        rho = self.inner_radius - cutter_radius + depth
+        e_r = np.array([math.cos(angle), math.sin(angle), 0.0])
+        f = self.contact_force_on_tool(rho * e_r + np.array([0.0, 0.0, self.z_top - engagement]))
+        return abs(float(f @ e_r))
+
+
+def measure_normal_force(depths, *, inner_radius=0.030, wall=0.005, layer_height=0.006, engagement=0.002,
+                         hydroelastic_modulus, cutter_radius=0.003, angle=0.0, n_theta=720):
+    """Normal (radial) contact force (N) on the cartesian tool's cutter for each radial depth (m).
+
+    Static evaluation of Drake's hydroelastic contact (continuous plant, contact model
+    hydroelastic_with_fallback) between the rigid cutter (radius cutter_radius) and the
+    compliant ring of modulus hydroelastic_modulus (Pa); the contact part of the
+    paper's eq. (4) at delta_dot = 0. Depth <= -0 gives zero force (out of contact).
+    """
+    _check_positive("engagement", engagement)
+    _check_positive("cutter_radius", cutter_radius)
+    depths = np.atleast_1d(np.asarray(depths, dtype=float))
+    if not np.all(np.isfinite(depths)):
+        raise ValueError("depths must be finite")
+    probe = RingContactProbe(inner_radius=inner_radius, wall=wall, layer_height=layer_height,
+                             hydroelastic_modulus=hydroelastic_modulus, n_theta=n_theta)
+    return np.array([probe.radial_force(d, angle, cutter_radius=cutter_radius, engagement=engagement)
+                     for d in depths])
+
+
+def local_stiffness(depths, *, step=2e-5, **kwargs):
+    """Local stiffness dF/d(delta) (N/m) at each depth (m), central differences of +-step (m).
+
+    kwargs go to measure_normal_force (hydroelastic_modulus is required).
+    """
+    _check_positive("step", step)
+    depths = np.atleast_1d(np.asarray(depths, dtype=float))
+    f = measure_normal_force(np.concatenate([depths + step, depths - step]), **kwargs)
+    return (f[:len(depths)] - f[len(depths):]) / (2.0 * step)
+
+
+def power_law_exponent(depths, forces):
+    """Least-squares exponent n of F = a * delta**n over the given samples (all must be > 0)."""
+    depths, forces = np.asarray(depths, dtype=float), np.asarray(forces, dtype=float)
+    if np.any(depths <= 0) or np.any(forces <= 0):
+        raise ValueError("depths and forces must all be > 0 for a power-law fit")
+    return float(np.polyfit(np.log(depths), np.log(forces), 1)[0])
+
+
+def calibrate_hydroelastic_modulus(*, target_stiffness=1.0e4, depth=5.0e-4, reference_modulus=1.0e7,
+                                   significant_digits=2, **kwargs):
+    """Hydroelastic modulus E (Pa) giving dF/d(delta) = target_stiffness (N/m) at `depth` (m).
+
+    Soft-rigid hydroelastic force is linear in E (pressure p = E * e, geometry fixed),
+    so one measurement at reference_modulus suffices; E is rounded to
+    significant_digits. kwargs go to measure_normal_force.
+    """
+    _check_positive("target_stiffness", target_stiffness)
+    _check_positive("depth", depth)
+    k_ref = float(local_stiffness([depth], hydroelastic_modulus=reference_modulus, **kwargs)[0])
+    if not k_ref > 0:
+        raise ValueError(f"no contact stiffness at depth={depth!r} m: the tool does not touch the ring there")
+    E = reference_modulus * target_stiffness / k_ref
+    return float(f"{E:.{significant_digits - 1}e}")
+
+
+def force_ripple(depth, *, n_samples=25, n_theta=720, **kwargs):
+    """Force ripple (max - min) / mean over one mesh segment (2 pi / n_theta rad) around the ring at `depth` (m).
+
+    Also returns the forces (N) at the n_samples angles in [0, 2 pi / n_theta]. kwargs
+    (hydroelastic_modulus required; inner_radius, wall, ...) go to RingContactProbe.
+    """
+    if isinstance(n_samples, bool) or not isinstance(n_samples, (int, np.integer)) or n_samples < 2:
+        raise ValueError(f"n_samples must be an integer >= 2, got {n_samples!r}")
+    cutter = {k: kwargs.pop(k) for k in ("cutter_radius", "engagement") if k in kwargs}
+    probe = RingContactProbe(n_theta=n_theta, **kwargs)
+    angles = np.linspace(0.0, 2.0 * math.pi / n_theta, n_samples)
+    f = np.array([probe.radial_force(depth, a, **cutter) for a in angles])
+    return float((f.max() - f.min()) / f.mean()), f
