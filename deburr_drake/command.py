@@ -1,0 +1,210 @@
+"""Outer loop: the feedrate-law command generator and the first-order hold
+between it and the inner loop (paper Section III.A, eq. (5), R2, R5, R6)."""
+
+from __future__ import annotations
+
+import numpy as np
+from pydrake.systems.framework import BasicVector, LeafSystem
+
+from deburr_drake.config import CommandConfig, ConfigError, TaskConfig
+from deburr_drake.geometry import Contour
+from deburr_drake.layout import CHAMFER_STATE, COMMAND_STATE
+
+__all__ = ["CommandGenerator", "FirstOrderHold", "feedrate"]
+
+
+def feedrate(tangential_speed: float, chamfering_force: float, *,
+             desired_force: float, threshold_force: float,
+             force_offset: float, default_feed: float) -> float:
+    """The feed speed v (m/s) of the outer-loop law before eq. (5):
+
+    v = |n2^T xdot_p| (||f_td|| - P'_th) / (||f_t|| - P'_th)
+        if ||f_t|| - P'_th > v_eps, else v0.
+    """
+    excess = chamfering_force - threshold_force
+    if excess > force_offset:
+        return abs(tangential_speed) * (desired_force - threshold_force) \
+            / excess
+    return default_feed
+
+
+class CommandGenerator(LeafSystem):
+    """Discrete outer-loop command generator, period T.
+
+    At t = kT it reads the chamfer state, computes the feed speed v with
+    :func:`feedrate` and outputs the point x_c(kT) that lies on the zero-depth
+    contour a distance v T ahead of the projection of x_p (R6: the command is
+    the paper's x_s, so (9) adds the depth only once).
+
+    .. pydrake_system::
+
+        name: CommandGenerator
+        input_ports:
+        - chamfer_state
+        output_ports:
+        - command
+        - feed
+
+    - ``chamfer_state`` (CHAMFER_STATE layout): x_p (m), xdot_p (m/s), n2
+      and ||f_t|| (N) are read.
+    - ``command`` (3, m): x_c(kT), world frame.
+    - ``feed`` (1, m/s): the commanded feed speed v.
+    - Discrete state (COMMAND_STATE layout): x_c (m), feed (m/s), arc
+      position of x_c (m, unwrapped, counts progress past one revolution).
+    """
+
+    def __init__(self, config: CommandConfig, task: TaskConfig,
+                 contour: Contour, initial_position):
+        super().__init__()
+        config.validate()
+        task.validate()
+        if task.desired_chamfering_force <= config.threshold_power_force:
+            raise ConfigError(
+                "task.desired_chamfering_force = "
+                f"{task.desired_chamfering_force!r} is invalid: allowed > "
+                f"command.threshold_power_force "
+                f"({config.threshold_power_force})")
+        self.set_name("command_generator")
+        self._config = config
+        self._task = task
+        self._contour = contour
+        self._period = config.period
+        start = contour.project(np.asarray(initial_position, float))
+        s0 = contour.arc_position(start)
+        self._state_index = self.DeclareDiscreteState(COMMAND_STATE.pack(
+            x_c=start, feed=config.default_feed, arc_position=s0))
+        self._chamfer_port = self.DeclareVectorInputPort(
+            "chamfer_state", CHAMFER_STATE.size)
+        self.DeclarePeriodicDiscreteUpdateEvent(
+            config.period, 0.0, self._update)
+        self.DeclareStateOutputPort("command_state", self._state_index)
+        self.DeclareVectorOutputPort(
+            "command", 3, self._calc_command,
+            prerequisites_of_calc={self.xd_ticket()})
+        self.DeclareVectorOutputPort(
+            "feed", 1, self._calc_feed,
+            prerequisites_of_calc={self.xd_ticket()})
+
+    @property
+    def period(self) -> float:
+        return self._period
+
+    @property
+    def contour(self) -> Contour:
+        return self._contour
+
+    def _update(self, context, discrete_state):
+        c = self._config
+        chamfer = self._chamfer_port.Eval(context)
+        x_p = CHAMFER_STATE.get(chamfer, "x_p")
+        xdot_p = CHAMFER_STATE.get(chamfer, "xdot_p")
+        n2 = CHAMFER_STATE.get(chamfer, "n2")
+        v = feedrate(
+            float(n2 @ xdot_p), CHAMFER_STATE.get(chamfer, "f_t"),
+            desired_force=self._task.desired_chamfering_force,
+            threshold_force=c.threshold_power_force,
+            force_offset=c.force_offset, default_feed=c.default_feed)
+        ds = v * self._period
+        x_c = self._contour.advance(x_p, ds)
+        s_previous = COMMAND_STATE.get(
+            context.get_discrete_state(self._state_index).get_value(),
+            "arc_position")
+        s_p = self._contour.unwrapped_arc_position(x_p, s_previous)
+        discrete_state.set_value(self._state_index, COMMAND_STATE.pack(
+            x_c=x_c, feed=v, arc_position=s_p + ds))
+
+    def _calc_command(self, context, output):
+        xd = context.get_discrete_state(self._state_index).get_value()
+        output.SetFromVector(COMMAND_STATE.get(xd, "x_c"))
+
+    def _calc_feed(self, context, output):
+        xd = context.get_discrete_state(self._state_index).get_value()
+        output.SetAtIndex(0, COMMAND_STATE.get(xd, "feed"))
+
+
+class FirstOrderHold(LeafSystem):
+    """Continuous ramp between the samples of a discrete command (eq. (5)).
+
+    ``variant="delayed_ramp"`` (default, R2): on [kT, (k+1)T)
+
+        x*(t) = x*(kT) + (x_c(kT) - x*(kT)) (t - kT) / T,
+
+    so x*((k+1)T) = x_c(kT): continuous, one period behind, settles on a
+    constant command. ``variant="paper_eq5"`` is (5) as printed,
+
+        x*(t) = x*(kT) + (x_c(kT) - x*(kT - T)) (t - kT) / T,
+
+    which does not settle (a unit step gives 0, 1, 2, 2, 1, 0, ...); it is
+    kept only to show that.
+
+    The input is the discrete output of a system updated at the same instants
+    (the command generator); the hold reads it through direct feedthrough, so
+    the ramp toward x_c(kT) starts at kT without an extra period of delay.
+
+    .. pydrake_system::
+
+        name: FirstOrderHold
+        input_ports:
+        - sampled
+        output_ports:
+        - position
+        - velocity
+
+    - ``sampled`` (n): x_c(kT), piecewise constant.
+    - ``position`` (n): x*(t). ``velocity`` (n): dx*/dt, piecewise constant.
+    - Discrete state: ramp start x*(kT) (n), x*(kT - T) (n), and kT (1).
+    """
+
+    VARIANTS = ("delayed_ramp", "paper_eq5")
+
+    def __init__(self, period: float, initial_value, *,
+                 variant: str = "delayed_ramp"):
+        super().__init__()
+        if not (np.isfinite(period) and period > 0):
+            raise ConfigError(f"period = {period!r} is invalid: allowed a "
+                              "finite number > 0")
+        if variant not in self.VARIANTS:
+            raise ConfigError(f"variant = {variant!r} is invalid: allowed "
+                              f"one of {self.VARIANTS}")
+        self.set_name("first_order_hold")
+        x0 = np.asarray(initial_value, float).ravel()
+        n = x0.size
+        self._n = n
+        self._period = period
+        self._paper = variant == "paper_eq5"
+        self._state_index = self.DeclareDiscreteState(
+            np.concatenate([x0, x0, [0.0]]))
+        self._input = self.DeclareVectorInputPort("sampled", n)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
+        deps = {self.time_ticket(), self.xd_ticket(),
+                self._input.ticket()}
+        self.DeclareVectorOutputPort("position", n, self._calc_position,
+                                     prerequisites_of_calc=deps)
+        self.DeclareVectorOutputPort(
+            "velocity", n, self._calc_velocity,
+            prerequisites_of_calc={self.xd_ticket(), self._input.ticket()})
+
+    def _unpack(self, context):
+        xd = context.get_discrete_state(self._state_index).get_value()
+        n = self._n
+        return xd[:n], xd[n:2 * n], xd[2 * n]
+
+    def _slope(self, context):
+        start, previous, _ = self._unpack(context)
+        origin = previous if self._paper else start
+        return (self._input.Eval(context) - origin) / self._period
+
+    def _update(self, context, discrete_state):
+        start, _, t_k = self._unpack(context)
+        t = context.get_time()
+        end = start + self._slope(context) * (t - t_k)
+        discrete_state.set_value(self._state_index,
+                                 np.concatenate([end, start, [t]]))
+
+    def _calc_position(self, context, output):
+        start, _, t_k = self._unpack(context)
+        output.SetFromVector(
+            start + self._slope(context) * (context.get_time() - t_k))
+
+    def _calc_velocity(self, context, output):
+        output.SetFromVector(self._slope(context))

@@ -1,0 +1,408 @@
+"""Typed configuration of deburr_drake: one dataclass per component, composed
+into a :class:`Scenario` and loaded from YAML with ``yaml_load_typed``.
+
+Every field is in SI units (m, N, s, rad); the comment on each field gives the
+unit. ``validate()`` on each class raises :class:`ConfigError` naming the field
+and the allowed range; nothing is clamped. :func:`load_scenario` validates the
+whole tree, so a loaded scenario is always usable.
+"""
+
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import List, Optional
+
+from pydrake.common.yaml import yaml_load_typed
+
+__all__ = [
+    "ConfigError",
+    "TubeConfig",
+    "ToolConfig",
+    "EdgeConfig",
+    "TaskConfig",
+    "CommandConfig",
+    "EstimatorConfig",
+    "FuzzyConfig",
+    "ControllerConfig",
+    "SensorConfig",
+    "ProcessConfig",
+    "SimulationConfig",
+    "Scenario",
+    "load_scenario",
+    "scenario_names",
+    "scenario_path",
+]
+
+
+class ConfigError(ValueError):
+    """A configuration value is invalid; the message names the field."""
+
+
+def _require(ok: bool, name: str, value, allowed: str):
+    if not ok:
+        raise ConfigError(f"{name} = {value!r} is invalid: allowed {allowed}")
+
+
+def _positive(owner: str, name: str, value: float):
+    _require(
+        isinstance(value, (int, float)) and math.isfinite(value) and value > 0,
+        f"{owner}.{name}", value, "a finite number > 0")
+
+
+def _non_negative(owner: str, name: str, value: float):
+    _require(
+        isinstance(value, (int, float)) and math.isfinite(value)
+        and value >= 0,
+        f"{owner}.{name}", value, "a finite number >= 0")
+
+
+def _vector(owner: str, name: str, value, size: int, check):
+    _require(len(value) == size, f"{owner}.{name}", value,
+             f"a list of {size} numbers")
+    for i, v in enumerate(value):
+        check(owner, f"{name}[{i}]", v)
+
+
+@dataclass
+class TubeConfig:
+    """The part: a tube whose inner top edge is chamfered. Only the edge
+    region (the top ``compliant_layer_height`` of the wall) is modelled, as a
+    compliant hydroelastic volume mesh."""
+
+    inner_radius: float = 0.030  # m
+    wall_thickness: float = 0.005  # m, radial thickness of the modelled wall
+    height: float = 0.050  # m, part spans 0 <= z <= height in its frame
+    position: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0])  # m, world, bottom centre
+    compliant_layer_height: float = 0.006  # m, top part of the wall modelled
+    hydroelastic_modulus: float = 4.5e6  # Pa, 10 N/mm at 0.5 mm
+    hunt_crossley_dissipation: float = 5.0  # s/m
+    mesh_segments: int = 720  # around the circumference
+    mesh_radial_cells: int = 2  # through the wall
+    mesh_height_cells: int = 2  # through the modelled layer
+
+    def validate(self):
+        o = "tube"
+        for name in ("inner_radius", "wall_thickness", "height",
+                     "compliant_layer_height", "hydroelastic_modulus"):
+            _positive(o, name, getattr(self, name))
+        _non_negative(o, "hunt_crossley_dissipation",
+                      self.hunt_crossley_dissipation)
+        _vector(o, "position", self.position, 3, _finite)
+        _require(self.compliant_layer_height <= self.height,
+                 "tube.compliant_layer_height", self.compliant_layer_height,
+                 f"<= tube.height ({self.height})")
+        _require(isinstance(self.mesh_segments, int)
+                 and self.mesh_segments >= 16,
+                 "tube.mesh_segments", self.mesh_segments, "an integer >= 16")
+        for name in ("mesh_radial_cells", "mesh_height_cells"):
+            v = getattr(self, name)
+            _require(isinstance(v, int) and v >= 2, f"tube.{name}", v,
+                     "an integer >= 2 (the mesh needs interior vertices)")
+
+
+def _finite(owner, name, value):
+    _require(isinstance(value, (int, float)) and math.isfinite(value),
+             f"{owner}.{name}", value, "a finite number")
+
+
+@dataclass
+class ToolConfig:
+    """The cylindrical burr cutter (vertical axis)."""
+
+    cutter_radius: float = 0.003  # m
+    cutter_length: float = 0.020  # m
+    engagement: float = 0.002  # m, cutter tip below the top edge
+
+    def validate(self):
+        for name in ("cutter_radius", "cutter_length", "engagement"):
+            _positive("tool", name, getattr(self, name))
+        _require(self.engagement < self.cutter_length, "tool.engagement",
+                 self.engagement,
+                 f"< tool.cutter_length ({self.cutter_length})")
+
+
+@dataclass
+class EdgeConfig:
+    """Where and which way the tool runs along the edge."""
+
+    start_angle: float = 0.0  # rad, polar angle of the contour start
+    direction: int = 1  # +1 counter-clockwise seen from +z, -1 clockwise
+
+    def validate(self):
+        _finite("edge", "start_angle", self.start_angle)
+        _require(self.direction in (1, -1), "edge.direction", self.direction,
+                 "1 or -1")
+
+
+@dataclass
+class TaskConfig:
+    """The deburring task of Section IV."""
+
+    desired_depth: float = 0.0005  # m, delta_d^* of (6)
+    desired_chamfering_force: float = 10.0  # N, ||f_td||
+
+    def validate(self):
+        _positive("task", "desired_depth", self.desired_depth)
+        _positive("task", "desired_chamfering_force",
+                  self.desired_chamfering_force)
+
+
+@dataclass
+class CommandConfig:
+    """Outer-loop command generator (feedrate law before (5))."""
+
+    period: float = 0.025  # s, T
+    default_feed: float = 0.001  # m/s, v0
+    force_offset: float = 0.5  # N, v_eps
+    threshold_power_force: float = 2.0  # N, P'_th as the controller knows it
+    min_tangential_speed: float = 1e-5  # m/s, below it n2 = contour tangent
+
+    def validate(self):
+        for name in ("period", "default_feed", "force_offset",
+                     "min_tangential_speed"):
+            _positive("command", name, getattr(self, name))
+        _non_negative("command", "threshold_power_force",
+                      self.threshold_power_force)
+
+
+@dataclass
+class EstimatorConfig:
+    """Contact-parameter estimator (13)-(18) with R3."""
+
+    initial_estimates: List[float] = field(
+        default_factory=lambda: [3.0, 4000.0, 20.0])  # N, N/m, N s/m
+    gains: List[float] = field(
+        default_factory=lambda: [20.0, 2.0e7, 0.0])  # per parameter
+    lower_bounds: List[float] = field(
+        default_factory=lambda: [0.1, 100.0, 0.0])  # eps_i: N, N/m, N s/m
+    contact_force_threshold: float = 0.2  # N, adapt only above it
+    adapt: bool = True
+
+    def validate(self):
+        o = "estimator"
+        _vector(o, "initial_estimates", self.initial_estimates, 3, _positive)
+        _vector(o, "gains", self.gains, 3, _non_negative)
+        _vector(o, "lower_bounds", self.lower_bounds, 3, _non_negative)
+        for i in range(3):
+            _require(self.initial_estimates[i] >= self.lower_bounds[i],
+                     f"{o}.initial_estimates[{i}]",
+                     self.initial_estimates[i],
+                     f">= {o}.lower_bounds[{i}] ({self.lower_bounds[i]})")
+        _non_negative(o, "contact_force_threshold",
+                      self.contact_force_threshold)
+
+
+@dataclass
+class FuzzyConfig:
+    """B-spline adaptive fuzzy compensator (24)-(35), R1, R4, R8."""
+
+    order: int = 2  # m, 0..3
+    upsilon: int = 5  # rules per input: 2*upsilon + 1
+    position_scale: float = 0.1  # m, x_max normalizing ||x|| (R8)
+    sliding_scales: List[float] = field(
+        default_factory=lambda: [0.005, 0.005])  # m/s, s_k,max per axis
+    width_fraction: float = 0.2  # Delta = width_fraction * scale
+    # m/s per axis; empty: (m+1)/2 * Delta_k (R4).
+    dead_zone_half_widths: List[float] = field(default_factory=list)
+    adaptation_gain: float = 2000.0  # r of (35), N s/m per s
+    axes: List[int] = field(default_factory=lambda: [0, 1])  # task axes
+    adapt: bool = True
+
+    def deltas(self):
+        """(Delta_0, [Delta_k]) in m and m/s."""
+        return (self.width_fraction * self.position_scale,
+                [self.width_fraction * s for s in self.sliding_scales])
+
+    def validate(self):
+        o = "fuzzy"
+        _require(isinstance(self.order, int) and 0 <= self.order <= 3,
+                 f"{o}.order", self.order, "an integer in 0..3")
+        _require(isinstance(self.upsilon, int) and self.upsilon >= 1,
+                 f"{o}.upsilon", self.upsilon, "an integer >= 1")
+        _positive(o, "position_scale", self.position_scale)
+        _positive(o, "width_fraction", self.width_fraction)
+        _positive(o, "adaptation_gain", self.adaptation_gain)
+        _require(len(set(self.axes)) == len(self.axes)
+                 and all(a in (0, 1, 2) for a in self.axes),
+                 f"{o}.axes", self.axes, "distinct task axes from {0, 1, 2}")
+        _vector(o, "sliding_scales", self.sliding_scales, len(self.axes),
+                _positive)
+        _, deltas = self.deltas()
+        if self.dead_zone_half_widths:
+            _vector(o, "dead_zone_half_widths", self.dead_zone_half_widths,
+                    len(self.axes), _non_negative)
+            for k, (w, d) in enumerate(zip(self.dead_zone_half_widths,
+                                           deltas)):
+                _require(w <= self.upsilon * d,
+                         f"{o}.dead_zone_half_widths[{k}]", w,
+                         f"<= upsilon * Delta_k = {self.upsilon * d:g} m/s "
+                         "(the dead zone must lie inside Omega_k)")
+
+
+@dataclass
+class ControllerConfig:
+    """Inner-loop hybrid position/force controller (7), (9)-(11), (36), (37),
+    R9, R10. Task axes are world x, y, z of the tool tip."""
+
+    sliding_lambda: List[float] = field(
+        default_factory=lambda: [40.0, 40.0, 40.0])  # 1/s, lambda
+    sliding_gain: List[float] = field(
+        default_factory=lambda: [400.0, 400.0, 400.0])  # N s/m, K
+    depth_gain: float = 4.0e-4  # m/(N s), k_delta of (7)
+    robust_gain: List[float] = field(
+        default_factory=lambda: [2.0, 2.0])  # N, h_bar_k (R10), fuzzy axes
+    robust_boundary_layer: List[float] = field(
+        default_factory=lambda: [0.005, 0.005])  # m/s, phi_k (R10)
+    gravity_compensation: bool = True
+    model_mass_scale: float = 1.2  # controller's model masses / true masses
+    fuzzy: FuzzyConfig = field(default_factory=FuzzyConfig)
+
+    def validate(self):
+        o = "controller"
+        _vector(o, "sliding_lambda", self.sliding_lambda, 3, _positive)
+        _vector(o, "sliding_gain", self.sliding_gain, 3, _positive)
+        _positive(o, "depth_gain", self.depth_gain)
+        _positive(o, "model_mass_scale", self.model_mass_scale)
+        n = len(self.fuzzy.axes)
+        _vector(o, "robust_gain", self.robust_gain, n, _non_negative)
+        _vector(o, "robust_boundary_layer", self.robust_boundary_layer, n,
+                _positive)
+        self.fuzzy.validate()
+
+
+@dataclass
+class SensorConfig:
+    """Tool force measurement."""
+
+    cutoff_frequency: float = 200.0  # Hz, first-order low-pass
+
+    def validate(self):
+        _positive("sensor", "cutoff_frequency", self.cutoff_frequency)
+
+
+@dataclass
+class ProcessConfig:
+    """Plant-side truth of the cutting process, eq. (3) and the threshold
+    c0 of (4). The controller never reads these values."""
+
+    cutting_coefficient: float = 3.3e9  # N s/m^3, k_c: g = k_c * area
+    plunge_coefficient: float = 0.0  # N s/m, h of (3)
+    threshold_power_force: float = 2.0  # N, P'_th
+    contact_threshold_force: float = 2.0  # N, c0 of (4)
+    threshold_depth: float = 2.0e-5  # m, c0 ramps in over this depth
+    smoothing_speed: float = 5.0e-5  # m/s, regularizes the sign of v_t
+
+    def validate(self):
+        o = "process"
+        for name in ("cutting_coefficient", "plunge_coefficient",
+                     "threshold_power_force", "contact_threshold_force"):
+            _non_negative(o, name, getattr(self, name))
+        _positive(o, "threshold_depth", self.threshold_depth)
+        _positive(o, "smoothing_speed", self.smoothing_speed)
+
+
+@dataclass
+class SimulationConfig:
+    duration: float = 10.0  # s
+    plant_time_step: float = 0.0  # s; 0: continuous plant
+    contact_approximation: str = "lagged"  # discrete plant only
+    integrator: str = "cenic"
+    accuracy: float = 1.0e-4
+    max_step: float = 0.01  # s
+    log_period: float = 0.005  # s
+    initial_depth: float = 0.0  # m, tool starts at this depth (in contact)
+
+    def validate(self):
+        o = "simulation"
+        _positive(o, "duration", self.duration)
+        _non_negative(o, "plant_time_step", self.plant_time_step)
+        _require(self.contact_approximation in ("lagged", "similar", "sap",
+                                                "tamsi"),
+                 f"{o}.contact_approximation", self.contact_approximation,
+                 "one of lagged, similar, sap, tamsi")
+        _require(self.integrator in ("cenic", "runge_kutta3", "radau3",
+                                     "implicit_euler", "runge_kutta5"),
+                 f"{o}.integrator", self.integrator,
+                 "one of cenic, runge_kutta3, runge_kutta5, radau3, "
+                 "implicit_euler")
+        for name in ("accuracy", "max_step", "log_period"):
+            _positive(o, name, getattr(self, name))
+        _non_negative(o, "initial_depth", self.initial_depth)
+
+
+@dataclass
+class Scenario:
+    """Everything one simulation needs."""
+
+    name: str = "point_mass"
+    tube: TubeConfig = field(default_factory=TubeConfig)
+    tool: ToolConfig = field(default_factory=ToolConfig)
+    edge: EdgeConfig = field(default_factory=EdgeConfig)
+    task: TaskConfig = field(default_factory=TaskConfig)
+    command: CommandConfig = field(default_factory=CommandConfig)
+    estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
+    controller: ControllerConfig = field(default_factory=ControllerConfig)
+    sensor: SensorConfig = field(default_factory=SensorConfig)
+    process: ProcessConfig = field(default_factory=ProcessConfig)
+    simulation: SimulationConfig = field(default_factory=SimulationConfig)
+
+    def validate(self):
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            if hasattr(value, "validate"):
+                value.validate()
+        _require(self.task.desired_depth < self.tube.wall_thickness,
+                 "task.desired_depth", self.task.desired_depth,
+                 f"< tube.wall_thickness ({self.tube.wall_thickness})")
+        _require(self.tool.engagement < self.tube.compliant_layer_height,
+                 "tool.engagement", self.tool.engagement,
+                 "< tube.compliant_layer_height "
+                 f"({self.tube.compliant_layer_height})")
+        _require(self.tool.cutter_radius < self.tube.inner_radius,
+                 "tool.cutter_radius", self.tool.cutter_radius,
+                 f"< tube.inner_radius ({self.tube.inner_radius})")
+        return self
+
+
+_SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
+
+
+def scenario_names() -> List[str]:
+    """Names of the scenarios shipped in the package."""
+    return sorted(p.stem for p in _SCENARIO_DIR.glob("*.yaml"))
+
+
+def scenario_path(name: str) -> Path:
+    path = _SCENARIO_DIR / f"{name}.yaml"
+    if not path.exists():
+        raise ConfigError(
+            f"scenario {name!r} is unknown: allowed {scenario_names()} "
+            "or a path to a YAML file")
+    return path
+
+
+def load_scenario(name_or_path: Optional[str] = None, *,
+                  text: Optional[str] = None) -> Scenario:
+    """Loads a scenario by package name or file path, then applies ``text``
+    (YAML overrides) on top, and validates it.
+
+    Raises ConfigError with one line naming the problem (unknown field,
+    wrong type, value out of range)."""
+    scenario = Scenario()
+    try:
+        if name_or_path is not None:
+            path = Path(name_or_path)
+            if not (path.suffix in (".yaml", ".yml") and path.exists()):
+                path = scenario_path(str(name_or_path))
+            scenario = yaml_load_typed(filename=str(path), defaults=scenario)
+        if text:
+            scenario = yaml_load_typed(data=text, defaults=scenario)
+    except ConfigError:
+        raise
+    except (RuntimeError, ValueError, TypeError, AssertionError) as e:
+        where = name_or_path if text is None else "--scenario-text"
+        raise ConfigError(f"{where}: {e}") from None
+    return scenario.validate()

@@ -1,0 +1,233 @@
+"""HybridController: the inner-loop adaptive fuzzy hybrid position/force
+controller, eqs. (7), (9)-(11), (30), (35)-(37) with R4, R8, R9, R10."""
+
+from __future__ import annotations
+
+import numpy as np
+from pydrake.autodiffutils import AutoDiffXd
+from pydrake.common.value import AbstractValue
+from pydrake.multibody.tree import BodyIndex, JacobianWrtVariable
+from pydrake.systems.framework import BasicVector_, LeafSystem_, ValueProducer
+from pydrake.systems.scalar_conversion import TemplateSystem
+
+from deburr_drake.config import ControllerConfig
+from deburr_drake.fuzzy import RuleBase
+from deburr_drake.layout import CHAMFER_STATE, CONTROLLER_DIAGNOSTICS
+
+__all__ = ["HybridController", "HybridController_", "make_rule_bases",
+           "saturation"]
+
+
+def _value(y):
+    return y.value() if hasattr(y, "value") else float(y)
+
+
+def saturation(x):
+    """sat(x) = x for |x| <= 1, sign(x) otherwise (T-generic)."""
+    v = _value(x)
+    if v > 1.0:
+        return 1.0 + 0.0 * x
+    if v < -1.0:
+        return -1.0 + 0.0 * x
+    return x
+
+
+def make_rule_bases(config: ControllerConfig):
+    """One two-input RuleBase (y0 = ||x||, y_k = s_k) per fuzzy task axis."""
+    f = config.fuzzy
+    delta0, deltas = f.deltas()
+    widths = f.dead_zone_half_widths or [None] * len(f.axes)
+    return [RuleBase(m=f.order, upsilon=f.upsilon, delta0=delta0,
+                     deltak=dk, dead_zone_half_width=w)
+            for dk, w in zip(deltas, widths)]
+
+
+@TemplateSystem.define("HybridController_", T_list=[float, AutoDiffXd])
+def HybridController_(T):
+
+    class Impl(LeafSystem_[T]):
+        """Adaptive fuzzy hybrid position/force control law in task space
+        (the tool point's world x, y, z), mapped to joint torques by the
+        controller's own model of the robot.
+
+        With the chamfer state (x_p, xdot_p, n1, ||f_n||) and the measured
+        force f:
+
+        - delta_d' = k_delta (||f_nd hat|| - ||f_n||)            (7), (13)
+        - x_pd = x_c* + delta_d n1,  xdot_pd = xdot_c* + delta_d' n1   (9)
+          (the delta_d dn1/dt term, about 1e-5 of the feed, is left out)
+        - e = x_pd - x_p,  s = edot + lambda e                    (10)
+        - f_tau = K s - f + zeta u_f + (1 - zeta) H_bar          (36), (37)
+          on the fuzzy axes (u_f of (30) with y0 = ||x_p||, y_k = s_k, R8;
+          H_bar_k = h_bar_k sat(s_k / phi_k), R10); K s - f on the others
+          (R9)
+        - tau = J^T f_tau - tau_g(q), tau_g from the controller's model
+          (masses scaled by ``model_mass_scale``: deliberately imperfect)
+        - theta_k' = r nu_k(y0, s_k) s_Delta,k on the (m+1)^2 active rules
+          (35), with the dead zone of R4.
+
+        .. pydrake_system::
+
+            name: HybridController
+            input_ports:
+            - plant_state
+            - chamfer_state
+            - tool_force
+            - commanded_position
+            - commanded_velocity
+            - desired_normal_force
+            output_ports:
+            - actuation
+            - diagnostics
+
+        - ``plant_state`` (nq + nv): joint positions and velocities.
+        - ``chamfer_state`` (CHAMFER_STATE layout, from ChamferObserver).
+        - ``tool_force`` (3, N): measured force on the tool, world.
+        - ``commanded_position`` (3, m), ``commanded_velocity`` (3, m/s):
+          x_c*(t) and its derivative from the first-order hold.
+        - ``desired_normal_force`` (1, N): ||f_nd hat|| from the estimator.
+        - ``actuation`` (nu, N or N m): actuator efforts.
+        - ``diagnostics`` (CONTROLLER_DIAGNOSTICS layout).
+        - Continuous state: delta_d (m), then theta_k ((2 Upsilon + 1)^2
+          values, N) for each fuzzy axis, row-major in (i, j).
+        """
+
+        def _construct(self, plant, tool_frame_name, config,
+                       converter=None):
+            LeafSystem_[T].__init__(self, converter)
+            config.validate()
+            self.set_name("controller")
+            self._float_plant = plant
+            self._plant = plant if T == float else plant.ToAutoDiffXd()
+            self._plant_context = self._plant.CreateDefaultContext()
+            for i in range(1, self._plant.num_bodies()):
+                body = self._plant.get_body(BodyIndex(i))
+                body.SetMass(self._plant_context,
+                             config.model_mass_scale * body.default_mass())
+            self._tool_frame_name = tool_frame_name
+            self._frame = self._plant.GetFrameByName(tool_frame_name)
+            self._world = self._plant.world_frame()
+            self._config = config
+            self._rule_bases = make_rule_bases(config)
+            self._axes = list(config.fuzzy.axes)
+            self._n_rules = self._rule_bases[0].n_rules
+            self._nq = plant.num_positions()
+            self._B_T = plant.MakeActuationMatrix().T  # nu x nv
+            self._lambda = np.asarray(config.sliding_lambda, float)
+            self._K = np.asarray(config.sliding_gain, float)
+            n_theta = len(self._axes) * self._n_rules
+            self.DeclareContinuousState(1 + n_theta)
+            nx = plant.num_multibody_states()
+            self._ports = {
+                name: self.DeclareVectorInputPort(name, size)
+                for name, size in [
+                    ("plant_state", nx),
+                    ("chamfer_state", CHAMFER_STATE.size),
+                    ("tool_force", 3),
+                    ("commanded_position", 3),
+                    ("commanded_velocity", 3),
+                    ("desired_normal_force", 1)]}
+            self._cache = self.DeclareCacheEntry(
+                "control_terms",
+                ValueProducer(allocate=AbstractValue.Make(dict()).Clone,
+                              calc=self._calc_terms),
+                prerequisites_of_calc={self.all_sources_ticket()})
+            deps = {self._cache.ticket()}
+            self.DeclareVectorOutputPort(
+                "actuation", BasicVector_[T](plant.num_actuators()),
+                self._calc_actuation, prerequisites_of_calc=deps)
+            self.DeclareVectorOutputPort(
+                "diagnostics", BasicVector_[T](CONTROLLER_DIAGNOSTICS.size),
+                self._calc_diagnostics, prerequisites_of_calc=deps)
+
+        def _construct_copy(self, other, converter=None):
+            Impl._construct(self, other._float_plant,
+                            other._tool_frame_name, other._config,
+                            converter=converter)
+
+        @property
+        def rule_bases(self):
+            return self._rule_bases
+
+        @property
+        def config(self):
+            return self._config
+
+        def theta(self, context):
+            """(n_fuzzy_axes, (2 Upsilon + 1)^2) array of the rule weights."""
+            x = context.get_continuous_state_vector().CopyToVector()
+            return x[1:].reshape(len(self._axes), self._n_rules)
+
+        def depth_reference(self, context):
+            """delta_d (m)."""
+            return context.get_continuous_state_vector()[0]
+
+        def _calc_terms(self, context, value):
+            c = self._config
+            x = context.get_continuous_state_vector().CopyToVector()
+            delta_d = x[0]
+            theta = x[1:].reshape(len(self._axes), self._n_rules)
+            p = {k: port.Eval(context) for k, port in self._ports.items()}
+            chamfer = p["chamfer_state"]
+            x_p = CHAMFER_STATE.get(chamfer, "x_p")
+            xdot_p = CHAMFER_STATE.get(chamfer, "xdot_p")
+            n1 = CHAMFER_STATE.get(chamfer, "n1")
+            f_n = CHAMFER_STATE.get(chamfer, "f_n")
+            f = p["tool_force"]
+
+            e_f = p["desired_normal_force"][0] - f_n
+            delta_d_dot = c.depth_gain * e_f
+            x_pd = p["commanded_position"] + delta_d * n1
+            xdot_pd = p["commanded_velocity"] + delta_d_dot * n1
+            e = x_pd - x_p
+            s = (xdot_pd - xdot_p) + self._lambda * e
+            f_tau = self._K * s - f
+
+            y0 = np.sqrt(x_p @ x_p)
+            u_fuzzy = np.zeros(3, dtype=x.dtype)
+            zeta = np.zeros(3)
+            theta_dot = np.zeros_like(theta)
+            r = c.fuzzy.adaptation_gain
+            for k, (axis, rb) in enumerate(zip(self._axes, self._rule_bases)):
+                s_k = s[axis]
+                if rb.in_domain(s_k):
+                    u, idx, rate = rb.evaluate_and_rate(theta[k], y0, s_k, r)
+                    zeta[axis] = 1.0
+                    if c.fuzzy.adapt and len(idx):
+                        theta_dot[k, idx] = rate
+                else:
+                    u = c.robust_gain[k] * saturation(
+                        s_k / c.robust_boundary_layer[k])
+                u_fuzzy[axis] = u
+            f_tau = f_tau + u_fuzzy
+
+            plant, ctx = self._plant, self._plant_context
+            plant.SetPositionsAndVelocities(ctx, p["plant_state"])
+            J = plant.CalcJacobianTranslationalVelocity(
+                ctx, JacobianWrtVariable.kV, self._frame, np.zeros(3),
+                self._world, self._world)
+            tau = J.T @ f_tau
+            if c.gravity_compensation:
+                tau = tau - plant.CalcGravityGeneralizedForces(ctx)
+            value.set_value(dict(
+                actuation=self._B_T @ tau,
+                derivatives=np.concatenate([[delta_d_dot],
+                                            theta_dot.ravel()]),
+                diagnostics=CONTROLLER_DIAGNOSTICS.pack(
+                    dtype=x.dtype, x_pd=x_pd, e=e, s=s, delta_d=delta_d,
+                    e_f=e_f, f_tau=f_tau, u_fuzzy=u_fuzzy, zeta=zeta)))
+
+        def DoCalcTimeDerivatives(self, context, derivatives):  # noqa: N802
+            derivatives.get_mutable_vector().SetFromVector(
+                self._cache.Eval(context)["derivatives"])
+
+        def _calc_actuation(self, context, output):
+            output.SetFromVector(self._cache.Eval(context)["actuation"])
+
+        def _calc_diagnostics(self, context, output):
+            output.SetFromVector(self._cache.Eval(context)["diagnostics"])
+
+    return Impl
+
+
+HybridController = HybridController_[None]

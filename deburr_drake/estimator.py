@@ -1,0 +1,93 @@
+"""Contact-parameter estimator, eqs. (13)-(18) with correction R3."""
+
+from __future__ import annotations
+
+import numpy as np
+from pydrake.systems.framework import BasicVector, LeafSystem
+
+from deburr_drake.config import EstimatorConfig, TaskConfig
+from deburr_drake.layout import CHAMFER_STATE
+
+__all__ = ["ContactParameterEstimator", "estimator_rate"]
+
+
+def estimator_rate(c_hat, delta, delta_dot, f_n, *, gains, lower_bounds,
+                   contact_force_threshold, adapt=True):
+    """d(c_hat)/dt of (16)-(18) with the regressor of R3.
+
+    e_n = ||f_n|| - (c0 + c1 delta + c2 delta_dot) (15); each parameter moves
+    along its regressor (1, delta, delta_dot) with its own gain r_i (a
+    diagonal gain keeps Proposition 1's Lyapunov argument with
+    V = sum c~_i^2 / (2 r_i)); a parameter at or below its bound eps_i is
+    frozen when its update would push it lower (projection). Zero out of
+    contact (delta <= 0 or ||f_n|| <= threshold): eq. (4) is zero there.
+    """
+    c_hat = np.asarray(c_hat, float)
+    if not adapt or delta <= 0.0 or f_n <= contact_force_threshold:
+        return np.zeros(3)
+    regressor = np.array([1.0, delta, delta_dot])
+    e_n = f_n - c_hat @ regressor
+    rate = np.asarray(gains, float) * e_n * regressor
+    frozen = (c_hat <= np.asarray(lower_bounds, float)) & (rate < 0.0)
+    rate[frozen] = 0.0
+    return rate
+
+
+class ContactParameterEstimator(LeafSystem):
+    """Estimates c0, c1, c2 of the contact-force model (4) and outputs the
+    refined desired normal force ||f_nd hat|| = c0 + c1 delta_d^* (13).
+
+    .. pydrake_system::
+
+        name: ContactParameterEstimator
+        input_ports:
+        - chamfer_state
+        output_ports:
+        - estimates
+        - desired_normal_force
+
+    - ``chamfer_state`` (CHAMFER_STATE layout): delta (m), delta_dot (m/s),
+      ||f_n|| (N) are read.
+    - ``estimates`` (3): c0 hat (N), c1 hat (N/m), c2 hat (N s/m).
+    - ``desired_normal_force`` (1, N): c0 hat + c1 hat delta_d^*.
+    - Continuous state (3): the estimates.
+    """
+
+    def __init__(self, config: EstimatorConfig, task: TaskConfig):
+        super().__init__()
+        config.validate()
+        task.validate()
+        self.set_name("contact_estimator")
+        self._config = config
+        self._desired_depth = task.desired_depth
+        xc = self.DeclareContinuousState(
+            BasicVector(np.asarray(config.initial_estimates, float)))
+        self._chamfer_port = self.DeclareVectorInputPort(
+            "chamfer_state", CHAMFER_STATE.size)
+        self.DeclareStateOutputPort("estimates", xc)
+        self.DeclareVectorOutputPort(
+            "desired_normal_force", 1, self._calc_desired_force,
+            prerequisites_of_calc={self.xc_ticket()})
+
+    def set_estimates(self, context, c_hat):
+        context.SetContinuousState(np.asarray(c_hat, float))
+
+    def _estimates(self, context):
+        return context.get_continuous_state_vector().CopyToVector()
+
+    def DoCalcTimeDerivatives(self, context, derivatives):  # noqa: N802
+        c = self._config
+        chamfer = self._chamfer_port.Eval(context)
+        rate = estimator_rate(
+            self._estimates(context),
+            CHAMFER_STATE.get(chamfer, "delta"),
+            CHAMFER_STATE.get(chamfer, "delta_dot"),
+            CHAMFER_STATE.get(chamfer, "f_n"),
+            gains=c.gains, lower_bounds=c.lower_bounds,
+            contact_force_threshold=c.contact_force_threshold,
+            adapt=c.adapt)
+        derivatives.get_mutable_vector().SetFromVector(rate)
+
+    def _calc_desired_force(self, context, output):
+        c_hat = self._estimates(context)
+        output.SetAtIndex(0, c_hat[0] + c_hat[1] * self._desired_depth)
