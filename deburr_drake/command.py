@@ -137,9 +137,13 @@ class FirstOrderHold(LeafSystem):
     which does not settle (a unit step gives 0, 1, 2, 2, 1, 0, ...); it is
     kept only to show that.
 
-    The input is the discrete output of a system updated at the same instants
-    (the command generator); the hold reads it through direct feedthrough, so
-    the ramp toward x_c(kT) starts at kT without an extra period of delay.
+    x*(t) is a continuous state whose derivative, the ramp's slope, is
+    piecewise constant, so every integrator reproduces the ramp exactly and
+    an integrator that treats the plant implicitly sees x* move within its
+    step. The input is the discrete output of a system updated at the same
+    instants (the command generator); the slope reads it through direct
+    feedthrough, so the ramp toward x_c(kT) starts at kT without an extra
+    period of delay.
 
     .. pydrake_system::
 
@@ -152,7 +156,9 @@ class FirstOrderHold(LeafSystem):
 
     - ``sampled`` (n): x_c(kT), piecewise constant.
     - ``position`` (n): x*(t). ``velocity`` (n): dx*/dt, piecewise constant.
-    - Discrete state: ramp start x*(kT) (n), x*(kT - T) (n), and kT (1).
+    - Continuous state (n): x*(t). Discrete state (2n): the slope's origin,
+      x*(kT) (``delayed_ramp``) or x*(kT - T) (``paper_eq5``), and x* at
+      the last knot.
     """
 
     VARIANTS = ("delayed_ramp", "paper_eq5")
@@ -169,42 +175,37 @@ class FirstOrderHold(LeafSystem):
         self.set_name("first_order_hold")
         x0 = np.asarray(initial_value, float).ravel()
         n = x0.size
-        self._n = n
         self._period = period
         self._paper = variant == "paper_eq5"
-        self._state_index = self.DeclareDiscreteState(
-            np.concatenate([x0, x0, [0.0]]))
+        self._n = n
+        xc = self.DeclareContinuousState(BasicVector(x0))
+        self._knots_index = self.DeclareDiscreteState(np.concatenate([x0, x0]))
         self._input = self.DeclareVectorInputPort("sampled", n)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
-        deps = {self.time_ticket(), self.xd_ticket(),
-                self._input.ticket()}
-        self.DeclareVectorOutputPort("position", n, self._calc_position,
-                                     prerequisites_of_calc=deps)
+        self.DeclareStateOutputPort("position", xc)
         self.DeclareVectorOutputPort(
             "velocity", n, self._calc_velocity,
             prerequisites_of_calc={self.xd_ticket(), self._input.ticket()})
 
-    def _unpack(self, context):
-        xd = context.get_discrete_state(self._state_index).get_value()
-        n = self._n
-        return xd[:n], xd[n:2 * n], xd[2 * n]
+    def _knots(self, context):
+        """(origin of the current slope, x* at the last knot)."""
+        xd = context.get_discrete_state(self._knots_index).get_value()
+        return xd[:self._n], xd[self._n:]
 
     def _slope(self, context):
-        start, previous, _ = self._unpack(context)
-        origin = previous if self._paper else start
+        origin, _ = self._knots(context)
         return (self._input.Eval(context) - origin) / self._period
 
     def _update(self, context, discrete_state):
-        start, _, t_k = self._unpack(context)
-        t = context.get_time()
-        end = start + self._slope(context) * (t - t_k)
-        discrete_state.set_value(self._state_index,
-                                 np.concatenate([end, start, [t]]))
+        x = context.get_continuous_state_vector().CopyToVector()
+        _, last_knot = self._knots(context)
+        # R2 ramps from x*(kT); (5) as printed from x*(kT - T).
+        origin = last_knot if self._paper else x
+        discrete_state.set_value(self._knots_index,
+                                 np.concatenate([origin, x]))
 
-    def _calc_position(self, context, output):
-        start, _, t_k = self._unpack(context)
-        output.SetFromVector(
-            start + self._slope(context) * (context.get_time() - t_k))
+    def DoCalcTimeDerivatives(self, context, derivatives):  # noqa: N802
+        derivatives.get_mutable_vector().SetFromVector(self._slope(context))
 
     def _calc_velocity(self, context, output):
         output.SetFromVector(self._slope(context))

@@ -3,6 +3,10 @@
 import numpy as np
 import pytest
 
+from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
+                                      SimulatorConfig)
+from pydrake.systems.framework import DiagramBuilder, LeafSystem
+
 from deburr_drake.command import CommandGenerator, FirstOrderHold, feedrate
 from deburr_drake.config import CommandConfig, ConfigError, TaskConfig
 from deburr_drake.geometry import CircularContour
@@ -82,53 +86,75 @@ def test_command_rejects_unreachable_force():
                          TaskConfig(), CONTOUR, CONTOUR.point_at(0))
 
 
-def _run_hold(variant, samples, period=0.025):
-    """Feed a FirstOrderHold the sequence x_c(kT) and return x*(kT) and
-    x*(kT + T/2), emulating the simultaneous discrete updates."""
-    hold = FirstOrderHold(period, [samples[0]], variant=variant)
-    context = hold.CreateDefaultContext()
+class _Samples(LeafSystem):
+    """Emits samples[k] from t = kT on, updated at kT like the command
+    generator (so the hold sees both updates at the same instants)."""
+
+    def __init__(self, samples, period):
+        super().__init__()
+        self._samples = list(samples)
+        self._k = self.DeclareDiscreteState(2)  # [value, k]
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
+        self.DeclareVectorOutputPort(
+            "value", 1, lambda c, o: o.SetAtIndex(
+                0, c.get_discrete_state(self._k).get_value()[0]),
+            prerequisites_of_calc={self.xd_ticket()})
+
+    def _update(self, context, state):
+        k = int(context.get_discrete_state(self._k).get_value()[1])
+        value = self._samples[min(k, len(self._samples) - 1)]
+        state.set_value(self._k, [value, k + 1])
+
+
+def _run_hold(variant, samples, period=0.025, integrator="runge_kutta3"):
+    """x*(kT) and x*(kT + T/2) of a FirstOrderHold fed x_c(kT) = samples[k]
+    in a simulated diagram."""
+    builder = DiagramBuilder()
+    source = builder.AddSystem(_Samples(samples, period))
+    hold = builder.AddSystem(
+        FirstOrderHold(period, [samples[0]], variant=variant))
+    builder.Connect(source.get_output_port(), hold.GetInputPort("sampled"))
+    diagram = builder.Build()
+    simulator = Simulator(diagram)
+    ApplySimulatorConfig(SimulatorConfig(integration_scheme=integrator),
+                         simulator)
+    context = hold.GetMyContextFromRoot(simulator.get_context())
     at_knots, midpoints = [], []
-    port = hold.GetInputPort("sampled")
-    previous = samples[0]
-    for k, value in enumerate(samples):
-        t = k * period
-        context.SetTime(t)
-        port.FixValue(context, [previous])  # the input before kT's update
-        xd = hold.EvalUniquePeriodicDiscreteUpdate(context)
-        context.SetDiscreteState(xd.get_vector(0).CopyToVector())
-        port.FixValue(context, [value])     # x_c(kT) after the update
+    for k in range(len(samples)):
+        simulator.AdvanceTo(k * period)
         at_knots.append(hold.GetOutputPort("position").Eval(context)[0])
-        context.SetTime(t + period / 2)
+        simulator.AdvanceTo((k + 0.5) * period)
         midpoints.append(hold.GetOutputPort("position").Eval(context)[0])
         velocity = hold.GetOutputPort("velocity").Eval(context)[0]
         assert velocity == pytest.approx(
-            (midpoints[-1] - at_knots[-1]) / (period / 2))
-        previous = value
+            (midpoints[-1] - at_knots[-1]) / (period / 2), abs=1e-9)
     return np.array(at_knots), np.array(midpoints)
 
 
 def test_first_order_hold_r2_settles_one_period_behind():
-    samples = [0.0] + [1.0] * 8
+    # x_c(kT) steps from 0 to 1 at k = 1; the update at t = 0 emits
+    # samples[0].
+    samples = [0.0, 1.0] + [1.0] * 7
     knots, mids = _run_hold("delayed_ramp", samples)
-    # x*((k+1)T) = x_c(kT): a unit step is reached one period later and held.
-    np.testing.assert_allclose(knots, [0, 0, 1, 1, 1, 1, 1, 1, 1], atol=1e-12)
-    np.testing.assert_allclose(mids[1], 0.5, atol=1e-12)
-    np.testing.assert_allclose(mids[2:], 1.0, atol=1e-12)
+    # x*((k+1)T) = x_c(kT): the step is reached one period later and held.
+    np.testing.assert_allclose(knots, [0, 0, 1, 1, 1, 1, 1, 1, 1], atol=1e-9)
+    np.testing.assert_allclose(mids[1], 0.5, atol=1e-9)
+    np.testing.assert_allclose(mids[2:], 1.0, atol=1e-9)
 
 
 def test_first_order_hold_paper_eq5_does_not_settle():
     samples = [0.0] + [1.0] * 8
     knots, _ = _run_hold("paper_eq5", samples)
     # (5) as printed: 0, 1, 2, 2, 1, 0, ... for a unit step (R2).
-    np.testing.assert_allclose(knots[1:8], [0, 1, 2, 2, 1, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(knots[1:8], [0, 1, 2, 2, 1, 0, 0], atol=1e-9)
 
 
 def test_first_order_hold_tracks_a_ramp_exactly():
     v, T = 0.0024, 0.025
     samples = [v * T * k for k in range(10)]
     knots, mids = _run_hold("delayed_ramp", samples)
-    np.testing.assert_allclose(knots[1:], np.array(samples[:-1]), atol=1e-15)
-    np.testing.assert_allclose(mids[1:] - knots[1:], v * T / 2, rtol=1e-9)
+    np.testing.assert_allclose(knots[1:], np.array(samples[:-1]), atol=1e-12)
+    np.testing.assert_allclose(mids[1:] - knots[1:], v * T / 2, rtol=1e-6)
 
 
 def test_first_order_hold_validation():
