@@ -248,14 +248,18 @@ class ControllerConfig:
     R9, R10. Task axes are world x, y, z of the tool tip."""
 
     sliding_lambda: List[float] = field(
-        default_factory=lambda: [40.0, 40.0, 40.0])  # 1/s, lambda
+        default_factory=lambda: [40.0, 40.0, 80.0])  # 1/s, lambda
     sliding_gain: List[float] = field(
-        default_factory=lambda: [400.0, 400.0, 400.0])  # N s/m, K
+        default_factory=lambda: [400.0, 400.0, 800.0])  # N s/m, K
     depth_gain: float = 4.0e-4  # m/(N s), k_delta of (7)
     robust_gain: List[float] = field(
         default_factory=lambda: [2.0, 2.0])  # N, h_bar_k (R10), fuzzy axes
     robust_boundary_layer: List[float] = field(
         default_factory=lambda: [0.005, 0.005])  # m/s, phi_k (R10)
+    # s; the paper's 2.5 ms inner loop holds f_tau (zero-order hold);
+    # 0: continuous (then use an integrator that is accurate for the
+    # controller, e.g. runge_kutta3: cenic treats non-plant systems lagged).
+    control_period: float = 0.0025
     gravity_compensation: bool = True
     model_mass_scale: float = 1.2  # controller's model masses / true masses
     fuzzy: FuzzyConfig = field(default_factory=FuzzyConfig)
@@ -265,6 +269,7 @@ class ControllerConfig:
         _vector(o, "sliding_lambda", self.sliding_lambda, 3, _positive)
         _vector(o, "sliding_gain", self.sliding_gain, 3, _positive)
         _positive(o, "depth_gain", self.depth_gain)
+        _non_negative(o, "control_period", self.control_period)
         _positive(o, "model_mass_scale", self.model_mass_scale)
         n = len(self.fuzzy.axes)
         _vector(o, "robust_gain", self.robust_gain, n, _non_negative)
@@ -277,10 +282,24 @@ class ControllerConfig:
 class SensorConfig:
     """Tool force measurement."""
 
-    cutoff_frequency: float = 200.0  # Hz, first-order low-pass
+    sample_period: float = 0.0025  # s
+    # Hz, first-order low-pass. The controller cancels the measured force
+    # (-f in (36)), which holds the process damping g of (3) through the
+    # sampled sensor: with the light point-mass testbed that loop went
+    # unstable at 50 Hz and was stable at 20 and 30 Hz (measured).
+    cutoff_frequency: float = 20.0
+    noise_std: float = 0.0  # N, white noise per axis before the filter
+    noise_seed: int = 0  # seeds the noise (RandomSource)
 
     def validate(self):
+        _positive("sensor", "sample_period", self.sample_period)
         _positive("sensor", "cutoff_frequency", self.cutoff_frequency)
+        _non_negative("sensor", "noise_std", self.noise_std)
+        _require(self.cutoff_frequency < 0.5 / self.sample_period,
+                 "sensor.cutoff_frequency", self.cutoff_frequency,
+                 f"< the Nyquist frequency {0.5 / self.sample_period:g} Hz")
+        _require(isinstance(self.noise_seed, int) and self.noise_seed >= 0,
+                 "sensor.noise_seed", self.noise_seed, "an integer >= 0")
 
 
 @dataclass

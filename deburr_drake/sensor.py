@@ -1,11 +1,11 @@
 """ForceSensor: the force/torque sensor between flange and tool (a weld
-joint of the plant), reduced to the force of the environment on the tool."""
+joint of the plant), sampled and low-pass filtered like a real one."""
 
 from __future__ import annotations
 
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.systems.framework import BasicVector, LeafSystem
+from pydrake.systems.framework import LeafSystem
 
 from deburr_drake.config import SensorConfig
 
@@ -13,14 +13,19 @@ __all__ = ["ForceSensor"]
 
 
 class ForceSensor(LeafSystem):
-    """Measured force of the environment on the tool, world frame, through a
-    first-order low-pass filter (its state; the output has no direct
-    feedthrough, which also breaks the loop controller -> plant reaction
-    forces -> controller).
+    """Measured force of the environment on the tool, world frame.
 
-    The raw reading is -F_weld - m_tool g: the weld joint's reaction force on
-    the tool with the tool's static weight compensated (a tared sensor);
-    the tool's inertial force m_tool a remains, as on a real sensor.
+    Every ``sample_period`` the sensor reads the weld joint's reaction force,
+    adds ``noise_std`` times the ``noise`` input (a unit Gaussian sample,
+    e.g. from a seeded RandomSource) and passes it through a first-order
+    low-pass of cutoff ``cutoff_frequency`` (the exact discretization,
+    y += (1 - exp(-2 pi f_c T_s)) (raw - y)). The output is the filter's
+    state, so it has no direct feedthrough: that also breaks the loop
+    controller -> plant reaction forces -> controller.
+
+    The raw reading is -F_weld - m_tool g: the weld's reaction force on the
+    tool with the tool's static weight compensated (a tared sensor); the
+    tool's inertial force m_tool a remains, as on a real sensor.
 
     .. pydrake_system::
 
@@ -28,14 +33,16 @@ class ForceSensor(LeafSystem):
         input_ports:
         - reaction_forces
         - plant_state
+        - noise
         output_ports:
         - tool_force
 
     - ``reaction_forces``: the plant's reaction forces (one SpatialForce per
       joint, on the child body at the child joint frame, in that frame).
     - ``plant_state`` (nq + nv): to rotate the reading into world.
+    - ``noise`` (3): unit-variance samples, scaled by ``noise_std`` (N).
     - ``tool_force`` (3, N): filtered force on the tool, world frame.
-    - Continuous state (3, N): the filter.
+    - Discrete state (3, N): the filter, updated every ``sample_period``.
     """
 
     def __init__(self, plant: MultibodyPlant, joint_name: str,
@@ -49,33 +56,35 @@ class ForceSensor(LeafSystem):
         self._joint_index = int(joint.index())
         self._child_frame = joint.frame_on_child()
         tool = joint.child_body()
-        self._weight = tool.default_mass() * plant.gravity_field().gravity_vector()
-        self._bandwidth = 2.0 * np.pi * config.cutoff_frequency  # rad/s
-        self.DeclareContinuousState(BasicVector(np.zeros(3)))
+        self._weight = tool.default_mass() * np.asarray(
+            plant.gravity_field().gravity_vector())
+        self._noise_std = config.noise_std
+        self._alpha = 1.0 - np.exp(
+            -2.0 * np.pi * config.cutoff_frequency * config.sample_period)
+        self._state_index = self.DeclareDiscreteState(3)
         self._reaction_port = self.DeclareAbstractInputPort(
             "reaction_forces",
             plant.get_reaction_forces_output_port().Allocate())
         self._state_port = self.DeclareVectorInputPort(
             "plant_state", plant.num_multibody_states())
-        self.DeclareVectorOutputPort(
-            "tool_force", 3, self._calc_output,
-            prerequisites_of_calc={self.xc_ticket()})
+        self._noise_port = self.DeclareVectorInputPort("noise", 3)
+        self.DeclarePeriodicDiscreteUpdateEvent(
+            config.sample_period, 0.0, self._update)
+        self.DeclareStateOutputPort("tool_force", self._state_index)
 
     def raw_force(self, context) -> np.ndarray:
-        """The unfiltered, weight-compensated reading (N, world)."""
-        reactions = self._reaction_port.Eval(context)
-        F = reactions[self._joint_index]
+        """The unfiltered, noise-free, weight-compensated reading (N,
+        world)."""
+        F = self._reaction_port.Eval(context)[self._joint_index]
         self._plant.SetPositionsAndVelocities(
             self._plant_context, self._state_port.Eval(context))
         R_WJ = self._child_frame.CalcPoseInWorld(
             self._plant_context).rotation()
         return -(R_WJ @ F.translational()) - self._weight
 
-    def DoCalcTimeDerivatives(self, context, derivatives):  # noqa: N802
-        x = context.get_continuous_state_vector().CopyToVector()
-        derivatives.get_mutable_vector().SetFromVector(
-            self._bandwidth * (self.raw_force(context) - x))
-
-    def _calc_output(self, context, output):
-        output.SetFromVector(
-            context.get_continuous_state_vector().CopyToVector())
+    def _update(self, context, discrete_state):
+        y = context.get_discrete_state(self._state_index).get_value()
+        raw = self.raw_force(context) \
+            + self._noise_std * self._noise_port.Eval(context)
+        discrete_state.set_value(self._state_index,
+                                 y + self._alpha * (raw - y))

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Dict, Optional
 
 import numpy as np
+from pydrake.common import RandomGenerator
 from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
                                       SimulatorConfig)
 from pydrake.systems.framework import Diagram
@@ -79,6 +80,8 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
     duration = scenario.simulation.duration if duration is None else duration
     simulator = make_simulator(diagram, scenario)
     context = simulator.get_mutable_context()
+    diagram.SetRandomContext(
+        context, RandomGenerator(scenario.sensor.noise_seed))
     start = time.perf_counter()
     simulator.Initialize()
     t = 0.0

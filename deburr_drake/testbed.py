@@ -7,7 +7,9 @@ from __future__ import annotations
 import numpy as np
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import LogVectorOutput
+from pydrake.common import RandomDistribution
+from pydrake.systems.primitives import (LogVectorOutput, RandomSource,
+                                        ZeroOrderHold)
 
 from deburr_drake.command import CommandGenerator, FirstOrderHold
 from deburr_drake.config import Scenario
@@ -107,12 +109,15 @@ def make_point_mass_diagram(*, scenario: Scenario) -> Diagram:
         plant, TOOL_FRAME, contour, c.process, cut_height=c.tool.engagement))
     sensor = builder.AddNamedSystem("force_sensor", ForceSensor(
         plant, SENSOR_JOINT, c.sensor))
+    noise = builder.AddNamedSystem("sensor_noise", RandomSource(
+        RandomDistribution.kGaussian, 3, c.sensor.sample_period))
+    builder.Connect(noise.get_output_port(), sensor.GetInputPort("noise"))
     observer = builder.AddNamedSystem("chamfer_observer", ChamferObserver(
         model, TOOL_FRAME, contour,
         min_tangential_speed=c.command.min_tangential_speed))
     generator = builder.AddNamedSystem("command_generator", CommandGenerator(
         c.command, c.task, contour, x0))
-    hold = builder.AddNamedSystem("first_order_hold", FirstOrderHold(
+    foh = builder.AddNamedSystem("first_order_hold", FirstOrderHold(
         c.command.period, contour.project(x0)))
     estimator = builder.AddNamedSystem(
         "contact_estimator", ContactParameterEstimator(c.estimator, c.task))
@@ -133,15 +138,20 @@ def make_point_mass_diagram(*, scenario: Scenario) -> Diagram:
     for system in (generator, estimator, controller):
         builder.Connect(chamfer, system.GetInputPort("chamfer_state"))
     builder.Connect(generator.GetOutputPort("command"),
-                    hold.GetInputPort("sampled"))
-    builder.Connect(hold.GetOutputPort("position"),
+                    foh.GetInputPort("sampled"))
+    builder.Connect(foh.GetOutputPort("position"),
                     controller.GetInputPort("commanded_position"))
-    builder.Connect(hold.GetOutputPort("velocity"),
+    builder.Connect(foh.GetOutputPort("velocity"),
                     controller.GetInputPort("commanded_velocity"))
     builder.Connect(estimator.GetOutputPort("desired_normal_force"),
                     controller.GetInputPort("desired_normal_force"))
-    builder.Connect(controller.GetOutputPort("actuation"),
-                    plant.get_actuation_input_port())
+    actuation = controller.GetOutputPort("actuation")
+    if c.controller.control_period > 0:
+        hold = builder.AddNamedSystem("actuation_hold", ZeroOrderHold(
+            c.controller.control_period, plant.num_actuators()))
+        builder.Connect(actuation, hold.get_input_port())
+        actuation = hold.get_output_port()
+    builder.Connect(actuation, plant.get_actuation_input_port())
 
     for name, (system, port) in LOGGED.items():
         logger = LogVectorOutput(
