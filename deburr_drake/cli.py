@@ -1,0 +1,97 @@
+"""The ``deburr-drake`` command line. Thin: parses arguments and calls the
+library."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+__all__ = ["main"]
+
+
+def _load(args):
+    from deburr_drake.config import load_scenario
+    return load_scenario(args.scenario, text=args.scenario_text)
+
+
+def _progress(t, wall):
+    print(f"  t = {t:6.2f} s simulated, {wall:6.1f} s wall", flush=True)
+
+
+def _demo(args) -> int:
+    from deburr_drake import demo
+    scenario = _load(args)
+    duration = args.duration or 5.0
+    print(f"deburr-drake demo: point-mass testbed, scenario "
+          f"'{scenario.name}', {duration:g} s")
+    truth = demo.contact_truth(scenario)
+    print("contact truth (Drake hydroelastic + process threshold): "
+          f"||f_n(delta*)|| = {truth.force_at_desired_depth:.3f} N, "
+          f"local stiffness {truth.local_stiffness / 1e3:.2f} N/mm")
+    print("run 1/2: adaptation off, estimates at the truth (eq. 8)")
+    frozen = demo.run(demo.frozen_adaptation(scenario, truth),
+                      min(duration, 3.0), progress=_progress)
+    print("run 2/2: adaptive (estimator and fuzzy rules on)")
+    log = demo.run(scenario, duration, progress=_progress)
+    summary = demo.summarize(log, truth, frozen)
+    rows = [
+        ("delta_d time constant, adaptation off", "depth_time_constant",
+         1.0, "s"),
+        ("  eq. (8) with the local stiffness", "depth_time_constant_eq8",
+         1.0, "s"),
+        ("final depth (adaptive)", "depth_final", 1e3, "mm"),
+        ("max |delta - delta*| after 2 s", "depth_max_error_after_settle",
+         1e3, "mm"),
+        ("c0 + c1 delta* (estimated)", "predicted_force_at_desired_depth",
+         1.0, "N"),
+        ("true ||f_n|| at delta*", "true_force_at_desired_depth", 1.0, "N"),
+        ("  relative error", "force_prediction_error_rel", 1.0, ""),
+        ("commanded feed (mean after 2 s)", "commanded_feed_mean", 1e3,
+         "mm/s"),
+        ("feedrate law on measured signals", "feedrate_law_mean", 1e3,
+         "mm/s"),
+        ("command speed along the contour", "command_speed", 1e3, "mm/s"),
+        ("chamfering force (mean after 2 s)", "chamfering_force_mean", 1.0,
+         "N"),
+        ("fraction of s in the dead zone after 2 s",
+         "dead_zone_fraction_after_settle", 1.0, ""),
+        ("NaN detected", "nan_detected", 1.0, ""),
+        ("wall time of the adaptive run", "wall_time_s", 1.0, "s"),
+    ]
+    print()
+    for label, key, scale, unit in rows:
+        print(f"  {label:42s} {summary[key] * scale:10.4f} {unit}")
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(summary, f, indent=2)
+    return 0
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="deburr-drake",
+        description="Adaptive fuzzy hybrid position/force deburring on "
+                    "Drake (Hsu & Fu, 2000).")
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("demo", help="run the point-mass testbed and print "
+                                    "its convergence numbers")
+    p.add_argument("--scenario", default="point_mass",
+                   help="scenario name or YAML file (default point_mass)")
+    p.add_argument("--scenario-text", default=None,
+                   help="YAML overrides applied on top of the scenario")
+    p.add_argument("--duration", type=float, default=None,
+                   help="simulated seconds of the adaptive run (default 5)")
+    p.add_argument("--json", default=None, help="also write the numbers")
+    p.set_defaults(func=_demo)
+    args = parser.parse_args(argv)
+    from deburr_drake.config import ConfigError
+    try:
+        return args.func(args)
+    except ConfigError as e:
+        print(f"deburr-drake: error: {e}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,79 @@
+"""Closed-loop point-mass testbed: the four control systems on a Cartesian
+tool with hydroelastic contact. Short simulations (8 s simulated in all)
+that assert the foundation's convergence numbers."""
+
+import numpy as np
+import pytest
+
+from deburr_drake import demo, metrics
+from deburr_drake.config import load_scenario
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    return load_scenario("point_mass")
+
+
+@pytest.fixture(scope="module")
+def truth(scenario):
+    return demo.contact_truth(scenario)
+
+
+@pytest.fixture(scope="module")
+def frozen_log(scenario, truth):
+    return demo.run(demo.frozen_adaptation(scenario, truth), 3.0)
+
+
+@pytest.fixture(scope="module")
+def log(scenario):
+    return demo.run(scenario, 5.0)
+
+
+@pytest.fixture(scope="module")
+def summary(log, truth, frozen_log):
+    return demo.summarize(log, truth, frozen_log)
+
+
+def test_depth_reference_follows_eq8_without_adaptation(summary):
+    """Estimates frozen at the truth: delta_d -> delta* with
+    tau = (1 + k_delta c2) / (k_delta c1) of (8), c1 the local stiffness."""
+    tau, tau8 = summary["depth_time_constant"], \
+        summary["depth_time_constant_eq8"]
+    assert abs(tau - tau8) / tau8 < 0.10, (tau, tau8)
+    assert summary["depth_final_frozen"] == pytest.approx(5e-4, abs=2e-5)
+
+
+def test_depth_settles_with_adaptation(log):
+    ch = log["chamfer"]
+    late = metrics.window(ch["t"], 3.0)
+    error = np.abs(ch["delta"][late] - 5e-4)
+    assert error.max() < 2e-5, error.max()
+    # Contact holds throughout after the first 0.2 s.
+    assert np.all(ch["f_n"][metrics.window(ch["t"], 0.2)] > 1.0)
+
+
+def test_estimates_predict_the_true_force(summary):
+    """c0 + c1 delta* predicts the contact force at delta* (R3)."""
+    assert summary["force_prediction_error_rel"] < 0.10, summary
+
+
+def test_command_follows_the_feedrate_law(summary):
+    # The generator's feed is the law on the measured signals.
+    assert summary["commanded_feed_mean"] == pytest.approx(
+        summary["feedrate_law_mean"], rel=0.01)
+    # The command advances along the zero-depth contour at that feed (the
+    # tool runs 0.5 mm outside it: 1.8 % more path per radian).
+    assert summary["command_speed"] == pytest.approx(
+        summary["commanded_feed_mean"], rel=0.03)
+    # ... which holds the chamfering force at the desired 10 N.
+    assert summary["chamfering_force_mean"] == pytest.approx(10.0, rel=0.03)
+
+
+def test_sliding_variable_stays_in_dead_zone(summary):
+    assert summary["dead_zone_fraction_after_settle"] == 1.0
+
+
+def test_no_nan(summary):
+    assert summary["nan_detected"] == 0.0

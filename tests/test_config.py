@@ -1,0 +1,62 @@
+"""Scenario loading and validation: typed YAML, one clear error per field."""
+
+import pytest
+
+from deburr_drake.config import (ConfigError, Scenario, load_scenario,
+                                 scenario_names)
+
+
+def test_shipped_scenarios_load_and_validate():
+    assert "point_mass" in scenario_names()
+    for name in scenario_names():
+        scenario = load_scenario(name)
+        assert isinstance(scenario, Scenario)
+        assert scenario.name == name
+
+
+def test_overrides_keep_other_defaults():
+    scenario = load_scenario("point_mass", text="""
+controller:
+  fuzzy: {order: 0}
+task: {desired_depth: 0.0008}
+""")
+    assert scenario.controller.fuzzy.order == 0
+    assert scenario.controller.fuzzy.upsilon == 5
+    assert scenario.task.desired_depth == 0.0008
+    assert scenario.task.desired_chamfering_force == 10.0
+
+
+@pytest.mark.parametrize("text, field", [
+    ("controller: {fuzzy: {order: 4}}", "fuzzy.order"),
+    ("controller: {fuzzy: {upsilon: 0}}", "fuzzy.upsilon"),
+    ("controller: {fuzzy: {dead_zone_half_widths: [0.1, 0.1]}}",
+     "fuzzy.dead_zone_half_widths"),
+    ("command: {period: 0.0}", "command.period"),
+    ("command: {period: -0.025}", "command.period"),
+    ("controller: {sliding_gain: [1.0, -2.0, 3.0]}",
+     "controller.sliding_gain"),
+    ("estimator: {initial_estimates: [0.01, 4000.0, 20.0]}",
+     "estimator.initial_estimates"),
+    ("sensor: {cutoff_frequency: 300.0}", "sensor.cutoff_frequency"),
+    ("simulation: {integrator: euler}", "simulation.integrator"),
+    ("edge: {direction: 2}", "edge.direction"),
+    ("tube: {inner_radius: 0.002}", "tool.cutter_radius"),
+])
+def test_invalid_values_name_the_field(text, field):
+    with pytest.raises(ConfigError, match=field.replace(".", r"\.")):
+        load_scenario("point_mass", text=text)
+
+
+def test_unknown_key_is_an_error():
+    with pytest.raises(ConfigError, match="gain_typo"):
+        load_scenario("point_mass", text="controller: {gain_typo: 1.0}")
+
+
+def test_unknown_scenario_lists_the_known_ones():
+    with pytest.raises(ConfigError, match="point_mass"):
+        load_scenario("no_such_scenario")
+
+
+def test_wrong_type_is_an_error():
+    with pytest.raises(ConfigError):
+        load_scenario("point_mass", text="command: {period: fast}")

@@ -1,0 +1,195 @@
+"""HybridController: hand-derived outputs and derivatives through the public
+API, ports, states and scalar conversion."""
+
+import copy
+
+import numpy as np
+import pytest
+from pydrake.systems.framework import DiagramBuilder
+
+from deburr_drake.config import ControllerConfig, ConfigError
+from deburr_drake.controller import HybridController, make_rule_bases
+from deburr_drake.geometry import CircularContour
+from deburr_drake.layout import CONTROLLER_DIAGNOSTICS
+from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
+from deburr_drake.observer import chamfer_quantities
+
+CONTOUR = CircularContour([0.0, 0.0, 0.048], 0.027)
+G = 9.81
+
+
+@pytest.fixture(scope="module")
+def model():
+    return make_kinematic_model(POINT_MASS_URL)
+
+
+def _inputs(x_p, v, force, x_c, v_c, f_nd):
+    chamfer = chamfer_quantities(CONTOUR, x_p, v, force,
+                                 min_tangential_speed=1e-5)
+    return dict(plant_state=np.concatenate([x_p, v]), chamfer_state=chamfer,
+                tool_force=force, commanded_position=x_c,
+                commanded_velocity=v_c, desired_normal_force=[f_nd])
+
+
+def _context(controller, inputs, delta_d, theta=None):
+    context = controller.CreateDefaultContext()
+    for name, value in inputs.items():
+        controller.GetInputPort(name).FixValue(context, value)
+    x = context.get_continuous_state_vector().CopyToVector()
+    x[0] = delta_d
+    if theta is not None:
+        x[1:] = theta.ravel()
+    context.SetContinuousState(x)
+    return context
+
+
+def _scenario_point():
+    p = CONTOUR.point_at(0.01)
+    n1, t = CONTOUR.n1(p), CONTOUR.tangent(p)
+    x_p = p + 4e-4 * n1
+    v = 2e-3 * t + 1e-4 * n1
+    force = -5.0 * n1 - 9.0 * t
+    x_c = p + 3e-5 * t
+    v_c = 2.4e-3 * t
+    return x_p, v, force, x_c, v_c, n1
+
+
+def test_structure(model):
+    config = ControllerConfig()
+    controller = HybridController(model, "tool_tip", config)
+    assert controller.get_name() == "controller"
+    n_rules = (2 * config.fuzzy.upsilon + 1) ** 2
+    assert controller.num_continuous_states() == 1 + 2 * n_rules  # 243
+    ports = [controller.get_input_port(i).get_name()
+             for i in range(controller.num_input_ports())]
+    assert ports == ["plant_state", "chamfer_state", "tool_force",
+                     "commanded_position", "commanded_velocity",
+                     "desired_normal_force"]
+    assert controller.GetOutputPort("actuation").size() == 3
+    assert controller.GetOutputPort("diagnostics").size() == \
+        CONTROLLER_DIAGNOSTICS.size
+    assert controller.ToAutoDiffXdMaybe() is not None
+
+
+def test_control_law_by_hand(model):
+    """(7), (9), s, (36) with theta = 0 inside Omega, J = I, gravity
+    compensation from the model with masses scaled 1.2."""
+    config = ControllerConfig()
+    controller = HybridController(model, "tool_tip", config)
+    x_p, v, force, x_c, v_c, n1 = _scenario_point()
+    f_nd, delta_d = 6.0, 3e-4
+    context = _context(controller, _inputs(x_p, v, force, x_c, v_c, f_nd),
+                       delta_d)
+    f_n = 5.0
+    e_f = f_nd - f_n
+    dd = config.depth_gain * e_f
+    x_pd = x_c + delta_d * n1
+    e = x_pd - x_p
+    s = (v_c + dd * n1 - v) + np.array(config.sliding_lambda) * e
+    assert np.all(np.abs(s[:2]) < 5 * 0.2 * 0.005)  # inside Omega_k
+    f_tau = np.array(config.sliding_gain) * s - force
+    m_z = 1.2 * (0.3 + 1.0)  # flange + tool, as the controller models them
+    expected = f_tau + np.array([0.0, 0.0, m_z * G])
+    actuation = controller.GetOutputPort("actuation").Eval(context)
+    np.testing.assert_allclose(actuation, expected, rtol=1e-9, atol=1e-9)
+    d = CONTROLLER_DIAGNOSTICS.split(
+        controller.GetOutputPort("diagnostics").Eval(context))
+    np.testing.assert_allclose(d["s"], s, rtol=1e-12)
+    np.testing.assert_allclose(d["x_pd"], x_pd, rtol=1e-12)
+    assert d["e_f"] == pytest.approx(e_f)
+    np.testing.assert_array_equal(d["zeta"], [1, 1, 0])
+    derivatives = controller.EvalTimeDerivatives(context).CopyToVector()
+    assert derivatives[0] == pytest.approx(dd)
+
+
+def test_fuzzy_term_and_adaptation(model):
+    """u_f = theta^T nu (30) on the fuzzy axes; theta' = r nu s_Delta (35)
+    on the active rules only, zero inside the dead zone (R4)."""
+    config = ControllerConfig()
+    controller = HybridController(model, "tool_tip", config)
+    rb = make_rule_bases(config)
+    rng = np.random.default_rng(0)
+    theta = rng.normal(size=(2, rb[0].n_rules))
+    x_p, v, force, x_c, v_c, _ = _scenario_point()
+    inputs = _inputs(x_p, v, force, x_c, v_c, 6.0)
+    base = _context(controller, inputs, 3e-4)
+    ctx = _context(controller, inputs, 3e-4, theta)
+    s = CONTROLLER_DIAGNOSTICS.get(
+        controller.GetOutputPort("diagnostics").Eval(ctx), "s")
+    y0 = np.linalg.norm(x_p)
+    du = (controller.GetOutputPort("actuation").Eval(ctx)
+          - controller.GetOutputPort("actuation").Eval(base))
+    for k in range(2):
+        assert du[k] == pytest.approx(rb[k].evaluate(theta[k], y0, s[k]),
+                                      rel=1e-9)
+    rate = controller.EvalTimeDerivatives(ctx).CopyToVector()[1:]
+    rate = rate.reshape(2, -1)
+    r = config.fuzzy.adaptation_gain
+    for k in range(2):
+        idx, nu = rb[k].active_rules(y0, s[k])
+        hw = rb[k].resolved_dead_zone_half_width
+        expected = np.zeros(rb[k].n_rules)
+        if abs(s[k]) > hw:
+            expected[idx] = r * nu * s[k]
+        np.testing.assert_allclose(rate[k], expected, rtol=1e-9, atol=1e-15)
+        assert np.count_nonzero(rate[k]) <= (config.fuzzy.order + 1) ** 2
+
+
+def test_robust_term_outside_omega(model):
+    """zeta_k = 0 outside Omega_k: H_bar = h_bar sat(s / phi) (R10)."""
+    config = ControllerConfig()
+    controller = HybridController(model, "tool_tip", config)
+    x_p, v, force, x_c, v_c, _ = _scenario_point()
+    v = v + np.array([0.0, -0.05, 0.0])  # s_y far outside Omega
+    ctx = _context(controller, _inputs(x_p, v, force, x_c, v_c, 6.0), 3e-4)
+    d = CONTROLLER_DIAGNOSTICS.split(
+        controller.GetOutputPort("diagnostics").Eval(ctx))
+    assert d["zeta"][1] == 0.0
+    assert d["u_fuzzy"][1] == pytest.approx(config.robust_gain[1])
+    rate = controller.EvalTimeDerivatives(ctx).CopyToVector()[1:]
+    np.testing.assert_array_equal(rate.reshape(2, -1)[1], 0.0)
+
+
+def test_autodiff_matches_finite_difference(model):
+    """The AutoDiffXd controller's d(actuation)/d(delta_d) equals a finite
+    difference of the float controller."""
+    from pydrake.autodiffutils import AutoDiffXd, ExtractGradient
+    config = ControllerConfig()
+    controller = HybridController(model, "tool_tip", config)
+    x_p, v, force, x_c, v_c, _ = _scenario_point()
+    inputs = _inputs(x_p, v, force, x_c, v_c, 6.0)
+    ad = controller.ToAutoDiffXd()
+    ctx_ad = ad.CreateDefaultContext()
+    for name, value in inputs.items():
+        ad.GetInputPort(name).FixValue(ctx_ad, np.array(
+            [AutoDiffXd(float(x)) for x in np.asarray(value, float)]))
+    x_ad = [AutoDiffXd(0.0) for _ in range(controller.num_continuous_states())]
+    x_ad[0] = AutoDiffXd(3e-4, np.array([1.0]))
+    ctx_ad.SetContinuousState(np.array(x_ad))
+    u_ad = ad.GetOutputPort("actuation").Eval(ctx_ad)
+    grad = ExtractGradient(u_ad)[:, 0]
+    h = 1e-7
+    u1 = controller.GetOutputPort("actuation").Eval(
+        _context(controller, inputs, 3e-4 + h))
+    u0 = controller.GetOutputPort("actuation").Eval(
+        _context(controller, inputs, 3e-4 - h))
+    np.testing.assert_allclose(grad, (u1 - u0) / (2 * h), rtol=1e-5,
+                               atol=1e-6)
+
+
+@pytest.mark.parametrize("path, value, match", [
+    (("fuzzy", "order"), 4, "fuzzy.order"),
+    (("fuzzy", "upsilon"), 0, "fuzzy.upsilon"),
+    (("fuzzy", "dead_zone_half_widths"), [0.01, 0.01],
+     "fuzzy.dead_zone_half_widths"),
+    (("depth_gain",), -1.0, "controller.depth_gain"),
+    (("sliding_gain",), [1.0, 1.0], "controller.sliding_gain"),
+])
+def test_invalid_config_names_the_field(model, path, value, match):
+    config = copy.deepcopy(ControllerConfig())
+    target = config
+    for name in path[:-1]:
+        target = getattr(target, name)
+    setattr(target, path[-1], value)
+    with pytest.raises(ConfigError, match=match):
+        HybridController(model, "tool_tip", config)

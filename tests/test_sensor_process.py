@@ -1,0 +1,104 @@
+"""ForceSensor (weld reaction, weight compensation, sampled low-pass) and
+CuttingProcess (eq. (3) and the threshold c0 of (4))."""
+
+import numpy as np
+import pytest
+from pydrake.multibody.math import SpatialForce
+from pydrake.multibody.plant import (AddMultibodyPlant,
+                                     ExternallyAppliedSpatialForce,
+                                     MultibodyPlantConfig)
+from pydrake.systems.framework import DiagramBuilder
+
+from deburr_drake.config import ProcessConfig, SensorConfig
+from deburr_drake.geometry import CircularContour
+from deburr_drake.part import add_cartesian_tool
+from deburr_drake.process import PROCESS_STATE, cutting_force
+from deburr_drake.sensor import ForceSensor
+
+CONTOUR = CircularContour([0.0, 0.0, 0.048], 0.027)
+
+
+def _held_tool(f_ext, config=SensorConfig()):
+    """Tool at rest, actuators balancing gravity and f_ext exactly."""
+    builder = DiagramBuilder()
+    plant, _ = AddMultibodyPlant(MultibodyPlantConfig(
+        time_step=0.0, contact_model="hydroelastic_with_fallback"), builder)
+    add_cartesian_tool(plant)
+    plant.Finalize()
+    sensor = builder.AddSystem(ForceSensor(plant, "ft_sensor", config))
+    builder.Connect(plant.get_reaction_forces_output_port(),
+                    sensor.GetInputPort("reaction_forces"))
+    builder.Connect(plant.get_state_output_port(),
+                    sensor.GetInputPort("plant_state"))
+    diagram = builder.Build()
+    context = diagram.CreateDefaultContext()
+    pc = plant.GetMyMutableContextFromRoot(context)
+    plant.SetPositions(pc, [0.1, -0.05, 0.2])
+    total_mass = sum(plant.GetBodyByName(b).default_mass()
+                     for b in ("x_carriage", "y_carriage", "flange", "tool"))
+    masses = np.array([total_mass, total_mass - 0.5, 1.3])
+    plant.get_actuation_input_port().FixValue(
+        pc, masses * np.array([0, 0, 9.81]) - f_ext)
+    applied = ExternallyAppliedSpatialForce()
+    applied.body_index = plant.GetBodyByName("tool").index()
+    applied.p_BoBq_B = np.zeros(3)
+    applied.F_Bq_W = SpatialForce(np.zeros(3), f_ext)
+    plant.get_applied_spatial_force_input_port().FixValue(pc, [applied])
+    sc = sensor.GetMyMutableContextFromRoot(context)
+    sensor.GetInputPort("noise").FixValue(sc, np.zeros(3))
+    return plant, pc, sensor, sc
+
+
+def test_reads_the_external_force_with_weight_compensated():
+    f_ext = np.array([-3.0, 7.5, 1.25])
+    plant, pc, sensor, sc = _held_tool(f_ext)
+    vdot = plant.get_generalized_acceleration_output_port().Eval(pc)
+    np.testing.assert_allclose(vdot, 0.0, atol=1e-12)
+    np.testing.assert_allclose(sensor.raw_force(sc), f_ext, atol=1e-9)
+
+
+def test_low_pass_update():
+    config = SensorConfig(sample_period=0.0025, cutoff_frequency=20.0)
+    f_ext = np.array([1.0, 2.0, 3.0])
+    _, _, sensor, sc = _held_tool(f_ext, config)
+    alpha = 1 - np.exp(-2 * np.pi * 20.0 * 0.0025)
+    y = sensor.EvalUniquePeriodicDiscreteUpdate(sc).get_vector(0)
+    np.testing.assert_allclose(y.CopyToVector(), alpha * f_ext, rtol=1e-9)
+    assert sensor.GetOutputPort("tool_force").Eval(sc) == pytest.approx(
+        np.zeros(3))  # no feedthrough: the state, not the input
+
+
+def test_cutting_force_by_hand():
+    config = ProcessConfig(cutting_coefficient=3.3e9, plunge_coefficient=50.0,
+                           threshold_power_force=2.0,
+                           contact_threshold_force=2.0)
+    p = CONTOUR.point_at(0.02)
+    n1, t = CONTOUR.n1(p), CONTOUR.tangent(p)
+    delta, v_t, v_n = 5e-4, 2.4e-3, 1e-4
+    force, state = cutting_force(config, CONTOUR, p + delta * n1,
+                                 v_t * t + v_n * n1, cut_height=0.002)
+    g = 3.3e9 * delta * 0.002
+    f_t = g * v_t + 50.0 * v_n + 2.0
+    smooth = v_t / np.hypot(v_t, config.smoothing_speed)
+    np.testing.assert_allclose(force, -f_t * smooth * t - 2.0 * n1,
+                               rtol=1e-9)
+    s = PROCESS_STATE.split(state)
+    assert s["g"] == pytest.approx(g)
+    assert s["engagement"] == 1.0
+    assert s["f_threshold"] == pytest.approx(2.0)
+
+
+def test_no_cutting_force_out_of_contact_and_smooth_onset():
+    config = ProcessConfig()
+    p = CONTOUR.point_at(0.0)
+    n1, t = CONTOUR.n1(p), CONTOUR.tangent(p)
+    force, _ = cutting_force(config, CONTOUR, p - 1e-4 * n1, 2e-3 * t,
+                             cut_height=0.002)
+    np.testing.assert_array_equal(force, 0.0)
+    half, _ = cutting_force(config, CONTOUR,
+                            p + 0.5 * config.threshold_depth * n1, 2e-3 * t,
+                            cut_height=0.002)
+    full, _ = cutting_force(config, CONTOUR,
+                            p + 2.0 * config.threshold_depth * n1, 2e-3 * t,
+                            cut_height=0.002)
+    assert 0 < -half @ n1 < -full @ n1
