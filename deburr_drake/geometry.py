@@ -140,21 +140,28 @@ class Contour(abc.ABC):
         return np.dot(self.n1(p), v)
 
     def n2(self, p, v, min_speed):
-        """Direction of motion n2 = (I - n1 n1^T) v / |(I - n1 n1^T) v| (eq. 2, R5).
+        """Direction of motion along the edge (eq. 2, R5): +-tangent(p), the
+        sign of the velocity's component along the edge, i.e.
+        (I - n1 n1^T) v normalized after also dropping the component along
+        the wall's vertical (parallel to the cutter axis), which cuts no
+        chamfer and would otherwise tip n2 out of the contour's plane.
 
-        Returns ``tangent(p)`` when the tangential speed is below ``min_speed``
-        (start-up).  T-generic; min_speed is a float > 0 [m/s].
+        Returns ``tangent(p)`` when the speed along the edge is below
+        ``min_speed`` (start-up). T-generic; min_speed is a float > 0 [m/s].
         """
         min_speed = _finite_scalar(min_speed, "min_speed")
         if min_speed <= 0.0:
             raise ValueError(f"min_speed must be > 0, got {min_speed}")
         v = _vec3(v, "v")
-        n1 = self.n1(p)
-        vt = v - n1 * np.dot(n1, v)
-        sq = np.dot(vt, vt)
-        if _value(sq) < min_speed * min_speed:
-            return self.tangent(p)
-        return vt / np.sqrt(sq)
+        t = self.tangent(p)
+        speed = np.dot(t, v)
+        if abs(_value(speed)) < min_speed:
+            return t
+        return t if _value(speed) > 0 else -t
+
+    def edge_speed(self, p, v):
+        """Signed speed along the edge, tangent(p) . v (m/s). T-generic."""
+        return np.dot(self.tangent(p), _vec3(v, "v"))
 
     def unwrapped_arc_position(self, p, reference_s) -> float:
         """The s congruent to arc_position(p) modulo length that is closest to
