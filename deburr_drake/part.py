@@ -26,7 +26,7 @@ __all__ = [
     "register_compliant_ring", "register_cutter", "add_cartesian_tool", "RingContactProbe", "measure_normal_force",
     "local_stiffness", "power_law_exponent", "calibrate_hydroelastic_modulus", "force_ripple"]
 
-# Calibration by scripts/contact_stiffness.py (n_theta = 720, n_radial = n_z = 2, the
+# Calibration by scripts/contact_stiffness.py (n_theta = 240, n_radial = n_z = 2, the
 # default geometry of measure_normal_force): with this modulus the local stiffness
 # dF/d(delta) at delta = 0.5 mm is about 10 N/mm; the force there is as stated.
 CALIBRATED_HYDROELASTIC_MODULUS = 4.5e6   # Pa
@@ -39,7 +39,7 @@ def _check_positive(name, value):
 
 
 def register_compliant_ring(plant, *, inner_radius, outer_radius, z_bottom, z_top, hydroelastic_modulus,
-                            hunt_crossley_dissipation, center_xy=(0.0, 0.0), n_theta=720, n_radial=2, n_z=2,
+                            hunt_crossley_dissipation, center_xy=(0.0, 0.0), n_theta=240, n_radial=2, n_z=2,
                             name="tube_edge"):
     """Register the ring inner_radius <= r <= outer_radius, z_bottom <= z <= z_top (m) about the
     vertical axis through center_xy (m, world) on the world body.
@@ -76,10 +76,10 @@ def register_compliant_ring(plant, *, inner_radius, outer_radius, z_bottom, z_to
     return geometry_id
 
 
-def register_cutter(plant, body, *, cutter_radius=0.003, cutter_length=0.020, resolution_hint=2e-4):
+def register_cutter(plant, body, *, cutter_radius=0.003, cutter_length=0.020, resolution_hint=4e-4):
     """The cylindrical cutter on `body`, tip at the body origin, axis +z (m): rigid hydroelastic,
     frictionless (the tangential force is the cutting process's, DESIGN.md §8), with a visual.
-    The default resolution hint gives ceil(2 pi r / hint) = 95 side facets for r = 3 mm.
+    The default resolution hint gives ceil(2 pi r / hint) = 48 side facets for r = 3 mm.
     Call before Finalize. Returns the collision GeometryId."""
     _check_positive("cutter_radius", cutter_radius)
     _check_positive("cutter_length", cutter_length)
@@ -93,12 +93,12 @@ def register_cutter(plant, body, *, cutter_radius=0.003, cutter_length=0.020, re
     return geometry_id
 
 
-def add_cartesian_tool(plant, *, cutter_radius=0.003, cutter_length=0.020):
+def add_cartesian_tool(plant, *, cutter_radius=0.003, cutter_length=0.020, resolution_hint=4e-4):
     """Add models/cartesian_tool.sdf (joints x, y, z, weld ft_sensor; body `tool` with origin at
     the tool tip) and its cutter. Returns the model instance."""
     (instance,) = make_parser(plant).AddModels(url=POINT_MASS_URL)
     register_cutter(plant, plant.GetBodyByName("tool", instance), cutter_radius=cutter_radius,
-                    cutter_length=cutter_length)
+                    cutter_length=cutter_length, resolution_hint=resolution_hint)
     return instance
 
 
@@ -110,7 +110,7 @@ class RingContactProbe:
     """
 
     def __init__(self, *, inner_radius=0.030, wall=0.005, layer_height=0.006, z_top=0.050,
-                 hydroelastic_modulus, hunt_crossley_dissipation=0.0, n_theta=720, n_radial=2, n_z=2):
+                 hydroelastic_modulus, hunt_crossley_dissipation=0.0, n_theta=240, n_radial=2, n_z=2):
         for name, value in (("inner_radius", inner_radius), ("wall", wall), ("layer_height", layer_height)):
             _check_positive(name, value)
         builder = DiagramBuilder()
@@ -164,7 +164,7 @@ class RingContactProbe:
 
 
 def measure_normal_force(depths, *, inner_radius=0.030, wall=0.005, layer_height=0.006, engagement=0.002,
-                         hydroelastic_modulus, cutter_radius=0.003, angle=0.0, n_theta=720):
+                         hydroelastic_modulus, cutter_radius=0.003, angle=0.0, n_theta=240):
     """Normal (radial) contact force (N) on the cartesian tool's cutter for each radial depth (m).
 
     Static evaluation of Drake's hydroelastic contact (continuous plant, contact model
@@ -219,7 +219,7 @@ def calibrate_hydroelastic_modulus(*, target_stiffness=1.0e4, depth=5.0e-4, refe
     return float(f"{E:.{significant_digits - 1}e}")
 
 
-def force_ripple(depth, *, n_samples=25, n_theta=720, **kwargs):
+def force_ripple(depth, *, n_samples=25, n_theta=240, **kwargs):
     """Force ripple (max - min) / mean over one mesh segment (2 pi / n_theta rad) around the ring at `depth` (m).
 
     Also returns the forces (N) at the n_samples angles in [0, 2 pi / n_theta]. kwargs
