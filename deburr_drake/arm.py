@@ -1,0 +1,135 @@
+"""The 5-DOF deburring arm (models/arm5.sdf): loading, and the tool-vertical inverse kinematics.
+
+The arm is the paper's class of robot (an industrial arm with a spindle and a wrist
+force/torque sensor, Section IV); its dynamics (1) are the MultibodyPlant's, with the
+motors' reflected inertia (drake:rotor_inertia, drake:gear_ratio) and viscous joint
+damping from the SDF (DESIGN.md §8). The task coordinates are the tool tip's
+position (frame `tool_tip`, the origin of body `tool`); the tool axis is kept
+vertical (tool +z = world +z), which fixes the wrist pitch; wrist_roll turns about
+the tool axis and does not move the tip.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pydrake.multibody.inverse_kinematics import InverseKinematics
+from pydrake.solvers import SnoptSolver, Solve, SolverOptions
+
+from deburr_drake.models import make_parser
+from deburr_drake.part import register_cutter
+
+__all__ = ["ARM_URL", "ARM_MODEL_NAME", "ARM_JOINTS", "DEFAULT_PART_POSITION", "Q_READY",
+           "add_arm", "solve_tool_pose", "default_q_guess"]
+
+ARM_URL = "package://deburr_drake_models/arm5.sdf"
+ARM_MODEL_NAME = "arm5"
+ARM_JOINTS = ("waist", "shoulder", "elbow", "wrist_pitch", "wrist_roll")
+
+# Where the tube's axis stands (m, world; the tube's bottom at z = 0). Chosen by IK
+# around circles of radius 17..57 mm at z = 0.048 m (tests/test_arm.py): the wrist
+# centre is then 0.34..0.46 m from the shoulder (links 0.30 + 0.30 m), elbow up, every
+# joint at least 0.78 rad from its limits (the largest margin of x = 0.30..0.50 m), static
+# gravity torques at most 21 % of the effort limits (shoulder, about 31 N m).
+DEFAULT_PART_POSITION = [0.40, 0.0, 0.0]
+
+# Elbow-up pose with the tool vertical, tip at (0.40, 0, 0.048) m (rad, order ARM_JOINTS).
+Q_READY = np.array([0.0, 0.8393, 0.1015, -0.9408, 0.0])
+
+_AXIS_POINT = 0.10        # m, second point on the tool axis used for the verticality constraint
+
+
+def add_arm(plant, *, cutter_radius=0.003, cutter_length=0.020, resolution_hint=4e-4):
+    """Add models/arm5.sdf (welded to the world at the origin; body `tool` with origin at the
+    tool tip, weld `ft_sensor` flange -> tool) and its cutter (part.register_cutter).
+    The plant must be registered with a SceneGraph (the cutter is geometry); for a
+    geometry-free model of the arm use models.make_kinematic_model(ARM_URL). Call before
+    Finalize. Returns the model instance."""
+    (instance,) = make_parser(plant).AddModels(url=ARM_URL)
+    register_cutter(plant, plant.GetBodyByName("tool", instance), cutter_radius=cutter_radius,
+                    cutter_length=cutter_length, resolution_hint=resolution_hint)
+    return instance
+
+
+def default_q_guess(p_W_tip):
+    """Elbow-up initial guess (rad) for a tip target p_W_tip (m): Q_READY turned by the waist
+    towards the target."""
+    p = np.asarray(p_W_tip, dtype=float)
+    q = Q_READY.copy()
+    if math.hypot(p[0], p[1]) > 1e-9:
+        q[0] = math.atan2(p[1], p[0])
+    return q
+
+
+def _arm_instance(plant, instance):
+    if instance is not None:
+        return instance
+    if not plant.HasModelInstanceNamed(ARM_MODEL_NAME):
+        raise ValueError(f"plant has no model instance named {ARM_MODEL_NAME!r}: pass instance=")
+    return plant.GetModelInstanceByName(ARM_MODEL_NAME)
+
+
+def solve_tool_pose(plant, p_W_tip, *, q_guess=None, instance=None, tolerance=1e-7):
+    """Arm joint angles q (5,) (rad, order ARM_JOINTS) with the tool tip at p_W_tip (m, world)
+    and the tool axis vertical (tool +z = world +z), within the joint limits.
+
+    Drake InverseKinematics (SNOPT) on the finalized `plant`, which may hold other models:
+    their positions stay at the plant's defaults. Constraints: tip position == p_W_tip;
+    the axis point 0.1 m up the tool axis has the tip's x, y and lies above the tip.
+    Cost: |q - q_guess|^2 (fixes the free wrist_roll). q_guess defaults to
+    default_q_guess(p_W_tip) (elbow up). Raises RuntimeError naming the target if the solver
+    fails or the result misses the target by more than `tolerance` (m; axis tilt times 0.1 m).
+    """
+    if not plant.is_finalized():
+        raise ValueError("plant must be finalized")
+    p = np.asarray(p_W_tip, dtype=float).reshape(-1)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise ValueError(f"p_W_tip must be 3 finite numbers (m), got {p_W_tip!r}")
+    instance = _arm_instance(plant, instance)
+    if q_guess is None:
+        q_guess = default_q_guess(p)
+    q_guess = np.asarray(q_guess, dtype=float).reshape(-1)
+    if q_guess.shape != (5,) or not np.all(np.isfinite(q_guess)):
+        raise ValueError(f"q_guess must be 5 finite joint angles (rad), got {q_guess!r}")
+
+    tip = plant.GetFrameByName("tool_tip", instance)
+    world = plant.world_frame()
+    ik = InverseKinematics(plant, with_joint_limits=True)
+    q = ik.q()
+    prog = ik.get_mutable_prog()
+    ik.AddPositionConstraint(tip, np.zeros(3), world, p, p)
+    up = np.array([0.0, 0.0, _AXIS_POINT])
+    inf = np.inf
+    ik.AddPositionConstraint(tip, up, world, np.array([p[0], p[1], p[2] + 0.5 * _AXIS_POINT]),
+                             np.array([p[0], p[1], inf]))
+
+    q0 = plant.GetDefaultPositions()
+    q_full_guess = q0.copy()
+    plant.SetPositionsInArray(instance, q_guess, q_full_guess)
+    arm_mask = np.zeros(plant.num_positions(), dtype=bool)
+    arm_idx = np.array([plant.GetJointByName(j, instance).position_start() for j in ARM_JOINTS])
+    arm_mask[arm_idx] = True
+    others = np.flatnonzero(~arm_mask)
+    if others.size:
+        prog.AddBoundingBoxConstraint(q0[others], q0[others], q[others])
+    prog.AddQuadraticErrorCost(np.eye(5), q_guess, q[arm_idx])
+
+    options = SolverOptions()
+    snopt = SnoptSolver().solver_id()
+    options.SetOption(snopt, "Major feasibility tolerance", 1e-10)
+    options.SetOption(snopt, "Major optimality tolerance", 1e-10)
+    result = Solve(prog, q_full_guess, options)
+    q_sol = result.GetSolution(q)
+    if not result.is_success():
+        raise RuntimeError(f"tool pose IK failed for tool tip target p_W_tip={p.tolist()} m "
+                           f"({result.get_solution_result()})")
+    context = plant.CreateDefaultContext()
+    plant.SetPositions(context, q_sol)
+    X_WT = tip.CalcPoseInWorld(context)
+    pos_err = np.linalg.norm(X_WT.translation() - p)
+    axis_err = _AXIS_POINT * np.linalg.norm(X_WT.rotation().matrix()[:2, 2])
+    if pos_err > tolerance or axis_err > tolerance:
+        raise RuntimeError(f"tool pose IK missed tool tip target p_W_tip={p.tolist()} m: "
+                           f"position error {pos_err:.3g} m, axis error {axis_err / _AXIS_POINT:.3g} rad")
+    return q_sol[arm_idx]
