@@ -61,8 +61,11 @@ def HybridController_(T):
           on the fuzzy axes (u_f of (30) with y0 = ||x_p||, y_k = s_k, R8;
           H_bar_k = h_bar_k sat(s_k / phi_k), R10); K s - f on the others
           (R9)
-        - tau = J^T f_tau - tau_g(q), tau_g from the controller's model
-          (masses scaled by ``model_mass_scale``: deliberately imperfect)
+        - tau = J_v^T f_tau + J_w^T K_o s_o - tau_g(q): tool orientation by
+          a PD on s_o = lambda_o e_o - omega (e_o the rotation vector of
+          R_d R^T, R_d = ``desired_rotation``, identity by default); tau_g
+          from the controller's model (masses scaled by
+          ``model_mass_scale``: deliberately imperfect)
         - theta_k' = r nu_k(y0, s_k) s_Delta,k on the (m+1)^2 active rules
           (35), with the dead zone of R4.
 
@@ -93,7 +96,7 @@ def HybridController_(T):
         """
 
         def _construct(self, plant, tool_frame_name, config,
-                       converter=None):
+                       desired_rotation=None, converter=None):
             LeafSystem_[T].__init__(self, converter)
             config.validate()
             self.set_name("controller")
@@ -115,6 +118,11 @@ def HybridController_(T):
             self._B_T = plant.MakeActuationMatrix().T  # nu x nv
             self._lambda = np.asarray(config.sliding_lambda, float)
             self._K = np.asarray(config.sliding_gain, float)
+            self._desired_rotation = (np.eye(3) if desired_rotation is None
+                                      else np.asarray(desired_rotation,
+                                                      float))
+            self._lambda_o = np.asarray(config.orientation_lambda, float)
+            self._K_o = np.asarray(config.orientation_gain, float)
             n_theta = len(self._axes) * self._n_rules
             self.DeclareContinuousState(1 + n_theta)
             nx = plant.num_multibody_states()
@@ -143,7 +151,7 @@ def HybridController_(T):
         def _construct_copy(self, other, converter=None):
             Impl._construct(self, other._float_plant,
                             other._tool_frame_name, other._config,
-                            converter=converter)
+                            other._desired_rotation, converter=converter)
 
         @property
         def rule_bases(self):
@@ -203,10 +211,19 @@ def HybridController_(T):
 
             plant, ctx = self._plant, self._plant_context
             plant.SetPositionsAndVelocities(ctx, p["plant_state"])
-            J = plant.CalcJacobianTranslationalVelocity(
+            J = plant.CalcJacobianSpatialVelocity(
                 ctx, JacobianWrtVariable.kV, self._frame, np.zeros(3),
-                self._world, self._world)
-            tau = J.T @ f_tau
+                self._world, self._world)  # rows: angular, translational
+            tau = J[3:].T @ f_tau
+            if np.any(self._K_o > 0):
+                R = self._frame.CalcPoseInWorld(ctx).rotation().matrix()
+                E = self._desired_rotation @ R.T
+                # Rotation vector of R_d R^T to first order (exact axis).
+                e_o = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0],
+                                      E[1, 0] - E[0, 1]])
+                omega = J[:3] @ p["plant_state"][self._nq:]
+                tau = tau + J[:3].T @ (self._K_o * (self._lambda_o * e_o
+                                                    - omega))
             if c.gravity_compensation:
                 tau = tau - plant.CalcGravityGeneralizedForces(ctx)
             value.set_value(dict(
