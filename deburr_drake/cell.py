@@ -1,20 +1,25 @@
-"""The point-mass testbed: a Cartesian tool (three prismatic joints, J = I,
-gravity on) whose cylindrical cutter presses on the inner edge of a tube
-through hydroelastic contact, closed by the paper's four control systems."""
+"""The deburring cell as a named Drake Diagram: a robot (the 5-DOF arm of
+Section IV, or a Cartesian point-mass tool) whose cylindrical cutter chamfers
+a tube's inner edge through hydroelastic contact, closed by the paper's
+command generator, first-order hold, contact estimator and hybrid
+controller, with the plant-side cutting process, joint friction and force
+sensor."""
 
 from __future__ import annotations
 
 import numpy as np
+from pydrake.common import RandomDistribution
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.common import RandomDistribution
 from pydrake.systems.primitives import (LogVectorOutput, RandomSource,
                                         ZeroOrderHold)
 
+from deburr_drake.arm import ARM_URL, add_arm, solve_tool_pose
 from deburr_drake.command import CommandGenerator, FirstOrderHold
 from deburr_drake.config import Scenario
 from deburr_drake.controller import HybridController
 from deburr_drake.estimator import ContactParameterEstimator
+from deburr_drake.friction import JointFriction
 from deburr_drake.geometry import CircularContour
 from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.observer import ChamferObserver
@@ -22,11 +27,17 @@ from deburr_drake.part import add_cartesian_tool, register_compliant_ring
 from deburr_drake.process import CuttingProcess
 from deburr_drake.sensor import ForceSensor
 
-__all__ = ["make_point_mass_diagram", "make_contour", "start_position",
-           "TOOL_FRAME", "SENSOR_JOINT", "LOGGED"]
+__all__ = ["make_deburring_diagram", "MakeDeburringDiagram", "make_contour",
+           "start_position", "TOOL_FRAME", "SENSOR_JOINT", "LOGGED",
+           "SYSTEM_NAMES"]
 
 TOOL_FRAME = "tool_tip"
 SENSOR_JOINT = "ft_sensor"
+
+_ROBOTS = {
+    "cartesian_tool": (POINT_MASS_URL, add_cartesian_tool),
+    "arm5": (ARM_URL, add_arm),
+}
 
 #: Logged signals: logger name -> (system name, output port name).
 LOGGED = {
@@ -41,6 +52,12 @@ LOGGED = {
     "tool_force": ("force_sensor", "tool_force"),
 }
 
+#: Every system the builder adds (besides the loggers ``log_<name>``).
+SYSTEM_NAMES = ("plant", "scene_graph", "cutting_process", "joint_friction",
+                "force_sensor", "sensor_noise", "chamfer_observer",
+                "command_generator", "first_order_hold", "contact_estimator",
+                "controller", "actuation_hold")
+
 
 def make_contour(scenario: Scenario) -> CircularContour:
     """The zero-depth path of the tool tip: the tube's inner edge offset by
@@ -53,6 +70,13 @@ def make_contour(scenario: Scenario) -> CircularContour:
                            direction=scenario.edge.direction)
 
 
+def start_position(scenario: Scenario, contour=None) -> np.ndarray:
+    """Tool tip at the contour start, ``initial_depth`` into the material."""
+    contour = contour or make_contour(scenario)
+    p = contour.point_at(0.0)
+    return p + scenario.simulation.initial_depth * contour.n1(p)
+
+
 def _add_plant(builder: DiagramBuilder, scenario: Scenario):
     sim = scenario.simulation
     config = MultibodyPlantConfig(
@@ -61,8 +85,10 @@ def _add_plant(builder: DiagramBuilder, scenario: Scenario):
     if sim.plant_time_step > 0:
         config.discrete_contact_approximation = sim.contact_approximation
     plant, scene_graph = AddMultibodyPlant(config, builder)
-    add_cartesian_tool(plant, cutter_radius=scenario.tool.cutter_radius,
-                       cutter_length=scenario.tool.cutter_length)
+    _, add_robot = _ROBOTS[scenario.robot.model]
+    add_robot(plant, cutter_radius=scenario.tool.cutter_radius,
+              cutter_length=scenario.tool.cutter_length,
+              resolution_hint=scenario.tool.resolution_hint)
     tube = scenario.tube
     z_top = tube.position[2] + tube.height
     register_compliant_ring(
@@ -79,39 +105,47 @@ def _add_plant(builder: DiagramBuilder, scenario: Scenario):
     return plant, scene_graph
 
 
-def start_position(scenario: Scenario, contour=None) -> np.ndarray:
-    """Tool tip at the contour start, ``initial_depth`` into the material."""
-    contour = contour or make_contour(scenario)
-    p = contour.point_at(0.0)
-    return p + scenario.simulation.initial_depth * contour.n1(p)
+def _initial_positions(plant, scenario: Scenario, x0) -> np.ndarray:
+    if scenario.robot.model == "cartesian_tool":
+        # World-aligned prismatic joints, tip at the origin for q = 0.
+        return np.asarray(x0, float)
+    return solve_tool_pose(plant, x0)
 
 
-def make_point_mass_diagram(*, scenario: Scenario) -> Diagram:
-    """The closed-loop point-mass testbed as a named Diagram.
+def make_deburring_diagram(*, scenario: Scenario) -> Diagram:
+    """The closed loop as a named Diagram.
 
-    Systems: ``plant``, ``scene_graph``, ``cutting_process``,
-    ``force_sensor``, ``chamfer_observer``, ``command_generator``,
-    ``first_order_hold``, ``contact_estimator``, ``controller``, and one
-    ``log_<name>`` VectorLogSink per entry of :data:`LOGGED`. The plant's
-    default positions put the tool tip at the contour start."""
+    Systems (see :data:`SYSTEM_NAMES`): ``plant``, ``scene_graph``,
+    ``cutting_process``, ``joint_friction`` (when the scenario has joint
+    friction), ``force_sensor``, ``sensor_noise``, ``chamfer_observer``,
+    ``command_generator``, ``first_order_hold``, ``contact_estimator``,
+    ``controller``, ``actuation_hold`` (when the controller output is held),
+    and one ``log_<name>`` VectorLogSink per entry of :data:`LOGGED`. The
+    plant's default positions put the tool tip at the contour start (by
+    inverse kinematics for the arm), in contact."""
     scenario.validate()
-    builder = DiagramBuilder()
-    plant, _ = _add_plant(builder, scenario)
-    contour = make_contour(scenario)
-    x0 = start_position(scenario, contour)
-    # The Cartesian tool's joints are world-aligned with the tip at the
-    # origin for q = 0, so q = tip position.
-    plant.SetDefaultPositions(x0)
-
-    model = make_kinematic_model(POINT_MASS_URL)
     c = scenario
+    builder = DiagramBuilder()
+    plant, _ = _add_plant(builder, c)
+    contour = make_contour(c)
+    x0 = start_position(c, contour)
+    q0 = _initial_positions(plant, c, x0)
+    plant.SetDefaultPositions(q0)
+
+    url, _ = _ROBOTS[c.robot.model]
+    model = make_kinematic_model(url)
+    model_context = model.CreateDefaultContext()
+    model.SetPositions(model_context, q0)
+    desired_rotation = model.GetFrameByName(TOOL_FRAME).CalcPoseInWorld(
+        model_context).rotation().matrix()
+
     process = builder.AddNamedSystem("cutting_process", CuttingProcess(
-        plant, TOOL_FRAME, contour, c.process, cut_height=c.tool.engagement))
+        plant, TOOL_FRAME, contour, c.process, cut_height=c.tool.engagement,
+        cutter_radius=c.tool.cutter_radius))
     sensor = builder.AddNamedSystem("force_sensor", ForceSensor(
         plant, SENSOR_JOINT, c.sensor))
     noise = builder.AddNamedSystem("sensor_noise", RandomSource(
         RandomDistribution.kGaussian, 3, c.sensor.sample_period))
-    builder.Connect(noise.get_output_port(), sensor.GetInputPort("noise"))
     observer = builder.AddNamedSystem("chamfer_observer", ChamferObserver(
         model, TOOL_FRAME, contour,
         min_tangential_speed=c.command.min_tangential_speed))
@@ -122,13 +156,20 @@ def make_point_mass_diagram(*, scenario: Scenario) -> Diagram:
     estimator = builder.AddNamedSystem(
         "contact_estimator", ContactParameterEstimator(c.estimator, c.task))
     controller = builder.AddNamedSystem("controller", HybridController(
-        model, TOOL_FRAME, c.controller))
+        model, TOOL_FRAME, c.controller, desired_rotation))
 
     state = plant.get_state_output_port()
     for system in (process, sensor, observer, controller):
         builder.Connect(state, system.GetInputPort("plant_state"))
+    if c.robot.joint_coulomb_friction:
+        friction = builder.AddNamedSystem("joint_friction",
+                                          JointFriction(plant, c.robot))
+        builder.Connect(state, friction.GetInputPort("plant_state"))
+        builder.Connect(friction.GetOutputPort("generalized_force"),
+                        plant.get_applied_generalized_force_input_port())
     builder.Connect(plant.get_reaction_forces_output_port(),
                     sensor.GetInputPort("reaction_forces"))
+    builder.Connect(noise.get_output_port(), sensor.GetInputPort("noise"))
     builder.Connect(process.GetOutputPort("spatial_forces"),
                     plant.get_applied_spatial_force_input_port())
     force = sensor.GetOutputPort("tool_force")
@@ -161,3 +202,7 @@ def make_point_mass_diagram(*, scenario: Scenario) -> Diagram:
     diagram = builder.Build()
     diagram.set_name(f"deburr_{c.name}")
     return diagram
+
+
+#: The builder under the name the design uses.
+MakeDeburringDiagram = make_deburring_diagram

@@ -93,6 +93,19 @@ class CommandGenerator(LeafSystem):
     def contour(self) -> Contour:
         return self._contour
 
+    @property
+    def start_arc_position(self) -> float:
+        """Arc position (m) of x_c(0)."""
+        return float(COMMAND_STATE.get(
+            self.CreateDefaultContext().get_discrete_state(
+                self._state_index).get_value(), "arc_position"))
+
+    def arc_progress(self, context) -> float:
+        """Unwrapped arc position (m) of the current command."""
+        return float(COMMAND_STATE.get(
+            context.get_discrete_state(self._state_index).get_value(),
+            "arc_position"))
+
     def _update(self, context, discrete_state):
         c = self._config
         chamfer = self._chamfer_port.Eval(context)

@@ -15,7 +15,7 @@ from deburr_drake.config import Scenario
 from deburr_drake.controller import make_rule_bases
 from deburr_drake.part import measure_normal_force
 from deburr_drake.simulation import RunLog, simulate
-from deburr_drake.testbed import make_point_mass_diagram
+from deburr_drake.cell import make_deburring_diagram
 
 __all__ = ["ContactTruth", "contact_truth", "frozen_adaptation",
            "run", "summarize", "SETTLE_TIME"]
@@ -65,7 +65,7 @@ def frozen_adaptation(scenario: Scenario, truth: ContactTruth) -> Scenario:
 
 
 def run(scenario: Scenario, duration: float, **kwargs) -> RunLog:
-    return simulate(make_point_mass_diagram(scenario=scenario), scenario,
+    return simulate(make_deburring_diagram(scenario=scenario), scenario,
                     duration=duration, **kwargs)
 
 

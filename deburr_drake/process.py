@@ -1,19 +1,25 @@
-"""CuttingProcess: the plant-side truth of the chamfering force (eq. (3)) and
-of the contact threshold c0 of eq. (4). The controller never reads it."""
+"""CuttingProcess: the plant-side truth of the chamfering force (eq. (3)),
+the contact threshold c0 of eq. (4), the burrs, and the surface finish the
+pass leaves. The controller never reads it."""
 
 from __future__ import annotations
 
+import math
+from typing import Sequence
+
 import numpy as np
+from pydrake.common.value import AbstractValue
 from pydrake.multibody.math import SpatialForce
 from pydrake.multibody.plant import (ExternallyAppliedSpatialForce,
                                      MultibodyPlant)
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import LeafSystem, ValueProducer
 
-from deburr_drake.config import ProcessConfig
+from deburr_drake.config import BurrConfig, ProcessConfig
 from deburr_drake.geometry import Contour
 from deburr_drake.layout import VectorLayout
 
-__all__ = ["CuttingProcess", "PROCESS_STATE", "cutting_force"]
+__all__ = ["CuttingProcess", "PROCESS_STATE", "cutting_force",
+           "burr_profile", "FinishBins"]
 
 PROCESS_STATE = VectorLayout("process_state", [
     ("delta", 1),            # m, true chamfer depth at the tool
@@ -22,6 +28,8 @@ PROCESS_STATE = VectorLayout("process_state", [
     ("f_t", 1),              # N, true ||f_t||
     ("f_threshold", 1),      # N, the c0 part of the normal force
     ("v_t", 1),              # m/s, tangential speed
+    ("burr_area", 1),        # m^2, burr cross-section at the tool
+    ("arc_position", 1),     # m, of the tool on the edge
 ])
 
 
@@ -30,35 +38,74 @@ def _smoothstep(x):
     return x * x * (3.0 - 2.0 * x)
 
 
+def burr_profile(arc, burrs: Sequence[BurrConfig], edge_length: float,
+                 closed: bool):
+    """Burr height (m) at arc positions ``arc`` (m): raised-cosine bumps
+    h (1 + cos(2 pi (s - c) / L)) / 2 for |s - c| < L / 2, the centre c a
+    fraction of the edge length; on a closed edge the distance wraps."""
+    arc = np.asarray(arc, float)
+    height = np.zeros_like(arc)
+    for burr in burrs:
+        center = burr.center_fraction * edge_length
+        d = arc - center
+        if closed:
+            d = (d + edge_length / 2) % edge_length - edge_length / 2
+        inside = np.abs(d) < burr.length / 2
+        bump = burr.height * 0.5 * (1 + np.cos(2 * np.pi * d / burr.length))
+        height = np.maximum(height, np.where(inside, bump, 0.0))
+    return height
+
+
+class FinishBins:
+    """Bins of at most ``bin_length`` along an edge of ``length``."""
+
+    def __init__(self, length: float, bin_length: float):
+        if not math.isfinite(length):
+            raise ValueError("the surface-finish record needs a finite edge "
+                             f"length, got {length}")
+        self.count = max(1, math.ceil(length / bin_length - 1e-9))
+        self.width = length / self.count
+        self.centers = (np.arange(self.count) + 0.5) * self.width
+
+    def index(self, s: float) -> int:
+        return min(max(int(s // self.width), 0), self.count - 1)
+
+
 def cutting_force(config: ProcessConfig, contour: Contour, x_p, xdot_p, *,
-                  cut_height: float):
+                  cut_height: float, burr_area: float = 0.0):
     """(force on the tool (3, N, world), PROCESS_STATE vector).
 
-    ||f_t|| = g |v_t| + h |v_n| + P'_th (3), g = k_c * chamfer area with the
-    area delta * cut_height, directed against the tangential motion (the
-    direction is regularized below ``smoothing_speed`` so the force is
-    continuous); plus the contact threshold c0 along -n1. Both ramp in
-    smoothly over the first ``threshold_depth`` of depth."""
+    ||f_t|| = g |v_t| + h |v_n| + P'_th (3), g = k_c (chamfer area + burr
+    area), chamfer area = delta * cut_height, v_t the speed along the edge
+    (R5: motion along the wall's vertical cuts no chamfer), directed against
+    that motion (the direction is regularized below
+    ``smoothing_speed`` so the force is continuous); plus the contact
+    threshold c0 along -n1. Both ramp in smoothly over the first
+    ``threshold_depth`` of depth."""
     n1 = contour.n1(x_p)
     delta = float(contour.depth(x_p))
     v_n = float(n1 @ xdot_p)
-    v_t_vec = xdot_p - v_n * n1
-    v_t = float(np.sqrt(v_t_vec @ v_t_vec))
+    tangent = contour.tangent(x_p)
+    v_along = float(tangent @ xdot_p)  # along the edge (R5)
+    v_t_vec = v_along * tangent
+    v_t = abs(v_along)
     on = _smoothstep(delta / config.threshold_depth)
-    g = config.cutting_coefficient * max(delta, 0.0) * cut_height
-    f_t = on * (g * v_t + config.plunge_coefficient * abs(v_n)
-                + config.threshold_power_force)
-    direction = v_t_vec / np.sqrt(v_t * v_t + config.smoothing_speed ** 2)
+    g = config.cutting_coefficient * (max(delta, 0.0) * cut_height
+                                      + burr_area)
+    magnitude = on * (g * v_t + config.plunge_coefficient * abs(v_n)
+                      + config.threshold_power_force)
+    regularized = np.sqrt(v_t * v_t + config.smoothing_speed ** 2)
     f_c0 = on * config.contact_threshold_force
-    force = -f_t * direction - f_c0 * n1
-    return force, PROCESS_STATE.pack(delta=delta, engagement=on, g=g,
-                                     f_t=f_t * v_t / np.hypot(
-                                         v_t, config.smoothing_speed),
-                                     f_threshold=f_c0, v_t=v_t)
+    force = -magnitude * v_t_vec / regularized - f_c0 * n1
+    return force, PROCESS_STATE.pack(
+        delta=delta, engagement=on, g=g, f_t=magnitude * v_t / regularized,
+        f_threshold=f_c0, v_t=v_t, burr_area=burr_area,
+        arc_position=contour.arc_position(x_p))
 
 
 class CuttingProcess(LeafSystem):
-    """Chamfering and threshold forces applied to the tool body.
+    """Chamfering and threshold forces applied to the tool body; burrs and
+    the surface finish along the edge.
 
     .. pydrake_system::
 
@@ -68,16 +115,26 @@ class CuttingProcess(LeafSystem):
         output_ports:
         - spatial_forces
         - process_state
+        - burr_height
+        - finish_depth
 
     - ``plant_state`` (nq + nv): the true robot state.
     - ``spatial_forces``: list of ExternallyAppliedSpatialForce for the
       plant's ``applied_spatial_force`` input (force at the tool point).
     - ``process_state`` (PROCESS_STATE layout).
+    - ``burr_height`` (bins, m): burr left on the edge.
+    - ``finish_depth`` (bins, m): the deepest chamfer cut so far in each bin
+      of at most ``finish_bin_length`` of arc (the paper's Fig. 8).
+    - Discrete state: burr_height and finish_depth, updated every
+      ``record_period``: the bin under the tool records its depth, and
+      the burr is removed from the bins the cutter has swept. The burr
+      area in g is the one at the cutter's front (arc position + r; the
+      tool runs toward +arc).
     """
 
     def __init__(self, plant: MultibodyPlant, tool_frame_name: str,
                  contour: Contour, config: ProcessConfig, *,
-                 cut_height: float):
+                 cut_height: float, cutter_radius: float):
         super().__init__()
         config.validate()
         self.set_name("cutting_process")
@@ -89,26 +146,93 @@ class CuttingProcess(LeafSystem):
         self._contour = contour
         self._config = config
         self._cut_height = cut_height
+        self._cutter_radius = cutter_radius
+        self._bins = FinishBins(contour.length, config.finish_bin_length)
+        self._burr_index = self.DeclareDiscreteState(
+            self.initial_burr_height())
+        self._finish_index = self.DeclareDiscreteState(self._bins.count)
         self._state_port = self.DeclareVectorInputPort(
             "plant_state", plant.num_multibody_states())
         self._cache = self.DeclareCacheEntry(
-            "process", _value_producer(self._calc_process),
-            prerequisites_of_calc={self._state_port.ticket()})
+            "process", ValueProducer(
+                allocate=AbstractValue.Make(
+                    (np.zeros(3), np.zeros(PROCESS_STATE.size))).Clone,
+                calc=self._calc_process),
+            prerequisites_of_calc={self._state_port.ticket(),
+                                   self.xd_ticket()})
         self.DeclareAbstractOutputPort(
-            "spatial_forces", lambda: _abstract_list(),
+            "spatial_forces",
+            lambda: AbstractValue.Make([ExternallyAppliedSpatialForce()]),
             self._calc_spatial_forces,
             prerequisites_of_calc={self._cache.ticket()})
         self.DeclareVectorOutputPort(
             "process_state", PROCESS_STATE.size, self._calc_state,
             prerequisites_of_calc={self._cache.ticket()})
+        self.DeclareStateOutputPort("burr_height", self._burr_index)
+        self.DeclareStateOutputPort("finish_depth", self._finish_index)
+        self.DeclarePeriodicDiscreteUpdateEvent(
+            config.record_period, 0.0, self._record)
 
-    def _calc_process(self, context, value):
+    @property
+    def bins(self) -> FinishBins:
+        return self._bins
+
+    def initial_burr_height(self) -> np.ndarray:
+        """Burr height (m) per bin before the pass."""
+        return burr_profile(self._bins.centers, self._config.burrs,
+                            self._contour.length, self._contour.closed)
+
+    def _tool_point(self, context):
         plant, ctx = self._plant, self._plant_context
         plant.SetPositionsAndVelocities(ctx, self._state_port.Eval(context))
-        x_p = self._frame.CalcPoseInWorld(ctx).translation()
-        xdot_p = self._frame.CalcSpatialVelocityInWorld(ctx).translational()
-        value.set_value(cutting_force(self._config, self._contour, x_p,
-                                      xdot_p, cut_height=self._cut_height))
+        return (self._frame.CalcPoseInWorld(ctx).translation(),
+                self._frame.CalcSpatialVelocityInWorld(ctx).translational())
+
+    def _calc_process(self, context, value):
+        x_p, xdot_p = self._tool_point(context)
+        burr = context.get_discrete_state(self._burr_index).get_value()
+        lead = self._leading_edge(self._contour.arc_position(x_p))
+        area = burr[self._bins.index(lead)] * self._burr_thickness(lead)
+        value.set_value(cutting_force(
+            self._config, self._contour, x_p, xdot_p,
+            cut_height=self._cut_height, burr_area=area))
+
+    def _leading_edge(self, s):
+        """Arc position of the cutter's front (the traversal direction is
+        +arc): the burr is cut there."""
+        lead = s + self._cutter_radius
+        return lead % self._contour.length if self._contour.closed else lead
+
+    def _burr_thickness(self, s):
+        # The thickness of the burr whose span covers s (they do not
+        # overlap in the shipped scenarios; the thickest wins otherwise).
+        thickness = 0.0
+        L = self._contour.length
+        for burr in self._config.burrs:
+            d = s - burr.center_fraction * L
+            if self._contour.closed:
+                d = (d + L / 2) % L - L / 2
+            if abs(d) < burr.length / 2:
+                thickness = max(thickness, burr.thickness)
+        return thickness
+
+    def _record(self, context, discrete_state):
+        _, state = self._cache.Eval(context)
+        delta = PROCESS_STATE.get(state, "delta")
+        if delta <= 0.0:
+            return
+        s = PROCESS_STATE.get(state, "arc_position")
+        finish = discrete_state.get_mutable_value(self._finish_index)
+        k = self._bins.index(s)
+        finish[k] = max(finish[k], delta)
+        # The cutter (diameter 2 r) has swept the burr behind its front.
+        burr = discrete_state.get_mutable_value(self._burr_index)
+        d = self._bins.centers - s
+        if self._contour.closed:
+            L = self._contour.length
+            d = (d + L / 2) % L - L / 2
+        r, w = self._cutter_radius, self._bins.width
+        burr[(d >= -r) & (d < r - w)] = 0.0
 
     def _calc_spatial_forces(self, context, output):
         force, _ = self._cache.Eval(context)
@@ -121,17 +245,3 @@ class CuttingProcess(LeafSystem):
     def _calc_state(self, context, output):
         _, state = self._cache.Eval(context)
         output.SetFromVector(state)
-
-
-def _abstract_list():
-    from pydrake.common.value import AbstractValue
-    return AbstractValue.Make([ExternallyAppliedSpatialForce()])
-
-
-def _value_producer(calc):
-    from pydrake.common.value import AbstractValue
-    from pydrake.systems.framework import ValueProducer
-    return ValueProducer(
-        allocate=AbstractValue.Make((np.zeros(3),
-                                     np.zeros(PROCESS_STATE.size))).Clone,
-        calc=calc)

@@ -10,7 +10,7 @@ import numpy as np
 from pydrake.common import RandomGenerator
 from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
                                       SimulatorConfig)
-from pydrake.systems.framework import Diagram
+from pydrake.systems.framework import Diagram, EventStatus
 
 from deburr_drake.config import Scenario
 from deburr_drake.layout import (CHAMFER_STATE, COMMAND_STATE,
@@ -37,6 +37,7 @@ class RunLog:
     wall_time: float = 0.0  # s
     sim_time: float = 0.0  # s
     steps: int = 0
+    completed_pass: bool = False
 
     def __getitem__(self, key: str) -> Dict[str, np.ndarray]:
         return self.signals[key]
@@ -57,6 +58,36 @@ def make_simulator(diagram: Diagram, scenario: Scenario) -> Simulator:
     return simulator
 
 
+def _final_state(diagram, context) -> Dict[str, Dict[str, np.ndarray]]:
+    """What the run leaves behind: the surface finish and burrs along the
+    edge, the final fuzzy rule weights and the rule-base geometry."""
+    process = diagram.GetSubsystemByName("cutting_process")
+    pc = process.GetMyContextFromRoot(context)
+    controller = diagram.GetSubsystemByName("controller")
+    cc = controller.GetMyContextFromRoot(context)
+    f = controller.config.fuzzy
+    delta0, deltak = f.deltas()
+    return {
+        "finish": {
+            "arc": process.bins.centers.copy(),
+            "depth": process.GetOutputPort("finish_depth").Eval(pc).copy(),
+            "burr_initial": process.initial_burr_height(),
+            "burr_remaining": process.GetOutputPort("burr_height").Eval(
+                pc).copy(),
+        },
+        "theta": {"final": controller.theta(cc).copy()},
+        "meta": {
+            "fuzzy_order": np.array(f.order),
+            "upsilon": np.array(f.upsilon),
+            "delta0": np.array(delta0),
+            "deltak": np.array(deltak),
+            "dead_zone": np.array([rb.resolved_dead_zone_half_width
+                                   for rb in controller.rule_bases]),
+            "fuzzy_axes": np.array(f.axes),
+        },
+    }
+
+
 def _collect(diagram, context, loggers) -> Dict[str, Dict[str, np.ndarray]]:
     out = {}
     for name in loggers:
@@ -71,27 +102,49 @@ def _collect(diagram, context, loggers) -> Dict[str, Dict[str, np.ndarray]]:
 
 def simulate(diagram: Diagram, scenario: Scenario, *,
              duration: Optional[float] = None,
-             progress: Optional[Callable[[float, float], None]] = None,
+             progress: Optional[Callable[[float, float, float], None]] = None,
              progress_interval: float = 1.0, loggers=None) -> RunLog:
     """Simulates from the diagram's default context for ``duration`` (the
-    scenario's by default) and returns the logs. ``progress(t, wall)`` is
-    called every ``progress_interval`` simulated seconds."""
-    from deburr_drake.testbed import LOGGED
+    scenario's by default, or until ``stop_after_passes`` edge lengths are
+    done) and returns the logs. ``progress(t, wall, feed)`` (s, s, m/s of
+    commanded feed) is called every ``progress_interval`` simulated
+    seconds."""
+    from deburr_drake.cell import LOGGED
     duration = scenario.simulation.duration if duration is None else duration
     simulator = make_simulator(diagram, scenario)
     context = simulator.get_mutable_context()
+    passes = scenario.simulation.stop_after_passes
+    if passes > 0:
+        generator = diagram.GetSubsystemByName("command_generator")
+        length = generator.contour.length
+        start = generator.start_arc_position
+
+        def monitor(root_context):
+            s = generator.arc_progress(
+                generator.GetMyContextFromRoot(root_context))
+            if s - start >= passes * length:
+                return EventStatus.ReachedTermination(
+                    generator, "completed the pass")
+            return EventStatus.Succeeded()
+
+        simulator.set_monitor(monitor)
     diagram.SetRandomContext(
         context, RandomGenerator(scenario.sensor.noise_seed))
-    start = time.perf_counter()
+    wall_start = time.perf_counter()
     simulator.Initialize()
-    t = 0.0
-    while t < duration - 1e-12:
-        t = min(duration, t + progress_interval)
-        simulator.AdvanceTo(t)
+    t, completed = 0.0, False
+    while t < duration - 1e-12 and not completed:
+        status = simulator.AdvanceTo(min(duration, t + progress_interval))
+        t = context.get_time()
+        completed = status.reason() == status.ReturnReason.kReachedTerminationCondition
         if progress is not None:
-            progress(t, time.perf_counter() - start)
-    wall = time.perf_counter() - start
-    return RunLog(scenario=scenario,
-                  signals=_collect(diagram, context, loggers or LOGGED),
-                  wall_time=wall, sim_time=duration,
-                  steps=simulator.get_num_steps_taken())
+            generator = diagram.GetSubsystemByName("command_generator")
+            feed = generator.GetOutputPort("feed").Eval(
+                generator.GetMyContextFromRoot(context))[0]
+            progress(t, time.perf_counter() - wall_start, feed)
+    wall = time.perf_counter() - wall_start
+    signals = _collect(diagram, context, loggers or LOGGED)
+    signals.update(_final_state(diagram, context))
+    return RunLog(scenario=scenario, signals=signals, wall_time=wall,
+                  sim_time=t, steps=simulator.get_num_steps_taken(),
+                  completed_pass=completed)

@@ -1,0 +1,99 @@
+"""The deburring cell: named systems, the arm's start pose, the cutting
+process's burrs and surface-finish record."""
+
+import numpy as np
+import pytest
+
+from deburr_drake.cell import (SYSTEM_NAMES, make_contour,
+                               make_deburring_diagram, start_position)
+from deburr_drake.config import BurrConfig, ProcessConfig, load_scenario
+from deburr_drake.geometry import CircularContour
+from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
+from deburr_drake.process import CuttingProcess, burr_profile
+
+
+@pytest.fixture(scope="module")
+def paper_diagram():
+    scenario = load_scenario("paper")
+    return scenario, make_deburring_diagram(scenario=scenario)
+
+
+def test_every_system_is_named(paper_diagram):
+    scenario, diagram = paper_diagram
+    names = {s.get_name() for s in diagram.GetSystems()}
+    for name in SYSTEM_NAMES:
+        assert name in names
+    for name in ("log_chamfer", "log_controller", "log_process"):
+        assert name in names
+    assert diagram.get_name() == "deburr_paper"
+    controller = diagram.GetSubsystemByName("controller")
+    # 242 rules (2 x 11^2) plus delta_d.
+    assert controller.num_continuous_states() == 243
+
+
+def test_arm_starts_at_the_contour_start_in_contact(paper_diagram):
+    scenario, diagram = paper_diagram
+    context = diagram.CreateDefaultContext()
+    plant = diagram.GetSubsystemByName("plant")
+    pc = plant.GetMyContextFromRoot(context)
+    tip = plant.GetFrameByName("tool_tip").CalcPoseInWorld(pc)
+    np.testing.assert_allclose(tip.translation(), start_position(scenario),
+                               atol=1e-7)
+    # Tool axis vertical.
+    np.testing.assert_allclose(tip.rotation().matrix()[:, 2], [0, 0, 1],
+                               atol=1e-7)
+    contour = make_contour(scenario)
+    assert contour.depth(tip.translation()) == pytest.approx(0.0, abs=1e-7)
+
+
+def test_burr_profile_raised_cosine():
+    burrs = [BurrConfig(center_fraction=0.25, length=0.008, height=0.001)]
+    L = 0.1
+    arc = np.array([0.025, 0.025 + 0.002, 0.025 + 0.004, 0.06])
+    h = burr_profile(arc, burrs, L, closed=True)
+    np.testing.assert_allclose(h, [0.001, 0.0005, 0.0, 0.0], atol=1e-15)
+    # Wraps on a closed edge.
+    h_wrap = burr_profile([0.099], [BurrConfig(center_fraction=0.0)], L,
+                          closed=True)
+    assert h_wrap[0] > 0
+
+
+def test_process_records_finish_and_removes_swept_burr():
+    contour = CircularContour([0.0, 0.0, 0.048], 0.027)
+    config = ProcessConfig(burrs=[BurrConfig(center_fraction=0.1,
+                                             length=0.008, height=0.001)])
+    model = make_kinematic_model(POINT_MASS_URL)
+    process = CuttingProcess(model, "tool_tip", contour, config,
+                             cut_height=0.002, cutter_radius=0.003)
+    context = process.CreateDefaultContext()
+    s = 0.1 * contour.length  # the tool's contact point at the burr centre
+    p = contour.point_at(s)
+    x_p = p + 4e-4 * contour.n1(p)
+    v = 2e-3 * contour.tangent(p)
+    process.GetInputPort("plant_state").FixValue(context,
+                                                 np.concatenate([x_p, v]))
+    burr0 = process.GetOutputPort("burr_height").Eval(context).copy()
+    state = process.GetOutputPort("process_state").Eval(context)
+    # The burr is cut at the cutter's front, s + r: raised cosine there.
+    front = burr_profile([s + 0.003], config.burrs, contour.length, True)[0]
+    from deburr_drake.process import PROCESS_STATE
+    area = PROCESS_STATE.get(state, "burr_area")
+    bins = process.bins
+    assert area == pytest.approx(burr0[bins.index(s + 0.003)] * 0.002)
+    assert 0 < area <= 0.001 * 0.002
+    assert front > 0
+    g = PROCESS_STATE.get(state, "g")
+    assert g == pytest.approx(config.cutting_coefficient
+                              * (4e-4 * 0.002 + area), rel=1e-3)
+    update = process.EvalUniquePeriodicDiscreteUpdate(context)
+    burr1 = update.get_vector(0).CopyToVector()
+    finish = update.get_vector(1).CopyToVector()
+    k = bins.index(s)
+    assert finish[k] == pytest.approx(4e-4, rel=1e-3)
+    assert np.count_nonzero(finish) == 1
+    d = bins.centers - s
+    swept = (d >= -0.003) & (d < 0.003 - bins.width)
+    np.testing.assert_array_equal(burr1[swept], 0.0)
+    np.testing.assert_array_equal(burr1[~swept], burr0[~swept])
+    assert burr1[bins.index(s + 0.003)] > 0  # the front is still uncut
+    assert bins.width <= 2e-4
