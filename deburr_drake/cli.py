@@ -7,6 +7,8 @@ import argparse
 import json
 import sys
 
+import numpy as np
+
 __all__ = ["main"]
 
 
@@ -15,8 +17,46 @@ def _load(args):
     return load_scenario(args.scenario, text=args.scenario_text)
 
 
-def _progress(t, wall):
-    print(f"  t = {t:6.2f} s simulated, {wall:6.1f} s wall", flush=True)
+def _progress(t, wall, feed):
+    print(f"  t = {t:6.2f} s simulated, {wall:6.1f} s wall, "
+          f"feed {feed * 1e3:5.2f} mm/s", flush=True)
+
+
+def _simulate(args) -> int:
+    from pathlib import Path
+
+    from deburr_drake import demo, figures, report
+    from deburr_drake.cell import make_deburring_diagram
+    from deburr_drake.simulation import simulate
+    scenario = _load(args)
+    if args.duration is not None:
+        scenario.simulation.duration = args.duration
+        scenario.validate()
+    out = Path(args.out or f"out/{scenario.name}")
+    passes = scenario.simulation.stop_after_passes
+    print(f"deburr-drake simulate: scenario '{scenario.name}' "
+          f"({scenario.robot.model}, m = {scenario.controller.fuzzy.order}), "
+          f"up to {scenario.simulation.duration:g} s"
+          + (f" or {passes:g} pass(es)" if passes else "")
+          + f", output {out}/", flush=True)
+    diagram = make_deburring_diagram(scenario=scenario)
+    log = simulate(diagram, scenario, progress=_progress,
+                   progress_interval=args.progress_interval)
+    truth = demo.contact_truth(scenario)
+    values = report.pass_metrics(
+        log, true_force_at_desired_depth=truth.force_at_desired_depth)
+    files = report.write_run(log, out, values)
+    with np.load(files["logs"]) as logs:
+        pngs = figures.make_figures(
+            dict(logs), out,
+            label=f"{scenario.name} (m = {scenario.controller.fuzzy.order})")
+    print()
+    width = max(len(k) for k in values)
+    for key in sorted(values):
+        print(f"  {key:{width}s} {values[key]:12.5g}")
+    print(f"\nwrote {files['logs']}, {files['metrics']} and "
+          f"{len(pngs)} figures in {out}/")
+    return 0
 
 
 def _demo(args) -> int:
@@ -84,6 +124,20 @@ def main(argv=None) -> int:
                    help="simulated seconds of the adaptive run (default 5)")
     p.add_argument("--json", default=None, help="also write the numbers")
     p.set_defaults(func=_demo)
+
+    p = sub.add_parser("simulate", help="run a deburring scenario (the "
+                                        "paper's experiment by default)")
+    p.add_argument("--scenario", default="paper",
+                   help="scenario name or YAML file (default paper)")
+    p.add_argument("--scenario-text", default=None,
+                   help="YAML overrides applied on top of the scenario")
+    p.add_argument("--duration", type=float, default=None,
+                   help="simulated seconds at most (default: the scenario's)")
+    p.add_argument("--out", default=None,
+                   help="output directory (default out/<scenario>)")
+    p.add_argument("--progress-interval", type=float, default=5.0,
+                   help="simulated seconds between progress lines")
+    p.set_defaults(func=_simulate)
     args = parser.parse_args(argv)
     from deburr_drake.config import ConfigError
     try:

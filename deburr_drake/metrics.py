@@ -61,3 +61,37 @@ def mean_speed(t, position) -> float:
 
 def any_nan(*arrays) -> bool:
     return any(not np.all(np.isfinite(np.asarray(a, float))) for a in arrays)
+
+
+def first_time(t, condition) -> float:
+    """The first time at which ``condition`` holds (nan if never)."""
+    t, condition = np.asarray(t, float), np.asarray(condition, bool)
+    idx = np.flatnonzero(condition)
+    return float(t[idx[0]]) if idx.size else float("nan")
+
+
+def arc_distance(a, b, length: float, closed: bool):
+    """Signed arc distance a - b, wrapped to [-L/2, L/2) on a closed edge."""
+    d = np.asarray(a, float) - b
+    return (d + length / 2) % length - length / 2 if closed else d
+
+
+def arc_span_mask(arc, start: float, stop: float, length: float,
+                  closed: bool):
+    """Bins whose arc lies in the span travelled from ``start`` to ``stop``
+    (m, unwrapped; stop >= start). On a closed edge spans of a full length
+    or more cover everything."""
+    arc = np.asarray(arc, float)
+    if stop < start:
+        raise ValueError(f"span stop {stop} < start {start}")
+    if not closed:
+        return (arc >= start) & (arc <= stop)
+    if stop - start >= length:
+        return np.ones(arc.shape, bool)
+    return ((arc - start) % length) <= (stop - start)
+
+
+def total_variation(x) -> float:
+    """Sum over samples and channels of |x[k+1] - x[k]|."""
+    x = np.asarray(x, float)
+    return float(np.sum(np.abs(np.diff(x, axis=0)))) if len(x) > 1 else 0.0
