@@ -12,6 +12,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.multibody.math import SpatialForce
 from pydrake.multibody.plant import (ExternallyAppliedSpatialForce,
                                      MultibodyPlant)
+from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.systems.framework import LeafSystem, ValueProducer
 
 from deburr_drake.config import BurrConfig, ProcessConfig
@@ -78,16 +79,18 @@ def cutting_force(config: ProcessConfig, contour: Contour, x_p, xdot_p, *,
     ||f_t|| = g |v_t| + h |v_n| + P'_th (3), g = k_c (chamfer area + burr
     area), chamfer area = delta * cut_height, v_t the speed along the edge
     (R5: motion along the wall's vertical cuts no chamfer), directed against
-    that motion (the direction is regularized below
-    ``smoothing_speed`` so the force is continuous); plus the contact
-    threshold c0 along -n1. Both ramp in smoothly over the first
-    ``threshold_depth`` of depth."""
-    n1 = contour.n1(x_p)
-    delta = float(contour.depth(x_p))
+    that motion (the direction is regularized below ``smoothing_speed`` so
+    the force is continuous); plus the contact threshold c0 along -n1. Both
+    ramp in smoothly over the first ``threshold_depth`` of depth."""
+    return _force(config, contour.n1(x_p), contour.tangent(x_p),
+                  float(contour.depth(x_p)), contour.arc_position(x_p),
+                  np.asarray(xdot_p, float), cut_height, burr_area)
+
+
+def _force(config: ProcessConfig, n1, tangent, delta, arc, xdot_p,
+           cut_height, burr_area):
     v_n = float(n1 @ xdot_p)
-    tangent = contour.tangent(x_p)
-    v_along = float(tangent @ xdot_p)  # along the edge (R5)
-    v_t_vec = v_along * tangent
+    v_along = float(tangent @ xdot_p)
     v_t = abs(v_along)
     on = _smoothstep(delta / config.threshold_depth)
     g = config.cutting_coefficient * (max(delta, 0.0) * cut_height
@@ -96,11 +99,10 @@ def cutting_force(config: ProcessConfig, contour: Contour, x_p, xdot_p, *,
                       + config.threshold_power_force)
     regularized = np.sqrt(v_t * v_t + config.smoothing_speed ** 2)
     f_c0 = on * config.contact_threshold_force
-    force = -magnitude * v_t_vec / regularized - f_c0 * n1
+    force = (-magnitude * v_along / regularized) * tangent - f_c0 * n1
     return force, PROCESS_STATE.pack(
         delta=delta, engagement=on, g=g, f_t=magnitude * v_t / regularized,
-        f_threshold=f_c0, v_t=v_t, burr_area=burr_area,
-        arc_position=contour.arc_position(x_p))
+        f_threshold=f_c0, v_t=v_t, burr_area=burr_area, arc_position=arc)
 
 
 class CuttingProcess(LeafSystem):
@@ -148,6 +150,10 @@ class CuttingProcess(LeafSystem):
         self._cut_height = cut_height
         self._cutter_radius = cutter_radius
         self._bins = FinishBins(contour.length, config.finish_bin_length)
+        self._nq = plant.num_positions()
+        self._memo = {}  # q bytes -> _edge_frame(q), at most 4 entries
+        self._thickness = np.array([self._burr_thickness(s)
+                                    for s in self._bins.centers])
         self._burr_index = self.DeclareDiscreteState(
             self.initial_burr_height())
         self._finish_index = self.DeclareDiscreteState(self._bins.count)
@@ -182,20 +188,38 @@ class CuttingProcess(LeafSystem):
         return burr_profile(self._bins.centers, self._config.burrs,
                             self._contour.length, self._contour.closed)
 
-    def _tool_point(self, context):
-        plant, ctx = self._plant, self._plant_context
-        plant.SetPositionsAndVelocities(ctx, self._state_port.Eval(context))
-        return (self._frame.CalcPoseInWorld(ctx).translation(),
-                self._frame.CalcSpatialVelocityInWorld(ctx).translational())
+    def _edge_frame(self, q):
+        """(J_v, n1, tangent, delta, arc) at the tool for positions q.
+
+        A pure function of q, memoized for the last few q: an integrator
+        that linearizes the applied force in v (cenic) re-evaluates this
+        system at one q with several v, alternating between its full- and
+        half-step states."""
+        key = q.tobytes()
+        memo = self._memo.get(key)
+        if memo is None:
+            plant, ctx = self._plant, self._plant_context
+            plant.SetPositions(ctx, q)
+            x_p = self._frame.CalcPoseInWorld(ctx).translation()
+            J = plant.CalcJacobianTranslationalVelocity(
+                ctx, JacobianWrtVariable.kV, self._frame, np.zeros(3),
+                plant.world_frame(), plant.world_frame())
+            c = self._contour
+            memo = (J, c.n1(x_p), c.tangent(x_p), float(c.depth(x_p)),
+                    c.arc_position(x_p))
+            if len(self._memo) >= 4:
+                self._memo.pop(next(iter(self._memo)))
+            self._memo[key] = memo
+        return memo
 
     def _calc_process(self, context, value):
-        x_p, xdot_p = self._tool_point(context)
+        x = self._state_port.Eval(context)
+        J, n1, tangent, delta, arc = self._edge_frame(x[:self._nq])
         burr = context.get_discrete_state(self._burr_index).get_value()
-        lead = self._leading_edge(self._contour.arc_position(x_p))
-        area = burr[self._bins.index(lead)] * self._burr_thickness(lead)
-        value.set_value(cutting_force(
-            self._config, self._contour, x_p, xdot_p,
-            cut_height=self._cut_height, burr_area=area))
+        k = self._bins.index(self._leading_edge(arc))
+        area = burr[k] * self._thickness[k]
+        value.set_value(_force(self._config, n1, tangent, delta, arc,
+                               J @ x[self._nq:], self._cut_height, area))
 
     def _leading_edge(self, s):
         """Arc position of the cutter's front (the traversal direction is
