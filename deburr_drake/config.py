@@ -399,11 +399,17 @@ class SimulationConfig:
     integrator: str = "cenic"
     accuracy: float = 1.0e-4
     max_step: float = 0.01  # s
-    log_period: float = 0.005  # s
+    # s; not a multiple of the 2.5 ms control period, so a limit cycle at
+    # its Nyquist frequency (200 Hz) shows in the logs instead of aliasing
+    # to a constant.
+    log_period: float = 0.004
     initial_depth: float = 0.0  # m, tool starts at this depth (in contact)
     # Stop when the command has run this many edge lengths (0: run for the
     # whole duration). 1.0 is one full pass of a closed edge.
     stop_after_passes: float = 0.0
+
+    INTEGRATORS = ("cenic", "runge_kutta2", "runge_kutta3", "runge_kutta5",
+                   "explicit_euler", "implicit_euler", "radau3")
 
     def validate(self):
         o = "simulation"
@@ -413,11 +419,9 @@ class SimulationConfig:
                                                 "tamsi"),
                  f"{o}.contact_approximation", self.contact_approximation,
                  "one of lagged, similar, sap, tamsi")
-        _require(self.integrator in ("cenic", "runge_kutta3", "radau3",
-                                     "implicit_euler", "runge_kutta5"),
+        _require(self.integrator in self.INTEGRATORS,
                  f"{o}.integrator", self.integrator,
-                 "one of cenic, runge_kutta3, runge_kutta5, radau3, "
-                 "implicit_euler")
+                 f"one of {', '.join(self.INTEGRATORS)}")
         for name in ("accuracy", "max_step", "log_period"):
             _positive(o, name, getattr(self, name))
         _non_negative(o, "initial_depth", self.initial_depth)
