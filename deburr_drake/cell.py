@@ -28,6 +28,7 @@ from deburr_drake.process import CuttingProcess
 from deburr_drake.sensor import ForceSensor
 
 __all__ = ["make_deburring_diagram", "MakeDeburringDiagram", "make_contour",
+           "edge_points",
            "start_position", "TOOL_FRAME", "SENSOR_JOINT", "LOGGED",
            "SYSTEM_NAMES"]
 
@@ -112,7 +113,24 @@ def _initial_positions(plant, scenario: Scenario, x0) -> np.ndarray:
     return solve_tool_pose(plant, x0)
 
 
-def make_deburring_diagram(*, scenario: Scenario) -> Diagram:
+def edge_points(scenario: Scenario, arc) -> np.ndarray:
+    """Points (m, world) on the tube's inner top edge at contour arc
+    positions ``arc`` (m): where the chamfer is cut, for drawing."""
+    contour = make_contour(scenario)
+    tube, tool = scenario.tube, scenario.tool
+    center = np.array(tube.position, float)
+    scale = tube.inner_radius / (tube.inner_radius - tool.cutter_radius)
+    points = []
+    for s in np.asarray(arc, float):
+        p = contour.point_at(s)
+        q = center + scale * (p - center)
+        q[2] = center[2] + tube.height
+        points.append(q)
+    return np.array(points)
+
+
+def make_deburring_diagram(*, scenario: Scenario,
+                           meshcat=None) -> Diagram:
     """The closed loop as a named Diagram.
 
     Systems (see :data:`SYSTEM_NAMES`): ``plant``, ``scene_graph``,
@@ -122,7 +140,8 @@ def make_deburring_diagram(*, scenario: Scenario) -> Diagram:
     ``controller``, ``actuation_hold`` (when the controller output is held),
     and one ``log_<name>`` VectorLogSink per entry of :data:`LOGGED`. The
     plant's default positions put the tool tip at the contour start (by
-    inverse kinematics for the arm), in contact."""
+    inverse kinematics for the arm), in contact. With a ``meshcat``, the
+    cell is drawn there too (see :mod:`deburr_drake.replay`)."""
     scenario.validate()
     c = scenario
     builder = DiagramBuilder()
@@ -193,6 +212,13 @@ def make_deburring_diagram(*, scenario: Scenario) -> Diagram:
         builder.Connect(actuation, hold.get_input_port())
         actuation = hold.get_output_port()
     builder.Connect(actuation, plant.get_actuation_input_port())
+
+    if meshcat is not None:
+        from deburr_drake.replay import add_meshcat
+        scene_graph = builder.GetSubsystemByName("scene_graph")
+        add_meshcat(builder, meshcat, plant=plant, scene_graph=scene_graph,
+                    process=process,
+                    edge_points=edge_points(c, process.bins.centers))
 
     for name, (system, port) in LOGGED.items():
         logger = LogVectorOutput(

@@ -39,9 +39,21 @@ def _simulate(args) -> int:
           f"up to {scenario.simulation.duration:g} s"
           + (f" or {passes:g} pass(es)" if passes else "")
           + f", output {out}/", flush=True)
-    diagram = make_deburring_diagram(scenario=scenario)
+    meshcat = None
+    if args.meshcat or args.record:
+        from pydrake.geometry import Meshcat
+        meshcat = Meshcat()
+        if args.meshcat:
+            print(f"Meshcat: {meshcat.web_url()}", flush=True)
+    diagram = make_deburring_diagram(scenario=scenario, meshcat=meshcat)
+    if args.record:
+        meshcat.StartRecording(frames_per_second=20.0)
     log = simulate(diagram, scenario, progress=_progress,
                    progress_interval=args.progress_interval)
+    if args.record:
+        from deburr_drake.replay import write_recording
+        path = write_recording(meshcat, args.record)
+        print(f"wrote the replay {path}")
     truth = demo.contact_truth(scenario)
     values = report.pass_metrics(
         log, true_force_at_desired_depth=truth.force_at_desired_depth)
@@ -108,6 +120,33 @@ def _demo(args) -> int:
     return 0
 
 
+def _diagram(args) -> int:
+    from pathlib import Path
+
+    from deburr_drake.cell import make_deburring_diagram
+    from deburr_drake.graphs import write_graphs
+    scenario = _load(args)
+    diagram = make_deburring_diagram(scenario=scenario)
+    out = Path(args.out or f"out/{scenario.name}/diagram.dot")
+    written, message = write_graphs(diagram, out, fmt=args.format,
+                                    max_depth=args.depth)
+    for path in written:
+        print(f"wrote {path}")
+    if message:
+        print(f"deburr-drake: {message}", file=sys.stderr)
+    return 0
+
+
+def _scenario_arguments(parser, default: str, duration_help: str):
+    parser.add_argument("--scenario", default=default,
+                        help=f"scenario name or YAML file (default {default})")
+    parser.add_argument("--scenario-text", default=None,
+                        help="YAML overrides applied on top of the scenario")
+    if duration_help:
+        parser.add_argument("--duration", type=float, default=None,
+                            help=duration_help)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(
         prog="deburr-drake",
@@ -116,28 +155,36 @@ def main(argv=None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("demo", help="run the point-mass testbed and print "
                                     "its convergence numbers")
-    p.add_argument("--scenario", default="point_mass",
-                   help="scenario name or YAML file (default point_mass)")
-    p.add_argument("--scenario-text", default=None,
-                   help="YAML overrides applied on top of the scenario")
-    p.add_argument("--duration", type=float, default=None,
-                   help="simulated seconds of the adaptive run (default 5)")
+    _scenario_arguments(p, "point_mass",
+                        "simulated seconds of the adaptive run (default 5)")
     p.add_argument("--json", default=None, help="also write the numbers")
     p.set_defaults(func=_demo)
 
     p = sub.add_parser("simulate", help="run a deburring scenario (the "
                                         "paper's experiment by default)")
-    p.add_argument("--scenario", default="paper",
-                   help="scenario name or YAML file (default paper)")
-    p.add_argument("--scenario-text", default=None,
-                   help="YAML overrides applied on top of the scenario")
-    p.add_argument("--duration", type=float, default=None,
-                   help="simulated seconds at most (default: the scenario's)")
+    _scenario_arguments(p, "paper",
+                        "simulated seconds at most (default: the scenario's)")
     p.add_argument("--out", default=None,
                    help="output directory (default out/<scenario>)")
     p.add_argument("--progress-interval", type=float, default=5.0,
                    help="simulated seconds between progress lines")
+    p.add_argument("--meshcat", action="store_true",
+                   help="show the run live in Meshcat (prints the URL)")
+    p.add_argument("--record", default=None, metavar="PATH.html",
+                   help="write a self-contained HTML replay of the run")
     p.set_defaults(func=_simulate)
+
+    p = sub.add_parser("diagram", help="export the diagram and the "
+                                       "controller as GraphViz graphs")
+    _scenario_arguments(p, "paper", None)
+    p.add_argument("--depth", type=int, default=None,
+                   help="levels of nesting to expand (default: all)")
+    p.add_argument("--format", choices=("dot", "svg", "png"), default="dot",
+                   help="also render with GraphViz's dot (default: .dot "
+                        "only)")
+    p.add_argument("--out", default=None,
+                   help="output path (default out/<scenario>/diagram.dot)")
+    p.set_defaults(func=_diagram)
     args = parser.parse_args(argv)
     from deburr_drake.config import ConfigError
     try:
