@@ -23,7 +23,8 @@ from deburr_drake.friction import JointFriction
 from deburr_drake.geometry import CircularContour
 from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.observer import ChamferObserver
-from deburr_drake.part import add_cartesian_tool, register_compliant_ring
+from deburr_drake.part import (add_cartesian_tool, register_compliant_ring,
+                               register_tube_visual)
 from deburr_drake.process import CuttingProcess
 from deburr_drake.sensor import ForceSensor
 
@@ -102,6 +103,11 @@ def _add_plant(builder: DiagramBuilder, scenario: Scenario):
         hunt_crossley_dissipation=tube.hunt_crossley_dissipation,
         n_theta=tube.mesh_segments, n_radial=tube.mesh_radial_cells,
         n_z=tube.mesh_height_cells)
+    register_tube_visual(
+        plant, inner_radius=tube.inner_radius,
+        outer_radius=tube.inner_radius + tube.wall_thickness,
+        z_bottom=tube.position[2], z_top=z_top - tube.compliant_layer_height,
+        center_xy=tube.position[:2], n_theta=tube.mesh_segments)
     plant.Finalize()
     return plant, scene_graph
 

@@ -47,7 +47,7 @@ def _simulate(args) -> int:
             print(f"Meshcat: {meshcat.web_url()}", flush=True)
     diagram = make_deburring_diagram(scenario=scenario, meshcat=meshcat)
     if args.record:
-        meshcat.StartRecording(frames_per_second=20.0)
+        meshcat.StartRecording(frames_per_second=10.0)
     log = simulate(diagram, scenario, progress=_progress,
                    progress_interval=args.progress_interval)
     if args.record:

@@ -399,10 +399,11 @@ class SimulationConfig:
     integrator: str = "cenic"
     accuracy: float = 1.0e-4
     max_step: float = 0.01  # s
-    # s; not a multiple of the 2.5 ms control period, so a limit cycle at
-    # its Nyquist frequency (200 Hz) shows in the logs instead of aliasing
-    # to a constant.
-    log_period: float = 0.004
+    # s; the control period: no extra integrator stops (an unaligned 4 ms
+    # log cost 50 % more steps), and a limit cycle at the loop's Nyquist
+    # frequency shows as sample-to-sample alternation instead of aliasing to
+    # a constant as a 5 ms log did.
+    log_period: float = 0.0025
     initial_depth: float = 0.0  # m, tool starts at this depth (in contact)
     # Stop when the command has run this many edge lengths (0: run for the
     # whole duration). 1.0 is one full pass of a closed edge.

@@ -23,7 +23,7 @@ from deburr_drake.tube_mesh import ring_mesh_path, ring_surface_path
 
 __all__ = [
     "CALIBRATED_HYDROELASTIC_MODULUS", "CALIBRATED_FORCE_AT_HALF_MM",
-    "register_compliant_ring", "register_cutter", "add_cartesian_tool", "RingContactProbe", "measure_normal_force",
+    "register_compliant_ring", "register_tube_visual", "register_cutter", "add_cartesian_tool", "RingContactProbe", "measure_normal_force",
     "local_stiffness", "power_law_exponent", "calibrate_hydroelastic_modulus", "force_ripple"]
 
 # Calibration by scripts/contact_stiffness.py (n_theta = 240, n_radial = n_z = 2, the
@@ -74,6 +74,17 @@ def register_compliant_ring(plant, *, inner_radius, outer_radius, z_bottom, z_to
     visual.set_illustration_properties(MakePhongIllustrationProperties(np.array([0.7, 0.6, 0.4, 1.0])))
     plant.RegisterVisualGeometry(world, visual)
     return geometry_id
+
+
+def register_tube_visual(plant, *, inner_radius, outer_radius, z_bottom, z_top, center_xy=(0.0, 0.0),
+                         n_theta=240, name="tube_body"):
+    """The rest of the tube below the compliant edge ring, for illustration only (it never
+    touches the tool). Call before Finalize."""
+    surface = ring_surface_path(inner_radius, outer_radius, z_bottom, z_top, n_theta)
+    X_WG = RigidTransform([float(center_xy[0]), float(center_xy[1]), 0.0])
+    visual = GeometryInstance(X_WG, Mesh(str(surface)), name)
+    visual.set_illustration_properties(MakePhongIllustrationProperties(np.array([0.6, 0.6, 0.65, 1.0])))
+    plant.RegisterVisualGeometry(plant.world_body(), visual)
 
 
 def register_cutter(plant, body, *, cutter_radius=0.003, cutter_length=0.020, resolution_hint=4e-4):

@@ -109,14 +109,14 @@ def _segment_pose(mid, along) -> RigidTransform:
 
 def add_meshcat(builder: DiagramBuilder, meshcat: Meshcat, *, plant,
                 scene_graph, process: CuttingProcess, edge_points,
-                publish_period: float = 0.05) -> None:
+                publish_period: float = 0.1) -> None:
     """Adds the illustration, contact-force arrows and the edge to
     ``meshcat`` (named systems ``meshcat_visualizer``,
     ``contact_visualizer``, ``edge_visualizer``), and points the camera at
     the part from above and in front of the arm."""
     edge_points = np.asarray(edge_points, float)
     center = edge_points.mean(axis=0)
-    meshcat.SetCameraPose(center + np.array([0.25, -0.35, 0.3]), center)
+    meshcat.SetCameraPose(center + np.array([0.10, -0.16, 0.12]), center)
     params = MeshcatVisualizerParams(role=Role.kIllustration,
                                      publish_period=publish_period)
     visualizer = MeshcatVisualizer.AddToBuilder(builder, scene_graph,
@@ -130,7 +130,7 @@ def add_meshcat(builder: DiagramBuilder, meshcat: Meshcat, *, plant,
     edge = builder.AddSystem(EdgeVisualizer(
         meshcat, process, edge_points=edge_points,
         burr_initial=process.initial_burr_height(),
-        publish_period=max(publish_period, 0.1)))
+        publish_period=publish_period))
     builder.Connect(process.GetOutputPort("finish_depth"),
                     edge.GetInputPort("finish_depth"))
     builder.Connect(process.GetOutputPort("burr_height"),
