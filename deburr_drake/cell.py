@@ -7,6 +7,8 @@ sensor."""
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 from pydrake.common import RandomDistribution
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
@@ -20,16 +22,16 @@ from deburr_drake.config import Scenario
 from deburr_drake.controller import HybridController
 from deburr_drake.estimator import ContactParameterEstimator
 from deburr_drake.friction import JointFriction
-from deburr_drake.geometry import CircularContour
+from deburr_drake.geometry import CircularContour, Contour, StraightContour
 from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.observer import ChamferObserver
 from deburr_drake.part import (add_cartesian_tool, register_compliant_ring,
-                               register_tube_visual)
+                               register_compliant_wall, register_tube_visual)
 from deburr_drake.process import CuttingProcess
 from deburr_drake.sensor import ForceSensor
 
 __all__ = ["make_deburring_diagram", "MakeDeburringDiagram", "make_contour",
-           "edge_points",
+           "edge_points", "contact_normal_force",
            "start_position", "TOOL_FRAME", "SENSOR_JOINT", "LOGGED",
            "SYSTEM_NAMES"]
 
@@ -61,15 +63,33 @@ SYSTEM_NAMES = ("plant", "scene_graph", "cutting_process", "joint_friction",
                 "controller", "actuation_hold")
 
 
-def make_contour(scenario: Scenario) -> CircularContour:
-    """The zero-depth path of the tool tip: the tube's inner edge offset by
-    the cutter radius, at the height where the cutter tip runs."""
-    tube, tool = scenario.tube, scenario.tool
+def _straight_frame(scenario: Scenario):
+    """(edge midpoint on the wall face at the top, travel direction,
+    material normal) of a straight edge."""
+    edge = scenario.edge
+    tube = scenario.tube
+    mid = np.array(tube.position, float)
+    mid[2] += tube.height
+    tangent = np.array([np.cos(edge.heading), np.sin(edge.heading), 0.0])
+    normal = np.array([tangent[1], -tangent[0], 0.0])  # material on the right
+    return mid, tangent, normal
+
+
+def make_contour(scenario: Scenario) -> Contour:
+    """The zero-depth path of the tool tip: the part's edge offset by the
+    cutter radius, at the height where the cutter tip runs."""
+    tube, tool, edge = scenario.tube, scenario.tool, scenario.edge
+    if edge.kind == "straight":
+        mid, tangent, normal = _straight_frame(scenario)
+        start = (mid - tool.cutter_radius * normal
+                 - 0.5 * edge.length * tangent)
+        start[2] -= tool.engagement
+        return StraightContour(start, tangent, normal, length=edge.length)
     center = np.array(tube.position, float)
     center[2] += tube.height - tool.engagement
     return CircularContour(center, tube.inner_radius - tool.cutter_radius,
-                           start_angle=scenario.edge.start_angle,
-                           direction=scenario.edge.direction)
+                           start_angle=edge.start_angle,
+                           direction=edge.direction)
 
 
 def start_position(scenario: Scenario, contour=None) -> np.ndarray:
@@ -91,6 +111,17 @@ def _add_plant(builder: DiagramBuilder, scenario: Scenario):
     add_robot(plant, cutter_radius=scenario.tool.cutter_radius,
               cutter_length=scenario.tool.cutter_length,
               resolution_hint=scenario.tool.resolution_hint)
+    if scenario.edge.kind == "straight":
+        mid, tangent, normal = _straight_frame(scenario)
+        register_compliant_wall(
+            plant, mid=mid, tangent=tangent, normal=normal,
+            length=scenario.edge.length, thickness=scenario.tube.wall_thickness,
+            height=scenario.tube.height,
+            layer_height=scenario.tube.compliant_layer_height,
+            hydroelastic_modulus=scenario.tube.hydroelastic_modulus,
+            hunt_crossley_dissipation=scenario.tube.hunt_crossley_dissipation)
+        plant.Finalize()
+        return plant, scene_graph
     tube = scenario.tube
     z_top = tube.position[2] + tube.height
     register_compliant_ring(
@@ -124,15 +155,51 @@ def edge_points(scenario: Scenario, arc) -> np.ndarray:
     positions ``arc`` (m): where the chamfer is cut, for drawing."""
     contour = make_contour(scenario)
     tube, tool = scenario.tube, scenario.tool
-    center = np.array(tube.position, float)
-    scale = tube.inner_radius / (tube.inner_radius - tool.cutter_radius)
+    top = tube.position[2] + tube.height
     points = []
     for s in np.asarray(arc, float):
         p = contour.point_at(s)
-        q = center + scale * (p - center)
-        q[2] = center[2] + tube.height
+        q = p + tool.cutter_radius * contour.n1(p)
+        q[2] = top
         points.append(q)
     return np.array(points)
+
+
+def contact_normal_force(scenario: Scenario, depths, *,
+                         arc_fraction: float = 0.5) -> np.ndarray:
+    """The hydroelastic normal force (N) on the scenario's cutter at each
+    depth (m) into its part, the tool vertical at ``arc_fraction`` of the
+    edge, at rest: the contact part of (4), measured on the same geometry
+    the cell simulates (a Cartesian tool holds the cutter)."""
+    probe = copy.deepcopy(scenario)
+    probe.robot.model = "cartesian_tool"
+    probe.robot.joint_coulomb_friction = []
+    probe.simulation.plant_time_step = 0.0
+    builder = DiagramBuilder()
+    plant, _ = _add_plant(builder, probe)
+    diagram = builder.Build()
+    context = diagram.CreateDefaultContext()
+    pc = plant.GetMyMutableContextFromRoot(context)
+    tool = plant.GetBodyByName("tool").index()
+    contour = make_contour(scenario)
+    p = contour.point_at(arc_fraction * contour.length)
+    n1 = contour.n1(p)
+    port = plant.get_contact_results_output_port()
+    forces = []
+    for depth in np.atleast_1d(np.asarray(depths, float)):
+        plant.SetPositions(pc, p + depth * n1)
+        results = port.Eval(pc)
+        f = np.zeros(3)
+        for i in range(results.num_hydroelastic_contacts()):
+            info = results.hydroelastic_contact_info(i)
+            F = info.F_Ac_W().translational()
+            # F_Ac_W acts on the body of geometry M.
+            body_M = plant.GetBodyFromFrameId(
+                diagram.GetSubsystemByName("scene_graph").model_inspector()
+                .GetFrameId(info.contact_surface().id_M())).index()
+            f += F if body_M == tool else -F
+        forces.append(-float(f @ n1))
+    return np.array(forces)
 
 
 def make_deburring_diagram(*, scenario: Scenario,

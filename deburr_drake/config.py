@@ -132,15 +132,30 @@ class ToolConfig:
 
 @dataclass
 class EdgeConfig:
-    """Where and which way the tool runs along the edge."""
+    """Which edge, and where and which way the tool runs along it.
 
+    ``circle``: the tube's inner top edge (``tube.*``), from ``start_angle``
+    in ``direction``. ``straight``: the top edge of a straight wall of the
+    ``tube``'s thickness, height and material, ``length`` long, its middle
+    above ``tube.position``; the tool runs along ``heading`` with the
+    material on its right."""
+
+    kind: str = "circle"  # circle or straight
     start_angle: float = 0.0  # rad, polar angle of the contour start
     direction: int = 1  # +1 counter-clockwise seen from +z, -1 clockwise
+    length: float = 0.1  # m, straight edge only
+    heading: float = 1.5707963267948966  # rad, straight: travel direction
+
+    KINDS = ("circle", "straight")
 
     def validate(self):
+        _require(self.kind in self.KINDS, "edge.kind", self.kind,
+                 f"one of {self.KINDS}")
         _finite("edge", "start_angle", self.start_angle)
         _require(self.direction in (1, -1), "edge.direction", self.direction,
                  "1 or -1")
+        _positive("edge", "length", self.length)
+        _finite("edge", "heading", self.heading)
 
 
 @dataclass

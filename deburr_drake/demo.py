@@ -13,7 +13,7 @@ import numpy as np
 from deburr_drake import metrics
 from deburr_drake.config import Scenario
 from deburr_drake.controller import make_rule_bases
-from deburr_drake.part import measure_normal_force
+from deburr_drake.cell import contact_normal_force
 from deburr_drake.simulation import RunLog, simulate
 from deburr_drake.cell import make_deburring_diagram
 
@@ -38,13 +38,8 @@ class ContactTruth:
 
 
 def contact_truth(scenario: Scenario, *, step: float = 2e-5) -> ContactTruth:
-    tube, tool, d = scenario.tube, scenario.tool, scenario.task.desired_depth
-    forces = measure_normal_force(
-        [d - step, d, d + step], inner_radius=tube.inner_radius,
-        wall=tube.wall_thickness, layer_height=tube.compliant_layer_height,
-        engagement=tool.engagement,
-        hydroelastic_modulus=tube.hydroelastic_modulus,
-        cutter_radius=tool.cutter_radius, n_theta=tube.mesh_segments)
+    tube, d = scenario.tube, scenario.task.desired_depth
+    forces = contact_normal_force(scenario, [d - step, d, d + step])
     c0 = scenario.process.contact_threshold_force
     return ContactTruth(
         force_at_desired_depth=float(forces[1] + c0), c0=c0,

@@ -12,9 +12,9 @@ import math
 
 import numpy as np
 from pydrake.geometry import (
-    AddCompliantHydroelasticProperties, AddContactMaterial, AddRigidHydroelasticProperties, Cylinder,
+    AddCompliantHydroelasticProperties, AddContactMaterial, AddRigidHydroelasticProperties, Box, Cylinder,
     GeometryInstance, MakePhongIllustrationProperties, Mesh, ProximityProperties)
-from pydrake.math import RigidTransform
+from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, ContactModel, CoulombFriction
 from pydrake.systems.framework import DiagramBuilder
 
@@ -23,7 +23,7 @@ from deburr_drake.tube_mesh import ring_mesh_path, ring_surface_path
 
 __all__ = [
     "CALIBRATED_HYDROELASTIC_MODULUS", "CALIBRATED_FORCE_AT_HALF_MM",
-    "register_compliant_ring", "register_tube_visual", "register_cutter", "add_cartesian_tool", "RingContactProbe", "measure_normal_force",
+    "register_compliant_ring", "register_compliant_wall", "register_tube_visual", "register_cutter", "add_cartesian_tool", "RingContactProbe", "measure_normal_force",
     "local_stiffness", "power_law_exponent", "calibrate_hydroelastic_modulus", "force_ripple"]
 
 # Calibration by scripts/contact_stiffness.py (n_theta = 240, n_radial = n_z = 2, the
@@ -73,6 +73,39 @@ def register_compliant_ring(plant, *, inner_radius, outer_radius, z_bottom, z_to
     visual = GeometryInstance(X_WG, Mesh(str(surface)), name + "_visual")
     visual.set_illustration_properties(MakePhongIllustrationProperties(np.array([0.7, 0.6, 0.4, 1.0])))
     plant.RegisterVisualGeometry(world, visual)
+    return geometry_id
+
+
+def register_compliant_wall(plant, *, mid, tangent, normal, length, thickness, height, layer_height,
+                            hydroelastic_modulus, hunt_crossley_dissipation, margin=0.01,
+                            name="wall_edge"):
+    """A straight wall whose top edge runs through `mid` (m, world, on the wall face at the top)
+    along `tangent`, the material on the side of `normal` (unit, horizontal): its top
+    `layer_height` as a compliant hydroelastic Box (Drake meshes it; pressure zero on the
+    surface, rising to E at its medial axis), `margin` longer than the edge at both ends,
+    frictionless; the rest of the wall as illustration. Call before Finalize. Returns the
+    collision GeometryId."""
+    _check_positive("hydroelastic_modulus", hydroelastic_modulus)
+    for label, value in (("length", length), ("thickness", thickness), ("height", height),
+                         ("layer_height", layer_height)):
+        _check_positive(label, value)
+    tangent, normal = np.asarray(tangent, float), np.asarray(normal, float)
+    R = RotationMatrix(np.column_stack([tangent, normal, np.cross(tangent, normal)]))
+    top = np.asarray(mid, float) + 0.5 * thickness * normal
+    X_layer = RigidTransform(R, top - [0.0, 0.0, 0.5 * layer_height])
+    props = ProximityProperties()
+    AddCompliantHydroelasticProperties(resolution_hint=thickness, hydroelastic_modulus=hydroelastic_modulus,
+                                       properties=props)
+    AddContactMaterial(dissipation=hunt_crossley_dissipation, friction=CoulombFriction(0.0, 0.0),
+                       properties=props)
+    shape = Box(length + 2 * margin, thickness, layer_height)
+    world = plant.world_body()
+    geometry_id = plant.RegisterCollisionGeometry(world, X_layer, shape, name, props)
+    plant.RegisterVisualGeometry(world, X_layer, shape, name + "_visual", np.array([0.7, 0.6, 0.4, 1.0]))
+    body_height = height - layer_height
+    X_body = RigidTransform(R, top - [0.0, 0.0, layer_height + 0.5 * body_height])
+    plant.RegisterVisualGeometry(world, X_body, Box(length + 2 * margin, thickness, body_height),
+                                 name + "_body", np.array([0.6, 0.6, 0.65, 1.0]))
     return geometry_id
 
 

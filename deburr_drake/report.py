@@ -27,15 +27,16 @@ def _burr_spans(scenario, length):
 
 
 def pass_metrics(log: RunLog, *,
-                 true_force_at_desired_depth: Optional[float] = None
-                 ) -> Dict[str, float]:
+                 true_force_at_desired_depth: Optional[float] = None,
+                 only_cut: bool = False) -> Dict[str, float]:
     """Every metric of the pass, SI units unless the name says mm.
 
     Excludes the first ``TRANSIENT`` s after contact (||f_n|| >
     ``CONTACT_FORCE``); the surface finish excludes the bins cut in that
-    time. ``true_force_at_desired_depth`` (N) is the plant's normal force at
-    delta* (see demo.contact_truth); without it the force-prediction error
-    is nan."""
+    time; with ``only_cut`` (a run shorter than a pass) also the bins the
+    tool has not reached. ``true_force_at_desired_depth`` (N) is the plant's
+    normal force at delta* (see demo.contact_truth); without it the
+    force-prediction error is nan."""
     sc = log.scenario
     d_star = sc.task.desired_depth
     f_td = sc.task.desired_chamfering_force
@@ -58,6 +59,8 @@ def pass_metrics(log: RunLog, *,
                                      max(s_span.max(), start), L, closed)
     else:
         skip = np.zeros(arc.shape, bool)
+    if only_cut:
+        skip |= depth <= 0.0
     error = depth[~skip] - d_star
     out["chamfer_depth_mean_error_mm"] = float(np.mean(error)) * 1e3
     out["chamfer_depth_rms_error_mm"] = metrics.rms(error) * 1e3

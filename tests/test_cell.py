@@ -97,3 +97,27 @@ def test_process_records_finish_and_removes_swept_burr():
     np.testing.assert_array_equal(burr1[~swept], burr0[~swept])
     assert burr1[bins.index(s + 0.003)] > 0  # the front is still uncut
     assert bins.width <= 2e-4
+
+
+def test_straight_edge_cell():
+    from deburr_drake.cell import contact_normal_force
+    from deburr_drake.geometry import StraightContour
+    scenario = load_scenario("paper", text="edge: {kind: straight}")
+    contour = make_contour(scenario)
+    assert isinstance(contour, StraightContour)
+    assert contour.length == pytest.approx(0.1)
+    # Material on the right of the travel direction (+y): n1 = +x.
+    np.testing.assert_allclose(contour.n1(contour.point_at(0.0)),
+                               [1, 0, 0], atol=1e-12)
+    f = contact_normal_force(scenario, [-1e-4, 2e-4, 5e-4, 8e-4])
+    assert f[0] == 0.0 and 0 < f[1] < f[2] < f[3]
+    # About the ring's 10 N/mm at 0.5 mm: the same material and wall.
+    k = (contact_normal_force(scenario, [5.2e-4])[0]
+         - contact_normal_force(scenario, [4.8e-4])[0]) / 4e-5
+    assert 8e3 < k < 12e3
+    diagram = make_deburring_diagram(scenario=scenario)
+    context = diagram.CreateDefaultContext()
+    plant = diagram.GetSubsystemByName("plant")
+    tip = plant.GetFrameByName("tool_tip").CalcPoseInWorld(
+        plant.GetMyContextFromRoot(context)).translation()
+    np.testing.assert_allclose(tip, contour.point_at(0.0), atol=1e-7)
