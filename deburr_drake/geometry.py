@@ -159,6 +159,14 @@ class Contour(abc.ABC):
             return t
         return t if _value(speed) > 0 else -t
 
+    def frame(self, p):
+        """(n1, tangent, depth, arc_position) at a float point p in one
+        call: what the observer and the cutting process need per
+        evaluation. Subclasses may compute it faster; the values equal the
+        separate methods'."""
+        return (self.n1(p), self.tangent(p), float(self.depth(p)),
+                self.arc_position(p))
+
     def edge_speed(self, p, v):
         """Signed speed along the edge, tangent(p) . v (m/s). T-generic."""
         return np.dot(self.tangent(p), _vec3(v, "v"))
@@ -264,6 +272,19 @@ class CircularContour(Contour):
         dx, dy, rho = self._planar(p)
         d = self._direction
         return np.array([-d * dy / rho, d * dx / rho, 0.0 * rho])
+
+    def frame(self, p):
+        p = _vec3_float(p, "p")
+        dx, dy = p[0] - self._center[0], p[1] - self._center[1]
+        rho = math.hypot(dx, dy)
+        if rho < _MIN_RHO:
+            return super().frame(p)  # raises with the usual message
+        n1 = np.array([dx / rho, dy / rho, 0.0])
+        d = self._direction
+        tangent = np.array([-d * dy / rho, d * dx / rho, 0.0])
+        arc = self._wrap(d * (math.atan2(dy, dx) - self._start_angle)
+                         * self._radius)
+        return n1, tangent, rho - self._radius, arc
 
     def _angle(self, p):
         p = _vec3_float(p, "p")

@@ -19,13 +19,12 @@ def chamfer_quantities(contour: Contour, x_p, xdot_p, force, *,
     and the measured force on the tool ``force`` (N, world):
     n1 and delta from the contour (eq. 2 with the n1 approximation at x_p),
     n2 the direction of motion (R5), ||f_n|| = -f.n1, ||f_t|| = -f.n2."""
-    n1 = contour.n1(x_p)
+    n1, _, delta, arc = contour.frame(x_p)
     n2 = contour.n2(x_p, xdot_p, min_tangential_speed)
     return CHAMFER_STATE.pack(
-        x_p=x_p, xdot_p=xdot_p, n1=n1, n2=n2,
-        delta=contour.depth(x_p), delta_dot=float(n1 @ xdot_p),
-        f_n=-float(force @ n1), f_t=-float(force @ n2),
-        arc_position=contour.arc_position(x_p))
+        x_p=x_p, xdot_p=xdot_p, n1=n1, n2=n2, delta=delta,
+        delta_dot=float(n1 @ xdot_p), f_n=-float(force @ n1),
+        f_t=-float(force @ n2), arc_position=arc)
 
 
 class ChamferObserver(LeafSystem):

@@ -12,7 +12,6 @@ from pydrake.common.value import AbstractValue
 from pydrake.multibody.math import SpatialForce
 from pydrake.multibody.plant import (ExternallyAppliedSpatialForce,
                                      MultibodyPlant)
-from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.systems.framework import LeafSystem, ValueProducer
 
 from deburr_drake.config import BurrConfig, ProcessConfig
@@ -82,8 +81,8 @@ def cutting_force(config: ProcessConfig, contour: Contour, x_p, xdot_p, *,
     that motion (the direction is regularized below ``smoothing_speed`` so
     the force is continuous); plus the contact threshold c0 along -n1. Both
     ramp in smoothly over the first ``threshold_depth`` of depth."""
-    return _force(config, contour.n1(x_p), contour.tangent(x_p),
-                  float(contour.depth(x_p)), contour.arc_position(x_p),
+    n1, tangent, delta, arc = contour.frame(x_p)
+    return _force(config, n1, tangent, delta, arc,
                   np.asarray(xdot_p, float), cut_height, burr_area)
 
 
@@ -150,8 +149,6 @@ class CuttingProcess(LeafSystem):
         self._cut_height = cut_height
         self._cutter_radius = cutter_radius
         self._bins = FinishBins(contour.length, config.finish_bin_length)
-        self._nq = plant.num_positions()
-        self._memo = {}  # q bytes -> _edge_frame(q), at most 4 entries
         self._thickness = np.array([self._burr_thickness(s)
                                     for s in self._bins.centers])
         self._burr_index = self.DeclareDiscreteState(
@@ -188,38 +185,17 @@ class CuttingProcess(LeafSystem):
         return burr_profile(self._bins.centers, self._config.burrs,
                             self._contour.length, self._contour.closed)
 
-    def _edge_frame(self, q):
-        """(J_v, n1, tangent, delta, arc) at the tool for positions q.
-
-        A pure function of q, memoized for the last few q: an integrator
-        that linearizes the applied force in v (cenic) re-evaluates this
-        system at one q with several v, alternating between its full- and
-        half-step states."""
-        key = q.tobytes()
-        memo = self._memo.get(key)
-        if memo is None:
-            plant, ctx = self._plant, self._plant_context
-            plant.SetPositions(ctx, q)
-            x_p = self._frame.CalcPoseInWorld(ctx).translation()
-            J = plant.CalcJacobianTranslationalVelocity(
-                ctx, JacobianWrtVariable.kV, self._frame, np.zeros(3),
-                plant.world_frame(), plant.world_frame())
-            c = self._contour
-            memo = (J, c.n1(x_p), c.tangent(x_p), float(c.depth(x_p)),
-                    c.arc_position(x_p))
-            if len(self._memo) >= 4:
-                self._memo.pop(next(iter(self._memo)))
-            self._memo[key] = memo
-        return memo
-
     def _calc_process(self, context, value):
-        x = self._state_port.Eval(context)
-        J, n1, tangent, delta, arc = self._edge_frame(x[:self._nq])
+        plant, ctx = self._plant, self._plant_context
+        plant.SetPositionsAndVelocities(ctx, self._state_port.Eval(context))
+        x_p = self._frame.CalcPoseInWorld(ctx).translation()
+        xdot_p = self._frame.CalcSpatialVelocityInWorld(ctx).translational()
+        n1, tangent, delta, arc = self._contour.frame(x_p)
         burr = context.get_discrete_state(self._burr_index).get_value()
         k = self._bins.index(self._leading_edge(arc))
         area = burr[k] * self._thickness[k]
         value.set_value(_force(self._config, n1, tangent, delta, arc,
-                               J @ x[self._nq:], self._cut_height, area))
+                               xdot_p, self._cut_height, area))
 
     def _leading_edge(self, s):
         """Arc position of the cutter's front (the traversal direction is

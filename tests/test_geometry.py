@@ -265,3 +265,14 @@ def test_validation_errors():
     StraightContour(o, [1.0 + 5e-10, 0, 0], [0, 1, 0])
     with pytest.raises(TypeError):
         Contour()
+
+
+@pytest.mark.parametrize("contour,p", [(circ(), polar(R + 0.0004, 2.5, z=0.3)),
+                                       (circ(direction=-1, start_angle=1.0), polar(R - 0.001, -0.7)),
+                                       (line(), np.array([0.7, 0.13, -1.0]))])
+def test_frame_equals_the_separate_methods(contour, p):
+    n1, tangent, depth, arc = contour.frame(p)
+    np.testing.assert_allclose(n1, contour.n1(p), atol=1e-15)
+    np.testing.assert_allclose(tangent, contour.tangent(p), atol=1e-15)
+    assert depth == pytest.approx(contour.depth(p), abs=1e-15)
+    assert arc == pytest.approx(contour.arc_position(p), abs=1e-12)
