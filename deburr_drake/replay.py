@@ -4,6 +4,7 @@ edge coloured as it is chamfered (the burrs disappear as the tool passes)."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Dict
 
 import numpy as np
@@ -137,10 +138,9 @@ def add_meshcat(builder: DiagramBuilder, meshcat: Meshcat, *, plant,
                     edge.GetInputPort("burr_height"))
 
 
-def write_recording(meshcat: Meshcat, path) -> "Path":
+def write_recording(meshcat: Meshcat, path) -> Path:
     """Stops Meshcat's recording and writes it as one self-contained HTML
     file (three.js and the scene inlined) at ``path``."""
-    from pathlib import Path
     meshcat.StopRecording()
     meshcat.PublishRecording()
     out = Path(path)

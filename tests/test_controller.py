@@ -5,7 +5,6 @@ import copy
 
 import numpy as np
 import pytest
-from pydrake.systems.framework import DiagramBuilder
 
 from deburr_drake.config import ControllerConfig, ConfigError
 from deburr_drake.controller import HybridController, make_rule_bases

@@ -7,7 +7,6 @@ import pytest
 from deburr_drake.config import EstimatorConfig, TaskConfig
 from deburr_drake.estimator import ContactParameterEstimator
 from deburr_drake.geometry import CircularContour
-from deburr_drake.layout import CHAMFER_STATE
 from deburr_drake.observer import chamfer_quantities
 
 CONTOUR = CircularContour([0.0, 0.0, 0.0], 0.027)
