@@ -17,6 +17,7 @@ from pydrake.systems.framework import LeafSystem, ValueProducer
 from deburr_drake.config import BurrConfig, ProcessConfig
 from deburr_drake.geometry import Contour
 from deburr_drake.layout import VectorLayout
+from deburr_drake.metrics import arc_distance
 
 __all__ = ["CuttingProcess", "PROCESS_STATE", "cutting_force",
            "burr_profile", "FinishBins"]
@@ -46,10 +47,8 @@ def burr_profile(arc, burrs: Sequence[BurrConfig], edge_length: float,
     arc = np.asarray(arc, float)
     height = np.zeros_like(arc)
     for burr in burrs:
-        center = burr.center_fraction * edge_length
-        d = arc - center
-        if closed:
-            d = (d + edge_length / 2) % edge_length - edge_length / 2
+        d = arc_distance(arc, burr.center_fraction * edge_length,
+                         edge_length, closed)
         inside = np.abs(d) < burr.length / 2
         bump = burr.height * 0.5 * (1 + np.cos(2 * np.pi * d / burr.length))
         height = np.maximum(height, np.where(inside, bump, 0.0))
@@ -207,11 +206,9 @@ class CuttingProcess(LeafSystem):
         # The thickness of the burr whose span covers s (they do not
         # overlap in the shipped scenarios; the thickest wins otherwise).
         thickness = 0.0
-        L = self._contour.length
+        L, closed = self._contour.length, self._contour.closed
         for burr in self._config.burrs:
-            d = s - burr.center_fraction * L
-            if self._contour.closed:
-                d = (d + L / 2) % L - L / 2
+            d = arc_distance(s, burr.center_fraction * L, L, closed)
             if abs(d) < burr.length / 2:
                 thickness = max(thickness, burr.thickness)
         return thickness
@@ -227,10 +224,8 @@ class CuttingProcess(LeafSystem):
         finish[k] = max(finish[k], delta)
         # The cutter (diameter 2 r) has swept the burr behind its front.
         burr = discrete_state.get_mutable_value(self._burr_index)
-        d = self._bins.centers - s
-        if self._contour.closed:
-            L = self._contour.length
-            d = (d + L / 2) % L - L / 2
+        d = arc_distance(self._bins.centers, s, self._contour.length,
+                         self._contour.closed)
         r, w = self._cutter_radius, self._bins.width
         burr[(d >= -r) & (d < r - w)] = 0.0
 
