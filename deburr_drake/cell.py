@@ -25,7 +25,8 @@ from deburr_drake.friction import JointFriction
 from deburr_drake.geometry import CircularContour, Contour, StraightContour
 from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.observer import ChamferObserver
-from deburr_drake.part import (add_cartesian_tool, register_compliant_ring,
+from deburr_drake.part import (add_cartesian_tool, contact_force_on_body,
+                               register_compliant_ring,
                                register_compliant_wall, register_tube_visual)
 from deburr_drake.process import CuttingProcess
 from deburr_drake.sensor import ForceSensor
@@ -180,7 +181,8 @@ def contact_normal_force(scenario: Scenario, depths, *,
     diagram = builder.Build()
     context = diagram.CreateDefaultContext()
     pc = plant.GetMyMutableContextFromRoot(context)
-    tool = plant.GetBodyByName("tool").index()
+    tool = plant.GetBodyByName("tool")
+    (cutter,) = plant.GetCollisionGeometriesForBody(tool)
     contour = make_contour(scenario)
     p = contour.point_at(arc_fraction * contour.length)
     n1 = contour.n1(p)
@@ -188,16 +190,7 @@ def contact_normal_force(scenario: Scenario, depths, *,
     forces = []
     for depth in np.atleast_1d(np.asarray(depths, float)):
         plant.SetPositions(pc, p + depth * n1)
-        results = port.Eval(pc)
-        f = np.zeros(3)
-        for i in range(results.num_hydroelastic_contacts()):
-            info = results.hydroelastic_contact_info(i)
-            F = info.F_Ac_W().translational()
-            # F_Ac_W acts on the body of geometry M.
-            body_M = plant.GetBodyFromFrameId(
-                diagram.GetSubsystemByName("scene_graph").model_inspector()
-                .GetFrameId(info.contact_surface().id_M())).index()
-            f += F if body_M == tool else -F
+        f = contact_force_on_body(port.Eval(pc), cutter, tool.index())
         forces.append(-float(f @ n1))
     return np.array(forces)
 

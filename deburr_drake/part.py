@@ -23,7 +23,7 @@ from deburr_drake.tube_mesh import ring_mesh_path, ring_surface_path
 
 __all__ = [
     "CALIBRATED_HYDROELASTIC_MODULUS", "CALIBRATED_FORCE_AT_HALF_MM",
-    "register_compliant_ring", "register_compliant_wall", "register_tube_visual", "register_cutter", "add_cartesian_tool", "RingContactProbe", "measure_normal_force",
+    "contact_force_on_body", "register_compliant_ring", "register_compliant_wall", "register_tube_visual", "register_cutter", "add_cartesian_tool", "RingContactProbe", "measure_normal_force",
     "local_stiffness", "power_law_exponent", "calibrate_hydroelastic_modulus", "force_ripple"]
 
 # Calibration by scripts/contact_stiffness.py (n_theta = 240, n_radial = n_z = 2, the
@@ -146,6 +146,22 @@ def add_cartesian_tool(plant, *, cutter_radius=0.003, cutter_length=0.020, resol
     return instance
 
 
+def contact_force_on_body(results, geometry_id, body_index):
+    """Sum of the contact forces (N, world) that ContactResults `results` apply ON the body
+    `body_index`, whose collision geometry is `geometry_id`: hydroelastic (F_Ac_W acts on the
+    body of the surface's geometry M) and fallback point contacts (contact_force() acts on B)."""
+    f = np.zeros(3)
+    for i in range(results.num_hydroelastic_contacts()):
+        info = results.hydroelastic_contact_info(i)
+        sign = 1.0 if info.contact_surface().id_M() == geometry_id else -1.0
+        f += sign * info.F_Ac_W().translational()
+    for i in range(results.num_point_pair_contacts()):
+        info = results.point_pair_contact_info(i)
+        sign = 1.0 if info.bodyB_index() == body_index else -1.0
+        f += sign * info.contact_force()
+    return f
+
+
 class RingContactProbe:
     """A continuous plant with the cartesian tool and a compliant ring, to evaluate contact forces statically.
 
@@ -181,18 +197,8 @@ class RingContactProbe:
         """Sum of the hydroelastic (and fallback point) contact forces ON the tool (N, world frame)."""
         self.set_tip_position(p_WT)
         results = self.plant.get_contact_results_output_port().Eval(self.plant_context)
-        f = np.zeros(3)
-        for i in range(results.num_hydroelastic_contacts()):
-            info = results.hydroelastic_contact_info(i)
-            # F_Ac_W acts on the body of geometry M of the contact surface.
-            sign = 1.0 if info.contact_surface().id_M() == self.cutter_id else -1.0
-            f += sign * info.F_Ac_W().translational()
         tool = self.plant.GetBodyByName("tool", self._instance).index()
-        for i in range(results.num_point_pair_contacts()):
-            info = results.point_pair_contact_info(i)
-            sign = 1.0 if info.bodyB_index() == tool else -1.0  # contact_force(): on B
-            f += sign * info.contact_force()
-        return f
+        return contact_force_on_body(results, self.cutter_id, tool)
 
     def radial_force(self, depth, angle=0.0, *, cutter_radius=0.003, engagement=0.002):
         """Radial component magnitude (N) of the contact force on the tool.
