@@ -35,12 +35,10 @@ def make_parser(plant: MultibodyPlant) -> Parser:
     return parser
 
 
-def make_kinematic_model(url: str, *, gravity: bool = True) -> MultibodyPlant:
+def make_kinematic_model(url: str) -> MultibodyPlant:
     """A standalone, finalized MultibodyPlant of the robot alone (no
     geometry simulation): the controller's and observers' model."""
     plant = MultibodyPlant(0.0)
     make_parser(plant).AddModels(url=url)
-    if not gravity:
-        plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
     plant.Finalize()
     return plant
