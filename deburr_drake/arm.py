@@ -17,8 +17,7 @@ import numpy as np
 from pydrake.multibody.inverse_kinematics import InverseKinematics
 from pydrake.solvers import SnoptSolver, Solve, SolverOptions
 
-from deburr_drake.models import make_parser
-from deburr_drake.part import register_cutter
+from deburr_drake.part import add_tool_robot
 
 __all__ = ["ARM_URL", "ARM_MODEL_NAME", "ARM_JOINTS", "DEFAULT_PART_POSITION", "Q_READY",
            "add_arm", "solve_tool_pose", "default_q_guess"]
@@ -40,16 +39,13 @@ Q_READY = np.array([0.0, 0.8393, 0.1015, -0.9408, 0.0])
 _AXIS_POINT = 0.10        # m, second point on the tool axis used for the verticality constraint
 
 
-def add_arm(plant, *, cutter_radius=0.003, cutter_length=0.020, resolution_hint=4e-4):
+def add_arm(plant, **cutter):
     """Add models/arm5.sdf (welded to the world at the origin; body `tool` with origin at the
-    tool tip, weld `ft_sensor` flange -> tool) and its cutter (part.register_cutter).
-    The plant must be registered with a SceneGraph (the cutter is geometry); for a
+    tool tip, weld `ft_sensor` flange -> tool) and its cutter (part.add_tool_robot's keyword
+    arguments). The plant must be registered with a SceneGraph (the cutter is geometry); for a
     geometry-free model of the arm use models.make_kinematic_model(ARM_URL). Call before
     Finalize. Returns the model instance."""
-    (instance,) = make_parser(plant).AddModels(url=ARM_URL)
-    register_cutter(plant, plant.GetBodyByName("tool", instance), cutter_radius=cutter_radius,
-                    cutter_length=cutter_length, resolution_hint=resolution_hint)
-    return instance
+    return add_tool_robot(plant, ARM_URL, **cutter)
 
 
 def default_q_guess(p_W_tip):

@@ -16,7 +16,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import (LogVectorOutput, RandomSource,
                                         ZeroOrderHold)
 
-from deburr_drake.arm import ARM_URL, add_arm, solve_tool_pose
+from deburr_drake.arm import ARM_URL, solve_tool_pose
 from deburr_drake.command import CommandGenerator, FirstOrderHold
 from deburr_drake.config import Scenario
 from deburr_drake.controller import HybridController
@@ -25,7 +25,7 @@ from deburr_drake.friction import JointFriction
 from deburr_drake.geometry import CircularContour, Contour, StraightContour
 from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.observer import ChamferObserver
-from deburr_drake.part import (add_cartesian_tool, contact_force_on_body,
+from deburr_drake.part import (add_tool_robot, contact_force_on_body,
                                register_compliant_ring,
                                register_compliant_wall, register_tube_visual)
 from deburr_drake.process import CuttingProcess
@@ -39,10 +39,8 @@ __all__ = ["make_deburring_diagram", "MakeDeburringDiagram", "make_contour",
 TOOL_FRAME = "tool_tip"
 SENSOR_JOINT = "ft_sensor"
 
-_ROBOTS = {
-    "cartesian_tool": (POINT_MASS_URL, add_cartesian_tool),
-    "arm5": (ARM_URL, add_arm),
-}
+#: Robot model name -> its model URL.
+_ROBOTS = {"cartesian_tool": POINT_MASS_URL, "arm5": ARM_URL}
 
 #: Logged signals: logger name -> (system name, output port name).
 LOGGED = {
@@ -108,10 +106,10 @@ def _add_plant(builder: DiagramBuilder, scenario: Scenario):
     if sim.plant_time_step > 0:
         config.discrete_contact_approximation = sim.contact_approximation
     plant, scene_graph = AddMultibodyPlant(config, builder)
-    _, add_robot = _ROBOTS[scenario.robot.model]
-    add_robot(plant, cutter_radius=scenario.tool.cutter_radius,
-              cutter_length=scenario.tool.cutter_length,
-              resolution_hint=scenario.tool.resolution_hint)
+    add_tool_robot(plant, _ROBOTS[scenario.robot.model],
+                   cutter_radius=scenario.tool.cutter_radius,
+                   cutter_length=scenario.tool.cutter_length,
+                   resolution_hint=scenario.tool.resolution_hint)
     if scenario.edge.kind == "straight":
         mid, tangent, normal = _straight_frame(scenario)
         register_compliant_wall(
@@ -217,8 +215,7 @@ def make_deburring_diagram(*, scenario: Scenario,
     q0 = _initial_positions(plant, c, x0)
     plant.SetDefaultPositions(q0)
 
-    url, _ = _ROBOTS[c.robot.model]
-    model = make_kinematic_model(url)
+    model = make_kinematic_model(_ROBOTS[c.robot.model])
     model_context = model.CreateDefaultContext()
     model.SetPositions(model_context, q0)
     desired_rotation = model.GetFrameByName(TOOL_FRAME).CalcPoseInWorld(

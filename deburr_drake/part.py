@@ -23,7 +23,7 @@ from deburr_drake.tube_mesh import ring_mesh_path, ring_surface_path
 
 __all__ = [
     "CALIBRATED_HYDROELASTIC_MODULUS", "CALIBRATED_FORCE_AT_HALF_MM",
-    "contact_force_on_body", "register_compliant_ring", "register_compliant_wall", "register_tube_visual", "register_cutter", "add_cartesian_tool", "RingContactProbe", "measure_normal_force",
+    "contact_force_on_body", "register_compliant_ring", "register_compliant_wall", "register_tube_visual", "register_cutter", "add_tool_robot", "add_cartesian_tool", "RingContactProbe", "measure_normal_force",
     "local_stiffness", "power_law_exponent", "calibrate_hydroelastic_modulus", "force_ripple"]
 
 # Calibration by scripts/contact_stiffness.py (n_theta = 240, n_radial = n_z = 2, the
@@ -137,13 +137,19 @@ def register_cutter(plant, body, *, cutter_radius=0.003, cutter_length=0.020, re
     return geometry_id
 
 
-def add_cartesian_tool(plant, *, cutter_radius=0.003, cutter_length=0.020, resolution_hint=4e-4):
-    """Add models/cartesian_tool.sdf (joints x, y, z, weld ft_sensor; body `tool` with origin at
-    the tool tip) and its cutter. Returns the model instance."""
-    (instance,) = make_parser(plant).AddModels(url=POINT_MASS_URL)
+def add_tool_robot(plant, url, *, cutter_radius=0.003, cutter_length=0.020, resolution_hint=4e-4):
+    """Add the robot model at `url` (its body `tool` has its origin at the tool tip, weld
+    `ft_sensor` holds it) and register the cutter on `tool`. Returns the model instance."""
+    (instance,) = make_parser(plant).AddModels(url=url)
     register_cutter(plant, plant.GetBodyByName("tool", instance), cutter_radius=cutter_radius,
                     cutter_length=cutter_length, resolution_hint=resolution_hint)
     return instance
+
+
+def add_cartesian_tool(plant, **cutter):
+    """Add models/cartesian_tool.sdf (joints x, y, z, weld ft_sensor) and its cutter
+    (`add_tool_robot`'s keyword arguments). Returns the model instance."""
+    return add_tool_robot(plant, POINT_MASS_URL, **cutter)
 
 
 def contact_force_on_body(results, geometry_id, body_index):
