@@ -56,6 +56,9 @@ def _vec3(p, name):
 
 def _vec3_float(p, name):
     """Shape-(3,) finite float array; AutoDiffXd entries are reduced to values."""
+    if (type(p) is np.ndarray and p.dtype == np.float64
+            and p.shape == (3,) and math.isfinite(p[0] + p[1] + p[2])):
+        return p  # the common case, on every controller and process step
     a = np.asarray(p)
     if a.shape != (3,):
         raise ValueError(f"{name} must have shape (3,), got shape {a.shape}")

@@ -45,18 +45,14 @@ class VectorLayout:
 
     def pack(self, dtype=float, **values) -> np.ndarray:
         """A flat vector from every block, given by name."""
-        out = np.empty(self.size, dtype=dtype)
-        try:
-            for block, s in self._slices.items():
-                out[s] = values[block]
-        except KeyError:
-            pass
-        if len(values) != len(self._slices) or any(
-                b not in values for b in self._slices):
+        if values.keys() != self._slices.keys():
             missing = set(self._slices) - set(values)
             extra = set(values) - set(self._slices)
             raise ValueError(f"{self.name}.pack: missing {sorted(missing)}, "
                              f"unknown {sorted(extra)}")
+        out = np.empty(self.size, dtype=dtype)
+        for block, s in self._slices.items():
+            out[s] = values[block]
         return out
 
     def names(self):

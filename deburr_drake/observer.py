@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.systems.framework import LeafSystem
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import LeafSystem, ValueProducer
 
 from deburr_drake.geometry import Contour
+from deburr_drake.kinematics import ToolPoint
 from deburr_drake.layout import CHAMFER_STATE
 
-__all__ = ["ChamferObserver", "chamfer_quantities"]
+__all__ = ["ChamferObserver", "chamfer_quantities", "chamfer_kinematics"]
 
 
 def chamfer_quantities(contour: Contour, x_p, xdot_p, force, *,
@@ -19,12 +21,31 @@ def chamfer_quantities(contour: Contour, x_p, xdot_p, force, *,
     and the measured force on the tool ``force`` (N, world):
     n1 and delta from the contour (eq. 2 with the n1 approximation at x_p),
     n2 the direction of motion (R5), ||f_n|| = -f.n1, ||f_t|| = -f.n2."""
+    out = chamfer_kinematics(contour, x_p, xdot_p,
+                             min_tangential_speed=min_tangential_speed)
+    _set_force(out, force)
+    return out
+
+
+def chamfer_kinematics(contour: Contour, x_p, xdot_p, *,
+                       min_tangential_speed: float) -> np.ndarray:
+    """:func:`chamfer_quantities` without the force (f_n = f_t = 0)."""
     n1, _, delta, arc = contour.frame(x_p)
     n2 = contour.n2(x_p, xdot_p, min_tangential_speed)
     return CHAMFER_STATE.pack(
         x_p=x_p, xdot_p=xdot_p, n1=n1, n2=n2, delta=delta,
-        delta_dot=float(n1 @ xdot_p), f_n=-float(force @ n1),
-        f_t=-float(force @ n2), arc_position=arc)
+        delta_dot=float(n1 @ xdot_p), f_n=0.0, f_t=0.0, arc_position=arc)
+
+
+_N1 = CHAMFER_STATE.slice("n1")
+_N2 = CHAMFER_STATE.slice("n2")
+_F_N = CHAMFER_STATE.slice("f_n").start
+_F_T = CHAMFER_STATE.slice("f_t").start
+
+
+def _set_force(chamfer, force):
+    chamfer[_F_N] = -float(force @ chamfer[_N1])
+    chamfer[_F_T] = -float(force @ chamfer[_N2])
 
 
 class ChamferObserver(LeafSystem):
@@ -52,27 +73,42 @@ class ChamferObserver(LeafSystem):
                  contour: Contour, *, min_tangential_speed: float):
         super().__init__()
         self.set_name("chamfer_observer")
-        self._plant = plant
-        self._plant_context = plant.CreateDefaultContext()
-        self._frame = plant.GetFrameByName(tool_frame_name)
+        self._tool_point = ToolPoint(plant,
+                                     plant.GetFrameByName(tool_frame_name))
         self._contour = contour
         self._min_speed = min_tangential_speed
         nx = plant.num_multibody_states()
         self._state_port = self.DeclareVectorInputPort("plant_state", nx)
         self._force_port = self.DeclareVectorInputPort("tool_force", 3)
+        # The kinematic part changes with the plant state only, not with
+        # each new force sample.
+        self._last = None  # (plant state, its kinematics): a memo
+        self._kinematics = self.DeclareCacheEntry(
+            "chamfer_kinematics", ValueProducer(
+                allocate=AbstractValue.Make(
+                    np.zeros(CHAMFER_STATE.size)).Clone,
+                calc=self._calc_kinematics),
+            prerequisites_of_calc={self._state_port.ticket()})
         self.DeclareVectorOutputPort("chamfer_state", CHAMFER_STATE.size,
                                      self._calc)
 
     def tool_point(self, plant_state):
         """(x_p, xdot_p) in world for a plant state vector."""
-        plant, ctx = self._plant, self._plant_context
-        plant.SetPositionsAndVelocities(ctx, plant_state)
-        x_p = self._frame.CalcPoseInWorld(ctx).translation()
-        xdot_p = self._frame.CalcSpatialVelocityInWorld(ctx).translational()
-        return x_p, xdot_p
+        return self._tool_point(plant_state)
+
+    def _calc_kinematics(self, context, value):
+        # Drake invalidates this cache whenever any discrete state changes
+        # (every sample) or the integrator perturbs and restores the state;
+        # the value only changes with the plant state itself.
+        state = self._state_port.Eval(context)
+        if self._last is None or not np.array_equal(state, self._last[0]):
+            x_p, xdot_p = self.tool_point(state)
+            self._last = (state.copy(), chamfer_kinematics(
+                self._contour, x_p, xdot_p,
+                min_tangential_speed=self._min_speed))
+        value.set_value(self._last[1])
 
     def _calc(self, context, output):
-        x_p, xdot_p = self.tool_point(self._state_port.Eval(context))
-        output.SetFromVector(chamfer_quantities(
-            self._contour, x_p, xdot_p, self._force_port.Eval(context),
-            min_tangential_speed=self._min_speed))
+        chamfer = self._kinematics.Eval(context).copy()
+        _set_force(chamfer, self._force_port.Eval(context))
+        output.SetFromVector(chamfer)
