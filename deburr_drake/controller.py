@@ -93,6 +93,13 @@ def HybridController_(T):
         - ``diagnostics`` (CONTROLLER_DIAGNOSTICS layout).
         - Continuous state: delta_d (m), then theta_k ((2 Upsilon + 1)^2
           values, N) for each fuzzy axis, row-major in (i, j).
+        - With ``control_period`` T > 0 the law runs as the paper's digital
+          inner loop: at t = kT (and at initialization) it is evaluated once
+          from the inputs and a discrete state holds the actuation, the
+          diagnostics and the rates of delta_d and theta until the next
+          sample, so the continuous states integrate the sampled rates
+          exactly (theta((k+1)T) = theta(kT) + T theta'(kT)). With T = 0
+          everything is continuous in time (for linearization).
         """
 
         def _construct(self, plant, tool_frame_name, config,
@@ -140,9 +147,26 @@ def HybridController_(T):
                 ValueProducer(allocate=AbstractValue.Make(dict()).Clone,
                               calc=self._calc_terms),
                 prerequisites_of_calc={self.all_sources_ticket()})
-            deps = {self._cache.ticket()}
+            nu = plant.num_actuators()
+            self._held = {}  # name -> slice of the held discrete state
+            start = 0
+            for name, size in [("actuation", nu),
+                               ("derivatives", 1 + n_theta),
+                               ("diagnostics", CONTROLLER_DIAGNOSTICS.size)]:
+                self._held[name] = slice(start, start + size)
+                start += size
+            if config.control_period > 0:
+                self._held_index = self.DeclareDiscreteState(
+                    BasicVector_[T](start))
+                self.DeclareInitializationDiscreteUpdateEvent(self._sample)
+                self.DeclarePeriodicDiscreteUpdateEvent(
+                    config.control_period, 0.0, self._sample)
+                deps = {self.xd_ticket()}
+            else:
+                self._held_index = None
+                deps = {self._cache.ticket()}
             self.DeclareVectorOutputPort(
-                "actuation", BasicVector_[T](plant.num_actuators()),
+                "actuation", BasicVector_[T](nu),
                 self._calc_actuation, prerequisites_of_calc=deps)
             self.DeclareVectorOutputPort(
                 "diagnostics", BasicVector_[T](CONTROLLER_DIAGNOSTICS.size),
@@ -234,15 +258,29 @@ def HybridController_(T):
                     dtype=x.dtype, x_pd=x_pd, e=e, s=s, delta_d=delta_d,
                     e_f=e_f, f_tau=f_tau, u_fuzzy=u_fuzzy, zeta=zeta)))
 
+        def _terms(self, context, name):
+            """One block of the control law's terms: held from the last
+            sample, or evaluated now (T = 0)."""
+            if self._held_index is None:
+                return self._cache.Eval(context)[name]
+            held = context.get_discrete_state(self._held_index).get_value()
+            return held[self._held[name]]
+
+        def _sample(self, context, discrete_state):
+            terms = self._cache.Eval(context)
+            held = discrete_state.get_mutable_value(self._held_index)
+            for name, block in self._held.items():
+                held[block] = terms[name]
+
         def DoCalcTimeDerivatives(self, context, derivatives):  # noqa: N802
             derivatives.get_mutable_vector().SetFromVector(
-                self._cache.Eval(context)["derivatives"])
+                self._terms(context, "derivatives"))
 
         def _calc_actuation(self, context, output):
-            output.SetFromVector(self._cache.Eval(context)["actuation"])
+            output.SetFromVector(self._terms(context, "actuation"))
 
         def _calc_diagnostics(self, context, output):
-            output.SetFromVector(self._cache.Eval(context)["diagnostics"])
+            output.SetFromVector(self._terms(context, "diagnostics"))
 
     return Impl
 

@@ -51,12 +51,19 @@ class ContactParameterEstimator(LeafSystem):
     - ``estimates`` (3): c0 hat (N), c1 hat (N/m), c2 hat (N s/m).
     - ``desired_normal_force`` (1, N): c0 hat + c1 hat delta_d^*.
     - Continuous state (3): the estimates.
+    - With ``sample_period`` T > 0 the update law is evaluated at t = kT
+      (and at initialization) and its rate held until the next sample (a
+      discrete state), as in the digital inner loop; T = 0: continuous.
     """
 
-    def __init__(self, config: EstimatorConfig, task: TaskConfig):
+    def __init__(self, config: EstimatorConfig, task: TaskConfig, *,
+                 sample_period: float = 0.0):
         super().__init__()
         config.validate()
         task.validate()
+        if not sample_period >= 0.0:
+            raise ValueError(f"sample_period must be >= 0 s, got "
+                             f"{sample_period}")
         self.set_name("contact_estimator")
         self._config = config
         self._desired_depth = task.desired_depth
@@ -64,6 +71,12 @@ class ContactParameterEstimator(LeafSystem):
             BasicVector(np.asarray(config.initial_estimates, float)))
         self._chamfer_port = self.DeclareVectorInputPort(
             "chamfer_state", CHAMFER_STATE.size)
+        self._rate_index = None
+        if sample_period > 0:
+            self._rate_index = self.DeclareDiscreteState(3)
+            self.DeclareInitializationDiscreteUpdateEvent(self._sample)
+            self.DeclarePeriodicDiscreteUpdateEvent(
+                sample_period, 0.0, self._sample)
         self.DeclareStateOutputPort("estimates", xc)
         self.DeclareVectorOutputPort(
             "desired_normal_force", 1, self._calc_desired_force,
@@ -75,10 +88,10 @@ class ContactParameterEstimator(LeafSystem):
     def _estimates(self, context):
         return context.get_continuous_state_vector().CopyToVector()
 
-    def DoCalcTimeDerivatives(self, context, derivatives):  # noqa: N802
+    def _rate(self, context):
         c = self._config
         chamfer = self._chamfer_port.Eval(context)
-        rate = estimator_rate(
+        return estimator_rate(
             self._estimates(context),
             CHAMFER_STATE.get(chamfer, "delta"),
             CHAMFER_STATE.get(chamfer, "delta_dot"),
@@ -86,6 +99,13 @@ class ContactParameterEstimator(LeafSystem):
             gains=c.gains, lower_bounds=c.lower_bounds,
             contact_force_threshold=c.contact_force_threshold,
             adapt=c.adapt)
+
+    def _sample(self, context, discrete_state):
+        discrete_state.set_value(self._rate_index, self._rate(context))
+
+    def DoCalcTimeDerivatives(self, context, derivatives):  # noqa: N802
+        rate = (self._rate(context) if self._rate_index is None else
+                context.get_discrete_state(self._rate_index).get_value())
         derivatives.get_mutable_vector().SetFromVector(rate)
 
     def _calc_desired_force(self, context, output):

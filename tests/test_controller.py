@@ -73,7 +73,7 @@ def test_structure(model):
 def test_control_law_by_hand(model):
     """(7), (9), s, (36) with theta = 0 inside Omega, J = I, gravity
     compensation from the model with masses scaled 1.2."""
-    config = ControllerConfig()
+    config = ControllerConfig(control_period=0.0)  # the law itself
     controller = HybridController(model, "tool_tip", config)
     x_p, v, force, x_c, v_c, n1 = _scenario_point()
     f_nd, delta_d = 6.0, 3e-4
@@ -104,7 +104,7 @@ def test_control_law_by_hand(model):
 def test_fuzzy_term_and_adaptation(model):
     """u_f = theta^T nu (30) on the fuzzy axes; theta' = r nu s_Delta (35)
     on the active rules only, zero inside the dead zone (R4)."""
-    config = ControllerConfig()
+    config = ControllerConfig(control_period=0.0)  # the law itself
     controller = HybridController(model, "tool_tip", config)
     rb = make_rule_bases(config)
     rng = np.random.default_rng(0)
@@ -136,7 +136,7 @@ def test_fuzzy_term_and_adaptation(model):
 
 def test_robust_term_outside_omega(model):
     """zeta_k = 0 outside Omega_k: H_bar = h_bar sat(s / phi) (R10)."""
-    config = ControllerConfig()
+    config = ControllerConfig(control_period=0.0)  # the law itself
     controller = HybridController(model, "tool_tip", config)
     x_p, v, force, x_c, v_c, _ = _scenario_point()
     v = v + np.array([0.0, -0.05, 0.0])  # s_y far outside Omega
@@ -153,7 +153,7 @@ def test_autodiff_matches_finite_difference(model):
     """The AutoDiffXd controller's d(actuation)/d(delta_d) equals a finite
     difference of the float controller."""
     from pydrake.autodiffutils import AutoDiffXd, ExtractGradient
-    config = ControllerConfig()
+    config = ControllerConfig(control_period=0.0)  # the law itself
     controller = HybridController(model, "tool_tip", config)
     x_p, v, force, x_c, v_c, _ = _scenario_point()
     inputs = _inputs(x_p, v, force, x_c, v_c, 6.0)
@@ -192,3 +192,31 @@ def test_invalid_config_names_the_field(model, path, value, match):
     setattr(target, path[-1], value)
     with pytest.raises(ConfigError, match=match):
         HybridController(model, "tool_tip", config)
+
+
+def test_sampled_law_holds_its_terms_between_samples(model):
+    """control_period > 0: the law is evaluated at initialization and at
+    each sample; outputs and rates hold the sample's values while the
+    inputs move."""
+    x_p, v, force, x_c, v_c, n1 = _scenario_point()
+    inputs = _inputs(x_p, v, force, x_c, v_c, 6.0)
+    continuous = HybridController(model, "tool_tip",
+                                  ControllerConfig(control_period=0.0))
+    sampled = HybridController(model, "tool_tip",
+                               ControllerConfig(control_period=0.0025))
+    cc = _context(continuous, inputs, 4e-4)
+    sc = _context(sampled, inputs, 4e-4)
+    sc.SetDiscreteState(sampled.EvalUniquePeriodicDiscreteUpdate(sc))
+    for port in ("actuation", "diagnostics"):
+        np.testing.assert_allclose(sampled.GetOutputPort(port).Eval(sc),
+                                   continuous.GetOutputPort(port).Eval(cc),
+                                   rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(
+        sampled.EvalTimeDerivatives(sc).CopyToVector(),
+        continuous.EvalTimeDerivatives(cc).CopyToVector(), rtol=1e-12,
+        atol=1e-12)
+    held = sampled.GetOutputPort("actuation").Eval(sc).copy()
+    sampled.GetInputPort("commanded_position").FixValue(sc, x_c + 1e-3 * n1)
+    np.testing.assert_array_equal(
+        sampled.GetOutputPort("actuation").Eval(sc), held)
+

@@ -86,3 +86,25 @@ def test_converges_to_linear_truth():
             x + dt * estimator.EvalTimeDerivatives(context).CopyToVector())
     c_hat = context.get_continuous_state_vector().CopyToVector()
     np.testing.assert_allclose(c_hat[:2], c_true, rtol=0.03)
+
+
+def test_sampled_rate_is_held_between_samples():
+    """sample_period > 0: the update law's rate is taken at the sample and
+    held while the chamfer state moves on."""
+    config = EstimatorConfig()
+    continuous, cc = _setup(config, 5e-4, 0.0, 6.0, [3.0, 4000.0, 20.0])
+    sampled = ContactParameterEstimator(config, TaskConfig(),
+                                        sample_period=0.0025)
+    sc = sampled.CreateDefaultContext()
+    chamfer = continuous.GetInputPort("chamfer_state").Eval(cc)
+    sampled.GetInputPort("chamfer_state").FixValue(sc, chamfer)
+    sc.SetDiscreteState(sampled.EvalUniquePeriodicDiscreteUpdate(sc))
+    rate = continuous.EvalTimeDerivatives(cc).CopyToVector()
+    assert np.linalg.norm(rate) > 0
+    np.testing.assert_allclose(
+        sampled.EvalTimeDerivatives(sc).CopyToVector(), rate, rtol=1e-12)
+    sampled.GetInputPort("chamfer_state").FixValue(sc, np.zeros_like(chamfer))
+    np.testing.assert_allclose(
+        sampled.EvalTimeDerivatives(sc).CopyToVector(), rate, rtol=1e-12)
+    with pytest.raises(ValueError, match="sample_period"):
+        ContactParameterEstimator(config, TaskConfig(), sample_period=-1.0)
