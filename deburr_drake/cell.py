@@ -13,15 +13,14 @@ import numpy as np
 from pydrake.common import RandomDistribution
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import (LogVectorOutput, RandomSource,
-                                        ZeroOrderHold)
+from pydrake.systems.primitives import LogVectorOutput, RandomSource
 
 from deburr_drake.arm import ARM_URL, solve_tool_pose
 from deburr_drake.command import CommandGenerator, FirstOrderHold
 from deburr_drake.config import Scenario
 from deburr_drake.controller import HybridController
 from deburr_drake.estimator import ContactParameterEstimator
-from deburr_drake.friction import JointFriction
+from deburr_drake.friction import add_joint_friction
 from deburr_drake.geometry import CircularContour, Contour, StraightContour
 from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.observer import ChamferObserver
@@ -56,10 +55,10 @@ LOGGED = {
 }
 
 #: Every system the builder adds (besides the loggers ``log_<name>``).
-SYSTEM_NAMES = ("plant", "scene_graph", "cutting_process", "joint_friction",
+SYSTEM_NAMES = ("plant", "scene_graph", "cutting_process", "cutting_force",
                 "force_sensor", "sensor_noise", "chamfer_observer",
                 "command_generator", "first_order_hold", "contact_estimator",
-                "controller", "actuation_hold")
+                "controller")
 
 
 def _straight_frame(scenario: Scenario):
@@ -110,6 +109,7 @@ def _add_plant(builder: DiagramBuilder, scenario: Scenario):
                    cutter_radius=scenario.tool.cutter_radius,
                    cutter_length=scenario.tool.cutter_length,
                    resolution_hint=scenario.tool.resolution_hint)
+    add_joint_friction(plant, scenario.robot)
     if scenario.edge.kind == "straight":
         mid, tangent, normal = _straight_frame(scenario)
         register_compliant_wall(
@@ -198,10 +198,10 @@ def make_deburring_diagram(*, scenario: Scenario,
     """The closed loop as a named Diagram.
 
     Systems (see :data:`SYSTEM_NAMES`): ``plant``, ``scene_graph``,
-    ``cutting_process``, ``joint_friction`` (when the scenario has joint
-    friction), ``force_sensor``, ``sensor_noise``, ``chamfer_observer``,
+    ``cutting_process`` and its force law ``cutting_force``,
+    ``force_sensor``, ``sensor_noise``, ``chamfer_observer``,
     ``command_generator``, ``first_order_hold``, ``contact_estimator``,
-    ``controller``, ``actuation_hold`` (when the controller output is held),
+    ``controller``,
     and one ``log_<name>`` VectorLogSink per entry of :data:`LOGGED`. The
     plant's default positions put the tool tip at the contour start (by
     inverse kinematics for the arm), in contact. With a ``meshcat``, the
@@ -236,24 +236,25 @@ def make_deburring_diagram(*, scenario: Scenario,
     foh = builder.AddNamedSystem("first_order_hold", FirstOrderHold(
         c.command.period, contour.project(x0)))
     estimator = builder.AddNamedSystem(
-        "contact_estimator", ContactParameterEstimator(c.estimator, c.task))
+        "contact_estimator", ContactParameterEstimator(
+            c.estimator, c.task, sample_period=c.controller.control_period))
     controller = builder.AddNamedSystem("controller", HybridController(
         model, TOOL_FRAME, c.controller, desired_rotation))
 
     state = plant.get_state_output_port()
     for system in (process, sensor, observer, controller):
         builder.Connect(state, system.GetInputPort("plant_state"))
-    if c.robot.joint_coulomb_friction:
-        friction = builder.AddNamedSystem("joint_friction",
-                                          JointFriction(plant, c.robot))
-        builder.Connect(state, friction.GetInputPort("plant_state"))
-        builder.Connect(friction.GetOutputPort("generalized_force"),
-                        plant.get_applied_generalized_force_input_port())
+    force_law = builder.AddSystem(process.force_law())
+    builder.Connect(process.GetOutputPort("force_law_terms"),
+                    force_law.GetInputPort("force_law_terms"))
+    builder.Connect(force_law.GetOutputPort("tool_force"),
+                    sensor.GetInputPort("applied_force"))
+    builder.Connect(state, force_law.GetInputPort("plant_state"))
+    builder.Connect(force_law.GetOutputPort("generalized_force"),
+                    plant.get_applied_generalized_force_input_port())
     builder.Connect(plant.get_reaction_forces_output_port(),
                     sensor.GetInputPort("reaction_forces"))
     builder.Connect(noise.get_output_port(), sensor.GetInputPort("noise"))
-    builder.Connect(process.GetOutputPort("spatial_forces"),
-                    plant.get_applied_spatial_force_input_port())
     force = sensor.GetOutputPort("tool_force")
     builder.Connect(force, observer.GetInputPort("tool_force"))
     builder.Connect(force, controller.GetInputPort("tool_force"))
@@ -268,13 +269,8 @@ def make_deburring_diagram(*, scenario: Scenario,
                     controller.GetInputPort("commanded_velocity"))
     builder.Connect(estimator.GetOutputPort("desired_normal_force"),
                     controller.GetInputPort("desired_normal_force"))
-    actuation = controller.GetOutputPort("actuation")
-    if c.controller.control_period > 0:
-        hold = builder.AddNamedSystem("actuation_hold", ZeroOrderHold(
-            c.controller.control_period, plant.num_actuators()))
-        builder.Connect(actuation, hold.get_input_port())
-        actuation = hold.get_output_port()
-    builder.Connect(actuation, plant.get_actuation_input_port())
+    builder.Connect(controller.GetOutputPort("actuation"),
+                    plant.get_actuation_input_port())
 
     if meshcat is not None:
         from deburr_drake.replay import add_meshcat

@@ -8,19 +8,23 @@ import math
 from typing import Sequence
 
 import numpy as np
-from pydrake.common.value import AbstractValue
-from pydrake.multibody.math import SpatialForce
-from pydrake.multibody.plant import (ExternallyAppliedSpatialForce,
-                                     MultibodyPlant)
-from pydrake.systems.framework import LeafSystem, ValueProducer
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.common import RandomDistribution
+from pydrake.systems.framework import Diagram, DiagramBuilder, LeafSystem
+from pydrake.systems.primitives import (Demultiplexer, Gain,
+                                        LinearTransformDensity, Multiplexer,
+                                        Saturation)
 
 from deburr_drake.config import BurrConfig, ProcessConfig
 from deburr_drake.geometry import Contour
+from deburr_drake.kinematics import ToolPoint
 from deburr_drake.layout import VectorLayout
 from deburr_drake.metrics import arc_distance
 
 __all__ = ["CuttingProcess", "PROCESS_STATE", "cutting_force",
-           "burr_profile", "FinishBins"]
+           "force_law_terms", "generalized_cutting_force",
+           "make_cutting_force_law", "burr_profile",
+           "FinishBins"]
 
 PROCESS_STATE = VectorLayout("process_state", [
     ("delta", 1),            # m, true chamfer depth at the tool
@@ -77,35 +81,133 @@ def cutting_force(config: ProcessConfig, contour: Contour, x_p, xdot_p, *,
     ||f_t|| = g |v_t| + h |v_n| + P'_th (3), g = k_c (chamfer area + burr
     area), chamfer area = delta * cut_height, v_t the speed along the edge
     (R5: motion along the wall's vertical cuts no chamfer), directed against
-    that motion (the direction is regularized below ``smoothing_speed`` so
-    the force is continuous); plus the contact threshold c0 along -n1. Both
-    ramp in smoothly over the first ``threshold_depth`` of depth."""
+    that motion; the direction is sat(v_along / v_s), v_s =
+    ``smoothing_speed``, so the force is continuous. Plus the contact threshold c0 along -n1. Both ramp
+    in smoothly over the first ``threshold_depth`` of depth."""
     n1, tangent, delta, arc = contour.frame(x_p)
     return _force(config, n1, tangent, delta, arc,
                   np.asarray(xdot_p, float), cut_height, burr_area)
+
+
+def _sat(x):
+    return min(max(x, -1.0), 1.0)
+
+
+def _engagement(config: ProcessConfig, delta, cut_height, burr_area):
+    """(engagement 0..1, g of (3) in N s/m)."""
+    on = _smoothstep(delta / config.threshold_depth)
+    g = config.cutting_coefficient * (max(delta, 0.0) * cut_height
+                                      + burr_area)
+    return on, g
 
 
 def _force(config: ProcessConfig, n1, tangent, delta, arc, xdot_p,
            cut_height, burr_area):
     v_n = float(n1 @ xdot_p)
     v_along = float(tangent @ xdot_p)
-    v_t = abs(v_along)
-    on = _smoothstep(delta / config.threshold_depth)
-    g = config.cutting_coefficient * (max(delta, 0.0) * cut_height
-                                      + burr_area)
-    magnitude = on * (g * v_t + config.plunge_coefficient * abs(v_n)
-                      + config.threshold_power_force)
-    regularized = np.sqrt(v_t * v_t + config.smoothing_speed ** 2)
+    on, g = _engagement(config, delta, cut_height, burr_area)
+    along = on * (g * v_along + (config.threshold_power_force
+                                 + config.plunge_coefficient * abs(v_n))
+                  * _sat(v_along / config.smoothing_speed))
     f_c0 = on * config.contact_threshold_force
-    force = (-magnitude * v_along / regularized) * tangent - f_c0 * n1
+    force = -along * tangent - f_c0 * n1
     return force, PROCESS_STATE.pack(
-        delta=delta, engagement=on, g=g, f_t=magnitude * v_t / regularized,
-        f_threshold=f_c0, v_t=v_t, burr_area=burr_area, arc_position=arc)
+        delta=delta, engagement=on, g=g, f_t=abs(along), f_threshold=f_c0,
+        v_t=abs(v_along), burr_area=burr_area, arc_position=arc)
+
+
+def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, v, *,
+                    cut_height: float, burr_area: float = 0.0) -> np.ndarray:
+    """The terms of :func:`make_cutting_force_law` that make it give
+    :func:`cutting_force` (J: the tool point's translational Jacobian, 3 x
+    nv; v: the joint velocities). With u = a.v (the speed along the edge)
+    and s = sat(u / v_s):
+
+        tau = A [u, s] + b (joint space),  f = B [u, s] + f0 (world),
+        a = J^T tangent,  A = [-on g a, -on (P'_th + h |v_n|) a],
+        b = -on c0 J^T n1,  B, f0 the same with J = I.
+
+    Returns [a, A by column, b, B by column, f0] (4 nv + 9). The place on
+    the edge (tangent, n1, g, the engagement) and the plunge speed v_n are
+    the sample's; u and s follow the velocities."""
+    on, g = _engagement(config, delta, cut_height, burr_area)
+    v_n = float(n1 @ (J @ np.asarray(v, float)))
+    power = config.threshold_power_force + config.plunge_coefficient * abs(v_n)
+    threshold = on * config.contact_threshold_force
+    return np.concatenate([
+        J.T @ tangent,
+        -on * g * (J.T @ tangent), -on * power * (J.T @ tangent),
+        -threshold * (J.T @ n1),
+        -on * g * tangent, -on * power * tangent, -threshold * n1])
+
+
+def generalized_cutting_force(terms, v, smoothing_speed: float):
+    """(tau, f) of :func:`make_cutting_force_law` in numpy (for tests)."""
+    nv = (len(terms) - 9) // 4
+    a, A, b, B, f0 = np.split(np.asarray(terms, float),
+                              np.cumsum([nv, 2 * nv, nv, 6]))
+    u = float(a @ v)
+    w = np.array([u, _sat(u / smoothing_speed)])
+    return A.reshape(2, nv).T @ w + b, B.reshape(2, 3).T @ w + f0
+
+
+def make_cutting_force_law(nq: int, nv: int,
+                           smoothing_speed: float) -> Diagram:
+    """``cutting_force``: the law of :func:`force_law_terms`, from
+    ``plant_state`` (nq + nv; the velocities are read) and the process's held ``force_law_terms`` (4 nv + 9, see
+    :func:`force_law_terms`), outputs ``generalized_force`` (nv, for the
+    plant's applied generalized force) and ``tool_force`` (3, N, world: the
+    same force on the tool, for the force sensor: a force applied through
+    the joints does not pass the sensor's weld).
+
+    The integrator evaluates whatever feeds the plant's applied forces
+    about eight times a step to linearize it, so the law is built from
+    Drake's C++ primitives: a few hundred instructions per evaluation,
+    where a Python LeafSystem cost about 60 us and a SymbolicVectorSystem
+    of the law 120,000 instructions. LinearTransformDensity is the
+    primitive that computes A w + b with A and b on input ports (no random
+    input is involved)."""
+    builder = DiagramBuilder()
+
+    def add(name, system):
+        return builder.AddNamedSystem(name, system)
+
+    def affine(name, n_in, n_out):
+        return add(name, LinearTransformDensity(
+            RandomDistribution.kGaussian, n_in, n_out))
+
+    state = add("state", Demultiplexer([nq, nv]))
+    terms = add("terms", Demultiplexer([nv, 2 * nv, nv, 6, 3]))
+    speed = affine("speed_along_edge", nv, 1)
+    scale = add("per_smoothing_speed", Gain(1.0 / smoothing_speed, 1))
+    sign = add("direction", Saturation([-1.0], [1.0]))
+    mux = add("speed_and_direction", Multiplexer([1, 1]))
+    joint_force = affine("generalized_force", 2, nv)
+    tool_force = affine("tool_force", 2, 3)
+    connect = builder.Connect
+    connect(state.get_output_port(1), speed.GetInputPort("w_in"))
+    connect(terms.get_output_port(0), speed.GetInputPort("A"))
+    connect(speed.GetOutputPort("w_out"), scale.get_input_port())
+    connect(scale.get_output_port(), sign.get_input_port())
+    connect(speed.GetOutputPort("w_out"), mux.get_input_port(0))
+    connect(sign.get_output_port(), mux.get_input_port(1))
+    for k, law in ((1, joint_force), (3, tool_force)):
+        connect(mux.get_output_port(), law.GetInputPort("w_in"))
+        connect(terms.get_output_port(k), law.GetInputPort("A"))
+        connect(terms.get_output_port(k + 1), law.GetInputPort("b"))
+    builder.ExportInput(state.get_input_port(), "plant_state")
+    builder.ExportInput(terms.get_input_port(), "force_law_terms")
+    builder.ExportOutput(joint_force.GetOutputPort("w_out"),
+                         "generalized_force")
+    builder.ExportOutput(tool_force.GetOutputPort("w_out"), "tool_force")
+    diagram = builder.Build()
+    diagram.set_name("cutting_force")
+    return diagram
 
 
 class CuttingProcess(LeafSystem):
-    """Chamfering and threshold forces applied to the tool body; burrs and
-    the surface finish along the edge.
+    """The tool's place on the edge for the chamfering and threshold
+    forces; burrs and the surface finish along the edge.
 
     .. pydrake_system::
 
@@ -113,23 +215,30 @@ class CuttingProcess(LeafSystem):
         input_ports:
         - plant_state
         output_ports:
-        - spatial_forces
+        - force_law_terms
         - process_state
         - burr_height
         - finish_depth
 
     - ``plant_state`` (nq + nv): the true robot state.
-    - ``spatial_forces``: list of ExternallyAppliedSpatialForce for the
-      plant's ``applied_spatial_force`` input (force at the tool point).
-    - ``process_state`` (PROCESS_STATE layout).
+    - ``force_law_terms`` (4 nv + 9): the chamfering and threshold forces'
+      dependence on the joint velocities (:func:`force_law_terms`) at the
+      last sample, for :func:`make_cutting_force_law`, whose outputs go to
+      the plant's ``applied_generalized_force`` input and to the force
+      sensor.
+    - ``process_state`` (PROCESS_STATE layout): eq. (3) at the last
+      sample (for logs; the controller never reads it).
     - ``burr_height`` (bins, m): burr left on the edge.
     - ``finish_depth`` (bins, m): the deepest chamfer cut so far in each bin
       of at most ``finish_bin_length`` of arc (the paper's Fig. 8).
-    - Discrete state: burr_height and finish_depth, updated every
-      ``record_period``: the bin under the tool records its depth, and
-      the burr is removed from the bins the cutter has swept. The burr
-      area in g is the one at the cutter's front (arc position + r; the
-      tool runs toward +arc).
+    - Discrete state, updated at initialization and every
+      ``sample_period``: the bin under the tool records its depth, the burr
+      is removed from the bins the cutter has swept, then the process state
+      and the force law's terms are sampled (depth, directions, the burr at
+      the cutter's front: arc position + r, the tool runs toward +arc).
+      Between samples the force follows the velocities through that law
+      and holds the place on the edge and the plunge speed: in 2.5 ms the tool moves about 6 um
+      along it.
     """
 
     def __init__(self, plant: MultibodyPlant, tool_frame_name: str,
@@ -138,11 +247,10 @@ class CuttingProcess(LeafSystem):
         super().__init__()
         config.validate()
         self.set_name("cutting_process")
-        self._plant = plant
-        self._plant_context = plant.CreateDefaultContext()
-        self._frame = plant.GetFrameByName(tool_frame_name)
-        self._body_index = self._frame.body().index()
-        self._p_BoQ_B = self._frame.GetFixedPoseInBodyFrame().translation()
+        frame = plant.GetFrameByName(tool_frame_name)
+        self._tool_point = ToolPoint(plant, frame)
+        self._nq = plant.num_positions()
+        self._nv = plant.num_velocities()
         self._contour = contour
         self._config = config
         self._cut_height = cut_height
@@ -153,48 +261,38 @@ class CuttingProcess(LeafSystem):
         self._burr_index = self.DeclareDiscreteState(
             self.initial_burr_height())
         self._finish_index = self.DeclareDiscreteState(self._bins.count)
+        self._terms_index = self.DeclareDiscreteState(4 * self._nv + 9)
         self._state_port = self.DeclareVectorInputPort(
             "plant_state", plant.num_multibody_states())
-        self._cache = self.DeclareCacheEntry(
-            "process", ValueProducer(
-                allocate=AbstractValue.Make(
-                    (np.zeros(3), np.zeros(PROCESS_STATE.size))).Clone,
-                calc=self._calc_process),
-            prerequisites_of_calc={self._state_port.ticket(),
-                                   self.xd_ticket()})
-        self.DeclareAbstractOutputPort(
-            "spatial_forces",
-            lambda: AbstractValue.Make([ExternallyAppliedSpatialForce()]),
-            self._calc_spatial_forces,
-            prerequisites_of_calc={self._cache.ticket()})
-        self.DeclareVectorOutputPort(
-            "process_state", PROCESS_STATE.size, self._calc_state,
-            prerequisites_of_calc={self._cache.ticket()})
+        self._state_index = self.DeclareDiscreteState(PROCESS_STATE.size)
+        self.DeclareStateOutputPort("force_law_terms", self._terms_index)
+        self.DeclareStateOutputPort("process_state", self._state_index)
         self.DeclareStateOutputPort("burr_height", self._burr_index)
         self.DeclareStateOutputPort("finish_depth", self._finish_index)
+        self.DeclareInitializationDiscreteUpdateEvent(self._update)
         self.DeclarePeriodicDiscreteUpdateEvent(
-            config.record_period, 0.0, self._record)
+            config.sample_period, 0.0, self._update)
 
     @property
     def bins(self) -> FinishBins:
         return self._bins
+
+    def force_law(self) -> Diagram:
+        """The ``cutting_force`` law for this process's plant and config."""
+        return make_cutting_force_law(self._nq, self._nv,
+                                      self._config.smoothing_speed)
 
     def initial_burr_height(self) -> np.ndarray:
         """Burr height (m) per bin before the pass."""
         return burr_profile(self._bins.centers, self._config.burrs,
                             self._contour.length, self._contour.closed)
 
-    def _calc_process(self, context, value):
-        plant, ctx = self._plant, self._plant_context
-        plant.SetPositionsAndVelocities(ctx, self._state_port.Eval(context))
-        x_p = self._frame.CalcPoseInWorld(ctx).translation()
-        xdot_p = self._frame.CalcSpatialVelocityInWorld(ctx).translational()
+    def _place(self, context):
+        """(n1, tangent, delta, arc, xdot_p, J, v) of the tool now."""
+        state = self._state_port.Eval(context)
+        x_p, xdot_p, J = self._tool_point.evaluate(state)
         n1, tangent, delta, arc = self._contour.frame(x_p)
-        burr = context.get_discrete_state(self._burr_index).get_value()
-        k = self._bins.index(self._leading_edge(arc))
-        area = burr[k] * self._thickness[k]
-        value.set_value(_force(self._config, n1, tangent, delta, arc,
-                               xdot_p, self._cut_height, area))
+        return n1, tangent, delta, arc, xdot_p, J, state[self._nq:]
 
     def _leading_edge(self, s):
         """Arc position of the cutter's front (the traversal direction is
@@ -213,30 +311,23 @@ class CuttingProcess(LeafSystem):
                 thickness = max(thickness, burr.thickness)
         return thickness
 
-    def _record(self, context, discrete_state):
-        _, state = self._cache.Eval(context)
-        delta = PROCESS_STATE.get(state, "delta")
-        if delta <= 0.0:
-            return
-        s = PROCESS_STATE.get(state, "arc_position")
-        finish = discrete_state.get_mutable_value(self._finish_index)
-        k = self._bins.index(s)
-        finish[k] = max(finish[k], delta)
-        # The cutter (diameter 2 r) has swept the burr behind its front.
+    def _update(self, context, discrete_state):
         burr = discrete_state.get_mutable_value(self._burr_index)
-        d = arc_distance(self._bins.centers, s, self._contour.length,
-                         self._contour.closed)
-        r, w = self._cutter_radius, self._bins.width
-        burr[(d >= -r) & (d < r - w)] = 0.0
-
-    def _calc_spatial_forces(self, context, output):
-        force, _ = self._cache.Eval(context)
-        applied = ExternallyAppliedSpatialForce()
-        applied.body_index = self._body_index
-        applied.p_BoBq_B = self._p_BoQ_B
-        applied.F_Bq_W = SpatialForce(np.zeros(3), force)
-        output.set_value([applied])
-
-    def _calc_state(self, context, output):
-        _, state = self._cache.Eval(context)
-        output.SetFromVector(state)
+        n1, tangent, delta, arc, xdot_p, J, v = self._place(context)
+        if delta > 0.0:
+            finish = discrete_state.get_mutable_value(self._finish_index)
+            k = self._bins.index(arc)
+            finish[k] = max(finish[k], delta)
+            # The cutter (diameter 2 r) has swept the burr behind its front.
+            d = arc_distance(self._bins.centers, arc, self._contour.length,
+                             self._contour.closed)
+            r, w = self._cutter_radius, self._bins.width
+            burr[(d >= -r) & (d < r - w)] = 0.0
+        k = self._bins.index(self._leading_edge(arc))
+        area = burr[k] * self._thickness[k]
+        _, state = _force(self._config, n1, tangent, delta, arc, xdot_p,
+                          self._cut_height, area)
+        discrete_state.set_value(self._state_index, state)
+        discrete_state.set_value(self._terms_index, force_law_terms(
+            self._config, n1, tangent, delta, J, v,
+            cut_height=self._cut_height, burr_area=area))

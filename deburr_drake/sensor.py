@@ -23,9 +23,13 @@ class ForceSensor(LeafSystem):
     state, so it has no direct feedthrough: that also breaks the loop
     controller -> plant reaction forces -> controller.
 
-    The raw reading is -F_weld - m_tool g: the weld's reaction force on the
-    tool with the tool's static weight compensated (a tared sensor); the
-    tool's inertial force m_tool a remains, as on a real sensor.
+    The raw reading is -F_weld - m_tool g + f_applied: the weld's reaction
+    force on the tool with the tool's static weight compensated (a tared
+    sensor), plus the cutting force, which the cell applies through the
+    joints (the equivalent generalized force J^T f_applied, computed in
+    C++): the weld would carry it if it were applied to the tool body, and
+    the motion is the same either way. The tool's inertial force m_tool a
+    remains, as on a real sensor.
 
     .. pydrake_system::
 
@@ -33,6 +37,7 @@ class ForceSensor(LeafSystem):
         input_ports:
         - reaction_forces
         - plant_state
+        - applied_force
         - noise
         output_ports:
         - tool_force
@@ -40,6 +45,8 @@ class ForceSensor(LeafSystem):
     - ``reaction_forces``: the plant's reaction forces (one SpatialForce per
       joint, on the child body at the child joint frame, in that frame).
     - ``plant_state`` (nq + nv): to rotate the reading into world.
+    - ``applied_force`` (3, N, world): force on the tool applied through
+      the joints (zero if unconnected).
     - ``noise`` (3): unit-variance samples, scaled by ``noise_std`` (N).
     - ``tool_force`` (3, N): filtered force on the tool, world frame.
     - Discrete state (3, N): the filter, updated every ``sample_period``.
@@ -67,6 +74,7 @@ class ForceSensor(LeafSystem):
             plant.get_reaction_forces_output_port().Allocate())
         self._state_port = self.DeclareVectorInputPort(
             "plant_state", plant.num_multibody_states())
+        self._applied_port = self.DeclareVectorInputPort("applied_force", 3)
         self._noise_port = self.DeclareVectorInputPort("noise", 3)
         self.DeclarePeriodicDiscreteUpdateEvent(
             config.sample_period, 0.0, self._update)
@@ -80,7 +88,10 @@ class ForceSensor(LeafSystem):
             self._plant_context, self._state_port.Eval(context))
         R_WJ = self._child_frame.CalcPoseInWorld(
             self._plant_context).rotation()
-        return -(R_WJ @ F.translational()) - self._weight
+        raw = -(R_WJ @ F.translational()) - self._weight
+        if self._applied_port.HasValue(context):
+            raw = raw + self._applied_port.Eval(context)
+        return raw
 
     def _update(self, context, discrete_state):
         y = context.get_discrete_state(self._state_index).get_value()

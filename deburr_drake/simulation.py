@@ -53,8 +53,10 @@ def make_simulator(diagram: Diagram, scenario: Scenario) -> Simulator:
     simulator = Simulator(diagram)
     ApplySimulatorConfig(SimulatorConfig(
         integration_scheme=sim.integrator, max_step_size=sim.max_step,
-        accuracy=sim.accuracy, use_error_control=True), simulator)
-    simulator.get_mutable_integrator().set_target_accuracy(sim.accuracy)
+        accuracy=sim.accuracy, use_error_control=sim.error_control),
+        simulator)
+    if sim.error_control:
+        simulator.get_mutable_integrator().set_target_accuracy(sim.accuracy)
     return simulator
 
 

@@ -73,6 +73,9 @@ def test_process_records_finish_and_removes_swept_burr():
     process.GetInputPort("plant_state").FixValue(context,
                                                  np.concatenate([x_p, v]))
     burr0 = process.GetOutputPort("burr_height").Eval(context).copy()
+    # One sample: records the finish, removes the swept burr, samples the
+    # process state.
+    context.SetDiscreteState(process.EvalUniquePeriodicDiscreteUpdate(context))
     state = process.GetOutputPort("process_state").Eval(context)
     # The burr is cut at the cutter's front, s + r: raised cosine there.
     front = burr_profile([s + 0.003], config.burrs, contour.length, True)[0]
@@ -85,9 +88,8 @@ def test_process_records_finish_and_removes_swept_burr():
     g = PROCESS_STATE.get(state, "g")
     assert g == pytest.approx(config.cutting_coefficient
                               * (4e-4 * 0.002 + area), rel=1e-3)
-    update = process.EvalUniquePeriodicDiscreteUpdate(context)
-    burr1 = update.get_vector(0).CopyToVector()
-    finish = update.get_vector(1).CopyToVector()
+    burr1 = process.GetOutputPort("burr_height").Eval(context)
+    finish = process.GetOutputPort("finish_depth").Eval(context)
     k = bins.index(s)
     assert finish[k] == pytest.approx(4e-4, rel=1e-3)
     assert np.count_nonzero(finish) == 1

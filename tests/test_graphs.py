@@ -21,11 +21,11 @@ def test_graph_names_every_system_and_port(diagram, tmp_path):
     text = (tmp_path / "cell.dot").read_text()
     for name in ("command_generator", "first_order_hold", "contact_estimator",
                  "controller", "plant", "scene_graph", "cutting_process",
-                 "force_sensor", "chamfer_observer", "joint_friction",
-                 "actuation_hold"):
+                 "force_sensor", "chamfer_observer", "cutting_force"):
         assert f"name={name}" in text, name
     for port in ("chamfer_state", "desired_normal_force",
-                 "commanded_position", "spatial_forces", "tool_force"):
+                 "commanded_position", "force_law_terms",
+                 "generalized_force", "tool_force"):
         assert port in text, port
     controller = (tmp_path / "cell_controller.dot").read_text()
     assert "name=controller" in controller and "actuation" in controller

@@ -79,8 +79,12 @@ def test_cutting_force_by_hand():
                                  v_t * t + v_n * n1, cut_height=0.002)
     g = 3.3e9 * delta * 0.002
     f_t = g * v_t + 50.0 * v_n + 2.0
-    smooth = v_t / np.hypot(v_t, config.smoothing_speed)
-    np.testing.assert_allclose(force, -f_t * smooth * t - 2.0 * n1,
+    np.testing.assert_allclose(force, -f_t * t - 2.0 * n1, rtol=1e-9)
+    # Below smoothing_speed the direction ramps: sat(v_t / v_s).
+    slow = 0.25 * config.smoothing_speed
+    force, _ = cutting_force(config, CONTOUR, p + delta * n1, slow * t,
+                             cut_height=0.002)
+    np.testing.assert_allclose(force, -(g * slow + 2.0 * 0.25) * t - 2.0 * n1,
                                rtol=1e-9)
     s = PROCESS_STATE.split(state)
     assert s["g"] == pytest.approx(g)
@@ -102,3 +106,15 @@ def test_no_cutting_force_out_of_contact_and_smooth_onset():
                             p + 2.0 * config.threshold_depth * n1, 2e-3 * t,
                             cut_height=0.002)
     assert 0 < -half @ n1 < -full @ n1
+
+
+def test_force_applied_through_the_joints_is_read_as_on_the_tool():
+    """The cell applies the cutting force as J^T f through the joints; the
+    sensor adds f back to the weld's reading (the weld would carry it)."""
+    config = SensorConfig(sample_period=0.0025, cutoff_frequency=20.0)
+    f_ext = np.array([1.0, 2.0, 3.0])
+    _, _, sensor, sc = _held_tool(f_ext, config)
+    base = sensor.raw_force(sc)
+    sensor.GetInputPort("applied_force").FixValue(sc, [0.5, -1.0, 0.25])
+    np.testing.assert_allclose(sensor.raw_force(sc) - base,
+                               [0.5, -1.0, 0.25], rtol=1e-12)

@@ -1,0 +1,153 @@
+"""The C++ force laws that feed the plant: the cutting force from the
+process's sampled terms, joint friction as DoorHinge elements, and the tool
+kinematics memo they rely on."""
+
+import numpy as np
+import pytest
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import MultibodyForces
+
+from deburr_drake.arm import ARM_URL
+from deburr_drake.cell import make_contour
+from deburr_drake.config import ConfigError, ProcessConfig, RobotConfig, load_scenario
+from deburr_drake.friction import add_joint_friction
+from deburr_drake.kinematics import ToolPoint
+from deburr_drake.models import POINT_MASS_URL, make_kinematic_model, make_parser
+from deburr_drake.process import (cutting_force, force_law_terms,
+                                  generalized_cutting_force,
+                                  make_cutting_force_law)
+
+CONFIG = ProcessConfig(plunge_coefficient=50.0)
+
+
+@pytest.fixture(scope="module")
+def arm():
+    return make_kinematic_model(ARM_URL)
+
+
+def _arm_state(arm, seed):
+    rng = np.random.default_rng(seed)
+    q = np.array([0.1, 0.6, -1.2, 0.5, 0.2]) + 0.05 * rng.normal(size=5)
+    return np.concatenate([q, 0.01 * rng.normal(size=5)])
+
+
+def test_tool_point_matches_drake_and_reuses_only_nearby_states(arm):
+    frame = arm.GetFrameByName("tool_tip")
+    tool = ToolPoint(arm, frame)
+    context = arm.CreateDefaultContext()
+    x = _arm_state(arm, 0)
+    x_p, xdot_p = tool(x)
+    arm.SetPositionsAndVelocities(context, x)
+    np.testing.assert_allclose(
+        x_p, frame.CalcPoseInWorld(context).translation(), atol=1e-15)
+    np.testing.assert_allclose(
+        xdot_p, frame.CalcSpatialVelocityInWorld(context).translational(),
+        atol=1e-15)
+    assert tool.full_evaluations == 1
+    # An integrator's perturbation (4e-11 rad): first order, no kinematics.
+    nearby = x.copy()
+    nearby[:5] += 4e-11
+    nearby[5:] += 1.5e-8
+    x_n, xdot_n = tool(nearby)
+    arm.SetPositionsAndVelocities(context, nearby)
+    np.testing.assert_allclose(
+        x_n, frame.CalcPoseInWorld(context).translation(), atol=1e-16)
+    np.testing.assert_allclose(
+        xdot_n, frame.CalcSpatialVelocityInWorld(context).translational(),
+        atol=1e-15)
+    assert tool.full_evaluations == 1
+    # One step later (1e-5 rad): evaluated again.
+    far = x.copy()
+    far[:5] += 1e-5
+    tool(far)
+    assert tool.full_evaluations == 2
+    with pytest.raises(ValueError, match="reuse_tolerance"):
+        ToolPoint(arm, frame, reuse_tolerance=-1.0)
+
+
+@pytest.mark.parametrize("speed", [2.4e-3, -1.1e-3, 1e-4, 0.0])
+def test_cutting_force_law_is_eq3_through_the_jacobian(arm, speed):
+    """The C++ law, its numpy twin and J^T of the world-frame eq. (3) agree
+    at the sample's state, including in the direction's ramp."""
+    scenario = load_scenario("paper")
+    contour = make_contour(scenario)
+    frame = arm.GetFrameByName("tool_tip")
+    tool = ToolPoint(arm, frame)
+    x = _arm_state(arm, 1)
+    x_p, _, J = tool.evaluate(x)
+    n1, tangent, delta, _ = contour.frame(x_p)
+    # Put the tool 0.5 mm deep with the wanted speed along the edge and a
+    # little plunge.
+    x_p = x_p + (5e-4 - delta) * n1
+    xdot = speed * tangent + 1e-4 * n1
+    v = np.linalg.lstsq(J, xdot, rcond=None)[0]
+    state = np.concatenate([x[:5], v])
+    terms = force_law_terms(CONFIG, n1, tangent, 5e-4, J, v,
+                            cut_height=0.002, burr_area=1e-6)
+    tau, f = generalized_cutting_force(terms, v, CONFIG.smoothing_speed)
+    f_ref, _ = cutting_force(CONFIG, contour, x_p, J @ v, cut_height=0.002,
+                             burr_area=1e-6)
+    np.testing.assert_allclose(f, f_ref, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(tau, J.T @ f_ref, rtol=1e-9, atol=1e-12)
+    law = make_cutting_force_law(5, 5, CONFIG.smoothing_speed)
+    context = law.CreateDefaultContext()
+    law.GetInputPort("plant_state").FixValue(context, state)
+    law.GetInputPort("force_law_terms").FixValue(context, terms)
+    np.testing.assert_allclose(
+        law.GetOutputPort("generalized_force").Eval(context), tau,
+        rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(law.GetOutputPort("tool_force").Eval(context),
+                               f, rtol=1e-12, atol=1e-12)
+
+
+def test_cutting_force_law_follows_the_velocity_between_samples(arm):
+    """Held place on the edge, live speed: doubling the speed along the
+    edge doubles the g part of the force, which opposes the motion."""
+    frame = arm.GetFrameByName("tool_tip")
+    _, _, J = ToolPoint(arm, frame).evaluate(_arm_state(arm, 2))
+    tangent, n1 = np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0])
+    v = np.linalg.lstsq(J, 2e-3 * tangent, rcond=None)[0]
+    terms = force_law_terms(CONFIG, n1, tangent, 5e-4, J, v,
+                            cut_height=0.002)
+    _, f1 = generalized_cutting_force(terms, v, CONFIG.smoothing_speed)
+    _, f2 = generalized_cutting_force(terms, 2 * v, CONFIG.smoothing_speed)
+    g = CONFIG.cutting_coefficient * 5e-4 * 0.002
+    assert f2 @ tangent - f1 @ tangent == pytest.approx(-g * 2e-3, rel=1e-9)
+    assert f1 @ tangent < 0
+
+
+def test_joint_friction_is_smooth_coulomb_in_the_plant():
+    plant = MultibodyPlant(0.0)
+    make_parser(plant).AddModels(url=ARM_URL)
+    config = RobotConfig(model="arm5",
+                         joint_coulomb_friction=[1.0, 1.0, 0.5, 0.0, 0.1],
+                         friction_smoothing_speed=1e-3)
+    elements = add_joint_friction(plant, config)
+    plant.Finalize()
+    assert len(elements) == 4  # none for the zero entry
+    context = plant.CreateDefaultContext()
+    v = np.array([5e-4, -2e-3, 1e-2, 3e-3, -0.1])
+    plant.SetVelocities(context, v)
+    forces = MultibodyForces(plant)
+    plant.CalcForceElementsContribution(context, forces)
+    damping = np.array([j.default_damping_vector()[0]
+                        for j in (plant.GetJointByName(n) for n in
+                                  ("waist", "shoulder", "elbow",
+                                   "wrist_pitch", "wrist_roll"))])
+    expected = -np.array([1.0, 1.0, 0.5, 0.0, 0.1]) * np.tanh(v / 1e-3)
+    np.testing.assert_allclose(forces.generalized_forces() + damping * v,
+                               expected, rtol=1e-9, atol=1e-12)
+
+
+def test_joint_friction_rejects_bad_lists_and_prismatic_joints():
+    plant = MultibodyPlant(0.0)
+    make_parser(plant).AddModels(url=ARM_URL)
+    with pytest.raises(ConfigError, match="one per joint"):
+        add_joint_friction(plant, RobotConfig(model="arm5",
+                                              joint_coulomb_friction=[1.0]))
+    gantry = MultibodyPlant(0.0)
+    make_parser(gantry).AddModels(url=POINT_MASS_URL)
+    with pytest.raises(ConfigError, match="revolute"):
+        add_joint_friction(gantry, RobotConfig(
+            joint_coulomb_friction=[1.0, 1.0, 1.0]))
+    assert add_joint_friction(gantry, RobotConfig()) == []
