@@ -148,29 +148,26 @@ def HybridController_(T):
                               calc=self._calc_terms),
                 prerequisites_of_calc={self.all_sources_ticket()})
             nu = plant.num_actuators()
-            self._held = {}  # name -> slice of the held discrete state
-            start = 0
-            for name, size in [("actuation", nu),
-                               ("derivatives", 1 + n_theta),
-                               ("diagnostics", CONTROLLER_DIAGNOSTICS.size)]:
-                self._held[name] = slice(start, start + size)
-                start += size
+            sizes = {"actuation": nu, "derivatives": 1 + n_theta,
+                     "diagnostics": CONTROLLER_DIAGNOSTICS.size}
+            # name -> discrete state group holding it (sampled mode only)
+            self._held = {}
             if config.control_period > 0:
-                self._held_index = self.DeclareDiscreteState(
-                    BasicVector_[T](start))
+                self._held = {name: self.DeclareDiscreteState(
+                    BasicVector_[T](size)) for name, size in sizes.items()}
                 self.DeclareInitializationDiscreteUpdateEvent(self._sample)
                 self.DeclarePeriodicDiscreteUpdateEvent(
                     config.control_period, 0.0, self._sample)
-                deps = {self.xd_ticket()}
+                for name in ("actuation", "diagnostics"):
+                    self.DeclareStateOutputPort(name, self._held[name])
             else:
-                self._held_index = None
                 deps = {self._cache.ticket()}
-            self.DeclareVectorOutputPort(
-                "actuation", BasicVector_[T](nu),
-                self._calc_actuation, prerequisites_of_calc=deps)
-            self.DeclareVectorOutputPort(
-                "diagnostics", BasicVector_[T](CONTROLLER_DIAGNOSTICS.size),
-                self._calc_diagnostics, prerequisites_of_calc=deps)
+                self.DeclareVectorOutputPort(
+                    "actuation", BasicVector_[T](nu),
+                    self._calc_actuation, prerequisites_of_calc=deps)
+                self.DeclareVectorOutputPort(
+                    "diagnostics", BasicVector_[T](sizes["diagnostics"]),
+                    self._calc_diagnostics, prerequisites_of_calc=deps)
 
         def _construct_copy(self, other, converter=None):
             Impl._construct(self, other._float_plant,
@@ -258,29 +255,24 @@ def HybridController_(T):
                     dtype=x.dtype, x_pd=x_pd, e=e, s=s, delta_d=delta_d,
                     e_f=e_f, f_tau=f_tau, u_fuzzy=u_fuzzy, zeta=zeta)))
 
-        def _terms(self, context, name):
-            """One block of the control law's terms: held from the last
-            sample, or evaluated now (T = 0)."""
-            if self._held_index is None:
-                return self._cache.Eval(context)[name]
-            held = context.get_discrete_state(self._held_index).get_value()
-            return held[self._held[name]]
-
         def _sample(self, context, discrete_state):
             terms = self._cache.Eval(context)
-            held = discrete_state.get_mutable_value(self._held_index)
-            for name, block in self._held.items():
-                held[block] = terms[name]
+            for name, index in self._held.items():
+                discrete_state.set_value(index, terms[name])
 
         def DoCalcTimeDerivatives(self, context, derivatives):  # noqa: N802
-            derivatives.get_mutable_vector().SetFromVector(
-                self._terms(context, "derivatives"))
+            if self._held:
+                rates = context.get_discrete_state(
+                    self._held["derivatives"]).get_value()
+            else:
+                rates = self._cache.Eval(context)["derivatives"]
+            derivatives.get_mutable_vector().SetFromVector(rates)
 
         def _calc_actuation(self, context, output):
-            output.SetFromVector(self._terms(context, "actuation"))
+            output.SetFromVector(self._cache.Eval(context)["actuation"])
 
         def _calc_diagnostics(self, context, output):
-            output.SetFromVector(self._terms(context, "diagnostics"))
+            output.SetFromVector(self._cache.Eval(context)["diagnostics"])
 
     return Impl
 
