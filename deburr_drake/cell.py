@@ -22,6 +22,7 @@ from deburr_drake.controller import HybridController
 from deburr_drake.estimator import ContactParameterEstimator
 from deburr_drake.friction import add_joint_friction
 from deburr_drake.geometry import CircularContour, Contour, StraightContour
+from deburr_drake.kinematics import ToolPoint
 from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.observer import ChamferObserver
 from deburr_drake.part import (add_tool_robot, contact_force_on_body,
@@ -221,16 +222,20 @@ def make_deburring_diagram(*, scenario: Scenario,
     desired_rotation = model.GetFrameByName(TOOL_FRAME).CalcPoseInWorld(
         model_context).rotation().matrix()
 
+    # The process (truth) and the observer (measurement) read the same
+    # joint state through the same kinematics: one memo serves both.
+    tool_point = ToolPoint(model, model.GetFrameByName(TOOL_FRAME))
     process = builder.AddNamedSystem("cutting_process", CuttingProcess(
         plant, TOOL_FRAME, contour, c.process, cut_height=c.tool.engagement,
-        cutter_radius=c.tool.cutter_radius))
+        cutter_radius=c.tool.cutter_radius, tool_point=tool_point))
     sensor = builder.AddNamedSystem("force_sensor", ForceSensor(
         plant, SENSOR_JOINT, c.sensor))
     noise = builder.AddNamedSystem("sensor_noise", RandomSource(
         RandomDistribution.kGaussian, 3, c.sensor.sample_period))
     observer = builder.AddNamedSystem("chamfer_observer", ChamferObserver(
         model, TOOL_FRAME, contour,
-        min_tangential_speed=c.command.min_tangential_speed))
+        min_tangential_speed=c.command.min_tangential_speed,
+        tool_point=tool_point))
     generator = builder.AddNamedSystem("command_generator", CommandGenerator(
         c.command, c.task, contour, x0))
     foh = builder.AddNamedSystem("first_order_hold", FirstOrderHold(

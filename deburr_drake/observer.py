@@ -66,15 +66,18 @@ class ChamferObserver(LeafSystem):
       delta_dot, ||f_n||, ||f_t||, arc position.
 
     ``plant`` is a kinematic model of the robot (it is not simulated here);
-    its Context is scratch memory for kinematics, not state.
+    its Context is scratch memory for kinematics, not state. A ``tool_point``
+    for that frame may be shared with other systems that read the same
+    state (its memo then serves all of them).
     """
 
     def __init__(self, plant: MultibodyPlant, tool_frame_name: str,
-                 contour: Contour, *, min_tangential_speed: float):
+                 contour: Contour, *, min_tangential_speed: float,
+                 tool_point: ToolPoint = None):
         super().__init__()
         self.set_name("chamfer_observer")
-        self._tool_point = ToolPoint(plant,
-                                     plant.GetFrameByName(tool_frame_name))
+        self._tool_point = tool_point or ToolPoint(
+            plant, plant.GetFrameByName(tool_frame_name))
         self._contour = contour
         self._min_speed = min_tangential_speed
         nx = plant.num_multibody_states()

@@ -237,18 +237,21 @@ class CuttingProcess(LeafSystem):
       and the force law's terms are sampled (depth, directions, the burr at
       the cutter's front: arc position + r, the tool runs toward +arc).
       Between samples the force follows the velocities through that law
-      and holds the place on the edge and the plunge speed: in 2.5 ms the tool moves about 6 um
-      along it.
+      and holds the place on the edge and the plunge speed: in 2.5 ms the
+      tool moves about 6 um along it. ``tool_point`` (optional) computes the
+      tool's kinematics; it may be shared with the observer (same frame,
+      same kinematics).
     """
 
     def __init__(self, plant: MultibodyPlant, tool_frame_name: str,
                  contour: Contour, config: ProcessConfig, *,
-                 cut_height: float, cutter_radius: float):
+                 cut_height: float, cutter_radius: float,
+                 tool_point: ToolPoint = None):
         super().__init__()
         config.validate()
         self.set_name("cutting_process")
-        frame = plant.GetFrameByName(tool_frame_name)
-        self._tool_point = ToolPoint(plant, frame)
+        self._tool_point = tool_point or ToolPoint(
+            plant, plant.GetFrameByName(tool_frame_name))
         self._nq = plant.num_positions()
         self._nv = plant.num_velocities()
         self._contour = contour

@@ -1,0 +1,114 @@
+#!/usr/bin/env python3
+"""The cost of the paper cell's physics alone, without any Python in the
+loop: the same plant (arm, joint friction, compliant ring, cutter), the
+same cutting-force law (its terms fixed at the start's values), cenic in
+fixed 2.5 ms steps, the weld's reaction forces sampled every 2.5 ms (as the
+force sensor does) and a C++ joint PID through a 2.5 ms hold pressing the
+tool 0.5 mm into the edge. What an 80 s pass costs at best on this host,
+whatever the controller is written in.
+
+    python scripts/bench_floor.py [--duration 6]
+"""
+
+import argparse
+import time
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
+                                      SimulatorConfig)
+from pydrake.systems.controllers import PidController
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import (Adder, ConstantVectorSource,
+                                        ZeroOrderHold)
+
+from deburr_drake.arm import solve_tool_pose
+from deburr_drake.cell import TOOL_FRAME, _add_plant, make_contour
+from deburr_drake.config import load_scenario
+from deburr_drake.kinematics import ToolPoint
+from deburr_drake.process import force_law_terms, make_cutting_force_law
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--duration", type=float, default=6.0, help="s")
+    ap.add_argument("--sensor", action=argparse.BooleanOptionalAction,
+                    default=True, help="sample the reaction forces")
+    args = ap.parse_args()
+    scenario = load_scenario("paper")
+    T = scenario.controller.control_period
+    builder = DiagramBuilder()
+    plant, _ = _add_plant(builder, scenario)
+    contour = make_contour(scenario)
+    p = contour.point_at(0.0)
+    # Aimed 1.5 mm deep: the joint PID settles near 0.5 mm, about 5 N.
+    q0 = solve_tool_pose(plant, p + 1.5e-3 * contour.n1(p))
+    plant.SetDefaultPositions(q0)
+    nq, nv = plant.num_positions(), plant.num_velocities()
+
+    _, _, J = ToolPoint(plant, plant.GetFrameByName(TOOL_FRAME)).evaluate(
+        np.concatenate([q0, np.zeros(nv)]))
+    n1, tangent, delta, _ = contour.frame(p + 5e-4 * contour.n1(p))
+    terms = force_law_terms(scenario.process, n1, tangent, delta, J,
+                            np.zeros(nv), cut_height=scenario.tool.engagement)
+    law = builder.AddSystem(make_cutting_force_law(
+        nq, nv, scenario.process.smoothing_speed))
+    source = builder.AddSystem(ConstantVectorSource(terms))
+    builder.Connect(source.get_output_port(),
+                    law.GetInputPort("force_law_terms"))
+    builder.Connect(plant.get_state_output_port(),
+                    law.GetInputPort("plant_state"))
+    builder.Connect(law.GetOutputPort("generalized_force"),
+                    plant.get_applied_generalized_force_input_port())
+
+    pid = builder.AddSystem(PidController(
+        kp=np.full(nv, 2000.0), ki=np.zeros(nv), kd=np.full(nv, 100.0)))
+    target = builder.AddSystem(ConstantVectorSource(
+        np.concatenate([q0, np.zeros(nv)])))
+    builder.Connect(target.get_output_port(),
+                    pid.get_input_port_desired_state())
+    builder.Connect(plant.get_state_output_port(),
+                    pid.get_input_port_estimated_state())
+    # Gravity feedforward at q0 (the arm barely moves).
+    context = plant.CreateDefaultContext()
+    gravity = builder.AddSystem(ConstantVectorSource(
+        -plant.CalcGravityGeneralizedForces(context)))
+    total = builder.AddSystem(Adder(2, nv))
+    builder.Connect(pid.get_output_port_control(), total.get_input_port(0))
+    builder.Connect(gravity.get_output_port(), total.get_input_port(1))
+    hold = builder.AddSystem(ZeroOrderHold(T, nv))
+    builder.Connect(total.get_output_port(), hold.get_input_port())
+    builder.Connect(hold.get_output_port(), plant.get_actuation_input_port())
+    if args.sensor:
+        reactions = plant.get_reaction_forces_output_port()
+        sample = builder.AddSystem(ZeroOrderHold(
+            T, AbstractValue.Make(reactions.Allocate().get_value())))
+        builder.Connect(reactions, sample.get_input_port())
+    diagram = builder.Build()
+
+    simulator = Simulator(diagram)
+    ApplySimulatorConfig(SimulatorConfig(
+        integration_scheme="cenic", max_step_size=T,
+        use_error_control=False), simulator)
+    simulator.Initialize()
+    simulator.AdvanceTo(1.0)
+    steps = simulator.get_num_steps_taken()
+    wall = time.perf_counter()
+    simulator.AdvanceTo(1.0 + args.duration)
+    wall = time.perf_counter() - wall
+    steps = simulator.get_num_steps_taken() - steps
+    results = plant.get_contact_results_output_port().Eval(
+        plant.GetMyContextFromRoot(simulator.get_context()))
+    contact = sum(np.linalg.norm(results.hydroelastic_contact_info(i)
+                                 .F_Ac_W().translational())
+                  for i in range(results.num_hydroelastic_contacts()))
+    print(f"contact force at the end: {contact:.2f} N")
+    sensor = "with" if args.sensor else "without"
+    print(f"physics only, {sensor} the sampled reaction forces: "
+          f"{steps / args.duration:.0f} steps per simulated second, "
+          f"{1e3 * wall / steps:.3f} ms per step; an 80 s pass: "
+          f"{80 * wall / args.duration:.1f} s")
+
+
+if __name__ == "__main__":
+    main()
