@@ -130,6 +130,7 @@ def HybridController_(T):
                                                       float))
             self._lambda_o = np.asarray(config.orientation_lambda, float)
             self._K_o = np.asarray(config.orientation_gain, float)
+            self._orientation_control = bool(np.any(self._K_o > 0))
             n_theta = len(self._axes) * self._n_rules
             self.DeclareContinuousState(1 + n_theta)
             nx = plant.num_multibody_states()
@@ -236,7 +237,7 @@ def HybridController_(T):
                 ctx, JacobianWrtVariable.kV, self._frame, np.zeros(3),
                 self._world, self._world)  # rows: angular, translational
             tau = J[3:].T @ f_tau
-            if np.any(self._K_o > 0):
+            if self._orientation_control:
                 R = self._frame.CalcPoseInWorld(ctx).rotation().matrix()
                 E = self._desired_rotation @ R.T
                 # Rotation vector of R_d R^T to first order (exact axis).

@@ -33,7 +33,7 @@ import math
 
 import numpy as np
 
-__all__ = ["Contour", "CircularContour", "StraightContour"]
+__all__ = ["Contour", "CircularContour", "StraightContour", "direction_of_motion"]
 
 _TOL = 1e-9          # validation tolerance (unit-ness, orthogonality, horizontality)
 _MIN_RHO = 1e-9      # CircularContour: n1 undefined closer than this to the centre axis
@@ -76,6 +76,18 @@ def _finite_scalar(x, name):
     if not math.isfinite(x):
         raise ValueError(f"{name} must be a finite number, got {x}")
     return x
+
+
+def direction_of_motion(tangent, v, min_speed):
+    """n2 of :meth:`Contour.n2` from the edge tangent at the point: +-tangent
+    by the sign of the speed along it, ``tangent`` below ``min_speed``."""
+    min_speed = _finite_scalar(min_speed, "min_speed")
+    if min_speed <= 0.0:
+        raise ValueError(f"min_speed must be > 0, got {min_speed}")
+    speed = _value(np.dot(tangent, _vec3(v, "v")))
+    if abs(speed) < min_speed or speed > 0:
+        return tangent
+    return -tangent
 
 
 class Contour(abc.ABC):
@@ -152,15 +164,7 @@ class Contour(abc.ABC):
         Returns ``tangent(p)`` when the speed along the edge is below
         ``min_speed`` (start-up). T-generic; min_speed is a float > 0 [m/s].
         """
-        min_speed = _finite_scalar(min_speed, "min_speed")
-        if min_speed <= 0.0:
-            raise ValueError(f"min_speed must be > 0, got {min_speed}")
-        v = _vec3(v, "v")
-        t = self.tangent(p)
-        speed = np.dot(t, v)
-        if abs(_value(speed)) < min_speed:
-            return t
-        return t if _value(speed) > 0 else -t
+        return direction_of_motion(self.tangent(p), v, min_speed)
 
     def frame(self, p):
         """(n1, tangent, depth, arc_position) at a float point p in one

@@ -53,9 +53,10 @@ class ToolPoint:
         """(x_p, xdot_p, J) with J = dx_p/dv (3 x nv, read-only)."""
         state = np.asarray(state, float)
         q, v = state[:self._nq], state[self._nq:]
+        tolerance = self._tolerance
         for q0, x0, J0 in self._anchors:
             dq = q - q0
-            if np.abs(dq).max() <= self._tolerance:
+            if max(map(abs, dq.tolist())) <= tolerance:
                 return x0 + J0 @ dq, J0 @ v, J0
         plant, ctx = self._plant, self._context
         plant.SetPositions(ctx, q)

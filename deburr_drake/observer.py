@@ -8,7 +8,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem, ValueProducer
 
-from deburr_drake.geometry import Contour
+from deburr_drake.geometry import Contour, direction_of_motion
 from deburr_drake.kinematics import ToolPoint
 from deburr_drake.layout import CHAMFER_STATE
 
@@ -30,8 +30,8 @@ def chamfer_quantities(contour: Contour, x_p, xdot_p, force, *,
 def chamfer_kinematics(contour: Contour, x_p, xdot_p, *,
                        min_tangential_speed: float) -> np.ndarray:
     """:func:`chamfer_quantities` without the force (f_n = f_t = 0)."""
-    n1, _, delta, arc = contour.frame(x_p)
-    n2 = contour.n2(x_p, xdot_p, min_tangential_speed)
+    n1, tangent, delta, arc = contour.frame(x_p)
+    n2 = direction_of_motion(tangent, xdot_p, min_tangential_speed)
     return CHAMFER_STATE.pack(
         x_p=x_p, xdot_p=xdot_p, n1=n1, n2=n2, delta=delta,
         delta_dot=float(n1 @ xdot_p), f_n=0.0, f_t=0.0, arc_position=arc)
