@@ -77,3 +77,31 @@ def test_sliding_variable_stays_in_dead_zone(summary):
 
 def test_no_nan(summary):
     assert summary["nan_detected"] == 0.0
+
+
+@pytest.mark.parametrize("kick", [2e-3, -2e-3])
+def test_no_sample_rate_chatter_after_a_kick(scenario, kick):
+    """A 2 mm/s kick along the edge dies out: no 200 Hz alternation of the
+    tool's speed. With the threshold force's direction regularized over
+    0.05 mm/s instead of 0.5 mm/s this point mass kept alternating by
+    about 2 mm/s from sample to sample (its sign flip, treated explicitly
+    by the integrator, moves it P'_th h / m = 3 mm/s per step)."""
+    from deburr_drake.cell import make_deburring_diagram
+    from deburr_drake.simulation import make_simulator
+    diagram = make_deburring_diagram(scenario=scenario)
+    simulator = make_simulator(diagram, scenario)
+    plant = diagram.GetSubsystemByName("plant")
+    context = plant.GetMyMutableContextFromRoot(
+        simulator.get_mutable_context())
+    simulator.Initialize()
+    simulator.AdvanceTo(0.3)
+    v = plant.GetVelocities(context).copy()
+    v[1] += kick
+    plant.SetVelocities(context, v)
+    period = scenario.controller.control_period
+    speeds = []
+    for k in range(1, 121):
+        simulator.AdvanceTo(0.3 + k * period)
+        speeds.append(plant.GetVelocities(context)[:2].copy())
+    alternation = np.abs(np.diff(np.array(speeds)[-40:], axis=0)).mean(axis=0)
+    assert np.all(alternation < 5e-5), alternation
