@@ -105,6 +105,14 @@ def pass_metrics(log: RunLog, *,
     act = log["actuation"]
     out["torque_total_variation"] = metrics.total_variation(
         act["value"][metrics.window(act["t"], t0)])
+    # What the m = 0 / m = 2 comparison turns on: the fuzzy term's own
+    # variation, and how far s roams on the fuzzy axes (against Delta_k).
+    axes = list(sc.controller.fuzzy.axes)
+    out["fuzzy_term_total_variation"] = metrics.total_variation(
+        ctl["u_fuzzy"][late_c][:, axes])
+    s_fuzzy = ctl["s"][late_c][:, axes]
+    out["sliding_variable_p01_mm_s"] = float(np.percentile(s_fuzzy, 1)) * 1e3
+    out["sliding_variable_p99_mm_s"] = float(np.percentile(s_fuzzy, 99)) * 1e3
     out["sim_time_s"] = log.sim_time
     out["wall_time_s"] = log.wall_time
     out["completed_pass"] = float(log.completed_pass)
