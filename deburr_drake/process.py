@@ -8,8 +8,8 @@ import math
 from typing import Sequence
 
 import numpy as np
-from pydrake.multibody.plant import MultibodyPlant
 from pydrake.common import RandomDistribution
+from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import Diagram, DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import (Demultiplexer, Gain,
                                         LinearTransformDensity, Multiplexer,
@@ -82,8 +82,9 @@ def cutting_force(config: ProcessConfig, contour: Contour, x_p, xdot_p, *,
     area), chamfer area = delta * cut_height, v_t the speed along the edge
     (R5: motion along the wall's vertical cuts no chamfer), directed against
     that motion; the direction is sat(v_along / v_s), v_s =
-    ``smoothing_speed``, so the force is continuous. Plus the contact threshold c0 along -n1. Both ramp
-    in smoothly over the first ``threshold_depth`` of depth."""
+    ``smoothing_speed``, so the force is continuous. Plus the contact
+    threshold c0 along -n1. Both ramp in smoothly over the first
+    ``threshold_depth`` of depth."""
     n1, tangent, delta, arc = contour.frame(x_p)
     return _force(config, n1, tangent, delta, arc,
                   np.asarray(xdot_p, float), cut_height, burr_area)
@@ -116,12 +117,13 @@ def _force(config: ProcessConfig, n1, tangent, delta, arc, xdot_p,
         v_t=abs(v_along), burr_area=burr_area, arc_position=arc)
 
 
-def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, v, *,
-                    cut_height: float, burr_area: float = 0.0) -> np.ndarray:
+def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, xdot_p,
+                    *, cut_height: float,
+                    burr_area: float = 0.0) -> np.ndarray:
     """The terms of :func:`make_cutting_force_law` that make it give
     :func:`cutting_force` (J: the tool point's translational Jacobian, 3 x
-    nv; v: the joint velocities). With u = a.v (the speed along the edge)
-    and s = sat(u / v_s):
+    nv; xdot_p: the tool point's velocity, m/s). With u = a.v (v the joint
+    velocities: the speed along the edge) and s = sat(u / v_s):
 
         tau = A [u, s] + b (joint space),  f = B [u, s] + f0 (world),
         a = J^T tangent,  A = [-on g a, -on (P'_th + h |v_n|) a],
@@ -131,7 +133,7 @@ def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, v, *,
     the edge (tangent, n1, g, the engagement) and the plunge speed v_n are
     the sample's; u and s follow the velocities."""
     on, g = _engagement(config, delta, cut_height, burr_area)
-    v_n = float(n1 @ (J @ np.asarray(v, float)))
+    v_n = float(n1 @ np.asarray(xdot_p, float))
     power = config.threshold_power_force + config.plunge_coefficient * abs(v_n)
     threshold = on * config.contact_threshold_force
     return np.concatenate([
@@ -154,8 +156,8 @@ def generalized_cutting_force(terms, v, smoothing_speed: float):
 def make_cutting_force_law(nq: int, nv: int,
                            smoothing_speed: float) -> Diagram:
     """``cutting_force``: the law of :func:`force_law_terms`, from
-    ``plant_state`` (nq + nv; the velocities are read) and the process's held ``force_law_terms`` (4 nv + 9, see
-    :func:`force_law_terms`), outputs ``generalized_force`` (nv, for the
+    ``plant_state`` (nq + nv; the velocities are read) and the process's
+    held ``force_law_terms`` (4 nv + 9), outputs ``generalized_force`` (nv, for the
     plant's applied generalized force) and ``tool_force`` (3, N, world: the
     same force on the tool, for the force sensor: a force applied through
     the joints does not pass the sensor's weld).
@@ -291,11 +293,11 @@ class CuttingProcess(LeafSystem):
                             self._contour.length, self._contour.closed)
 
     def _place(self, context):
-        """(n1, tangent, delta, arc, xdot_p, J, v) of the tool now."""
-        state = self._state_port.Eval(context)
-        x_p, xdot_p, J = self._tool_point.evaluate(state)
+        """(n1, tangent, delta, arc, xdot_p, J) of the tool now."""
+        x_p, xdot_p, J = self._tool_point.evaluate(
+            self._state_port.Eval(context))
         n1, tangent, delta, arc = self._contour.frame(x_p)
-        return n1, tangent, delta, arc, xdot_p, J, state[self._nq:]
+        return n1, tangent, delta, arc, xdot_p, J
 
     def _leading_edge(self, s):
         """Arc position of the cutter's front (the traversal direction is
@@ -316,7 +318,7 @@ class CuttingProcess(LeafSystem):
 
     def _update(self, context, discrete_state):
         burr = discrete_state.get_mutable_value(self._burr_index)
-        n1, tangent, delta, arc, xdot_p, J, v = self._place(context)
+        n1, tangent, delta, arc, xdot_p, J = self._place(context)
         if delta > 0.0:
             finish = discrete_state.get_mutable_value(self._finish_index)
             k = self._bins.index(arc)
@@ -332,5 +334,5 @@ class CuttingProcess(LeafSystem):
                           self._cut_height, area)
         discrete_state.set_value(self._state_index, state)
         discrete_state.set_value(self._terms_index, force_law_terms(
-            self._config, n1, tangent, delta, J, v,
+            self._config, n1, tangent, delta, J, xdot_p,
             cut_height=self._cut_height, burr_area=area))

@@ -50,7 +50,7 @@ def main():
         np.concatenate([q0, np.zeros(nv)]))
     n1, tangent, delta, _ = contour.frame(p + 5e-4 * contour.n1(p))
     terms = force_law_terms(scenario.process, n1, tangent, delta, J,
-                            np.zeros(nv), cut_height=scenario.tool.engagement)
+                            np.zeros(3), cut_height=scenario.tool.engagement)
     law = builder.AddSystem(make_cutting_force_law(
         nq, nv, scenario.process.smoothing_speed))
     source = builder.AddSystem(ConstantVectorSource(terms))

@@ -82,7 +82,7 @@ def test_cutting_force_law_is_eq3_through_the_jacobian(arm, speed):
     xdot = speed * tangent + 1e-4 * n1
     v = np.linalg.lstsq(J, xdot, rcond=None)[0]
     state = np.concatenate([x[:5], v])
-    terms = force_law_terms(CONFIG, n1, tangent, 5e-4, J, v,
+    terms = force_law_terms(CONFIG, n1, tangent, 5e-4, J, J @ v,
                             cut_height=0.002, burr_area=1e-6)
     tau, f = generalized_cutting_force(terms, v, CONFIG.smoothing_speed)
     f_ref, _ = cutting_force(CONFIG, contour, x_p, J @ v, cut_height=0.002,
@@ -107,7 +107,7 @@ def test_cutting_force_law_follows_the_velocity_between_samples(arm):
     _, _, J = ToolPoint(arm, frame).evaluate(_arm_state(arm, 2))
     tangent, n1 = np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0])
     v = np.linalg.lstsq(J, 2e-3 * tangent, rcond=None)[0]
-    terms = force_law_terms(CONFIG, n1, tangent, 5e-4, J, v,
+    terms = force_law_terms(CONFIG, n1, tangent, 5e-4, J, J @ v,
                             cut_height=0.002)
     _, f1 = generalized_cutting_force(terms, v, CONFIG.smoothing_speed)
     _, f2 = generalized_cutting_force(terms, 2 * v, CONFIG.smoothing_speed)
