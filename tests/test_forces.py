@@ -35,26 +35,25 @@ def test_tool_point_matches_drake_and_reuses_only_nearby_states(arm):
     frame = arm.GetFrameByName("tool_tip")
     tool = ToolPoint(arm, frame)
     context = arm.CreateDefaultContext()
+
+    def assert_matches_drake(state, position_tolerance):
+        x_p, xdot_p = tool(state)
+        arm.SetPositionsAndVelocities(context, state)
+        np.testing.assert_allclose(
+            x_p, frame.CalcPoseInWorld(context).translation(),
+            atol=position_tolerance)
+        np.testing.assert_allclose(
+            xdot_p, frame.CalcSpatialVelocityInWorld(context).translational(),
+            atol=1e-15)
+
     x = _arm_state(arm, 0)
-    x_p, xdot_p = tool(x)
-    arm.SetPositionsAndVelocities(context, x)
-    np.testing.assert_allclose(
-        x_p, frame.CalcPoseInWorld(context).translation(), atol=1e-15)
-    np.testing.assert_allclose(
-        xdot_p, frame.CalcSpatialVelocityInWorld(context).translational(),
-        atol=1e-15)
+    assert_matches_drake(x, 1e-15)
     assert tool.full_evaluations == 1
     # An integrator's perturbation (4e-11 rad): first order, no kinematics.
     nearby = x.copy()
     nearby[:5] += 4e-11
     nearby[5:] += 1.5e-8
-    x_n, xdot_n = tool(nearby)
-    arm.SetPositionsAndVelocities(context, nearby)
-    np.testing.assert_allclose(
-        x_n, frame.CalcPoseInWorld(context).translation(), atol=1e-16)
-    np.testing.assert_allclose(
-        xdot_n, frame.CalcSpatialVelocityInWorld(context).translational(),
-        atol=1e-15)
+    assert_matches_drake(nearby, 1e-16)
     assert tool.full_evaluations == 1
     # One step later (1e-5 rad): evaluated again.
     far = x.copy()
