@@ -367,8 +367,9 @@ class ProcessConfig:
     # The integrator treats a sign flip beyond this band explicitly, so the
     # band must exceed the speed one 2.5 ms step can give it (P'_th h / m:
     # 3 mm/s on the 1.8 kg point mass): at 0.05 mm/s the point mass chattered
-    # at 200 Hz after a 2 mm/s kick, at 0.5 mm/s it did not (measured). No
-    # operating point is this slow (v0 = 1 mm/s).
+    # at 200 Hz after a 2 mm/s kick, at 0.5 mm/s it does not
+    # (tests/test_closed_loop.py). No operating point is this slow
+    # (v0 = 1 mm/s).
     smoothing_speed: float = 5.0e-4
     burrs: List[BurrConfig] = field(default_factory=list)
     finish_bin_length: float = 2.0e-4  # m of arc per surface-finish bin

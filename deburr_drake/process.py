@@ -164,11 +164,11 @@ def make_cutting_force_law(nq: int, nv: int,
 
     The integrator evaluates whatever feeds the plant's applied forces
     about eight times a step to linearize it, so the law is built from
-    Drake's C++ primitives: a few hundred instructions per evaluation,
-    where a Python LeafSystem cost about 60 us and a SymbolicVectorSystem
-    of the law 120,000 instructions. LinearTransformDensity is the
-    primitive that computes A w + b with A and b on input ports (no random
-    input is involved)."""
+    Drake's C++ primitives rather than a Python LeafSystem or a (much
+    slower to evaluate) SymbolicVectorSystem; scripts/bench_floor.py times
+    it with the plant alone. LinearTransformDensity is the primitive that
+    computes A w + b with A and b on input ports (no random input is
+    involved)."""
     builder = DiagramBuilder()
 
     def add(name, system):
