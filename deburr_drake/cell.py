@@ -222,14 +222,14 @@ def make_deburring_diagram(*, scenario: Scenario,
     desired_rotation = model.GetFrameByName(TOOL_FRAME).CalcPoseInWorld(
         model_context).rotation().matrix()
 
-    # The process (truth) and the observer (measurement) read the same
-    # joint state through the same kinematics: one memo serves both.
+    # The process (truth), the sensor and the observer (measurement) read
+    # the same joint state through the same kinematics: one memo serves all.
     tool_point = ToolPoint(model, model.GetFrameByName(TOOL_FRAME))
     process = builder.AddNamedSystem("cutting_process", CuttingProcess(
         plant, TOOL_FRAME, contour, c.process, cut_height=c.tool.engagement,
         cutter_radius=c.tool.cutter_radius, tool_point=tool_point))
     sensor = builder.AddNamedSystem("force_sensor", ForceSensor(
-        plant, SENSOR_JOINT, c.sensor))
+        plant, SENSOR_JOINT, c.sensor, tool_point=tool_point))
     noise = builder.AddNamedSystem("sensor_noise", RandomSource(
         RandomDistribution.kGaussian, 3, c.sensor.sample_period))
     observer = builder.AddNamedSystem("chamfer_observer", ChamferObserver(

@@ -8,6 +8,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
 from deburr_drake.config import SensorConfig
+from deburr_drake.kinematics import ToolPoint
 
 __all__ = ["ForceSensor"]
 
@@ -50,10 +51,14 @@ class ForceSensor(LeafSystem):
     - ``noise`` (3): unit-variance samples, scaled by ``noise_std`` (N).
     - ``tool_force`` (3, N): filtered force on the tool, world frame.
     - Discrete state (3, N): the filter, updated every ``sample_period``.
+
+    A ``tool_point`` (a ToolPoint of a frame on the sensor's child body, on
+    a model with the plant's joints) shares its kinematics for the reading's
+    rotation into world; without one the sensor computes it itself.
     """
 
     def __init__(self, plant: MultibodyPlant, joint_name: str,
-                 config: SensorConfig):
+                 config: SensorConfig, *, tool_point: ToolPoint = None):
         super().__init__()
         config.validate()
         self.set_name("force_sensor")
@@ -63,6 +68,18 @@ class ForceSensor(LeafSystem):
         self._joint_index = int(joint.index())
         self._child_frame = joint.frame_on_child()
         tool = joint.child_body()
+        self._tool_point = tool_point
+        if tool_point is not None:
+            # R_WJ = R_WF R_FJ, F the tool point's frame, fixed on the body.
+            frame = plant.GetFrameByName(tool_point.frame.name())
+            if frame.body().index() != tool.index():
+                raise ValueError(
+                    f"tool_point's frame {frame.name()!r} is not on the "
+                    f"sensor's child body {tool.name()!r}")
+            context = plant.CreateDefaultContext()
+            self._R_FJ = (frame.CalcPoseInWorld(context).rotation().inverse()
+                          @ self._child_frame.CalcPoseInWorld(context)
+                          .rotation()).matrix()
         self._weight = tool.default_mass() * np.asarray(
             plant.gravity_field().gravity_vector())
         self._noise_std = config.noise_std
@@ -84,10 +101,13 @@ class ForceSensor(LeafSystem):
         """The unfiltered, noise-free, weight-compensated reading (N,
         world)."""
         F = self._reaction_port.Eval(context)[self._joint_index]
-        self._plant.SetPositionsAndVelocities(
-            self._plant_context, self._state_port.Eval(context))
-        R_WJ = self._child_frame.CalcPoseInWorld(
-            self._plant_context).rotation()
+        state = self._state_port.Eval(context)
+        if self._tool_point is not None:
+            R_WJ = self._tool_point.rotation(state) @ self._R_FJ
+        else:
+            self._plant.SetPositionsAndVelocities(self._plant_context, state)
+            R_WJ = self._child_frame.CalcPoseInWorld(
+                self._plant_context).rotation().matrix()
         raw = -(R_WJ @ F.translational()) - self._weight
         if self._applied_port.HasValue(context):
             raw = raw + self._applied_port.Eval(context)

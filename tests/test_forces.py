@@ -43,6 +43,10 @@ def test_tool_point_matches_drake_and_reuses_only_nearby_states(arm):
             x_p, frame.CalcPoseInWorld(context).translation(),
             atol=position_tolerance)
         np.testing.assert_allclose(
+            tool.rotation(state),
+            frame.CalcPoseInWorld(context).rotation().matrix(),
+            atol=1e-9)
+        np.testing.assert_allclose(
             xdot_p, frame.CalcSpatialVelocityInWorld(context).translational(),
             atol=1e-15)
 
