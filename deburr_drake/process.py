@@ -73,6 +73,18 @@ class FinishBins:
     def index(self, s: float) -> int:
         return min(max(int(s // self.width), 0), self.count - 1)
 
+    def near(self, s: float, radius: float, closed: bool) -> np.ndarray:
+        """Indices of a superset of the bins whose centres lie within
+        ``radius`` of arc position ``s`` (wrapping when ``closed``)."""
+        first = math.floor((s - radius) / self.width) - 1
+        last = math.ceil((s + radius) / self.width) + 1
+        if last - first + 1 >= self.count:
+            return np.arange(self.count)
+        window = np.arange(first, last + 1)
+        if closed:
+            return window % self.count
+        return window[(window >= 0) & (window < self.count)]
+
 
 def cutting_force(config: ProcessConfig, contour: Contour, x_p, xdot_p, *,
                   cut_height: float, burr_area: float = 0.0):
@@ -136,10 +148,9 @@ def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, xdot_p,
     v_n = float(n1 @ np.asarray(xdot_p, float))
     power = config.threshold_power_force + config.plunge_coefficient * abs(v_n)
     threshold = on * config.contact_threshold_force
+    a = J.T @ tangent
     return np.concatenate([
-        J.T @ tangent,
-        -on * g * (J.T @ tangent), -on * power * (J.T @ tangent),
-        -threshold * (J.T @ n1),
+        a, -on * g * a, -on * power * a, -threshold * (J.T @ n1),
         -on * g * tangent, -on * power * tangent, -threshold * n1])
 
 
@@ -324,10 +335,12 @@ class CuttingProcess(LeafSystem):
             k = self._bins.index(arc)
             finish[k] = max(finish[k], delta)
             # The cutter (diameter 2 r) has swept the burr behind its front.
-            d = arc_distance(self._bins.centers, arc, self._contour.length,
-                             self._contour.closed)
             r, w = self._cutter_radius, self._bins.width
-            burr[(d >= -r) & (d < r - w)] = 0.0
+            closed = self._contour.closed
+            near = self._bins.near(arc, r, closed)
+            d = arc_distance(self._bins.centers[near], arc,
+                             self._contour.length, closed)
+            burr[near[(d >= -r) & (d < r - w)]] = 0.0
         k = self._bins.index(self._leading_edge(arc))
         area = burr[k] * self._thickness[k]
         _, state = _force(self._config, n1, tangent, delta, arc, xdot_p,

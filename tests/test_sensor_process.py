@@ -9,9 +9,12 @@ from pydrake.multibody.plant import (AddMultibodyPlant,
                                      MultibodyPlantConfig)
 from pydrake.systems.framework import DiagramBuilder
 
+from deburr_drake.arm import ARM_URL
 from deburr_drake.config import ProcessConfig, SensorConfig
 from deburr_drake.geometry import CircularContour
-from deburr_drake.part import add_cartesian_tool
+from deburr_drake.kinematics import ToolPoint
+from deburr_drake.models import make_kinematic_model
+from deburr_drake.part import add_cartesian_tool, add_tool_robot
 from deburr_drake.process import PROCESS_STATE, cutting_force
 from deburr_drake.sensor import ForceSensor
 
@@ -55,6 +58,37 @@ def test_reads_the_external_force_with_weight_compensated():
     vdot = plant.get_generalized_acceleration_output_port().Eval(pc)
     np.testing.assert_allclose(vdot, 0.0, atol=1e-12)
     np.testing.assert_allclose(sensor.raw_force(sc), f_ext, atol=1e-9)
+
+
+def test_shared_tool_point_gives_the_same_reading_on_the_arm():
+    """The arm's tool is tilted: the rotation into world matters. A sensor
+    that takes it from a ToolPoint on the kinematic model reads what one
+    computing it on the plant reads."""
+    builder = DiagramBuilder()
+    plant, _ = AddMultibodyPlant(MultibodyPlantConfig(time_step=0.0),
+                                 builder)
+    add_tool_robot(plant, ARM_URL)
+    plant.Finalize()
+    model = make_kinematic_model(ARM_URL)
+    tool_point = ToolPoint(model, model.GetFrameByName("tool_tip"))
+    sensors = [builder.AddNamedSystem(name, ForceSensor(
+        plant, "ft_sensor", SensorConfig(), tool_point=tp))
+        for name, tp in (("own", None), ("shared", tool_point))]
+    for sensor in sensors:
+        builder.Connect(plant.get_reaction_forces_output_port(),
+                        sensor.GetInputPort("reaction_forces"))
+        builder.Connect(plant.get_state_output_port(),
+                        sensor.GetInputPort("plant_state"))
+    diagram = builder.Build()
+    context = diagram.CreateDefaultContext()
+    pc = plant.GetMyMutableContextFromRoot(context)
+    plant.SetPositions(pc, [0.3, 0.7, -1.1, 0.6, 0.4])
+    plant.get_actuation_input_port().FixValue(pc, [1.0, -2.0, 3.0, 0.5, 0.1])
+    readings = [s.raw_force(s.GetMyContextFromRoot(context))
+                for s in sensors]
+    assert np.linalg.norm(readings[0]) > 1.0
+    np.testing.assert_allclose(readings[1], readings[0], atol=1e-12)
+    assert tool_point.full_evaluations == 1
 
 
 def test_low_pass_update():
@@ -118,3 +152,21 @@ def test_force_applied_through_the_joints_is_read_as_on_the_tool():
     sensor.GetInputPort("applied_force").FixValue(sc, [0.5, -1.0, 0.25])
     np.testing.assert_allclose(sensor.raw_force(sc) - base,
                                [0.5, -1.0, 0.25], rtol=1e-12)
+
+
+@pytest.mark.parametrize("closed", [True, False])
+def test_finish_bins_near_covers_every_bin_within_the_radius(closed):
+    from deburr_drake.metrics import arc_distance
+    from deburr_drake.process import FinishBins
+    length, radius = 0.1696, 0.003
+    bins = FinishBins(length, 2e-4)
+    for s in np.r_[np.linspace(0.0, length, 97, endpoint=False),
+                   [1e-9, length - 1e-9, radius, length - radius]]:
+        d = arc_distance(bins.centers, s, length, closed)
+        within = set(np.flatnonzero(np.abs(d) <= radius))
+        near = bins.near(s, radius, closed)
+        assert within <= set(near)
+        assert len(set(near)) == len(near) < bins.count
+    np.testing.assert_array_equal(FinishBins(0.001, 2e-4).near(5e-4, radius,
+                                                                closed),
+                                  np.arange(5))
