@@ -18,6 +18,10 @@ __all__ = ["HybridController", "HybridController_", "make_rule_bases",
            "saturation"]
 
 
+#: What HybridController's law returns, in order.
+_LAW_OUTPUTS = ("actuation", "derivatives", "diagnostics")
+
+
 def _value(y):
     return y.value() if hasattr(y, "value") else float(y)
 
@@ -149,8 +153,8 @@ def HybridController_(T):
                               calc=self._calc_terms),
                 prerequisites_of_calc={self.all_sources_ticket()})
             nu = plant.num_actuators()
-            sizes = {"actuation": nu, "derivatives": 1 + n_theta,
-                     "diagnostics": CONTROLLER_DIAGNOSTICS.size}
+            sizes = dict(zip(_LAW_OUTPUTS, (
+                nu, 1 + n_theta, CONTROLLER_DIAGNOSTICS.size)))
             # name -> discrete state group holding it (sampled mode only)
             self._held = {}
             if config.control_period > 0:
@@ -193,6 +197,10 @@ def HybridController_(T):
             return context.get_continuous_state_vector()[0]
 
         def _calc_terms(self, context, value):
+            value.set_value(dict(zip(_LAW_OUTPUTS, self._law(context))))
+
+        def _law(self, context):
+            """(actuation, derivatives, diagnostics) at ``context``."""
             c = self._config
             x = context.get_continuous_state_vector().CopyToVector()
             delta_d = x[0]
@@ -216,7 +224,9 @@ def HybridController_(T):
             y0 = np.sqrt(x_p @ x_p)
             u_fuzzy = np.zeros(3, dtype=x.dtype)
             zeta = np.zeros(3)
-            theta_dot = np.zeros_like(theta)
+            # [delta_d', theta'] with theta' zero off the active rules.
+            derivatives = np.zeros_like(x)
+            derivatives[0] = delta_d_dot
             r = c.fuzzy.adaptation_gain
             for k, (axis, rb) in enumerate(zip(self._axes, self._rule_bases)):
                 s_k = s[axis]
@@ -224,7 +234,7 @@ def HybridController_(T):
                     u, idx, rate = rb.evaluate_and_rate(theta[k], y0, s_k, r)
                     zeta[axis] = 1.0
                     if c.fuzzy.adapt and len(idx):
-                        theta_dot[k, idx] = rate
+                        derivatives[1 + k * self._n_rules + idx] = rate
                 else:
                     u = c.robust_gain[k] * saturation(
                         s_k / c.robust_boundary_layer[k])
@@ -248,18 +258,15 @@ def HybridController_(T):
                                                     - omega))
             if c.gravity_compensation:
                 tau = tau - plant.CalcGravityGeneralizedForces(ctx)
-            value.set_value(dict(
-                actuation=self._B_T @ tau,
-                derivatives=np.concatenate([[delta_d_dot],
-                                            theta_dot.ravel()]),
-                diagnostics=CONTROLLER_DIAGNOSTICS.pack(
-                    dtype=x.dtype, x_pd=x_pd, e=e, s=s, delta_d=delta_d,
-                    e_f=e_f, f_tau=f_tau, u_fuzzy=u_fuzzy, zeta=zeta)))
+            return (self._B_T @ tau, derivatives,
+                    CONTROLLER_DIAGNOSTICS.pack(
+                        dtype=x.dtype, x_pd=x_pd, e=e, s=s, delta_d=delta_d,
+                        e_f=e_f, f_tau=f_tau, u_fuzzy=u_fuzzy, zeta=zeta))
 
         def _sample(self, context, discrete_state):
-            terms = self._cache.Eval(context)
-            for name, index in self._held.items():
-                discrete_state.set_value(index, terms[name])
+            # Once per sample, at the sample's inputs: no cache needed.
+            for name, value in zip(_LAW_OUTPUTS, self._law(context)):
+                discrete_state.set_value(self._held[name], value)
 
         def DoCalcTimeDerivatives(self, context, derivatives):  # noqa: N802
             if self._held:
