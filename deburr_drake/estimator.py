@@ -33,6 +33,10 @@ def estimator_rate(c_hat, delta, delta_dot, f_n, *, gains, lower_bounds,
     return rate
 
 
+_DELTA, _DELTA_DOT, _F_N = (CHAMFER_STATE.slice(name).start
+                            for name in ("delta", "delta_dot", "f_n"))
+
+
 class ContactParameterEstimator(LeafSystem):
     """Estimates c0, c1, c2 of the contact-force model (4) and outputs the
     refined desired normal force ||f_nd hat|| = c0 + c1 delta_d^* (13).
@@ -66,6 +70,10 @@ class ContactParameterEstimator(LeafSystem):
                              f"{sample_period}")
         self.set_name("contact_estimator")
         self._config = config
+        self._law = dict(gains=np.asarray(config.gains, float),
+                         lower_bounds=np.asarray(config.lower_bounds, float),
+                         contact_force_threshold=config.contact_force_threshold,
+                         adapt=config.adapt)
         self._desired_depth = task.desired_depth
         xc = self.DeclareContinuousState(
             BasicVector(np.asarray(config.initial_estimates, float)))
@@ -89,16 +97,10 @@ class ContactParameterEstimator(LeafSystem):
         return context.get_continuous_state_vector().CopyToVector()
 
     def _rate(self, context):
-        c = self._config
         chamfer = self._chamfer_port.Eval(context)
         return estimator_rate(
-            self._estimates(context),
-            CHAMFER_STATE.get(chamfer, "delta"),
-            CHAMFER_STATE.get(chamfer, "delta_dot"),
-            CHAMFER_STATE.get(chamfer, "f_n"),
-            gains=c.gains, lower_bounds=c.lower_bounds,
-            contact_force_threshold=c.contact_force_threshold,
-            adapt=c.adapt)
+            self._estimates(context), chamfer[_DELTA], chamfer[_DELTA_DOT],
+            chamfer[_F_N], **self._law)
 
     def _sample(self, context, discrete_state):
         discrete_state.set_value(self._rate_index, self._rate(context))

@@ -85,7 +85,7 @@ class ChamferObserver(LeafSystem):
         self._force_port = self.DeclareVectorInputPort("tool_force", 3)
         # The kinematic part changes with the plant state only, not with
         # each new force sample.
-        self._last = None  # (plant state, its kinematics): a memo
+        self._last = None  # (plant state's bytes, its kinematics): a memo
         self._kinematics = self.DeclareCacheEntry(
             "chamfer_kinematics", ValueProducer(
                 allocate=AbstractValue.Make(
@@ -104,9 +104,10 @@ class ChamferObserver(LeafSystem):
         # (every sample) or the integrator perturbs and restores the state;
         # the value only changes with the plant state itself.
         state = self._state_port.Eval(context)
-        if self._last is None or not np.array_equal(state, self._last[0]):
+        key = state.tobytes()
+        if self._last is None or key != self._last[0]:
             x_p, xdot_p = self.tool_point(state)
-            self._last = (state.copy(), chamfer_kinematics(
+            self._last = (key, chamfer_kinematics(
                 self._contour, x_p, xdot_p,
                 min_tangential_speed=self._min_speed))
         value.set_value(self._last[1])

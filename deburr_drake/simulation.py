@@ -118,13 +118,12 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
     passes = scenario.simulation.stop_after_passes
     if passes > 0:
         generator = diagram.GetSubsystemByName("command_generator")
-        length = generator.contour.length
-        start = generator.start_arc_position
+        generator_context = generator.GetMyContextFromRoot(context)
+        end = generator.start_arc_position + passes * generator.contour.length
 
         def monitor(root_context):
-            s = generator.arc_progress(
-                generator.GetMyContextFromRoot(root_context))
-            if s - start >= passes * length:
+            # Called after every step, always with this simulator's context.
+            if generator.arc_progress(generator_context) >= end:
                 return EventStatus.ReachedTermination(
                     generator, "completed the pass")
             return EventStatus.Succeeded()
