@@ -335,6 +335,11 @@ class RuleBase:
 
         nu_ij = N_m(y0 - i*delta0) * N_m(yk - j*deltak); T-generic in nu.
         """
+        # Plain numbers (numpy scalars included) as Python floats: the
+        # scalar arithmetic below is then several times faster.
+        plain = not (hasattr(y0, "value") or hasattr(yk, "value"))
+        if plain:
+            y0, yk = float(y0), float(yk)
         lo0, w0 = self._axis(y0, self._d0, "y0")
         lok, wk = self._axis(yk, self._dk, "yk")
         if lo0 is None or lok is None:
@@ -345,7 +350,10 @@ class RuleBase:
             idx = self._offsets + base
         else:
             idx = (np.arange(n0)[:, None] * self._n + np.arange(nk)[None, :]).ravel() + base
-        nu = np.multiply.outer(np.array(w0), np.array(wk)).ravel()
+        if plain:
+            nu = np.array([a * b for a in w0 for b in wk])
+        else:
+            nu = np.multiply.outer(np.array(w0), np.array(wk)).ravel()
         return idx, nu
 
     def evaluate(self, theta, y0, yk):
