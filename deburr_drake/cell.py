@@ -222,8 +222,9 @@ def make_deburring_diagram(*, scenario: Scenario,
     desired_rotation = model.GetFrameByName(TOOL_FRAME).CalcPoseInWorld(
         model_context).rotation().matrix()
 
-    # The process (truth), the sensor and the observer (measurement) read
-    # the same joint state through the same kinematics: one memo serves all.
+    # The process (truth), the sensor, the observer (measurement) and the
+    # controller read the same joint state through the same kinematics: one
+    # memo serves all.
     tool_point = ToolPoint(model, model.GetFrameByName(TOOL_FRAME))
     process = builder.AddNamedSystem("cutting_process", CuttingProcess(
         plant, TOOL_FRAME, contour, c.process, cut_height=c.tool.engagement,
@@ -244,7 +245,8 @@ def make_deburring_diagram(*, scenario: Scenario,
         "contact_estimator", ContactParameterEstimator(
             c.estimator, c.task, sample_period=c.controller.control_period))
     controller = builder.AddNamedSystem("controller", HybridController(
-        model, TOOL_FRAME, c.controller, desired_rotation))
+        model, TOOL_FRAME, c.controller, desired_rotation,
+        tool_point=tool_point))
 
     state = plant.get_state_output_port()
     for system in (process, sensor, observer, controller):

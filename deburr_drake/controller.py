@@ -104,13 +104,26 @@ def HybridController_(T):
           sample, so the continuous states integrate the sampled rates
           exactly (theta((k+1)T) = theta(kT) + T theta'(kT)). With T = 0
           everything is continuous in time (for linearization).
+        - ``tool_point`` (optional, float only): a ToolPoint of the tool
+          frame on ``plant`` whose kinematics and gravity forces the law
+          reuses (e.g. shared with the observer, which has evaluated them at
+          the same state); the AutoDiffXd system computes its own.
         """
 
         def _construct(self, plant, tool_frame_name, config,
-                       desired_rotation=None, converter=None):
+                       desired_rotation=None, converter=None, *,
+                       tool_point=None):
             LeafSystem_[T].__init__(self, converter)
             config.validate()
             self.set_name("controller")
+            if tool_point is not None and (
+                    tool_point.frame.name() != tool_frame_name
+                    or tool_point.frame.GetParentPlant() is not plant):
+                raise ValueError(
+                    f"tool_point must be of {tool_frame_name!r} on the "
+                    "controller's plant")
+            # Shared kinematics serve the float law; AutoDiffXd has its own.
+            self._tool_point = tool_point if T == float else None
             self._float_plant = plant
             self._plant = plant if T == float else plant.ToAutoDiffXd()
             self._plant_context = self._plant.CreateDefaultContext()
@@ -241,14 +254,9 @@ def HybridController_(T):
                 u_fuzzy[axis] = u
             f_tau = f_tau + u_fuzzy
 
-            plant, ctx = self._plant, self._plant_context
-            plant.SetPositionsAndVelocities(ctx, p["plant_state"])
-            J = plant.CalcJacobianSpatialVelocity(
-                ctx, JacobianWrtVariable.kV, self._frame, np.zeros(3),
-                self._world, self._world)  # rows: angular, translational
+            J, R, tau_g = self._kinematics(p["plant_state"])
             tau = J[3:].T @ f_tau
             if self._orientation_control:
-                R = self._frame.CalcPoseInWorld(ctx).rotation().matrix()
                 E = self._desired_rotation @ R.T
                 # Rotation vector of R_d R^T to first order (exact axis).
                 e_o = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0],
@@ -257,11 +265,30 @@ def HybridController_(T):
                 tau = tau + J[:3].T @ (self._K_o * (self._lambda_o * e_o
                                                     - omega))
             if c.gravity_compensation:
-                tau = tau - plant.CalcGravityGeneralizedForces(ctx)
+                tau = tau - tau_g
             return (self._B_T @ tau, derivatives,
                     CONTROLLER_DIAGNOSTICS.pack(
                         dtype=x.dtype, x_pd=x_pd, e=e, s=s, delta_d=delta_d,
                         e_f=e_f, f_tau=f_tau, u_fuzzy=u_fuzzy, zeta=zeta))
+
+        def _kinematics(self, state):
+            """(J, R, tau_g) of the controller's model at ``state``: the tool
+            frame's spatial Jacobian (rows angular, translational) and
+            orientation in world, and the gravity forces with the model's
+            masses."""
+            if self._tool_point is not None:
+                # Every mass scaled alike: tau_g scales with them.
+                return (self._tool_point.spatial_jacobian(state),
+                        self._tool_point.rotation(state),
+                        self._config.model_mass_scale
+                        * self._tool_point.gravity_forces(state))
+            plant, ctx = self._plant, self._plant_context
+            plant.SetPositionsAndVelocities(ctx, state)
+            J = plant.CalcJacobianSpatialVelocity(
+                ctx, JacobianWrtVariable.kV, self._frame, np.zeros(3),
+                self._world, self._world)
+            R = self._frame.CalcPoseInWorld(ctx).rotation().matrix()
+            return J, R, plant.CalcGravityGeneralizedForces(ctx)
 
         def _sample(self, context, discrete_state):
             # Once per sample, at the sample's inputs: no cache needed.

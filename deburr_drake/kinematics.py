@@ -1,5 +1,6 @@
 """ToolPoint: a frame's origin and its velocity in world from a plant state,
-cheap when the same state comes back perturbed by a rounding-size amount."""
+its orientation and Jacobian, and the robot's gravity forces: cheap when the
+same state comes back, exactly or perturbed by a rounding-size amount."""
 
 from __future__ import annotations
 
@@ -15,7 +16,9 @@ __all__ = ["ToolPoint"]
 class ToolPoint:
     """x_p (m) and xdot_p (m/s) in world of ``frame``'s origin for a state
     vector [q; v] of ``plant`` (float; its Context here is scratch memory),
-    and the frame's orientation.
+    the frame's orientation and spatial Jacobian, and the plant's
+    generalized gravity forces. Systems that read the same state share one
+    ToolPoint: the first to ask evaluates the plant, the others reuse it.
 
     cenic linearizes every system that feeds the plant by finite
     differences: per step it evaluates them at the state and at ``nv``
@@ -39,9 +42,11 @@ class ToolPoint:
         self._nq = plant.num_positions()
         self._tolerance = (reuse_tolerance
                            if self._nq == plant.num_velocities() else -1.0)
-        # The last few anchors (q0, x0, J0, R0): a step evaluates at the
-        # states before and after it in turn.
+        # The last few anchors (q0, x0, Jv0, R0, J0, [gravity or None]),
+        # Jv0 = dx/dv (rows 3: of the spatial Jacobian J0): a step evaluates
+        # at the states before and after it in turn.
         self._anchors = []
+        self._keys = []  # their q as lists, for quick comparison
         self.full_evaluations = 0
 
     _MAX_ANCHORS = 3
@@ -58,7 +63,7 @@ class ToolPoint:
         """(x_p, xdot_p, J) with J = dx_p/dv (3 x nv, read-only)."""
         state = np.asarray(state, float)
         q, v = state[:self._nq], state[self._nq:]
-        (q0, x0, J0, _), dq = self._anchor(q)
+        (q0, x0, J0, *_), dq = self._anchor(q)
         return (x0.copy() if dq is None else x0 + J0 @ dq), J0 @ v, J0
 
     def rotation(self, state) -> np.ndarray:
@@ -67,24 +72,45 @@ class ToolPoint:
         state = np.asarray(state, float)
         return self._anchor(state[:self._nq])[0][3]
 
+    def spatial_jacobian(self, state) -> np.ndarray:
+        """J with [omega; xdot_p] = J v, world frame (6 x nv, rows angular
+        then translational, read-only): the anchor's."""
+        state = np.asarray(state, float)
+        return self._anchor(state[:self._nq])[0][4]
+
+    def gravity_forces(self, state) -> np.ndarray:
+        """tau_g(q), the plant's generalized gravity forces (nv, read-only):
+        the anchor's, computed on first request."""
+        state = np.asarray(state, float)
+        anchor, _ = self._anchor(state[:self._nq])
+        if anchor[5][0] is None:
+            self._plant.SetPositions(self._context, anchor[0])
+            tau = self._plant.CalcGravityGeneralizedForces(self._context)
+            tau.flags.writeable = False
+            anchor[5][0] = tau
+        return anchor[5][0]
+
     def _anchor(self, q):
-        """((q0, x0, J0, R0), q - q0 or None when q is a new anchor)."""
+        """((q0, x0, J0, R0), q - q0, or None when q is exactly q0)."""
         tolerance = self._tolerance
-        for anchor in self._anchors:
-            dq = q - anchor[0]
-            if max(map(abs, dq.tolist())) <= tolerance:
-                return anchor, dq
+        key = q.tolist()
+        for anchor, anchor_key in zip(self._anchors, self._keys):
+            if key == anchor_key:
+                return anchor, None
+            if all(abs(a - b) <= tolerance for a, b in zip(key, anchor_key)):
+                return anchor, q - anchor[0]
         plant, ctx = self._plant, self._context
         plant.SetPositions(ctx, q)
         X_WF = self._frame.CalcPoseInWorld(ctx)
-        J0 = plant.CalcJacobianTranslationalVelocity(
+        J0 = plant.CalcJacobianSpatialVelocity(
             ctx, JacobianWrtVariable.kV, self._frame, np.zeros(3),
             self._world, self._world)
-        anchor = (q.copy(), X_WF.translation(), J0,
-                  X_WF.rotation().matrix())
-        for array in anchor[1:]:
+        anchor = (q.copy(), X_WF.translation(), J0[3:],
+                  X_WF.rotation().matrix(), J0, [None])
+        for array in anchor[1:5]:
             array.flags.writeable = False
         self._anchors.insert(0, anchor)
-        del self._anchors[self._MAX_ANCHORS:]
+        self._keys.insert(0, key)
+        del self._anchors[self._MAX_ANCHORS:], self._keys[self._MAX_ANCHORS:]
         self.full_evaluations += 1
         return anchor, None

@@ -220,3 +220,40 @@ def test_sampled_law_holds_its_terms_between_samples(model):
     np.testing.assert_array_equal(
         sampled.GetOutputPort("actuation").Eval(sc), held)
 
+
+
+def test_shared_tool_point_gives_the_same_law_on_the_arm():
+    """On the arm (tilted tool, gravity on every joint) the law with a
+    ToolPoint's kinematics and gravity forces equals the law computing its
+    own; its AutoDiffXd copy computes its own."""
+    from deburr_drake.arm import ARM_URL
+    from deburr_drake.kinematics import ToolPoint
+    arm = make_kinematic_model(ARM_URL)
+    tool_point = ToolPoint(arm, arm.GetFrameByName("tool_tip"))
+    config = ControllerConfig(control_period=0.0)
+    rotation = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+    own = HybridController(arm, "tool_tip", config, rotation)
+    shared = HybridController(arm, "tool_tip", config, rotation,
+                              tool_point=tool_point)
+    state = np.array([0.1, 0.6, -1.2, 0.5, 0.2, 0.01, -0.02, 0.03, 0.0, 0.1])
+    x_p, v = tool_point(state)
+    _, _, force, x_c, v_c, _ = _scenario_point()
+    inputs = _inputs(x_p, v, force, x_c + x_p - CONTOUR.point_at(0.01),
+                     v_c, 6.0)
+    inputs["plant_state"] = state
+    theta = np.random.default_rng(0).normal(size=2 * 121)
+    outputs = []
+    for controller in (own, shared):
+        context = _context(controller, inputs, 3e-4, theta)
+        outputs.append([controller.GetOutputPort(name).Eval(context)
+                        for name in ("actuation", "diagnostics")]
+                       + [controller.EvalTimeDerivatives(context)
+                          .CopyToVector()])
+    assert np.linalg.norm(outputs[0][0]) > 1.0
+    for a, b in zip(*outputs):
+        np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12)
+    assert tool_point.full_evaluations == 1
+    assert shared.ToAutoDiffXd() is not None
+    with pytest.raises(ValueError, match="tool_point"):
+        HybridController(make_kinematic_model(ARM_URL), "tool_tip", config,
+                         tool_point=tool_point)
