@@ -5,8 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import LeafSystem, ValueProducer
+from pydrake.systems.framework import LeafSystem
 
 from deburr_drake.geometry import Contour, direction_of_motion
 from deburr_drake.kinematics import ToolPoint
@@ -84,14 +83,10 @@ class ChamferObserver(LeafSystem):
         self._state_port = self.DeclareVectorInputPort("plant_state", nx)
         self._force_port = self.DeclareVectorInputPort("tool_force", 3)
         # The kinematic part changes with the plant state only, not with
-        # each new force sample.
+        # each new force sample; Drake invalidates the output whenever any
+        # discrete state changes (every sample) or the integrator perturbs
+        # and restores the state.
         self._last = None  # (plant state's bytes, its kinematics): a memo
-        self._kinematics = self.DeclareCacheEntry(
-            "chamfer_kinematics", ValueProducer(
-                allocate=AbstractValue.Make(
-                    np.zeros(CHAMFER_STATE.size)).Clone,
-                calc=self._calc_kinematics),
-            prerequisites_of_calc={self._state_port.ticket()})
         self.DeclareVectorOutputPort("chamfer_state", CHAMFER_STATE.size,
                                      self._calc)
 
@@ -99,10 +94,7 @@ class ChamferObserver(LeafSystem):
         """(x_p, xdot_p) in world for a plant state vector."""
         return self._tool_point(plant_state)
 
-    def _calc_kinematics(self, context, value):
-        # Drake invalidates this cache whenever any discrete state changes
-        # (every sample) or the integrator perturbs and restores the state;
-        # the value only changes with the plant state itself.
+    def _calc(self, context, output):
         state = self._state_port.Eval(context)
         key = state.tobytes()
         if self._last is None or key != self._last[0]:
@@ -110,9 +102,6 @@ class ChamferObserver(LeafSystem):
             self._last = (key, chamfer_kinematics(
                 self._contour, x_p, xdot_p,
                 min_tangential_speed=self._min_speed))
-        value.set_value(self._last[1])
-
-    def _calc(self, context, output):
-        chamfer = self._kinematics.Eval(context).copy()
+        chamfer = self._last[1].copy()
         _set_force(chamfer, self._force_port.Eval(context))
         output.SetFromVector(chamfer)
