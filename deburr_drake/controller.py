@@ -277,11 +277,9 @@ def HybridController_(T):
             orientation in world, and the gravity forces with the model's
             masses."""
             if self._tool_point is not None:
+                J, R, tau_g = self._tool_point.control_terms(state)
                 # Every mass scaled alike: tau_g scales with them.
-                return (self._tool_point.spatial_jacobian(state),
-                        self._tool_point.rotation(state),
-                        self._config.model_mass_scale
-                        * self._tool_point.gravity_forces(state))
+                return J, R, self._config.model_mass_scale * tau_g
             plant, ctx = self._plant, self._plant_context
             plant.SetPositionsAndVelocities(ctx, state)
             J = plant.CalcJacobianSpatialVelocity(

@@ -72,15 +72,12 @@ class ToolPoint:
         state = np.asarray(state, float)
         return self._anchor(state[:self._nq])[0][3]
 
-    def spatial_jacobian(self, state) -> np.ndarray:
-        """J with [omega; xdot_p] = J v, world frame (6 x nv, rows angular
-        then translational, read-only): the anchor's."""
-        state = np.asarray(state, float)
-        return self._anchor(state[:self._nq])[0][4]
-
-    def gravity_forces(self, state) -> np.ndarray:
-        """tau_g(q), the plant's generalized gravity forces (nv, read-only):
-        the anchor's, computed on first request."""
+    def control_terms(self, state):
+        """(J, R_WF, tau_g) at the anchor, read-only: the spatial Jacobian
+        with [omega; xdot_p] = J v in world (6 x nv, rows angular then
+        translational), the frame's orientation, and the plant's
+        generalized gravity forces tau_g(q) (nv, computed on first
+        request)."""
         state = np.asarray(state, float)
         anchor, _ = self._anchor(state[:self._nq])
         if anchor[5][0] is None:
@@ -88,7 +85,7 @@ class ToolPoint:
             tau = self._plant.CalcGravityGeneralizedForces(self._context)
             tau.flags.writeable = False
             anchor[5][0] = tau
-        return anchor[5][0]
+        return anchor[4], anchor[3], anchor[5][0]
 
     def _anchor(self, q):
         """((q0, x0, J0, R0), q - q0, or None when q is exactly q0)."""
