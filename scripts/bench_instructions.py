@@ -1,0 +1,63 @@
+#!/usr/bin/env python3
+"""Instructions per integrator step of the deburring cell, counted by
+valgrind's callgrind over the first ``--duration`` simulated seconds (inside
+Simulator.AdvanceTo only: no start-up, no figures). Unlike wall time on a
+shared host, the count repeats exactly for the same code and inputs, so it
+compares two versions of the code even when the machine's speed drifts.
+Takes about 90 s for the default 0.5 s; needs valgrind.
+
+    python scripts/bench_instructions.py [--scenario paper] [--duration 0.5]
+"""
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+
+_CHILD = """
+import sys
+from pydrake.common import RandomGenerator
+from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.config import load_scenario
+from deburr_drake.simulation import make_simulator
+scenario = load_scenario(sys.argv[1])
+diagram = make_deburring_diagram(scenario=scenario)
+simulator = make_simulator(diagram, scenario)
+diagram.SetRandomContext(simulator.get_mutable_context(),
+                         RandomGenerator(scenario.sensor.noise_seed))
+simulator.Initialize()
+simulator.AdvanceTo(float(sys.argv[2]))
+print("steps", simulator.get_num_steps_taken())
+"""
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--scenario", default="paper")
+    ap.add_argument("--duration", type=float, default=0.5, help="s simulated")
+    args = ap.parse_args()
+    if shutil.which("valgrind") is None:
+        sys.exit("bench_instructions: valgrind is not installed "
+                 "(apt-get install valgrind)")
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "callgrind.out")
+        run = subprocess.run(
+            ["valgrind", "--tool=callgrind", "--collect-atstart=no",
+             "--toggle-collect=*Simulator*AdvanceTo*",
+             f"--callgrind-out-file={out}", sys.executable, "-c", _CHILD,
+             args.scenario, str(args.duration)],
+            capture_output=True, text=True)
+        if run.returncode != 0:
+            sys.exit(f"bench_instructions: the run failed:\n{run.stderr}")
+    steps = int(re.search(r"^steps (\d+)", run.stdout, re.M).group(1))
+    total = int(re.search(r"Collected : (\d+)", run.stderr).group(1))
+    print(f"{args.scenario}, first {args.duration:g} s: {steps} steps, "
+          f"{total / 1e6:.1f} M instructions, "
+          f"{total / steps / 1e6:.3f} M per step")
+
+
+if __name__ == "__main__":
+    main()
