@@ -28,6 +28,7 @@ class VectorLayout:
             self._slices[block] = slice(start, start + size)
             start += size
         self.size = start
+        self._scalars = start == len(self._slices)  # every block size 1
 
     @property
     def blocks(self):
@@ -50,6 +51,12 @@ class VectorLayout:
             extra = set(values) - set(self._slices)
             raise ValueError(f"{self.name}.pack: missing {sorted(missing)}, "
                              f"unknown {sorted(extra)}")
+        if self._scalars:
+            try:
+                return np.array([values[block] for block in self._slices],
+                                dtype=dtype)
+            except ValueError:  # a block given as a length-1 array
+                pass
         out = np.empty(self.size, dtype=dtype)
         for block, s in self._slices.items():
             out[s] = values[block]
