@@ -26,8 +26,10 @@ class ToolPoint:
     (about 4e-11 rad). Within ``reuse_tolerance`` (rad or m, max norm) of
     the q of the last full evaluation this returns x0 + J0 (q - q0) and
     J0 v, J0 = dx/dq there; the error is second order in q - q0 (below
-    1e-16 m at the default 1e-9). Farther away it evaluates the plant's
-    kinematics. With a quaternion joint (nq != nv) it always does.
+    1e-16 m at the default 1e-9). The orientation, Jacobian and gravity
+    forces are the anchor's (first-order error). Farther away it evaluates
+    the plant's kinematics. With a quaternion joint (nq != nv) it reuses
+    only the exact q.
     """
 
     def __init__(self, plant: MultibodyPlant, frame: Frame, *,
