@@ -13,6 +13,19 @@ from pydrake.multibody.tree import Frame, JacobianWrtVariable
 __all__ = ["ToolPoint"]
 
 
+class _Anchor:
+    """The kinematics at one q (arrays read-only); gravity on request."""
+
+    __slots__ = ("q", "key", "x", "J", "R", "gravity")
+
+    def __init__(self, q, key, x, J, R):
+        self.q, self.key = q.copy(), key  # key: q as a list, to compare
+        self.x, self.J, self.R = x, J, R  # J: spatial, rows angular first
+        for array in (x, J, R):
+            array.flags.writeable = False
+        self.gravity = None
+
+
 class ToolPoint:
     """x_p (m) and xdot_p (m/s) in world of ``frame``'s origin for a state
     vector [q; v] of ``plant`` (float; its Context here is scratch memory),
@@ -44,11 +57,9 @@ class ToolPoint:
         self._nq = plant.num_positions()
         self._tolerance = (reuse_tolerance
                            if self._nq == plant.num_velocities() else -1.0)
-        # The last few anchors (q0, x0, Jv0, R0, J0, [gravity or None]),
-        # Jv0 = dx/dv (rows 3: of the spatial Jacobian J0): a step evaluates
-        # at the states before and after it in turn.
+        # The last few anchors: a step evaluates at the states before and
+        # after it in turn.
         self._anchors = []
-        self._keys = []  # their q as lists, for quick comparison
         self.full_evaluations = 0
 
     _MAX_ANCHORS = 3
@@ -65,14 +76,15 @@ class ToolPoint:
         """(x_p, xdot_p, J) with J = dx_p/dv (3 x nv, read-only)."""
         state = np.asarray(state, float)
         q, v = state[:self._nq], state[self._nq:]
-        (q0, x0, J0, *_), dq = self._anchor(q)
-        return (x0.copy() if dq is None else x0 + J0 @ dq), J0 @ v, J0
+        anchor, dq = self._anchor(q)
+        Jv = anchor.J[3:]
+        return (anchor.x.copy() if dq is None else anchor.x + Jv @ dq,
+                Jv @ v, Jv)
 
     def rotation(self, state) -> np.ndarray:
         """R_WF, the frame's orientation in world (3 x 3, read-only): that of
         the anchor, so within ``reuse_tolerance`` of the exact one."""
-        state = np.asarray(state, float)
-        return self._anchor(state[:self._nq])[0][3]
+        return self._anchor_of(state).R
 
     def control_terms(self, state):
         """(J, R_WF, tau_g) at the anchor, read-only: the spatial Jacobian
@@ -80,36 +92,35 @@ class ToolPoint:
         translational), the frame's orientation, and the plant's
         generalized gravity forces tau_g(q) (nv, computed on first
         request)."""
-        state = np.asarray(state, float)
-        anchor, _ = self._anchor(state[:self._nq])
-        if anchor[5][0] is None:
-            self._plant.SetPositions(self._context, anchor[0])
-            tau = self._plant.CalcGravityGeneralizedForces(self._context)
-            tau.flags.writeable = False
-            anchor[5][0] = tau
-        return anchor[4], anchor[3], anchor[5][0]
+        anchor = self._anchor_of(state)
+        if anchor.gravity is None:
+            self._plant.SetPositions(self._context, anchor.q)
+            anchor.gravity = self._plant.CalcGravityGeneralizedForces(
+                self._context)
+            anchor.gravity.flags.writeable = False
+        return anchor.J, anchor.R, anchor.gravity
+
+    def _anchor_of(self, state) -> _Anchor:
+        return self._anchor(np.asarray(state, float)[:self._nq])[0]
 
     def _anchor(self, q):
-        """((q0, x0, J0, R0), q - q0, or None when q is exactly q0)."""
+        """(the anchor for q, q - its q or None when q is exactly its q)."""
         tolerance = self._tolerance
         key = q.tolist()
-        for anchor, anchor_key in zip(self._anchors, self._keys):
-            if key == anchor_key:
+        for anchor in self._anchors:
+            if key == anchor.key:
                 return anchor, None
-            if all(abs(a - b) <= tolerance for a, b in zip(key, anchor_key)):
-                return anchor, q - anchor[0]
+            if all(abs(a - b) <= tolerance for a, b in zip(key, anchor.key)):
+                return anchor, q - anchor.q
         plant, ctx = self._plant, self._context
         plant.SetPositions(ctx, q)
         X_WF = self._frame.CalcPoseInWorld(ctx)
-        J0 = plant.CalcJacobianSpatialVelocity(
+        J = plant.CalcJacobianSpatialVelocity(
             ctx, JacobianWrtVariable.kV, self._frame, np.zeros(3),
             self._world, self._world)
-        anchor = (q.copy(), X_WF.translation(), J0[3:],
-                  X_WF.rotation().matrix(), J0, [None])
-        for array in anchor[1:5]:
-            array.flags.writeable = False
+        anchor = _Anchor(q, key, X_WF.translation(), J,
+                         X_WF.rotation().matrix())
         self._anchors.insert(0, anchor)
-        self._keys.insert(0, key)
-        del self._anchors[self._MAX_ANCHORS:], self._keys[self._MAX_ANCHORS:]
+        del self._anchors[self._MAX_ANCHORS:]
         self.full_evaluations += 1
         return anchor, None
