@@ -69,7 +69,6 @@ class ContactParameterEstimator(LeafSystem):
             raise ValueError(f"sample_period must be >= 0 s, got "
                              f"{sample_period}")
         self.set_name("contact_estimator")
-        self._config = config
         self._law = dict(gains=tuple(map(float, config.gains)),
                          lower_bounds=tuple(map(float, config.lower_bounds)),
                          contact_force_threshold=config.contact_force_threshold,
