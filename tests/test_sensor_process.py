@@ -21,6 +21,13 @@ from deburr_drake.sensor import ForceSensor
 CONTOUR = CircularContour([0.0, 0.0, 0.048], 0.027)
 
 
+def _connect_sensor(builder, plant, sensor):
+    builder.Connect(plant.get_reaction_forces_output_port(),
+                    sensor.GetInputPort("reaction_forces"))
+    builder.Connect(plant.get_state_output_port(),
+                    sensor.GetInputPort("plant_state"))
+
+
 def _held_tool(f_ext, config=SensorConfig()):
     """Tool at rest, actuators balancing gravity and f_ext exactly."""
     builder = DiagramBuilder()
@@ -29,10 +36,7 @@ def _held_tool(f_ext, config=SensorConfig()):
     add_cartesian_tool(plant)
     plant.Finalize()
     sensor = builder.AddSystem(ForceSensor(plant, "ft_sensor", config))
-    builder.Connect(plant.get_reaction_forces_output_port(),
-                    sensor.GetInputPort("reaction_forces"))
-    builder.Connect(plant.get_state_output_port(),
-                    sensor.GetInputPort("plant_state"))
+    _connect_sensor(builder, plant, sensor)
     diagram = builder.Build()
     context = diagram.CreateDefaultContext()
     pc = plant.GetMyMutableContextFromRoot(context)
@@ -75,10 +79,7 @@ def test_shared_tool_point_gives_the_same_reading_on_the_arm():
         plant, "ft_sensor", SensorConfig(), tool_point=tp))
         for name, tp in (("own", None), ("shared", tool_point))]
     for sensor in sensors:
-        builder.Connect(plant.get_reaction_forces_output_port(),
-                        sensor.GetInputPort("reaction_forces"))
-        builder.Connect(plant.get_state_output_port(),
-                        sensor.GetInputPort("plant_state"))
+        _connect_sensor(builder, plant, sensor)
     diagram = builder.Build()
     context = diagram.CreateDefaultContext()
     pc = plant.GetMyMutableContextFromRoot(context)
