@@ -1,0 +1,193 @@
+"""The stability envelope over burr size and desired force: one burr per
+run on the paper cell, its pass/fail bounds and per-run numbers.
+
+``scripts/envelope.py`` runs the grid in parallel processes and prints the
+table. The numbers of one run come from :func:`burr_metrics`, a pure numpy
+function of the logged arrays; the bounds from :func:`burr_bounds`.
+
+Bounds (SI units), for desired chamfering force f_d, the threshold force
+P'_th, the cutting coefficient k_c, the cut height h (the cutter's
+engagement), the desired depth delta*, a burr of cross-section A_b
+(height x thickness):
+
+- the feed the outer loop's law gives off the burr, in steady cutting:
+  v_off = max(v0, (f_d - P'_th) / (k_c delta* h));
+- the true chamfering force stays below 2 f_d + k_c A_b v_off: twice the
+  desired force, plus what the burr would cut at the feed the tool had
+  before the law saw the burr (the issue's bound);
+- the tool's speed along the edge stays below 1.5 v_off: the fastest steady
+  feed of the pass plus half of it for transients (the surge this envelope
+  guards against reached 116 mm/s against 2.4 mm/s);
+- the true chamfer depth, while the cutter's front is on the burr, stays
+  within 0.05 mm RMS of delta*.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import asdict, dataclass
+from typing import Dict, Iterable, List, Optional
+
+import numpy as np
+
+from deburr_drake import metrics
+
+__all__ = ["BurrCell", "burr_bounds", "burr_metrics", "burr_scenario",
+           "run_burr_cell", "GRID_HEIGHTS", "GRID_LENGTHS", "GRID_FORCES",
+           "grid", "DEPTH_RMS_LIMIT", "SPEED_FACTOR", "LEAD_TIME"]
+
+#: The grid of the issue: burr height (m), burr length (m of arc), desired
+#: chamfering force (N).
+GRID_HEIGHTS = (0.0005, 0.001, 0.0015, 0.002)
+GRID_LENGTHS = (0.003, 0.008, 0.020, 0.040)
+GRID_FORCES = (5.0, 10.0, 15.0)
+
+#: m, RMS of the true depth error on the burr.
+DEPTH_RMS_LIMIT = 5.0e-5
+#: The tool's speed bound as a multiple of the steady feed off the burr.
+SPEED_FACTOR = 1.5
+#: s of steady cutting at the off-burr feed before the cutter reaches the
+#: burr (after the contact transient).
+LEAD_TIME = 3.0
+#: s, the contact transient (report.TRANSIENT) before the lead.
+_TRANSIENT = 2.0
+
+
+@dataclass
+class BurrCell:
+    """One cell of the envelope: a burr (m) and a desired force (N)."""
+
+    height: float
+    length: float
+    force: float
+    thickness: float = 0.002  # m
+
+    @property
+    def label(self) -> str:
+        return (f"h {self.height * 1e3:.1f} mm, L {self.length * 1e3:.0f} "
+                f"mm, f_d {self.force:.0f} N")
+
+
+def grid(heights: Iterable[float] = GRID_HEIGHTS,
+         lengths: Iterable[float] = GRID_LENGTHS,
+         forces: Iterable[float] = GRID_FORCES) -> List[BurrCell]:
+    return [BurrCell(h, length, f) for f in forces for h in heights
+            for length in lengths]
+
+
+def off_burr_feed(scenario) -> float:
+    """v_off (m/s): the feed law's steady feed off the burrs, or v0."""
+    p, c = scenario.process, scenario.command
+    g = p.cutting_coefficient * scenario.task.desired_depth \
+        * scenario.tool.engagement
+    excess = scenario.task.desired_chamfering_force \
+        - p.threshold_power_force
+    return max(c.default_feed, excess / g if g > 0 else math.inf)
+
+
+def burr_bounds(scenario, cell: BurrCell) -> Dict[str, float]:
+    """The pass bounds of a cell (N, m/s, m); see the module docstring."""
+    v_off = off_burr_feed(scenario)
+    k_c = scenario.process.cutting_coefficient
+    return {
+        "max_chamfering_force_N": 2 * cell.force
+        + k_c * cell.height * cell.thickness * v_off,
+        "max_tool_speed_m_s": SPEED_FACTOR * v_off,
+        "depth_rms_error_on_burr_m": DEPTH_RMS_LIMIT,
+    }
+
+
+def burr_scenario(base, cell: BurrCell, *, lead_time: float = LEAD_TIME,
+                  max_duration: float = 40.0):
+    """``base`` (a Scenario) with one burr of ``cell`` placed so that the
+    cutter's front reaches it ``lead_time`` s of off-burr feed after the
+    contact transient, the desired force of ``cell``, and a stop once the
+    command is 1 mm past the burr (or at ``max_duration`` s)."""
+    from deburr_drake.cell import make_contour
+    from deburr_drake.config import BurrConfig
+    sc = copy.deepcopy(base)
+    sc.task.desired_chamfering_force = cell.force
+    length = make_contour(sc).length
+    v_off = off_burr_feed(sc)
+    start = (_TRANSIENT + lead_time) * v_off + sc.tool.cutter_radius
+    center = start + cell.length / 2
+    if center + cell.length / 2 >= length:
+        raise ValueError(f"{cell.label}: the burr does not fit on the edge "
+                         f"({length * 1e3:.1f} mm)")
+    sc.process.burrs = [BurrConfig(center_fraction=center / length,
+                                   length=cell.length, height=cell.height,
+                                   thickness=cell.thickness)]
+    sc.simulation.stop_after_passes = (center + cell.length / 2 + 1e-3) \
+        / length
+    sc.simulation.duration = max_duration
+    sc.name = (f"{base.name}_burr_{cell.height * 1e3:g}mm_"
+               f"{cell.length * 1e3:g}mm_{cell.force:g}N")
+    return sc.validate()
+
+
+def burr_metrics(signals: Dict[str, Dict[str, np.ndarray]], scenario,
+                 cell: BurrCell) -> Dict[str, float]:
+    """The envelope's numbers of one run from its logged ``process`` and
+    ``chamfer`` signals (RunLog.signals), SI units:
+
+    - ``max_chamfering_force_N``: the true ||f_t|| after first contact;
+    - ``max_tool_speed_m_s``: the true speed along the edge after contact;
+    - ``depth_rms_error_on_burr_m``: true depth minus delta* while the
+      cutter's front is on the burr (burr area at the front > 0);
+    - ``feed_on_burr_m_s``: the mean speed along the edge there, and
+      ``feed_law_on_burr_m_s``, the feed law's steady value there, (f_d -
+      P'_th) / g with the true g of (3) (v0 where that is below v_eps);
+    - ``burr_reached``: 1.0 when the front reached the burr;
+    - ``nan``: 1.0 when any logged signal holds a NaN;
+    - ``passed``: 1.0 when every bound of :func:`burr_bounds` holds and the
+      burr was reached without NaN.
+    """
+    proc, ch = signals["process"], signals["chamfer"]
+    t_contact = metrics.first_time(ch["t"], ch["f_n"] > 1.0)
+    after = metrics.window(proc["t"], t_contact)
+    on = after & (proc["burr_area"] > 0.0)
+    p, c = scenario.process, scenario.command
+    law = np.where(
+        proc["g"] > 0.0,
+        (cell.force - c.threshold_power_force) / np.maximum(proc["g"],
+                                                            1e-12),
+        c.default_feed)
+    nan = metrics.any_nan(*[v for blocks in signals.values()
+                            for v in blocks.values()])
+    out = {
+        "max_chamfering_force_N": float(np.max(proc["f_t"][after]))
+        if np.any(after) else math.nan,
+        "max_tool_speed_m_s": float(np.max(proc["v_t"][after]))
+        if np.any(after) else math.nan,
+        "depth_rms_error_on_burr_m": metrics.rms(
+            proc["delta"][on] - scenario.task.desired_depth),
+        "feed_on_burr_m_s": float(np.mean(proc["v_t"][on]))
+        if np.any(on) else math.nan,
+        "feed_law_on_burr_m_s": float(np.mean(law[on]))
+        if np.any(on) else math.nan,
+        "burr_reached": float(np.any(on)),
+        "nan": float(nan),
+    }
+    bounds = burr_bounds(scenario, cell)
+    ok = (not nan) and bool(np.any(on)) and all(
+        np.isfinite(out[k]) and out[k] <= limit
+        for k, limit in bounds.items())
+    out["passed"] = float(ok)
+    return out
+
+
+def run_burr_cell(cell: BurrCell, base_name: str = "paper",
+                  base_text: Optional[str] = None) -> Dict[str, object]:
+    """Simulates one cell (in this process) and returns its numbers, the
+    bounds and the run's simulated and wall time."""
+    from deburr_drake.cell import make_deburring_diagram
+    from deburr_drake.config import load_scenario
+    from deburr_drake.simulation import simulate
+    base = load_scenario(base_name, text=base_text)
+    sc = burr_scenario(base, cell)
+    log = simulate(make_deburring_diagram(scenario=sc), sc,
+                   loggers=("process", "chamfer"))
+    return {"cell": asdict(cell), "bounds": burr_bounds(sc, cell),
+            "sim_time_s": log.sim_time, "wall_time_s": log.wall_time,
+            **burr_metrics(log.signals, sc, cell)}

@@ -1,0 +1,173 @@
+"""The tall-burr envelope: its bounds and per-run numbers on hand-made
+logs, the cenic behaviour behind the surge, and the issue's reproduction
+burr (2 mm x 20 mm at 10 N) in a short window on the paper cell."""
+
+import numpy as np
+import pytest
+from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
+from pydrake.multibody.tree import PrismaticJoint, SpatialInertia
+from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
+                                      SimulatorConfig)
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import MatrixGain
+
+from deburr_drake import envelope
+from deburr_drake.config import load_scenario
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return load_scenario("paper")
+
+
+def test_bounds_follow_the_feed_law(paper):
+    cell = envelope.BurrCell(height=0.002, length=0.02, force=10.0)
+    b = envelope.burr_bounds(paper, cell)
+    # v_off = (10 - 2) N / (3.3e9 * 0.5 mm * 2 mm) = 2.424 mm/s.
+    v_off = 8.0 / 3300.0
+    assert envelope.off_burr_feed(paper) == pytest.approx(v_off)
+    assert b["max_chamfering_force_N"] == pytest.approx(
+        20.0 + 3.3e9 * 0.002 * 0.002 * v_off)
+    assert b["max_tool_speed_m_s"] == pytest.approx(1.5 * v_off)
+    # Below v_eps the law runs at v0: 2.5 N on the 1 mm/s default.
+    low = envelope.BurrCell(height=0.001, length=0.008, force=2.5)
+    paper_low = load_scenario("paper", text="task: "
+                              "{desired_chamfering_force: 2.5}")
+    assert envelope.burr_bounds(paper_low, low)["max_tool_speed_m_s"] \
+        == pytest.approx(1.5e-3)
+
+
+def _signals(f_t, v_t, delta, burr_area, g):
+    n = len(f_t)
+    t = np.arange(n) * 0.0025
+    return {
+        "process": {"t": t, "f_t": np.asarray(f_t, float),
+                    "v_t": np.asarray(v_t, float),
+                    "delta": np.asarray(delta, float),
+                    "burr_area": np.asarray(burr_area, float),
+                    "g": np.asarray(g, float)},
+        "chamfer": {"t": t, "f_n": np.full(n, 5.0)},
+    }
+
+
+def test_burr_metrics_on_a_hand_made_log(paper):
+    cell = envelope.BurrCell(height=0.001, length=0.008, force=10.0)
+    on = np.array([0, 0, 1, 1, 0], float) * 2e-6
+    sig = _signals(f_t=[10, 11, 12, 9, 10], v_t=[2.4e-3, 2.4e-3, 1e-3,
+                                                 1.2e-3, 2.4e-3],
+                   delta=[5e-4, 5e-4, 5.3e-4, 4.9e-4, 5e-4], burr_area=on,
+                   g=[3300, 3300, 8000, 8000, 3300])
+    m = envelope.burr_metrics(sig, paper, cell)
+    assert m["max_chamfering_force_N"] == 12.0
+    assert m["max_tool_speed_m_s"] == pytest.approx(2.4e-3)
+    assert m["depth_rms_error_on_burr_m"] == pytest.approx(
+        np.sqrt((0.03e-3 ** 2 + 0.01e-3 ** 2) / 2))
+    assert m["feed_on_burr_m_s"] == pytest.approx(1.1e-3)
+    assert m["feed_law_on_burr_m_s"] == pytest.approx(8.0 / 8000)
+    assert m["passed"] == 1.0 and m["nan"] == 0.0
+
+    surge = _signals(f_t=[10, 900, 12, 9, 10], v_t=[2.4e-3, 50e-3, 1e-3,
+                                                    1.2e-3, 2.4e-3],
+                     delta=[5e-4] * 5, burr_area=on, g=[3300] * 5)
+    assert envelope.burr_metrics(surge, paper, cell)["passed"] == 0.0
+    never = _signals(f_t=[10] * 5, v_t=[2.4e-3] * 5, delta=[5e-4] * 5,
+                     burr_area=np.zeros(5), g=[3300] * 5)
+    assert envelope.burr_metrics(never, paper, cell)["passed"] == 0.0
+
+
+def test_burr_scenario_places_the_burr_ahead(paper):
+    cell = envelope.BurrCell(height=0.002, length=0.02, force=10.0)
+    sc = envelope.burr_scenario(paper, cell, lead_time=1.0)
+    (burr,) = sc.process.burrs
+    from deburr_drake.cell import make_contour
+    L = make_contour(sc).length
+    start = burr.center_fraction * L - burr.length / 2
+    # The cutter's front (arc + r) reaches it after 2 s + 1 s at 2.42 mm/s.
+    assert start == pytest.approx(3.0 * 8.0 / 3300 + 0.003)
+    assert sc.simulation.stop_after_passes * L == pytest.approx(
+        start + 0.02 + 1e-3)
+
+
+def _rank_one_damper_velocities(direction, *, g=3000.0, mass=1.0,
+                                h=0.0025):
+    """A point mass on three prismatic joints under the force -g a a^T v,
+    a the unit ``direction``, from an initial speed along a: its speed
+    along a after each of 5 fixed cenic steps of ``h`` (later steps reach
+    the solver's tolerance when the speed decays)."""
+    builder = DiagramBuilder()
+    plant, _ = AddMultibodyPlant(MultibodyPlantConfig(time_step=0.0),
+                                 builder)
+    parent = plant.world_body()
+    for i, axis in enumerate(np.eye(3)):
+        body = plant.AddRigidBody(f"body{i}", SpatialInertia.
+                                  SolidSphereWithMass(
+                                      mass if i == 2 else 1e-6, 0.01))
+        plant.AddJoint(PrismaticJoint(f"joint{i}", parent.body_frame(),
+                                      body.body_frame(), axis))
+        parent = body
+    plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
+    plant.Finalize()
+    a = np.asarray(direction, float) / np.linalg.norm(direction)
+    damper = builder.AddSystem(MatrixGain(
+        np.hstack([np.zeros((3, 3)), -g * np.outer(a, a)])))
+    builder.Connect(plant.get_state_output_port(), damper.get_input_port())
+    builder.Connect(damper.get_output_port(),
+                    plant.get_applied_generalized_force_input_port())
+    simulator = Simulator(builder.Build())
+    ApplySimulatorConfig(SimulatorConfig(
+        integration_scheme="cenic", max_step_size=h,
+        use_error_control=False), simulator)
+    context = plant.GetMyMutableContextFromRoot(
+        simulator.get_mutable_context())
+    plant.SetVelocities(context, 1e-3 * a)
+    speeds = []
+    for k in range(1, 6):
+        simulator.AdvanceTo(k * h)
+        speeds.append(plant.GetVelocities(context) @ a)
+    return np.array(speeds)
+
+
+def test_cenic_treats_only_the_diagonal_of_an_applied_damping_implicitly():
+    """What the surge turned on (README, numerical choices): cenic
+    linearizes the applied generalized forces keeping only the diagonal of
+    d tau / dv. A damper g a a^T along a joint axis decays as implicit
+    Euler, 1 / (1 + h g / m) per step; along (1, 1, 1) the off-diagonal
+    part is explicit and the step's factor is (1 - 2 h g / 3 m) / (1 +
+    h g / 3 m) = -1.14 at h g / m = 7.5: it grows, alternating sign. Half
+    the step (3.75) gives -0.57."""
+    along_axis = _rank_one_damper_velocities([1, 0, 0])
+    np.testing.assert_allclose(along_axis[1:] / along_axis[:-1],
+                               1 / 8.5, rtol=1e-3)
+    diagonal = _rank_one_damper_velocities([1, 1, 1])
+    np.testing.assert_allclose(diagonal[1:] / diagonal[:-1],
+                               -4.0 / 3.5, rtol=1e-3)
+    half = _rank_one_damper_velocities([1, 1, 1], h=0.00125)
+    np.testing.assert_allclose(half[1:] / half[:-1],
+                               -1.5 / 2.25, rtol=1e-3)
+
+
+@pytest.mark.slow
+def test_tall_long_burr_does_not_surge(paper):
+    """The issue's reproduction burr, 2 mm x 20 mm at 10 N, the cutter's
+    front reaching it 3 s after the contact transient, simulated for 17 s
+    (to 6 mm past the burr's top). With one 2.5 ms cenic step per sample
+    this very window surged at 15.9 s: 286 N, 18 mm/s. The force stays
+    under the envelope's bound and the issue's 30 N, the speed under 1.5
+    times the off-burr feed, and the feed on the burr follows the law."""
+    from deburr_drake.cell import make_deburring_diagram
+    from deburr_drake.simulation import simulate
+    cell = envelope.BurrCell(height=0.002, length=0.02, force=10.0)
+    sc = envelope.burr_scenario(paper, cell)
+    log = simulate(make_deburring_diagram(scenario=sc), sc, duration=17.0,
+                   loggers=("process", "chamfer"))
+    m = envelope.burr_metrics(log.signals, sc, cell)
+    bounds = envelope.burr_bounds(sc, cell)
+    assert m["nan"] == 0.0 and m["burr_reached"] == 1.0
+    assert m["max_chamfering_force_N"] < min(
+        30.0, bounds["max_chamfering_force_N"]), m
+    assert m["max_tool_speed_m_s"] < bounds["max_tool_speed_m_s"], m
+    assert m["depth_rms_error_on_burr_m"] < envelope.DEPTH_RMS_LIMIT, m
+    # On the burr the feed falls from 2.4 mm/s toward (f_d - P'_th) / g.
+    assert m["feed_on_burr_m_s"] < 1.2e-3, m
+    assert m["feed_on_burr_m_s"] == pytest.approx(
+        m["feed_law_on_burr_m_s"], rel=0.25), m
