@@ -7,6 +7,11 @@ compares two versions of the code even when the machine's speed drifts.
 Takes about 90 s for the default 0.5 s; needs valgrind.
 
     python scripts/bench_instructions.py [--scenario paper] [--duration 0.5]
+        [--scenario-text YAML]
+
+Per simulated second is the figure to compare when the step changes
+(e.g. --scenario-text 'simulation: {max_step: 0.0025}' against the
+paper's two steps per 2.5 ms sample).
 """
 
 import argparse
@@ -23,7 +28,7 @@ from pydrake.common import RandomGenerator
 from deburr_drake.cell import make_deburring_diagram
 from deburr_drake.config import load_scenario
 from deburr_drake.simulation import make_simulator
-scenario = load_scenario(sys.argv[1])
+scenario = load_scenario(sys.argv[1], text=sys.argv[3] or None)
 diagram = make_deburring_diagram(scenario=scenario)
 simulator = make_simulator(diagram, scenario)
 diagram.SetRandomContext(simulator.get_mutable_context(),
@@ -38,6 +43,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--scenario", default="paper")
     ap.add_argument("--duration", type=float, default=0.5, help="s simulated")
+    ap.add_argument("--scenario-text", default="",
+                    help="YAML overrides of the scenario")
     args = ap.parse_args()
     if shutil.which("valgrind") is None:
         sys.exit("bench_instructions: valgrind is not installed "
@@ -48,15 +55,18 @@ def main():
             ["valgrind", "--tool=callgrind", "--collect-atstart=no",
              "--toggle-collect=*Simulator*AdvanceTo*",
              f"--callgrind-out-file={out}", sys.executable, "-c", _CHILD,
-             args.scenario, str(args.duration)],
+             args.scenario, str(args.duration), args.scenario_text],
             capture_output=True, text=True)
         if run.returncode != 0:
             sys.exit(f"bench_instructions: the run failed:\n{run.stderr}")
     steps = int(re.search(r"^steps (\d+)", run.stdout, re.M).group(1))
     total = int(re.search(r"Collected : (\d+)", run.stderr).group(1))
-    print(f"{args.scenario}, first {args.duration:g} s: {steps} steps, "
+    label = args.scenario + (f" + {args.scenario_text!r}"
+                             if args.scenario_text else "")
+    print(f"{label}, first {args.duration:g} s: {steps} steps, "
           f"{total / 1e6:.1f} M instructions, "
-          f"{total / steps / 1e6:.3f} M per step")
+          f"{total / steps / 1e6:.3f} M per step, "
+          f"{total / args.duration / 1e9:.3f} G per simulated second")
 
 
 if __name__ == "__main__":
