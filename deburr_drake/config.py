@@ -10,6 +10,7 @@ whole tree, so a loaded scenario is always usable.
 
 import dataclasses
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import List, Optional
@@ -481,6 +482,12 @@ class Scenario:
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
 
     def validate(self):
+        # The default output directory is out/<name>: a plain file name.
+        _require(isinstance(self.name, str)
+                 and re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.+-]*", self.name)
+                 is not None, "name", self.name,
+                 "a plain file name of letters, digits and _ . + - "
+                 "(no path separators, no leading dot)")
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
             if hasattr(value, "validate"):

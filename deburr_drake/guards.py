@@ -1,0 +1,3 @@
+"""Runtime safety guards of the deburring cell (filled in below)."""
+
+GUARDS_SYSTEM = "guards"
