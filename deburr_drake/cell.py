@@ -17,7 +17,7 @@ from pydrake.systems.primitives import LogVectorOutput, RandomSource
 
 from deburr_drake.arm import ARM_URL, solve_tool_pose
 from deburr_drake.command import CommandGenerator, FirstOrderHold
-from deburr_drake.config import Scenario
+from deburr_drake.config import ConfigError, Scenario
 from deburr_drake.controller import HybridController
 from deburr_drake.estimator import ContactParameterEstimator
 from deburr_drake.friction import add_joint_friction
@@ -33,7 +33,7 @@ from deburr_drake.sensor import ForceSensor
 
 __all__ = ["make_deburring_diagram", "MakeDeburringDiagram", "make_contour",
            "edge_points", "contact_normal_force",
-           "start_position", "TOOL_FRAME", "SENSOR_JOINT", "LOGGED",
+           "start_position", "check_part_in_reach", "TOOL_FRAME", "SENSOR_JOINT", "LOGGED",
            "SYSTEM_NAMES"]
 
 TOOL_FRAME = "tool_tip"
@@ -143,6 +143,31 @@ def _add_plant(builder: DiagramBuilder, scenario: Scenario):
     return plant, scene_graph
 
 
+def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
+    """Raises ConfigError naming the first point of the tool's path (the
+    start, then ``samples`` points along the edge) the arm cannot reach with
+    the tool vertical, and how far out of reach it is."""
+    if scenario.robot.model != "arm5":
+        return  # the Cartesian tool reaches everywhere
+    from deburr_drake.arm import check_reach
+    contour = contour or make_contour(scenario)
+    arcs = np.linspace(0.0, contour.length, samples,
+                       endpoint=not contour.closed)
+    points = [start_position(scenario, contour)] + [
+        contour.point_at(s) for s in arcs]
+    miss = check_reach(make_kinematic_model(ARM_URL), points)
+    if miss is not None:
+        k, p, distance = miss
+        where = "the start point" if k == 0 else \
+            f"the edge point at arc {arcs[k - 1] * 1e3:.1f} mm"
+        raise ConfigError(
+            f"tube.position = {list(scenario.tube.position)} is out of the "
+            f"arm's reach: {where}, tool tip at {np.round(p, 4).tolist()} m, "
+            f"is {distance * 1e3:.1f} mm beyond the nearest reachable tool "
+            "position (tool vertical, joint limits): allowed a part whose "
+            "edge the arm reaches (default [0.40, 0.0, 0.0])")
+
+
 def _initial_positions(plant, scenario: Scenario, x0) -> np.ndarray:
     if scenario.robot.model == "cartesian_tool":
         # World-aligned prismatic joints, tip at the origin for q = 0.
@@ -209,6 +234,7 @@ def make_deburring_diagram(*, scenario: Scenario,
     cell is drawn there too (see :mod:`deburr_drake.replay`)."""
     scenario.validate()
     c = scenario
+    check_part_in_reach(c)
     builder = DiagramBuilder()
     plant, _ = _add_plant(builder, c)
     contour = make_contour(c)

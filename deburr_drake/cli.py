@@ -79,6 +79,12 @@ def _check_writable_target(path, what: str, force: bool, *, is_dir: bool,
              f"{probe}")
 
 
+def _check_duration(duration):
+    if not (np.isfinite(duration) and duration > 0):
+        _bad(f"--duration = {duration!r} is invalid: allowed a finite "
+             "number > 0 (simulated seconds)")
+
+
 def _exit_code(log, signal_number) -> int:
     import signal
     reason = log.stop_reason
@@ -108,10 +114,11 @@ def _simulate(args) -> int:
     from pathlib import Path
 
     from deburr_drake import demo, figures, report
-    from deburr_drake.cell import make_deburring_diagram
+    from deburr_drake.cell import check_part_in_reach, make_deburring_diagram
     from deburr_drake.simulation import simulate
     scenario = _load(args)
     if args.duration is not None:
+        _check_duration(args.duration)
         scenario.simulation.duration = args.duration
         scenario.validate()
     if not (args.progress_interval > 0
@@ -124,6 +131,7 @@ def _simulate(args) -> int:
     if args.record:
         _check_writable_target(args.record, "--record", args.force,
                                is_dir=False)
+    check_part_in_reach(scenario)
     passes = scenario.simulation.stop_after_passes
     print(f"deburr-drake simulate: scenario '{scenario.name}' "
           f"({scenario.robot.model}, m = {scenario.controller.fuzzy.order}), "
@@ -196,7 +204,9 @@ def _simulate(args) -> int:
 def _demo(args) -> int:
     from deburr_drake import demo
     scenario = _load(args)
-    duration = args.duration or 5.0
+    if args.duration is not None:
+        _check_duration(args.duration)
+    duration = 5.0 if args.duration is None else args.duration
     print(f"deburr-drake demo: point-mass testbed, scenario "
           f"'{scenario.name}', {duration:g} s")
     truth = demo.contact_truth(scenario)

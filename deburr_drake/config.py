@@ -156,11 +156,14 @@ class EdgeConfig:
     def validate(self):
         _require(self.kind in self.KINDS, "edge.kind", self.kind,
                  f"one of {self.KINDS}")
-        _finite("edge", "start_angle", self.start_angle)
+        for name in ("start_angle", "heading"):
+            v = getattr(self, name)
+            _require(isinstance(v, (int, float)) and math.isfinite(v)
+                     and abs(v) <= 2 * math.pi, f"edge.{name}", v,
+                     "a number in [-2 pi, 2 pi] rad")
         _require(self.direction in (1, -1), "edge.direction", self.direction,
                  "1 or -1")
         _positive("edge", "length", self.length)
-        _finite("edge", "heading", self.heading)
 
 
 @dataclass
@@ -242,8 +245,7 @@ class FuzzyConfig:
         return (self.width_fraction * self.position_scale,
                 [self.width_fraction * s for s in self.sliding_scales])
 
-    def validate(self):
-        o = "fuzzy"
+    def validate(self, o="controller.fuzzy"):
         _require(isinstance(self.order, int) and 0 <= self.order <= 3,
                  f"{o}.order", self.order, "an integer in 0..3")
         _require(isinstance(self.upsilon, int) and self.upsilon >= 1,
@@ -502,6 +504,22 @@ class Scenario:
         _require(self.tool.cutter_radius < self.tube.inner_radius,
                  "tool.cutter_radius", self.tool.cutter_radius,
                  f"< tube.inner_radius ({self.tube.inner_radius})")
+        _require(self.task.desired_depth < self.tool.cutter_radius,
+                 "task.desired_depth", self.task.desired_depth,
+                 f"< tool.cutter_radius ({self.tool.cutter_radius})")
+        _require(self.simulation.initial_depth
+                 < min(self.tool.cutter_radius, self.tube.wall_thickness),
+                 "simulation.initial_depth", self.simulation.initial_depth,
+                 "< tool.cutter_radius and tube.wall_thickness "
+                 f"({min(self.tool.cutter_radius, self.tube.wall_thickness)})")
+        inner = self.controller.control_period
+        if inner > 0:
+            period = self.command.period
+            ratio = period / inner
+            _require(ratio >= 1 - 1e-9 and abs(ratio - round(ratio)) < 1e-6,
+                     "command.period", period,
+                     "a whole multiple >= 1 of controller.control_period "
+                     f"({inner:g} s): the outer loop samples the inner one")
         return self
 
 
@@ -522,6 +540,118 @@ def scenario_path(name: str) -> Path:
     return path
 
 
+def _schema_error(where: str, node, message: str):
+    mark = node.start_mark
+    raise ConfigError(f"{where}:{mark.line + 1}:{mark.column + 1}: {message}")
+
+
+_TAG = "tag:yaml.org,2002:"
+
+
+def _check_node(where: str, node, schema, path: str):
+    """Checks a composed YAML node against the dataclass ``schema``: every
+    key known (named with its full dotted path), no key twice, every value
+    of the field's type. One ConfigError with file:line:column."""
+    import typing
+
+    import yaml
+    origin = typing.get_origin(schema)
+    if dataclasses.is_dataclass(schema):
+        known = {f.name for f in dataclasses.fields(schema)}
+        if not isinstance(node, yaml.MappingNode):
+            _schema_error(where, node, f"{path or 'the scenario'} must be a "
+                          f"mapping of {sorted(known)}")
+        hints = typing.get_type_hints(schema)
+        seen = {}
+        for key_node, value_node in node.value:
+            key = key_node.value
+            name = f"{path}.{key}" if path else key
+            if key in seen:
+                _schema_error(where, key_node,
+                              f"{name} is given twice (first at line "
+                              f"{seen[key].start_mark.line + 1})")
+            seen[key] = key_node
+            if key not in known:
+                _schema_error(where, key_node,
+                              f"{name} is unknown: allowed fields of "
+                              f"{path or 'the scenario'}: {sorted(known)}")
+            _check_node(where, value_node, hints[key], name)
+        return
+    if origin in (list, List):
+        (item,) = typing.get_args(schema)
+        if not isinstance(node, yaml.SequenceNode):
+            kind = {float: "numbers", int: "integers", bool: "booleans",
+                    str: "strings"}.get(item, "mappings")
+            _schema_error(where, node, f"{path} = {_shown(node)} is invalid: "
+                          f"allowed a list of {kind}")
+        for k, child in enumerate(node.value):
+            _check_node(where, child, item, f"{path}[{k}]")
+        return
+    tags = {float: ("float", "int"), int: ("int",), bool: ("bool",),
+            str: ("str",)}.get(schema)
+    if tags is None:
+        return
+    kinds = {float: "a number", int: "an integer", bool: "true or false",
+             str: "a string"}
+    if schema is float and isinstance(node, yaml.ScalarNode) \
+            and node.tag == _TAG + "str" and node.style is None:
+        try:  # YAML 1.1 reads 4.5e6 as a string; the loader takes it
+            float(node.value)
+            return
+        except ValueError:
+            pass
+    if not (isinstance(node, yaml.ScalarNode)
+            and node.tag in [_TAG + t for t in tags]):
+        _schema_error(where, node, f"{path} = {_shown(node)} is invalid: "
+                      f"allowed {kinds[schema]}")
+
+
+def _shown(node) -> str:
+    import yaml
+    if isinstance(node, yaml.ScalarNode):
+        return repr(node.value)
+    return "a list" if isinstance(node, yaml.SequenceNode) else "a mapping"
+
+
+def _check_yaml(text: str, where: str):
+    """Syntax (file:line:column), duplicate and unknown keys, and types of
+    the YAML ``text`` against :class:`Scenario`, before it is loaded."""
+    import yaml
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.MarkedYAMLError as e:
+        mark = e.problem_mark or e.context_mark
+        problem = e.problem or ""
+        if e.context:
+            c = e.context_mark
+            problem += f" ({e.context}" + (
+                f" at {c.line + 1}:{c.column + 1})" if c else ")")
+        at = f":{mark.line + 1}:{mark.column + 1}" if mark else ""
+        raise ConfigError(f"{where}{at}: YAML syntax error: {problem}") \
+            from None
+    except yaml.YAMLError as e:
+        raise ConfigError(f"{where}: YAML error: "
+                          f"{' '.join(str(e).split())}") from None
+    if root is None:
+        return
+    _check_node(where, root, Scenario, "")
+
+
+def _scenario_file(name_or_path: str) -> Path:
+    path = Path(name_or_path)
+    looks_like_path = path.suffix in (".yaml", ".yml") or len(path.parts) > 1
+    if not looks_like_path:
+        return scenario_path(str(name_or_path))
+    if path.is_dir():
+        raise ConfigError(f"--scenario {name_or_path} is a directory: "
+                          "allowed a YAML file or one of "
+                          f"{scenario_names()}")
+    if not path.is_file():
+        raise ConfigError(f"--scenario {name_or_path}: no such file: "
+                          f"allowed a YAML file or one of {scenario_names()}")
+    return path
+
+
 def load_scenario(name_or_path: Optional[str] = None, *,
                   text: Optional[str] = None) -> Scenario:
     """Loads a scenario by package name or file path, then applies ``text``
@@ -532,11 +662,16 @@ def load_scenario(name_or_path: Optional[str] = None, *,
     scenario = Scenario()
     try:
         if name_or_path is not None:
-            path = Path(name_or_path)
-            if not (path.suffix in (".yaml", ".yml") and path.exists()):
-                path = scenario_path(str(name_or_path))
+            path = _scenario_file(str(name_or_path))
+            try:
+                source = path.read_text()
+            except (OSError, UnicodeDecodeError) as e:
+                raise ConfigError(f"--scenario {path}: cannot read: {e}") \
+                    from None
+            _check_yaml(source, str(path))
             scenario = yaml_load_typed(filename=str(path), defaults=scenario)
         if text:
+            _check_yaml(text, "--scenario-text")
             scenario = yaml_load_typed(data=text, defaults=scenario)
     except ConfigError:
         raise
