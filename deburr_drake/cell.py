@@ -22,6 +22,7 @@ from deburr_drake.controller import HybridController
 from deburr_drake.estimator import ContactParameterEstimator
 from deburr_drake.friction import add_joint_friction
 from deburr_drake.geometry import CircularContour, Contour, StraightContour
+from deburr_drake.guards import add_effort_saturation, add_guards
 from deburr_drake.kinematics import ToolPoint
 from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.observer import ChamferObserver
@@ -227,7 +228,10 @@ def make_deburring_diagram(*, scenario: Scenario,
     ``cutting_process`` and its force law ``cutting_force``,
     ``force_sensor``, ``sensor_noise``, ``chamfer_observer``,
     ``command_generator``, ``first_order_hold``, ``contact_estimator``,
-    ``controller``,
+    ``controller``, ``guards`` (deburr_drake.guards, unless
+    ``guards.enabled`` is false) and ``drive_saturation`` (the drives clamp
+    the commanded torque at the effort limits, unless
+    ``guards.saturate_effort`` is false),
     and one ``log_<name>`` VectorLogSink per entry of :data:`LOGGED`. The
     plant's default positions put the tool tip at the contour start (by
     inverse kinematics for the arm), in contact. With a ``meshcat``, the
@@ -302,8 +306,10 @@ def make_deburring_diagram(*, scenario: Scenario,
                     controller.GetInputPort("commanded_velocity"))
     builder.Connect(estimator.GetOutputPort("desired_normal_force"),
                     controller.GetInputPort("desired_normal_force"))
-    builder.Connect(controller.GetOutputPort("actuation"),
-                    plant.get_actuation_input_port())
+    builder.Connect(
+        add_effort_saturation(builder, c, plant,
+                              controller.GetOutputPort("actuation")),
+        plant.get_actuation_input_port())
 
     if meshcat is not None:
         from deburr_drake.replay import add_meshcat
@@ -312,10 +318,11 @@ def make_deburring_diagram(*, scenario: Scenario,
                     process=process,
                     edge_points=edge_points(c, process.bins.centers))
 
-    for name, (system, port) in LOGGED.items():
-        logger = LogVectorOutput(
-            builder.GetSubsystemByName(system).GetOutputPort(port), builder,
-            c.simulation.log_period)
+    logged = {name: builder.GetSubsystemByName(system).GetOutputPort(port)
+              for name, (system, port) in LOGGED.items()}
+    add_guards(builder, c, plant, contour, logged)
+    for name, port in logged.items():
+        logger = LogVectorOutput(port, builder, c.simulation.log_period)
         logger.set_name(f"log_{name}")
     diagram = builder.Build()
     diagram.set_name(f"deburr_{c.name}")
