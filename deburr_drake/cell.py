@@ -120,7 +120,11 @@ def _add_plant(builder: DiagramBuilder, scenario: Scenario):
             height=scenario.tube.height,
             layer_height=scenario.tube.compliant_layer_height,
             hydroelastic_modulus=scenario.tube.hydroelastic_modulus,
-            hunt_crossley_dissipation=scenario.tube.hunt_crossley_dissipation)
+            hunt_crossley_dissipation=scenario.tube.hunt_crossley_dissipation,
+            # The wall is the edge: the process cuts only where it is
+            # (process.material_overlap), and off its ends there is no
+            # contact either.
+            margin=0.0)
         plant.Finalize()
         return plant, scene_graph
     tube = scenario.tube
