@@ -34,7 +34,8 @@ from deburr_drake.sensor import ForceSensor
 
 __all__ = ["make_deburring_diagram", "MakeDeburringDiagram", "make_contour",
            "edge_points", "contact_normal_force",
-           "start_position", "check_part_in_reach", "TOOL_FRAME", "SENSOR_JOINT", "LOGGED",
+           "start_position", "check_part_in_reach", "believed_scenario",
+           "believed_contour", "TOOL_FRAME", "SENSOR_JOINT", "LOGGED",
            "SYSTEM_NAMES"]
 
 TOOL_FRAME = "tool_tip"
@@ -90,6 +91,29 @@ def make_contour(scenario: Scenario) -> Contour:
     return CircularContour(center, tube.inner_radius - tool.cutter_radius,
                            start_angle=edge.start_angle,
                            direction=edge.direction)
+
+
+def believed_scenario(scenario: Scenario) -> Scenario:
+    """The scenario with the part the controller believes in
+    (``part_error`` applied to ``tube`` and ``edge``); the scenario itself
+    when there is no error."""
+    e = scenario.part_error
+    if not any(e.offset) and e.yaw == 0.0 and e.radius == 0.0:
+        return scenario
+    believed = copy.deepcopy(scenario)
+    believed.tube.position = [p + d for p, d in zip(scenario.tube.position,
+                                                    e.offset)]
+    believed.tube.inner_radius += e.radius
+    if scenario.edge.kind == "straight":
+        believed.edge.heading += e.yaw
+    else:
+        believed.edge.start_angle += e.yaw
+    return believed
+
+
+def believed_contour(scenario: Scenario) -> Contour:
+    """The zero-depth path on the part the controller believes in."""
+    return make_contour(believed_scenario(scenario))
 
 
 def start_position(scenario: Scenario, contour=None) -> np.ndarray:
@@ -155,7 +179,7 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
     if scenario.robot.model != "arm5":
         return  # the Cartesian tool reaches everywhere
     from deburr_drake.arm import check_reach
-    contour = contour or make_contour(scenario)
+    contour = contour or believed_contour(scenario)
     arcs = np.linspace(0.0, contour.length, samples,
                        endpoint=not contour.closed)
     points = [start_position(scenario, contour)] + [
@@ -245,8 +269,9 @@ def make_deburring_diagram(*, scenario: Scenario,
     check_part_in_reach(c)
     builder = DiagramBuilder()
     plant, _ = _add_plant(builder, c)
-    contour = make_contour(c)
-    x0 = start_position(c, contour)
+    contour = make_contour(c)  # the real part: the plant's truth
+    belief = believed_contour(c)  # the part the controller believes in
+    x0 = start_position(c, belief)
     q0 = _initial_positions(plant, c, x0)
     plant.SetDefaultPositions(q0)
 
@@ -268,13 +293,13 @@ def make_deburring_diagram(*, scenario: Scenario,
     noise = builder.AddNamedSystem("sensor_noise", RandomSource(
         RandomDistribution.kGaussian, 3, c.sensor.sample_period))
     observer = builder.AddNamedSystem("chamfer_observer", ChamferObserver(
-        model, TOOL_FRAME, contour,
+        model, TOOL_FRAME, belief,
         min_tangential_speed=c.command.min_tangential_speed,
         tool_point=tool_point))
     generator = builder.AddNamedSystem("command_generator", CommandGenerator(
-        c.command, c.task, contour, x0))
+        c.command, c.task, belief, x0))
     foh = builder.AddNamedSystem("first_order_hold", FirstOrderHold(
-        c.command.period, contour.project(x0)))
+        c.command.period, belief.project(x0)))
     estimator = builder.AddNamedSystem(
         "contact_estimator", ContactParameterEstimator(
             c.estimator, c.task, sample_period=c.controller.control_period))

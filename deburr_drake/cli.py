@@ -181,8 +181,11 @@ def _simulate(args) -> int:
             print(f"deburr-drake: could not write the replay: {e}",
                   file=sys.stderr)
     truth = demo.contact_truth(scenario)
+    # A run that stopped before the pass was done: the finish over the
+    # bins the tool reached.
     values = report.pass_metrics(
-        log, true_force_at_desired_depth=truth.force_at_desired_depth)
+        log, true_force_at_desired_depth=truth.force_at_desired_depth,
+        only_cut=not log.completed_pass)
     files = report.write_run(log, out, values)
     try:
         with np.load(files["logs"]) as logs:

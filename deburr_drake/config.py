@@ -33,6 +33,7 @@ __all__ = [
     "RobotConfig",
     "SimulationConfig",
     "GuardsConfig",
+    "PartErrorConfig",
     "Scenario",
     "load_scenario",
     "scenario_names",
@@ -468,6 +469,30 @@ class SimulationConfig:
 
 
 @dataclass
+class PartErrorConfig:
+    """How the part the controller believes in differs from the real one.
+    ``tube`` and ``edge`` describe the real part (the plant, the contact,
+    the cutting process and the metrics use it); the command generator,
+    the first-order hold, the observer and the start pose use the believed
+    part: the real one moved by ``offset``, turned by ``yaw`` about its
+    vertical axis (circle: the start angle; straight: the heading about
+    ``tube.position``) and with an inner radius ``radius`` larger."""
+
+    offset: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0])  # m, believed - real
+    yaw: float = 0.0  # rad, believed - real, about the vertical
+    radius: float = 0.0  # m, believed - real inner radius (circle)
+
+    def validate(self):
+        o = "part_error"
+        _vector(o, "offset", self.offset, 3, _finite)
+        _require(isinstance(self.yaw, (int, float)) and math.isfinite(
+            self.yaw) and abs(self.yaw) <= math.pi, f"{o}.yaw", self.yaw,
+            "a number in [-pi, pi] rad")
+        _finite(o, "radius", self.radius)
+
+
+@dataclass
 class GuardsConfig:
     """Runtime safety guards (deburr_drake.guards): each stops the run with
     ``stop_reason`` ``guard:<name>`` and its values at the trip. A limit of
@@ -524,6 +549,7 @@ class Scenario:
     process: ProcessConfig = field(default_factory=ProcessConfig)
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
     guards: GuardsConfig = field(default_factory=GuardsConfig)
+    part_error: PartErrorConfig = field(default_factory=PartErrorConfig)
 
     def validate(self):
         # The default output directory is out/<name>: a plain file name.
@@ -554,6 +580,13 @@ class Scenario:
                  "simulation.initial_depth", self.simulation.initial_depth,
                  "< tool.cutter_radius and tube.wall_thickness "
                  f"({min(self.tool.cutter_radius, self.tube.wall_thickness)})")
+        believed = self.tube.inner_radius + self.part_error.radius
+        _require(self.tool.cutter_radius < believed
+                 and abs(self.part_error.radius) < self.tube.wall_thickness,
+                 "part_error.radius", self.part_error.radius,
+                 "|radius| < tube.wall_thickness "
+                 f"({self.tube.wall_thickness}) with the believed inner "
+                 f"radius > tool.cutter_radius ({self.tool.cutter_radius})")
         inner = self.controller.control_period
         if inner > 0:
             period = self.command.period

@@ -13,7 +13,7 @@ Guards (``GuardsConfig``, scenario section ``guards:``):
   takes more than the limit (``add_effort_saturation``: the drives clamp,
   and the guard sees a command one sample after the plant does);
 - ``tool_force``: the measured tool force above a limit;
-- ``depth``: the measured chamfer depth beyond a limit;
+- ``depth``: the measured or the true chamfer depth beyond a limit;
 - ``workspace``: the tool tip outside the edge's bounding box plus a margin;
 - ``contact_lost``: ||f_n|| below the contact force for longer than a time,
   once contact was made;
@@ -35,6 +35,7 @@ from pydrake.systems.primitives import Saturation
 
 from deburr_drake.config import GuardsConfig, Scenario
 from deburr_drake.layout import CHAMFER_STATE
+from deburr_drake.process import PROCESS_STATE
 
 __all__ = ["GUARDS_SYSTEM", "GUARD_NAMES", "GuardLimits", "SafetyGuards",
            "guard_limits", "add_guards", "effort_limits",
@@ -162,6 +163,9 @@ class SafetyGuards(LeafSystem):
         chamfer = self._slices["chamfer"]
         base = chamfer.start
         high[base + CHAMFER_STATE.slice("delta").start] = limits.depth
+        if "process" in self._slices:  # the true depth (part_error)
+            high[self._slices["process"].start
+                 + PROCESS_STATE.slice("delta").start] = limits.depth
         x_p = CHAMFER_STATE.slice("x_p")
         low[base + x_p.start:base + x_p.stop] = limits.workspace_low
         high[base + x_p.start:base + x_p.stop] = limits.workspace_high
@@ -245,8 +249,11 @@ class SafetyGuards(LeafSystem):
                 f"{lim.tool_force:.4g} N (f = {_fmt(force)} N)")
         chamfer = x[self._slices["chamfer"]]
         delta = float(CHAMFER_STATE.get(chamfer, "delta"))
-        if delta > lim.depth:
-            return self._trip(t, "depth", f"delta = {delta * 1e3:.4g} mm > "
+        true = float(PROCESS_STATE.get(x[self._slices["process"]], "delta")) \
+            if "process" in self._slices else delta
+        if max(delta, true) > lim.depth:
+            return self._trip(t, "depth", f"delta = {delta * 1e3:.4g} mm "
+                              f"measured, {true * 1e3:.4g} mm true > "
                               f"{lim.depth * 1e3:.4g} mm")
         x_p = CHAMFER_STATE.get(chamfer, "x_p")
         if np.any(x_p < lim.workspace_low) or np.any(x_p > lim.workspace_high):

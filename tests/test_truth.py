@@ -64,3 +64,35 @@ guards: {joint_torque_fraction: 1000.0}
     assert log.stop_time < 7.0
     # The finish records nothing beyond the wall.
     assert log["finish"]["depth"][-1] < 1e-3
+
+
+def test_the_believed_part_is_the_real_one_moved_turned_and_resized():
+    from deburr_drake.cell import believed_contour, make_contour
+    real = load_scenario("paper")
+    assert believed_contour(real).radius == make_contour(real).radius
+    wrong = load_scenario("paper", text="part_error: {offset: [0.001, 0.0, "
+                                        "0.0], yaw: 0.1, radius: 0.0003}")
+    believed, truth = believed_contour(wrong), make_contour(wrong)
+    assert believed.radius == pytest.approx(truth.radius + 3e-4)
+    np.testing.assert_allclose(believed.center - truth.center,
+                               [1e-3, 0.0, 0.0], atol=1e-12)
+    assert wrong.tube.position == [0.4, 0.0, 0.0]  # the real part stays
+
+
+@pytest.mark.slow
+def test_the_metrics_measure_depth_on_the_real_part():
+    """The controller believes the inner radius 0.3 mm larger: it holds
+    its (believed) 0.5 mm, the real chamfer is 0.8 mm deep."""
+    scenario = load_scenario("paper", text="part_error: {radius: 0.0003}")
+    log = simulate(make_deburring_diagram(scenario=scenario), scenario,
+                   duration=4.0, progress_interval=4.0)
+    late = log["process"]["t"] > 3.0
+    np.testing.assert_allclose(log["process"]["delta"][late], 8e-4,
+                               atol=3e-5)
+    late = log["chamfer"]["t"] > 3.0
+    np.testing.assert_allclose(log["chamfer"]["delta"][late], 5e-4,
+                               atol=3e-5)
+    from deburr_drake import report
+    values = report.pass_metrics(log, only_cut=True)
+    assert values["chamfer_depth_mean_error_mm"] == pytest.approx(0.3,
+                                                                  abs=0.03)
