@@ -20,6 +20,7 @@ from deburr_drake.command import CommandGenerator, FirstOrderHold
 from deburr_drake.config import ConfigError, Scenario
 from deburr_drake.controller import HybridController
 from deburr_drake.estimator import ContactParameterEstimator
+from deburr_drake.faults import add_noise_scale, add_sensor_faults
 from deburr_drake.friction import add_joint_friction
 from deburr_drake.geometry import CircularContour, Contour, StraightContour
 from deburr_drake.guards import add_effort_saturation, add_guards
@@ -320,8 +321,13 @@ def make_deburring_diagram(*, scenario: Scenario,
                     plant.get_applied_generalized_force_input_port())
     builder.Connect(plant.get_reaction_forces_output_port(),
                     sensor.GetInputPort("reaction_forces"))
-    builder.Connect(noise.get_output_port(), sensor.GetInputPort("noise"))
-    force = sensor.GetOutputPort("tool_force")
+    builder.Connect(
+        add_noise_scale(builder, c.faults, noise.get_output_port()),
+        sensor.GetInputPort("noise"))
+    # What the observer and the controller read (faults: bias, dropouts).
+    force = add_sensor_faults(builder, c.faults,
+                              sensor.GetOutputPort("tool_force"),
+                              sample_period=c.sensor.sample_period)
     builder.Connect(force, observer.GetInputPort("tool_force"))
     builder.Connect(force, controller.GetInputPort("tool_force"))
     chamfer = observer.GetOutputPort("chamfer_state")

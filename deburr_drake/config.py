@@ -34,6 +34,8 @@ __all__ = [
     "SimulationConfig",
     "GuardsConfig",
     "PartErrorConfig",
+    "DropoutConfig",
+    "FaultsConfig",
     "Scenario",
     "load_scenario",
     "scenario_names",
@@ -493,6 +495,46 @@ class PartErrorConfig:
 
 
 @dataclass
+class DropoutConfig:
+    """A window in which the force sensor's reading is lost."""
+
+    start: float = 0.0  # s
+    duration: float = 0.0  # s
+    mode: str = "hold"  # hold: the last reading; zero: 0 N
+
+    MODES = ("hold", "zero")
+
+    def validate(self, owner="faults.dropouts[]"):
+        _non_negative(owner, "start", self.start)
+        _positive(owner, "duration", self.duration)
+        _require(self.mode in self.MODES, f"{owner}.mode", self.mode,
+                 f"one of {self.MODES}")
+
+
+@dataclass
+class FaultsConfig:
+    """Faults a deburring cell meets, injected by Drake systems in the
+    diagram (deburr_drake.faults); none by default. See also
+    ``part_error`` (the part not where the controller thinks it is)."""
+
+    # N, world, added to the force reading the controller and observer get
+    sensor_bias: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    noise_scale: float = 1.0  # x sensor.noise_std
+    dropouts: List[DropoutConfig] = field(default_factory=list)
+
+    def validate(self):
+        o = "faults"
+        _vector(o, "sensor_bias", self.sensor_bias, 3, _finite)
+        _non_negative(o, "noise_scale", self.noise_scale)
+        for k, d in enumerate(self.dropouts):
+            d.validate(f"{o}.dropouts[{k}]")
+
+    def sensor_faults(self) -> bool:
+        """True if the force reading is biased or drops out."""
+        return any(self.sensor_bias) or bool(self.dropouts)
+
+
+@dataclass
 class GuardsConfig:
     """Runtime safety guards (deburr_drake.guards): each stops the run with
     ``stop_reason`` ``guard:<name>`` and its values at the trip. A limit of
@@ -550,6 +592,7 @@ class Scenario:
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
     guards: GuardsConfig = field(default_factory=GuardsConfig)
     part_error: PartErrorConfig = field(default_factory=PartErrorConfig)
+    faults: FaultsConfig = field(default_factory=FaultsConfig)
 
     def validate(self):
         # The default output directory is out/<name>: a plain file name.
