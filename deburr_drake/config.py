@@ -104,6 +104,12 @@ class TubeConfig:
         _non_negative(o, "hunt_crossley_dissipation",
                       self.hunt_crossley_dissipation)
         _vector(o, "position", self.position, 3, _finite)
+        # 1e300 Pa stopped the process inside Drake's contact solver (a
+        # C++ failure Python cannot catch, so nothing was written).
+        _require(self.hydroelastic_modulus <= 1e12,
+                 "tube.hydroelastic_modulus", self.hydroelastic_modulus,
+                 "a number in (0, 1e12] Pa (steel's Young's modulus is "
+                 "2e11)")
         _require(self.compliant_layer_height <= self.height,
                  "tube.compliant_layer_height", self.compliant_layer_height,
                  f"<= tube.height ({self.height})")

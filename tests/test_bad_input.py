@@ -87,6 +87,9 @@ CASES = {
     "--record exists": (
         SIM + ["--out", "{tmp}/new", "--record", "{tmp}/replay.html"],
         ["--record", "already exists", "--force"]),
+    "absurd contact modulus": (
+        SIM + ["--scenario-text", "tube: {hydroelastic_modulus: 1.0e300}"],
+        ["tube.hydroelastic_modulus = 1e+300", "(0, 1e12] Pa"]),
     "unknown scenario": (
         SIM + ["--scenario", "no_such"], ["'no_such' is unknown", "paper"]),
 }
