@@ -550,7 +550,7 @@ class GuardsConfig:
     # Trip when any |tau_i| exceeds this fraction of the joint's effort
     # limit (models/arm5.sdf); joints without a limit are not checked.
     joint_torque_fraction: float = 1.0
-    tool_force: float = 0.0  # N, |measured f|; 0: 10 x desired chamfering force
+    tool_force: float = 0.0  # N, |measured f|; 0: 10 x desired |f_t|
     depth: float = 0.0  # m, chamfer depth; 0: min(4 x desired, cutter radius)
     workspace_margin: float = 0.02  # m, around the edge's bounding box
     contact_lost_time: float = 1.0  # s below contact_force after contact
