@@ -20,7 +20,7 @@ from pydrake.solvers import SnoptSolver, Solve, SolverOptions
 from deburr_drake.part import add_tool_robot
 
 __all__ = ["ARM_URL", "ARM_MODEL_NAME", "ARM_JOINTS", "DEFAULT_PART_POSITION", "Q_READY",
-           "add_arm", "solve_tool_pose", "default_q_guess"]
+           "add_arm", "solve_tool_pose", "default_q_guess", "closest_tool_position", "check_reach"]
 
 ARM_URL = "package://deburr_drake_models/arm5.sdf"
 ARM_MODEL_NAME = "arm5"
@@ -129,3 +129,37 @@ def solve_tool_pose(plant, p_W_tip, *, q_guess=None, instance=None, tolerance=1e
         raise RuntimeError(f"tool pose IK missed tool tip target p_W_tip={p.tolist()} m: "
                            f"position error {pos_err:.3g} m, axis error {axis_err / _AXIS_POINT:.3g} rad")
     return q_sol[arm_idx]
+
+
+def closest_tool_position(plant, p_W_tip, *, instance=None):
+    """The tool tip position (m, world) nearest to p_W_tip that the arm reaches with the tool
+    axis vertical within its joint limits: how far out of reach a target is."""
+    p = np.asarray(p_W_tip, dtype=float).reshape(3)
+    instance = _arm_instance(plant, instance)
+    tip = plant.GetFrameByName("tool_tip", instance)
+    world = plant.world_frame()
+    ik = InverseKinematics(plant, with_joint_limits=True)
+    q = ik.q()
+    ik.AddPositionCost(world, p, tip, np.zeros(3), np.eye(3))
+    # The tool axis vertical, as solve_tool_pose keeps it.
+    ik.AddAngleBetweenVectorsConstraint(tip, np.array([0.0, 0.0, 1.0]), world,
+                                        np.array([0.0, 0.0, 1.0]), 0.0, 1e-6)
+    q_guess = plant.GetDefaultPositions().copy()
+    plant.SetPositionsInArray(instance, default_q_guess(p), q_guess)
+    result = Solve(ik.get_mutable_prog(), q_guess)
+    context = plant.CreateDefaultContext()
+    plant.SetPositions(context, result.GetSolution(q))
+    return tip.CalcPoseInWorld(context).translation()
+
+
+def check_reach(plant, points, *, instance=None):
+    """None if the tool reaches every point (m, world, rows) vertically; otherwise
+    (index, point, distance (m) to the nearest reachable tool position) of the first one
+    it does not reach."""
+    for k, p in enumerate(np.asarray(points, dtype=float)):
+        try:
+            solve_tool_pose(plant, p, instance=instance)
+        except RuntimeError:
+            reached = closest_tool_position(plant, p, instance=instance)
+            return k, p, float(np.linalg.norm(reached - p))
+    return None

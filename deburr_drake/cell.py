@@ -17,11 +17,13 @@ from pydrake.systems.primitives import LogVectorOutput, RandomSource
 
 from deburr_drake.arm import ARM_URL, solve_tool_pose
 from deburr_drake.command import CommandGenerator, FirstOrderHold
-from deburr_drake.config import Scenario
+from deburr_drake.config import ConfigError, Scenario
 from deburr_drake.controller import HybridController
 from deburr_drake.estimator import ContactParameterEstimator
+from deburr_drake.faults import add_noise_scale, add_sensor_faults
 from deburr_drake.friction import add_joint_friction
 from deburr_drake.geometry import CircularContour, Contour, StraightContour
+from deburr_drake.guards import add_effort_saturation, add_guards
 from deburr_drake.kinematics import ToolPoint
 from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.observer import ChamferObserver
@@ -33,7 +35,8 @@ from deburr_drake.sensor import ForceSensor
 
 __all__ = ["make_deburring_diagram", "MakeDeburringDiagram", "make_contour",
            "edge_points", "contact_normal_force",
-           "start_position", "TOOL_FRAME", "SENSOR_JOINT", "LOGGED",
+           "start_position", "check_part_in_reach", "believed_scenario",
+           "believed_contour", "TOOL_FRAME", "SENSOR_JOINT", "LOGGED",
            "SYSTEM_NAMES"]
 
 TOOL_FRAME = "tool_tip"
@@ -91,6 +94,29 @@ def make_contour(scenario: Scenario) -> Contour:
                            direction=edge.direction)
 
 
+def believed_scenario(scenario: Scenario) -> Scenario:
+    """The scenario with the part the controller believes in
+    (``part_error`` applied to ``tube`` and ``edge``); the scenario itself
+    when there is no error."""
+    e = scenario.part_error
+    if not any(e.offset) and e.yaw == 0.0 and e.radius == 0.0:
+        return scenario
+    believed = copy.deepcopy(scenario)
+    believed.tube.position = [p + d for p, d in zip(scenario.tube.position,
+                                                    e.offset)]
+    believed.tube.inner_radius += e.radius
+    if scenario.edge.kind == "straight":
+        believed.edge.heading += e.yaw
+    else:
+        believed.edge.start_angle += e.yaw
+    return believed
+
+
+def believed_contour(scenario: Scenario) -> Contour:
+    """The zero-depth path on the part the controller believes in."""
+    return make_contour(believed_scenario(scenario))
+
+
 def start_position(scenario: Scenario, contour=None) -> np.ndarray:
     """Tool tip at the contour start, ``initial_depth`` into the material."""
     contour = contour or make_contour(scenario)
@@ -119,7 +145,11 @@ def _add_plant(builder: DiagramBuilder, scenario: Scenario):
             height=scenario.tube.height,
             layer_height=scenario.tube.compliant_layer_height,
             hydroelastic_modulus=scenario.tube.hydroelastic_modulus,
-            hunt_crossley_dissipation=scenario.tube.hunt_crossley_dissipation)
+            hunt_crossley_dissipation=scenario.tube.hunt_crossley_dissipation,
+            # The wall is the edge: the process cuts only where it is
+            # (process.material_overlap), and off its ends there is no
+            # contact either.
+            margin=0.0)
         plant.Finalize()
         return plant, scene_graph
     tube = scenario.tube
@@ -141,6 +171,31 @@ def _add_plant(builder: DiagramBuilder, scenario: Scenario):
         center_xy=tube.position[:2], n_theta=tube.mesh_segments)
     plant.Finalize()
     return plant, scene_graph
+
+
+def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
+    """Raises ConfigError naming the first point of the tool's path (the
+    start, then ``samples`` points along the edge) the arm cannot reach with
+    the tool vertical, and how far out of reach it is."""
+    if scenario.robot.model != "arm5":
+        return  # the Cartesian tool reaches everywhere
+    from deburr_drake.arm import check_reach
+    contour = contour or believed_contour(scenario)
+    arcs = np.linspace(0.0, contour.length, samples,
+                       endpoint=not contour.closed)
+    points = [start_position(scenario, contour)] + [
+        contour.point_at(s) for s in arcs]
+    miss = check_reach(make_kinematic_model(ARM_URL), points)
+    if miss is not None:
+        k, p, distance = miss
+        where = "the start point" if k == 0 else \
+            f"the edge point at arc {arcs[k - 1] * 1e3:.1f} mm"
+        raise ConfigError(
+            f"tube.position = {list(scenario.tube.position)} is out of the "
+            f"arm's reach: {where}, tool tip at {np.round(p, 4).tolist()} m, "
+            f"is {distance * 1e3:.1f} mm beyond the nearest reachable tool "
+            "position (tool vertical, joint limits): allowed a part whose "
+            "edge the arm reaches (default [0.40, 0.0, 0.0])")
 
 
 def _initial_positions(plant, scenario: Scenario, x0) -> np.ndarray:
@@ -202,17 +257,22 @@ def make_deburring_diagram(*, scenario: Scenario,
     ``cutting_process`` and its force law ``cutting_force``,
     ``force_sensor``, ``sensor_noise``, ``chamfer_observer``,
     ``command_generator``, ``first_order_hold``, ``contact_estimator``,
-    ``controller``,
+    ``controller``, ``guards`` (deburr_drake.guards, unless
+    ``guards.enabled`` is false) and ``drive_saturation`` (the drives clamp
+    the commanded torque at the effort limits, unless
+    ``guards.saturate_effort`` is false),
     and one ``log_<name>`` VectorLogSink per entry of :data:`LOGGED`. The
     plant's default positions put the tool tip at the contour start (by
     inverse kinematics for the arm), in contact. With a ``meshcat``, the
     cell is drawn there too (see :mod:`deburr_drake.replay`)."""
     scenario.validate()
     c = scenario
+    check_part_in_reach(c)
     builder = DiagramBuilder()
     plant, _ = _add_plant(builder, c)
-    contour = make_contour(c)
-    x0 = start_position(c, contour)
+    contour = make_contour(c)  # the real part: the plant's truth
+    belief = believed_contour(c)  # the part the controller believes in
+    x0 = start_position(c, belief)
     q0 = _initial_positions(plant, c, x0)
     plant.SetDefaultPositions(q0)
 
@@ -234,13 +294,13 @@ def make_deburring_diagram(*, scenario: Scenario,
     noise = builder.AddNamedSystem("sensor_noise", RandomSource(
         RandomDistribution.kGaussian, 3, c.sensor.sample_period))
     observer = builder.AddNamedSystem("chamfer_observer", ChamferObserver(
-        model, TOOL_FRAME, contour,
+        model, TOOL_FRAME, belief,
         min_tangential_speed=c.command.min_tangential_speed,
         tool_point=tool_point))
     generator = builder.AddNamedSystem("command_generator", CommandGenerator(
-        c.command, c.task, contour, x0))
+        c.command, c.task, belief, x0))
     foh = builder.AddNamedSystem("first_order_hold", FirstOrderHold(
-        c.command.period, contour.project(x0)))
+        c.command.period, belief.project(x0)))
     estimator = builder.AddNamedSystem(
         "contact_estimator", ContactParameterEstimator(
             c.estimator, c.task, sample_period=c.controller.control_period))
@@ -261,8 +321,13 @@ def make_deburring_diagram(*, scenario: Scenario,
                     plant.get_applied_generalized_force_input_port())
     builder.Connect(plant.get_reaction_forces_output_port(),
                     sensor.GetInputPort("reaction_forces"))
-    builder.Connect(noise.get_output_port(), sensor.GetInputPort("noise"))
-    force = sensor.GetOutputPort("tool_force")
+    builder.Connect(
+        add_noise_scale(builder, c.faults, noise.get_output_port()),
+        sensor.GetInputPort("noise"))
+    # What the observer and the controller read (faults: bias, dropouts).
+    force = add_sensor_faults(builder, c.faults,
+                              sensor.GetOutputPort("tool_force"),
+                              sample_period=c.sensor.sample_period)
     builder.Connect(force, observer.GetInputPort("tool_force"))
     builder.Connect(force, controller.GetInputPort("tool_force"))
     chamfer = observer.GetOutputPort("chamfer_state")
@@ -276,8 +341,10 @@ def make_deburring_diagram(*, scenario: Scenario,
                     controller.GetInputPort("commanded_velocity"))
     builder.Connect(estimator.GetOutputPort("desired_normal_force"),
                     controller.GetInputPort("desired_normal_force"))
-    builder.Connect(controller.GetOutputPort("actuation"),
-                    plant.get_actuation_input_port())
+    builder.Connect(
+        add_effort_saturation(builder, c, plant,
+                              controller.GetOutputPort("actuation")),
+        plant.get_actuation_input_port())
 
     if meshcat is not None:
         from deburr_drake.replay import add_meshcat
@@ -286,10 +353,11 @@ def make_deburring_diagram(*, scenario: Scenario,
                     process=process,
                     edge_points=edge_points(c, process.bins.centers))
 
-    for name, (system, port) in LOGGED.items():
-        logger = LogVectorOutput(
-            builder.GetSubsystemByName(system).GetOutputPort(port), builder,
-            c.simulation.log_period)
+    logged = {name: builder.GetSubsystemByName(system).GetOutputPort(port)
+              for name, (system, port) in LOGGED.items()}
+    add_guards(builder, c, plant, contour, logged)
+    for name, port in logged.items():
+        logger = LogVectorOutput(port, builder, c.simulation.log_period)
         logger.set_name(f"log_{name}")
     diagram = builder.Build()
     diagram.set_name(f"deburr_{c.name}")

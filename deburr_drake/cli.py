@@ -22,59 +22,211 @@ def _progress(t, wall, feed):
           f"feed {feed * 1e3:5.2f} mm/s", flush=True)
 
 
+#: Exit codes of ``deburr-drake`` (also in the README and ``--help``).
+EXIT_CODES = {
+    "pass_complete": 0, "duration": 0,  # a normal ending
+    "error": 1,  # an exception during the run (outputs written)
+    # 2: bad input (nothing run or written)
+    "guard": 3,  # a runtime guard stopped the run (outputs written)
+    "nan": 4,  # Drake detected a NaN (outputs written)
+    "interrupted": 130,  # SIGINT (Ctrl-C); SIGTERM gives 143
+}
+_EXIT_HELP = ("exit codes: 0 the pass completed or the duration was reached; "
+              "1 error during the run; 2 bad input (nothing run or written); "
+              "3 a guard stopped the run; 4 NaN detected; 130 interrupted "
+              "(SIGINT), 143 terminated (SIGTERM). Every ending after the "
+              "start writes logs.npz and metrics.json (stop_reason: "
+              "pass_complete, duration, interrupted, guard:<name>, nan, "
+              "error).")
+#: What ``simulate`` writes into its output directory.
+_OUTPUTS = ("logs.npz", "metrics.json")
+
+
+def _bad(message: str):
+    from deburr_drake.config import ConfigError
+    raise ConfigError(message)
+
+
+def _check_writable_target(path, what: str, force: bool, *, is_dir: bool,
+                           names=()):
+    """Refuses, before anything runs, a path that cannot be written or
+    would overwrite existing results without ``--force``."""
+    import os
+    from pathlib import Path
+    path = Path(path)
+    if is_dir:
+        if path.exists() and not path.is_dir():
+            _bad(f"{what} {path} is not a directory")
+        existing = [n for n in names if (path / n).exists()]
+        if existing and not force:
+            _bad(f"{what} {path} already holds {', '.join(existing)}: "
+                 "choose another directory or pass --force to overwrite")
+    else:
+        if path.is_dir():
+            _bad(f"{what} {path} is a directory: allowed a file path")
+        if path.exists() and not force:
+            _bad(f"{what} {path} already exists: pass --force to "
+                 "overwrite")
+    probe = path if is_dir else path.parent
+    while not probe.exists():
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if not probe.is_dir():
+        _bad(f"{what} {path} cannot be created: {probe} is not a directory")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        _bad(f"{what} {path} cannot be written: no write permission in "
+             f"{probe}")
+
+
+def _check_duration(duration):
+    if not (np.isfinite(duration) and duration > 0):
+        _bad(f"--duration = {duration!r} is invalid: allowed a finite "
+             "number > 0 (simulated seconds)")
+
+
+def _exit_code(log, signal_number) -> int:
+    import signal
+    reason = log.stop_reason
+    if reason == "interrupted" and signal_number == signal.SIGTERM:
+        return 143
+    return EXIT_CODES.get(reason.split(":", 1)[0], 1)
+
+
+def _print_metrics(values: dict):
+    import math
+    reasons = getattr(values, "reasons", {})
+    width = max(len(k) for k in values)
+    missing = {}
+    for key in sorted(values):
+        v = values[key]
+        if isinstance(v, float) and not math.isfinite(v):
+            print(f"  {key:{width}s} {'n/a':>12s}")
+            missing.setdefault(reasons.get(key, "not finite"), []).append(key)
+        else:
+            print(f"  {key:{width}s} {v:12.5g}")
+    for reason, keys in missing.items():
+        print(f"  n/a: {reason}: {', '.join(keys)}")
+
+
 def _simulate(args) -> int:
+    import signal
     from pathlib import Path
 
-    from deburr_drake import demo, figures, report
-    from deburr_drake.cell import make_deburring_diagram
-    from deburr_drake.simulation import simulate
+    from deburr_drake.cell import check_part_in_reach
     scenario = _load(args)
     if args.duration is not None:
+        _check_duration(args.duration)
         scenario.simulation.duration = args.duration
         scenario.validate()
+    if not (args.progress_interval > 0
+            and np.isfinite(args.progress_interval)):
+        _bad(f"--progress-interval = {args.progress_interval!r} is "
+             "invalid: allowed a finite number > 0 (simulated seconds)")
     out = Path(args.out or f"out/{scenario.name}")
+    _check_writable_target(out, "--out", args.force, is_dir=True,
+                           names=_OUTPUTS)
+    if args.record:
+        _check_writable_target(args.record, "--record", args.force,
+                               is_dir=False)
+    check_part_in_reach(scenario)
     passes = scenario.simulation.stop_after_passes
     print(f"deburr-drake simulate: scenario '{scenario.name}' "
           f"({scenario.robot.model}, m = {scenario.controller.fuzzy.order}), "
           f"up to {scenario.simulation.duration:g} s"
           + (f" or {passes:g} pass(es)" if passes else "")
           + f", output {out}/", flush=True)
-    meshcat = None
-    if args.meshcat or args.record:
-        from pydrake.geometry import Meshcat
-        meshcat = Meshcat()
-        if args.meshcat:
-            print(f"Meshcat: {meshcat.web_url()}", flush=True)
-    diagram = make_deburring_diagram(scenario=scenario, meshcat=meshcat)
-    if args.record:
-        meshcat.StartRecording(frames_per_second=10.0)
-    log = simulate(diagram, scenario, progress=_progress,
-                   progress_interval=args.progress_interval)
+    received, running = [], [True]
+
+    def on_signal(number, frame):
+        # Only a flag: the simulator's monitor stops the run after the
+        # current step, and everything logged so far is written. A second
+        # signal while the run still winds down stops waiting for it; once
+        # the outputs are being written, signals wait for them.
+        if received and running[0]:
+            raise KeyboardInterrupt
+        received.append(number)
+
+    previous = {n: signal.signal(n, on_signal)
+                for n in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        return _run_and_write(args, scenario, out, received, running)
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+
+
+def _run_and_write(args, scenario, out, received, running) -> int:
+    import signal
+
+    from deburr_drake import demo, figures, report
+    from deburr_drake.cell import make_deburring_diagram
+    from deburr_drake.simulation import simulate
+    try:
+        meshcat = None
+        if args.meshcat or args.record:
+            from pydrake.geometry import Meshcat
+            meshcat = Meshcat()
+            if args.meshcat:
+                print(f"Meshcat: {meshcat.web_url()}", flush=True)
+        diagram = make_deburring_diagram(scenario=scenario, meshcat=meshcat)
+        if args.record:
+            meshcat.StartRecording(frames_per_second=10.0)
+        log = simulate(diagram, scenario, progress=_progress,
+                       progress_interval=args.progress_interval,
+                       should_stop=lambda: "interrupted" if received
+                       else None)
+    finally:
+        running[0] = False
+    signal_number = received[0] if received else None
+    if signal_number is not None and log.stop_reason == "interrupted":
+        log.stop_detail = signal.Signals(signal_number).name
+    print(f"\nstopped at t = {log.stop_time:.3f} s: {log.stop_reason}"
+          + (f" ({log.stop_detail})" if log.stop_detail else ""),
+          flush=True)
     if args.record:
         from deburr_drake.replay import write_recording
-        path = write_recording(meshcat, args.record)
-        print(f"wrote the replay {path}")
-    truth = demo.contact_truth(scenario)
+        try:
+            path = write_recording(meshcat, args.record)
+            print(f"wrote the replay {path}")
+        except Exception as e:
+            print(f"deburr-drake: could not write the replay: {e}",
+                  file=sys.stderr)
+    try:
+        truth = demo.contact_truth(scenario).force_at_desired_depth
+    except Exception as e:  # the metrics then leave it out, with why
+        print(f"deburr-drake: no contact truth: {type(e).__name__}: {e}",
+              file=sys.stderr)
+        truth = None
+    # A run that stopped before the pass was done: the finish over the
+    # bins the tool reached.
     values = report.pass_metrics(
-        log, true_force_at_desired_depth=truth.force_at_desired_depth)
+        log, true_force_at_desired_depth=truth,
+        only_cut=not log.completed_pass)
     files = report.write_run(log, out, values)
-    with np.load(files["logs"]) as logs:
-        pngs = figures.make_figures(
-            dict(logs), out,
-            label=f"{scenario.name} (m = {scenario.controller.fuzzy.order})")
+    try:
+        with np.load(files["logs"]) as logs:
+            pngs = figures.make_figures(
+                dict(logs), out,
+                label=f"{scenario.name} (m = "
+                      f"{scenario.controller.fuzzy.order})")
+    except Exception as e:  # too little to draw
+        print(f"deburr-drake: no figures: {type(e).__name__}: {e}",
+              file=sys.stderr)
+        pngs = []
     print()
-    width = max(len(k) for k in values)
-    for key in sorted(values):
-        print(f"  {key:{width}s} {values[key]:12.5g}")
+    _print_metrics(values)
     print(f"\nwrote {files['logs']}, {files['metrics']} and "
           f"{len(pngs)} figures in {out}/")
-    return 0
+    return _exit_code(log, signal_number)
 
 
 def _demo(args) -> int:
     from deburr_drake import demo
     scenario = _load(args)
-    duration = args.duration or 5.0
+    if args.duration is not None:
+        _check_duration(args.duration)
+    duration = 5.0 if args.duration is None else args.duration
     print(f"deburr-drake demo: point-mass testbed, scenario "
           f"'{scenario.name}', {duration:g} s")
     truth = demo.contact_truth(scenario)
@@ -151,7 +303,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(
         prog="deburr-drake",
         description="Adaptive fuzzy hybrid position/force deburring on "
-                    "Drake (Hsu & Fu, 2000).")
+                    "Drake (Hsu & Fu, 2000).", epilog=_EXIT_HELP)
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("demo", help="run the point-mass testbed and print "
                                     "its convergence numbers")
@@ -161,7 +313,8 @@ def main(argv=None) -> int:
     p.set_defaults(func=_demo)
 
     p = sub.add_parser("simulate", help="run a deburring scenario (the "
-                                        "paper's experiment by default)")
+                                        "paper's experiment by default)",
+                       epilog=_EXIT_HELP)
     _scenario_arguments(p, "paper",
                         "simulated seconds at most (default: the scenario's)")
     p.add_argument("--out", default=None,
@@ -172,6 +325,9 @@ def main(argv=None) -> int:
                    help="show the run live in Meshcat (prints the URL)")
     p.add_argument("--record", default=None, metavar="PATH.html",
                    help="write a self-contained HTML replay of the run")
+    p.add_argument("--force", action="store_true",
+                   help="overwrite existing logs.npz / metrics.json in "
+                        "--out and an existing --record file")
     p.set_defaults(func=_simulate)
 
     p = sub.add_parser("diagram", help="export the diagram and the "

@@ -10,6 +10,7 @@ whole tree, so a loaded scenario is always usable.
 
 import dataclasses
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import List, Optional
@@ -31,6 +32,10 @@ __all__ = [
     "BurrConfig",
     "RobotConfig",
     "SimulationConfig",
+    "GuardsConfig",
+    "PartErrorConfig",
+    "DropoutConfig",
+    "FaultsConfig",
     "Scenario",
     "load_scenario",
     "scenario_names",
@@ -99,6 +104,12 @@ class TubeConfig:
         _non_negative(o, "hunt_crossley_dissipation",
                       self.hunt_crossley_dissipation)
         _vector(o, "position", self.position, 3, _finite)
+        # 1e300 Pa stopped the process inside Drake's contact solver (a
+        # C++ failure Python cannot catch, so nothing was written).
+        _require(self.hydroelastic_modulus <= 1e12,
+                 "tube.hydroelastic_modulus", self.hydroelastic_modulus,
+                 "a number in (0, 1e12] Pa (steel's Young's modulus is "
+                 "2e11)")
         _require(self.compliant_layer_height <= self.height,
                  "tube.compliant_layer_height", self.compliant_layer_height,
                  f"<= tube.height ({self.height})")
@@ -155,11 +166,14 @@ class EdgeConfig:
     def validate(self):
         _require(self.kind in self.KINDS, "edge.kind", self.kind,
                  f"one of {self.KINDS}")
-        _finite("edge", "start_angle", self.start_angle)
+        for name in ("start_angle", "heading"):
+            v = getattr(self, name)
+            _require(isinstance(v, (int, float)) and math.isfinite(v)
+                     and abs(v) <= 2 * math.pi, f"edge.{name}", v,
+                     "a number in [-2 pi, 2 pi] rad")
         _require(self.direction in (1, -1), "edge.direction", self.direction,
                  "1 or -1")
         _positive("edge", "length", self.length)
-        _finite("edge", "heading", self.heading)
 
 
 @dataclass
@@ -241,8 +255,7 @@ class FuzzyConfig:
         return (self.width_fraction * self.position_scale,
                 [self.width_fraction * s for s in self.sliding_scales])
 
-    def validate(self):
-        o = "fuzzy"
+    def validate(self, o="controller.fuzzy"):
         _require(isinstance(self.order, int) and 0 <= self.order <= 3,
                  f"{o}.order", self.order, "an integer in 0..3")
         _require(isinstance(self.upsilon, int) and self.upsilon >= 1,
@@ -469,6 +482,110 @@ class SimulationConfig:
 
 
 @dataclass
+class PartErrorConfig:
+    """How the part the controller believes in differs from the real one.
+    ``tube`` and ``edge`` describe the real part (the plant, the contact,
+    the cutting process and the metrics use it); the command generator,
+    the first-order hold, the observer and the start pose use the believed
+    part: the real one moved by ``offset``, turned by ``yaw`` about its
+    vertical axis (circle: the start angle; straight: the heading about
+    ``tube.position``) and with an inner radius ``radius`` larger."""
+
+    offset: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0])  # m, believed - real
+    yaw: float = 0.0  # rad, believed - real, about the vertical
+    radius: float = 0.0  # m, believed - real inner radius (circle)
+
+    def validate(self):
+        o = "part_error"
+        _vector(o, "offset", self.offset, 3, _finite)
+        _require(isinstance(self.yaw, (int, float)) and math.isfinite(
+            self.yaw) and abs(self.yaw) <= math.pi, f"{o}.yaw", self.yaw,
+            "a number in [-pi, pi] rad")
+        _finite(o, "radius", self.radius)
+
+
+@dataclass
+class DropoutConfig:
+    """A window in which the force sensor's reading is lost."""
+
+    start: float = 0.0  # s
+    duration: float = 0.0  # s
+    mode: str = "hold"  # hold: the last reading; zero: 0 N
+
+    MODES = ("hold", "zero")
+
+    def validate(self, owner="faults.dropouts[]"):
+        _non_negative(owner, "start", self.start)
+        _positive(owner, "duration", self.duration)
+        _require(self.mode in self.MODES, f"{owner}.mode", self.mode,
+                 f"one of {self.MODES}")
+
+
+@dataclass
+class FaultsConfig:
+    """Faults a deburring cell meets, injected by Drake systems in the
+    diagram (deburr_drake.faults); none by default. See also
+    ``part_error`` (the part not where the controller thinks it is)."""
+
+    # N, world, added to the force reading the controller and observer get
+    sensor_bias: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    noise_scale: float = 1.0  # x sensor.noise_std
+    dropouts: List[DropoutConfig] = field(default_factory=list)
+
+    def validate(self):
+        o = "faults"
+        _vector(o, "sensor_bias", self.sensor_bias, 3, _finite)
+        _non_negative(o, "noise_scale", self.noise_scale)
+        for k, d in enumerate(self.dropouts):
+            d.validate(f"{o}.dropouts[{k}]")
+
+    def sensor_faults(self) -> bool:
+        """True if the force reading is biased or drops out."""
+        return any(self.sensor_bias) or bool(self.dropouts)
+
+
+@dataclass
+class GuardsConfig:
+    """Runtime safety guards (deburr_drake.guards): each stops the run with
+    ``stop_reason`` ``guard:<name>`` and its values at the trip. A limit of
+    0 takes the default derived from the models and the task."""
+
+    enabled: bool = True
+    # Trip when any |tau_i| exceeds this fraction of the joint's effort
+    # limit (models/arm5.sdf); joints without a limit are not checked.
+    joint_torque_fraction: float = 1.0
+    tool_force: float = 0.0  # N, |measured f|; 0: 10 x desired |f_t|
+    depth: float = 0.0  # m, chamfer depth; 0: min(4 x desired, cutter radius)
+    workspace_margin: float = 0.02  # m, around the edge's bounding box
+    contact_lost_time: float = 1.0  # s below contact_force after contact
+    contact_force: float = 1.0  # N, ||f_n|| above it is contact
+    nan: bool = True  # any NaN or infinity in a logged signal
+    # s; all guards are checked this often, the joint torque also at every
+    # inner-loop sample. A multiple of the 2.5 ms inner loop adds no
+    # integrator steps. On a 10 s paper run (scripts/bench_guards.py) all
+    # guards every 2.5 ms took 4.5-4.7 % of the CPU time; every 10 ms with
+    # the torque every 2.5 ms 2.7-2.8 %.
+    check_period: float = 0.02
+    # The drives clamp the commanded torque at the effort limits, as real
+    # ones do: a guard sees a torque one sample after it is commanded, so
+    # without the clamp the plant would take one sample of it.
+    saturate_effort: bool = True
+
+    def validate(self):
+        o = "guards"
+        _positive(o, "joint_torque_fraction", self.joint_torque_fraction)
+        for name in ("tool_force", "depth"):
+            _non_negative(o, name, getattr(self, name))
+        for name in ("workspace_margin", "contact_lost_time",
+                     "contact_force", "check_period"):
+            _positive(o, name, getattr(self, name))
+        _require(self.contact_lost_time > self.check_period,
+                 "guards.contact_lost_time", self.contact_lost_time,
+                 f"> guards.check_period ({self.check_period})")
+
+
+@dataclass
 class Scenario:
     """Everything one simulation needs."""
 
@@ -484,8 +601,17 @@ class Scenario:
     sensor: SensorConfig = field(default_factory=SensorConfig)
     process: ProcessConfig = field(default_factory=ProcessConfig)
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
+    guards: GuardsConfig = field(default_factory=GuardsConfig)
+    part_error: PartErrorConfig = field(default_factory=PartErrorConfig)
+    faults: FaultsConfig = field(default_factory=FaultsConfig)
 
     def validate(self):
+        # The default output directory is out/<name>: a plain file name.
+        _require(isinstance(self.name, str)
+                 and re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.+-]*", self.name)
+                 is not None, "name", self.name,
+                 "a plain file name of letters, digits and _ . + - "
+                 "(no path separators, no leading dot)")
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
             if hasattr(value, "validate"):
@@ -500,6 +626,34 @@ class Scenario:
         _require(self.tool.cutter_radius < self.tube.inner_radius,
                  "tool.cutter_radius", self.tool.cutter_radius,
                  f"< tube.inner_radius ({self.tube.inner_radius})")
+        _require(self.task.desired_depth < self.tool.cutter_radius,
+                 "task.desired_depth", self.task.desired_depth,
+                 f"< tool.cutter_radius ({self.tool.cutter_radius})")
+        _require(self.simulation.initial_depth
+                 < min(self.tool.cutter_radius, self.tube.wall_thickness),
+                 "simulation.initial_depth", self.simulation.initial_depth,
+                 "< tool.cutter_radius and tube.wall_thickness "
+                 f"({min(self.tool.cutter_radius, self.tube.wall_thickness)})")
+        believed = self.tube.inner_radius + self.part_error.radius
+        _require(self.tool.cutter_radius < believed
+                 and abs(self.part_error.radius) < self.tube.wall_thickness,
+                 "part_error.radius", self.part_error.radius,
+                 "|radius| < tube.wall_thickness "
+                 f"({self.tube.wall_thickness}) with the believed inner "
+                 f"radius > tool.cutter_radius ({self.tool.cutter_radius})")
+        inner = self.controller.control_period
+        if inner > 0:
+            period = self.command.period
+            ratio = period / inner
+            _require(ratio >= 1 - 1e-9 and abs(ratio - round(ratio)) < 1e-6,
+                     "command.period", period,
+                     "a whole multiple >= 1 of controller.control_period "
+                     f"({inner:g} s): the outer loop samples the inner one")
+            ratio = self.guards.check_period / inner
+            _require(ratio >= 1 - 1e-9 and abs(ratio - round(ratio)) < 1e-6,
+                     "guards.check_period", self.guards.check_period,
+                     "a whole multiple >= 1 of controller.control_period "
+                     f"({inner:g} s): other times add integrator steps")
         return self
 
 
@@ -520,6 +674,118 @@ def scenario_path(name: str) -> Path:
     return path
 
 
+def _schema_error(where: str, node, message: str):
+    mark = node.start_mark
+    raise ConfigError(f"{where}:{mark.line + 1}:{mark.column + 1}: {message}")
+
+
+_TAG = "tag:yaml.org,2002:"
+
+
+def _check_node(where: str, node, schema, path: str):
+    """Checks a composed YAML node against the dataclass ``schema``: every
+    key known (named with its full dotted path), no key twice, every value
+    of the field's type. One ConfigError with file:line:column."""
+    import typing
+
+    import yaml
+    origin = typing.get_origin(schema)
+    if dataclasses.is_dataclass(schema):
+        known = {f.name for f in dataclasses.fields(schema)}
+        if not isinstance(node, yaml.MappingNode):
+            _schema_error(where, node, f"{path or 'the scenario'} must be a "
+                          f"mapping of {sorted(known)}")
+        hints = typing.get_type_hints(schema)
+        seen = {}
+        for key_node, value_node in node.value:
+            key = key_node.value
+            name = f"{path}.{key}" if path else key
+            if key in seen:
+                _schema_error(where, key_node,
+                              f"{name} is given twice (first at line "
+                              f"{seen[key].start_mark.line + 1})")
+            seen[key] = key_node
+            if key not in known:
+                _schema_error(where, key_node,
+                              f"{name} is unknown: allowed fields of "
+                              f"{path or 'the scenario'}: {sorted(known)}")
+            _check_node(where, value_node, hints[key], name)
+        return
+    if origin in (list, List):
+        (item,) = typing.get_args(schema)
+        if not isinstance(node, yaml.SequenceNode):
+            kind = {float: "numbers", int: "integers", bool: "booleans",
+                    str: "strings"}.get(item, "mappings")
+            _schema_error(where, node, f"{path} = {_shown(node)} is invalid: "
+                          f"allowed a list of {kind}")
+        for k, child in enumerate(node.value):
+            _check_node(where, child, item, f"{path}[{k}]")
+        return
+    tags = {float: ("float", "int"), int: ("int",), bool: ("bool",),
+            str: ("str",)}.get(schema)
+    if tags is None:
+        return
+    kinds = {float: "a number", int: "an integer", bool: "true or false",
+             str: "a string"}
+    if schema is float and isinstance(node, yaml.ScalarNode) \
+            and node.tag == _TAG + "str" and node.style is None:
+        try:  # YAML 1.1 reads 4.5e6 as a string; the loader takes it
+            float(node.value)
+            return
+        except ValueError:
+            pass
+    if not (isinstance(node, yaml.ScalarNode)
+            and node.tag in [_TAG + t for t in tags]):
+        _schema_error(where, node, f"{path} = {_shown(node)} is invalid: "
+                      f"allowed {kinds[schema]}")
+
+
+def _shown(node) -> str:
+    import yaml
+    if isinstance(node, yaml.ScalarNode):
+        return repr(node.value)
+    return "a list" if isinstance(node, yaml.SequenceNode) else "a mapping"
+
+
+def _check_yaml(text: str, where: str):
+    """Syntax (file:line:column), duplicate and unknown keys, and types of
+    the YAML ``text`` against :class:`Scenario`, before it is loaded."""
+    import yaml
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.MarkedYAMLError as e:
+        mark = e.problem_mark or e.context_mark
+        problem = e.problem or ""
+        if e.context:
+            c = e.context_mark
+            problem += f" ({e.context}" + (
+                f" at {c.line + 1}:{c.column + 1})" if c else ")")
+        at = f":{mark.line + 1}:{mark.column + 1}" if mark else ""
+        raise ConfigError(f"{where}{at}: YAML syntax error: {problem}") \
+            from None
+    except yaml.YAMLError as e:
+        raise ConfigError(f"{where}: YAML error: "
+                          f"{' '.join(str(e).split())}") from None
+    if root is None:
+        return
+    _check_node(where, root, Scenario, "")
+
+
+def _scenario_file(name_or_path: str) -> Path:
+    path = Path(name_or_path)
+    looks_like_path = path.suffix in (".yaml", ".yml") or len(path.parts) > 1
+    if not looks_like_path:
+        return scenario_path(str(name_or_path))
+    if path.is_dir():
+        raise ConfigError(f"--scenario {name_or_path} is a directory: "
+                          "allowed a YAML file or one of "
+                          f"{scenario_names()}")
+    if not path.is_file():
+        raise ConfigError(f"--scenario {name_or_path}: no such file: "
+                          f"allowed a YAML file or one of {scenario_names()}")
+    return path
+
+
 def load_scenario(name_or_path: Optional[str] = None, *,
                   text: Optional[str] = None) -> Scenario:
     """Loads a scenario by package name or file path, then applies ``text``
@@ -530,11 +796,16 @@ def load_scenario(name_or_path: Optional[str] = None, *,
     scenario = Scenario()
     try:
         if name_or_path is not None:
-            path = Path(name_or_path)
-            if not (path.suffix in (".yaml", ".yml") and path.exists()):
-                path = scenario_path(str(name_or_path))
+            path = _scenario_file(str(name_or_path))
+            try:
+                source = path.read_text()
+            except (OSError, UnicodeDecodeError) as e:
+                raise ConfigError(f"--scenario {path}: cannot read: {e}") \
+                    from None
+            _check_yaml(source, str(path))
             scenario = yaml_load_typed(filename=str(path), defaults=scenario)
         if text:
+            _check_yaml(text, "--scenario-text")
             scenario = yaml_load_typed(data=text, defaults=scenario)
     except ConfigError:
         raise

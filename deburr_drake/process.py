@@ -24,7 +24,7 @@ from deburr_drake.metrics import arc_distance
 __all__ = ["CuttingProcess", "PROCESS_STATE", "cutting_force",
            "force_law_terms", "generalized_cutting_force",
            "make_cutting_force_law", "burr_profile",
-           "FinishBins"]
+           "FinishBins", "material_overlap"]
 
 PROCESS_STATE = VectorLayout("process_state", [
     ("delta", 1),            # m, true chamfer depth at the tool
@@ -87,7 +87,8 @@ class FinishBins:
 
 
 def cutting_force(config: ProcessConfig, contour: Contour, x_p, xdot_p, *,
-                  cut_height: float, burr_area: float = 0.0):
+                  cut_height: float, burr_area: float = 0.0,
+                  overlap: float = 1.0):
     """(force on the tool (3, N, world), PROCESS_STATE vector).
 
     ||f_t|| = g |v_t| + h |v_n| + P'_th (3), g = k_c (chamfer area + burr
@@ -96,29 +97,44 @@ def cutting_force(config: ProcessConfig, contour: Contour, x_p, xdot_p, *,
     that motion; the direction is sat(v_along / v_s), v_s =
     ``smoothing_speed``, so the force is continuous. Plus the contact
     threshold c0 along -n1. Both ramp in smoothly over the first
-    ``threshold_depth`` of depth."""
+    ``threshold_depth`` of depth; ``overlap`` (material_overlap) scales
+    both where the cutter runs off an open edge's end."""
     n1, tangent, delta, arc = contour.frame(x_p)
     return _force(config, n1, tangent, delta, arc,
-                  np.asarray(xdot_p, float), cut_height, burr_area)
+                  np.asarray(xdot_p, float), cut_height, burr_area, overlap)
 
 
 def _sat(x):
     return min(max(x, -1.0), 1.0)
 
 
-def _engagement(config: ProcessConfig, delta, cut_height, burr_area):
+def material_overlap(contour: Contour, arc: float, delta: float,
+                     cutter_radius: float) -> float:
+    """Fraction (0..1) of the cutter's contact chord that lies on material:
+    1 on a closed edge; on an open edge of length L the chord of half-width
+    sqrt(2 r delta) about the tool's arc position, clipped to [0, L]. Off
+    the edge's ends it is 0: no cutting force, no threshold force."""
+    if contour.closed:
+        return 1.0
+    c = max(math.sqrt(2.0 * cutter_radius * max(delta, 0.0)), 1e-6)
+    covered = min(arc + c, contour.length) - max(arc - c, 0.0)
+    return min(max(covered / (2.0 * c), 0.0), 1.0)
+
+
+def _engagement(config: ProcessConfig, delta, cut_height, burr_area,
+                overlap=1.0):
     """(engagement 0..1, g of (3) in N s/m)."""
-    on = _smoothstep(delta / config.threshold_depth)
+    on = _smoothstep(delta / config.threshold_depth) * overlap
     g = config.cutting_coefficient * (max(delta, 0.0) * cut_height
                                       + burr_area)
     return on, g
 
 
 def _force(config: ProcessConfig, n1, tangent, delta, arc, xdot_p,
-           cut_height, burr_area):
+           cut_height, burr_area, overlap=1.0):
     v_n = float(n1 @ xdot_p)
     v_along = float(tangent @ xdot_p)
-    on, g = _engagement(config, delta, cut_height, burr_area)
+    on, g = _engagement(config, delta, cut_height, burr_area, overlap)
     along = on * (g * v_along + (config.threshold_power_force
                                  + config.plunge_coefficient * abs(v_n))
                   * _sat(v_along / config.smoothing_speed))
@@ -131,7 +147,8 @@ def _force(config: ProcessConfig, n1, tangent, delta, arc, xdot_p,
 
 def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, xdot_p,
                     *, cut_height: float,
-                    burr_area: float = 0.0) -> np.ndarray:
+                    burr_area: float = 0.0,
+                    overlap: float = 1.0) -> np.ndarray:
     """The terms of :func:`make_cutting_force_law` that make it give
     :func:`cutting_force` (J: the tool point's translational Jacobian, 3 x
     nv; xdot_p: the tool point's velocity, m/s). With u = a.v (v the joint
@@ -144,7 +161,7 @@ def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, xdot_p,
     Returns [a, A by column, b, B by column, f0] (4 nv + 9). The place on
     the edge (tangent, n1, g, the engagement) and the plunge speed v_n are
     the sample's; u and s follow the velocities."""
-    on, g = _engagement(config, delta, cut_height, burr_area)
+    on, g = _engagement(config, delta, cut_height, burr_area, overlap)
     v_n = float(n1 @ np.asarray(xdot_p, float))
     power = config.threshold_power_force + config.plunge_coefficient * abs(v_n)
     threshold = on * config.contact_threshold_force
@@ -330,7 +347,9 @@ class CuttingProcess(LeafSystem):
     def _update(self, context, discrete_state):
         burr = discrete_state.get_mutable_value(self._burr_index)
         n1, tangent, delta, arc, xdot_p, J = self._place(context)
-        if delta > 0.0:
+        overlap = material_overlap(self._contour, arc, delta,
+                                   self._cutter_radius)
+        if delta > 0.0 and overlap > 0.0:
             finish = discrete_state.get_mutable_value(self._finish_index)
             k = self._bins.index(arc)
             finish[k] = max(finish[k], delta)
@@ -344,8 +363,8 @@ class CuttingProcess(LeafSystem):
         k = self._bins.index(self._leading_edge(arc))
         area = burr[k] * self._thickness[k]
         _, state = _force(self._config, n1, tangent, delta, arc, xdot_p,
-                          self._cut_height, area)
+                          self._cut_height, area, overlap)
         discrete_state.set_value(self._state_index, state)
         discrete_state.set_value(self._terms_index, force_law_terms(
             self._config, n1, tangent, delta, J, xdot_p,
-            cut_height=self._cut_height, burr_area=area))
+            cut_height=self._cut_height, burr_area=area, overlap=overlap))

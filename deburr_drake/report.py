@@ -13,7 +13,8 @@ from deburr_drake import metrics
 from deburr_drake.cell import make_contour
 from deburr_drake.simulation import RunLog
 
-__all__ = ["pass_metrics", "write_run", "TRANSIENT", "CONTACT_FORCE"]
+__all__ = ["pass_metrics", "PassMetrics", "run_summary", "write_run",
+           "TRANSIENT", "CONTACT_FORCE"]
 
 #: Excluded after contact is established (s), as the issue asks.
 TRANSIENT = 2.0
@@ -26,9 +27,22 @@ def _burr_spans(scenario, length):
             for b in scenario.process.burrs]
 
 
+class PassMetrics(dict):
+    """The metrics by name (float, nan where a metric cannot be computed on
+    this run) with ``reasons[name]``: why that metric is nan."""
+
+    def __init__(self):
+        super().__init__()
+        self.reasons: Dict[str, str] = {}
+
+    def unavailable(self, name: str, reason: str):
+        self[name] = float("nan")
+        self.reasons[name] = reason
+
+
 def pass_metrics(log: RunLog, *,
                  true_force_at_desired_depth: Optional[float] = None,
-                 only_cut: bool = False) -> Dict[str, float]:
+                 only_cut: bool = False) -> PassMetrics:
     """Every metric of the pass, SI units unless the name says mm.
 
     Excludes the first ``TRANSIENT`` s after contact (||f_n|| >
@@ -36,47 +50,85 @@ def pass_metrics(log: RunLog, *,
     time; with ``only_cut`` (a run shorter than a pass) also the bins the
     tool has not reached. ``true_force_at_desired_depth`` (N) is the plant's
     normal force at delta* (see demo.contact_truth); without it the
-    force-prediction error is nan."""
+    force-prediction error is nan. A metric that this run cannot give (no
+    contact, no sample after the transient, an empty log) is nan, with the
+    reason in ``reasons``; nothing raises on a short or stopped run."""
     sc = log.scenario
     d_star = sc.task.desired_depth
     f_td = sc.task.desired_chamfering_force
     contour = make_contour(sc)
     L, closed = contour.length, contour.closed
     ch, ctl, proc = log["chamfer"], log["controller"], log["process"]
+    out = PassMetrics()
     t_contact = metrics.first_time(ch["t"], ch["f_n"] > CONTACT_FORCE)
     t0 = t_contact + TRANSIENT
-    out: Dict[str, float] = {"contact_time_s": t_contact}
+    if np.isfinite(t_contact):
+        out["contact_time_s"] = t_contact
+        late_reason = (f"no sample after the transient (contact at "
+                       f"{t_contact:.3f} s + {TRANSIENT:g} s; the run "
+                       f"stopped at {log.sim_time:.3f} s)")
+    else:
+        late_reason = (f"no contact (||f_n|| never above {CONTACT_FORCE:g} "
+                       "N)")
+        out.unavailable("contact_time_s", late_reason)
+
+    def late_metric(name, t, value_of):
+        """value_of(mask) over the samples after the transient."""
+        mask = metrics.window(t, t0)
+        if not np.any(mask):
+            out.unavailable(name, late_reason)
+        else:
+            out[name] = value_of(mask)
 
     # Surface finish (Fig. 8): bins cut after the transient.
-    finish = log["finish"]
-    arc, depth = finish["arc"], finish["depth"]
-    s_proc = proc["arc_position"]
-    transient = metrics.window(proc["t"], t_contact, t0)
-    if np.any(transient):
-        s_span = np.unwrap(s_proc[transient] / L * 2 * np.pi) * L / (2 * np.pi)
-        start = s_span[0]
-        skip = metrics.arc_span_mask(arc, start - sc.tool.cutter_radius,
-                                     max(s_span.max(), start), L, closed)
+    finish = log.signals.get("finish")
+    if finish is None:
+        for name in ("chamfer_depth_mean_error_mm",
+                     "chamfer_depth_rms_error_mm",
+                     "chamfer_depth_max_error_mm", "edge_coverage",
+                     "burr_remaining_max_mm"):
+            out.unavailable(name, "the process's final state could not be "
+                                  "read (" + log.stop_detail + ")")
     else:
-        skip = np.zeros(arc.shape, bool)
-    if only_cut:
-        skip |= depth <= 0.0
-    error = depth[~skip] - d_star
-    out["chamfer_depth_mean_error_mm"] = float(np.mean(error)) * 1e3
-    out["chamfer_depth_rms_error_mm"] = metrics.rms(error) * 1e3
-    out["chamfer_depth_max_error_mm"] = float(np.max(np.abs(error))) * 1e3
-    out["edge_coverage"] = float(np.mean(depth > 0.0))
-    out["burr_remaining_max_mm"] = float(np.max(finish["burr_remaining"])) \
-        * 1e3 if finish["burr_remaining"].size else 0.0
+        arc, depth = finish["arc"], finish["depth"]
+        s_proc = proc["arc_position"]
+        transient = metrics.window(proc["t"], t_contact, t0)
+        if np.any(transient):
+            s_span = np.unwrap(s_proc[transient] / L * 2 * np.pi) * L \
+                / (2 * np.pi)
+            start = s_span[0]
+            skip = metrics.arc_span_mask(arc, start - sc.tool.cutter_radius,
+                                         max(s_span.max(), start), L, closed)
+        else:
+            skip = np.zeros(arc.shape, bool)
+        if only_cut:
+            skip |= depth <= 0.0
+        error = depth[~skip] - d_star
+        if error.size and np.any(proc["t"] > t0):
+            out["chamfer_depth_mean_error_mm"] = float(np.mean(error)) * 1e3
+            out["chamfer_depth_rms_error_mm"] = metrics.rms(error) * 1e3
+            out["chamfer_depth_max_error_mm"] = \
+                float(np.max(np.abs(error))) * 1e3
+        else:
+            reason = late_reason if not np.any(proc["t"] > t0) else \
+                "no edge bin was cut after the transient"
+            for name in ("chamfer_depth_mean_error_mm",
+                         "chamfer_depth_rms_error_mm",
+                         "chamfer_depth_max_error_mm"):
+                out.unavailable(name, reason)
+        out["edge_coverage"] = float(np.mean(depth > 0.0))
+        out["burr_remaining_max_mm"] = \
+            float(np.max(finish["burr_remaining"])) * 1e3 \
+            if finish["burr_remaining"].size else 0.0
 
-    late = metrics.window(proc["t"], t0)
-    out["chamfering_force_rms_error_N"] = metrics.rms(
-        proc["f_t"][late] - f_td)
-    late_c = metrics.window(ctl["t"], t0)
-    out["normal_force_rms_error_N"] = metrics.rms(ctl["e_f"][late_c])
-    out["depth_tracking_rms_error_mm"] = metrics.rms(
-        np.interp(ctl["t"][late_c], ch["t"], ch["delta"])
-        - ctl["delta_d"][late_c]) * 1e3
+    late_metric("chamfering_force_rms_error_N", proc["t"],
+                lambda m: metrics.rms(proc["f_t"][m] - f_td))
+    late_metric("normal_force_rms_error_N", ctl["t"],
+                lambda m: metrics.rms(ctl["e_f"][m]))
+    late_metric("depth_tracking_rms_error_mm", ctl["t"],
+                lambda m: metrics.rms(
+                    np.interp(ctl["t"][m], ch["t"], ch["delta"])
+                    - ctl["delta_d"][m]) * 1e3)
 
     # Feed on and off the burrs: the tool's speed along the edge while its
     # front (arc + r) is inside a burr's span.
@@ -86,44 +138,91 @@ def pass_metrics(log: RunLog, *,
     on = np.zeros(lead.shape, bool)
     for center, half in _burr_spans(sc, L):
         on |= np.abs(metrics.arc_distance(lead, center, L, closed)) < half
-    out["feed_mean_on_burrs_mm_s"] = float(np.mean(speed[on])) * 1e3 \
-        if np.any(on) else float("nan")
-    out["feed_mean_off_burrs_mm_s"] = float(np.mean(speed[~on])) * 1e3 \
-        if np.any(~on) else float("nan")
+    for name, mask, where in (("feed_mean_on_burrs_mm_s", on, "on"),
+                              ("feed_mean_off_burrs_mm_s", ~on, "off")):
+        if np.any(mask):
+            out[name] = float(np.mean(speed[mask])) * 1e3
+        else:
+            out.unavailable(name, late_reason if not np.any(late_ch) else
+                            f"the tool was never {where} a burr after the "
+                            "transient")
 
-    c_hat = log["estimates"]["value"][-1]
-    predicted = float(c_hat[0] + c_hat[1] * d_star)
-    out["predicted_force_at_desired_depth_N"] = predicted
-    if true_force_at_desired_depth is None:
-        out["force_prediction_error_rel"] = float("nan")
+    estimates = log["estimates"]["value"]
+    if len(estimates):
+        c_hat = estimates[-1]
+        predicted = float(c_hat[0] + c_hat[1] * d_star)
+        out["predicted_force_at_desired_depth_N"] = predicted
+        if true_force_at_desired_depth is None:
+            out.unavailable("force_prediction_error_rel",
+                            "the true force at delta* was not given")
+        else:
+            out["true_force_at_desired_depth_N"] = \
+                true_force_at_desired_depth
+            out["force_prediction_error_rel"] = abs(
+                predicted - true_force_at_desired_depth) \
+                / true_force_at_desired_depth
     else:
-        out["true_force_at_desired_depth_N"] = true_force_at_desired_depth
-        out["force_prediction_error_rel"] = abs(
-            predicted - true_force_at_desired_depth) \
-            / true_force_at_desired_depth
+        for name in ("predicted_force_at_desired_depth_N",
+                     "force_prediction_error_rel"):
+            out.unavailable(name, "no estimate was logged")
 
     act = log["actuation"]
-    out["torque_total_variation"] = metrics.total_variation(
-        act["value"][metrics.window(act["t"], t0)])
+    late_metric("torque_total_variation", act["t"],
+                lambda m: metrics.total_variation(act["value"][m]))
     # What the m = 0 / m = 2 comparison turns on: the fuzzy term's own
     # variation, and how far s roams on the fuzzy axes (against Delta_k).
     axes = list(sc.controller.fuzzy.axes)
-    out["fuzzy_term_total_variation"] = metrics.total_variation(
-        ctl["u_fuzzy"][late_c][:, axes])
-    s_fuzzy = ctl["s"][late_c][:, axes]
-    out["sliding_variable_p01_mm_s"] = float(np.percentile(s_fuzzy, 1)) * 1e3
-    out["sliding_variable_p99_mm_s"] = float(np.percentile(s_fuzzy, 99)) * 1e3
+    late_metric("fuzzy_term_total_variation", ctl["t"],
+                lambda m: metrics.total_variation(ctl["u_fuzzy"][m][:, axes]))
+    late_metric("sliding_variable_p01_mm_s", ctl["t"],
+                lambda m: float(np.percentile(ctl["s"][m][:, axes], 1)) * 1e3)
+    late_metric("sliding_variable_p99_mm_s", ctl["t"],
+                lambda m: float(np.percentile(ctl["s"][m][:, axes], 99))
+                * 1e3)
     out["sim_time_s"] = log.sim_time
     out["wall_time_s"] = log.wall_time
     out["completed_pass"] = float(log.completed_pass)
-    out["nan_detected"] = float(metrics.any_nan(
+    out["nan_detected"] = float(log.stop_reason == "nan" or metrics.any_nan(
         *[v for blocks in log.signals.values() for v in blocks.values()]))
     return out
 
 
+def _json_value(value):
+    """Strict JSON: nan and infinities become null."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, float, np.floating, np.integer)):
+        value = float(value)
+        return value if np.isfinite(value) else None
+    return value
+
+
+def run_summary(log: RunLog, metrics_: Dict[str, float]) -> dict:
+    """What metrics.json holds: the scenario, how the run ended
+    (``completed_pass``, ``stop_reason``, ``stop_time_s``,
+    ``stop_detail``), every metric (null where it cannot be computed) and
+    ``unavailable``: the reason for each null."""
+    reasons = dict(getattr(metrics_, "reasons", {}))
+    values = {}
+    for key, value in metrics_.items():
+        values[key] = _json_value(value)
+        if values[key] is None and key not in reasons:
+            reasons[key] = "not finite (the run diverged)"
+    values.update({
+        "scenario": log.scenario.name,
+        "completed_pass": bool(log.completed_pass),
+        "stop_reason": log.stop_reason,
+        "stop_time_s": float(log.stop_time),
+        "stop_detail": log.stop_detail,
+        "unavailable": reasons,
+    })
+    return values
+
+
 def write_run(log: RunLog, out_dir, metrics_: Dict[str, float]) -> Dict[
         str, Path]:
-    """logs.npz (named arrays, SI units) and metrics.json in ``out_dir``."""
+    """logs.npz (named arrays, SI units) and metrics.json (strict JSON,
+    see :func:`run_summary`) in ``out_dir``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     arrays = log.flat()
@@ -133,8 +232,10 @@ def write_run(log: RunLog, out_dir, metrics_: Dict[str, float]) -> Dict[
         sc.task.desired_chamfering_force)
     if np.isfinite(metrics_.get("contact_time_s", np.nan)):
         arrays["meta.contact_start"] = np.array(metrics_["contact_time_s"])
+    arrays["meta.stop_time"] = np.array(log.stop_time)
+    arrays["meta.stop_reason"] = np.array(log.stop_reason)
     np.savez_compressed(out / "logs.npz", **arrays)
     with open(out / "metrics.json", "w") as f:
-        json.dump({"scenario": sc.name, **metrics_}, f, indent=2,
-                  sort_keys=True)
+        json.dump(run_summary(log, metrics_), f, indent=2, sort_keys=True,
+                  allow_nan=False)
     return {"logs": out / "logs.npz", "metrics": out / "metrics.json"}

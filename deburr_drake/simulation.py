@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import time
 from dataclasses import dataclass, field
 from typing import Callable, Dict, Optional
@@ -17,7 +18,12 @@ from deburr_drake.layout import (CHAMFER_STATE, COMMAND_STATE,
                                  CONTROLLER_DIAGNOSTICS)
 from deburr_drake.process import PROCESS_STATE
 
-__all__ = ["RunLog", "simulate", "make_simulator"]
+__all__ = ["RunLog", "simulate", "make_simulator", "STOP_REASONS"]
+
+#: Why a run ended (``RunLog.stop_reason``). ``guard:<name>`` names the
+#: guard that tripped (deburr_drake.guards).
+STOP_REASONS = ("pass_complete", "duration", "interrupted", "guard:<name>",
+                "nan", "error")
 
 _LAYOUTS = {
     "chamfer": CHAMFER_STATE,
@@ -38,6 +44,9 @@ class RunLog:
     sim_time: float = 0.0  # s
     steps: int = 0
     completed_pass: bool = False
+    stop_reason: str = "duration"  # one of STOP_REASONS
+    stop_time: float = 0.0  # s, simulated time at the stop
+    stop_detail: str = ""  # the guard's values, the signal, the exception
 
     def __getitem__(self, key: str) -> Dict[str, np.ndarray]:
         return self.signals[key]
@@ -102,50 +111,99 @@ def _collect(diagram, context, loggers) -> Dict[str, Dict[str, np.ndarray]]:
     return out
 
 
+def _stop_of(status, diagram) -> tuple:
+    """(stop_reason, detail) of a simulator status that reached a
+    termination condition requested by a system's event or the monitor."""
+    from deburr_drake.guards import GUARDS_SYSTEM
+    system = status.system()
+    name = system.get_name() if system is not None else ""
+    message = status.message()
+    if name == GUARDS_SYSTEM:
+        return f"guard:{message.split(':', 1)[0]}", message
+    if name == "command_generator":
+        return "pass_complete", message
+    return message or "interrupted", ""
+
+
+def _is_nan_error(error: BaseException) -> bool:
+    return re.search(r"\bNaN\b", str(error)) is not None
+
+
 def simulate(diagram: Diagram, scenario: Scenario, *,
              duration: Optional[float] = None,
              progress: Optional[Callable[[float, float, float], None]] = None,
-             progress_interval: float = 1.0, loggers=None) -> RunLog:
+             progress_interval: float = 1.0, loggers=None,
+             should_stop: Optional[Callable[[], Optional[str]]] = None
+             ) -> RunLog:
     """Simulates from the diagram's default context for ``duration`` (the
     scenario's by default, or until ``stop_after_passes`` edge lengths are
     done) and returns the logs. ``progress(t, wall, feed)`` (s, s, m/s of
     commanded feed) is called every ``progress_interval`` simulated
-    seconds."""
+    seconds.
+
+    Every ending returns what was logged so far, with ``stop_reason`` (one
+    of :data:`STOP_REASONS`), ``stop_time`` and ``stop_detail``: the pass
+    completed, the duration reached, a guard of the diagram tripped (its
+    event requested termination), ``should_stop()`` returned a reason
+    (checked after every step by the simulator's monitor, e.g. a signal
+    handler's flag: "interrupted"), Drake detected a NaN ("nan"), or
+    another exception ("error"; the detail holds its message)."""
     from deburr_drake.cell import LOGGED
     duration = scenario.simulation.duration if duration is None else duration
+    if not (progress_interval > 0 and np.isfinite(progress_interval)):
+        raise ValueError(f"progress_interval = {progress_interval!r} is "
+                         "invalid: allowed a finite number > 0")
     simulator = make_simulator(diagram, scenario)
     context = simulator.get_mutable_context()
     passes = scenario.simulation.stop_after_passes
-    if passes > 0:
-        generator = diagram.GetSubsystemByName("command_generator")
-        generator_context = generator.GetMyContextFromRoot(context)
-        end = generator.start_arc_position + passes * generator.contour.length
+    generator = diagram.GetSubsystemByName("command_generator")
+    generator_context = generator.GetMyContextFromRoot(context)
+    end = generator.start_arc_position + passes * generator.contour.length
 
-        def monitor(root_context):
-            # Called after every step, always with this simulator's context.
-            if generator.arc_progress(generator_context) >= end:
-                return EventStatus.ReachedTermination(
-                    generator, "completed the pass")
-            return EventStatus.Succeeded()
+    def monitor(root_context):
+        # Called after every step, always with this simulator's context.
+        if passes > 0 and generator.arc_progress(generator_context) >= end:
+            return EventStatus.ReachedTermination(
+                generator, "completed the pass")
+        if should_stop is not None:
+            reason = should_stop()
+            if reason:
+                return EventStatus.ReachedTermination(diagram, reason)
+        return EventStatus.Succeeded()
 
+    if passes > 0 or should_stop is not None:
         simulator.set_monitor(monitor)
     diagram.SetRandomContext(
         context, RandomGenerator(scenario.sensor.noise_seed))
     wall_start = time.perf_counter()
-    simulator.Initialize()
-    t, completed = 0.0, False
-    while t < duration - 1e-12 and not completed:
-        status = simulator.AdvanceTo(min(duration, t + progress_interval))
-        t = context.get_time()
-        completed = status.reason() == status.ReturnReason.kReachedTerminationCondition
-        if progress is not None:
-            generator = diagram.GetSubsystemByName("command_generator")
-            feed = generator.GetOutputPort("feed").Eval(
-                generator.GetMyContextFromRoot(context))[0]
-            progress(t, time.perf_counter() - wall_start, feed)
+    t = 0.0
+    reason, detail = "duration", ""
+    try:
+        simulator.Initialize()
+        while t < duration - 1e-12:
+            status = simulator.AdvanceTo(min(duration, t + progress_interval))
+            t = context.get_time()
+            if status.reason() == \
+                    status.ReturnReason.kReachedTerminationCondition:
+                reason, detail = _stop_of(status, diagram)
+                break
+            if progress is not None:
+                feed = generator.GetOutputPort("feed").Eval(
+                    generator_context)[0]
+                progress(t, time.perf_counter() - wall_start, feed)
+    except KeyboardInterrupt:
+        reason, detail = "interrupted", "KeyboardInterrupt"
+    except Exception as e:  # Drake's NaN checks and failures end up here
+        reason = "nan" if _is_nan_error(e) else "error"
+        detail = f"{type(e).__name__}: {e}"
+    t = context.get_time()
     wall = time.perf_counter() - wall_start
     signals = _collect(diagram, context, loggers or LOGGED)
-    signals.update(_final_state(diagram, context))
+    try:
+        signals.update(_final_state(diagram, context))
+    except Exception as e:  # e.g. a NaN state; the logs are still there
+        detail += f" (final state unavailable: {type(e).__name__}: {e})"
     return RunLog(scenario=scenario, signals=signals, wall_time=wall,
                   sim_time=t, steps=simulator.get_num_steps_taken(),
-                  completed_pass=completed)
+                  completed_pass=reason == "pass_complete",
+                  stop_reason=reason, stop_time=t, stop_detail=detail)

