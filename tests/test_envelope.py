@@ -38,15 +38,20 @@ def test_bounds_follow_the_feed_law(paper):
 
 
 def _signals(f_t, v_t, delta, burr_area, g):
+    """A log whose first sample (t = 0) is the start of contact, with a
+    start-up speed of 9 mm/s and force of 30 N that the bounds ignore, and
+    the given samples from t = TRANSIENT on."""
     n = len(f_t)
-    t = np.arange(n) * 0.0025
+    t = np.concatenate([[0.0], envelope.TRANSIENT + np.arange(n) * 0.0025])
+
+    def first(value, rest):
+        return np.concatenate([[value], np.asarray(rest, float)])
+
     return {
-        "process": {"t": t, "f_t": np.asarray(f_t, float),
-                    "v_t": np.asarray(v_t, float),
-                    "delta": np.asarray(delta, float),
-                    "burr_area": np.asarray(burr_area, float),
-                    "g": np.asarray(g, float)},
-        "chamfer": {"t": t, "f_n": np.full(n, 5.0)},
+        "process": {"t": t, "f_t": first(30.0, f_t), "v_t": first(9e-3, v_t),
+                    "delta": first(1e-4, delta),
+                    "burr_area": first(0.0, burr_area), "g": first(600, g)},
+        "chamfer": {"t": t, "f_n": np.full(n + 1, 5.0)},
     }
 
 
