@@ -297,16 +297,22 @@ def make_deburring_diagram(*, scenario: Scenario,
         model, TOOL_FRAME, belief,
         min_tangential_speed=c.command.min_tangential_speed,
         tool_point=tool_point))
+    # The constant-feed baselines (controller.kind) run a timed path.
+    constant_feed = (c.command.constant_feed if c.controller.kind
+                     in c.controller.CONSTANT_FEED_KINDS else None)
     generator = builder.AddNamedSystem("command_generator", CommandGenerator(
-        c.command, c.task, belief, x0))
+        c.command, c.task, belief, x0, constant_feed=constant_feed))
     foh = builder.AddNamedSystem("first_order_hold", FirstOrderHold(
         c.command.period, belief.project(x0)))
     estimator = builder.AddNamedSystem(
         "contact_estimator", ContactParameterEstimator(
             c.estimator, c.task, sample_period=c.controller.control_period))
+    # The law (controller.kind) is the only thing that differs: the ideal
+    # law reads the true plant's model, the constant-feed ones the depth.
     controller = builder.AddNamedSystem("controller", HybridController(
         model, TOOL_FRAME, c.controller, desired_rotation,
-        tool_point=tool_point))
+        tool_point=tool_point, nominal_depth=c.task.desired_depth,
+        true_plant=plant if c.controller.kind == "ideal" else None))
 
     state = plant.get_state_output_port()
     for system in (process, sensor, observer, controller):

@@ -51,10 +51,16 @@ class CommandGenerator(LeafSystem):
     - ``feed`` (1, m/s): the commanded feed speed v.
     - Discrete state (COMMAND_STATE layout): x_c (m), feed (m/s), arc
       position of x_c (m, unwrapped, counts progress past one revolution).
+
+    With ``constant_feed`` v (m/s) there is no feedrate law and no
+    feedback: x_c((k+1)T) lies v T of arc ahead of x_c(kT) whatever the
+    tool does (a timed path, what the constant-feed baselines of
+    ``controller.kind`` impedance and position run).
     """
 
     def __init__(self, config: CommandConfig, task: TaskConfig,
-                 contour: Contour, initial_position):
+                 contour: Contour, initial_position, *,
+                 constant_feed=None):
         super().__init__()
         config.validate()
         task.validate()
@@ -69,10 +75,15 @@ class CommandGenerator(LeafSystem):
         self._task = task
         self._contour = contour
         self._period = config.period
+        if constant_feed is not None and not constant_feed > 0:
+            raise ConfigError(f"command.constant_feed = {constant_feed!r} "
+                              "is invalid: allowed a finite number > 0")
+        self._constant_feed = constant_feed
         start = contour.project(np.asarray(initial_position, float))
         s0 = contour.arc_position(start)
         self._state_index = self.DeclareDiscreteState(COMMAND_STATE.pack(
-            x_c=start, feed=config.default_feed, arc_position=s0))
+            x_c=start, feed=(config.default_feed if constant_feed is None
+                             else constant_feed), arc_position=s0))
         self._chamfer_port = self.DeclareVectorInputPort(
             "chamfer_state", CHAMFER_STATE.size)
         self.DeclarePeriodicDiscreteUpdateEvent(
@@ -107,6 +118,9 @@ class CommandGenerator(LeafSystem):
             "arc_position"))
 
     def _update(self, context, discrete_state):
+        if self._constant_feed is not None:
+            self._advance_timed(context, discrete_state)
+            return
         c = self._config
         chamfer = self._chamfer_port.Eval(context)
         x_p = CHAMFER_STATE.get(chamfer, "x_p")
@@ -125,6 +139,15 @@ class CommandGenerator(LeafSystem):
         s_p = self._contour.unwrapped_arc_position(x_p, s_previous)
         discrete_state.set_value(self._state_index, COMMAND_STATE.pack(
             x_c=x_c, feed=v, arc_position=s_p + ds))
+
+    def _advance_timed(self, context, discrete_state):
+        xd = context.get_discrete_state(self._state_index).get_value()
+        v = self._constant_feed
+        ds = v * self._period
+        x_c = self._contour.advance(COMMAND_STATE.get(xd, "x_c"), ds)
+        discrete_state.set_value(self._state_index, COMMAND_STATE.pack(
+            x_c=x_c, feed=v,
+            arc_position=COMMAND_STATE.get(xd, "arc_position") + ds))
 
     def _calc_command(self, context, output):
         xd = context.get_discrete_state(self._state_index).get_value()

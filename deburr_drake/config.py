@@ -26,6 +26,9 @@ __all__ = [
     "CommandConfig",
     "EstimatorConfig",
     "FuzzyConfig",
+    "RobustConfig",
+    "ImpedanceConfig",
+    "PositionConfig",
     "ControllerConfig",
     "SensorConfig",
     "ProcessConfig",
@@ -198,10 +201,13 @@ class CommandConfig:
     force_offset: float = 0.5  # N, v_eps
     threshold_power_force: float = 2.0  # N, P'_th as the controller knows it
     min_tangential_speed: float = 1e-5  # m/s, below it n2 = contour tangent
+    # m/s: the feed of the constant-feed baselines (controller.kind
+    # impedance, position; no feedrate law), about the paper's average feed.
+    constant_feed: float = 0.0024
 
     def validate(self):
         for name in ("period", "default_feed", "force_offset",
-                     "min_tangential_speed"):
+                     "min_tangential_speed", "constant_feed"):
             _positive("command", name, getattr(self, name))
         _non_negative("command", "threshold_power_force",
                       self.threshold_power_force)
@@ -281,10 +287,67 @@ class FuzzyConfig:
 
 
 @dataclass
+class RobustConfig:
+    """The robust law (22) of Theorem 1 on the fuzzy axes:
+    H(||x||, s_k) = (b1 + b2 ||x|| + b3 ||x||^2) sgn(s_k) + (b4 + b5 ||x||) s_k
+    with ||x|| = ||x_p|| (m, R8). The Appendix's bounds taken literally give
+    gains no sampled servo survives (``deburr_drake.baselines.laws.
+    appendix_gains``: b1 about 1.6e5 N on this cell, from lambda^2 m d0);
+    the default keeps the sign term sized for the residual it must dominate
+    here (h2: the gravity model's 20 % error and joint friction along x1,
+    x2, a few N; m d2: about 1.4 N), see docs in ``laws``."""
+
+    gains: List[float] = field(
+        default_factory=lambda: [5.0, 0.0, 0.0, 0.0, 0.0])
+    # b1 N, b2 N/m, b3 N/m^2, b4 N s/m, b5 N s/m^2
+
+    def validate(self, o="controller.robust"):
+        _vector(o, "gains", self.gains, 5, _non_negative)
+
+
+@dataclass
+class ImpedanceConfig:
+    """Impedance control at constant feed (the paper's ref. [2]): along n1
+    f = k (delta* - delta_x) + d (0 - delta_x') about the nominal path at the
+    desired depth, a PD (K s) on the other directions, no force feedback,
+    no feedrate law (``command.constant_feed``), no contact estimator."""
+
+    stiffness: float = 40000.0  # N/m along n1 (= lambda K of the x1, x2 PD)
+    damping: float = 400.0  # N s/m along n1
+
+    def validate(self, o="controller.impedance"):
+        _positive(o, "stiffness", self.stiffness)
+        _non_negative(o, "damping", self.damping)
+
+
+@dataclass
+class PositionConfig:
+    """Stiff position control of the nominal path (desired depth) at
+    constant feed: f = K_p s on every task axis, s = edot + lambda e, no
+    force feedback. K_p below M / T of the 2.5 ms servo (7 kg / 2.5 ms =
+    2800 N s/m) keeps it stable."""
+
+    sliding_gain: List[float] = field(
+        default_factory=lambda: [1500.0, 1500.0, 1500.0])  # N s/m
+
+    def validate(self, o="controller.position"):
+        _vector(o, "sliding_gain", self.sliding_gain, 3, _positive)
+
+
+@dataclass
 class ControllerConfig:
     """Inner-loop hybrid position/force controller (7), (9)-(11), (36), (37),
-    R9, R10. Task axes are world x, y, z of the tool tip."""
+    R9, R10. Task axes are world x, y, z of the tool tip.
 
+    ``kind`` selects the law (deburr_drake.baselines): ``fuzzy`` (36), (37);
+    ``robust`` (22); ``ideal`` (12) with the true model; ``impedance`` and
+    ``position`` at constant feed. Everything else is shared."""
+
+    KINDS = ("fuzzy", "robust", "ideal", "impedance", "position")
+    #: Kinds that run at constant feed and ignore the estimator.
+    CONSTANT_FEED_KINDS = ("impedance", "position")
+
+    kind: str = "fuzzy"
     sliding_lambda: List[float] = field(
         default_factory=lambda: [40.0, 40.0, 80.0])  # 1/s, lambda
     sliding_gain: List[float] = field(
@@ -307,9 +370,14 @@ class ControllerConfig:
     gravity_compensation: bool = True
     model_mass_scale: float = 1.2  # controller's model masses / true masses
     fuzzy: FuzzyConfig = field(default_factory=FuzzyConfig)
+    robust: RobustConfig = field(default_factory=RobustConfig)
+    impedance: ImpedanceConfig = field(default_factory=ImpedanceConfig)
+    position: PositionConfig = field(default_factory=PositionConfig)
 
     def validate(self):
         o = "controller"
+        _require(self.kind in self.KINDS, f"{o}.kind", self.kind,
+                 "one of " + ", ".join(self.KINDS))
         _vector(o, "sliding_lambda", self.sliding_lambda, 3, _positive)
         _vector(o, "sliding_gain", self.sliding_gain, 3, _positive)
         _positive(o, "depth_gain", self.depth_gain)
@@ -324,6 +392,9 @@ class ControllerConfig:
         _vector(o, "robust_boundary_layer", self.robust_boundary_layer, n,
                 _positive)
         self.fuzzy.validate()
+        self.robust.validate()
+        self.impedance.validate()
+        self.position.validate()
 
 
 @dataclass

@@ -6,10 +6,12 @@ from __future__ import annotations
 import numpy as np
 from pydrake.autodiffutils import AutoDiffXd
 from pydrake.common.value import AbstractValue
-from pydrake.multibody.tree import BodyIndex, JacobianWrtVariable
+from pydrake.multibody.tree import (BodyIndex, JacobianWrtVariable,
+                                    MultibodyForces_)
 from pydrake.systems.framework import BasicVector_, LeafSystem_, ValueProducer
 from pydrake.systems.scalar_conversion import TemplateSystem
 
+from deburr_drake.baselines.laws import impedance_force, robust_term
 from deburr_drake.config import ControllerConfig
 from deburr_drake.fuzzy import RuleBase
 from deburr_drake.layout import CHAMFER_STATE, CONTROLLER_DIAGNOSTICS
@@ -73,6 +75,26 @@ def HybridController_(T):
         - theta_k' = r nu_k(y0, s_k) s_Delta,k on the (m+1)^2 active rules
           (35), with the dead zone of R4.
 
+        ``config.kind`` replaces the law f_tau and keeps the rest (ports,
+        states, e, s, the Jacobian mapping, the orientation PD, the gravity
+        compensation, the sampled hold):
+
+        - ``robust`` (22): K s - f + H(||x_p||, s_k) on the fuzzy axes,
+          H = (b1 + b2 ||x|| + b3 ||x||^2) sgn(s_k) + (b4 + b5 ||x||) s_k.
+        - ``ideal`` (12): K s - f, plus in joint space the true model
+          (``true_plant``: its own M, C, gravity, friction and damping)
+          M vdot_r + C v - tau_g - tau_friction by Drake's inverse dynamics,
+          J vdot_r + Jdot v = [-lambda_o omega; lambda edot] (xddot_d = 0
+          between the hold's samples), least squares; its own gravity
+          replaces the model's.
+        - ``impedance`` (ref. [2]): x_pd = x_c* + delta* n1 (delta* =
+          ``nominal_depth``, fixed), f_tau = n1 (k e_n + d edot_n) +
+          (I - n1 n1^T) K s; no force feedback, no estimate.
+        - ``position``: the same x_pd, f_tau = K_p s, no force feedback.
+
+        theta is not adapted except by ``fuzzy``; delta_d is fixed at
+        delta* by the constant-feed kinds (impedance, position).
+
         .. pydrake_system::
 
             name: HybridController
@@ -112,9 +134,26 @@ def HybridController_(T):
 
         def _construct(self, plant, tool_frame_name, config,
                        desired_rotation=None, converter=None, *,
-                       tool_point=None):
+                       tool_point=None, nominal_depth=None,
+                       true_plant=None):
             LeafSystem_[T].__init__(self, converter)
             config.validate()
+            if (config.kind in config.CONSTANT_FEED_KINDS
+                    and nominal_depth is None):
+                raise ValueError(f"controller.kind = {config.kind!r} needs "
+                                 "nominal_depth (the desired depth, m)")
+            if config.kind == "ideal" and true_plant is None:
+                raise ValueError("controller.kind = 'ideal' needs "
+                                 "true_plant (the plant's own model)")
+            self._nominal_depth = nominal_depth
+            self._float_true_plant = true_plant
+            if true_plant is not None:
+                self._true_plant = (true_plant if T == float
+                                    else true_plant.ToAutoDiffXd())
+                self._true_context = self._true_plant.CreateDefaultContext()
+                self._true_frame = self._true_plant.GetFrameByName(
+                    tool_frame_name)
+                self._true_forces = MultibodyForces_[T](self._true_plant)
             self.set_name("controller")
             if tool_point is not None and (
                     tool_point.frame.name() != tool_frame_name
@@ -142,6 +181,8 @@ def HybridController_(T):
             self._B_T = plant.MakeActuationMatrix().T  # nu x nv
             self._lambda = np.asarray(config.sliding_lambda, float)
             self._K = np.asarray(config.sliding_gain, float)
+            self._K_position = np.asarray(config.position.sliding_gain,
+                                         float)
             self._desired_rotation = (np.eye(3) if desired_rotation is None
                                       else np.asarray(desired_rotation,
                                                       float))
@@ -190,7 +231,9 @@ def HybridController_(T):
         def _construct_copy(self, other, converter=None):
             Impl._construct(self, other._float_plant,
                             other._tool_frame_name, other._config,
-                            other._desired_rotation, converter=converter)
+                            other._desired_rotation, converter=converter,
+                            nominal_depth=other._nominal_depth,
+                            true_plant=other._float_true_plant)
 
         @property
         def rule_bases(self):
@@ -227,19 +270,68 @@ def HybridController_(T):
             f = p["tool_force"]
 
             e_f = p["desired_normal_force"][0] - f_n
-            delta_d_dot = c.depth_gain * e_f
+            # [delta_d', theta'] with theta' zero off the active rules.
+            derivatives = np.zeros_like(x)
+            if c.kind in c.CONSTANT_FEED_KINDS:
+                # The nominal path at the desired depth: no depth law.
+                delta_d = self._nominal_depth + 0.0 * x[0]
+                delta_d_dot = 0.0 * x[0]
+            else:
+                delta_d_dot = c.depth_gain * e_f
+                derivatives[0] = delta_d_dot
             x_pd = p["commanded_position"] + delta_d * n1
             xdot_pd = p["commanded_velocity"] + delta_d_dot * n1
             e = x_pd - x_p
-            s = (xdot_pd - xdot_p) + self._lambda * e
-            f_tau = self._K * s - f
+            edot = xdot_pd - xdot_p
+            s = edot + self._lambda * e
 
-            y0 = np.sqrt(x_p @ x_p)
             u_fuzzy = np.zeros(3, dtype=x.dtype)
             zeta = np.zeros(3)
-            # [delta_d', theta'] with theta' zero off the active rules.
-            derivatives = np.zeros_like(x)
-            derivatives[0] = delta_d_dot
+            if c.kind == "impedance":
+                im = c.impedance
+                f_tau = impedance_force(e, edot, n1, s,
+                                        stiffness=im.stiffness,
+                                        damping=im.damping, gain=self._K)
+            elif c.kind == "position":
+                f_tau = self._K_position * s
+            else:
+                f_tau = self._K * s - f
+                y0 = np.sqrt(x_p @ x_p)
+                if c.kind == "fuzzy":
+                    self._fuzzy(theta, y0, s, u_fuzzy, zeta, derivatives)
+                elif c.kind == "robust":
+                    for axis in self._axes:
+                        u_fuzzy[axis] = robust_term(s[axis], y0,
+                                                    c.robust.gains)
+                f_tau = f_tau + u_fuzzy
+
+            state = p["plant_state"]
+            J, R, tau_g = self._kinematics(state)
+            tau = J[3:].T @ f_tau
+            omega = J[:3] @ state[self._nq:]
+            if self._orientation_control:
+                E = self._desired_rotation @ R.T
+                # Rotation vector of R_d R^T to first order (exact axis).
+                e_o = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0],
+                                      E[1, 0] - E[0, 1]])
+                tau = tau + J[:3].T @ (self._K_o * (self._lambda_o * e_o
+                                                    - omega))
+            if c.kind == "ideal":
+                tau = tau + self._true_model_forces(
+                    state, J, self._lambda * edot,
+                    -self._lambda_o * omega if self._orientation_control
+                    else 0.0 * omega)
+            elif c.gravity_compensation:
+                tau = tau - tau_g
+            return (self._B_T @ tau, derivatives,
+                    CONTROLLER_DIAGNOSTICS.pack(
+                        dtype=x.dtype, x_pd=x_pd, e=e, s=s, delta_d=delta_d,
+                        e_f=e_f, f_tau=f_tau, u_fuzzy=u_fuzzy, zeta=zeta))
+
+        def _fuzzy(self, theta, y0, s, u_fuzzy, zeta, derivatives):
+            """(36), (37) on the fuzzy axes: fills u_fuzzy, zeta and the
+            theta rates (35) in place."""
+            c = self._config
             r = c.fuzzy.adaptation_gain
             for k, (axis, rb) in enumerate(zip(self._axes, self._rule_bases)):
                 s_k = s[axis]
@@ -252,24 +344,23 @@ def HybridController_(T):
                     u = c.robust_gain[k] * saturation(
                         s_k / c.robust_boundary_layer[k])
                 u_fuzzy[axis] = u
-            f_tau = f_tau + u_fuzzy
 
-            J, R, tau_g = self._kinematics(p["plant_state"])
-            tau = J[3:].T @ f_tau
-            if self._orientation_control:
-                E = self._desired_rotation @ R.T
-                # Rotation vector of R_d R^T to first order (exact axis).
-                e_o = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0],
-                                      E[1, 0] - E[0, 1]])
-                omega = J[:3] @ p["plant_state"][self._nq:]
-                tau = tau + J[:3].T @ (self._K_o * (self._lambda_o * e_o
-                                                    - omega))
-            if c.gravity_compensation:
-                tau = tau - tau_g
-            return (self._B_T @ tau, derivatives,
-                    CONTROLLER_DIAGNOSTICS.pack(
-                        dtype=x.dtype, x_pd=x_pd, e=e, s=s, delta_d=delta_d,
-                        e_f=e_f, f_tau=f_tau, u_fuzzy=u_fuzzy, zeta=zeta))
+        def _true_model_forces(self, state, J, a_r, alpha_r):
+            """M vdot_r + C v - tau_g - tau_friction of the true plant (its
+            force elements: joint friction; its joint damping), with vdot_r
+            the least-squares solution of J vdot_r = [alpha_r; a_r] - Jdot v
+            (the pseudo-inverse from float values)."""
+            plant, ctx = self._true_plant, self._true_context
+            plant.SetPositionsAndVelocities(ctx, state)
+            bias = plant.CalcBiasSpatialAcceleration(
+                ctx, JacobianWrtVariable.kV, self._true_frame, np.zeros(3),
+                plant.world_frame(), plant.world_frame())
+            target = np.concatenate([alpha_r - bias.rotational(),
+                                     a_r - bias.translational()])
+            J_value = np.vectorize(_value)(J) if J.dtype == object else J
+            vdot_r = np.linalg.pinv(J_value) @ target
+            plant.CalcForceElementsContribution(ctx, self._true_forces)
+            return plant.CalcInverseDynamics(ctx, vdot_r, self._true_forces)
 
         def _kinematics(self, state):
             """(J, R, tau_g) of the controller's model at ``state``: the tool
