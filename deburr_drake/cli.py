@@ -289,6 +289,46 @@ def _diagram(args) -> int:
     return 0
 
 
+def _compare(args) -> int:
+    from pathlib import Path
+
+    from deburr_drake.baselines import compare as cmp
+    from deburr_drake.cell import check_part_in_reach
+    scenario = _load(args)
+    if args.duration is not None:
+        _check_duration(args.duration)
+    controllers = [c.strip() for c in args.controllers.split(",")
+                   if c.strip()]
+    if not controllers or len(set(controllers)) != len(controllers):
+        _bad(f"--controllers = {args.controllers!r} is invalid: allowed "
+             f"distinct names from {', '.join(cmp.CONTROLLERS)}")
+    for c in controllers:
+        cmp.configure(scenario, c)
+    if not (isinstance(args.workers, int) and args.workers >= 1):
+        _bad(f"--workers = {args.workers!r} is invalid: allowed an "
+             "integer >= 1")
+    out = Path(args.out or f"out/{scenario.name}_comparison")
+    _check_writable_target(out, "--out", args.force, is_dir=True,
+                           names=("comparison.json", "comparison.md"))
+    check_part_in_reach(scenario)
+    print(f"deburr-drake compare: scenario '{scenario.name}', "
+          f"{', '.join(controllers)}, "
+          + (f"{args.duration:g} s" if args.duration else "full run")
+          + f", {args.workers} worker(s), output {out}/", flush=True)
+    rows = cmp.compare(scenario, controllers, duration=args.duration,
+                       out_dir=out, workers=args.workers)
+    print((out / "comparison.md").read_text())
+    worst = 0
+    for row in rows:
+        worst = max(worst, EXIT_CODES.get(
+            row["stop_reason"].split(":", 1)[0], 1))
+    print(f"wrote {out}/comparison.json, comparison.md and the overlay "
+          "figures")
+    # A controller's guard or NaN is a finding, written in the table: the
+    # comparison itself succeeded.
+    return 0 if worst in (0, 3, 4) else worst
+
+
 def _scenario_arguments(parser, default: str, duration_help: str):
     parser.add_argument("--scenario", default=default,
                         help=f"scenario name or YAML file (default {default})")
@@ -329,6 +369,25 @@ def main(argv=None) -> int:
                    help="overwrite existing logs.npz / metrics.json in "
                         "--out and an existing --record file")
     p.set_defaults(func=_simulate)
+
+    p = sub.add_parser("compare", help="run several controllers on one "
+                                       "scenario and compare them")
+    _scenario_arguments(p, "paper",
+                        "simulated seconds of each run (default: the "
+                        "scenario's, a full pass)")
+    p.add_argument("--controllers",
+                   default="fuzzy,fuzzy_m0,impedance,robust,ideal,position",
+                   help="comma-separated: fuzzy (the scenario's order), "
+                        "fuzzy_m0, fuzzy_m2, robust, ideal, impedance, "
+                        "position")
+    p.add_argument("--workers", type=int, default=1,
+                   help="parallel processes (default 1)")
+    p.add_argument("--out", default=None,
+                   help="output directory (default "
+                        "out/<scenario>_comparison)")
+    p.add_argument("--force", action="store_true",
+                   help="overwrite an existing comparison in --out")
+    p.set_defaults(func=_compare)
 
     p = sub.add_parser("diagram", help="export the diagram and the "
                                        "controller as GraphViz graphs")

@@ -95,3 +95,26 @@ def total_variation(x) -> float:
     """Sum over samples and channels of |x[k+1] - x[k]|."""
     x = np.asarray(x, float)
     return float(np.sum(np.abs(np.diff(x, axis=0)))) if len(x) > 1 else 0.0
+
+
+def high_frequency_power(t, x, cutoff: float) -> float:
+    """Mean power (sum over channels, units of x squared) of the part of
+    the uniformly sampled signal ``x`` (samples along axis 0, times ``t``)
+    above ``cutoff`` Hz, from its one-sided periodogram: the mean square of
+    the signal high-passed at ``cutoff``. nan with fewer than 8 samples."""
+    x = np.asarray(x, float)
+    if x.ndim == 1:
+        x = x[:, None]
+    if len(x) < 8:
+        return float("nan")
+    dt = float(np.median(np.diff(t)))
+    spectrum = np.fft.rfft(x - x.mean(axis=0), axis=0)
+    freq = np.fft.rfftfreq(len(x), dt)
+    # Parseval: mean square = sum |X_k|^2 / N^2 with the one-sided bins
+    # (except DC and Nyquist) counted twice.
+    weight = np.full(freq.shape, 2.0)
+    weight[0] = 1.0
+    if len(x) % 2 == 0:
+        weight[-1] = 1.0
+    power = weight[:, None] * np.abs(spectrum) ** 2 / len(x) ** 2
+    return float(np.sum(power[freq > cutoff]))

@@ -200,3 +200,31 @@ def test_short_closed_loop_run(kind):
     assert 2e-4 < ch["delta"][-1] < 8e-4
     assert not metrics.any_nan(*[v for b in log.signals.values()
                                  for v in b.values()])
+
+
+def test_high_frequency_power_by_hand():
+    from deburr_drake.metrics import high_frequency_power
+    t = np.arange(4000) * 0.0025
+    x = np.c_[3 * np.sin(2 * np.pi * 100 * t) + 5 * np.sin(2 * np.pi * 10 * t),
+              np.sin(2 * np.pi * 60 * t)]
+    assert high_frequency_power(t, x, 50.0) == pytest.approx(4.5 + 0.5)
+
+
+@pytest.mark.slow
+def test_compare_writes_both_files(tmp_path):
+    import json
+
+    from deburr_drake.cli import main
+    out = tmp_path / "cmp"
+    assert main(["compare", "--controllers", "fuzzy,position",
+                 "--duration", "0.5", "--out", str(out)]) == 0
+    data = json.loads((out / "comparison.json").read_text())
+    assert [r["controller"] for r in data["rows"]] == ["fuzzy", "position"]
+    assert all(r["stop_reason"] == "duration" for r in data["rows"])
+    assert "torque_power_above_50Hz" in data["rows"][0]
+    table = (out / "comparison.md").read_text()
+    assert "| fuzzy |" in table and "| position |" in table
+    assert (out / "position" / "metrics.json").exists()
+    assert main(["compare", "--controllers", "fuzzy,pid", "--duration",
+                 "0.5", "--out", str(tmp_path / "bad")]) == 2
+    assert not (tmp_path / "bad").exists()
