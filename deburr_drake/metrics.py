@@ -118,3 +118,14 @@ def high_frequency_power(t, x, cutoff: float) -> float:
         weight[-1] = 1.0
     power = weight[:, None] * np.abs(spectrum) ** 2 / len(x) ** 2
     return float(np.sum(power[freq > cutoff]))
+
+
+def cell_crossings(s, delta: float) -> int:
+    """How often ``s`` (samples along axis 0, one column per axis) moves
+    from one zeroth-order B-spline cell [(j - 1/2) Delta, (j + 1/2) Delta)
+    to another (R1's half-open indicator), summed over the columns."""
+    s = np.asarray(s, float)
+    if s.ndim == 1:
+        s = s[:, None]
+    cells = np.floor(s / delta + 0.5)
+    return int(np.count_nonzero(np.diff(cells, axis=0)))

@@ -228,3 +228,10 @@ def test_compare_writes_both_files(tmp_path):
     assert main(["compare", "--controllers", "fuzzy,pid", "--duration",
                  "0.5", "--out", str(tmp_path / "bad")]) == 2
     assert not (tmp_path / "bad").exists()
+
+
+def test_cell_crossings_by_hand():
+    from deburr_drake.metrics import cell_crossings
+    # cells of width 1: [-0.5, 0.5) is 0, [0.5, 1.5) is 1
+    assert cell_crossings([0.0, 0.49, 0.5, 0.2, -0.5, -0.51], 1.0) == 3
+    assert cell_crossings(np.zeros((5, 2)), 1.0) == 0

@@ -45,6 +45,7 @@ _TABLE = (
     ("torque_total_variation", "torque TV (N m)", 1.0),
     ("torque_power_above_50Hz", "torque power >50 Hz (N^2 m^2)", 1.0),
     ("torque_rms_above_50Hz", "torque RMS >50 Hz (N m)", 1.0),
+    ("fuzzy_cell_crossings", "s cell crossings", 1.0),
     ("wall_time_s", "wall (s)", 1.0),
 )
 
@@ -69,7 +70,7 @@ def configure(scenario, controller: str):
 def smoothness(log, t0: float) -> Dict[str, float]:
     """Torque total variation is in pass_metrics; here the torque's power
     and RMS above HIGH_FREQUENCY Hz after ``t0`` s (the chattering of a
-    sampled sign law shows there)."""
+    sampled sign law shows there) and the m = 0 cell crossings of s."""
     from deburr_drake import metrics
     act = log["actuation"]
     mask = metrics.window(act["t"], t0)
@@ -77,8 +78,18 @@ def smoothness(log, t0: float) -> Dict[str, float]:
                                           act["value"][mask],
                                           HIGH_FREQUENCY)
              if np.count_nonzero(mask) >= 8 else float("nan"))
+    ctl = log["controller"]
+    late = metrics.window(ctl["t"], t0)
+    f = log.scenario.controller.fuzzy
+    _, deltas = f.deltas()
+    crossings = sum(metrics.cell_crossings(ctl["s"][late][:, axis], d)
+                    for axis, d in zip(f.axes, deltas))
     return {"torque_power_above_50Hz": power,
-            "torque_rms_above_50Hz": float(np.sqrt(power))}
+            "torque_rms_above_50Hz": float(np.sqrt(power)),
+            # How often s_k left its m = 0 cell (width Delta_k) on the
+            # fuzzy axes: 0 means m = 0 and m = 2 cannot differ in
+            # smoothness through the memberships.
+            "fuzzy_cell_crossings": float(crossings)}
 
 
 def run_controller(scenario, controller: str, duration: Optional[float],
