@@ -235,3 +235,30 @@ def test_cell_crossings_by_hand():
     # cells of width 1: [-0.5, 0.5) is 0, [0.5, 1.5) is 1
     assert cell_crossings([0.0, 0.49, 0.5, 0.2, -0.5, -0.51], 1.0) == 3
     assert cell_crossings(np.zeros((5, 2)), 1.0) == 0
+
+
+@pytest.mark.parametrize("kind", ["robust", "ideal", "impedance",
+                                  "position"])
+def test_scalar_conversion(model, kind):
+    """Every kind converts to AutoDiffXd (for linearization) and gives the
+    float law's actuation."""
+    config = ControllerConfig(control_period=0.0, kind=kind)
+    controller = HybridController(model, "tool_tip", config,
+                                  nominal_depth=5e-4, true_plant=model)
+    expected, _, _ = _evaluate(controller)
+    ad = controller.ToAutoDiffXd()
+    x_p, v, force, x_c, v_c, _ = _point()
+    chamfer = chamfer_quantities(CONTOUR, x_p, v, force,
+                                 min_tangential_speed=1e-5)
+    context = ad.CreateDefaultContext()
+    for name, value in dict(
+            plant_state=np.concatenate([x_p, v]), chamfer_state=chamfer,
+            tool_force=force, commanded_position=x_c,
+            commanded_velocity=v_c, desired_normal_force=[6.0]).items():
+        ad.GetInputPort(name).FixValue(context, value)
+    x = context.get_continuous_state_vector().CopyToVector()
+    x[0] = 3e-4
+    context.SetContinuousState(x)
+    actuation = [a.value() for a in
+                 ad.GetOutputPort("actuation").Eval(context)]
+    np.testing.assert_allclose(actuation, expected, rtol=1e-9, atol=1e-9)
