@@ -30,6 +30,11 @@ FAULTS = {
     "believed part turned 0.2 rad": "part_error: {yaw: 0.2}",
     "sliding gain 2e4 (runaway)":
         "controller: {sliding_gain: [20000.0, 20000.0, 1500.0]}",
+    # Taller than the cutter's 2 mm engagement below the edge (g = 23,100
+    # N s/m on it, beyond the envelope's 2 mm: scripts/envelope.py).
+    "burr 3 mm x 8 mm (> engagement)":
+        "process: {burrs: [{center_fraction: 0.1, length: 0.008, "
+        "height: 0.003, thickness: 0.002}]}",
     "straight 10 mm edge, run off": "{edge: {kind: straight, length: 0.01}, "
                                     "process: {burrs: []}, "
                                     "simulation: {stop_after_passes: 0}}",
