@@ -36,7 +36,8 @@ from deburr_drake.sensor import ForceSensor
 __all__ = ["make_deburring_diagram", "MakeDeburringDiagram", "make_contour",
            "edge_points", "contact_normal_force",
            "start_position", "check_part_in_reach", "believed_scenario",
-           "believed_contour", "TOOL_FRAME", "SENSOR_JOINT", "LOGGED",
+           "believed_contour", "believed_contour_step", "TOOL_FRAME",
+           "SENSOR_JOINT", "LOGGED",
            "SYSTEM_NAMES"]
 
 TOOL_FRAME = "tool_tip"
@@ -115,6 +116,19 @@ def believed_scenario(scenario: Scenario) -> Scenario:
 def believed_contour(scenario: Scenario) -> Contour:
     """The zero-depth path on the part the controller believes in."""
     return make_contour(believed_scenario(scenario))
+
+
+def believed_contour_step(scenario: Scenario):
+    """(time (s), believed contour from then on) of ``faults.part_step``:
+    the believed part moved by minus the real part's step; None without a
+    step."""
+    step = scenario.faults.part_step
+    if not step.active():
+        return None
+    after = copy.deepcopy(scenario)
+    after.part_error.offset = [e - d for e, d in zip(
+        scenario.part_error.offset, step.offset)]
+    return step.time, believed_contour(after)
 
 
 def start_position(scenario: Scenario, contour=None) -> np.ndarray:
@@ -272,6 +286,7 @@ def make_deburring_diagram(*, scenario: Scenario,
     plant, _ = _add_plant(builder, c)
     contour = make_contour(c)  # the real part: the plant's truth
     belief = believed_contour(c)  # the part the controller believes in
+    belief_step = believed_contour_step(c)  # ... after the part moved
     x0 = start_position(c, belief)
     q0 = _initial_positions(plant, c, x0)
     plant.SetDefaultPositions(q0)
@@ -296,12 +311,13 @@ def make_deburring_diagram(*, scenario: Scenario,
     observer = builder.AddNamedSystem("chamfer_observer", ChamferObserver(
         model, TOOL_FRAME, belief,
         min_tangential_speed=c.command.min_tangential_speed,
-        tool_point=tool_point))
+        tool_point=tool_point, contour_step=belief_step))
     # The constant-feed baselines (controller.kind) run a timed path.
     constant_feed = (c.command.constant_feed if c.controller.kind
                      in c.controller.CONSTANT_FEED_KINDS else None)
     generator = builder.AddNamedSystem("command_generator", CommandGenerator(
-        c.command, c.task, belief, x0, constant_feed=constant_feed))
+        c.command, c.task, belief, x0, constant_feed=constant_feed,
+        contour_step=belief_step))
     foh = builder.AddNamedSystem("first_order_hold", FirstOrderHold(
         c.command.period, belief.project(x0)))
     estimator = builder.AddNamedSystem(

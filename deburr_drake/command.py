@@ -7,7 +7,7 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from deburr_drake.config import CommandConfig, ConfigError, TaskConfig
-from deburr_drake.geometry import Contour
+from deburr_drake.geometry import Contour, contour_at
 from deburr_drake.layout import CHAMFER_STATE, COMMAND_STATE
 
 __all__ = ["CommandGenerator", "FirstOrderHold", "feedrate"]
@@ -60,7 +60,7 @@ class CommandGenerator(LeafSystem):
 
     def __init__(self, config: CommandConfig, task: TaskConfig,
                  contour: Contour, initial_position, *,
-                 constant_feed=None):
+                 constant_feed=None, contour_step=None):
         super().__init__()
         config.validate()
         task.validate()
@@ -74,6 +74,8 @@ class CommandGenerator(LeafSystem):
         self._config = config
         self._task = task
         self._contour = contour
+        # (time, contour): the part as the controller sees it from then on.
+        self._contour_step = contour_step
         self._period = config.period
         if constant_feed is not None and not constant_feed > 0:
             raise ConfigError(f"command.constant_feed = {constant_feed!r} "
@@ -132,11 +134,12 @@ class CommandGenerator(LeafSystem):
             threshold_force=c.threshold_power_force,
             force_offset=c.force_offset, default_feed=c.default_feed)
         ds = v * self._period
-        x_c = self._contour.advance(x_p, ds)
+        contour = self._contour_now(context)
+        x_c = contour.advance(x_p, ds)
         s_previous = COMMAND_STATE.get(
             context.get_discrete_state(self._state_index).get_value(),
             "arc_position")
-        s_p = self._contour.unwrapped_arc_position(x_p, s_previous)
+        s_p = contour.unwrapped_arc_position(x_p, s_previous)
         discrete_state.set_value(self._state_index, COMMAND_STATE.pack(
             x_c=x_c, feed=v, arc_position=s_p + ds))
 
@@ -144,10 +147,15 @@ class CommandGenerator(LeafSystem):
         xd = context.get_discrete_state(self._state_index).get_value()
         v = self._constant_feed
         ds = v * self._period
-        x_c = self._contour.advance(COMMAND_STATE.get(xd, "x_c"), ds)
+        x_c = self._contour_now(context).advance(
+            COMMAND_STATE.get(xd, "x_c"), ds)
         discrete_state.set_value(self._state_index, COMMAND_STATE.pack(
             x_c=x_c, feed=v,
             arc_position=COMMAND_STATE.get(xd, "arc_position") + ds))
+
+    def _contour_now(self, context) -> Contour:
+        return contour_at(self._contour, self._contour_step,
+                          context.get_time())
 
     def _calc_command(self, context, output):
         xd = context.get_discrete_state(self._state_index).get_value()

@@ -38,6 +38,7 @@ __all__ = [
     "GuardsConfig",
     "PartErrorConfig",
     "DropoutConfig",
+    "PartStepConfig",
     "FaultsConfig",
     "Scenario",
     "load_scenario",
@@ -594,6 +595,29 @@ class DropoutConfig:
 
 
 @dataclass
+class PartStepConfig:
+    """The part moves in its fixture at ``time`` by ``offset``. The real
+    part is fixed in the plant (welded hydroelastic geometry), so the step
+    is applied to the part the controller believes in, by -``offset``:
+    from ``time`` on, the observer and the command generator see the part
+    where it was before while it is ``offset`` away, the error a slipped
+    fixture gives the controller (without the contact's own jolt)."""
+
+    time: float = 0.0  # s; 0: no step
+    offset: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0])  # m, world, real part's move
+
+    def validate(self, owner="faults.part_step"):
+        _non_negative(owner, "time", self.time)
+        _vector(owner, "offset", self.offset, 3, _finite)
+        _require(self.time == 0.0 or any(self.offset), f"{owner}.offset",
+                 self.offset, f"not all zero when {owner}.time > 0")
+
+    def active(self) -> bool:
+        return self.time > 0.0
+
+
+@dataclass
 class FaultsConfig:
     """Faults a deburring cell meets, injected by Drake systems in the
     diagram (deburr_drake.faults); none by default. See also
@@ -603,6 +627,7 @@ class FaultsConfig:
     sensor_bias: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
     noise_scale: float = 1.0  # x sensor.noise_std
     dropouts: List[DropoutConfig] = field(default_factory=list)
+    part_step: PartStepConfig = field(default_factory=PartStepConfig)
 
     def validate(self):
         o = "faults"
@@ -610,6 +635,7 @@ class FaultsConfig:
         _non_negative(o, "noise_scale", self.noise_scale)
         for k, d in enumerate(self.dropouts):
             d.validate(f"{o}.dropouts[{k}]")
+        self.part_step.validate(f"{o}.part_step")
 
     def sensor_faults(self) -> bool:
         """True if the force reading is biased or drops out."""

@@ -33,7 +33,8 @@ import math
 
 import numpy as np
 
-__all__ = ["Contour", "CircularContour", "StraightContour", "direction_of_motion"]
+__all__ = ["Contour", "CircularContour", "StraightContour", "contour_at",
+           "direction_of_motion"]
 
 _TOL = 1e-9          # validation tolerance (unit-ness, orthogonality, horizontality)
 _MIN_RHO = 1e-9      # CircularContour: n1 undefined closer than this to the centre axis
@@ -76,6 +77,14 @@ def _finite_scalar(x, name):
     if not math.isfinite(x):
         raise ValueError(f"{name} must be a finite number, got {x}")
     return x
+
+
+def contour_at(contour, step, time: float):
+    """``contour``, or the contour of ``step`` = (time (s), contour) once
+    ``time`` has reached that step's time (``step`` None: no step)."""
+    if step is not None and time >= step[0]:
+        return step[1]
+    return contour
 
 
 def direction_of_motion(tangent, v, min_speed):

@@ -7,7 +7,7 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
-from deburr_drake.geometry import Contour, direction_of_motion
+from deburr_drake.geometry import Contour, contour_at, direction_of_motion
 from deburr_drake.kinematics import ToolPoint
 from deburr_drake.layout import CHAMFER_STATE
 
@@ -67,17 +67,20 @@ class ChamferObserver(LeafSystem):
     ``plant`` is a kinematic model of the robot (it is not simulated here);
     its Context is scratch memory for kinematics, not state. A ``tool_point``
     for that frame may be shared with other systems that read the same
-    state (its memo then serves all of them).
+    state (its memo then serves all of them). ``contour_step`` (time (s),
+    contour) replaces ``contour`` from that time on (a part that moves in
+    its fixture, as the controller then sees it).
     """
 
     def __init__(self, plant: MultibodyPlant, tool_frame_name: str,
                  contour: Contour, *, min_tangential_speed: float,
-                 tool_point: ToolPoint = None):
+                 tool_point: ToolPoint = None, contour_step=None):
         super().__init__()
         self.set_name("chamfer_observer")
         self._tool_point = tool_point or ToolPoint(
             plant, plant.GetFrameByName(tool_frame_name))
         self._contour = contour
+        self._contour_step = contour_step
         self._min_speed = min_tangential_speed
         nx = plant.num_multibody_states()
         self._state_port = self.DeclareVectorInputPort("plant_state", nx)
@@ -96,11 +99,13 @@ class ChamferObserver(LeafSystem):
 
     def _calc(self, context, output):
         state = self._state_port.Eval(context)
-        key = state.tobytes()
+        contour = contour_at(self._contour, self._contour_step,
+                             context.get_time())
+        key = (state.tobytes(), id(contour))
         if self._last is None or key != self._last[0]:
             x_p, xdot_p = self.tool_point(state)
             self._last = (key, chamfer_kinematics(
-                self._contour, x_p, xdot_p,
+                contour, x_p, xdot_p,
                 min_tangential_speed=self._min_speed))
         chamfer = self._last[1].copy()
         _set_force(chamfer, self._force_port.Eval(context))

@@ -28,6 +28,8 @@ FAULTS = {
     "believed radius +0.3 mm": "part_error: {radius: 0.0003}",
     "believed part 1 mm off in x": "part_error: {offset: [0.001, 0.0, 0.0]}",
     "believed part turned 0.2 rad": "part_error: {yaw: 0.2}",
+    "part moves 0.3 mm along x at 10 s":
+        "faults: {part_step: {time: 10.0, offset: [0.0003, 0.0, 0.0]}}",
     "sliding gain 2e4 (runaway)":
         "controller: {sliding_gain: [20000.0, 20000.0, 1500.0]}",
     # Taller than the cutter's 2 mm engagement below the edge (g = 23,100

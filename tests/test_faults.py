@@ -4,9 +4,10 @@ touches."""
 import numpy as np
 import pytest
 
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.cell import believed_contour_step, make_deburring_diagram
 from deburr_drake.config import ConfigError, FaultsConfig, load_scenario
 from deburr_drake.faults import SensorFaults
+from deburr_drake.layout import CHAMFER_STATE
 from deburr_drake.simulation import simulate
 
 
@@ -93,3 +94,48 @@ faults:
     window = (ch["t"] >= 3.0) & (ch["t"] < 3.2)
     assert np.all(ch["f_n"][window] == 0.0)
     assert np.all(true_f_n[window] > 1.0)  # the contact is still there
+
+
+def test_part_step_moves_the_part_the_controller_sees():
+    """faults.part_step: the real part moves by 0.3 mm along x (n1 at the
+    start of the point-mass testbed's edge is +x) at 0.5 s. Before it the
+    observer and the command generator see the part as it was; from 0.5 s
+    on, the observer's depth at the same tool state is 0.3 mm larger (the
+    part the controller believes in sits 0.3 mm nearer the tool than the
+    real one), and the command moves onto the stepped contour."""
+    scenario = load_scenario("point_mass", text="""
+faults: {part_step: {time: 0.5, offset: [0.0003, 0.0, 0.0]}}
+""")
+    diagram = make_deburring_diagram(scenario=scenario)
+    context = diagram.CreateDefaultContext()
+    observer = diagram.GetSubsystemByName("chamfer_observer")
+    generator = diagram.GetSubsystemByName("command_generator")
+
+    def chamfer(t):
+        context.SetTime(t)
+        return CHAMFER_STATE.split(observer.GetOutputPort(
+            "chamfer_state").Eval(observer.GetMyContextFromRoot(context)))
+
+    before, after = chamfer(0.49), chamfer(0.5)
+    np.testing.assert_allclose(before["n1"], [1.0, 0.0, 0.0], atol=1e-9)
+    assert after["delta"] - before["delta"] == pytest.approx(3e-4,
+                                                             abs=1e-9)
+    gc = generator.GetMyMutableContextFromRoot(context)
+    for t in (0.475, 0.5):
+        context.SetTime(t)
+        x_c = generator.EvalUniquePeriodicDiscreteUpdate(gc).get_vector(
+            0).CopyToVector()[:3]
+        # The command lies on the zero-depth contour the observer uses.
+        contour = (generator.contour if t < 0.5
+                   else believed_contour_step(scenario)[1])
+        assert abs(contour.phi(x_c)) < 1e-9
+
+
+@pytest.mark.parametrize("text, field", [
+    ("{part_step: {time: -1.0, offset: [0.001, 0.0, 0.0]}}",
+     "faults.part_step.time"),
+    ("{part_step: {time: 1.0}}", "faults.part_step.offset"),
+])
+def test_bad_part_step_names_the_field(text, field):
+    with pytest.raises(ConfigError, match=field.replace(".", r"\.")):
+        _faults(text)
