@@ -137,6 +137,31 @@ def _diagram(args) -> int:
     return 0
 
 
+def _analyze(args) -> int:
+    from pathlib import Path
+
+    from deburr_drake import analysis
+    scenario = _load(args)
+    grid = analysis.parse_map(scenario, args.map) if args.map else None
+    out = Path(args.out or f"out/{scenario.name}/analysis")
+    result = analysis.analyze(scenario, at=args.at,
+                              after_contact=args.after_contact,
+                              progress=lambda m: print(f"  {m}", flush=True))
+    if args.validate:
+        result["boundaries"] = analysis.validate_boundaries(
+            result["_objects"]["op"],
+            progress=lambda m: print(f"  {m}", flush=True))
+    if grid is not None:
+        result["_objects"]["map"] = analysis.stability_map(
+            result["_objects"]["op"], grid)
+        result["map"] = result["_objects"]["map"].to_dict()
+    files = analysis.write_analysis(result, out)
+    print()
+    print(analysis.summary_text(result))
+    print("\nwrote " + ", ".join(str(p) for p in files.values()))
+    return 0
+
+
 def _scenario_arguments(parser, default: str, duration_help: str):
     parser.add_argument("--scenario", default=default,
                         help=f"scenario name or YAML file (default {default})")
@@ -185,6 +210,29 @@ def main(argv=None) -> int:
     p.add_argument("--out", default=None,
                    help="output path (default out/<scenario>/diagram.dot)")
     p.set_defaults(func=_diagram)
+
+    p = sub.add_parser("analyze", help="closed-loop stability at an "
+                                       "operating point in steady cutting")
+    _scenario_arguments(p, "paper", None)
+    p.add_argument("--at", type=float, default=None,
+                   help="simulated time (s) of the operating point "
+                        "(default: --after-contact s after the first "
+                        "contact)")
+    p.add_argument("--after-contact", type=float, default=3.0,
+                   help="seconds of cutting before the operating point "
+                        "(default 3)")
+    p.add_argument("--map", nargs="+", default=None,
+                   metavar="FIELD=LO:HI:N",
+                   help="stability map of rho over one or two scenario "
+                        "fields by dotted name, e.g. "
+                        "sensor.cutoff_frequency=5:80:16 "
+                        "controller.sliding_gain[0]=100:3000:16")
+    p.add_argument("--validate", action="store_true",
+                   help="predicted against simulated stability boundaries "
+                        "(short runs from the operating point)")
+    p.add_argument("--out", default=None,
+                   help="output directory (default out/<scenario>/analysis)")
+    p.set_defaults(func=_analyze)
     args = parser.parse_args(argv)
     from deburr_drake.config import ConfigError
     try:

@@ -11,6 +11,16 @@ from deburr_drake.analysis.operating_point import (
 from deburr_drake.analysis.linearization import (
     ContinuousLinearization, Mode, classify_modes, continuous_state_slices,
     eq8_time_constant, linearize_closed_loop, numerical_jacobian)
+from deburr_drake.analysis.sampled import (
+    SampledLoop, StateEntry, cell_map_entries, period_map, sampled_loop,
+    simulator_config, spectral_radius)
+from deburr_drake.analysis.frequency import (
+    NormalForceLoop, frequency_response, loop_from_map, margins,
+    normal_force_loop, plot_bode_nyquist)
+from deburr_drake.analysis.maps import (
+    MapAxis, StabilityMap, parse_map, plot_map, stability_map)
+from deburr_drake.analysis.report import (
+    SUMMARY_KEYS, analyze, plot_poles, summary_text, write_analysis)
 
 __all__ = [
     "DEFAULT_TIME_AFTER_CONTACT", "OperatingPoint", "find_operating_point",
@@ -18,4 +28,11 @@ __all__ = [
     "ContinuousLinearization", "Mode", "classify_modes",
     "continuous_state_slices", "eq8_time_constant", "linearize_closed_loop",
     "numerical_jacobian",
+    "SampledLoop", "StateEntry", "cell_map_entries", "period_map",
+    "sampled_loop", "simulator_config", "spectral_radius",
+    "NormalForceLoop", "frequency_response", "loop_from_map", "margins",
+    "normal_force_loop", "plot_bode_nyquist",
+    "MapAxis", "StabilityMap", "parse_map", "plot_map", "stability_map",
+    "SUMMARY_KEYS", "analyze", "plot_poles", "summary_text",
+    "write_analysis",
 ]

@@ -170,6 +170,7 @@ class SampledLoop:
     sensor_alpha: float  # the sampled low-pass's gain, y += alpha (raw - y)
     sensor_rows: slice  # y's rows/columns in Phi
     n1: np.ndarray  # the operating point's depth direction (world)
+    n2: np.ndarray  # and direction of motion (world)
     diagram: Diagram = None
     context: Context = None
 
@@ -206,11 +207,13 @@ def sampled_loop(op: OperatingPoint, **overrides) -> SampledLoop:
         labels += [f"{e.label}[{i}]" for i in range(n)]
         start += n
     observer = diagram.GetSubsystemByName("chamfer_observer")
-    n1 = CHAMFER_STATE.get(observer.GetOutputPort("chamfer_state").Eval(
-        observer.GetMyContextFromRoot(context)), "n1")
+    chamfer = observer.GetOutputPort("chamfer_state").Eval(
+        observer.GetMyContextFromRoot(context))
+    n1 = CHAMFER_STATE.get(chamfer, "n1")
+    n2 = CHAMFER_STATE.get(chamfer, "n2")
     alpha = 1.0 - np.exp(-2 * np.pi * scenario.sensor.cutoff_frequency
                          * scenario.sensor.sample_period)
     return SampledLoop(Phi=Phi, labels=labels, period=period,
                        spectral_radius=spectral_radius(Phi),
-                       sensor_alpha=alpha, sensor_rows=rows, n1=n1.copy(),
+                       sensor_alpha=alpha, sensor_rows=rows, n1=n1.copy(), n2=n2.copy(),
                        diagram=diagram, context=context)

@@ -1,0 +1,128 @@
+"""Stability maps: the sampled loop's spectral radius rho over a grid of
+one or two scenario fields given by dotted name, drawn as a heat map with
+the rho = 1 contour."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from deburr_drake.analysis.operating_point import (OperatingPoint,
+                                                   frozen_scenario,
+                                                   get_field)
+from deburr_drake.config import ConfigError, Scenario
+
+__all__ = ["MapAxis", "StabilityMap", "parse_map", "stability_map",
+           "plot_map"]
+
+
+@dataclass
+class MapAxis:
+    field: str  # dotted scenario field, e.g. controller.sliding_gain[0]
+    values: np.ndarray
+
+
+def parse_map(scenario: Scenario, specs: Sequence[str]) -> List[MapAxis]:
+    """``["sensor.cutoff_frequency=5:80:16", ...]`` (one or two) ->
+    axes. ConfigError, one line, for an unknown field, a malformed spec,
+    an empty range (N < 1, or LO = HI with N > 1) or a value the scenario
+    rejects."""
+    if not 1 <= len(specs) <= 2:
+        raise ConfigError(f"--map takes one or two FIELD=LO:HI:N, got "
+                          f"{len(specs)}")
+    axes = []
+    for spec in specs:
+        field, eq, rng = spec.partition("=")
+        parts = rng.split(":")
+        if not eq or len(parts) != 3:
+            raise ConfigError(f"--map {spec!r}: expected FIELD=LO:HI:N")
+        try:
+            lo, hi, n = float(parts[0]), float(parts[1]), int(parts[2])
+        except ValueError:
+            raise ConfigError(f"--map {spec!r}: LO, HI must be numbers and "
+                              "N an integer") from None
+        current = get_field(scenario, field)
+        if isinstance(current, (list, dict)) or not isinstance(
+                current, (int, float)) or isinstance(current, bool):
+            raise ConfigError(f"--map {field!r} is not a numeric scenario "
+                              "field")
+        if n < 1 or (n > 1 and not hi > lo) or not (np.isfinite(lo)
+                                                  and np.isfinite(hi)):
+            raise ConfigError(f"--map {spec!r}: empty range (need "
+                              "LO < HI and N >= 1)")
+        values = np.linspace(lo, hi, n) if n > 1 else np.array([lo])
+        for v in (values[0], values[-1]):
+            frozen_scenario(scenario, **{field: v})  # ConfigError if bad
+        axes.append(MapAxis(field, values))
+    return axes
+
+
+@dataclass
+class StabilityMap:
+    axes: List[MapAxis]
+    rho: np.ndarray  # (n0,) or (n0, n1)
+    scenario: str = ""
+
+    def to_dict(self):
+        return {"fields": [a.field for a in self.axes],
+                "values": [a.values.tolist() for a in self.axes],
+                "rho": self.rho.tolist()}
+
+
+def stability_map(op: OperatingPoint, axes: Sequence[MapAxis], *,
+                  rho_of: Optional[Callable[..., float]] = None,
+                  progress: Optional[Callable[[str], None]] = None
+                  ) -> StabilityMap:
+    """rho at every grid point, all from the one operating point (the
+    simulation to steady cutting is done once)."""
+    from deburr_drake.analysis.sampled import sampled_loop
+    if rho_of is None:
+        def rho_of(**overrides):
+            return sampled_loop(op, **overrides).spectral_radius
+    shape = tuple(len(a.values) for a in axes)
+    rho = np.zeros(shape)
+    for index in np.ndindex(*shape):
+        overrides = {a.field: float(a.values[i])
+                     for a, i in zip(axes, index)}
+        rho[index] = rho_of(**overrides)
+        if progress:
+            progress(f"map {index}: rho = {rho[index]:.4f}")
+    return StabilityMap(list(axes), rho, op.scenario.name)
+
+
+def plot_map(m: StabilityMap, path, *, boundaries=None):
+    """Heat map of rho with the rho = 1 contour (one field: rho against
+    it), and simulated boundary points on top when given."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6.5, 5))
+    if len(m.axes) == 1:
+        ax.plot(m.axes[0].values, m.rho, "o-")
+        ax.axhline(1.0, color="r", lw=1)
+        ax.set(xlabel=m.axes[0].field, ylabel="rho")
+        for b in boundaries or []:
+            if b["parameter"] == m.axes[0].field and b.get("simulated"):
+                ax.axvline(b["simulated"], color="k", ls="--",
+                           label="simulated boundary")
+    else:
+        x, y = m.axes[0].values, m.axes[1].values
+        mesh = ax.pcolormesh(x, y, m.rho.T, shading="nearest",
+                             cmap="RdYlGn_r", vmin=min(0.9, m.rho.min()),
+                             vmax=max(1.1, m.rho.max()))
+        fig.colorbar(mesh, ax=ax, label="rho (spectral radius)")
+        if m.rho.min() < 1 < m.rho.max():
+            ax.contour(x, y, m.rho.T, levels=[1.0], colors="k")
+        ax.set(xlabel=m.axes[0].field, ylabel=m.axes[1].field)
+        for b in boundaries or []:
+            if b["parameter"] == m.axes[0].field and b.get("simulated"):
+                ax.axvline(b["simulated"], color="k", ls="--")
+            if b["parameter"] == m.axes[1].field and b.get("simulated"):
+                ax.axhline(b["simulated"], color="k", ls="--")
+    ax.set_title(f"{m.scenario}: stability of the sampled loop")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
