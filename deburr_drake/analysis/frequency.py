@@ -68,6 +68,12 @@ def margins(f, L):
         if -20 * np.log10(m) < gm:
             gm, f_pc = float(-20 * np.log10(m)), float(
                 f[i] + a * (f[i + 1] - f[i]))
+    # At the Nyquist frequency a discrete loop is real: on the negative
+    # real axis it touches -180 there without crossing.
+    wrapped = (phase[-1] + 180.0) % 360.0
+    if min(wrapped, 360.0 - wrapped) < 1e-6 and \
+            -20 * np.log10(mag[-1]) < gm:
+        gm, f_pc = float(-20 * np.log10(mag[-1])), float(f[-1])
     pm, f_gc = np.inf, np.nan
     above = mag > 1.0
     for i in np.flatnonzero(np.diff(above.astype(int)) != 0):
