@@ -199,3 +199,45 @@ def test_set_field_by_dotted_name():
     assert sc.sensor.cutoff_frequency == 7.0
     with pytest.raises(ConfigError):
         analysis.set_field(sc, "sensor.cutoff", 1.0)
+
+
+def test_fuzzy_slope_adds_slope_times_s_to_the_surface():
+    from deburr_drake.cell import make_deburring_diagram
+    sc = load_scenario("point_mass")
+    diagram = make_deburring_diagram(scenario=sc)
+    context = diagram.CreateDefaultContext()
+    controller = diagram.GetSubsystemByName("controller")
+    cc = controller.GetMyContextFromRoot(context)
+    before = controller.theta(cc).copy()
+    analysis.add_fuzzy_slope(diagram, context, 750.0)
+    theta = controller.theta(cc)
+    for k, rb in enumerate(controller.rule_bases):
+        for s in (-0.7 * rb.omegak_half_width, 0.013 * rb.omegak_half_width,
+                  0.4 * rb.omegak_half_width):
+            u_before = rb.evaluate(before[k], 0.03, s)
+            u_after = rb.evaluate(theta[k], 0.03, s)
+            assert u_after - u_before == pytest.approx(750.0 * s, rel=1e-9)
+
+
+def test_stability_map_grid_and_figure(tmp_path):
+    sc = load_scenario("point_mass")
+    axes = analysis.parse_map(sc, ["sensor.cutoff_frequency=10:40:4",
+                                   "controller.sliding_gain[0]=100:400:3"])
+    assert [a.field for a in axes] == ["sensor.cutoff_frequency",
+                                       "controller.sliding_gain[0]"]
+    np.testing.assert_allclose(axes[0].values, [10, 20, 30, 40])
+
+    class _Op:  # only the scenario's name is read without a simulation
+        scenario = sc
+
+    seen = []
+
+    def rho_of(**overrides):
+        seen.append(overrides)
+        return overrides["sensor.cutoff_frequency"] / 25.0
+
+    m = analysis.stability_map(_Op(), axes, rho_of=rho_of)
+    assert m.rho.shape == (4, 3) and len(seen) == 12
+    np.testing.assert_allclose(m.rho[:, 0], [0.4, 0.8, 1.2, 1.6])
+    path = analysis.plot_map(m, tmp_path / "map.png")
+    assert path.stat().st_size > 0

@@ -19,6 +19,9 @@ from deburr_drake.analysis.frequency import (
     normal_force_loop, plot_bode_nyquist)
 from deburr_drake.analysis.maps import (
     MapAxis, StabilityMap, parse_map, plot_map, stability_map)
+from deburr_drake.analysis.validation import (
+    PARAMETERS, Parameter, add_fuzzy_slope, predicted_boundary,
+    simulated_boundary, simulated_growth, validate_boundaries)
 from deburr_drake.analysis.report import (
     SUMMARY_KEYS, analyze, plot_poles, summary_text, write_analysis)
 
@@ -33,6 +36,8 @@ __all__ = [
     "NormalForceLoop", "frequency_response", "loop_from_map", "margins",
     "normal_force_loop", "plot_bode_nyquist",
     "MapAxis", "StabilityMap", "parse_map", "plot_map", "stability_map",
+    "PARAMETERS", "Parameter", "add_fuzzy_slope", "predicted_boundary",
+    "simulated_boundary", "simulated_growth", "validate_boundaries",
     "SUMMARY_KEYS", "analyze", "plot_poles", "summary_text",
     "write_analysis",
 ]

@@ -36,7 +36,8 @@ from deburr_drake.cell import make_deburring_diagram
 from deburr_drake.config import Scenario
 
 __all__ = ["StateEntry", "period_map", "spectral_radius", "SampledLoop",
-           "sampled_loop", "cell_map_entries", "simulator_config"]
+           "sampled_loop", "cell_map_entries", "outer_loop_entries",
+           "simulator_config"]
 
 
 @dataclass(frozen=True)
@@ -129,8 +130,17 @@ def period_map(diagram: Diagram, context: Context,
     return np.array(columns).T
 
 
-def spectral_radius(M: np.ndarray) -> float:
-    return float(np.max(np.abs(np.linalg.eigvals(M))))
+def spectral_radius(M: np.ndarray, *, neutral: int = 0,
+                    tolerance: float = 1e-3) -> float:
+    """max |eig(M)|, leaving out up to ``neutral`` eigenvalues within
+    ``tolerance`` of 1 (a known neutral mode, such as a shift along the
+    edge)."""
+    eigs = np.linalg.eigvals(M)
+    for _ in range(neutral):
+        i = int(np.argmin(np.abs(eigs - 1.0)))
+        if abs(eigs[i] - 1.0) < tolerance:
+            eigs = np.delete(eigs, i)
+    return float(np.max(np.abs(eigs)))
 
 
 def cell_map_entries(diagram: Diagram) -> List[StateEntry]:
@@ -179,9 +189,26 @@ class SampledLoop:
         return np.linalg.eigvals(self.Phi)
 
 
-def sampled_loop(op: OperatingPoint, **overrides) -> SampledLoop:
+def outer_loop_entries(diagram: Diagram) -> List[StateEntry]:
+    """The outer loop's states: the command generator's x_c(kT), feed and
+    arc position, the first-order hold's x*(t) and its knots."""
+    return [
+        StateEntry("command_generator", "discrete", 0, step=1e-7,
+                   label="command_state"),
+        StateEntry("first_order_hold", "continuous", step=1e-7,
+                   label="x_star"),
+        StateEntry("first_order_hold", "discrete", 0, step=1e-7,
+                   label="hold_knots"),
+    ]
+
+
+def sampled_loop(op: OperatingPoint, *, modify=None, outer_loop=False,
+                 **overrides) -> SampledLoop:
     """The one-period map of ``op``'s sampled loop, with scenario
-    ``overrides`` by dotted name (e.g. ``sensor.cutoff_frequency``)."""
+    ``overrides`` by dotted name (e.g. ``sensor.cutoff_frequency``);
+    ``modify(diagram, context)`` may change the operating point's state
+    first (e.g. the fuzzy surface, see
+    :func:`deburr_drake.analysis.add_fuzzy_slope`)."""
     from deburr_drake.layout import CHAMFER_STATE
     scenario = frozen_scenario(op.scenario, **overrides)
     period = scenario.controller.control_period
@@ -196,7 +223,23 @@ def sampled_loop(op: OperatingPoint, **overrides) -> SampledLoop:
     diagram = make_deburring_diagram(scenario=scenario)
     context = diagram.CreateDefaultContext()
     transfer_state(op.diagram, op.context, diagram, context)
+    if modify is not None:
+        modify(diagram, context)
     entries = cell_map_entries(diagram)
+    if outer_loop:
+        outer = scenario.command.period
+        t = context.get_time()
+        start = np.ceil(t / outer - 1e-9) * outer
+        if start > t:  # run on to just before the next outer sample
+            simulator = Simulator(diagram, context)
+            config = copy.copy(simulator_config(scenario))
+            config.start_time = t
+            ApplySimulatorConfig(config, simulator)
+            simulator.Initialize(
+                InitializeParams(suppress_initialization_events=True))
+            simulator.AdvanceTo(start)
+        period = outer
+        entries = entries + outer_loop_entries(diagram)
     Phi = period_map(diagram, context, entries, period=period,
                      config=simulator_config(scenario))
     labels, start, rows = [], 0, None
@@ -214,6 +257,7 @@ def sampled_loop(op: OperatingPoint, **overrides) -> SampledLoop:
     alpha = 1.0 - np.exp(-2 * np.pi * scenario.sensor.cutoff_frequency
                          * scenario.sensor.sample_period)
     return SampledLoop(Phi=Phi, labels=labels, period=period,
-                       spectral_radius=spectral_radius(Phi),
+                       spectral_radius=spectral_radius(
+                           Phi, neutral=1 if outer_loop else 0),
                        sensor_alpha=alpha, sensor_rows=rows, n1=n1.copy(), n2=n2.copy(),
                        diagram=diagram, context=context)
