@@ -143,9 +143,11 @@ def _analyze(args) -> int:
     from deburr_drake import analysis
     scenario = _load(args)
     grid = analysis.parse_map(scenario, args.map) if args.map else None
+    overrides = analysis.parse_settings(scenario, args.set or [])
     out = Path(args.out or f"out/{scenario.name}/analysis")
     result = analysis.analyze(scenario, at=args.at,
                               after_contact=args.after_contact,
+                              overrides=overrides,
                               progress=lambda m: print(f"  {m}", flush=True))
     if args.validate:
         result["boundaries"] = analysis.validate_boundaries(
@@ -227,6 +229,12 @@ def main(argv=None) -> int:
                         "fields by dotted name, e.g. "
                         "sensor.cutoff_frequency=5:80:16 "
                         "controller.sliding_gain[0]=100:3000:16")
+    p.add_argument("--set", nargs="+", default=None,
+                   metavar="FIELD=VALUE",
+                   help="analyse the operating point with these scenario "
+                        "fields changed (the scenario as given reaches "
+                        "steady cutting first), e.g. "
+                        "controller.sliding_gain[0]=4500")
     p.add_argument("--validate", action="store_true",
                    help="predicted against simulated stability boundaries "
                         "(short runs from the operating point)")

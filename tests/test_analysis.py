@@ -241,3 +241,14 @@ def test_stability_map_grid_and_figure(tmp_path):
     np.testing.assert_allclose(m.rho[:, 0], [0.4, 0.8, 1.2, 1.6])
     path = analysis.plot_map(m, tmp_path / "map.png")
     assert path.stat().st_size > 0
+
+
+def test_settings_at_the_operating_point_are_checked():
+    sc = load_scenario("paper")
+    assert analysis.parse_settings(sc, ["controller.sliding_gain[1]=4500"]) \
+        == {"controller.sliding_gain[1]": 4500.0}
+    for bad in (["controller.sliding_gain[7]=1"], ["sensor.cutoff=3"],
+                ["sensor.cutoff_frequency"], ["sensor.cutoff_frequency=x"],
+                ["sensor.cutoff_frequency=300"]):
+        with pytest.raises(ConfigError):
+            analysis.parse_settings(sc, bad)

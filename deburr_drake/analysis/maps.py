@@ -14,8 +14,28 @@ from deburr_drake.analysis.operating_point import (OperatingPoint,
                                                    get_field)
 from deburr_drake.config import ConfigError, Scenario
 
-__all__ = ["MapAxis", "StabilityMap", "parse_map", "stability_map",
-           "plot_map"]
+__all__ = ["MapAxis", "StabilityMap", "parse_map", "parse_settings",
+           "stability_map", "plot_map"]
+
+
+def parse_settings(scenario: Scenario, specs: Sequence[str]):
+    """``["controller.sliding_gain[0]=4500", ...]`` -> {field: value};
+    ConfigError, one line, for a malformed spec, an unknown field or a
+    value the scenario rejects."""
+    out = {}
+    for spec in specs:
+        field, eq, value = spec.partition("=")
+        if not eq:
+            raise ConfigError(f"--set {spec!r}: expected FIELD=VALUE")
+        get_field(scenario, field)
+        try:
+            out[field] = float(value)
+        except ValueError:
+            raise ConfigError(f"--set {spec!r}: VALUE must be a number") \
+                from None
+    if out:
+        frozen_scenario(scenario, **out)  # ConfigError if out of range
+    return out
 
 
 @dataclass
