@@ -143,6 +143,32 @@ def test_point_mass_depth_mode_matches_eq8(point_mass_op):
 
 
 @pytest.mark.slow
+def test_paper_arm_depth_mode_matches_eq8_and_the_loop_is_stable():
+    from deburr_drake.demo import contact_truth
+    sc = load_scenario("paper")
+    op = analysis.find_operating_point(sc, after_contact=1.0)
+    truth = contact_truth(sc)
+    lin = analysis.linearize_closed_loop(op, stiffness=truth.local_stiffness)
+    tau8 = analysis.eq8_time_constant(sc.controller.depth_gain,
+                                      truth.local_stiffness, truth.c2)
+    assert lin.depth_time_constant == pytest.approx(tau8, rel=0.10)
+    assert "joint" in lin.groups()
+    assert analysis.sampled_loop(op).spectral_radius < 1.0
+
+
+def test_frozen_scenario_freezes_the_adaptation_and_the_noise():
+    sc = load_scenario("point_mass")
+    frozen = analysis.frozen_scenario(sc, continuous=True,
+                                      **{"sensor.cutoff_frequency": 7.0})
+    assert not frozen.estimator.adapt and not frozen.controller.fuzzy.adapt
+    assert frozen.sensor.noise_std == 0.0
+    assert frozen.controller.control_period == 0.0
+    assert frozen.sensor.cutoff_frequency == 7.0
+    assert frozen.simulation.accuracy <= 1e-7
+    assert sc.estimator.adapt and sc.sensor.cutoff_frequency != 7.0
+
+
+@pytest.mark.slow
 def test_point_mass_sampled_loop_goes_unstable_with_a_fast_sensor(
         point_mass_op):
     stable = analysis.sampled_loop(point_mass_op)
