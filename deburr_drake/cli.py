@@ -145,6 +145,7 @@ def _analyze(args) -> int:
     grid = analysis.parse_map(scenario, args.map) if args.map else None
     overrides = analysis.parse_settings(scenario, args.set or [])
     out = Path(args.out or f"out/{scenario.name}/analysis")
+    out.mkdir(parents=True, exist_ok=True)
     result = analysis.analyze(scenario, at=args.at,
                               after_contact=args.after_contact,
                               overrides=overrides,
@@ -153,6 +154,11 @@ def _analyze(args) -> int:
         result["boundaries"] = analysis.validate_boundaries(
             result["_objects"]["op"],
             progress=lambda m: print(f"  {m}", flush=True))
+    if args.lyapunov:
+        trace = analysis.lyapunov_trace(scenario, duration=args.lyapunov)
+        result["lyapunov"] = trace.summary
+        analysis.plot_lyapunov(trace, out / "lyapunov.png",
+                               title=scenario.name)
     if grid is not None:
         result["_objects"]["map"] = analysis.stability_map(
             result["_objects"]["op"], grid)
@@ -235,6 +241,10 @@ def main(argv=None) -> int:
                         "fields changed (the scenario as given reaches "
                         "steady cutting first), e.g. "
                         "controller.sliding_gain[0]=4500")
+    p.add_argument("--lyapunov", type=float, default=None,
+                   metavar="SECONDS",
+                   help="also run the scenario this long and trace V1 of "
+                        "Prop. 1 and V of (38) (lyapunov.png)")
     p.add_argument("--validate", action="store_true",
                    help="predicted against simulated stability boundaries "
                         "(short runs from the operating point)")

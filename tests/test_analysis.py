@@ -278,3 +278,19 @@ def test_settings_at_the_operating_point_are_checked():
                 ["sensor.cutoff_frequency=300"]):
         with pytest.raises(ConfigError):
             analysis.parse_settings(sc, bad)
+
+
+def test_lyapunov_v1_starts_at_the_estimate_error():
+    from deburr_drake.demo import contact_truth
+    sc = load_scenario("point_mass")
+    trace = analysis.lyapunov_trace(sc, duration=0.2, sample_period=0.05)
+    truth = contact_truth(sc)
+    c_error = np.array(sc.estimator.initial_estimates) - [
+        truth.c0, truth.secant_stiffness, truth.c2]
+    gains = np.array(sc.estimator.gains)
+    expected = np.sum(c_error[gains > 0] ** 2 / (2 * gains[gains > 0]))
+    # At t = 0 the tool is nearly at rest on its command: s^T M s / 2 is
+    # micro-joules against the estimate error's 0.3 J.
+    assert expected <= trace.V1[0] <= expected + 1e-5
+    assert np.all(np.isfinite(trace.V)) and np.all(trace.V >= trace.V1 - 1e-12)
+    assert len(trace.t) == 5

@@ -23,6 +23,8 @@ from deburr_drake.analysis.maps import (
 from deburr_drake.analysis.validation import (
     PARAMETERS, Parameter, add_fuzzy_slope, predicted_boundary,
     simulated_boundary, simulated_growth, validate_boundaries)
+from deburr_drake.analysis.lyapunov import (
+    LyapunovTrace, lyapunov_trace, plot_lyapunov)
 from deburr_drake.analysis.report import (
     SUMMARY_KEYS, analyze, plot_poles, summary_text, write_analysis)
 
@@ -39,6 +41,7 @@ __all__ = [
     "MapAxis", "StabilityMap", "parse_map", "parse_settings", "plot_map", "stability_map",
     "PARAMETERS", "Parameter", "add_fuzzy_slope", "predicted_boundary",
     "simulated_boundary", "simulated_growth", "validate_boundaries",
+    "LyapunovTrace", "lyapunov_trace", "plot_lyapunov",
     "SUMMARY_KEYS", "analyze", "plot_poles", "summary_text",
     "write_analysis",
 ]

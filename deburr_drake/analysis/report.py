@@ -176,6 +176,14 @@ def summary_text(result: Dict) -> str:
         f"{result['phase_margin_deg']:.1f} deg (at "
         f"{result['gain_crossover_hz']:.2f} Hz)",
     ]
+    if "lyapunov" in result:
+        ly = result["lyapunov"]
+        lines.append(
+            "Lyapunov: dV/dt > 0 in "
+            f"{100 * ly['fraction_dV_positive_outside_dead_zone']:.0f} % of "
+            f"{ly['samples_outside_dead_zone']} samples outside the dead "
+            f"zone (V1: "
+            f"{100 * ly['fraction_dV1_positive_outside_dead_zone']:.0f} %)")
     if "boundaries" in result:
         lines += ["", f"  {'parameter':34s} {'predicted':>11s} "
                       f"{'simulated':>11s}"]
