@@ -142,11 +142,17 @@ def test_point_mass_depth_mode_matches_eq8(point_mass_op):
     assert {"depth/force", "tangential"} <= set(lin.groups())
 
 
+@pytest.fixture(scope="module")
+def paper_op():
+    return analysis.find_operating_point(load_scenario("paper"),
+                                         after_contact=1.0)
+
+
 @pytest.mark.slow
-def test_paper_arm_depth_mode_matches_eq8_and_the_loop_is_stable():
+def test_paper_arm_depth_mode_matches_eq8_and_the_loop_is_stable(paper_op):
     from deburr_drake.demo import contact_truth
-    sc = load_scenario("paper")
-    op = analysis.find_operating_point(sc, after_contact=1.0)
+    op = paper_op
+    sc = op.scenario
     truth = contact_truth(sc)
     lin = analysis.linearize_closed_loop(op, stiffness=truth.local_stiffness)
     tau8 = analysis.eq8_time_constant(sc.controller.depth_gain,
@@ -294,3 +300,22 @@ def test_lyapunov_v1_starts_at_the_estimate_error():
     assert expected <= trace.V1[0] <= expected + 1e-5
     assert np.all(np.isfinite(trace.V)) and np.all(trace.V >= trace.V1 - 1e-12)
     assert len(trace.t) == 5
+
+
+@pytest.mark.slow
+def test_fast_map_matches_the_full_map(paper_op, point_mass_op):
+    fields = ["sensor.cutoff_frequency", "controller.sliding_gain[0]"]
+    rho_of = analysis.fast_rho(paper_op, fields)
+    assert analysis.fast_rho(paper_op, ["tube.inner_radius"]) is None
+    # Error control: no split of the period.
+    assert analysis.fast_rho(point_mass_op, fields) is None
+    # At the scenario's own parameters the split is exact; elsewhere the
+    # integration is linearized along the base trajectory (first order in
+    # the change of held actuation: 5 % here, 1 s after contact; 2e-5 at
+    # the steadier 3 s operating point).
+    base = {fields[0]: 10.0, fields[1]: 400.0}
+    assert rho_of(**base) == pytest.approx(
+        analysis.sampled_loop(paper_op, **base).spectral_radius, abs=1e-4)
+    far = {fields[0]: 60.0, fields[1]: 5000.0}
+    full = analysis.sampled_loop(paper_op, **far).spectral_radius
+    assert full > 1.0 and rho_of(**far) == pytest.approx(full, rel=0.1)

@@ -18,7 +18,7 @@ from deburr_drake.analysis.frequency import (
     NormalForceLoop, frequency_response, loop_from_map, margins,
     normal_force_loop, plot_bode_nyquist)
 from deburr_drake.analysis.maps import (
-    MapAxis, StabilityMap, parse_map, parse_settings, plot_map,
+    MapAxis, StabilityMap, fast_rho, parse_map, parse_settings, plot_map,
     stability_map)
 from deburr_drake.analysis.validation import (
     PARAMETERS, Parameter, add_fuzzy_slope, predicted_boundary,
@@ -38,7 +38,7 @@ __all__ = [
     "sampled_loop", "simulator_config", "spectral_radius",
     "NormalForceLoop", "frequency_response", "loop_from_map", "margins",
     "normal_force_loop", "plot_bode_nyquist",
-    "MapAxis", "StabilityMap", "parse_map", "parse_settings", "plot_map", "stability_map",
+    "MapAxis", "StabilityMap", "fast_rho", "parse_map", "parse_settings", "plot_map", "stability_map",
     "PARAMETERS", "Parameter", "add_fuzzy_slope", "predicted_boundary",
     "simulated_boundary", "simulated_growth", "validate_boundaries",
     "LyapunovTrace", "lyapunov_trace", "plot_lyapunov",

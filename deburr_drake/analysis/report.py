@@ -185,11 +185,14 @@ def summary_text(result: Dict) -> str:
             f"zone (V1: "
             f"{100 * ly['fraction_dV1_positive_outside_dead_zone']:.0f} %)")
     if "boundaries" in result:
-        lines += ["", f"  {'parameter':34s} {'predicted':>11s} "
+        lines += ["", f"  {'parameter':52s} {'predicted':>11s} "
                       f"{'simulated':>11s}"]
+        def fmt(x):
+            return "none" if x is None else f"{x:.4g}"
         for b in result["boundaries"]:
-            lines.append(f"  {b['parameter']:34s} {b['predicted']:11.4g} "
-                         f"{b['simulated']:11.4g}")
+            lines.append(f"  {b['parameter'][:52]:52s} "
+                         f"{fmt(b['predicted']):>11s} "
+                         f"{fmt(b['simulated']):>11s}")
     return "\n".join(lines)
 
 

@@ -163,6 +163,12 @@ def cell_map_entries(diagram: Diagram) -> List[StateEntry]:
         StateEntry("controller", "discrete",
                    int(controller._held["actuation"]), step=1e-3,
                    label="u_held"),
+        # delta_d's held rate: overwritten at each sample (a zero column
+        # of the one-period map), but carried across a split of the
+        # period (maps.fast_rho).
+        StateEntry("controller", "discrete",
+                   int(controller._held["derivatives"]), indices=(0,),
+                   step=1e-8, label="delta_d_rate"),
         StateEntry("cutting_process", "discrete",
                    int(process._terms_index), step=1e-4,
                    label="force_law_terms"),
