@@ -169,7 +169,8 @@ def summary_text(result: Dict) -> str:
         f"), dominant eigenvalue at "
         f"{result['sampled_dominant_frequency_hz']:.1f} Hz",
         f"with the feed law live ({result['outer_period_s'] * 1e3:g} ms "
-        f"map, shift along the edge left out): rho = "
+        f"map, shift along the edge left out; experimental, see README): "
+        f"rho = "
         f"{result['outer_period_spectral_radius']:.5f}",
         f"normal-force loop: gain margin {result['gain_margin_dB']:.1f} dB "
         f"(at {result['phase_crossover_hz']:.2f} Hz), phase margin "
