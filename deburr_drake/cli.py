@@ -329,6 +329,39 @@ def _compare(args) -> int:
     return 0 if worst in (0, 3, 4) else worst
 
 
+def _analyze(args) -> int:
+    from pathlib import Path
+
+    from deburr_drake import analysis
+    scenario = _load(args)
+    grid = analysis.parse_map(scenario, args.map) if args.map else None
+    overrides = analysis.parse_settings(scenario, args.set or [])
+    out = Path(args.out or f"out/{scenario.name}/analysis")
+    out.mkdir(parents=True, exist_ok=True)
+    result = analysis.analyze(scenario, at=args.at,
+                              after_contact=args.after_contact,
+                              overrides=overrides,
+                              progress=lambda m: print(f"  {m}", flush=True))
+    if args.validate:
+        result["boundaries"] = analysis.validate_boundaries(
+            result["_objects"]["op"],
+            progress=lambda m: print(f"  {m}", flush=True))
+    if args.lyapunov:
+        trace = analysis.lyapunov_trace(scenario, duration=args.lyapunov)
+        result["lyapunov"] = trace.summary
+        analysis.plot_lyapunov(trace, out / "lyapunov.png",
+                               title=scenario.name)
+    if grid is not None:
+        result["_objects"]["map"] = analysis.stability_map(
+            result["_objects"]["op"], grid)
+        result["map"] = result["_objects"]["map"].to_dict()
+    files = analysis.write_analysis(result, out)
+    print()
+    print(analysis.summary_text(result))
+    print("\nwrote " + ", ".join(str(p) for p in files.values()))
+    return 0
+
+
 def _scenario_arguments(parser, default: str, duration_help: str):
     parser.add_argument("--scenario", default=default,
                         help=f"scenario name or YAML file (default {default})")
@@ -400,6 +433,39 @@ def main(argv=None) -> int:
     p.add_argument("--out", default=None,
                    help="output path (default out/<scenario>/diagram.dot)")
     p.set_defaults(func=_diagram)
+
+    p = sub.add_parser("analyze", help="closed-loop stability at an "
+                                       "operating point in steady cutting")
+    _scenario_arguments(p, "paper", None)
+    p.add_argument("--at", type=float, default=None,
+                   help="simulated time (s) of the operating point "
+                        "(default: --after-contact s after the first "
+                        "contact)")
+    p.add_argument("--after-contact", type=float, default=3.0,
+                   help="seconds of cutting before the operating point "
+                        "(default 3)")
+    p.add_argument("--map", nargs="+", default=None,
+                   metavar="FIELD=LO:HI:N",
+                   help="stability map of rho over one or two scenario "
+                        "fields by dotted name, e.g. "
+                        "sensor.cutoff_frequency=5:80:16 "
+                        "controller.sliding_gain[0]=100:3000:16")
+    p.add_argument("--set", nargs="+", default=None,
+                   metavar="FIELD=VALUE",
+                   help="analyse the operating point with these scenario "
+                        "fields changed (the scenario as given reaches "
+                        "steady cutting first), e.g. "
+                        "controller.sliding_gain[0]=4500")
+    p.add_argument("--lyapunov", type=float, default=None,
+                   metavar="SECONDS",
+                   help="also run the scenario this long and trace V1 of "
+                        "Prop. 1 and V of (38) (lyapunov.png)")
+    p.add_argument("--validate", action="store_true",
+                   help="predicted against simulated stability boundaries "
+                        "(short runs from the operating point)")
+    p.add_argument("--out", default=None,
+                   help="output directory (default out/<scenario>/analysis)")
+    p.set_defaults(func=_analyze)
     args = parser.parse_args(argv)
     from deburr_drake.config import ConfigError
     try:

@@ -1,0 +1,320 @@
+"""deburr_drake.analysis: the methods on hand-derived systems, then the
+cell (point-mass testbed) against eq. (8) and the sampled-loop limit, the
+summary keys and the command line's errors."""
+
+import json
+
+import numpy as np
+import pytest
+from pydrake.examples import PendulumPlant
+from pydrake.systems.analysis import SimulatorConfig
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import (LinearSystem, MatrixGain,
+                                        ZeroOrderHold)
+from pydrake.systems.primitives import Linearize
+
+from deburr_drake import analysis
+from deburr_drake.cli import main
+from deburr_drake.config import ConfigError, load_scenario
+
+
+# --- the methods on hand-derived systems ---------------------------------
+
+def _mass_under_sampled_pd(m, kp, kd, T):
+    """A mass (x, v) under u = -kp x - kd v through a zero-order hold."""
+    builder = DiagramBuilder()
+    plant = builder.AddNamedSystem("mass", LinearSystem(
+        A=[[0, 1], [0, 0]], B=[[0], [1 / m]], C=np.eye(2),
+        D=np.zeros((2, 1))))
+    hold = builder.AddNamedSystem("hold", ZeroOrderHold(T, 2))
+    gain = builder.AddNamedSystem("pd", MatrixGain(np.array([[-kp, -kd]])))
+    builder.Connect(plant.get_output_port(), hold.get_input_port())
+    builder.Connect(hold.get_output_port(), gain.get_input_port())
+    builder.Connect(gain.get_output_port(), plant.get_input_port())
+    return builder.Build()
+
+
+def _zoh_closed_form_rho(m, kp, kd, T):
+    """x_{k+1} = (Ad - Bd K) x_k, Ad = [[1, T], [0, 1]],
+    Bd = [T^2 / (2 m), T / m]: the exact ZOH discretization."""
+    Ad = np.array([[1.0, T], [0.0, 1.0]])
+    Bd = np.array([[T * T / (2 * m)], [T / m]])
+    return max(abs(np.linalg.eigvals(Ad - Bd @ np.array([[kp, kd]]))))
+
+
+@pytest.mark.parametrize("kd", [10.0, 250.0])
+def test_period_map_of_a_mass_under_sampled_pd_matches_the_zoh_closed_form(
+        kd):
+    m, kp, T = 1.0, 100.0, 0.01
+    diagram = _mass_under_sampled_pd(m, kp, kd, T)
+    context = diagram.CreateDefaultContext()
+    context.SetTime(3 * T)  # just before a sample, as AdvanceTo leaves it
+    diagram.GetSubsystemByName("mass").GetMyMutableContextFromRoot(
+        context).SetContinuousState([0.01, -0.02])
+    entries = [analysis.StateEntry("mass", "continuous", step=1e-6),
+               analysis.StateEntry("hold", "discrete", 0, step=1e-6)]
+    # RK3 integrates a constant-input double integrator exactly.
+    config = SimulatorConfig(integration_scheme="runge_kutta3",
+                             max_step_size=T / 4, use_error_control=False)
+    Phi = analysis.period_map(diagram, context, entries, period=T,
+                              config=config)
+    expected = _zoh_closed_form_rho(m, kp, kd, T)
+    assert analysis.spectral_radius(Phi) == pytest.approx(expected,
+                                                          rel=1e-6)
+    # kd T / m = 2.5 > 2: the sampled loop is unstable though the
+    # continuous one (any kp, kd > 0) is not.
+    assert (expected > 1.0) == (kd == 250.0)
+    # The held value is overwritten by the sample: its columns are zero.
+    np.testing.assert_allclose(Phi[:, 2:], 0.0, atol=1e-9)
+
+
+def test_numerical_linearization_matches_drake_linearize_on_a_pendulum():
+    builder = DiagramBuilder()
+    pendulum = builder.AddNamedSystem("pendulum", PendulumPlant())
+    pd = builder.AddNamedSystem("pd", MatrixGain(np.array([[-20.0, -3.0]])))
+    builder.Connect(pendulum.get_state_output_port(), pd.get_input_port())
+    builder.Connect(pd.get_output_port(), pendulum.get_input_port())
+    diagram = builder.Build()
+    context = diagram.CreateDefaultContext()
+    x0 = np.array([0.7, -0.3])
+    context.SetContinuousState(x0)
+    slices = analysis.continuous_state_slices(diagram, context)
+    assert slices == {"pendulum": slice(0, 2)}
+
+    def f(x):
+        context.SetContinuousState(x)
+        return diagram.EvalTimeDerivatives(context).CopyToVector()
+
+    A = analysis.numerical_jacobian(f, x0, 1e-6)
+    context.SetContinuousState(x0)
+    drake_A = Linearize(diagram, context,
+                        equilibrium_check_tolerance=1e6).A()
+    np.testing.assert_allclose(A, drake_A, rtol=1e-6, atol=1e-6)
+    # Hand-derived: theta'' = (-m g l sin(theta) - b theta' + u) / (m l^2).
+    params = pendulum.get_parameters(pendulum.GetMyContextFromRoot(context))
+    ml2 = params.mass() * params.length() ** 2
+    expected = np.array([
+        [0.0, 1.0],
+        [(-params.mass() * params.gravity() * params.length()
+          * np.cos(0.7) - 20.0) / ml2, (-params.damping() - 3.0) / ml2]])
+    np.testing.assert_allclose(A, expected, rtol=1e-6, atol=1e-8)
+
+
+def test_margins_of_a_discrete_integrator_loop():
+    # Phi_ol = 1, b = -g, c = 1: L(z) = g / (z - 1), closed-loop pole 1 - g.
+    g, T = 0.5, 0.01
+    r = analysis.loop_from_map(np.array([[1.0 - g]]), [-g], [1.0], T)
+    # Phase -180 at the Nyquist frequency, |L| = g / 2 there.
+    assert r.gain_margin_dB == pytest.approx(20 * np.log10(2 / g), abs=0.05)
+    assert r.phase_crossover_hz == pytest.approx(0.5 / T, rel=1e-3)
+    # |e^{j th} - 1| = g: th = 2 asin(g / 2), PM = 90 - th / 2 (degrees).
+    theta = 2 * np.arcsin(g / 2)
+    assert r.phase_margin_deg == pytest.approx(90 - np.degrees(theta) / 2,
+                                               abs=0.05)
+    assert r.gain_crossover_hz == pytest.approx(
+        theta / (2 * np.pi * T), rel=1e-3)
+
+
+def test_eq8_time_constant():
+    assert analysis.eq8_time_constant(4e-4, 1e4, 20.0) == pytest.approx(
+        (1 + 4e-4 * 20) / (4e-4 * 1e4))
+
+
+# --- the cell ------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def point_mass_op():
+    return analysis.find_operating_point(load_scenario("point_mass"),
+                                         after_contact=1.5)
+
+
+@pytest.mark.slow
+def test_point_mass_depth_mode_matches_eq8(point_mass_op):
+    from deburr_drake.demo import contact_truth
+    sc = point_mass_op.scenario
+    truth = contact_truth(sc)
+    lin = analysis.linearize_closed_loop(point_mass_op,
+                                         stiffness=truth.local_stiffness)
+    tau8 = analysis.eq8_time_constant(sc.controller.depth_gain,
+                                      truth.local_stiffness, truth.c2)
+    assert lin.depth_time_constant == pytest.approx(tau8, rel=0.10)
+    assert all(m.eigenvalue.real < 0 for m in lin.modes)
+    assert {"depth/force", "tangential"} <= set(lin.groups())
+
+
+@pytest.fixture(scope="module")
+def paper_op():
+    return analysis.find_operating_point(load_scenario("paper"),
+                                         after_contact=1.0)
+
+
+@pytest.mark.slow
+def test_paper_arm_depth_mode_matches_eq8_and_the_loop_is_stable(paper_op):
+    from deburr_drake.demo import contact_truth
+    op = paper_op
+    sc = op.scenario
+    truth = contact_truth(sc)
+    lin = analysis.linearize_closed_loop(op, stiffness=truth.local_stiffness)
+    tau8 = analysis.eq8_time_constant(sc.controller.depth_gain,
+                                      truth.local_stiffness, truth.c2)
+    assert lin.depth_time_constant == pytest.approx(tau8, rel=0.10)
+    assert "joint" in lin.groups()
+    assert analysis.sampled_loop(op).spectral_radius < 1.0
+
+
+def test_frozen_scenario_freezes_the_adaptation_and_the_noise():
+    sc = load_scenario("point_mass")
+    frozen = analysis.frozen_scenario(sc, continuous=True,
+                                      **{"sensor.cutoff_frequency": 7.0})
+    assert not frozen.estimator.adapt and not frozen.controller.fuzzy.adapt
+    assert frozen.sensor.noise_std == 0.0
+    assert frozen.controller.control_period == 0.0
+    assert frozen.sensor.cutoff_frequency == 7.0
+    assert not frozen.simulation.error_control
+    assert frozen.simulation.max_step == sc.controller.control_period
+    assert sc.estimator.adapt and sc.sensor.cutoff_frequency != 7.0
+
+
+@pytest.mark.slow
+def test_point_mass_sampled_loop_goes_unstable_with_a_fast_sensor(
+        point_mass_op):
+    stable = analysis.sampled_loop(point_mass_op)
+    fast = analysis.sampled_loop(point_mass_op,
+                                 **{"sensor.cutoff_frequency": 60.0})
+    assert stable.spectral_radius < 1.0 < fast.spectral_radius
+    # The slow real eigenvalue is the continuous depth mode, sampled.
+    worst = fast.eigenvalues[np.argmax(np.abs(fast.eigenvalues))]
+    assert worst.real < -1.0  # a Nyquist-frequency (200 Hz) oscillation
+
+
+def test_operating_point_without_contact_is_a_config_error():
+    sc = load_scenario("point_mass", text=(
+        "estimator: {initial_estimates: [0.1, 100.0, 1.0], adapt: false}"))
+    with pytest.raises(ConfigError, match="never reached contact"):
+        analysis.find_operating_point(sc, max_time_to_contact=0.2)
+
+
+@pytest.mark.slow
+def test_analyze_writes_the_summary_keys(tmp_path, capsys):
+    code = main(["analyze", "--scenario", "point_mass", "--after-contact",
+                 "1.0", "--out", str(tmp_path)])
+    assert code == 0
+    data = json.loads((tmp_path / "analysis.json").read_text())
+    for key in analysis.SUMMARY_KEYS:
+        assert key in data, key
+    assert all(len(e) == 2 for e in data["eigenvalues"])
+    assert 0.5 < data["sampled_spectral_radius"] < 1.0
+    for key in ("time", "depth", "feed", "normal_force",
+                "chamfering_force"):
+        assert key in data["operating_point"]
+    assert (tmp_path / "poles.png").stat().st_size > 0
+    assert (tmp_path / "bode_nyquist.png").stat().st_size > 0
+    assert "spectral radius" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("spec, message", [
+    ("controller.no_such_gain=1:2:3", "unknown"),
+    ("sensor.cutoff_frequency=5:5:4", "empty range"),
+    ("sensor.cutoff_frequency=5:80:0", "empty range"),
+    ("sensor.cutoff_frequency=5-80", "expected FIELD=LO:HI:N"),
+])
+def test_bad_map_is_one_error_line(spec, message, capsys):
+    assert main(["analyze", "--scenario", "point_mass", "--map", spec]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and message in err
+
+
+def test_set_field_by_dotted_name():
+    sc = load_scenario("point_mass")
+    analysis.set_field(sc, "controller.sliding_gain[1]", 123.0)
+    analysis.set_field(sc, "sensor.cutoff_frequency", 7)
+    assert sc.controller.sliding_gain[1] == 123.0
+    assert sc.sensor.cutoff_frequency == 7.0
+    with pytest.raises(ConfigError):
+        analysis.set_field(sc, "sensor.cutoff", 1.0)
+
+
+def test_fuzzy_slope_adds_slope_times_s_to_the_surface():
+    from deburr_drake.cell import make_deburring_diagram
+    sc = load_scenario("point_mass")
+    diagram = make_deburring_diagram(scenario=sc)
+    context = diagram.CreateDefaultContext()
+    controller = diagram.GetSubsystemByName("controller")
+    cc = controller.GetMyContextFromRoot(context)
+    before = controller.theta(cc).copy()
+    analysis.add_fuzzy_slope(diagram, context, 750.0)
+    theta = controller.theta(cc)
+    for k, rb in enumerate(controller.rule_bases):
+        for s in (-0.7 * rb.omegak_half_width, 0.013 * rb.omegak_half_width,
+                  0.4 * rb.omegak_half_width):
+            u_before = rb.evaluate(before[k], 0.03, s)
+            u_after = rb.evaluate(theta[k], 0.03, s)
+            assert u_after - u_before == pytest.approx(750.0 * s, rel=1e-9)
+
+
+def test_stability_map_grid_and_figure(tmp_path):
+    sc = load_scenario("point_mass")
+    axes = analysis.parse_map(sc, ["sensor.cutoff_frequency=10:40:4",
+                                   "controller.sliding_gain[0]=100:400:3"])
+    assert [a.field for a in axes] == ["sensor.cutoff_frequency",
+                                       "controller.sliding_gain[0]"]
+    np.testing.assert_allclose(axes[0].values, [10, 20, 30, 40])
+
+    class _Op:  # only the scenario's name is read without a simulation
+        scenario = sc
+
+    seen = []
+
+    def rho_of(**overrides):
+        seen.append(overrides)
+        return overrides["sensor.cutoff_frequency"] / 25.0
+
+    m = analysis.stability_map(_Op(), axes, rho_of=rho_of)
+    assert m.rho.shape == (4, 3) and len(seen) == 12
+    np.testing.assert_allclose(m.rho[:, 0], [0.4, 0.8, 1.2, 1.6])
+    path = analysis.plot_map(m, tmp_path / "map.png")
+    assert path.stat().st_size > 0
+
+
+def test_settings_at_the_operating_point_are_checked():
+    sc = load_scenario("paper")
+    assert analysis.parse_settings(sc, ["controller.sliding_gain[1]=4500"]) \
+        == {"controller.sliding_gain[1]": 4500.0}
+    for bad in (["controller.sliding_gain[7]=1"], ["sensor.cutoff=3"],
+                ["sensor.cutoff_frequency"], ["sensor.cutoff_frequency=x"],
+                ["sensor.cutoff_frequency=300"]):
+        with pytest.raises(ConfigError):
+            analysis.parse_settings(sc, bad)
+
+
+def test_lyapunov_v1_starts_at_the_estimate_error():
+    from deburr_drake.demo import contact_truth
+    sc = load_scenario("point_mass")
+    trace = analysis.lyapunov_trace(sc, duration=0.2, sample_period=0.05)
+    truth = contact_truth(sc)
+    c_error = np.array(sc.estimator.initial_estimates) - [
+        truth.c0, truth.secant_stiffness, truth.c2]
+    gains = np.array(sc.estimator.gains)
+    expected = np.sum(c_error[gains > 0] ** 2 / (2 * gains[gains > 0]))
+    # At t = 0 the tool is nearly at rest on its command: s^T M s / 2 is
+    # micro-joules against the estimate error's 0.3 J.
+    assert expected <= trace.V1[0] <= expected + 1e-5
+    assert np.all(np.isfinite(trace.V)) and np.all(trace.V >= trace.V1 - 1e-12)
+    assert len(trace.t) == 5
+
+
+@pytest.mark.slow
+def test_fast_map_matches_the_full_map(paper_op):
+    fields = ["sensor.cutoff_frequency", "controller.sliding_gain[0]"]
+    rho_of = analysis.fast_rho(paper_op, fields)
+    assert analysis.fast_rho(paper_op, ["tube.inner_radius"]) is None
+    # At the scenario's own parameters the split is exact; elsewhere the
+    # integration is linearized along the base trajectory (first order in
+    # the change of held actuation: 5 % here, 1 s after contact; 2e-5 at
+    # the steadier 3 s operating point).
+    base = {fields[0]: 10.0, fields[1]: 400.0}
+    assert rho_of(**base) == pytest.approx(
+        analysis.sampled_loop(paper_op, **base).spectral_radius, abs=1e-4)
+    far = {fields[0]: 60.0, fields[1]: 5000.0}
+    full = analysis.sampled_loop(paper_op, **far).spectral_radius
+    assert full > 1.0 and rho_of(**far) == pytest.approx(full, rel=0.1)
