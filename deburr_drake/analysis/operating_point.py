@@ -17,10 +17,13 @@ What is frozen, and why:
 - the burr: the operating point lies off the burrs (checked), and the burr
   and surface-finish records are not perturbed.
 - the sensor noise (``noise_std: 0``): it is an input, not dynamics.
+- the safety guards and the drives' torque clamp are off (``guards``):
+  neither is in the linear model; the clamp bounds a limit cycle, and a
+  guard stops the run that should show it.
 
 And one numerical setting: a scenario integrated with error control is
-analysed with fixed steps of one control period, as the paper scenarios
-run. An error-controlled step size is hidden state that the one-period map
+analysed with fixed steps of one control period (the paper scenarios run
+fixed steps of their own ``max_step``, two per control period). An error-controlled step size is hidden state that the one-period map
 cannot perturb: on the point mass at its 1e-4 a run's frames stopped
 following the map after the first, and at 1e-7 the predicted limits missed
 the simulated ones by 25-40 %; with fixed steps the 2.5 ms map and the runs
@@ -93,6 +96,10 @@ def frozen_scenario(scenario: Scenario, *, continuous: bool = False,
     frozen.estimator.adapt = False
     frozen.controller.fuzzy.adapt = False
     frozen.sensor.noise_std = 0.0
+    # Neither the drives' torque clamp nor the safety guards are in the
+    # linear model: the clamp bounds a limit cycle, a guard stops the run.
+    frozen.guards.enabled = False
+    frozen.guards.saturate_effort = False
     if frozen.simulation.error_control and \
             frozen.controller.control_period > 0:
         frozen.simulation.error_control = False
