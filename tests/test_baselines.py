@@ -11,12 +11,13 @@ from deburr_drake.command import CommandGenerator
 from deburr_drake.config import (CommandConfig, ConfigError,
                                  ControllerConfig, TaskConfig, load_scenario)
 from deburr_drake.controller import HybridController
-from deburr_drake.geometry import CircularContour
 from deburr_drake.layout import COMMAND_STATE, CONTROLLER_DIAGNOSTICS
 from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.observer import chamfer_quantities
+# The controller tests' contour and tool point: the laws are checked at
+# the same place.
+from test_controller import CONTOUR, _scenario_point as _point
 
-CONTOUR = CircularContour([0.0, 0.0, 0.048], 0.027)
 G = 9.81
 M_Z = 0.3 + 1.0  # flange + tool (kg): what the z joint carries
 MASSES = np.array([0.5 + 0.5 + M_Z, 0.5 + M_Z, M_Z])  # x, y, z carriages
@@ -27,19 +28,10 @@ def model():
     return make_kinematic_model(POINT_MASS_URL)
 
 
-def _point():
-    p = CONTOUR.point_at(0.01)
-    n1, t = CONTOUR.n1(p), CONTOUR.tangent(p)
-    x_p = p + 4e-4 * n1
-    v = 2e-3 * t + 1e-4 * n1
-    force = -5.0 * n1 - 9.0 * t
-    x_c = p + 3e-5 * t
-    v_c = 2.4e-3 * t
-    return x_p, v, force, x_c, v_c, n1
-
-
-def _evaluate(controller, delta_d=3e-4, f_nd=6.0):
-    x_p, v, force, x_c, v_c, n1 = _point()
+def _context(controller, delta_d=3e-4, f_nd=6.0):
+    """The controller's context at the tool point of :func:`_point`, its
+    inputs fixed, delta_d set (float or AutoDiffXd controller)."""
+    x_p, v, force, x_c, v_c, _ = _point()
     chamfer = chamfer_quantities(CONTOUR, x_p, v, force,
                                  min_tangential_speed=1e-5)
     context = controller.CreateDefaultContext()
@@ -51,6 +43,12 @@ def _evaluate(controller, delta_d=3e-4, f_nd=6.0):
     x = context.get_continuous_state_vector().CopyToVector()
     x[0] = delta_d
     context.SetContinuousState(x)
+    return context
+
+
+def _evaluate(controller, delta_d=3e-4, f_nd=6.0):
+    x_p, v, force, x_c, v_c, n1 = _point()
+    context = _context(controller, delta_d, f_nd)
     return (controller.GetOutputPort("actuation").Eval(context),
             CONTROLLER_DIAGNOSTICS.split(
                 controller.GetOutputPort("diagnostics").Eval(context)),
@@ -247,18 +245,7 @@ def test_scalar_conversion(model, kind):
                                   nominal_depth=5e-4, true_plant=model)
     expected, _, _ = _evaluate(controller)
     ad = controller.ToAutoDiffXd()
-    x_p, v, force, x_c, v_c, _ = _point()
-    chamfer = chamfer_quantities(CONTOUR, x_p, v, force,
-                                 min_tangential_speed=1e-5)
-    context = ad.CreateDefaultContext()
-    for name, value in dict(
-            plant_state=np.concatenate([x_p, v]), chamfer_state=chamfer,
-            tool_force=force, commanded_position=x_c,
-            commanded_velocity=v_c, desired_normal_force=[6.0]).items():
-        ad.GetInputPort(name).FixValue(context, value)
-    x = context.get_continuous_state_vector().CopyToVector()
-    x[0] = 3e-4
-    context.SetContinuousState(x)
+    context = _context(ad)
     actuation = [a.value() for a in
                  ad.GetOutputPort("actuation").Eval(context)]
     np.testing.assert_allclose(actuation, expected, rtol=1e-9, atol=1e-9)
