@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["window", "exponential_time_constant", "rms", "dead_zone_fraction",
-           "mean_speed", "any_nan", "secant_slope"]
+           "mean_speed", "any_nan", "secant_slope", "high_frequency_power",
+           "cell_crossings", "surface_roughness"]
 
 
 def window(t, start=-np.inf, stop=np.inf):
@@ -129,3 +130,25 @@ def cell_crossings(s, delta: float) -> int:
         s = s[:, None]
     cells = np.floor(s / delta + 0.5)
     return int(np.count_nonzero(np.diff(cells, axis=0)))
+
+
+def surface_roughness(u, y0_range, s_range, *, n_y0: int = 8,
+                      n_s: int = 128) -> float:
+    """How far a control surface u(y0, s) (a callable, N) departs from a
+    plane over the region y0_range x s_range: the RMS residual (N) of its
+    least-squares fit a + b y0 + c s on an n_y0 x n_s grid. A plane scores
+    0; a staircase of steps J (the m = 0 rule base) scores about
+    J / sqrt(12); a smooth surface scores what its curvature bends away
+    from the plane. Unlike a finite-difference curvature it does not grow
+    as the grid is refined when u has jumps. nan on an empty region."""
+    (y_lo, y_hi), (s_lo, s_hi) = y0_range, s_range
+    if not (np.isfinite([y_lo, y_hi, s_lo, s_hi]).all()
+            and y_hi >= y_lo and s_hi > s_lo):
+        return float("nan")
+    y0 = np.linspace(y_lo, y_hi, n_y0 if y_hi > y_lo else 1)
+    s = np.linspace(s_lo, s_hi, n_s)
+    Y, S = np.meshgrid(y0, s, indexing="ij")
+    values = np.array([float(u(a, b)) for a, b in zip(Y.ravel(), S.ravel())])
+    A = np.column_stack([np.ones(values.size), Y.ravel(), S.ravel()])
+    coef, *_ = np.linalg.lstsq(A, values, rcond=None)
+    return rms(values - A @ coef)

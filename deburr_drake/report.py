@@ -174,6 +174,19 @@ def pass_metrics(log: RunLog, *,
     axes = list(sc.controller.fuzzy.axes)
     late_metric("fuzzy_term_total_variation", ctl["t"],
                 lambda m: metrics.total_variation(ctl["u_fuzzy"][m][:, axes]))
+    # The roughness of the learned surface u_f(y0, s_k) over the region the
+    # run visited after the transient (y0 = ||x_p||, s_k from its least to
+    # its largest value: the rare excursions into the next cells are where
+    # an m = 0 surface steps), the largest over the fuzzy axes.
+    theta = log.signals.get("theta", {}).get("final")
+    if theta is not None:
+        from deburr_drake.controller import make_rule_bases
+        late_metric("control_surface_roughness_N", ctl["t"],
+                    lambda m: _surface_roughness(
+                        make_rule_bases(sc.controller), theta,
+                        np.linalg.norm(ch["x_p"], axis=1)[
+                            metrics.window(ch["t"], t0)],
+                        ctl["s"][m][:, axes]))
     late_metric("sliding_variable_p01_mm_s", ctl["t"],
                 lambda m: float(np.percentile(ctl["s"][m][:, axes], 1)) * 1e3)
     late_metric("sliding_variable_p99_mm_s", ctl["t"],
@@ -185,6 +198,20 @@ def pass_metrics(log: RunLog, *,
     out["nan_detected"] = float(log.stop_reason == "nan" or metrics.any_nan(
         *[v for blocks in log.signals.values() for v in blocks.values()]))
     return out
+
+
+def _surface_roughness(rule_bases, theta, y0, s) -> float:
+    """metrics.surface_roughness of each fuzzy axis's u_f over the
+    visited ranges of y0 and of its s; the largest."""
+    if not len(y0):
+        return float("nan")
+    worst = 0.0
+    for k, rb in enumerate(rule_bases):
+        lo, hi = float(np.min(s[:, k])), float(np.max(s[:, k]))
+        worst = max(worst, metrics.surface_roughness(
+            lambda a, b, rb=rb, w=theta[k]: rb.evaluate(w, a, b),
+            (float(np.min(y0)), float(np.max(y0))), (lo, hi)))
+    return worst
 
 
 def _json_value(value):

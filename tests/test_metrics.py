@@ -34,3 +34,36 @@ def test_total_variation_rms_and_speed():
     assert metrics.arc_distance(0.95, 0.05, 1.0, True) == pytest.approx(-0.1)
     assert metrics.first_time([0, 1, 2], [False, True, True]) == 1
     assert metrics.any_nan([1.0, np.nan]) and not metrics.any_nan([1.0])
+
+
+def test_surface_roughness_of_a_plane_a_staircase_and_a_parabola():
+    from deburr_drake.metrics import surface_roughness
+    plane = surface_roughness(lambda y, s: 2.0 + 3.0 * y - 5.0 * s,
+                              (0.3, 0.5), (-1.0, 1.0))
+    assert plane == pytest.approx(0.0, abs=1e-12)
+    # Steps of 1 every 0.1 over [-1, 1): about 1 / sqrt(12).
+    stairs = surface_roughness(lambda y, s: np.floor(s / 0.1),
+                               (0.3, 0.5), (-1.0, 1.0), n_s=2000)
+    assert stairs == pytest.approx(1 / np.sqrt(12), rel=0.02)
+    # s^2 on [-1, 1]: residual s^2 - 1/3, RMS sqrt(1/5 - 1/9).
+    parabola = surface_roughness(lambda y, s: s * s, (0.4, 0.4),
+                                 (-1.0, 1.0), n_s=4001)
+    assert parabola == pytest.approx(np.sqrt(1 / 5 - 1 / 9), rel=1e-3)
+    assert np.isnan(surface_roughness(lambda y, s: s, (0.4, 0.4),
+                                      (0.1, 0.1)))
+
+
+def test_the_second_order_surface_is_smoother_than_the_zeroth():
+    """The same rule weights (a ramp in s) under m = 0 and m = 2: the
+    zeroth-order surface is a staircase, the second-order one nearly the
+    plane through it."""
+    from deburr_drake.fuzzy import RuleBase
+    from deburr_drake.metrics import surface_roughness
+    rough = {}
+    for m in (0, 2):
+        rb = RuleBase(m=m, upsilon=5, delta0=0.2, deltak=0.004)
+        theta = np.tile(np.arange(-5, 6, dtype=float), 11)  # theta_ij = j
+        rough[m] = surface_roughness(lambda y, s: rb.evaluate(theta, y, s),
+                                     (0.4, 0.45), (-0.012, 0.012))
+    assert rough[0] == pytest.approx(1 / np.sqrt(12), rel=0.1)
+    assert rough[2] < 0.2 * rough[0]

@@ -46,6 +46,7 @@ _TABLE = (
     ("torque_power_above_50Hz", "torque power >50 Hz (N^2 m^2)", 1.0),
     ("torque_rms_above_50Hz", "torque RMS >50 Hz (N m)", 1.0),
     ("fuzzy_cell_crossings", "s cell crossings", 1.0),
+    ("control_surface_roughness_N", "u_f roughness (N)", 1.0),
     ("wall_time_s", "wall (s)", 1.0),
 )
 
