@@ -202,16 +202,17 @@ def pass_metrics(log: RunLog, *,
 
 def _surface_roughness(rule_bases, theta, y0, s) -> float:
     """metrics.surface_roughness of each fuzzy axis's u_f over the
-    visited ranges of y0 and of its s; the largest."""
+    visited ranges of y0 and of its s; the largest (nan when no axis has a
+    range to measure)."""
     if not len(y0):
         return float("nan")
-    worst = 0.0
-    for k, rb in enumerate(rule_bases):
-        lo, hi = float(np.min(s[:, k])), float(np.max(s[:, k]))
-        worst = max(worst, metrics.surface_roughness(
-            lambda a, b, rb=rb, w=theta[k]: rb.evaluate(w, a, b),
-            (float(np.min(y0)), float(np.max(y0))), (lo, hi)))
-    return worst
+    y0_range = (float(np.min(y0)), float(np.max(y0)))
+    values = [metrics.surface_roughness(
+        lambda a, b, rb=rb, w=theta[k]: rb.evaluate(w, a, b), y0_range,
+        (float(np.min(s[:, k])), float(np.max(s[:, k]))))
+        for k, rb in enumerate(rule_bases)]
+    finite = [v for v in values if np.isfinite(v)]
+    return max(finite) if finite else float("nan")
 
 
 def _json_value(value):
