@@ -279,8 +279,12 @@ def HybridController_(T):
             else:
                 delta_d_dot = c.depth_gain * e_f
                 derivatives[0] = delta_d_dot
+            # d/dt (delta_d n1(x_p)): n1 turns with the edge's curvature;
+            # without delta_d n1' the reference velocity runs delta/rho
+            # slower than the reference on a circle (a steady edot).
             x_pd = p["commanded_position"] + delta_d * n1
-            xdot_pd = p["commanded_velocity"] + delta_d_dot * n1
+            xdot_pd = (p["commanded_velocity"] + delta_d_dot * n1
+                       + delta_d * CHAMFER_STATE.get(chamfer, "n1_rate"))
             e = x_pd - x_p
             edot = xdot_pd - xdot_p
             s = edot + self._lambda * e

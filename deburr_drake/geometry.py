@@ -163,6 +163,13 @@ class Contour(abc.ABC):
         v = _vec3(v, "v")
         return np.dot(self.n1(p), v)
 
+    @abc.abstractmethod
+    def n1_rate(self, p, v) -> np.ndarray:
+        """dn1/dt = (dn1/dp) v for a point p moving at v (1/s, float): the
+        rate at which the depth direction turns, from the edge's
+        curvature. x_pd = x* + delta_d n1(x_p) moves at
+        xdot* + delta_d' n1 + delta_d n1_rate."""
+
     def n2(self, p, v, min_speed):
         """Direction of motion along the edge (eq. 2, R5): +-tangent(p), the
         sign of the velocity's component along the edge, i.e.
@@ -302,6 +309,15 @@ class CircularContour(Contour):
                          * self._radius)
         return n1, tangent, rho - self._radius, arc
 
+    def n1_rate(self, p, v):
+        """(I - n1 n1^T) v_xy / rho: n1 is the planar radial direction."""
+        p = _vec3_float(p, "p")
+        v = _vec3_float(v, "v")
+        dx, dy, rho = self._planar(p)
+        n1 = np.array([dx / rho, dy / rho, 0.0])
+        v_xy = np.array([v[0], v[1], 0.0])
+        return (v_xy - (n1 @ v_xy) * n1) / rho
+
     def _angle(self, p):
         p = _vec3_float(p, "p")
         dx, dy, _ = self._planar(p)
@@ -388,6 +404,12 @@ class StraightContour(Contour):
         p = _vec3(p, "p")
         z = 0.0 * p[0]
         return np.array([z + self._t[0], z + self._t[1], z])
+
+    def n1_rate(self, p, v):
+        """Zero: a straight edge's n1 does not turn."""
+        _vec3_float(p, "p")
+        _vec3_float(v, "v")
+        return np.zeros(3)
 
     def arc_position(self, p):
         p = _vec3_float(p, "p")

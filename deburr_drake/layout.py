@@ -86,6 +86,7 @@ CHAMFER_STATE = VectorLayout("chamfer_state", [
     ("f_n", 1),           # N, ||f_n|| = -f . n1
     ("f_t", 1),           # N, ||f_t|| = -f . n2
     ("arc_position", 1),  # m, of the projection on the contour, [0, L)
+    ("n1_rate", 3),       # 1/s, dn1/dt = (dn1/dx_p) xdot_p (the edge's curvature)
 ])
 
 #: The outer loop's discrete state.

@@ -33,7 +33,8 @@ def chamfer_kinematics(contour: Contour, x_p, xdot_p, *,
     n2 = direction_of_motion(tangent, xdot_p, min_tangential_speed)
     return CHAMFER_STATE.pack(
         x_p=x_p, xdot_p=xdot_p, n1=n1, n2=n2, delta=delta,
-        delta_dot=float(n1 @ xdot_p), f_n=0.0, f_t=0.0, arc_position=arc)
+        delta_dot=float(n1 @ xdot_p), f_n=0.0, f_t=0.0, arc_position=arc,
+        n1_rate=contour.n1_rate(x_p, xdot_p))
 
 
 _N1 = CHAMFER_STATE.slice("n1")

@@ -56,10 +56,11 @@ def _evaluate(controller, delta_d=3e-4, f_nd=6.0):
 
 
 def _sliding(config, delta_d, dd):
-    """e, edot, s of (9), (10) at _point() with depth delta_d, rate dd."""
+    """e, edot, s of (9), (10) at _point() with depth delta_d, rate dd
+    (x_pd = x* + delta_d n1(x_p) moves at xdot* + dd n1 + delta_d n1')."""
     x_p, v, _, x_c, v_c, n1 = _point()
     e = x_c + delta_d * n1 - x_p
-    edot = v_c + dd * n1 - v
+    edot = v_c + dd * n1 + delta_d * CONTOUR.n1_rate(x_p, v) - v
     return e, edot, edot + np.array(config.sliding_lambda) * e
 
 

@@ -84,7 +84,11 @@ def test_control_law_by_hand(model):
     dd = config.depth_gain * e_f
     x_pd = x_c + delta_d * n1
     e = x_pd - x_p
-    s = (v_c + dd * n1 - v) + np.array(config.sliding_lambda) * e
+    # x_pd moves at xdot* + dd n1 + delta_d n1' (n1 turns along the arc)
+    n1_rate = v @ CONTOUR.tangent(x_p) / np.linalg.norm(
+        (x_p - CONTOUR.center)[:2]) * CONTOUR.tangent(x_p)
+    s = (v_c + dd * n1 + delta_d * n1_rate - v) \
+        + np.array(config.sliding_lambda) * e
     assert np.all(np.abs(s[:2]) < 5 * 0.2 * 0.005)  # inside Omega_k
     f_tau = np.array(config.sliding_gain) * s - force
     m_z = 1.2 * (0.3 + 1.0)  # flange + tool, as the controller models them

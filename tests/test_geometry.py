@@ -75,6 +75,28 @@ def test_depth_rate_matches_finite_difference(contour, p):
     assert abs(contour.depth_rate(p, v)) > 1e-3   # non-trivial
 
 
+@pytest.mark.parametrize("contour,p", [
+    (circ(), polar(R + 0.0005, 1.1)), (circ(direction=-1), polar(R * 0.9, -2.5)),
+    (line(), np.array([0.4, 0.1003, 0.25]))])
+def test_n1_rate_matches_finite_difference(contour, p):
+    v = np.array([0.03, -0.02, 0.01])
+    h = 1e-6
+    fd = (contour.n1(p + h * v) - contour.n1(p - h * v)) / (2 * h)
+    np.testing.assert_allclose(contour.n1_rate(p, v), fd, atol=1e-8)
+
+
+def test_n1_rate_on_a_circle_is_speed_over_radius_along_the_tangent():
+    # The tool at depth delta moves along the edge at V: n1 turns at V / rho
+    # (the reference x* + delta n1 moves (rho / R) V, not V).
+    c = circ()
+    rho = R + 0.0005
+    p = polar(rho, 0.4)
+    t = c.tangent(p)
+    np.testing.assert_allclose(c.n1_rate(p, 0.002 * t), 0.002 / rho * t,
+                               atol=1e-15)
+    np.testing.assert_allclose(c.n1_rate(p, 0.002 * c.n1(p)), 0.0, atol=1e-15)
+
+
 # ---------------------------------------------------------------- n2 (R5)
 def test_n2_is_direction_of_motion_and_falls_back_to_tangent():
     c = circ()
