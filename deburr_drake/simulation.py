@@ -1,4 +1,13 @@
-"""Running a deburring diagram and collecting its logs as named arrays."""
+"""Running a deburring diagram and collecting its logs as named arrays.
+
+Use: ``log = simulate(diagram, scenario, duration=3.0)`` runs a diagram from
+:func:`deburr_drake.cell.make_deburring_diagram` and returns a
+:class:`RunLog`: ``log["chamfer"]["f_n"]`` is the array of one named block
+of one logger (``log["chamfer"]["t"]`` its sample times; the loggers are
+``deburr_drake.cell.LOGGED``, the blocks the layouts of
+``deburr_drake.layout``), ``log.stop_reason`` says how the run ended.
+:func:`make_simulator` gives the scenario's configured ``Simulator`` for a
+diagram of your own."""
 
 from __future__ import annotations
 
