@@ -267,8 +267,8 @@ def contact_normal_force(scenario: Scenario, depths, *,
     return np.array(forces)
 
 
-def make_deburring_diagram(*, scenario: Scenario,
-                           meshcat=None) -> Diagram:
+def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
+                           extra_logs=None) -> Diagram:
     """The closed loop as a named Diagram.
 
     Systems (see :data:`SYSTEM_NAMES`): ``plant``, ``scene_graph``,
@@ -282,7 +282,13 @@ def make_deburring_diagram(*, scenario: Scenario,
     and one ``log_<name>`` VectorLogSink per entry of :data:`LOGGED`. The
     plant's default positions put the tool tip at the contour start (by
     inverse kinematics for the arm), in contact. With a ``meshcat``, the
-    cell is drawn there too (see :mod:`deburr_drake.replay`)."""
+    cell is drawn there too (see :mod:`deburr_drake.replay`).
+
+    ``extra_logs`` ({name: (system name, output port name)}) logs more
+    signals at ``simulation.log_period``, e.g. ``{"feed": ("command_generator",
+    "feed"), "state": ("plant", "state")}``: loggers ``log_<name>`` that
+    :func:`deburr_drake.simulation.simulate` collects as ``log[name]``
+    (``t`` and ``value``)."""
     scenario.validate()
     c = scenario
     check_part_in_reach(c)
@@ -352,6 +358,13 @@ def make_deburring_diagram(*, scenario: Scenario,
     logged = {name: builder.GetSubsystemByName(system).GetOutputPort(port)
               for name, (system, port) in LOGGED.items()}
     add_guards(builder, c, plant, contour, logged)
+    for name, (system, port) in (extra_logs or {}).items():
+        if name in logged:
+            raise ValueError(f"extra_logs: {name!r} is logged already: "
+                             f"allowed a name not in {sorted(logged)}")
+        logged_port = builder.GetSubsystemByName(system).GetOutputPort(port)
+        # After add_guards: the guards read the standard signals only.
+        logged = {**logged, name: logged_port}
     for name, port in logged.items():
         logger = LogVectorOutput(port, builder, c.simulation.log_period)
         logger.set_name(f"log_{name}")
