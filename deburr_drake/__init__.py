@@ -38,32 +38,30 @@ modules ``fuzzy``, ``geometry``, ``metrics``) import no Drake.
 
 import importlib
 
-#: Public name -> the module that defines it.
-_EXPORTS = {
-    "load_scenario": "config", "Scenario": "config",
-    "ConfigError": "config", "scenario_names": "config",
-    "set_field": "analysis.operating_point",
-    "get_field": "analysis.operating_point",
-    "make_deburring_diagram": "cell", "LOGGED": "cell",
-    "make_contour": "cell",
-    "simulate": "simulation", "RunLog": "simulation",
-    "make_simulator": "simulation",
-    "run": "demo", "contact_truth": "demo",
-    "pass_metrics": "report", "log_arrays": "report", "write_run": "report",
-    "make_figures": "figures", "compare_figures": "figures",
-    "write_graphs": "graphs",
-    "write_recording": "replay",
-    "add_deburring_controller": "loop", "DeburringController": "loop",
-    "HybridController": "controller",
-    "CommandGenerator": "command", "FirstOrderHold": "command",
-    "ContactParameterEstimator": "estimator",
-    "ChamferObserver": "observer",
-    "ForceSensor": "sensor",
-    "CuttingProcess": "process",
-    "CircularContour": "geometry", "StraightContour": "geometry",
-    "CHAMFER_STATE": "layout", "CONTROLLER_DIAGNOSTICS": "layout",
-    "COMMAND_STATE": "layout",
+#: Each module's public names, in the order of the docstring above.
+_MODULES = {
+    "config": ("load_scenario", "Scenario", "ConfigError", "scenario_names"),
+    "analysis.operating_point": ("set_field", "get_field"),
+    "cell": ("make_deburring_diagram", "LOGGED", "make_contour"),
+    "simulation": ("simulate", "RunLog", "make_simulator"),
+    "demo": ("run", "contact_truth"),
+    "report": ("pass_metrics", "log_arrays", "write_run"),
+    "figures": ("make_figures", "compare_figures"),
+    "graphs": ("write_graphs",),
+    "replay": ("write_recording",),
+    "loop": ("add_deburring_controller", "DeburringController"),
+    "controller": ("HybridController",),
+    "command": ("CommandGenerator", "FirstOrderHold"),
+    "estimator": ("ContactParameterEstimator",),
+    "observer": ("ChamferObserver",),
+    "sensor": ("ForceSensor",),
+    "process": ("CuttingProcess",),
+    "geometry": ("CircularContour", "StraightContour"),
+    "layout": ("CHAMFER_STATE", "CONTROLLER_DIAGNOSTICS", "COMMAND_STATE"),
 }
+#: Public name -> the module that defines it.
+_EXPORTS = {name: module for module, names in _MODULES.items()
+            for name in names}
 
 __all__ = list(_EXPORTS)
 
