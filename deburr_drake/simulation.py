@@ -158,7 +158,8 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
     scenario's by default, or until ``stop_after_passes`` edge lengths are
     done) and returns the logs. ``progress(t, wall, feed)`` (s, s, m/s of
     commanded feed) is called every ``progress_interval`` simulated
-    seconds.
+    seconds. ``loggers`` (names) limits the logs collected; by default
+    every ``log_<name>`` of the diagram (:func:`logger_names`).
 
     Every ending returns what was logged so far, with ``stop_reason`` (one
     of :data:`STOP_REASONS`), ``stop_time`` and ``stop_detail``: the pass

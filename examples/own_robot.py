@@ -19,8 +19,9 @@ import tempfile
 from pathlib import Path
 
 import deburr_drake as dd
+from deburr_drake.models import models_dir
 
-SHIPPED_ARM = Path(__file__).resolve().parents[1] / "models" / "arm5.sdf"
+SHIPPED_ARM = models_dir() / "arm5.sdf"
 
 
 def run(model_path, duration):

@@ -34,12 +34,12 @@ def study(scenario_name, field, values, duration, scale=1.0):
         dd.set_field(scenario, field, value * scale)
         scenario.validate()
         log = dd.run(scenario, duration)
-        values_ = dd.pass_metrics(log, only_cut=True)
+        metrics = dd.pass_metrics(log, only_cut=True)
         chamfer = log["chamfer"]
-        late = chamfer["t"] >= values_.get("contact_time_s", 0.0) + 2.0
+        late = chamfer["t"] >= metrics.get("contact_time_s", 0.0) + 2.0
         depth = float(np.mean(chamfer["delta"][late])) if late.any() \
             else float("nan")
-        rows[value] = (depth, values_)
+        rows[value] = (depth, metrics)
     return rows
 
 
