@@ -1,1 +1,80 @@
-"""deburr_drake: Drake reproduction of Hsu & Fu, adaptive fuzzy hybrid position/force control of a deburring robot."""
+"""deburr_drake: Drake reproduction of Hsu & Fu, adaptive fuzzy hybrid
+position/force control of a deburring robot (IEEE T-RA, 2000).
+
+The public Python API, importable from the package itself (README, "Python
+API"; ``examples/`` and ``examples/tutorial.ipynb`` use it)::
+
+    import deburr_drake as dd
+
+    scenario = dd.load_scenario("paper", text="task: {desired_depth: 0.0006}")
+    dd.set_field(scenario, "controller.fuzzy.order", 0)   # by dotted name
+    diagram = dd.make_deburring_diagram(scenario=scenario)
+    log = dd.simulate(diagram, scenario, duration=3.0)    # a RunLog
+    log["chamfer"]["f_n"]                                 # named arrays
+    values = dd.pass_metrics(log, only_cut=True)          # metrics by name
+    dd.make_figures(dd.log_arrays(log, values), "out/figs")
+
+- scenarios: :func:`load_scenario` (name or YAML file, plus YAML overrides),
+  :func:`set_field` / :func:`get_field` (a field by dotted name),
+  :class:`Scenario`, :class:`ConfigError`, :func:`scenario_names`;
+- the cell: :func:`make_deburring_diagram`, :data:`LOGGED` (logger name ->
+  system and port), :func:`make_contour`;
+- running: :func:`simulate`, :func:`run` (build and simulate),
+  :class:`RunLog`, :func:`make_simulator`;
+- results: :func:`pass_metrics`, :func:`log_arrays`, :func:`write_run`,
+  :func:`make_figures`, :func:`compare_figures`, :func:`write_graphs`,
+  :func:`write_recording` (HTML replay), :func:`contact_truth`;
+- the paper's loops inside your own Diagram: :func:`add_deburring_controller`
+  and the systems :class:`HybridController`, :class:`CommandGenerator`,
+  :class:`FirstOrderHold`, :class:`ContactParameterEstimator`,
+  :class:`ChamferObserver`, :class:`ForceSensor`, :class:`CuttingProcess`;
+  edge geometry :class:`CircularContour`, :class:`StraightContour`; signal
+  layouts :data:`CHAMFER_STATE`, :data:`CONTROLLER_DIAGNOSTICS`,
+  :data:`COMMAND_STATE`.
+
+Names load on first use, so ``import deburr_drake`` (and the pure-numpy
+modules ``fuzzy``, ``geometry``, ``metrics``) import no Drake.
+"""
+
+import importlib
+
+#: Each module's public names, in the order of the docstring above.
+_MODULES = {
+    "config": ("load_scenario", "Scenario", "ConfigError", "scenario_names"),
+    "analysis.operating_point": ("set_field", "get_field"),
+    "cell": ("make_deburring_diagram", "LOGGED", "make_contour"),
+    "simulation": ("simulate", "RunLog", "make_simulator"),
+    "demo": ("run", "contact_truth"),
+    "report": ("pass_metrics", "log_arrays", "write_run"),
+    "figures": ("make_figures", "compare_figures"),
+    "graphs": ("write_graphs",),
+    "replay": ("write_recording",),
+    "loop": ("add_deburring_controller", "DeburringController"),
+    "controller": ("HybridController",),
+    "command": ("CommandGenerator", "FirstOrderHold"),
+    "estimator": ("ContactParameterEstimator",),
+    "observer": ("ChamferObserver",),
+    "sensor": ("ForceSensor",),
+    "process": ("CuttingProcess",),
+    "geometry": ("CircularContour", "StraightContour"),
+    "layout": ("CHAMFER_STATE", "CONTROLLER_DIAGNOSTICS", "COMMAND_STATE"),
+}
+#: Public name -> the module that defines it.
+_EXPORTS = {name: module for module, names in _MODULES.items()
+            for name in names}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'deburr_drake' has no attribute "
+                             f"{name!r}")
+    value = getattr(importlib.import_module(f"deburr_drake.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -3,7 +3,14 @@ Section IV, or a Cartesian point-mass tool) whose cylindrical cutter chamfers
 a tube's inner edge through hydroelastic contact, closed by the paper's
 command generator, first-order hold, contact estimator and hybrid
 controller, with the plant-side cutting process, joint friction and force
-sensor."""
+sensor.
+
+Use: ``diagram = make_deburring_diagram(scenario=load_scenario("paper"))``,
+then :func:`deburr_drake.simulation.simulate`. Every system is named
+(:data:`SYSTEM_NAMES`), every logged output is in :data:`LOGGED` (logger
+``log_<name>``); pass ``meshcat=`` to draw the cell (deburr_drake.replay).
+The controller side alone, around a plant of your own, is
+:func:`deburr_drake.loop.add_deburring_controller`."""
 
 from __future__ import annotations
 
@@ -16,17 +23,14 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, RandomSource
 
 from deburr_drake.arm import ARM_URL, solve_tool_pose
-from deburr_drake.command import CommandGenerator, FirstOrderHold
 from deburr_drake.config import ConfigError, Scenario
-from deburr_drake.controller import HybridController
-from deburr_drake.estimator import ContactParameterEstimator
 from deburr_drake.faults import add_noise_scale, add_sensor_faults
 from deburr_drake.friction import add_joint_friction
 from deburr_drake.geometry import CircularContour, Contour, StraightContour
 from deburr_drake.guards import add_effort_saturation, add_guards
 from deburr_drake.kinematics import ToolPoint
+from deburr_drake.loop import add_deburring_controller
 from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
-from deburr_drake.observer import ChamferObserver
 from deburr_drake.part import (add_tool_robot, contact_force_on_body,
                                register_compliant_ring,
                                register_compliant_wall, register_tube_visual)
@@ -263,8 +267,8 @@ def contact_normal_force(scenario: Scenario, depths, *,
     return np.array(forces)
 
 
-def make_deburring_diagram(*, scenario: Scenario,
-                           meshcat=None) -> Diagram:
+def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
+                           extra_logs=None) -> Diagram:
     """The closed loop as a named Diagram.
 
     Systems (see :data:`SYSTEM_NAMES`): ``plant``, ``scene_graph``,
@@ -278,7 +282,13 @@ def make_deburring_diagram(*, scenario: Scenario,
     and one ``log_<name>`` VectorLogSink per entry of :data:`LOGGED`. The
     plant's default positions put the tool tip at the contour start (by
     inverse kinematics for the arm), in contact. With a ``meshcat``, the
-    cell is drawn there too (see :mod:`deburr_drake.replay`)."""
+    cell is drawn there too (see :mod:`deburr_drake.replay`).
+
+    ``extra_logs`` ({name: (system name, output port name)}) logs more
+    signals at ``simulation.log_period``, e.g. ``{"feed": ("command_generator",
+    "feed"), "state": ("plant", "state")}``: loggers ``log_<name>`` that
+    :func:`deburr_drake.simulation.simulate` collects as ``log[name]``
+    (``t`` and ``value``)."""
     scenario.validate()
     c = scenario
     check_part_in_reach(c)
@@ -308,30 +318,8 @@ def make_deburring_diagram(*, scenario: Scenario,
         plant, SENSOR_JOINT, c.sensor, tool_point=tool_point))
     noise = builder.AddNamedSystem("sensor_noise", RandomSource(
         RandomDistribution.kGaussian, 3, c.sensor.sample_period))
-    observer = builder.AddNamedSystem("chamfer_observer", ChamferObserver(
-        model, TOOL_FRAME, belief,
-        min_tangential_speed=c.command.min_tangential_speed,
-        tool_point=tool_point, contour_step=belief_step))
-    # The constant-feed baselines (controller.kind) run a timed path.
-    constant_feed = (c.command.constant_feed if c.controller.kind
-                     in c.controller.CONSTANT_FEED_KINDS else None)
-    generator = builder.AddNamedSystem("command_generator", CommandGenerator(
-        c.command, c.task, belief, x0, constant_feed=constant_feed,
-        contour_step=belief_step))
-    foh = builder.AddNamedSystem("first_order_hold", FirstOrderHold(
-        c.command.period, belief.project(x0)))
-    estimator = builder.AddNamedSystem(
-        "contact_estimator", ContactParameterEstimator(
-            c.estimator, c.task, sample_period=c.controller.control_period))
-    # The law (controller.kind) is the only thing that differs: the ideal
-    # law reads the true plant's model, the constant-feed ones the depth.
-    controller = builder.AddNamedSystem("controller", HybridController(
-        model, TOOL_FRAME, c.controller, desired_rotation,
-        tool_point=tool_point, nominal_depth=c.task.desired_depth,
-        true_plant=plant if c.controller.kind == "ideal" else None))
-
     state = plant.get_state_output_port()
-    for system in (process, sensor, observer, controller):
+    for system in (process, sensor):
         builder.Connect(state, system.GetInputPort("plant_state"))
     force_law = builder.AddSystem(process.force_law())
     builder.Connect(process.GetOutputPort("force_law_terms"),
@@ -350,22 +338,14 @@ def make_deburring_diagram(*, scenario: Scenario,
     force = add_sensor_faults(builder, c.faults,
                               sensor.GetOutputPort("tool_force"),
                               sample_period=c.sensor.sample_period)
-    builder.Connect(force, observer.GetInputPort("tool_force"))
-    builder.Connect(force, controller.GetInputPort("tool_force"))
-    chamfer = observer.GetOutputPort("chamfer_state")
-    for system in (generator, estimator, controller):
-        builder.Connect(chamfer, system.GetInputPort("chamfer_state"))
-    builder.Connect(generator.GetOutputPort("command"),
-                    foh.GetInputPort("sampled"))
-    builder.Connect(foh.GetOutputPort("position"),
-                    controller.GetInputPort("commanded_position"))
-    builder.Connect(foh.GetOutputPort("velocity"),
-                    controller.GetInputPort("commanded_velocity"))
-    builder.Connect(estimator.GetOutputPort("desired_normal_force"),
-                    controller.GetInputPort("desired_normal_force"))
+    # The paper's loops around the plant (deburr_drake.loop).
+    loops = add_deburring_controller(
+        builder, scenario=c, plant=model, contour=belief,
+        plant_state=state, tool_force=force, tool_frame=TOOL_FRAME,
+        start=x0, desired_rotation=desired_rotation, tool_point=tool_point,
+        contour_step=belief_step, true_plant=plant)
     builder.Connect(
-        add_effort_saturation(builder, c, plant,
-                              controller.GetOutputPort("actuation")),
+        add_effort_saturation(builder, c, plant, loops.actuation),
         plant.get_actuation_input_port())
 
     if meshcat is not None:
@@ -378,6 +358,13 @@ def make_deburring_diagram(*, scenario: Scenario,
     logged = {name: builder.GetSubsystemByName(system).GetOutputPort(port)
               for name, (system, port) in LOGGED.items()}
     add_guards(builder, c, plant, contour, logged)
+    for name, (system, port) in (extra_logs or {}).items():
+        if name in logged:
+            raise ValueError(f"extra_logs: {name!r} is logged already: "
+                             f"allowed a name not in {sorted(logged)}")
+        logged_port = builder.GetSubsystemByName(system).GetOutputPort(port)
+        # After add_guards: the guards read the standard signals only.
+        logged = {**logged, name: logged_port}
     for name, port in logged.items():
         logger = LogVectorOutput(port, builder, c.simulation.log_period)
         logger.set_name(f"log_{name}")

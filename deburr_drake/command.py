@@ -1,5 +1,10 @@
 """Outer loop: the feedrate-law command generator and the first-order hold
-between it and the inner loop (paper Section III.A, eq. (5), R2, R5, R6)."""
+between it and the inner loop (paper Section III.A, eq. (5), R2, R5, R6).
+
+Use: ``CommandGenerator(scenario.command, scenario.task, contour, x0)``
+and ``FirstOrderHold(scenario.command.period, contour.project(x0))``,
+the generator's ``command`` into the hold's ``sampled``;
+:func:`feedrate` is the outer-loop law as a pure function."""
 
 from __future__ import annotations
 

@@ -1,5 +1,10 @@
 """HybridController: the inner-loop adaptive fuzzy hybrid position/force
-controller, eqs. (7), (9)-(11), (30), (35)-(37) with R4, R8, R9, R10."""
+controller, eqs. (7), (9)-(11), (30), (35)-(37) with R4, R8, R9, R10.
+
+Use: ``HybridController(plant, "tool_tip", scenario.controller)`` is an
+ordinary LeafSystem (float and AutoDiffXd); its input and output ports are
+in the class docstring. :func:`deburr_drake.loop.add_deburring_controller`
+adds it together with the systems that feed it."""
 
 from __future__ import annotations
 

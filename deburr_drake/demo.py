@@ -1,6 +1,10 @@
 """The point-mass demo: runs the testbed and measures what the foundation
 issue asks for (depth convergence and eq. (8)'s time constant, estimator
-convergence, feedrate, dead zone, NaN)."""
+convergence, feedrate, dead zone, NaN).
+
+Also :func:`run` (build a scenario's cell and simulate it in one call) and
+:func:`contact_truth` (the plant's normal-force law near the desired depth,
+what an ideal estimator would report)."""
 
 from __future__ import annotations
 
@@ -60,6 +64,8 @@ def frozen_adaptation(scenario: Scenario, truth: ContactTruth) -> Scenario:
 
 
 def run(scenario: Scenario, duration: float, **kwargs) -> RunLog:
+    """Builds the scenario's cell (:func:`make_deburring_diagram`) and
+    simulates it for ``duration`` s; ``kwargs`` go to :func:`simulate`."""
     return simulate(make_deburring_diagram(scenario=scenario), scenario,
                     duration=duration, **kwargs)
 

@@ -1,4 +1,8 @@
-"""Contact-parameter estimator, eqs. (13)-(18) with correction R3."""
+"""Contact-parameter estimator, eqs. (13)-(18) with correction R3.
+
+Use: ``ContactParameterEstimator(scenario.estimator, scenario.task,
+sample_period=scenario.controller.control_period)``, fed the observer's
+``chamfer_state``; :func:`estimator_rate` is its law as a pure function."""
 
 from __future__ import annotations
 

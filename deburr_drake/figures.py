@@ -14,6 +14,11 @@ plots show depths in mm, forces in N, time in s (../shared/DESIGN.md §6).
 
 Missing keys skip the figure that needs them (with a warning); present but
 malformed arrays (wrong ndim or length) raise ValueError naming the key.
+
+Use: ``make_figures(dict(np.load("out/paper/logs.npz")), out_dir)`` after a
+run of the command line, or ``make_figures(report.log_arrays(log, values),
+out_dir)`` straight from a RunLog; ``compare_figures({"m = 0": logs0,
+"m = 2": logs2}, out_dir)`` overlays runs. Both return the PNG paths.
 """
 
 from __future__ import annotations

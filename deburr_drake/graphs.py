@@ -1,4 +1,8 @@
-"""GraphViz export of a deburring diagram and of its controller."""
+"""GraphViz export of a deburring diagram and of its controller.
+
+Use: ``write_graphs(diagram, "out/diagram.dot", fmt="svg")`` (the
+``deburr-drake diagram`` command); ``diagram.GetGraphvizString()`` is the
+text itself."""
 
 from __future__ import annotations
 

@@ -1,5 +1,10 @@
 """ChamferObserver: the chamfer quantities both control loops use, from the
-measured robot state, the part geometry and the force sensor (Sec. II)."""
+measured robot state, the part geometry and the force sensor (Sec. II).
+
+Use: ``ChamferObserver(plant, "tool_tip", contour,
+min_tangential_speed=scenario.command.min_tangential_speed)``; its
+``chamfer_state`` (layout ``deburr_drake.layout.CHAMFER_STATE``) feeds
+the command generator, the estimator and the controller."""
 
 from __future__ import annotations
 

@@ -1,6 +1,12 @@
 """Meshcat for the deburring cell: the arm, tool, part and burrs live or in
 a self-contained HTML replay, with the contact force as an arrow and the
-edge coloured as it is chamfered (the burrs disappear as the tool passes)."""
+edge coloured as it is chamfered (the burrs disappear as the tool passes).
+
+Use: ``meshcat = Meshcat()``, ``make_deburring_diagram(scenario=s,
+meshcat=meshcat)``, ``meshcat.StartRecording(frames_per_second=10.0)``,
+simulate, then ``write_recording(meshcat, "out/replay.html")``: one
+self-contained HTML file to open in a browser (or an IFrame in a
+notebook)."""
 
 from __future__ import annotations
 

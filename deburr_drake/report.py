@@ -1,5 +1,10 @@
 """The metrics of a deburring pass (DESIGN §6 and the cell issue) from a
-run's logs, and their files: logs.npz, metrics.json."""
+run's logs, and their files: logs.npz, metrics.json.
+
+Use: ``values = pass_metrics(log, only_cut=True)`` (a dict by metric name,
+nan with ``values.reasons[name]`` where a short run cannot give one);
+``log_arrays(log, values)`` is the flat dict the figures read;
+``write_run(log, out_dir, values)`` writes both files."""
 
 from __future__ import annotations
 
@@ -14,6 +19,7 @@ from deburr_drake.cell import make_contour
 from deburr_drake.simulation import RunLog
 
 __all__ = ["pass_metrics", "PassMetrics", "run_summary", "write_run",
+           "log_arrays",
            "TRANSIENT", "CONTACT_FORCE"]
 
 #: Excluded after contact is established (s), as the issue asks.
@@ -247,12 +253,12 @@ def run_summary(log: RunLog, metrics_: Dict[str, float]) -> dict:
     return values
 
 
-def write_run(log: RunLog, out_dir, metrics_: Dict[str, float]) -> Dict[
-        str, Path]:
-    """logs.npz (named arrays, SI units) and metrics.json (strict JSON,
-    see :func:`run_summary`) in ``out_dir``."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+def log_arrays(log: RunLog, metrics_: Dict[str, float]) -> Dict[
+        str, np.ndarray]:
+    """Every array of the run as ``"<logger>.<block>"`` plus the
+    ``meta.*`` entries the figures read (desired depth and force, contact
+    start, stop time and reason): what logs.npz holds, and what
+    :func:`deburr_drake.figures.make_figures` takes without a file."""
     arrays = log.flat()
     sc = log.scenario
     arrays["meta.desired_depth"] = np.array(sc.task.desired_depth)
@@ -262,7 +268,16 @@ def write_run(log: RunLog, out_dir, metrics_: Dict[str, float]) -> Dict[
         arrays["meta.contact_start"] = np.array(metrics_["contact_time_s"])
     arrays["meta.stop_time"] = np.array(log.stop_time)
     arrays["meta.stop_reason"] = np.array(log.stop_reason)
-    np.savez_compressed(out / "logs.npz", **arrays)
+    return arrays
+
+
+def write_run(log: RunLog, out_dir, metrics_: Dict[str, float]) -> Dict[
+        str, Path]:
+    """logs.npz (:func:`log_arrays`: named arrays, SI units) and
+    metrics.json (strict JSON, see :func:`run_summary`) in ``out_dir``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(out / "logs.npz", **log_arrays(log, metrics_))
     with open(out / "metrics.json", "w") as f:
         json.dump(run_summary(log, metrics_), f, indent=2, sort_keys=True,
                   allow_nan=False)

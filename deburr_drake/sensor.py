@@ -1,5 +1,9 @@
 """ForceSensor: the force/torque sensor between flange and tool (a weld
-joint of the plant), sampled and low-pass filtered like a real one."""
+joint of the plant), sampled and low-pass filtered like a real one.
+
+Use: ``ForceSensor(plant, "ft_sensor", scenario.sensor)`` on a plant with
+a weld joint between flange and tool; its ``tool_force`` output is what
+the observer and the controller read."""
 
 from __future__ import annotations
 

@@ -1,4 +1,13 @@
-"""Running a deburring diagram and collecting its logs as named arrays."""
+"""Running a deburring diagram and collecting its logs as named arrays.
+
+Use: ``log = simulate(diagram, scenario, duration=3.0)`` runs a diagram from
+:func:`deburr_drake.cell.make_deburring_diagram` and returns a
+:class:`RunLog`: ``log["chamfer"]["f_n"]`` is the array of one named block
+of one logger (``log["chamfer"]["t"]`` its sample times; the loggers are
+``deburr_drake.cell.LOGGED``, the blocks the layouts of
+``deburr_drake.layout``), ``log.stop_reason`` says how the run ended.
+:func:`make_simulator` gives the scenario's configured ``Simulator`` for a
+diagram of your own."""
 
 from __future__ import annotations
 
@@ -12,13 +21,15 @@ from pydrake.common import RandomGenerator
 from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
                                       SimulatorConfig)
 from pydrake.systems.framework import Diagram, EventStatus
+from pydrake.systems.primitives import VectorLogSink
 
 from deburr_drake.config import Scenario
 from deburr_drake.layout import (CHAMFER_STATE, COMMAND_STATE,
                                  CONTROLLER_DIAGNOSTICS)
 from deburr_drake.process import PROCESS_STATE
 
-__all__ = ["RunLog", "simulate", "make_simulator", "STOP_REASONS"]
+__all__ = ["RunLog", "simulate", "make_simulator", "logger_names",
+           "STOP_REASONS"]
 
 #: Why a run ended (``RunLog.stop_reason``). ``guard:<name>`` names the
 #: guard that tripped (deburr_drake.guards).
@@ -99,6 +110,14 @@ def _final_state(diagram, context) -> Dict[str, Dict[str, np.ndarray]]:
     }
 
 
+def logger_names(diagram: Diagram):
+    """The names ``<name>`` of the diagram's loggers ``log_<name>``: those of
+    ``deburr_drake.cell.LOGGED`` and any ``extra_logs``."""
+    return [s.get_name()[len("log_"):] for s in diagram.GetSystems()
+            if s.get_name().startswith("log_")
+            and isinstance(s, VectorLogSink)]
+
+
 def _collect(diagram, context, loggers) -> Dict[str, Dict[str, np.ndarray]]:
     out = {}
     for name in loggers:
@@ -139,7 +158,8 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
     scenario's by default, or until ``stop_after_passes`` edge lengths are
     done) and returns the logs. ``progress(t, wall, feed)`` (s, s, m/s of
     commanded feed) is called every ``progress_interval`` simulated
-    seconds.
+    seconds. ``loggers`` (names) limits the logs collected; by default
+    every ``log_<name>`` of the diagram (:func:`logger_names`).
 
     Every ending returns what was logged so far, with ``stop_reason`` (one
     of :data:`STOP_REASONS`), ``stop_time`` and ``stop_detail``: the pass
@@ -148,7 +168,6 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
     (checked after every step by the simulator's monitor, e.g. a signal
     handler's flag: "interrupted"), Drake detected a NaN ("nan"), or
     another exception ("error"; the detail holds its message)."""
-    from deburr_drake.cell import LOGGED
     duration = scenario.simulation.duration if duration is None else duration
     if not (progress_interval > 0 and np.isfinite(progress_interval)):
         raise ValueError(f"progress_interval = {progress_interval!r} is "
@@ -198,7 +217,7 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
         detail = f"{type(e).__name__}: {e}"
     t = context.get_time()
     wall = time.perf_counter() - wall_start
-    signals = _collect(diagram, context, loggers or LOGGED)
+    signals = _collect(diagram, context, loggers or logger_names(diagram))
     try:
         signals.update(_final_state(diagram, context))
     except Exception as e:  # e.g. a NaN state; the logs are still there

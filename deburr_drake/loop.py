@@ -1,0 +1,135 @@
+"""The paper's two control loops, added to any ``DiagramBuilder`` around any
+robot plant: :func:`add_deburring_controller`.
+
+The outer loop is the ``CommandGenerator`` (feedrate law, T = 25 ms) and its
+``FirstOrderHold`` (5); the inner loop is the ``ChamferObserver``, the
+``ContactParameterEstimator`` (13)-(18) and the ``HybridController``
+(36), (37). Together they need two signals from the user's side of the
+diagram and give one back::
+
+    plant state [q; v] ──┐                ┌── actuation (nu) ──> plant
+    tool force (3, N) ───┴─> the loops ───┘
+
+``make_deburring_diagram`` builds the paper's cell with it; a user with a
+plant of their own (``examples/own_plant.py``) calls it the same way::
+
+    loops = add_deburring_controller(
+        builder, scenario=scenario, plant=plant, contour=contour,
+        plant_state=plant.get_state_output_port(),
+        tool_force=my_force_sensor.get_output_port())
+    builder.Connect(loops.actuation, plant.get_actuation_input_port())
+
+The systems get the cell's names (``chamfer_observer``,
+``command_generator``, ``first_order_hold``, ``contact_estimator``,
+``controller``), so :data:`deburr_drake.cell.LOGGED` names their outputs in
+a user's diagram too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.systems.framework import DiagramBuilder, OutputPort
+
+from deburr_drake.command import CommandGenerator, FirstOrderHold
+from deburr_drake.config import Scenario
+from deburr_drake.controller import HybridController
+from deburr_drake.estimator import ContactParameterEstimator
+from deburr_drake.geometry import Contour
+from deburr_drake.observer import ChamferObserver
+
+__all__ = ["DeburringController", "add_deburring_controller"]
+
+
+@dataclass
+class DeburringController:
+    """The systems :func:`add_deburring_controller` added, and the port to
+    connect to the plant's actuation input."""
+
+    observer: ChamferObserver
+    command_generator: CommandGenerator
+    first_order_hold: FirstOrderHold
+    estimator: ContactParameterEstimator
+    controller: HybridController
+
+    @property
+    def actuation(self) -> OutputPort:
+        """The controller's ``actuation`` output (nu, N or N m)."""
+        return self.controller.GetOutputPort("actuation")
+
+
+def add_deburring_controller(
+        builder: DiagramBuilder, *, scenario: Scenario,
+        plant: MultibodyPlant, contour: Contour, plant_state: OutputPort,
+        tool_force: OutputPort, tool_frame: str = "tool_tip", start=None,
+        desired_rotation=None, tool_point=None, contour_step=None,
+        true_plant=None) -> DeburringController:
+    """Adds the command generator, first-order hold, chamfer observer,
+    contact estimator and hybrid controller to ``builder``, configured by
+    ``scenario`` (its ``command``, ``task``, ``estimator`` and ``controller``
+    sections), and connects them to each other and to the two signals:
+
+    - ``plant_state``: an output port with [q; v] of ``plant`` (m or rad,
+      m/s or rad/s), e.g. ``plant.get_state_output_port()``;
+    - ``tool_force``: an output port (3, N, world) with the measured force
+      of the part on the tool (a force sensor, or your contact model).
+
+    ``plant`` is a finalized MultibodyPlant of the robot that the
+    controller uses as its model (kinematics, Jacobian, gravity with masses
+    scaled by ``controller.model_mass_scale``); it is not simulated here, so
+    it may be the simulated plant itself or a separate copy. ``tool_frame``
+    names the frame whose origin is the tool point x_p. ``contour`` is the
+    zero-depth path of the tool point along the edge (the part the
+    controller believes in; see :mod:`deburr_drake.geometry`), ``start``
+    the tool point where the command starts (m, world; the contour's start
+    by default). ``desired_rotation`` (3 x 3) is the tool orientation the
+    controller holds (identity by default); ``tool_point``,
+    ``contour_step`` and ``true_plant`` are passed through to the systems
+    (shared kinematics, a part that moves, the ``ideal`` law's true plant).
+
+    Returns the systems; connect ``.actuation`` to the plant's actuation
+    input (directly, or through your own saturation or fault systems)."""
+    c = scenario
+    x0 = (contour.point_at(0.0) if start is None
+          else np.asarray(start, float))
+    # The constant-feed baselines (controller.kind) run a timed path.
+    constant_feed = (c.command.constant_feed if c.controller.kind
+                     in c.controller.CONSTANT_FEED_KINDS else None)
+    observer = builder.AddNamedSystem("chamfer_observer", ChamferObserver(
+        plant, tool_frame, contour,
+        min_tangential_speed=c.command.min_tangential_speed,
+        tool_point=tool_point, contour_step=contour_step))
+    generator = builder.AddNamedSystem("command_generator", CommandGenerator(
+        c.command, c.task, contour, x0, constant_feed=constant_feed,
+        contour_step=contour_step))
+    foh = builder.AddNamedSystem("first_order_hold", FirstOrderHold(
+        c.command.period, contour.project(x0)))
+    estimator = builder.AddNamedSystem(
+        "contact_estimator", ContactParameterEstimator(
+            c.estimator, c.task, sample_period=c.controller.control_period))
+    # The law (controller.kind) is the only thing that differs: the ideal
+    # law reads the true plant's model, the constant-feed ones the depth.
+    controller = builder.AddNamedSystem("controller", HybridController(
+        plant, tool_frame, c.controller, desired_rotation,
+        tool_point=tool_point, nominal_depth=c.task.desired_depth,
+        true_plant=true_plant if c.controller.kind == "ideal" else None))
+
+    for system in (observer, controller):
+        builder.Connect(plant_state, system.GetInputPort("plant_state"))
+        builder.Connect(tool_force, system.GetInputPort("tool_force"))
+    chamfer = observer.GetOutputPort("chamfer_state")
+    for system in (generator, estimator, controller):
+        builder.Connect(chamfer, system.GetInputPort("chamfer_state"))
+    builder.Connect(generator.GetOutputPort("command"),
+                    foh.GetInputPort("sampled"))
+    builder.Connect(foh.GetOutputPort("position"),
+                    controller.GetInputPort("commanded_position"))
+    builder.Connect(foh.GetOutputPort("velocity"),
+                    controller.GetInputPort("commanded_velocity"))
+    builder.Connect(estimator.GetOutputPort("desired_normal_force"),
+                    controller.GetInputPort("desired_normal_force"))
+    return DeburringController(observer=observer, command_generator=generator,
+                               first_order_hold=foh, estimator=estimator,
+                               controller=controller)
