@@ -1,0 +1,197 @@
+"""Bring your own robot (deburr_drake.robot): the shipped 6-DOF arm
+(models/arm6.sdf) and its spindle, the one-line errors of a model the cell
+cannot use, a user's model file outside the package, and a short closed
+loop of the paper_6dof scenario."""
+
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+
+from deburr_drake import metrics
+from deburr_drake.cell import check_part_in_reach, make_deburring_diagram
+from deburr_drake.config import ConfigError, RobotConfig, load_scenario, scenario_path
+from deburr_drake.models import models_dir
+from deburr_drake.robot import check_robot, make_robot_model, robot_joints
+from deburr_drake.simulation import simulate
+
+ARM6_JOINTS = ("a1", "a2", "a3", "a4", "a5", "a6")
+
+
+def _arm6(**fields):
+    return RobotConfig(**{"model": "arm6", "flange_frame": "flange", **fields})
+
+
+def test_arm6_is_a_6dof_arm_with_drives_masses_and_limits():
+    plant = check_robot(_arm6())
+    joints = robot_joints(plant)
+    assert tuple(j.name() for j in joints) == ARM6_JOINTS
+    assert plant.num_actuators() == 6
+    ns = "{http://drake.mit.edu}"
+    root = ET.parse(models_dir() / "arm6.sdf").getroot()
+    for joint in root.iter("joint"):
+        if joint.get("type") != "revolute":
+            continue
+        actuator = plant.GetJointActuatorByName(joint.get("name"))
+        rotor = float(joint.find(f"{ns}rotor_inertia").text)
+        gear = float(joint.find(f"{ns}gear_ratio").text)
+        assert actuator.default_rotor_inertia() == pytest.approx(rotor) and rotor > 0
+        assert actuator.default_gear_ratio() == pytest.approx(gear) and 50 <= gear <= 200
+        assert actuator.effort_limit() == pytest.approx(float(joint.find("axis/limit/effort").text))
+        assert float(joint.find("axis/dynamics/damping").text) > 0
+    for joint in joints:
+        assert joint.position_lower_limits()[0] < 0 < joint.position_upper_limits()[0]
+        assert 2.0 <= joint.velocity_upper_limits()[0] <= 11.0
+    links = [plant.GetBodyByName(f"link{i}") for i in range(1, 7)]
+    masses = np.array([b.default_mass() for b in links])
+    assert np.all(masses > 0)
+    # A 16 kg payload class arm: about 140 kg moving, 210 kg with the base.
+    assert 120 <= masses.sum() <= 160
+    for body in links:  # physically valid inertias (triangle inequality)
+        I = body.default_rotational_inertia().CopyToFullMatrix3()
+        d = np.diag(I)
+        assert np.all(d > 0) and np.all(d.sum() - 2 * d >= -1e-9)
+
+
+def test_the_spindle_hangs_from_the_flange_on_the_sensor_weld():
+    plant = make_robot_model(_arm6(tool_length=0.12, tool_mass=1.5))
+    context = plant.CreateDefaultContext()
+    tool = plant.GetBodyByName("tool")
+    assert tool.default_mass() == pytest.approx(1.5)
+    sensor = plant.GetJointByName("ft_sensor")
+    assert sensor.num_velocities() == 0 and sensor.child_body().index() == tool.index()
+    X_WF = plant.GetFrameByName("flange").CalcPoseInWorld(context)
+    X_WT = plant.GetFrameByName("tool_tip").CalcPoseInWorld(context)
+    flange_z = X_WF.rotation().matrix()[:, 2]
+    np.testing.assert_allclose(X_WT.translation(), X_WF.translation() + 0.12 * flange_z, atol=1e-12)
+    np.testing.assert_allclose(X_WT.rotation().matrix()[:, 2], -flange_z, atol=1e-12)
+
+
+def _one_line_error(config_or_call, field):
+    with pytest.raises(ConfigError) as info:
+        config_or_call()
+    message = str(info.value)
+    assert "\n" not in message and message.startswith(field), message
+    return message
+
+
+def test_a_missing_model_file_is_one_line():
+    _one_line_error(RobotConfig(model="/no/such/arm.urdf").validate, "robot.model")
+    _one_line_error(RobotConfig(model="arm7").validate, "robot.model")
+
+
+def test_a_missing_frame_lists_the_frames_there_are():
+    message = _one_line_error(lambda: check_robot(_arm6(flange_frame="tool0")),
+                              "robot.flange_frame")
+    assert "'flange'" in message and "'link6'" in message
+    _one_line_error(lambda: check_robot(RobotConfig(model="arm6")), "robot.tool_frame")
+    _one_line_error(lambda: check_robot(RobotConfig(model="arm5", sensor_joint="sensor")),
+                    "robot.sensor_joint")
+
+
+def test_wrong_lengths_of_the_per_joint_lists_are_one_line():
+    _one_line_error(lambda: check_robot(_arm6(joint_coulomb_friction=[1.0] * 5)),
+                    "robot.joint_coulomb_friction")
+    _one_line_error(lambda: check_robot(_arm6(ik_seed=[0.0] * 5)), "robot.ik_seed")
+
+
+def _arm_file(tmp_path, n_joints):
+    """arm6.sdf cut down to its first n_joints joints, flange on the last link."""
+    tree = ET.parse(models_dir() / "arm6.sdf")
+    model = tree.getroot().find("model")
+    keep = {f"link{i}" for i in range(1, n_joints + 1)} | {"base"}
+    for child in list(model):
+        name = child.get("name")
+        if child.tag == "link" and name not in keep:
+            model.remove(child)
+        if child.tag == "joint" and child.find("child").text not in keep:
+            model.remove(child)
+        if child.tag == "frame":
+            child.set("attached_to", f"link{n_joints}")
+            child.find("pose").set("relative_to", f"link{n_joints}")
+    path = tmp_path / f"arm{n_joints}.sdf"
+    tree.write(path)
+    return path
+
+
+def test_fewer_than_five_actuated_joints_is_one_line(tmp_path):
+    path = _arm_file(tmp_path, 4)
+    message = _one_line_error(
+        lambda: check_robot(RobotConfig(model=str(path), flange_frame="flange")), "robot.model")
+    assert "4 actuated joints" in message
+
+
+def test_a_part_out_of_reach_is_one_line():
+    scenario = load_scenario("paper_6dof", text="tube: {position: [2.5, 0.0, 0.45]}")
+    message = _one_line_error(lambda: check_part_in_reach(scenario), "tube.position")
+    assert "beyond the nearest reachable" in message
+
+
+def test_the_cli_says_a_bad_robot_in_one_line_and_runs_nothing(tmp_path):
+    result = subprocess.run(
+        [sys.executable, "-m", "deburr_drake.cli", "simulate", "--scenario", "paper_6dof",
+         "--scenario-text", "robot: {flange_frame: tool0}", "--out", str(tmp_path / "out")],
+        capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "robot.flange_frame" in lines[0], result.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def _user_scenario(tmp_path):
+    """paper_6dof as a user writes it: the model copied into their own
+    package (package.xml, a mesh it names by package://), the scenario
+    beside it naming the model by a relative path."""
+    package = tmp_path / "my_cell" / "my_arms"
+    (package / "meshes").mkdir(parents=True)
+    (package / "package.xml").write_text(
+        '<?xml version="1.0"?><package format="2"><name>my_arms</name><version>0.0.1</version>'
+        '<description>a user arm</description><maintainer email="u@example.com">u</maintainer>'
+        '<license>BSD</license></package>')
+    (package / "meshes" / "cover.obj").write_text(
+        "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    sdf = (models_dir() / "arm6.sdf").read_text().replace(
+        '<visual name="carousel">',
+        '<visual name="cover"><geometry><mesh><uri>package://my_arms/meshes/cover.obj</uri>'
+        '</mesh></geometry></visual>\n      <visual name="carousel">')
+    (package / "my_arm.sdf").write_text(sdf)
+    text = scenario_path("paper_6dof").read_text()
+    assert "  model: arm6\n" in text
+    text = text.replace("  model: arm6\n", "  model: my_arms/my_arm.sdf\n")
+    text = text.replace("name: paper_6dof", "name: my_cell")
+    path = tmp_path / "my_cell" / "cell.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_a_user_model_file_outside_the_package_runs_in_contact(tmp_path):
+    path = _user_scenario(tmp_path)
+    scenario = load_scenario(str(path), text="simulation: {duration: 1.5}")
+    assert scenario.robot.model == str(path.parent / "my_arms" / "my_arm.sdf")
+    assert str(models_dir()) not in scenario.robot.model
+    check_part_in_reach(scenario)
+    log = simulate(make_deburring_diagram(scenario=scenario), scenario)
+    ch = log["chamfer"]
+    assert not metrics.any_nan(*[v for b in log.signals.values() for v in b.values()])
+    t_contact = metrics.first_time(ch["t"], ch["f_n"] > 1.0)
+    assert t_contact < 0.5
+    assert np.all(ch["f_n"][metrics.window(ch["t"], t_contact + 0.5)] > 2.0)
+
+
+@pytest.mark.slow
+def test_paper_6dof_converges_in_a_short_run():
+    scenario = load_scenario("paper_6dof")
+    log = simulate(make_deburring_diagram(scenario=scenario), scenario, duration=4.0)
+    ch = log["chamfer"]
+    late = metrics.window(ch["t"], 3.0)
+    assert np.max(np.abs(ch["delta"][late] - 5e-4)) < 2e-5
+    cmd = log["command"]
+    feed = metrics.window(cmd["t"], 2.0)
+    assert 2.0e-3 < metrics.mean_speed(cmd["t"][feed], cmd["arc_position"][feed]) < 2.8e-3
+    process = log["process"]
+    settled = metrics.window(process["t"], 2.0)
+    assert np.mean(process["f_t"][settled]) == pytest.approx(10.0, abs=1.0)
+    assert not metrics.any_nan(*[v for b in log.signals.values() for v in b.values()])
