@@ -696,7 +696,7 @@ class GuardsConfig:
 
     enabled: bool = True
     # Trip when any |tau_i| exceeds this fraction of the joint's effort
-    # limit (models/arm5.sdf); joints without a limit are not checked.
+    # limit (the robot model's <effort>); joints without one are not checked.
     joint_torque_fraction: float = 1.0
     tool_force: float = 0.0  # N, |measured f|; 0: 10 x desired |f_t|
     depth: float = 0.0  # m, chamfer depth; 0: min(4 x desired, cutter radius)
