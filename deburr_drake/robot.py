@@ -49,7 +49,8 @@ from pydrake.geometry import Cylinder
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
 from pydrake.systems.framework import DiagramBuilder
-from pydrake.multibody.tree import (FixedOffsetFrame, FrameIndex, JointIndex,
+from pydrake.multibody.tree import (FixedOffsetFrame, FrameIndex,
+                                    JacobianWrtVariable, JointIndex,
                                     SpatialInertia, UnitInertia, WeldJoint)
 
 from deburr_drake.arm import ARM_URL, default_q_guess
@@ -58,7 +59,8 @@ from deburr_drake.models import POINT_MASS_URL, make_parser
 
 __all__ = ["ARM6_URL", "SHIPPED_ROBOTS", "MIN_JOINTS", "MAX_JOINTS",
            "add_robot", "make_robot_model", "check_robot", "robot_joints",
-           "ik_seed", "tool_frame_of", "spindle_inertia"]
+           "ik_seed", "tool_frame_of", "spindle_inertia", "start_pose",
+           "loop_numbers"]
 
 ARM6_URL = "package://deburr_drake_models/arm6.sdf"
 
@@ -113,10 +115,19 @@ def _add_models(plant: MultibodyPlant, config: RobotConfig):
 
 
 def _frame_names(plant, instance):
+    """The instance's body frames and named frames (not its joints' frames,
+    not __model__)."""
+    joint_frames = set()
+    for index in plant.GetJointIndices(instance):
+        joint = plant.get_joint(index)
+        joint_frames |= {joint.frame_on_parent().index(),
+                         joint.frame_on_child().index()}
     names = []
     for i in range(plant.num_frames()):
         frame = plant.get_frame(FrameIndex(i))
-        if frame.model_instance() == instance:
+        if frame.model_instance() == instance and \
+                frame.index() not in joint_frames and \
+                frame.name() != "__model__":
             names.append(frame.name())
     return sorted(set(names))
 
@@ -298,3 +309,68 @@ def ik_seed(config: RobotConfig, p_W_tip):
     if config.model == "arm5":
         return default_q_guess(p_W_tip)
     return None
+
+
+def start_pose(scenario):
+    """The arm's joint angles (rad) at the start of the scenario's pass:
+    the tool tip at the start of the believed contour, the tool vertical
+    (what the cell sets as the plant's default positions)."""
+    from deburr_drake.arm import solve_tool_pose
+    from deburr_drake.cell import believed_contour, start_position
+    robot = scenario.robot
+    plant = make_robot_model(robot)
+    x0 = start_position(scenario, believed_contour(scenario))
+    if robot.model == "cartesian_tool":
+        return x0
+    frame = plant.GetFrameByName(robot.tool_frame)
+    return solve_tool_pose(plant, x0, instance=frame.model_instance(),
+                           q_guess=ik_seed(robot, x0),
+                           tool_frame=robot.tool_frame)
+
+
+def loop_numbers(scenario, q=None) -> dict:
+    """The numbers that set a robot's gains (README, bring your own robot),
+    at joint angles ``q`` (default :func:`start_pose`), from the robot
+    model alone:
+
+    - ``gravity_error_force`` (3, N, world) and ``gravity_error_moment``
+      (3, N m): the wrench at the tool frame whose J^T equals the
+      controller's gravity error (model_mass_scale - 1) tau_g (least
+      squares on a 5-DOF arm): what the fuzzy terms must learn on the fuzzy
+      axes, and what leaves e_k = f_k / (K_k lambda_k) on the others;
+    - ``static_error`` (3, m): that last quotient on every task axis;
+    - ``lightest_task_mass`` (kg): the smallest eigenvalue of
+      (J_v M^-1 J_v^T)^-1, the tool point's lightest direction;
+    - ``sampled_rate``: max Re eig(M^-1 D) T, D = J_v^T K J_v + J_w^T K_o
+      J_w, T the control period: the sampled loop's fastest decay per
+      period (arm5 with paper.yaml: 0.30; its measured limit, at K = 5000
+      on x1, x2: about 1.6)."""
+    c = scenario.controller
+    plant = make_robot_model(scenario.robot)
+    if q is None:
+        q = start_pose(scenario)
+    context = plant.CreateDefaultContext()
+    plant.SetPositions(context, q)
+    frame = plant.GetFrameByName(scenario.robot.tool_frame)
+    J = plant.CalcJacobianSpatialVelocity(
+        context, JacobianWrtVariable.kV, frame, np.zeros(3),
+        plant.world_frame(), plant.world_frame())
+    M = plant.CalcMassMatrix(context)
+    error = (c.model_mass_scale - 1.0) * \
+        plant.CalcGravityGeneralizedForces(context)
+    wrench = np.linalg.lstsq(J.T, error, rcond=None)[0]
+    K = np.asarray(c.sliding_gain, float)
+    lam = np.asarray(c.sliding_lambda, float)
+    D = J[3:].T @ np.diag(K) @ J[3:] + \
+        J[:3].T @ np.diag(np.asarray(c.orientation_gain, float)) @ J[:3]
+    Jv_Minv = J[3:] @ np.linalg.inv(M)
+    period = c.control_period
+    return {
+        "gravity_error_moment": wrench[:3],
+        "gravity_error_force": wrench[3:],
+        "static_error": wrench[3:] / (K * lam),
+        "lightest_task_mass": float(np.min(np.linalg.eigvalsh(
+            np.linalg.inv(Jv_Minv @ J[3:].T)))),
+        "sampled_rate": float(np.max(np.linalg.eigvals(
+            np.linalg.solve(M, D)).real) * period) if period > 0 else 0.0,
+    }

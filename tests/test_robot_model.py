@@ -15,7 +15,7 @@ from deburr_drake import metrics
 from deburr_drake.cell import check_part_in_reach, make_deburring_diagram
 from deburr_drake.config import ConfigError, RobotConfig, load_scenario, scenario_path
 from deburr_drake.models import models_dir
-from deburr_drake.robot import check_robot, make_robot_model, robot_joints
+from deburr_drake.robot import check_robot, loop_numbers, make_robot_model, robot_joints
 from deburr_drake.simulation import simulate
 
 ARM6_JOINTS = ("a1", "a2", "a3", "a4", "a5", "a6")
@@ -68,6 +68,20 @@ def test_the_spindle_hangs_from_the_flange_on_the_sensor_weld():
     flange_z = X_WF.rotation().matrix()[:, 2]
     np.testing.assert_allclose(X_WT.translation(), X_WF.translation() + 0.12 * flange_z, atol=1e-12)
     np.testing.assert_allclose(X_WT.rotation().matrix()[:, 2], -flange_z, atol=1e-12)
+
+
+def test_loop_numbers_give_the_gravity_error_and_the_sampled_rate():
+    """The numbers paper_6dof's gains are derived from (its comments)."""
+    arm5 = loop_numbers(load_scenario("paper"))
+    arm6 = loop_numbers(load_scenario("paper_6dof"))
+    np.testing.assert_allclose(arm5["gravity_error_force"], [3.94, 0.0, -13.91], atol=0.01)
+    np.testing.assert_allclose(arm6["gravity_error_force"], [25.84, 0.0, -69.17], atol=0.01)
+    assert arm6["gravity_error_moment"][1] == pytest.approx(7.18, abs=0.01)
+    assert arm5["sampled_rate"] == pytest.approx(0.30, abs=0.005)
+    assert arm6["sampled_rate"] == pytest.approx(0.33, abs=0.005)
+    assert arm6["lightest_task_mass"] == pytest.approx(5.9, abs=0.05)
+    # The vertical error of the PD axis: 69 N / (4000 x 100) N/m.
+    assert arm6["static_error"][2] == pytest.approx(-69.17 / 4e5, rel=1e-3)
 
 
 def _one_line_error(config_or_call, field):
