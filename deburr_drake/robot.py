@@ -196,15 +196,24 @@ def add_robot(plant: MultibodyPlant, config: RobotConfig, *,
     return instance
 
 
+def _require_named(config: RobotConfig, field: str, exists, what: str,
+                   names, added: str):
+    """ConfigError listing ``names()`` unless ``exists(robot.<field>)``."""
+    name = getattr(config, field)
+    if not exists(name):
+        raise ConfigError(
+            f"robot.{field} = {name!r} is invalid: allowed {what} of "
+            f"{config.model!r}: {names()} (or name the mounting face in "
+            f"robot.flange_frame and the cell adds the {added})")
+
+
 def tool_frame_of(plant, instance, config: RobotConfig):
     """The tool frame of the robot; ConfigError listing the model's frames
     if it has none of that name."""
-    if not plant.HasFrameNamed(config.tool_frame, instance):
-        raise ConfigError(
-            f"robot.tool_frame = {config.tool_frame!r} is invalid: allowed "
-            f"a frame of {config.model!r} at the tool tip: "
-            f"{_frame_names(plant, instance)} (or name the mounting face in "
-            "robot.flange_frame and the cell adds the tool)")
+    _require_named(config, "tool_frame",
+                   lambda name: plant.HasFrameNamed(name, instance),
+                   "a frame at the tool tip",
+                   lambda: _frame_names(plant, instance), "tool")
     return plant.GetFrameByName(config.tool_frame, instance)
 
 
@@ -249,12 +258,10 @@ def check_robot(config: RobotConfig) -> MultibodyPlant:
     _parse_with_geometry(config)  # every URI in the file resolves
     plant, instance = _robot_model(config)
     tool = tool_frame_of(plant, instance, config)
-    if not plant.HasJointNamed(config.sensor_joint, instance):
-        raise ConfigError(
-            f"robot.sensor_joint = {config.sensor_joint!r} is invalid: "
-            f"allowed a weld joint of {config.model!r} holding the tool: "
-            f"{_joint_names(plant, instance)} (or name the mounting face in "
-            "robot.flange_frame and the cell adds the sensor)")
+    _require_named(config, "sensor_joint",
+                   lambda name: plant.HasJointNamed(name, instance),
+                   "the weld joint holding the tool",
+                   lambda: _joint_names(plant, instance), "sensor")
     sensor = plant.GetJointByName(config.sensor_joint, instance)
     if sensor.num_velocities() != 0 or \
             sensor.child_body().index() != tool.body().index():
