@@ -131,6 +131,79 @@ def _arm_file(tmp_path, n_joints):
     return path
 
 
+def _urdf_of_arm6(path, *, transmissions=True):
+    """models/arm6.sdf written as URDF (inertias, joints, limits, damping, drives;
+    no visuals): its links are parallel to the model frame at q = 0, so a joint's
+    origin is the child's position less the parent's."""
+    ns = "{http://drake.mit.edu}"
+    model = ET.parse(models_dir() / "arm6.sdf").getroot().find("model")
+    position = {"world": np.zeros(3)}
+    out = ['<?xml version="1.0"?>', '<robot name="arm6" xmlns:drake="http://drake.mit.edu">']
+    for link in model.findall("link"):
+        name = link.get("name")
+        position[name] = np.array(link.find("pose").text.split(), float)[:3]
+        inertial = link.find("inertial")
+        com = " ".join(inertial.find("pose").text.split()[:3])
+        I = {k: inertial.find(f"inertia/{k}").text for k in ("ixx", "iyy", "izz")}
+        out.append(f'<link name="{name}"><inertial><origin xyz="{com}"/>'
+                   f'<mass value="{inertial.find("mass").text}"/>'
+                   f'<inertia ixx="{I["ixx"]}" iyy="{I["iyy"]}" izz="{I["izz"]}" ixy="0" ixz="0" '
+                   'iyz="0"/></inertial></link>')
+    for joint in model.findall("joint"):
+        name, kind = joint.get("name"), joint.get("type")
+        parent, child = joint.find("parent").text, joint.find("child").text
+        xyz = " ".join(f"{v:.6g}" for v in position[child] - position[parent])
+        text = (f'<joint name="{name}" type="{kind}"><parent link="{parent}"/>'
+                f'<child link="{child}"/><origin xyz="{xyz}"/>')
+        if kind == "revolute":
+            limit = joint.find("axis/limit")
+            text += (f'<axis xyz="{joint.find("axis/xyz").text}"/>'
+                     f'<limit lower="{limit.find("lower").text}" upper="{limit.find("upper").text}" '
+                     f'effort="{limit.find("effort").text}" velocity="{limit.find("velocity").text}"/>'
+                     f'<dynamics damping="{joint.find("axis/dynamics/damping").text}"/>')
+            if transmissions:
+                out.append(
+                    f'<transmission name="{name}_drive"><type>transmission_interface/SimpleTransmission'
+                    f'</type><joint name="{name}"><hardwareInterface>EffortJointInterface'
+                    f'</hardwareInterface></joint><actuator name="{name}_motor">'
+                    f'<drake:rotor_inertia value="{joint.find(ns + "rotor_inertia").text}"/>'
+                    f'<drake:gear_ratio value="{joint.find(ns + "gear_ratio").text}"/>'
+                    '</actuator></transmission>')
+        out.append(text + "</joint>")
+    frame = model.find("frame")
+    xyz_rpy = frame.find("pose").text.split()
+    out.append('<link name="flange"/>')
+    out.append(f'<joint name="flange_mount" type="fixed"><parent link="{frame.get("attached_to")}"/>'
+               f'<child link="flange"/><origin xyz="{" ".join(xyz_rpy[:3])}" '
+               f'rpy="{" ".join(xyz_rpy[3:])}"/></joint>')
+    path.write_text("\n".join(out + ["</robot>"]))
+    return path
+
+
+def test_a_urdf_arm_is_the_same_arm(tmp_path):
+    """arm6 as a user's URDF: the same joints, drives, kinematics and mass
+    matrix as the shipped SDF; without its <transmission>s, one line."""
+    urdf = RobotConfig(model=str(_urdf_of_arm6(tmp_path / "arm6.urdf")), flange_frame="flange")
+    plant, shipped = check_robot(urdf), make_robot_model(_arm6())
+    assert [j.name() for j in robot_joints(plant)] == list(ARM6_JOINTS)
+    q = np.array([0.3, 0.5, 0.4, -0.7, 0.8, 1.1])
+    frames, mass = [], []
+    for p in (plant, shipped):
+        context = p.CreateDefaultContext()
+        p.SetPositions(context, q)
+        frames.append(p.GetFrameByName("tool_tip").CalcPoseInWorld(context).GetAsMatrix4())
+        mass.append(p.CalcMassMatrix(context))
+        drives = {p.get_joint_actuator(i).joint().name(): p.get_joint_actuator(i)
+                  for i in p.GetJointActuatorIndices()}
+        assert drives["a2"].default_reflected_inertia() == pytest.approx(185**2 * 2.4e-4)
+        assert drives["a6"].effort_limit() == pytest.approx(70.0)
+    np.testing.assert_allclose(frames[0], frames[1], atol=1e-12)
+    np.testing.assert_allclose(mass[0], mass[1], rtol=1e-9, atol=1e-9)
+    bare = RobotConfig(model=str(_urdf_of_arm6(tmp_path / "bare.urdf", transmissions=False)),
+                       flange_frame="flange")
+    assert "have no actuator" in _one_line_error(lambda: check_robot(bare), "robot.model")
+
+
 def test_fewer_than_five_actuated_joints_is_one_line(tmp_path):
     path = _arm_file(tmp_path, 4)
     message = _one_line_error(
