@@ -519,7 +519,6 @@ class RobotConfig:
 
     #: Models shipped in models/ (deburr_drake.robot.SHIPPED_ROBOTS).
     SHIPPED = ("cartesian_tool", "arm5", "arm6")
-    MODELS = SHIPPED  # the name before robot models could be files
     FILE_SUFFIXES = (".urdf", ".sdf")
 
     def is_file(self) -> bool:

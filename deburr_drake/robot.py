@@ -67,6 +67,7 @@ ARM6_URL = "package://deburr_drake_models/arm6.sdf"
 #: Shipped model name -> its URL in models/.
 SHIPPED_ROBOTS = {"cartesian_tool": POINT_MASS_URL, "arm5": ARM_URL,
                   "arm6": ARM6_URL}
+assert tuple(SHIPPED_ROBOTS) == RobotConfig.SHIPPED  # one list of names
 
 #: Actuated joints an arm needs (3 for the position, 2 to hold the tool
 #: axis vertical) and the most the controller handles (no null space).
