@@ -6,7 +6,8 @@
 ``package://`` URIs inside resolve as Drake resolves them (the
 ``package.xml`` files in the directories above the model file, and
 ``ROS_PACKAGE_PATH``), plus ``deburr_drake_models`` (this repository's
-``models/``).
+``models/``). A base link without a joint to the world is welded at the
+world origin.
 
 The tool is mounted one of two ways:
 
@@ -170,6 +171,17 @@ def _attach_spindle(plant, instance, config: RobotConfig):
             np.array([0.3, 0.3, 0.35, 1.0]))
 
 
+def _weld_free_base(plant, instance):
+    """A model whose base link has no joint to the world (many URDFs) stands
+    welded at the world origin, as arm5 and arm6 do."""
+    children = {plant.get_joint(i).child_body().index()
+                for i in plant.GetJointIndices(instance)}
+    roots = [i for i in plant.GetBodyIndices(instance) if i not in children]
+    if len(roots) == 1:
+        plant.WeldFrames(plant.world_frame(),
+                         plant.get_body(roots[0]).body_frame())
+
+
 def _robot_instance(plant, instances, config: RobotConfig):
     if len(instances) != 1:
         raise ConfigError(
@@ -187,6 +199,7 @@ def add_robot(plant: MultibodyPlant, config: RobotConfig, *,
     SceneGraph. Returns the model instance. Names are checked
     (ConfigError) but the joint count only by :func:`check_robot`."""
     instance = _robot_instance(plant, _add_models(plant, config), config)
+    _weld_free_base(plant, instance)
     if config.flange_frame:
         _attach_spindle(plant, instance, config)
     frame = tool_frame_of(plant, instance, config)

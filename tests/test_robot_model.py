@@ -131,7 +131,7 @@ def _arm_file(tmp_path, n_joints):
     return path
 
 
-def _urdf_of_arm6(path, *, transmissions=True):
+def _urdf_of_arm6(path, *, transmissions=True, world_joint=True):
     """models/arm6.sdf written as URDF (inertias, joints, limits, damping, drives;
     no visuals): its links are parallel to the model frame at q = 0, so a joint's
     origin is the child's position less the parent's."""
@@ -152,6 +152,8 @@ def _urdf_of_arm6(path, *, transmissions=True):
     for joint in model.findall("joint"):
         name, kind = joint.get("name"), joint.get("type")
         parent, child = joint.find("parent").text, joint.find("child").text
+        if parent == "world" and not world_joint:
+            continue
         xyz = " ".join(f"{v:.6g}" for v in position[child] - position[parent])
         text = (f'<joint name="{name}" type="{kind}"><parent link="{parent}"/>'
                 f'<child link="{child}"/><origin xyz="{xyz}"/>')
@@ -183,7 +185,9 @@ def _urdf_of_arm6(path, *, transmissions=True):
 def test_a_urdf_arm_is_the_same_arm(tmp_path):
     """arm6 as a user's URDF: the same joints, drives, kinematics and mass
     matrix as the shipped SDF; without its <transmission>s, one line."""
-    urdf = RobotConfig(model=str(_urdf_of_arm6(tmp_path / "arm6.urdf")), flange_frame="flange")
+    # As many URDFs are: no joint to the world (the base is welded at the origin).
+    urdf = RobotConfig(model=str(_urdf_of_arm6(tmp_path / "arm6.urdf", world_joint=False)),
+                       flange_frame="flange")
     plant, shipped = check_robot(urdf), make_robot_model(_arm6())
     assert [j.name() for j in robot_joints(plant)] == list(ARM6_JOINTS)
     q = np.array([0.3, 0.5, 0.4, -0.7, 0.8, 1.1])
