@@ -342,7 +342,8 @@ def make_deburring_diagram(*, scenario: Scenario,
     controller = builder.AddNamedSystem("controller", HybridController(
         model, tool_frame, c.controller, desired_rotation,
         tool_point=tool_point, nominal_depth=c.task.desired_depth,
-        true_plant=plant if c.controller.kind == "ideal" else None))
+        true_plant=plant if c.controller.kind == "ideal" else None,
+        posture=q0))
 
     state = plant.get_state_output_port()
     for system in (process, sensor, observer, controller):

@@ -25,9 +25,9 @@ The controller maps the task-space law through the tool frame's 6 x n
 Jacobian, tau = J_v^T f + J_w^T m (deburr_drake.controller), which needs
 nothing of the arm's kinematics: with 5 joints the tool axis is held
 vertical and the rotation about it (two orientation axes; the third is not
-in J_w's range), with 6 the full orientation. More than 6 joints would
-leave a null space that nothing controls: :func:`check_robot` refuses it
-(one error line) rather than let the posture drift. The joint limits and
+in J_w's range), with 6 the full orientation, with more also the start
+posture, by a joint PD in J's null space (``controller.null_space_*``).
+The joint limits and
 effort limits are the model file's (the inverse kinematics, the guards and
 the drives read them from the plant); the joint friction is
 ``robot.joint_coulomb_friction``, one value per joint; the controller's
@@ -58,7 +58,7 @@ from deburr_drake.arm import ARM_URL, default_q_guess
 from deburr_drake.config import ConfigError, RobotConfig
 from deburr_drake.models import POINT_MASS_URL, make_parser
 
-__all__ = ["ARM6_URL", "SHIPPED_ROBOTS", "MIN_JOINTS", "MAX_JOINTS",
+__all__ = ["ARM6_URL", "SHIPPED_ROBOTS", "MIN_JOINTS",
            "add_robot", "make_robot_model", "check_robot", "robot_joints",
            "ik_seed", "tool_frame_of", "spindle_inertia", "start_pose",
            "loop_numbers"]
@@ -70,9 +70,9 @@ SHIPPED_ROBOTS = {"cartesian_tool": POINT_MASS_URL, "arm5": ARM_URL,
                   "arm6": ARM6_URL}
 assert tuple(SHIPPED_ROBOTS) == RobotConfig.SHIPPED  # one list of names
 
-#: Actuated joints an arm needs (3 for the position, 2 to hold the tool
-#: axis vertical) and the most the controller handles (no null space).
-MIN_JOINTS, MAX_JOINTS = 5, 6
+#: Actuated joints an arm needs: 3 for the position, 2 to hold the tool
+#: axis vertical.
+MIN_JOINTS = 5
 
 _SPINDLE_RADIUS = 0.03  # m, the spindle's solid cylinder (as on arm5)
 
@@ -264,8 +264,8 @@ def robot_joints(plant, instance=None):
 def check_robot(config: RobotConfig) -> MultibodyPlant:
     """Raises ConfigError (one line, naming the field) if the robot cannot
     serve the cell: a file Drake cannot parse, a missing tool or flange
-    frame or sensor joint, fewer than 5 or more than 6 actuated joints (an
-    arm; the shipped cartesian_tool has 3), a joint without an actuator,
+    frame or sensor joint, fewer than 5 actuated joints (an arm; the
+    shipped cartesian_tool has 3), a joint without an actuator,
     a joint_coulomb_friction or ik_seed list of the wrong length. Returns
     the robot's model (:func:`make_robot_model`)."""
     config.validate()
@@ -299,14 +299,12 @@ def check_robot(config: RobotConfig) -> MultibodyPlant:
             f"robot.model = {config.model!r} is invalid: allowed revolute "
             "or prismatic joints, welded to the world (a floating or ball "
             "joint has no single actuator)")
-    if config.model != "cartesian_tool" and not \
-            MIN_JOINTS <= n <= MAX_JOINTS:
+    if config.model != "cartesian_tool" and n < MIN_JOINTS:
         raise ConfigError(
             f"robot.model = {config.model!r} is invalid: it has {n} "
             f"actuated joints ({[j.name() for j in joints]}), allowed "
-            f"{MIN_JOINTS} (tool axis held vertical) or {MAX_JOINTS} (full "
-            "tool orientation); more would need null-space posture "
-            "control, which the controller does not have")
+            f"at least {MIN_JOINTS} (3 for the tool's position, 2 to hold "
+            "its axis vertical)")
     friction = config.joint_coulomb_friction
     if friction and len(friction) != n:
         raise ConfigError(

@@ -16,7 +16,8 @@ from deburr_drake.cell import check_part_in_reach, make_deburring_diagram
 from deburr_drake.config import ConfigError, RobotConfig, load_scenario, scenario_path
 from deburr_drake.models import models_dir
 from deburr_drake.robot import check_robot, loop_numbers, make_robot_model, robot_joints
-from deburr_drake.simulation import simulate
+from deburr_drake.layout import CHAMFER_STATE
+from deburr_drake.simulation import make_simulator, simulate
 
 ARM6_JOINTS = ("a1", "a2", "a3", "a4", "a5", "a6")
 
@@ -206,6 +207,62 @@ def test_a_urdf_arm_is_the_same_arm(tmp_path):
     bare = RobotConfig(model=str(_urdf_of_arm6(tmp_path / "bare.urdf", transmissions=False)),
                        flange_frame="flange")
     assert "have no actuator" in _one_line_error(lambda: check_robot(bare), "robot.model")
+
+
+def _arm7_file(tmp_path):
+    """arm6 with a seventh joint: a second flange roll a7, coaxial with a6
+    (a redundant arm whose null space is a6 - a7)."""
+    text = (models_dir() / "arm6.sdf").read_text()
+    flange = text[text.index('    <frame name="flange" attached_to="link6">'):
+                  text.index('    <joint name="base_weld"')]
+    link7 = """<link name="link7"><pose>1.088 0 1.39 0 0 0</pose>
+      <inertial><pose>0.01 0 0 0 0 0</pose><mass>0.3</mass><inertia><ixx>3.04e-4</ixx>
+      <iyy>1.62e-4</iyy><izz>1.62e-4</izz><ixy>0</ixy><ixz>0</ixz><iyz>0</iyz></inertia>
+      </inertial></link>
+    <joint name="a7" type="revolute"><parent>link6</parent><child>link7</child>
+      <axis><xyz expressed_in="__model__">1 0 0</xyz><limit><lower>-6.1</lower><upper>6.1</upper>
+      <effort>70</effort><velocity>10.7</velocity></limit><dynamics><damping>1.0</damping>
+      </dynamics></axis><drake:rotor_inertia>3.0e-5</drake:rotor_inertia>
+      <drake:gear_ratio>80</drake:gear_ratio></joint>
+    <frame name="flange" attached_to="link7">
+      <pose relative_to="link7">0.02 0 0 0 1.5707963267948966 0</pose></frame>
+"""
+    path = tmp_path / "arm7.sdf"
+    path.write_text(text.replace(flange, link7).replace('<model name="arm6">',
+                                                        '<model name="arm7">'))
+    return path
+
+
+def test_a_redundant_arm_holds_its_posture_in_the_null_space(tmp_path):
+    path = _arm7_file(tmp_path)
+    scenario = load_scenario("paper_6dof", text=(
+        f"robot: {{model: {path}, ik_seed: [0.0, 0.45, 0.5, 0.0, 0.6, 0.0, 0.0], "
+        "joint_coulomb_friction: [10.0, 8.0, 2.5, 0.12, 0.12, 0.04, 0.04]}"))
+    joints = [j.name() for j in robot_joints(check_robot(scenario.robot))]
+    assert sorted(joints) == sorted(ARM6_JOINTS + ("a7",))
+    a6, a7 = joints.index("a6"), joints.index("a7")  # position order
+    diagram = make_deburring_diagram(scenario=scenario)
+    plant = diagram.GetSubsystemByName("plant")
+    simulator = make_simulator(diagram, scenario)
+    context = simulator.get_mutable_context()
+    plant_context = plant.GetMyMutableContextFromRoot(context)
+    q0 = plant.GetPositions(plant_context).copy()
+    # Turn a6 and a7 0.05 rad apart: the tool does not move, only the
+    # null-space posture term brings them back (joint friction holds them
+    # otherwise).
+    q = q0.copy()
+    q[a6] += 0.05
+    q[a7] -= 0.05
+    plant.SetPositions(plant_context, q)
+    simulator.AdvanceTo(1.5)
+    q = plant.GetPositions(plant_context)
+    assert np.all(np.isfinite(q))
+    null = (q - q0)[a6] - (q - q0)[a7]
+    assert abs(null) < 0.01, q - q0  # from 0.1 rad; without the term 0.103 (measured)
+    chamfer = diagram.GetSubsystemByName("chamfer_observer").GetOutputPort(
+        "chamfer_state").Eval(diagram.GetSubsystemContext(
+            diagram.GetSubsystemByName("chamfer_observer"), context))
+    assert CHAMFER_STATE.get(chamfer, "f_n") > 2.0  # in contact
 
 
 def test_fewer_than_five_actuated_joints_is_one_line(tmp_path):
