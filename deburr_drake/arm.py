@@ -1,4 +1,4 @@
-"""The 5-DOF deburring arm (models/arm5.sdf): loading, and the tool-vertical inverse kinematics.
+"""The 5-DOF deburring arm (models/arm5.sdf), and the tool-vertical inverse kinematics of any arm.
 
 The arm is the paper's class of robot (an industrial arm with a spindle and a wrist
 force/torque sensor, Section IV); its dynamics (1) are the MultibodyPlant's, with the
@@ -7,6 +7,11 @@ damping from the SDF (DESIGN.md §8). The task coordinates are the tool tip's
 position (frame `tool_tip`, the origin of body `tool`); the tool axis is kept
 vertical (tool +z = world +z), which fixes the wrist pitch; wrist_roll turns about
 the tool axis and does not move the tip.
+
+`solve_tool_pose`, `closest_tool_position` and `check_reach` work on any arm of n >= 5
+joints (deburr_drake.robot loads other models): the tool axis vertical, the rest of
+the posture (for n = 6 the tool's rotation about its axis) the one nearest the
+initial guess.
 """
 
 from __future__ import annotations
@@ -66,16 +71,35 @@ def _arm_instance(plant, instance):
     return plant.GetModelInstanceByName(ARM_MODEL_NAME)
 
 
-def solve_tool_pose(plant, p_W_tip, *, q_guess=None, instance=None, tolerance=1e-7):
-    """Arm joint angles q (5,) (rad, order ARM_JOINTS) with the tool tip at p_W_tip (m, world)
-    and the tool axis vertical (tool +z = world +z), within the joint limits.
+def _arm_positions(plant, instance):
+    """Indices into the plant's q of the instance's joint positions, in joint position order."""
+    starts = []
+    for index in plant.GetJointIndices(instance):
+        joint = plant.get_joint(index)
+        starts.extend(range(joint.position_start(), joint.position_start() + joint.num_positions()))
+    return np.array(sorted(starts), dtype=int)
+
+
+def _default_guess(plant, instance, arm_idx, p):
+    if plant.GetModelInstanceName(instance) == ARM_MODEL_NAME:
+        return default_q_guess(p)
+    return plant.GetDefaultPositions()[arm_idx]
+
+
+def solve_tool_pose(plant, p_W_tip, *, q_guess=None, instance=None, tolerance=1e-7,
+                    tool_frame="tool_tip"):
+    """Arm joint angles q (n,) (rad, the instance's joints in position order; arm5: ARM_JOINTS)
+    with the tool tip at p_W_tip (m, world) and the tool axis vertical (tool +z = world +z),
+    within the joint limits.
 
     Drake InverseKinematics (SNOPT) on the finalized `plant`, which may hold other models:
-    their positions stay at the plant's defaults. Constraints: tip position == p_W_tip;
+    their positions stay at the plant's defaults. Constraints: frame `tool_frame` at p_W_tip;
     the axis point 0.1 m up the tool axis has the tip's x, y and lies above the tip.
-    Cost: |q - q_guess|^2 (fixes the free wrist_roll). q_guess defaults to
-    default_q_guess(p_W_tip) (elbow up). Raises RuntimeError naming the target if the solver
-    fails or the result misses the target by more than `tolerance` (m; axis tilt times 0.1 m).
+    Cost: |q - q_guess|^2 (fixes what the constraints leave free: arm5's wrist_roll, a 6-DOF
+    arm's rotation about the tool axis). q_guess defaults to default_q_guess(p_W_tip) (elbow
+    up) on arm5 and to the plant's default positions on other arms. Raises RuntimeError naming
+    the target if the solver fails or the result misses the target by more than `tolerance`
+    (m; axis tilt times 0.1 m).
     """
     if not plant.is_finalized():
         raise ValueError("plant must be finalized")
@@ -83,13 +107,15 @@ def solve_tool_pose(plant, p_W_tip, *, q_guess=None, instance=None, tolerance=1e
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise ValueError(f"p_W_tip must be 3 finite numbers (m), got {p_W_tip!r}")
     instance = _arm_instance(plant, instance)
+    arm_idx = _arm_positions(plant, instance)
+    n = len(arm_idx)
     if q_guess is None:
-        q_guess = default_q_guess(p)
+        q_guess = _default_guess(plant, instance, arm_idx, p)
     q_guess = np.asarray(q_guess, dtype=float).reshape(-1)
-    if q_guess.shape != (5,) or not np.all(np.isfinite(q_guess)):
-        raise ValueError(f"q_guess must be 5 finite joint angles (rad), got {q_guess!r}")
+    if q_guess.shape != (n,) or not np.all(np.isfinite(q_guess)):
+        raise ValueError(f"q_guess must be {n} finite joint angles (rad), got {q_guess!r}")
 
-    tip = plant.GetFrameByName("tool_tip", instance)
+    tip = plant.GetFrameByName(tool_frame, instance)
     world = plant.world_frame()
     ik = InverseKinematics(plant, with_joint_limits=True)
     q = ik.q()
@@ -102,14 +128,13 @@ def solve_tool_pose(plant, p_W_tip, *, q_guess=None, instance=None, tolerance=1e
 
     q0 = plant.GetDefaultPositions()
     q_full_guess = q0.copy()
-    plant.SetPositionsInArray(instance, q_guess, q_full_guess)
+    q_full_guess[arm_idx] = q_guess
     arm_mask = np.zeros(plant.num_positions(), dtype=bool)
-    arm_idx = np.array([plant.GetJointByName(j, instance).position_start() for j in ARM_JOINTS])
     arm_mask[arm_idx] = True
     others = np.flatnonzero(~arm_mask)
     if others.size:
         prog.AddBoundingBoxConstraint(q0[others], q0[others], q[others])
-    prog.AddQuadraticErrorCost(np.eye(5), q_guess, q[arm_idx])
+    prog.AddQuadraticErrorCost(np.eye(n), q_guess, q[arm_idx])
 
     options = SolverOptions()
     snopt = SnoptSolver().solver_id()
@@ -131,12 +156,12 @@ def solve_tool_pose(plant, p_W_tip, *, q_guess=None, instance=None, tolerance=1e
     return q_sol[arm_idx]
 
 
-def closest_tool_position(plant, p_W_tip, *, instance=None):
+def closest_tool_position(plant, p_W_tip, *, instance=None, q_guess=None, tool_frame="tool_tip"):
     """The tool tip position (m, world) nearest to p_W_tip that the arm reaches with the tool
     axis vertical within its joint limits: how far out of reach a target is."""
     p = np.asarray(p_W_tip, dtype=float).reshape(3)
     instance = _arm_instance(plant, instance)
-    tip = plant.GetFrameByName("tool_tip", instance)
+    tip = plant.GetFrameByName(tool_frame, instance)
     world = plant.world_frame()
     ik = InverseKinematics(plant, with_joint_limits=True)
     q = ik.q()
@@ -144,22 +169,26 @@ def closest_tool_position(plant, p_W_tip, *, instance=None):
     # The tool axis vertical, as solve_tool_pose keeps it.
     ik.AddAngleBetweenVectorsConstraint(tip, np.array([0.0, 0.0, 1.0]), world,
                                         np.array([0.0, 0.0, 1.0]), 0.0, 1e-6)
-    q_guess = plant.GetDefaultPositions().copy()
-    plant.SetPositionsInArray(instance, default_q_guess(p), q_guess)
-    result = Solve(ik.get_mutable_prog(), q_guess)
+    arm_idx = _arm_positions(plant, instance)
+    q_full_guess = plant.GetDefaultPositions().copy()
+    q_full_guess[arm_idx] = (_default_guess(plant, instance, arm_idx, p) if q_guess is None
+                             else q_guess)
+    result = Solve(ik.get_mutable_prog(), q_full_guess)
     context = plant.CreateDefaultContext()
     plant.SetPositions(context, result.GetSolution(q))
     return tip.CalcPoseInWorld(context).translation()
 
 
-def check_reach(plant, points, *, instance=None):
+def check_reach(plant, points, *, instance=None, q_guess=None, tool_frame="tool_tip"):
     """None if the tool reaches every point (m, world, rows) vertically; otherwise
     (index, point, distance (m) to the nearest reachable tool position) of the first one
-    it does not reach."""
+    it does not reach. `q_guess` (a function of the point, or None) seeds each solve."""
     for k, p in enumerate(np.asarray(points, dtype=float)):
+        guess = None if q_guess is None else q_guess(p)
         try:
-            solve_tool_pose(plant, p, instance=instance)
+            solve_tool_pose(plant, p, instance=instance, q_guess=guess, tool_frame=tool_frame)
         except RuntimeError:
-            reached = closest_tool_position(plant, p, instance=instance)
+            reached = closest_tool_position(plant, p, instance=instance, q_guess=guess,
+                                            tool_frame=tool_frame)
             return k, p, float(np.linalg.norm(reached - p))
     return None

@@ -1,5 +1,6 @@
 """The deburring cell as a named Drake Diagram: a robot (the 5-DOF arm of
-Section IV, or a Cartesian point-mass tool) whose cylindrical cutter chamfers
+Section IV, the 6-DOF arm6, any arm from a model file (deburr_drake.robot),
+or a Cartesian point-mass tool) whose cylindrical cutter chamfers
 a tube's inner edge through hydroelastic contact, closed by the paper's
 command generator, first-order hold, contact estimator and hybrid
 controller, with the plant-side cutting process, joint friction and force
@@ -22,19 +23,20 @@ from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, RandomSource
 
-from deburr_drake.arm import ARM_URL, solve_tool_pose
-from deburr_drake.config import ConfigError, Scenario
+from deburr_drake.arm import check_reach, solve_tool_pose
+from deburr_drake.config import ConfigError, RobotConfig, Scenario
 from deburr_drake.faults import add_noise_scale, add_sensor_faults
 from deburr_drake.friction import add_joint_friction
 from deburr_drake.geometry import CircularContour, Contour, StraightContour
 from deburr_drake.guards import add_effort_saturation, add_guards
 from deburr_drake.kinematics import ToolPoint
 from deburr_drake.loop import add_deburring_controller
-from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
-from deburr_drake.part import (add_tool_robot, contact_force_on_body,
+from deburr_drake.part import (contact_force_on_body,
                                register_compliant_ring,
                                register_compliant_wall, register_tube_visual)
 from deburr_drake.process import CuttingProcess
+from deburr_drake.robot import (add_robot, check_robot, ik_seed,
+                                make_robot_model)
 from deburr_drake.sensor import ForceSensor
 
 __all__ = ["make_deburring_diagram", "MakeDeburringDiagram", "make_contour",
@@ -44,11 +46,10 @@ __all__ = ["make_deburring_diagram", "MakeDeburringDiagram", "make_contour",
            "SENSOR_JOINT", "LOGGED",
            "SYSTEM_NAMES"]
 
-TOOL_FRAME = "tool_tip"
-SENSOR_JOINT = "ft_sensor"
-
-#: Robot model name -> its model URL.
-_ROBOTS = {"cartesian_tool": POINT_MASS_URL, "arm5": ARM_URL}
+#: The default names of the tool frame and the sensor joint
+#: (``robot.tool_frame``, ``robot.sensor_joint`` name them per robot).
+TOOL_FRAME = RobotConfig.tool_frame
+SENSOR_JOINT = RobotConfig.sensor_joint
 
 #: Logged signals: logger name -> (system name, output port name).
 LOGGED = {
@@ -150,10 +151,10 @@ def _add_plant(builder: DiagramBuilder, scenario: Scenario):
     if sim.plant_time_step > 0:
         config.discrete_contact_approximation = sim.contact_approximation
     plant, scene_graph = AddMultibodyPlant(config, builder)
-    add_tool_robot(plant, _ROBOTS[scenario.robot.model],
-                   cutter_radius=scenario.tool.cutter_radius,
-                   cutter_length=scenario.tool.cutter_length,
-                   resolution_hint=scenario.tool.resolution_hint)
+    add_robot(plant, scenario.robot, cutter=dict(
+        cutter_radius=scenario.tool.cutter_radius,
+        cutter_length=scenario.tool.cutter_length,
+        resolution_hint=scenario.tool.resolution_hint))
     add_joint_friction(plant, scenario.robot)
     if scenario.edge.kind == "straight":
         mid, tangent, normal = _straight_frame(scenario)
@@ -192,18 +193,24 @@ def _add_plant(builder: DiagramBuilder, scenario: Scenario):
 
 
 def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
-    """Raises ConfigError naming the first point of the tool's path (the
-    start, then ``samples`` points along the edge) the arm cannot reach with
-    the tool vertical, and how far out of reach it is."""
-    if scenario.robot.model != "arm5":
+    """Raises ConfigError if the robot cannot serve the cell
+    (deburr_drake.robot.check_robot: the model file, its frames, its
+    joints), or naming the first point of the tool's path (the start, then
+    ``samples`` points along the edge) the arm cannot reach with the tool
+    vertical, and how far out of reach it is."""
+    robot = scenario.robot
+    model = check_robot(robot)
+    if robot.model == "cartesian_tool":
         return  # the Cartesian tool reaches everywhere
-    from deburr_drake.arm import check_reach
     contour = contour or believed_contour(scenario)
     arcs = np.linspace(0.0, contour.length, samples,
                        endpoint=not contour.closed)
     points = [start_position(scenario, contour)] + [
         contour.point_at(s) for s in arcs]
-    miss = check_reach(make_kinematic_model(ARM_URL), points)
+    instance = model.GetFrameByName(robot.tool_frame).model_instance()
+    miss = check_reach(model, points, instance=instance,
+                       q_guess=lambda p: ik_seed(robot, p),
+                       tool_frame=robot.tool_frame)
     if miss is not None:
         k, p, distance = miss
         where = "the start point" if k == 0 else \
@@ -213,14 +220,19 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
             f"arm's reach: {where}, tool tip at {np.round(p, 4).tolist()} m, "
             f"is {distance * 1e3:.1f} mm beyond the nearest reachable tool "
             "position (tool vertical, joint limits): allowed a part whose "
-            "edge the arm reaches (default [0.40, 0.0, 0.0])")
+            f"edge the arm reaches (arm5: [0.40, 0.0, 0.0]; {robot.model!r}"
+            ": see its robot.ik_seed and the model's joint limits)")
 
 
 def _initial_positions(plant, scenario: Scenario, x0) -> np.ndarray:
-    if scenario.robot.model == "cartesian_tool":
+    robot = scenario.robot
+    if robot.model == "cartesian_tool":
         # World-aligned prismatic joints, tip at the origin for q = 0.
         return np.asarray(x0, float)
-    return solve_tool_pose(plant, x0)
+    frame = plant.GetFrameByName(robot.tool_frame)
+    return solve_tool_pose(plant, x0, instance=frame.model_instance(),
+                           q_guess=ik_seed(robot, x0),
+                           tool_frame=robot.tool_frame)
 
 
 def edge_points(scenario: Scenario, arc) -> np.ndarray:
@@ -245,8 +257,7 @@ def contact_normal_force(scenario: Scenario, depths, *,
     edge, at rest: the contact part of (4), measured on the same geometry
     the cell simulates (a Cartesian tool holds the cutter)."""
     probe = copy.deepcopy(scenario)
-    probe.robot.model = "cartesian_tool"
-    probe.robot.joint_coulomb_friction = []
+    probe.robot = RobotConfig(model="cartesian_tool")
     probe.simulation.plant_time_step = 0.0
     builder = DiagramBuilder()
     plant, _ = _add_plant(builder, probe)
@@ -301,21 +312,24 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
     q0 = _initial_positions(plant, c, x0)
     plant.SetDefaultPositions(q0)
 
-    model = make_kinematic_model(_ROBOTS[c.robot.model])
+    model = make_robot_model(c.robot)
+    tool_frame = c.robot.tool_frame
     model_context = model.CreateDefaultContext()
     model.SetPositions(model_context, q0)
-    desired_rotation = model.GetFrameByName(TOOL_FRAME).CalcPoseInWorld(
+    # The tool's orientation at the start is held (the tool axis vertical;
+    # on a 6-DOF arm also its rotation about that axis).
+    desired_rotation = model.GetFrameByName(tool_frame).CalcPoseInWorld(
         model_context).rotation().matrix()
 
     # The process (truth), the sensor, the observer (measurement) and the
     # controller read the same joint state through the same kinematics: one
     # memo serves all.
-    tool_point = ToolPoint(model, model.GetFrameByName(TOOL_FRAME))
+    tool_point = ToolPoint(model, model.GetFrameByName(tool_frame))
     process = builder.AddNamedSystem("cutting_process", CuttingProcess(
-        plant, TOOL_FRAME, contour, c.process, cut_height=c.tool.engagement,
+        plant, tool_frame, contour, c.process, cut_height=c.tool.engagement,
         cutter_radius=c.tool.cutter_radius, tool_point=tool_point))
     sensor = builder.AddNamedSystem("force_sensor", ForceSensor(
-        plant, SENSOR_JOINT, c.sensor, tool_point=tool_point))
+        plant, c.robot.sensor_joint, c.sensor, tool_point=tool_point))
     noise = builder.AddNamedSystem("sensor_noise", RandomSource(
         RandomDistribution.kGaussian, 3, c.sensor.sample_period))
     state = plant.get_state_output_port()
@@ -341,9 +355,9 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
     # The paper's loops around the plant (deburr_drake.loop).
     loops = add_deburring_controller(
         builder, scenario=c, plant=model, contour=belief,
-        plant_state=state, tool_force=force, tool_frame=TOOL_FRAME,
+        plant_state=state, tool_force=force, tool_frame=tool_frame,
         start=x0, desired_rotation=desired_rotation, tool_point=tool_point,
-        contour_step=belief_step, true_plant=plant)
+        contour_step=belief_step, true_plant=plant, posture=q0)
     builder.Connect(
         add_effort_saturation(builder, c, plant, loops.actuation),
         plant.get_actuation_input_port())

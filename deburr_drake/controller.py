@@ -76,7 +76,10 @@ def HybridController_(T):
           a PD on s_o = lambda_o e_o - omega (e_o the rotation vector of
           R_d R^T, R_d = ``desired_rotation``, identity by default); tau_g
           from the controller's model (masses scaled by
-          ``model_mass_scale``: deliberately imperfect)
+          ``model_mass_scale``: deliberately imperfect). With 5 joints J_w^T
+          passes two of the three orientation axes, with 6 all three; with
+          more than 6 (and a ``posture``) tau also gets (I - J^T J^T+)
+          (k_n (q_posture - q) - d_n v), a posture PD in J's null space.
         - theta_k' = r nu_k(y0, s_k) s_Delta,k on the (m+1)^2 active rules
           (35), with the dead zone of R4.
 
@@ -140,7 +143,7 @@ def HybridController_(T):
         def _construct(self, plant, tool_frame_name, config,
                        desired_rotation=None, converter=None, *,
                        tool_point=None, nominal_depth=None,
-                       true_plant=None):
+                       true_plant=None, posture=None):
             LeafSystem_[T].__init__(self, converter)
             config.validate()
             if (config.kind in config.CONSTANT_FEED_KINDS
@@ -194,6 +197,10 @@ def HybridController_(T):
             self._lambda_o = np.asarray(config.orientation_lambda, float)
             self._K_o = np.asarray(config.orientation_gain, float)
             self._orientation_control = bool(np.any(self._K_o > 0))
+            # Redundant arms only: nothing else holds J's null space.
+            self._posture = (None if posture is None
+                             or plant.num_velocities() <= 6
+                             else np.asarray(posture, float))
             n_theta = len(self._axes) * self._n_rules
             self.DeclareContinuousState(1 + n_theta)
             nx = plant.num_multibody_states()
@@ -238,7 +245,8 @@ def HybridController_(T):
                             other._tool_frame_name, other._config,
                             other._desired_rotation, converter=converter,
                             nominal_depth=other._nominal_depth,
-                            true_plant=other._float_true_plant)
+                            true_plant=other._float_true_plant,
+                            posture=other._posture)
 
         @property
         def rule_bases(self):
@@ -325,6 +333,8 @@ def HybridController_(T):
                                       E[1, 0] - E[0, 1]])
                 tau = tau + J[:3].T @ (self._K_o * (self._lambda_o * e_o
                                                     - omega))
+            if self._posture is not None:
+                tau = tau + self._null_space_posture(state, J)
             if c.kind == "ideal":
                 tau = tau + self._true_model_forces(
                     state, J, self._lambda * edot,
@@ -353,6 +363,18 @@ def HybridController_(T):
                     u = c.robust_gain[k] * saturation(
                         s_k / c.robust_boundary_layer[k])
                 u_fuzzy[axis] = u
+
+        def _null_space_posture(self, state, J):
+            """(I - J^T J^T+) (k_n (q_posture - q) - d_n v): the posture PD
+            that changes no force or moment at the tool frame (the
+            projector from float values)."""
+            c = self._config
+            q, v = state[:self._nq], state[self._nq:]
+            J_value = np.vectorize(_value)(J) if J.dtype == object else J
+            projector = np.eye(J.shape[1]) - J_value.T @ np.linalg.pinv(
+                J_value.T)
+            return projector @ (c.null_space_stiffness * (self._posture - q)
+                                - c.null_space_damping * v)
 
         def _true_model_forces(self, state, J, a_r, alpha_r):
             """M vdot_r + C v - tau_g - tau_friction of the true plant (its

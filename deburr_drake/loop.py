@@ -65,7 +65,7 @@ def add_deburring_controller(
         plant: MultibodyPlant, contour: Contour, plant_state: OutputPort,
         tool_force: OutputPort, tool_frame: str = "tool_tip", start=None,
         desired_rotation=None, tool_point=None, contour_step=None,
-        true_plant=None) -> DeburringController:
+        true_plant=None, posture=None) -> DeburringController:
     """Adds the command generator, first-order hold, chamfer observer,
     contact estimator and hybrid controller to ``builder``, configured by
     ``scenario`` (its ``command``, ``task``, ``estimator`` and ``controller``
@@ -86,8 +86,10 @@ def add_deburring_controller(
     the tool point where the command starts (m, world; the contour's start
     by default). ``desired_rotation`` (3 x 3) is the tool orientation the
     controller holds (identity by default); ``tool_point``,
-    ``contour_step`` and ``true_plant`` are passed through to the systems
-    (shared kinematics, a part that moves, the ``ideal`` law's true plant).
+    ``contour_step``, ``true_plant`` and ``posture`` are passed through to
+    the systems (shared kinematics, a part that moves, the ``ideal`` law's
+    true plant, the joint posture an arm with more than six joints holds in
+    its null space).
 
     Returns the systems; connect ``.actuation`` to the plant's actuation
     input (directly, or through your own saturation or fault systems)."""
@@ -114,7 +116,8 @@ def add_deburring_controller(
     controller = builder.AddNamedSystem("controller", HybridController(
         plant, tool_frame, c.controller, desired_rotation,
         tool_point=tool_point, nominal_depth=c.task.desired_depth,
-        true_plant=true_plant if c.controller.kind == "ideal" else None))
+        true_plant=true_plant if c.controller.kind == "ideal" else None,
+        posture=posture))
 
     for system in (observer, controller):
         builder.Connect(plant_state, system.GetInputPort("plant_state"))

@@ -122,14 +122,18 @@ def register_tube_visual(plant, *, inner_radius, outer_radius, z_bottom, z_top, 
     plant.RegisterVisualGeometry(plant.world_body(), visual)
 
 
-def register_cutter(plant, body, *, cutter_radius=0.003, cutter_length=0.020, resolution_hint=4e-4):
-    """The cylindrical cutter on `body`, tip at the body origin, axis +z (m): rigid hydroelastic,
-    frictionless (the tangential force is the cutting process's, DESIGN.md §8), with a visual.
-    The default resolution hint gives ceil(2 pi r / hint) = 48 side facets for r = 3 mm.
-    Call before Finalize. Returns the collision GeometryId."""
+def register_cutter(plant, body, *, cutter_radius=0.003, cutter_length=0.020, resolution_hint=4e-4,
+                    X_BT=None):
+    """The cylindrical cutter on `body`, tip at the tool frame T (pose X_BT in the body; default the
+    body origin), axis T's +z (m): rigid hydroelastic, frictionless (the tangential force is the
+    cutting process's, DESIGN.md §8), with a visual. The default resolution hint gives
+    ceil(2 pi r / hint) = 48 side facets for r = 3 mm. Call before Finalize. Returns the collision
+    GeometryId."""
     _check_positive("cutter_radius", cutter_radius)
     _check_positive("cutter_length", cutter_length)
     X_BG = RigidTransform([0.0, 0.0, cutter_length / 2])
+    if X_BT is not None:
+        X_BG = X_BT @ X_BG
     shape = Cylinder(cutter_radius, cutter_length)
     props = ProximityProperties()
     AddRigidHydroelasticProperties(resolution_hint, props)

@@ -63,8 +63,6 @@ def test_custom_logging_logs_and_plots(tmp_path):
     assert png.stat().st_size > 10_000
 
 
-@pytest.mark.xfail(strict=False, reason="robot.model accepts a path to a "
-                   "URDF/SDF file once the robot branch is merged")
 def test_own_robot_runs_the_cell_on_a_model_file(tmp_path):
     out = _run([EXAMPLES / "own_robot.py", "--duration", "2.5"], tmp_path)
     assert "my_arm.sdf" in out

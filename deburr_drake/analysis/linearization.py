@@ -34,7 +34,7 @@ from pydrake.systems.framework import Context, Diagram
 from deburr_drake.analysis.operating_point import (OperatingPoint,
                                                    frozen_scenario,
                                                    transfer_state)
-from deburr_drake.cell import TOOL_FRAME, make_deburring_diagram
+from deburr_drake.cell import make_deburring_diagram
 from deburr_drake.layout import CHAMFER_STATE
 
 __all__ = ["numerical_jacobian", "continuous_state_slices",
@@ -194,7 +194,7 @@ def linearize_closed_loop(op: OperatingPoint, *, stiffness: float = None,
     f(z0)  # leave the context at the operating point
 
     plant_context = plant.GetMyContextFromRoot(context)
-    frame = plant.GetFrameByName(TOOL_FRAME)
+    frame = plant.GetFrameByName(scenario.robot.tool_frame)
     J = plant.CalcJacobianSpatialVelocity(
         plant_context, JacobianWrtVariable.kV, frame, np.zeros(3),
         plant.world_frame(), plant.world_frame())

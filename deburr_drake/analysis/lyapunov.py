@@ -20,7 +20,7 @@ import numpy as np
 from pydrake.common import RandomGenerator
 from pydrake.multibody.tree import JacobianWrtVariable
 
-from deburr_drake.cell import TOOL_FRAME, make_deburring_diagram
+from deburr_drake.cell import make_deburring_diagram
 from deburr_drake.config import Scenario
 from deburr_drake.layout import CONTROLLER_DIAGNOSTICS
 from deburr_drake.simulation import make_simulator
@@ -58,7 +58,7 @@ def lyapunov_trace(scenario: Scenario, *, duration: float = 5.0,
     plant = diagram.GetSubsystemByName("plant")
     estimator = diagram.GetSubsystemByName("contact_estimator")
     controller = diagram.GetSubsystemByName("controller")
-    frame = plant.GetFrameByName(TOOL_FRAME)
+    frame = plant.GetFrameByName(scenario.robot.tool_frame)
     pc = plant.GetMyContextFromRoot(context)
     ec = estimator.GetMyContextFromRoot(context)
     cc = controller.GetMyContextFromRoot(context)

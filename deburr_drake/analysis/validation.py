@@ -257,7 +257,9 @@ def validate_boundaries(op: OperatingPoint, *, parameters=None,
     say = progress or (lambda m: None)
     rows = []
     for p in parameters or PARAMETERS(op.scenario):
-        lo, hi = p.ranges[op.scenario.robot.model]
+        model = op.scenario.robot.model
+        # Any arm other than the shipped ones is searched over arm5's range.
+        lo, hi = p.ranges.get(model, p.ranges["arm5"])
         say(f"boundary of {p.name}: rho = 1 (bisection)")
         pred = predicted_boundary(op, p, lo=lo, hi=hi, rel_tol=rel_tol)
         say(f"boundary of {p.name}: simulation (bisection)")
