@@ -28,7 +28,7 @@ LIMITS = GuardLimits(
 def _chamfer(**values):
     base = dict(x_p=[0.0, 0.0, 0.05], xdot_p=[0.0] * 3, n1=[1.0, 0, 0],
                 n2=[0, 1.0, 0], delta=0.0005, delta_dot=0.0, f_n=5.0,
-                f_t=10.0, arc_position=0.0)
+                f_t=10.0, arc_position=0.0, n1_rate=[0.0] * 3)
     base.update(values)
     return CHAMFER_STATE.pack(**base)
 
