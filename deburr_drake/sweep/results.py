@@ -1,0 +1,271 @@
+"""A sweep's results: the table (``results.csv``, one row per run), the
+summary (``summary.json``: success rate per rule with a 95 % Wilson
+interval) and the figures (each metric's distribution; success and
+failure against the two parameters that separate them best). Pure numpy
+and matplotlib: nothing here imports Drake."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+__all__ = ["wilson_interval", "separation", "table_rows", "write_table",
+           "summarize", "write_summary", "plot_metrics", "plot_failures",
+           "write_results"]
+
+
+def wilson_interval(successes: int, n: int, z: float = 1.959964):
+    """The Wilson score interval of a binomial proportion (95 % for the
+    default z); (nan, nan) for n = 0."""
+    if n == 0:
+        return (math.nan, math.nan)
+    p = successes / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+def separation(values: Sequence[float], failed: Sequence[bool]) -> float:
+    """How well one parameter separates failed runs from passed ones:
+    |2 AUC - 1| of the parameter as a score for failure (0: no better than
+    chance, 1: a threshold separates them), from the Mann-Whitney U with
+    average ranks for ties. nan without both kinds."""
+    x = np.asarray(values, float)
+    f = np.asarray(failed, bool)
+    ok = np.isfinite(x)
+    x, f = x[ok], f[ok]
+    n1, n0 = int(f.sum()), int((~f).sum())
+    if n1 == 0 or n0 == 0:
+        return math.nan
+    order = np.argsort(x, kind="mergesort")
+    ranks = np.empty(len(x))
+    sorted_x = x[order]
+    i = 0
+    while i < len(x):  # average ranks over ties
+        j = i
+        while j + 1 < len(x) and sorted_x[j + 1] == sorted_x[i]:
+            j += 1
+        ranks[order[i:j + 1]] = (i + j) / 2 + 1
+        i = j + 1
+    u = ranks[f].sum() - n1 * (n1 + 1) / 2
+    return abs(2 * u / (n1 * n0) - 1)
+
+
+def _number(value):
+    if value is None or isinstance(value, bool):
+        return None if value is None else float(value)
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        return None
+    return value if math.isfinite(value) else None
+
+
+def table_rows(runs, results: Dict[str, Optional[dict]], metrics: List[str],
+               rules) -> List[dict]:
+    """One row per run with a result: index, key, stop reason, the run's
+    parameters, every metric (None: null) and each rule's verdict."""
+    rows = []
+    for run in runs:
+        result = results.get(run.key)
+        if result is None:
+            continue
+        row = {"index": run.index, "key": run.key,
+               "stop_reason": result.get("stop_reason"),
+               "stop_time_s": _number(result.get("stop_time_s"))}
+        row.update(run.params)
+        for name in metrics:
+            row[name] = _number(result.get(name))
+        verdicts = [rule.passes(_number(result.get(rule.metric)))
+                    for rule in rules]
+        for rule, ok in zip(rules, verdicts):
+            row[f"pass: {rule.text}"] = ok
+        row["pass_all"] = all(verdicts)
+        row["run_wall_time_s"] = _number(result.get("run_wall_time_s"))
+        row["stop_detail"] = (result.get("stop_detail") or "").split(
+            "\n")[0][:200]
+        rows.append(row)
+    return rows
+
+
+def write_table(rows: List[dict], path) -> Path:
+    """CSV, empty cells for null metrics."""
+    path = Path(path)
+    columns = list(rows[0]) if rows else ["index", "key", "stop_reason"]
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=columns)
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: ("" if v is None else v)
+                             for k, v in row.items()})
+    return path
+
+
+def _explaining(rows, params: List[str], failed) -> List[dict]:
+    scores = [{"parameter": p, "separation": separation(
+        [r[p] for r in rows], failed)} for p in params]
+    return sorted(scores, key=lambda s: -(s["separation"]
+                                          if math.isfinite(s["separation"])
+                                          else -1))
+
+
+def summarize(study, rows: List[dict], rules, metrics: List[str],
+              params: List[str], *, runs_total: int, wall_time_s=None
+              ) -> dict:
+    """The sweep in numbers (strict JSON: no nan)."""
+    n = len(rows)
+    summary = {"study": study.name, "duration_s": study.duration,
+               "metric_window": "from 2 s after the first contact "
+                                "(report.TRANSIENT) to the run's end",
+               "runs_requested": runs_total, "runs_finished": n,
+               "stop_reasons": {}, "rules": [], "metrics": {}}
+    for row in rows:
+        reason = row["stop_reason"]
+        summary["stop_reasons"][reason] = \
+            summary["stop_reasons"].get(reason, 0) + 1
+    verdicts = [(rule.text, [row[f"pass: {rule.text}"] for row in rows])
+                for rule in rules]
+    verdicts.append(("all rules", [row["pass_all"] for row in rows]))
+    for text, ok in verdicts:
+        k = int(sum(ok))
+        lo, hi = wilson_interval(k, n)
+        summary["rules"].append({
+            "rule": text, "passed": k, "runs": n,
+            "success_rate": k / n if n else None,
+            "ci95": [lo, hi] if n else None})
+    for name in metrics:
+        values = np.array([row[name] for row in rows
+                           if row[name] is not None], float)
+        entry = {"n": int(values.size), "null": n - int(values.size)}
+        if values.size:
+            entry.update(mean=float(values.mean()),
+                         median=float(np.median(values)),
+                         p5=float(np.percentile(values, 5)),
+                         p95=float(np.percentile(values, 95)),
+                         min=float(values.min()), max=float(values.max()))
+        summary["metrics"][name] = entry
+    failed = [not row["pass_all"] for row in rows]
+    scores = _explaining(rows, params, failed)
+    summary["failures_explained_by"] = [
+        {"parameter": s["parameter"],
+         "separation": s["separation"] if math.isfinite(s["separation"])
+         else None} for s in scores]
+    summary["wall_time_s"] = wall_time_s
+    summary["run_cpu_time_s"] = float(sum(
+        row["run_wall_time_s"] or 0.0 for row in rows))
+    return summary
+
+
+def write_summary(summary: dict, path) -> Path:
+    path = Path(path)
+    with open(path, "w") as f:
+        json.dump(summary, f, indent=2, allow_nan=False)
+    return path
+
+
+def plot_metrics(rows: List[dict], metrics: List[str], rules, path,
+                 title: str = "") -> Path:
+    """One histogram per metric, the rules' bounds as dashed lines, the
+    count of null values in each title."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    n = len(metrics)
+    cols = min(3, max(n, 1))
+    nrows = max(1, math.ceil(n / cols))
+    fig, axes = plt.subplots(nrows, cols, figsize=(4.2 * cols, 3.2 * nrows),
+                             squeeze=False)
+    for ax, name in zip(axes.flat, metrics):
+        values = np.array([r[name] for r in rows if r[name] is not None],
+                          float)
+        nulls = len(rows) - values.size
+        if values.size:
+            ax.hist(values, bins=min(40, max(5, values.size // 4)),
+                    color="tab:blue", alpha=0.8)
+        for rule in rules:
+            if rule.metric == name:
+                ax.axvline(rule.value, color="tab:red", ls="--",
+                           label=rule.text)
+                ax.legend(fontsize=7)
+        ax.set_title(f"{name}" + (f" ({nulls} null)" if nulls else ""),
+                     fontsize=8)
+        ax.set_ylabel("runs")
+    for ax in list(axes.flat)[n:]:
+        ax.axis("off")
+    fig.suptitle(title or "metric distributions")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_failures(rows: List[dict], params: List[str], path,
+                  title: str = "") -> Path:
+    """Passed and failed runs (all rules) against the two parameters that
+    separate them best (:func:`separation`), failed runs marked by how they
+    stopped."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    failed = np.array([not r["pass_all"] for r in rows], bool)
+    ranked = [s["parameter"] for s in _explaining(rows, params, failed)]
+    fig, ax = plt.subplots(figsize=(6.5, 5))
+    if not ranked:
+        ax.text(0.5, 0.5, "no parameters", ha="center")
+    else:
+        px = ranked[0]
+        py = ranked[1] if len(ranked) > 1 else None
+        x = np.array([r[px] for r in rows], float)
+        y = np.array([r[py] for r in rows], float) if py else \
+            np.zeros(len(rows))
+        stops = np.array([r["stop_reason"] or "" for r in rows])
+        normal = np.isin(stops, ("duration", "pass_complete"))
+        ax.scatter(x[~failed], y[~failed], c="tab:green", s=18,
+                   label=f"pass ({int((~failed).sum())})")
+        sel = failed & normal
+        ax.scatter(x[sel], y[sel], c="tab:red", marker="x", s=30,
+                   label=f"fail, ran to the end ({int(sel.sum())})")
+        sel = failed & ~normal
+        if sel.any():
+            ax.scatter(x[sel], y[sel], c="black", marker="^", s=30,
+                       label=f"fail, stopped: guard / nan / error / crash "
+                             f"({int(sel.sum())})")
+        scores = {s["parameter"]: s["separation"]
+                  for s in _explaining(rows, params, failed)}
+        ax.set_xlabel(f"{px} (separation {scores[px]:.2f})")
+        if py:
+            ax.set_ylabel(f"{py} (separation {scores[py]:.2f})")
+        ax.legend(fontsize=8)
+    ax.set_title(title or "success and failure (all rules)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)
+
+
+def write_results(study, runs, results, out_dir, *, rules, metrics,
+                  wall_time_s=None) -> Dict[str, Path]:
+    """results.csv, summary.json, metrics.png and failures.png in
+    ``out_dir``, from every run of ``runs`` that has a result."""
+    out = Path(out_dir)
+    params = list(runs[0].params) if runs else []
+    rows = table_rows(runs, results, metrics, rules)
+    files = {"table": write_table(rows, out / "results.csv")}
+    summary = summarize(study, rows, rules, metrics, params,
+                        runs_total=len(runs), wall_time_s=wall_time_s)
+    files["summary"] = write_summary(summary, out / "summary.json")
+    if rows:
+        files["metrics_figure"] = plot_metrics(
+            rows, metrics, rules, out / "metrics.png",
+            title=f"{study.name}: {len(rows)} runs of {study.duration:g} s")
+        files["failures_figure"] = plot_failures(
+            rows, params, out / "failures.png",
+            title=f"{study.name}: {len(rows)} runs, all rules")
+    files["summary_data"] = summary
+    return files
