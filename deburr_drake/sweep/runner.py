@@ -79,7 +79,7 @@ def run_scenario(scenario_text: str, run_dir: str, key: str, *,
     import traceback
     out = Path(run_dir)
     out.mkdir(parents=True, exist_ok=True)
-    t_start = time.perf_counter()
+    t_start, cpu_start = time.perf_counter(), time.process_time()
     timing = {}
     try:
         from deburr_drake import demo, report
@@ -113,7 +113,8 @@ def run_scenario(scenario_text: str, run_dir: str, key: str, *,
     result = _sweep_fields(result)
     result.update(key=key, run_dir=str(out), host=socket.gethostname(),
                   pid=os.getpid(),
-                  run_wall_time_s=time.perf_counter() - t_start, **timing)
+                  run_wall_time_s=time.perf_counter() - t_start,
+                  run_cpu_time_s=time.process_time() - cpu_start, **timing)
     _write_atomically(out / "result.json", result)
     return result
 
@@ -185,12 +186,13 @@ def _client(workers: int, scheduler: Optional[str]):
 def run_sweep(study: Study, runs: List[RunSpec], out_dir, *,
               workers: int = 2, scheduler: Optional[str] = None,
               on_result: Optional[Callable[[dict], None]] = None,
-              stream=None) -> SweepOutcome:
+              stream=None, priority: int = 0) -> SweepOutcome:
     """Runs every run of ``runs`` that has no result in ``out_dir`` yet, as
     Dask tasks, and returns all their results. A task that fails without
     a result (its worker died) is recorded with ``stop_reason: crash``.
     KeyboardInterrupt cancels what is still running and returns what is
-    finished (``interrupted``)."""
+    finished (``interrupted``). ``priority``: Dask's task priority (higher
+    first), for studies that share a cluster."""
     from distributed import KilledWorker, as_completed
     stream = stream or sys.stdout
     out = Path(out_dir).resolve()
@@ -222,7 +224,7 @@ def run_sweep(study: Study, runs: List[RunSpec], out_dir, *,
             future = client.submit(
                 run_scenario, run.scenario_text, str(run_dir), run.key,
                 keep_logs=study.keep_logs, metrics=metrics,
-                key=f"deburr-run-{run.key}", pure=False)
+                key=f"deburr-run-{run.key}", pure=False, priority=priority)
             futures[future] = run
         progress = _Progress(len(todo), n_workers, stream)
         for future in as_completed(list(futures)):
