@@ -368,6 +368,16 @@ def _sweep(args) -> int:
             print(f"  {r['rule']:45s} {r['passed']:4d}/{r['runs']:<4d} "
                   f"{100 * r['success_rate']:5.1f} % "
                   f"(95 % CI {100 * lo:.1f}-{100 * hi:.1f} %)")
+    ranked = [r for r in summary["failures_explained_by"]
+              if r["separation"] is not None][:2]
+    if ranked:
+        print("failures (all rules) are best separated by "
+              + ", ".join(f"{r['parameter']} ({r['separation']:.2f})"
+                          for r in ranked))
+        for b in summary["success_by_parameter"].get(
+                ranked[0]["parameter"], []):
+            print(f"  {b['low']:11.4g} .. {b['high']:<11.4g} {b['passed']:4d}"
+                  f"/{b['runs']:<4d} pass")
     print(f"wrote {out}/results.csv, summary.json and the figures")
     if outcome.errors:
         print(f"deburr-drake sweep: {len(outcome.errors)} run(s) could not "

@@ -173,6 +173,10 @@ def test_wilson_interval_and_separation():
     assert sweep.separation(x, [1, 1, 1, 0, 0, 0]) == 1.0
     assert sweep.separation(x, [1, 0, 0, 1, 1, 0]) == pytest.approx(1 / 9)
     assert math.isnan(sweep.separation(x, [0] * 6))
+    # Failures at both ends (a symmetric error): by the distance from the
+    # median.
+    y = [-0.3, -0.2, -0.1, 0.1, 0.2, 0.3]
+    assert sweep.separation(y, [1, 0, 0, 0, 0, 1]) == 1.0
 
 
 def test_rules_fail_on_null():
@@ -241,3 +245,11 @@ def test_a_run_that_raises_is_recorded_with_its_reason(tmp_path):
     assert result["run_failed"] == 1.0
     assert json.loads((tmp_path / "run" / "result.json").read_text())[
         "stop_reason"] == "error"
+
+
+def test_binned_success_shows_where_runs_fail():
+    from deburr_drake.sweep.results import binned_success
+    x = [0.1, 0.9, 0.2, 0.8, 0.3, 0.7]
+    bins = binned_success(x, [True, False, True, False, True, True], bins=2)
+    assert [(b["low"], b["high"], b["passed"], b["runs"]) for b in bins] == \
+        [(0.1, 0.3, 3, 3), (0.7, 0.9, 1, 3)]

@@ -14,7 +14,7 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
-__all__ = ["wilson_interval", "separation", "table_rows", "write_table",
+__all__ = ["wilson_interval", "separation", "binned_success", "table_rows", "write_table",
            "summarize", "write_summary", "plot_metrics", "plot_failures",
            "write_results"]
 
@@ -31,18 +31,10 @@ def wilson_interval(successes: int, n: int, z: float = 1.959964):
     return (max(0.0, centre - half), min(1.0, centre + half))
 
 
-def separation(values: Sequence[float], failed: Sequence[bool]) -> float:
-    """How well one parameter separates failed runs from passed ones:
-    |2 AUC - 1| of the parameter as a score for failure (0: no better than
-    chance, 1: a threshold separates them), from the Mann-Whitney U with
-    average ranks for ties. nan without both kinds."""
-    x = np.asarray(values, float)
-    f = np.asarray(failed, bool)
-    ok = np.isfinite(x)
-    x, f = x[ok], f[ok]
+def _auc_separation(x: np.ndarray, f: np.ndarray) -> float:
+    """|2 AUC - 1| of x as a score for f, from the Mann-Whitney U with
+    average ranks for ties."""
     n1, n0 = int(f.sum()), int((~f).sum())
-    if n1 == 0 or n0 == 0:
-        return math.nan
     order = np.argsort(x, kind="mergesort")
     ranks = np.empty(len(x))
     sorted_x = x[order]
@@ -55,6 +47,22 @@ def separation(values: Sequence[float], failed: Sequence[bool]) -> float:
         i = j + 1
     u = ranks[f].sum() - n1 * (n1 + 1) / 2
     return abs(2 * u / (n1 * n0) - 1)
+
+
+def separation(values: Sequence[float], failed: Sequence[bool]) -> float:
+    """How well one parameter separates failed runs from passed ones:
+    |2 AUC - 1| of the parameter as a score for failure (0: no better than
+    chance, 1: a threshold separates them), or of its distance from its
+    median if that is larger (failures at both ends of a symmetric range,
+    e.g. a position error of either sign). nan without both kinds."""
+    x = np.asarray(values, float)
+    f = np.asarray(failed, bool)
+    ok = np.isfinite(x)
+    x, f = x[ok], f[ok]
+    if not f.any() or f.all():
+        return math.nan
+    return max(_auc_separation(x, f),
+               _auc_separation(np.abs(x - np.median(x)), f))
 
 
 def _number(value):
@@ -156,10 +164,37 @@ def summarize(study, rows: List[dict], rules, metrics: List[str],
         {"parameter": s["parameter"],
          "separation": s["separation"] if math.isfinite(s["separation"])
          else None} for s in scores]
+    passed = [row["pass_all"] for row in rows]
+    summary["success_by_parameter"] = {
+        s["parameter"]: binned_success([row[s["parameter"]] for row in rows],
+                                       passed)
+        for s in scores[:2] if math.isfinite(s["separation"])}
     summary["wall_time_s"] = wall_time_s
     summary["run_cpu_time_s"] = float(sum(
         row["run_wall_time_s"] or 0.0 for row in rows))
     return summary
+
+
+def binned_success(values: Sequence[float], passed: Sequence[bool],
+                   bins: int = 5) -> List[dict]:
+    """The success rate in ``bins`` equal-count bins of one parameter
+    (with each bin's range and 95 % Wilson interval): where in that
+    parameter's range the runs fail."""
+    x = np.asarray(values, float)
+    ok = np.asarray(passed, bool)
+    keep = np.isfinite(x)
+    x, ok = x[keep], ok[keep]
+    if not x.size:
+        return []
+    order = np.argsort(x, kind="mergesort")
+    out = []
+    for chunk in np.array_split(order, min(bins, x.size)):
+        k, n = int(ok[chunk].sum()), int(chunk.size)
+        lo, hi = wilson_interval(k, n)
+        out.append({"low": float(x[chunk].min()), "high": float(
+            x[chunk].max()), "passed": k, "runs": n, "success_rate": k / n,
+            "ci95": [lo, hi]})
+    return out
 
 
 def write_summary(summary: dict, path) -> Path:
