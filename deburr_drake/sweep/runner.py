@@ -82,7 +82,7 @@ def run_scenario(scenario_text: str, run_dir: str, key: str, *,
     t_start, cpu_start = time.perf_counter(), time.process_time()
     timing = {}
     try:
-        from deburr_drake import demo, report
+        from deburr_drake import report
         from deburr_drake.cell import make_deburring_diagram
         from deburr_drake.simulation import simulate
         from deburr_drake.sweep.study import scenario_from_text
@@ -93,12 +93,8 @@ def run_scenario(scenario_text: str, run_dir: str, key: str, *,
         timing["build_s"] = time.perf_counter() - t
         log = simulate(diagram, scenario)
         timing["simulate_s"] = log.wall_time
-        truth = None
-        if any(m in _TRUTH_METRICS for m in metrics):
-            try:
-                truth = demo.contact_truth(scenario).force_at_desired_depth
-            except Exception:  # the metric is then null with its reason
-                truth = None
+        truth = report.force_at_desired_depth(scenario) if any(
+            m in _TRUTH_METRICS for m in metrics) else None
         values = report.pass_metrics(log, true_force_at_desired_depth=truth,
                                      only_cut=not log.completed_pass)
         if keep_logs:
