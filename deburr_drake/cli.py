@@ -349,8 +349,20 @@ def _sweep(args) -> int:
     rules, metrics = sweep.rules_of(study), sweep.metrics_of(study)
     print(f"deburr-drake sweep: study '{study.name}', {len(runs)} run(s) of "
           f"{study.duration:g} s, output {out}/", flush=True)
-    outcome = sweep.run_sweep(study, runs, out, workers=workers,
-                              scheduler=args.scheduler)
+    import signal
+    received = []
+
+    def on_term(number, frame):
+        # As Ctrl-C: cancel what is still running, keep what is finished.
+        received.append(number)
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, on_term)
+    try:
+        outcome = sweep.run_sweep(study, runs, out, workers=workers,
+                                  scheduler=args.scheduler)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
     if outcome.ran == 0 and not outcome.interrupted:
         print(f"all {len(runs)} run(s) already have results in {out}/runs: "
               "nothing to run")
@@ -383,7 +395,11 @@ def _sweep(args) -> int:
         print(f"deburr-drake sweep: {len(outcome.errors)} run(s) could not "
               "run (nothing recorded for them; rerun to retry)",
               file=sys.stderr)
-    return 130 if outcome.interrupted else (1 if outcome.errors else 0)
+    if outcome.interrupted:
+        print(f"interrupted: the {summary['runs_finished']} finished run(s) "
+              "are kept; the same command resumes")
+        return 143 if received else 130
+    return 1 if outcome.errors else 0
 
 
 def _analyze(args) -> int:
