@@ -253,3 +253,18 @@ def test_binned_success_shows_where_runs_fail():
     bins = binned_success(x, [True, False, True, False, True, True], bins=2)
     assert [(b["low"], b["high"], b["passed"], b["runs"]) for b in bins] == \
         [(0.1, 0.3, 3, 3), (0.7, 0.9, 1, 3)]
+
+
+def test_a_crashed_or_failed_run_fails_every_rule_and_is_a_row():
+    from deburr_drake.sweep.results import table_rows
+    from deburr_drake.sweep.runner import failed_result
+    runs = [sweep.RunSpec(0, {"tube.inner_radius": 0.03}, "a", 1.0),
+            sweep.RunSpec(1, {"tube.inner_radius": 0.04}, "b", 1.0),
+            sweep.RunSpec(2, {"tube.inner_radius": 0.05}, "c", 1.0)]
+    rule = sweep.parse_rule("guard_tripped == 0", "r")
+    results = {runs[0].key: failed_result(runs[0].key, "crash", "died"),
+               runs[1].key: {"stop_reason": "duration", "guard_tripped": 0.0,
+                             "run_failed": 0.0}}
+    rows = table_rows(runs, results, ["guard_tripped"], [rule])
+    assert [(r["index"], r["stop_reason"], r["pass_all"]) for r in rows] == \
+        [(0, "crash", False), (1, "duration", True)]

@@ -90,8 +90,11 @@ def table_rows(runs, results: Dict[str, Optional[dict]], metrics: List[str],
         row.update(run.params)
         for name in metrics:
             row[name] = _number(result.get(name))
-        verdicts = [rule.passes(_number(result.get(rule.metric)))
-                    for rule in rules]
+        # A run that raised or crashed has no metrics to judge: it fails
+        # every rule (guard_tripped == 0 would pass it).
+        broken = row["stop_reason"] in ("error", "crash")
+        verdicts = [not broken and rule.passes(_number(result.get(
+            rule.metric))) for rule in rules]
         for rule, ok in zip(rules, verdicts):
             row[f"pass: {rule.text}"] = ok
         row["pass_all"] = all(verdicts)

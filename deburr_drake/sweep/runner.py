@@ -171,8 +171,11 @@ def _client(workers: int, scheduler: Optional[str]):
     if scheduler:
         return Client(scheduler, timeout="20s"), None
     # One task per worker process; a worker that dies (a crash inside
-    # Drake) fails its run at once instead of retrying it on another.
-    dask.config.set({"distributed.scheduler.allowed-failures": 0})
+    # Drake) fails its run at once instead of retrying it on another, and
+    # only that run: no task waits assigned to a worker (saturation 1.0;
+    # Dask's 1.1 queued a second one there, and it failed too).
+    dask.config.set({"distributed.scheduler.allowed-failures": 0,
+                     "distributed.scheduler.worker-saturation": 1.0})
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
                            processes=True, dashboard_address=":0",
                            silence_logs=40)
