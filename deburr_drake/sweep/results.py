@@ -14,9 +14,25 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
-__all__ = ["wilson_interval", "separation", "binned_success", "table_rows", "write_table",
+__all__ = ["METRICS", "wilson_interval", "separation", "binned_success", "table_rows", "write_table",
            "summarize", "write_summary", "plot_metrics", "plot_failures",
            "write_results"]
+
+
+#: What a run can report (report.pass_metrics, plus the sweep's own
+#: ``guard_tripped`` and ``run_failed``: 1.0 or 0.0).
+METRICS = (
+    "contact_time_s", "chamfer_depth_mean_error_mm",
+    "chamfer_depth_rms_error_mm", "chamfer_depth_max_error_mm",
+    "edge_coverage", "burr_remaining_max_mm", "chamfering_force_rms_error_N",
+    "normal_force_rms_error_N", "depth_tracking_rms_error_mm",
+    "feed_mean_on_burrs_mm_s", "feed_mean_off_burrs_mm_s",
+    "predicted_force_at_desired_depth_N", "true_force_at_desired_depth_N",
+    "force_prediction_error_rel", "torque_total_variation",
+    "fuzzy_term_total_variation", "control_surface_roughness_N",
+    "sliding_variable_p01_mm_s", "sliding_variable_p99_mm_s", "sim_time_s",
+    "wall_time_s", "completed_pass", "nan_detected", "guard_tripped",
+    "run_failed")
 
 
 def wilson_interval(successes: int, n: int, z: float = 1.959964):
@@ -293,7 +309,10 @@ def write_results(study, runs, results, out_dir, *, rules, metrics,
     ``out_dir``, from every run of ``runs`` that has a result."""
     out = Path(out_dir)
     params = list(runs[0].params) if runs else []
-    rows = table_rows(runs, results, metrics, rules)
+    # The table holds every metric a run reports, the study's first; the
+    # summary and the figures the study's.
+    rows = table_rows(runs, results, list(metrics) + [
+        m for m in METRICS if m not in metrics], rules)
     files = {"table": write_table(rows, out / "results.csv")}
     summary = summarize(study, rows, rules, metrics, params,
                         runs_total=len(runs), wall_time_s=wall_time_s)

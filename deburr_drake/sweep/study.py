@@ -21,25 +21,11 @@ from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
 
 from deburr_drake.config import (ConfigError, Scenario, _check_yaml,
                                  field_type, load_scenario, set_field)
+from deburr_drake.sweep.results import METRICS
 
 __all__ = ["Distribution", "SampleConfig", "Study", "Rule", "RunSpec",
            "load_study", "expand_runs", "parse_rule", "METRICS",
            "scenario_from_text", "KEY_VERSION", "check_reach", "rules_of", "metrics_of"]
-
-#: What a run can report (report.pass_metrics, plus the sweep's own
-#: ``guard_tripped`` and ``run_failed``: 1.0 or 0.0).
-METRICS = (
-    "contact_time_s", "chamfer_depth_mean_error_mm",
-    "chamfer_depth_rms_error_mm", "chamfer_depth_max_error_mm",
-    "edge_coverage", "burr_remaining_max_mm", "chamfering_force_rms_error_N",
-    "normal_force_rms_error_N", "depth_tracking_rms_error_mm",
-    "feed_mean_on_burrs_mm_s", "feed_mean_off_burrs_mm_s",
-    "predicted_force_at_desired_depth_N", "true_force_at_desired_depth_N",
-    "force_prediction_error_rel", "torque_total_variation",
-    "fuzzy_term_total_variation", "control_surface_roughness_N",
-    "sliding_variable_p01_mm_s", "sliding_variable_p99_mm_s", "sim_time_s",
-    "wall_time_s", "completed_pass", "nan_detected", "guard_tripped",
-    "run_failed")
 
 #: Part of every run's key: raise it when a change of the code makes old
 #: results wrong (the key is otherwise the resolved scenario and duration).
