@@ -13,8 +13,8 @@ from deburr_drake import metrics
 from deburr_drake.cell import make_contour
 from deburr_drake.simulation import RunLog
 
-__all__ = ["pass_metrics", "PassMetrics", "force_at_desired_depth", "run_summary", "write_run",
-           "TRANSIENT", "CONTACT_FORCE"]
+__all__ = ["pass_metrics", "PassMetrics", "force_at_desired_depth",
+           "run_summary", "write_run", "TRANSIENT", "CONTACT_FORCE"]
 
 #: Excluded after contact is established (s), as the issue asks.
 TRANSIENT = 2.0

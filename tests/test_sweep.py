@@ -42,7 +42,8 @@ sample:
     tube.inner_radius: {{distribution: uniform, low: 0.02, high: 0.06}}
     sensor.noise_std: {{distribution: log_uniform, low: 0.05, high: 0.3}}
     sensor.noise_seed: {{distribution: uniform, low: 1, high: 9}}
-    process.burrs[0].height: {{distribution: normal, mean: 0.001, std: 0.001, low: 0.0, high: 0.002}}
+    process.burrs[0].height:
+      {{distribution: normal, mean: 0.001, std: 0.001, low: 0.0, high: 0.002}}
 {extra}rules: ["chamfer_depth_rms_error_mm <= 0.05"]
 """
 

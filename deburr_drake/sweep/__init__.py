@@ -14,7 +14,8 @@ from deburr_drake.sweep.study import (METRICS, Distribution, Rule, RunSpec,
 
 __all__ = [
     "Study", "SampleConfig", "Distribution", "Rule", "RunSpec", "METRICS",
-    "load_study", "expand_runs", "check_reach", "parse_rule", "rules_of", "metrics_of",
+    "load_study", "expand_runs", "check_reach", "parse_rule", "rules_of",
+    "metrics_of",
     "scenario_from_text", "run_scenario", "run_sweep", "read_result",
     "SweepOutcome", "write_results", "wilson_interval", "separation",
 ]

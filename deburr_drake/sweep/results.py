@@ -14,8 +14,8 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
-__all__ = ["METRICS", "wilson_interval", "separation", "binned_success", "table_rows", "write_table",
-           "summarize", "write_summary", "plot_metrics", "plot_failures",
+__all__ = ["METRICS", "wilson_interval", "separation", "binned_success",
+           "table_rows", "write_table", "summarize", "write_summary", "plot_metrics", "plot_failures",
            "write_results"]
 
 

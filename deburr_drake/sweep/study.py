@@ -25,7 +25,8 @@ from deburr_drake.sweep.results import METRICS
 
 __all__ = ["Distribution", "SampleConfig", "Study", "Rule", "RunSpec",
            "load_study", "expand_runs", "parse_rule", "METRICS",
-           "scenario_from_text", "KEY_VERSION", "check_reach", "rules_of", "metrics_of"]
+           "scenario_from_text", "KEY_VERSION", "check_reach", "rules_of",
+           "metrics_of"]
 
 #: Part of every run's key: raise it when a change of the code makes old
 #: results wrong (the key is otherwise the resolved scenario and duration).
