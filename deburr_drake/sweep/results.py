@@ -15,8 +15,8 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 __all__ = ["METRICS", "wilson_interval", "separation", "binned_success",
-           "table_rows", "write_table", "summarize", "write_summary", "plot_metrics", "plot_failures",
-           "write_results"]
+           "table_rows", "write_table", "summarize", "write_summary",
+           "plot_metrics", "plot_failures", "write_results"]
 
 
 #: What a run can report (report.pass_metrics, plus the sweep's own
