@@ -331,6 +331,7 @@ def _compare(args) -> int:
 
 def _sweep(args) -> int:
     import os
+    import signal
     from pathlib import Path
 
     from deburr_drake import sweep
@@ -344,12 +345,12 @@ def _sweep(args) -> int:
     _check_writable_target(out, "--out", True, is_dir=True)
     runs = sweep.expand_runs(study)  # every run validated before any starts
     runs = runs[:args.limit] if args.limit else runs
+    if args.no_run:
+        return _sweep_report(study, runs, out)
     sweep.check_reach(study, [r for r in runs
                               if sweep.read_result(out, r.key) is None])
-    rules, metrics = sweep.rules_of(study), sweep.metrics_of(study)
     print(f"deburr-drake sweep: study '{study.name}', {len(runs)} run(s) of "
           f"{study.duration:g} s, output {out}/", flush=True)
-    import signal
     received = []
 
     def on_term(number, frame):
@@ -366,14 +367,34 @@ def _sweep(args) -> int:
     if outcome.ran == 0 and not outcome.interrupted:
         print(f"all {len(runs)} run(s) already have results in {out}/runs: "
               "nothing to run")
-    files = sweep.write_results(study, runs, outcome.results, out,
-                                rules=rules, metrics=metrics,
-                                wall_time_s=outcome.wall_time_s)
+    print(f"\n{outcome.ran} run(s) now, {outcome.skipped} already done, in "
+          f"{outcome.wall_time_s:.1f} s")
+    summary = _sweep_report(study, runs, out, outcome)
+    if outcome.errors:
+        print(f"deburr-drake sweep: {len(outcome.errors)} run(s) could not "
+              "run (nothing recorded for them; rerun to retry)",
+              file=sys.stderr)
+    if outcome.interrupted:
+        print(f"interrupted: the {summary['runs_finished']} finished run(s) "
+              "are kept; the same command resumes")
+        return 143 if received else 130
+    return 1 if outcome.errors else 0
+
+
+def _sweep_report(study, runs, out, outcome=None):
+    """Writes results.csv, summary.json and the figures from the finished
+    runs among ``runs`` and prints the success rates; returns the summary
+    (0 with --no-run)."""
+    from deburr_drake import sweep
+    results = outcome.results if outcome is not None else {
+        r.key: sweep.read_result(out, r.key) for r in runs}
+    files = sweep.write_results(
+        study, runs, results, out, rules=sweep.rules_of(study),
+        metrics=sweep.metrics_of(study),
+        wall_time_s=outcome.wall_time_s if outcome is not None else None)
     summary = files["summary_data"]
-    print(f"\n{summary['runs_finished']}/{len(runs)} run(s) finished "
-          f"({outcome.ran} now, {outcome.skipped} already done) in "
-          f"{outcome.wall_time_s:.1f} s; stop reasons "
-          f"{summary['stop_reasons']}")
+    print(f"{summary['runs_finished']}/{len(runs)} run(s) finished; stop "
+          f"reasons {summary['stop_reasons']}")
     for r in summary["rules"]:
         if r["runs"]:
             lo, hi = r["ci95"]
@@ -391,15 +412,7 @@ def _sweep(args) -> int:
             print(f"  {b['low']:11.4g} .. {b['high']:<11.4g} {b['passed']:4d}"
                   f"/{b['runs']:<4d} pass")
     print(f"wrote {out}/results.csv, summary.json and the figures")
-    if outcome.errors:
-        print(f"deburr-drake sweep: {len(outcome.errors)} run(s) could not "
-              "run (nothing recorded for them; rerun to retry)",
-              file=sys.stderr)
-    if outcome.interrupted:
-        print(f"interrupted: the {summary['runs_finished']} finished run(s) "
-              "are kept; the same command resumes")
-        return 143 if received else 130
-    return 1 if outcome.errors else 0
+    return summary if outcome is not None else 0
 
 
 def _analyze(args) -> int:
@@ -522,6 +535,10 @@ def main(argv=None) -> int:
                         "rerun skips the runs it already holds")
     p.add_argument("--limit", type=int, default=None,
                    help="only the study's first N runs")
+    p.add_argument("--no-run", action="store_true",
+                   help="run nothing: write the table, summary and figures "
+                        "from the runs finished so far (e.g. while a sweep "
+                        "is going)")
     p.set_defaults(func=_sweep)
 
     p = sub.add_parser("analyze", help="closed-loop stability at an "

@@ -221,7 +221,9 @@ def test_local_sweep_records_a_guard_and_a_rerun_does_no_work(
     assert cli.main(["sweep", str(path), "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "all 2 run(s) already have results" in printed
-    assert "(0 now, 2 already done)" in printed
+    assert "0 run(s) now, 2 already done" in printed
+    assert cli.main(["sweep", str(path), "--out", str(out), "--no-run"]) == 0
+    assert "2/2 run(s) finished" in capsys.readouterr().out
 
 
 @pytest.mark.slow
