@@ -208,11 +208,22 @@ class CommandConfig:
     # m/s: the feed of the constant-feed baselines (controller.kind
     # impedance, position; no feedrate law), about the paper's average feed.
     constant_feed: float = 0.0024
+    # m/s: the feed law's output is clamped here, as a machine's feed is.
+    # The law scales the tool's speed by (f_td - P'_th) / (f_t - P'_th):
+    # on a chamfer that vanishes under the tool (a part error larger than
+    # the depth) f_t stays near P'_th + v_eps and the feed grew about 20 x
+    # per 25 ms sample, to 450 mm/s and the joint-torque guard (the
+    # robustness study, issue 12). The steady feed (f_td - P'_th) / g of the
+    # study's ranges is at most 14 mm/s (0.2 mm deep, 15 N, k_c - 30 %).
+    max_feed: float = 0.02
 
     def validate(self):
         for name in ("period", "default_feed", "force_offset",
-                     "min_tangential_speed", "constant_feed"):
+                     "min_tangential_speed", "constant_feed", "max_feed"):
             _positive("command", name, getattr(self, name))
+        _require(self.max_feed >= self.default_feed, "command.max_feed",
+                 self.max_feed, f">= command.default_feed "
+                 f"({self.default_feed})")
         _non_negative("command", "threshold_power_force",
                       self.threshold_power_force)
 
