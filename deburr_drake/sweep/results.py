@@ -308,6 +308,7 @@ def write_results(study, runs, results, out_dir, *, rules, metrics,
     """results.csv, summary.json, metrics.png and failures.png in
     ``out_dir``, from every run of ``runs`` that has a result."""
     out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
     params = list(runs[0].params) if runs else []
     # The table holds every metric a run reports, the study's first; the
     # summary and the figures the study's.
