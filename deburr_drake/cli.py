@@ -402,10 +402,10 @@ def _sweep_report(study, runs, out, outcome=None):
                   f"{100 * r['success_rate']:5.1f} % "
                   f"(95 % CI {100 * lo:.1f}-{100 * hi:.1f} %)")
     ranked = [r for r in summary["failures_explained_by"]
-              if r["separation"] is not None][:2]
+              if r["association"] is not None][:2]
     if ranked:
-        print("failures (all rules) are best separated by "
-              + ", ".join(f"{r['parameter']} ({r['separation']:.2f})"
+        print("how badly runs did is best explained by "
+              + ", ".join(f"{r['parameter']} ({r['association']:.2f})"
                           for r in ranked))
         for b in summary["success_by_parameter"].get(
                 ranked[0]["parameter"], []):

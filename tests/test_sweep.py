@@ -10,6 +10,7 @@ import math
 import textwrap
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from deburr_drake import cli, sweep
@@ -162,22 +163,32 @@ def test_bad_study_files(tmp_path, text, expected):
     assert expected in message and "\n" not in message, message
 
 
-def test_wilson_interval_and_separation():
+def test_wilson_interval_and_association():
     lo, hi = sweep.wilson_interval(200, 200)
     assert (lo, hi) == pytest.approx((0.9812, 1.0), abs=1e-4)
     lo, hi = sweep.wilson_interval(5, 10)
     assert (lo, hi) == pytest.approx((0.2366, 0.7634), abs=1e-4)
     assert all(math.isnan(v) for v in sweep.wilson_interval(0, 0))
-    # A threshold separates them: 1; independent of failure: about 0.
+    # Monotone in the parameter: 1; independent of it: about 0.
     x = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]
-    assert sweep.separation(x, [0, 0, 0, 1, 1, 1]) == 1.0
-    assert sweep.separation(x, [1, 1, 1, 0, 0, 0]) == 1.0
-    assert sweep.separation(x, [1, 0, 0, 1, 1, 0]) == pytest.approx(1 / 9)
-    assert math.isnan(sweep.separation(x, [0] * 6))
-    # Failures at both ends (a symmetric error): by the distance from the
+    assert sweep.association(x, [1, 2, 3, 4, 5, 6]) == pytest.approx(1.0)
+    assert sweep.association(x, [0, 0, 0, 1, 1, 1]) == pytest.approx(
+        0.878, abs=1e-3)
+    assert math.isnan(sweep.association(x, [0] * 6))
+    # Bad at both ends (a symmetric error): by the distance from the
     # median.
     y = [-0.3, -0.2, -0.1, 0.1, 0.2, 0.3]
-    assert sweep.separation(y, [1, 0, 0, 0, 0, 1]) == 1.0
+    assert sweep.association(y, [3, 2, 1, 1, 2, 3]) == pytest.approx(1.0)
+
+
+def test_badness_is_the_most_failed_rules_metric_null_worst():
+    rules = [sweep.parse_rule("guard_tripped == 0", "a"),
+             sweep.parse_rule("chamfer_depth_rms_error_mm <= 0.05", "b")]
+    rows = [{"pass: guard_tripped == 0": g, "pass_all": False,
+             "pass: chamfer_depth_rms_error_mm <= 0.05": False,
+             "chamfer_depth_rms_error_mm": d}
+            for g, d in ((True, 0.1), (True, 0.3), (False, None))]
+    np.testing.assert_allclose(sweep.badness(rows, rules), [0.1, 0.3, 1.3])
 
 
 def test_rules_fail_on_null():

@@ -2,8 +2,8 @@
 file (:mod:`.study`), its runs as tasks in worker processes (:mod:`.runner`)
 and the results table, summary and figures (:mod:`.results`)."""
 
-from deburr_drake.sweep.results import (separation, wilson_interval,
-                                        write_results)
+from deburr_drake.sweep.results import (association, badness,
+                                        wilson_interval, write_results)
 from deburr_drake.sweep.runner import (SweepOutcome, read_result,
                                        run_scenario, run_sweep)
 from deburr_drake.sweep.study import (METRICS, Distribution, Rule, RunSpec,
@@ -17,5 +17,6 @@ __all__ = [
     "load_study", "expand_runs", "check_reach", "parse_rule", "rules_of",
     "metrics_of",
     "scenario_from_text", "run_scenario", "run_sweep", "read_result",
-    "SweepOutcome", "write_results", "wilson_interval", "separation",
+    "SweepOutcome", "write_results", "wilson_interval", "association",
+    "badness",
 ]

@@ -14,7 +14,8 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
-__all__ = ["METRICS", "wilson_interval", "separation", "binned_success",
+__all__ = ["METRICS", "wilson_interval", "association", "badness",
+           "binned_success",
            "table_rows", "write_table", "summarize", "write_summary",
            "plot_metrics", "plot_failures", "write_results"]
 
@@ -47,38 +48,64 @@ def wilson_interval(successes: int, n: int, z: float = 1.959964):
     return (max(0.0, centre - half), min(1.0, centre + half))
 
 
-def _auc_separation(x: np.ndarray, f: np.ndarray) -> float:
-    """|2 AUC - 1| of x as a score for f, from the Mann-Whitney U with
-    average ranks for ties."""
-    n1, n0 = int(f.sum()), int((~f).sum())
+def _ranks(x: np.ndarray) -> np.ndarray:
+    """Ranks 1..n, ties given their average rank."""
     order = np.argsort(x, kind="mergesort")
     ranks = np.empty(len(x))
     sorted_x = x[order]
     i = 0
-    while i < len(x):  # average ranks over ties
+    while i < len(x):
         j = i
         while j + 1 < len(x) and sorted_x[j + 1] == sorted_x[i]:
             j += 1
         ranks[order[i:j + 1]] = (i + j) / 2 + 1
         i = j + 1
-    u = ranks[f].sum() - n1 * (n1 + 1) / 2
-    return abs(2 * u / (n1 * n0) - 1)
+    return ranks
 
 
-def separation(values: Sequence[float], failed: Sequence[bool]) -> float:
-    """How well one parameter separates failed runs from passed ones:
-    |2 AUC - 1| of the parameter as a score for failure (0: no better than
-    chance, 1: a threshold separates them), or of its distance from its
-    median if that is larger (failures at both ends of a symmetric range,
-    e.g. a position error of either sign). nan without both kinds."""
-    x = np.asarray(values, float)
-    f = np.asarray(failed, bool)
-    ok = np.isfinite(x)
-    x, f = x[ok], f[ok]
-    if not f.any() or f.all():
+def _spearman(x: np.ndarray, y: np.ndarray) -> float:
+    rx, ry = _ranks(x), _ranks(y)
+    if np.ptp(rx) == 0 or np.ptp(ry) == 0:
         return math.nan
-    return max(_auc_separation(x, f),
-               _auc_separation(np.abs(x - np.median(x)), f))
+    return float(np.corrcoef(rx, ry)[0, 1])
+
+
+def association(values: Sequence[float], badness: Sequence[float]) -> float:
+    """How well one parameter explains how badly the runs did: |Spearman
+    rank correlation| of the parameter with ``badness`` (0: not at all, 1:
+    monotonically), or of its distance from its median if that is larger
+    (runs that fail at both ends of a symmetric range, e.g. a position error
+    of either sign). nan when either is constant."""
+    x = np.asarray(values, float)
+    b = np.asarray(badness, float)
+    ok = np.isfinite(x) & np.isfinite(b)
+    x, b = x[ok], b[ok]
+    if x.size < 3:
+        return math.nan
+    scores = [abs(_spearman(x, b)), abs(_spearman(np.abs(x - np.median(x)),
+                                                 b))]
+    scores = [v for v in scores if math.isfinite(v)]
+    return max(scores) if scores else math.nan
+
+
+def badness(rows: List[dict], rules) -> np.ndarray:
+    """How badly each run did on the rule the most runs fail: its metric
+    (larger is worse for <= and <, smaller for >= and >, a null the worst);
+    for == and != rules, or without rules, 1 for a failed run, 0 else."""
+    failed = np.array([not row["pass_all"] for row in rows], float)
+    if not rules:
+        return failed
+    counts = [sum(not row[f"pass: {rule.text}"] for row in rows)
+              for rule in rules]
+    rule = rules[int(np.argmax(counts))]
+    if rule.op not in ("<=", "<", ">=", ">") or not max(counts):
+        return np.array([float(not row[f"pass: {rule.text}"])
+                         for row in rows])
+    sign = 1.0 if rule.op in ("<=", "<") else -1.0
+    values = np.array([np.nan if row[rule.metric] is None
+                       else sign * row[rule.metric] for row in rows])
+    worst = np.nanmax(values) + 1.0 if np.isfinite(values).any() else 1.0
+    return np.where(np.isfinite(values), values, worst)
 
 
 def _number(value):
@@ -134,11 +161,12 @@ def write_table(rows: List[dict], path) -> Path:
     return path
 
 
-def _explaining(rows, params: List[str], failed) -> List[dict]:
-    scores = [{"parameter": p, "separation": separation(
-        [r[p] for r in rows], failed)} for p in params]
-    return sorted(scores, key=lambda s: -(s["separation"]
-                                          if math.isfinite(s["separation"])
+def _explaining(rows, params: List[str], rules) -> List[dict]:
+    bad = badness(rows, rules)
+    scores = [{"parameter": p, "association": association(
+        [r[p] for r in rows], bad)} for p in params]
+    return sorted(scores, key=lambda s: -(s["association"]
+                                          if math.isfinite(s["association"])
                                           else -1))
 
 
@@ -177,17 +205,16 @@ def summarize(study, rows: List[dict], rules, metrics: List[str],
                          p95=float(np.percentile(values, 95)),
                          min=float(values.min()), max=float(values.max()))
         summary["metrics"][name] = entry
-    failed = [not row["pass_all"] for row in rows]
-    scores = _explaining(rows, params, failed)
+    scores = _explaining(rows, params, rules)
     summary["failures_explained_by"] = [
         {"parameter": s["parameter"],
-         "separation": s["separation"] if math.isfinite(s["separation"])
+         "association": s["association"] if math.isfinite(s["association"])
          else None} for s in scores]
     passed = [row["pass_all"] for row in rows]
     summary["success_by_parameter"] = {
         s["parameter"]: binned_success([row[s["parameter"]] for row in rows],
                                        passed)
-        for s in scores[:2] if math.isfinite(s["separation"])}
+        for s in scores[:2] if math.isfinite(s["association"])}
     summary["wall_time_s"] = wall_time_s
     summary["run_cpu_time_s"] = float(sum(
         row["run_wall_time_s"] or 0.0 for row in rows))
@@ -259,16 +286,17 @@ def plot_metrics(rows: List[dict], metrics: List[str], rules, path,
     return Path(path)
 
 
-def plot_failures(rows: List[dict], params: List[str], path,
+def plot_failures(rows: List[dict], params: List[str], rules, path,
                   title: str = "") -> Path:
     """Passed and failed runs (all rules) against the two parameters that
-    separate them best (:func:`separation`), failed runs marked by how they
-    stopped."""
+    explain best how badly the runs did (:func:`association` with
+    :func:`badness`), failed runs marked by how they stopped."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     failed = np.array([not r["pass_all"] for r in rows], bool)
-    ranked = [s["parameter"] for s in _explaining(rows, params, failed)]
+    explained = _explaining(rows, params, rules)
+    ranked = [s["parameter"] for s in explained]
     fig, ax = plt.subplots(figsize=(6.5, 5))
     if not ranked:
         ax.text(0.5, 0.5, "no parameters", ha="center")
@@ -290,11 +318,10 @@ def plot_failures(rows: List[dict], params: List[str], path,
             ax.scatter(x[sel], y[sel], c="black", marker="^", s=30,
                        label=f"fail, stopped: guard / nan / error / crash "
                              f"({int(sel.sum())})")
-        scores = {s["parameter"]: s["separation"]
-                  for s in _explaining(rows, params, failed)}
-        ax.set_xlabel(f"{px} (separation {scores[px]:.2f})")
+        scores = {s["parameter"]: s["association"] for s in explained}
+        ax.set_xlabel(f"{px} (association {scores[px]:.2f})")
         if py:
-            ax.set_ylabel(f"{py} (separation {scores[py]:.2f})")
+            ax.set_ylabel(f"{py} (association {scores[py]:.2f})")
         ax.legend(fontsize=8)
     ax.set_title(title or "success and failure (all rules)", fontsize=9)
     fig.tight_layout()
@@ -323,7 +350,7 @@ def write_results(study, runs, results, out_dir, *, rules, metrics,
             rows, metrics, rules, out / "metrics.png",
             title=f"{study.name}: {len(rows)} runs of {study.duration:g} s")
         files["failures_figure"] = plot_failures(
-            rows, params, out / "failures.png",
+            rows, params, rules, out / "failures.png",
             title=f"{study.name}: {len(rows)} runs, all rules")
     files["summary_data"] = summary
     return files
