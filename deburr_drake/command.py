@@ -20,16 +20,19 @@ __all__ = ["CommandGenerator", "FirstOrderHold", "feedrate"]
 
 def feedrate(tangential_speed: float, chamfering_force: float, *,
              desired_force: float, threshold_force: float,
-             force_offset: float, default_feed: float) -> float:
+             force_offset: float, default_feed: float,
+             max_feed: float = float("inf")) -> float:
     """The feed speed v (m/s) of the outer-loop law before eq. (5):
 
     v = |n2^T xdot_p| (||f_td|| - P'_th) / (||f_t|| - P'_th)
-        if ||f_t|| - P'_th > v_eps, else v0.
+        if ||f_t|| - P'_th > v_eps, else v0;
+
+    at most ``max_feed`` (the paper is silent; see CommandConfig.max_feed).
     """
     excess = chamfering_force - threshold_force
     if excess > force_offset:
-        return abs(tangential_speed) * (desired_force - threshold_force) \
-            / excess
+        return min(abs(tangential_speed) * (desired_force - threshold_force)
+                   / excess, max_feed)
     return default_feed
 
 
@@ -137,7 +140,8 @@ class CommandGenerator(LeafSystem):
             float(n2 @ xdot_p), CHAMFER_STATE.get(chamfer, "f_t"),
             desired_force=self._task.desired_chamfering_force,
             threshold_force=c.threshold_power_force,
-            force_offset=c.force_offset, default_feed=c.default_feed)
+            force_offset=c.force_offset, default_feed=c.default_feed,
+            max_feed=c.max_feed)
         ds = v * self._period
         contour = self._contour_now(context)
         x_c = contour.advance(x_p, ds)

@@ -44,6 +44,9 @@ __all__ = [
     "load_scenario",
     "scenario_names",
     "scenario_path",
+    "get_field",
+    "set_field",
+    "field_type",
 ]
 
 
@@ -205,11 +208,22 @@ class CommandConfig:
     # m/s: the feed of the constant-feed baselines (controller.kind
     # impedance, position; no feedrate law), about the paper's average feed.
     constant_feed: float = 0.0024
+    # m/s: the feed law's output is clamped here, as a machine's feed is.
+    # The law scales the tool's speed by (f_td - P'_th) / (f_t - P'_th):
+    # on a chamfer that vanishes under the tool (a part error larger than
+    # the depth) f_t stays near P'_th + v_eps and the feed grew about 20 x
+    # per 25 ms sample, to 450 mm/s and the joint-torque guard (the
+    # robustness study, issue 12). The steady feed (f_td - P'_th) / g of the
+    # study's ranges is at most 14 mm/s (0.2 mm deep, 15 N, k_c - 30 %).
+    max_feed: float = 0.02
 
     def validate(self):
         for name in ("period", "default_feed", "force_offset",
-                     "min_tangential_speed", "constant_feed"):
+                     "min_tangential_speed", "constant_feed", "max_feed"):
             _positive("command", name, getattr(self, name))
+        _require(self.max_feed >= self.default_feed, "command.max_feed",
+                 self.max_feed, f">= command.default_feed "
+                 f"({self.default_feed})")
         _non_negative("command", "threshold_power_force",
                       self.threshold_power_force)
 
@@ -809,6 +823,73 @@ class Scenario:
         return self
 
 
+# Scenario fields by dotted name (``--set``, stability maps, sweeps).
+
+def _parse_path(path: str):
+    """'controller.sliding_gain[0]' -> [('controller', None),
+    ('sliding_gain', 0)]."""
+    parts = []
+    for token in path.split("."):
+        index = None
+        if token.endswith("]") and "[" in token:
+            token, _, rest = token.partition("[")
+            try:
+                index = int(rest[:-1])
+            except ValueError:
+                raise ConfigError(f"{path!r}: bad index [{rest}") from None
+        parts.append((token, index))
+    return parts
+
+
+def get_field(scenario, path: str):
+    obj = scenario
+    for name, index in _parse_path(path):
+        if not hasattr(obj, "__dataclass_fields__") or \
+                name not in obj.__dataclass_fields__:
+            raise ConfigError(f"{path!r} is not a scenario field "
+                              f"({name!r} unknown)")
+        obj = getattr(obj, name)
+        if index is not None:
+            if not isinstance(obj, list) or not -len(obj) <= index < len(obj):
+                raise ConfigError(f"{path!r}: index {index} out of range")
+            obj = obj[index]
+    return obj
+
+
+def set_field(scenario, path: str, value):
+    """Sets a scenario field by dotted name (``sensor.cutoff_frequency``,
+    ``controller.sliding_gain[0]``); ConfigError names an unknown one."""
+    get_field(scenario, path)  # validates the path
+    parts = _parse_path(path)
+    obj = scenario
+    for name, index in parts[:-1]:
+        obj = getattr(obj, name)
+        if index is not None:
+            obj = obj[index]
+    name, index = parts[-1]
+    if index is None:
+        current = getattr(obj, name)
+        setattr(obj, name, type(current)(value)
+                if isinstance(current, (int, float)) else value)
+    else:
+        getattr(obj, name)[index] = float(value)
+
+
+def field_type(scenario, path: str):
+    """The declared type of a scenario field by dotted name: ``float``,
+    ``int``, ``bool``, ``str``, a ``List[...]`` or a dataclass."""
+    import typing
+    get_field(scenario, path)  # validates the path
+    obj = scenario
+    for name, index in _parse_path(path):
+        hint = typing.get_type_hints(type(obj))[name]
+        obj = getattr(obj, name)
+        if index is not None:
+            (hint,) = typing.get_args(hint)
+            obj = obj[index]
+    return hint
+
+
 _SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
 
 
@@ -863,6 +944,21 @@ def _check_node(where: str, node, schema, path: str):
                               f"{path or 'the scenario'}: {sorted(known)}")
             _check_node(where, value_node, hints[key], name)
         return
+    if origin is dict:
+        key_type, item = typing.get_args(schema)
+        if not isinstance(node, yaml.MappingNode):
+            _schema_error(where, node, f"{path} = {_shown(node)} is invalid: "
+                          "allowed a mapping")
+        seen = {}
+        for key_node, value_node in node.value:
+            name = f"{path}.{key_node.value}"
+            if key_node.value in seen:
+                _schema_error(where, key_node,
+                              f"{name} is given twice (first at line "
+                              f"{seen[key_node.value].start_mark.line + 1})")
+            seen[key_node.value] = key_node
+            _check_node(where, value_node, item, name)
+        return
     if origin in (list, List):
         (item,) = typing.get_args(schema)
         if not isinstance(node, yaml.SequenceNode):
@@ -899,9 +995,10 @@ def _shown(node) -> str:
     return "a list" if isinstance(node, yaml.SequenceNode) else "a mapping"
 
 
-def _check_yaml(text: str, where: str):
+def _check_yaml(text: str, where: str, schema=None, path: str = ""):
     """Syntax (file:line:column), duplicate and unknown keys, and types of
-    the YAML ``text`` against :class:`Scenario`, before it is loaded."""
+    the YAML ``text`` against ``schema`` (:class:`Scenario` by default;
+    fields named under ``path``), before it is loaded."""
     import yaml
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
@@ -920,7 +1017,7 @@ def _check_yaml(text: str, where: str):
                           f"{' '.join(str(e).split())}") from None
     if root is None:
         return
-    _check_node(where, root, Scenario, "")
+    _check_node(where, root, schema or Scenario, path)
 
 
 def _scenario_file(name_or_path: str) -> Path:

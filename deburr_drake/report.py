@@ -18,9 +18,9 @@ from deburr_drake import metrics
 from deburr_drake.cell import make_contour
 from deburr_drake.simulation import RunLog
 
-__all__ = ["pass_metrics", "PassMetrics", "run_summary", "write_run",
-           "log_arrays",
-           "TRANSIENT", "CONTACT_FORCE"]
+__all__ = ["pass_metrics", "PassMetrics", "force_at_desired_depth",
+           "run_summary", "write_run", "log_arrays", "TRANSIENT",
+           "CONTACT_FORCE"]
 
 #: Excluded after contact is established (s), as the issue asks.
 TRANSIENT = 2.0
@@ -44,6 +44,17 @@ class PassMetrics(dict):
     def unavailable(self, name: str, reason: str):
         self[name] = float("nan")
         self.reasons[name] = reason
+
+
+def force_at_desired_depth(scenario) -> Optional[float]:
+    """The plant's normal force at delta* (demo.contact_truth), or None
+    when it cannot be computed: the metrics that need it are then null
+    with their reason."""
+    from deburr_drake import demo
+    try:
+        return demo.contact_truth(scenario).force_at_desired_depth
+    except Exception:
+        return None
 
 
 def pass_metrics(log: RunLog, *,

@@ -39,6 +39,20 @@ def test_feedrate_law_branches():
     # ||f_t|| - P' = 0.4 <= v_eps: the default feed v0.
     assert feedrate(0.002, 2.4, **kw) == pytest.approx(0.001)
     assert feedrate(0.0, 0.0, **kw) == pytest.approx(0.001)
+    # ||f_t|| - P' = 0.51 on a vanishing chamfer: 16 x the speed, clamped.
+    assert feedrate(0.002, 2.51, **kw) == pytest.approx(0.002 * 8 / 0.51)
+    assert feedrate(0.002, 2.51, max_feed=0.02, **kw) == 0.02
+
+
+def test_command_generator_clamps_the_feed():
+    # A chamfer that vanishes under a tool at 15 mm/s: ||f_t|| - P' = 0.6,
+    # the law asks 15 * 8 / 0.6 = 200 mm/s; the command takes max_feed.
+    config, task = CommandConfig(), TaskConfig()
+    x0 = CONTOUR.point_at(0.01)
+    generator = CommandGenerator(config, task, CONTOUR, x0)
+    x_p = x0 + 0.00001 * CONTOUR.n1(x0)
+    out = _step(generator, _chamfer(x_p, 0.015 * CONTOUR.tangent(x0), 2.6))
+    assert out["feed"] == pytest.approx(config.max_feed, rel=1e-12)
 
 
 @pytest.mark.parametrize("f_t, speed, expected", [

@@ -44,7 +44,8 @@ from pydrake.common import RandomGenerator
 from pydrake.systems.framework import Context, Diagram
 
 from deburr_drake.cell import make_deburring_diagram
-from deburr_drake.config import ConfigError, Scenario
+from deburr_drake.config import (ConfigError, Scenario,  # noqa: F401
+                                 get_field, set_field)
 from deburr_drake.layout import CHAMFER_STATE
 from deburr_drake.process import PROCESS_STATE
 from deburr_drake.simulation import make_simulator
@@ -109,56 +110,6 @@ def frozen_scenario(scenario: Scenario, *, continuous: bool = False,
     for path, value in overrides.items():
         set_field(frozen, path, value)
     return frozen.validate()
-
-
-def _parse_path(path: str):
-    """'controller.sliding_gain[0]' -> [('controller', None),
-    ('sliding_gain', 0)]."""
-    parts = []
-    for token in path.split("."):
-        index = None
-        if token.endswith("]") and "[" in token:
-            token, _, rest = token.partition("[")
-            try:
-                index = int(rest[:-1])
-            except ValueError:
-                raise ConfigError(f"{path!r}: bad index [{rest}") from None
-        parts.append((token, index))
-    return parts
-
-
-def get_field(scenario: Scenario, path: str):
-    obj = scenario
-    for name, index in _parse_path(path):
-        if not hasattr(obj, "__dataclass_fields__") or \
-                name not in obj.__dataclass_fields__:
-            raise ConfigError(f"{path!r} is not a scenario field "
-                              f"({name!r} unknown)")
-        obj = getattr(obj, name)
-        if index is not None:
-            if not isinstance(obj, list) or not -len(obj) <= index < len(obj):
-                raise ConfigError(f"{path!r}: index {index} out of range")
-            obj = obj[index]
-    return obj
-
-
-def set_field(scenario: Scenario, path: str, value):
-    """Sets a scenario field by dotted name (``sensor.cutoff_frequency``,
-    ``controller.sliding_gain[0]``); ConfigError names an unknown one."""
-    get_field(scenario, path)  # validates the path
-    parts = _parse_path(path)
-    obj = scenario
-    for name, index in parts[:-1]:
-        obj = getattr(obj, name)
-        if index is not None:
-            obj = obj[index]
-    name, index = parts[-1]
-    if index is None:
-        current = getattr(obj, name)
-        setattr(obj, name, type(current)(value)
-                if isinstance(current, (int, float)) else value)
-    else:
-        getattr(obj, name)[index] = float(value)
 
 
 def transfer_state(source: Diagram, source_context: Context,

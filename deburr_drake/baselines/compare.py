@@ -99,16 +99,13 @@ def run_controller(scenario, controller: str, duration: Optional[float],
     scenario's if None) and writes ``out_dir``/logs.npz, metrics.json;
     returns the metrics.json content plus the smoothness metrics and the
     normal force against the plant's true force at delta*."""
-    from deburr_drake import demo, metrics, report
+    from deburr_drake import metrics, report
     from deburr_drake.cell import make_deburring_diagram
     from deburr_drake.simulation import simulate
     sc = configure(scenario, controller)
     log = simulate(make_deburring_diagram(scenario=sc), sc,
                    duration=duration)
-    try:
-        truth = demo.contact_truth(sc).force_at_desired_depth
-    except Exception:  # the metric is then null with its reason
-        truth = None
+    truth = report.force_at_desired_depth(sc)
     values = report.pass_metrics(log, true_force_at_desired_depth=truth,
                                  only_cut=not log.completed_pass)
     t0 = values.get("contact_time_s", np.nan) + report.TRANSIENT
