@@ -164,6 +164,15 @@ def pass_metrics(log: RunLog, *,
                             f"the tool was never {where} a burr after the "
                             "transient")
 
+    # The feed law's output held at command.max_feed (the clamp is never
+    # silent): the fraction of the run's outer-loop samples, whole run.
+    feed = log["command"]["feed"]
+    if len(feed):
+        out["feed_at_max_fraction"] = float(
+            np.mean(feed >= sc.command.max_feed * (1.0 - 1e-9)))
+    else:
+        out.unavailable("feed_at_max_fraction", "no command sample")
+
     estimates = log["estimates"]["value"]
     if len(estimates):
         c_hat = estimates[-1]

@@ -40,6 +40,8 @@ def test_a_run_shorter_than_the_transient_writes_logs_and_metrics(
     assert "transient" in metrics["unavailable"][
         "chamfering_force_rms_error_N"]
     assert metrics["contact_time_s"] < 0.5
+    # The feed law never reached command.max_feed (20 mm/s).
+    assert metrics["feed_at_max_fraction"] == 0.0
     with np.load(out / "logs.npz") as logs:
         assert logs["chamfer.t"][-1] == pytest.approx(1.0)
     # A second run into the same directory is refused (nothing run) ...
@@ -47,6 +49,21 @@ def test_a_run_shorter_than_the_transient_writes_logs_and_metrics(
     assert cli.main(["simulate", "--duration", "1", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--force" in err[0]
+
+
+def test_a_clamped_feed_is_counted_in_the_metrics(tmp_path):
+    """command.max_feed below the feeds the law asks for: the metrics say
+    for how much of the run the feed was held at the clamp."""
+    out = tmp_path / "d"
+    assert cli.main(["simulate", "--duration", "1", "--out", str(out),
+                     "--scenario-text", "command: {max_feed: 0.0015}"]) == 0
+    metrics = _strict_json(out / "metrics.json")
+    with np.load(out / "logs.npz") as logs:
+        feed = logs["command.feed"]
+    assert feed.max() == pytest.approx(0.0015)
+    assert metrics["feed_at_max_fraction"] == pytest.approx(
+        np.mean(feed >= 0.0015 * (1 - 1e-9)))
+    assert metrics["feed_at_max_fraction"] > 0.3
 
 
 def _run_and_signal(tmp_path, number):
