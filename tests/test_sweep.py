@@ -227,6 +227,13 @@ def test_local_sweep_records_a_guard_and_a_rerun_does_no_work(
     # Every metric is there (the force at delta* only when a metric asks).
     assert set(sweep.METRICS) - {"true_force_at_desired_depth_N"} \
         <= set(results[0])
+    # ... and every metric the run reports is a column (METRICS is the
+    # sweep's list: a metric added to the report must be added there).
+    reported = json.loads(
+        (out / "runs" / runs[0].key / "metrics.json").read_text())
+    assert set(reported) - {"scenario", "stop_reason", "stop_time_s",
+                            "stop_detail", "unavailable"} \
+        <= set(sweep.METRICS)
     assert (out / "runs" / runs[0].key / "logs.npz").exists()
     capsys.readouterr()
     assert cli.main(["sweep", str(path), "--out", str(out)]) == 0

@@ -31,7 +31,8 @@ METRICS = (
     "predicted_force_at_desired_depth_N", "true_force_at_desired_depth_N",
     "force_prediction_error_rel", "torque_total_variation",
     "fuzzy_term_total_variation", "control_surface_roughness_N",
-    "sliding_variable_p01_mm_s", "sliding_variable_p99_mm_s", "sim_time_s",
+    "sliding_variable_p01_mm_s", "sliding_variable_p99_mm_s",
+    "feed_at_max_fraction", "sim_time_s",
     "wall_time_s", "completed_pass", "nan_detected", "guard_tripped",
     "run_failed")
 
