@@ -33,6 +33,12 @@ def _value(y):
     return y.value() if hasattr(y, "value") else float(y)
 
 
+def _float_values(J):
+    """J's values as floats (an AutoDiffXd array's values; a float array
+    as is): what the pseudo-inverses are taken of."""
+    return np.vectorize(_value)(J) if J.dtype == object else J
+
+
 def saturation(x):
     """sat(x) = x for |x| <= 1, sign(x) otherwise (T-generic)."""
     v = _value(x)
@@ -370,7 +376,7 @@ def HybridController_(T):
             projector from float values)."""
             c = self._config
             q, v = state[:self._nq], state[self._nq:]
-            J_value = np.vectorize(_value)(J) if J.dtype == object else J
+            J_value = _float_values(J)
             projector = np.eye(J.shape[1]) - J_value.T @ np.linalg.pinv(
                 J_value.T)
             return projector @ (c.null_space_stiffness * (self._posture - q)
@@ -388,7 +394,7 @@ def HybridController_(T):
                 plant.world_frame(), plant.world_frame())
             target = np.concatenate([alpha_r - bias.rotational(),
                                      a_r - bias.translational()])
-            J_value = np.vectorize(_value)(J) if J.dtype == object else J
+            J_value = _float_values(J)
             vdot_r = np.linalg.pinv(J_value) @ target
             plant.CalcForceElementsContribution(ctx, self._true_forces)
             return plant.CalcInverseDynamics(ctx, vdot_r, self._true_forces)
