@@ -32,22 +32,22 @@ DEFAULT_CONTROLLERS = ("fuzzy", "fuzzy_m0", "impedance", "robust", "ideal",
 #: Hz: the torque's power above it is the chattering measure.
 HIGH_FREQUENCY = 50.0
 
-#: The columns of comparison.md, in order: (key, header, scale).
+#: The columns of comparison.md, in order: (key, header).
 _TABLE = (
-    ("stop_reason", "stop", None),
-    ("chamfering_force_rms_error_N", "f_t RMS err (N)", 1.0),
-    ("normal_force_rms_error_N", "e_f RMS (N)", 1.0),
-    ("normal_force_vs_truth_rms_error_N", "f_n - f_n(d*) RMS (N)", 1.0),
-    ("chamfer_depth_rms_error_mm", "depth RMS err (mm)", 1.0),
-    ("chamfer_depth_mean_error_mm", "depth mean err (mm)", 1.0),
-    ("feed_mean_off_burrs_mm_s", "feed off burrs (mm/s)", 1.0),
-    ("feed_mean_on_burrs_mm_s", "feed on burrs (mm/s)", 1.0),
-    ("torque_total_variation", "torque TV (N m)", 1.0),
-    ("torque_power_above_50Hz", "torque power >50 Hz (N^2 m^2)", 1.0),
-    ("torque_rms_above_50Hz", "torque RMS >50 Hz (N m)", 1.0),
-    ("fuzzy_cell_crossings", "s cell crossings", 1.0),
-    ("control_surface_roughness_N", "u_f roughness (N)", 1.0),
-    ("wall_time_s", "wall (s)", 1.0),
+    ("stop_reason", "stop"),
+    ("chamfering_force_rms_error_N", "f_t RMS err (N)"),
+    ("normal_force_rms_error_N", "e_f RMS (N)"),
+    ("normal_force_vs_truth_rms_error_N", "f_n - f_n(d*) RMS (N)"),
+    ("chamfer_depth_rms_error_mm", "depth RMS err (mm)"),
+    ("chamfer_depth_mean_error_mm", "depth mean err (mm)"),
+    ("feed_mean_off_burrs_mm_s", "feed off burrs (mm/s)"),
+    ("feed_mean_on_burrs_mm_s", "feed on burrs (mm/s)"),
+    ("torque_total_variation", "torque TV (N m)"),
+    ("torque_power_above_50Hz", "torque power >50 Hz (N^2 m^2)"),
+    ("torque_rms_above_50Hz", "torque RMS >50 Hz (N m)"),
+    ("fuzzy_cell_crossings", "s cell crossings"),
+    ("control_surface_roughness_N", "u_f roughness (N)"),
+    ("wall_time_s", "wall (s)"),
 )
 
 
@@ -153,12 +153,13 @@ def compare(scenario, controllers: List[str], *, duration=None, out_dir,
     return rows
 
 
-def _cell(value, scale):
-    if scale is None:
-        return str(value)
+def _cell(value):
+    """A table cell: text as it is, a number to 4 digits, n/a for null."""
+    if isinstance(value, str):
+        return value
     if value is None:
         return "n/a"
-    return f"{value * scale:.4g}"
+    return f"{value:.4g}"
 
 
 def write_comparison(rows: List[dict], out_dir, *, scenario: str,
@@ -173,11 +174,11 @@ def write_comparison(rows: List[dict], out_dir, *, scenario: str,
                   allow_nan=False)
     lines = [f"# Controller comparison: scenario `{scenario}`"
              + (f", {duration:g} s" if duration else ", full run"), "",
-             "| controller | " + " | ".join(h for _, h, _ in _TABLE) + " |",
+             "| controller | " + " | ".join(h for _, h in _TABLE) + " |",
              "|---" * (len(_TABLE) + 1) + "|"]
     for row in rows:
         lines.append(f"| {row['controller']} | " + " | ".join(
-            _cell(row.get(k), s) for k, _, s in _TABLE) + " |")
+            _cell(row.get(k)) for k, _ in _TABLE) + " |")
     lines += ["", "f_t: chamfering force against the desired one; e_f: "
               "the controller's normal-force error (against its own "
               "estimate f_nd hat; impedance and position ignore it); "
