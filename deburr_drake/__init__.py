@@ -33,31 +33,42 @@ API"; ``examples/`` and ``examples/tutorial.ipynb`` use it)::
   :data:`COMMAND_STATE`.
 
 Names load on first use, so ``import deburr_drake`` (and the pure-numpy
-modules ``fuzzy``, ``geometry``, ``metrics``) import no Drake.
+modules of ``deburr_drake.math``: ``fuzzy``, ``geometry``, ``metrics``)
+import no Drake.
+
+The package is layered (pyproject.toml's import-linter contracts hold it):
+``math`` and ``config`` at the ground, ``control`` (the paper's systems),
+``cell`` (the simulated cell), ``runs`` (simulating and reporting), the
+capabilities ``analysis``, ``sweep``, and ``cli`` on top. A module imports
+only from its own layer or below.
 """
 
 import importlib
 
 #: Each module's public names, in the order of the docstring above.
 _MODULES = {
-    "config": ("load_scenario", "Scenario", "ConfigError", "scenario_names"),
-    "analysis.operating_point": ("set_field", "get_field"),
-    "cell": ("make_deburring_diagram", "LOGGED", "make_contour"),
-    "simulation": ("simulate", "RunLog", "make_simulator"),
-    "demo": ("run", "contact_truth"),
-    "report": ("pass_metrics", "log_arrays", "write_run"),
-    "figures": ("make_figures", "compare_figures"),
-    "graphs": ("write_graphs",),
-    "replay": ("write_recording",),
-    "loop": ("add_deburring_controller", "DeburringController"),
-    "controller": ("HybridController",),
-    "command": ("CommandGenerator", "FirstOrderHold"),
-    "estimator": ("ContactParameterEstimator",),
-    "observer": ("ChamferObserver",),
-    "sensor": ("ForceSensor",),
-    "process": ("CuttingProcess",),
-    "geometry": ("CircularContour", "StraightContour"),
-    "layout": ("CHAMFER_STATE", "CONTROLLER_DIAGNOSTICS", "COMMAND_STATE"),
+    "config": ("load_scenario", "Scenario", "ConfigError", "scenario_names",
+               "set_field", "get_field"),
+    "cell.diagram": ("make_deburring_diagram", "LOGGED"),
+    "cell.edge": ("make_contour",),
+    "runs.simulation": ("simulate", "RunLog", "make_simulator"),
+    "runs.demo": ("run",),
+    "cell.truth": ("contact_truth",),
+    "runs.pass_metrics": ("pass_metrics",),
+    "runs.report": ("log_arrays", "write_run"),
+    "runs.figures": ("make_figures", "compare_figures"),
+    "runs.graphs": ("write_graphs",),
+    "runs.replay": ("write_recording",),
+    "control.loop": ("add_deburring_controller", "DeburringController"),
+    "control.controller": ("HybridController",),
+    "control.command": ("CommandGenerator", "FirstOrderHold"),
+    "control.estimator": ("ContactParameterEstimator",),
+    "control.observer": ("ChamferObserver",),
+    "cell.sensor": ("ForceSensor",),
+    "cell.process": ("CuttingProcess",),
+    "math.geometry": ("CircularContour", "StraightContour"),
+    "control.layout": ("CHAMFER_STATE", "CONTROLLER_DIAGNOSTICS",
+                       "COMMAND_STATE"),
 }
 #: Public name -> the module that defines it.
 _EXPORTS = {name: module for module, names in _MODULES.items()

@@ -113,7 +113,7 @@ def _simulate(args) -> int:
     import signal
     from pathlib import Path
 
-    from deburr_drake.cell import check_part_in_reach
+    from deburr_drake.cell.reach import check_part_in_reach
     scenario = _load(args)
     if args.duration is not None:
         _check_duration(args.duration)
@@ -159,9 +159,11 @@ def _simulate(args) -> int:
 def _run_and_write(args, scenario, out, received, running) -> int:
     import signal
 
-    from deburr_drake import demo, figures, report
-    from deburr_drake.cell import make_deburring_diagram
-    from deburr_drake.simulation import simulate
+    from deburr_drake.cell.truth import contact_truth
+    from deburr_drake.runs import figures, report
+    from deburr_drake.runs.pass_metrics import pass_metrics
+    from deburr_drake.cell.diagram import make_deburring_diagram
+    from deburr_drake.runs.simulation import simulate
     try:
         meshcat = None
         if args.meshcat or args.record:
@@ -185,7 +187,7 @@ def _run_and_write(args, scenario, out, received, running) -> int:
           + (f" ({log.stop_detail})" if log.stop_detail else ""),
           flush=True)
     if args.record:
-        from deburr_drake.replay import write_recording
+        from deburr_drake.runs.replay import write_recording
         try:
             path = write_recording(meshcat, args.record)
             print(f"wrote the replay {path}")
@@ -193,14 +195,14 @@ def _run_and_write(args, scenario, out, received, running) -> int:
             print(f"deburr-drake: could not write the replay: {e}",
                   file=sys.stderr)
     try:
-        truth = demo.contact_truth(scenario).force_at_desired_depth
+        truth = contact_truth(scenario).force_at_desired_depth
     except Exception as e:  # the metrics then leave it out, with why
         print(f"deburr-drake: no contact truth: {type(e).__name__}: {e}",
               file=sys.stderr)
         truth = None
     # A run that stopped before the pass was done: the finish over the
     # bins the tool reached.
-    values = report.pass_metrics(
+    values = pass_metrics(
         log, true_force_at_desired_depth=truth,
         only_cut=not log.completed_pass)
     files = report.write_run(log, out, values)
@@ -222,14 +224,15 @@ def _run_and_write(args, scenario, out, received, running) -> int:
 
 
 def _demo(args) -> int:
-    from deburr_drake import demo
+    from deburr_drake.cell.truth import contact_truth
+    from deburr_drake.runs import demo
     scenario = _load(args)
     if args.duration is not None:
         _check_duration(args.duration)
     duration = 5.0 if args.duration is None else args.duration
     print(f"deburr-drake demo: point-mass testbed, scenario "
           f"'{scenario.name}', {duration:g} s")
-    truth = demo.contact_truth(scenario)
+    truth = contact_truth(scenario)
     print("contact truth (Drake hydroelastic + process threshold): "
           f"||f_n(delta*)|| = {truth.force_at_desired_depth:.3f} N, "
           f"local stiffness {truth.local_stiffness / 1e3:.2f} N/mm")
@@ -275,8 +278,8 @@ def _demo(args) -> int:
 def _diagram(args) -> int:
     from pathlib import Path
 
-    from deburr_drake.cell import make_deburring_diagram
-    from deburr_drake.graphs import write_graphs
+    from deburr_drake.cell.diagram import make_deburring_diagram
+    from deburr_drake.runs.graphs import write_graphs
     scenario = _load(args)
     diagram = make_deburring_diagram(scenario=scenario)
     out = Path(args.out or f"out/{scenario.name}/diagram.dot")
@@ -292,8 +295,8 @@ def _diagram(args) -> int:
 def _compare(args) -> int:
     from pathlib import Path
 
-    from deburr_drake.baselines import compare as cmp
-    from deburr_drake.cell import check_part_in_reach
+    from deburr_drake.runs import compare as cmp
+    from deburr_drake.cell.reach import check_part_in_reach
     scenario = _load(args)
     if args.duration is not None:
         _check_duration(args.duration)

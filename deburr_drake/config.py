@@ -306,7 +306,7 @@ class RobustConfig:
     """The robust law (22) of Theorem 1 on the fuzzy axes:
     H(||x||, s_k) = (b1 + b2 ||x|| + b3 ||x||^2) sgn(s_k) + (b4 + b5 ||x||) s_k
     with ||x|| = ||x_p|| (m, R8). The Appendix's bounds taken literally give
-    gains no sampled servo survives (``deburr_drake.baselines.laws.
+    gains no sampled servo survives (``deburr_drake.control.laws.
     appendix_gains``: b1 about 1.6e5 N on this cell, from lambda^2 m d0);
     the default keeps the sign term sized for the residual it must dominate
     here (h2: the gravity model's 20 % error and joint friction along x1,
@@ -524,7 +524,7 @@ class RobotConfig:
     or ``flange_frame`` names the model's mounting face (+z out of the
     flange) and the cell welds the sensor (joint ``sensor_joint``) and a
     spindle of ``tool_mass`` there, its tip ``tool_length`` along the
-    flange's +z (deburr_drake.robot). The controller's model of the arm
+    flange's +z (deburr_drake.cell.robot). The controller's model of the arm
     differs from the plant by ``controller.model_mass_scale``."""
 
     model: str = "cartesian_tool"  # shipped name, or a .urdf / .sdf path
@@ -541,7 +541,7 @@ class RobotConfig:
     # default (arm5: its ready pose turned towards the part).
     ik_seed: List[float] = field(default_factory=list)
 
-    #: Models shipped in models/ (deburr_drake.robot.SHIPPED_ROBOTS).
+    #: Models shipped in models/ (deburr_drake.cell.robot.SHIPPED_ROBOTS).
     SHIPPED = ("cartesian_tool", "arm5", "arm6")
     FILE_SUFFIXES = (".urdf", ".sdf")
 
@@ -689,7 +689,7 @@ class PartStepConfig:
 @dataclass
 class FaultsConfig:
     """Faults a deburring cell meets, injected by Drake systems in the
-    diagram (deburr_drake.faults); none by default. See also
+    diagram (deburr_drake.cell.faults); none by default. See also
     ``part_error`` (the part not where the controller thinks it is)."""
 
     # N, world, added to the force reading the controller and observer get
@@ -713,7 +713,7 @@ class FaultsConfig:
 
 @dataclass
 class GuardsConfig:
-    """Runtime safety guards (deburr_drake.guards): each stops the run with
+    """Runtime safety guards (deburr_drake.cell.guards): each stops the run with
     ``stop_reason`` ``guard:<name>`` and its values at the trip. A limit of
     0 takes the default derived from the models and the task."""
 

@@ -19,7 +19,7 @@ import tempfile
 from pathlib import Path
 
 import deburr_drake as dd
-from deburr_drake.models import models_dir
+from deburr_drake.cell.models import models_dir
 
 SHIPPED_ARM = models_dir() / "arm5.sdf"
 

@@ -13,9 +13,9 @@ import time
 
 from pydrake.common import RandomGenerator
 
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
-from deburr_drake.simulation import make_simulator
+from deburr_drake.runs.simulation import make_simulator
 
 
 def main():

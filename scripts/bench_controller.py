@@ -10,10 +10,10 @@ import time
 import numpy as np
 
 from deburr_drake.config import ControllerConfig
-from deburr_drake.controller import HybridController
-from deburr_drake.geometry import CircularContour
-from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
-from deburr_drake.observer import chamfer_quantities
+from deburr_drake.control.controller import HybridController
+from deburr_drake.math.geometry import CircularContour
+from deburr_drake.cell.models import POINT_MASS_URL, make_kinematic_model
+from deburr_drake.control.observer import chamfer_quantities
 
 
 def main(n: int = 5000) -> None:

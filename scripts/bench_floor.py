@@ -22,11 +22,13 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import (Adder, ConstantVectorSource,
                                         ZeroOrderHold)
 
-from deburr_drake.arm import solve_tool_pose
-from deburr_drake.cell import TOOL_FRAME, _add_plant, make_contour
+from deburr_drake.cell.arm import solve_tool_pose
+from deburr_drake.cell.diagram import TOOL_FRAME
+from deburr_drake.cell.plant import add_cell_plant
+from deburr_drake.cell.edge import make_contour
 from deburr_drake.config import load_scenario
-from deburr_drake.kinematics import ToolPoint
-from deburr_drake.process import force_law_terms, make_cutting_force_law
+from deburr_drake.control.kinematics import ToolPoint
+from deburr_drake.cell.process import force_law_terms, make_cutting_force_law
 
 
 def main():
@@ -38,7 +40,7 @@ def main():
     scenario = load_scenario("paper")
     T = scenario.controller.control_period
     builder = DiagramBuilder()
-    plant, _ = _add_plant(builder, scenario)
+    plant, _ = add_cell_plant(builder, scenario)
     contour = make_contour(scenario)
     p = contour.point_at(0.0)
     # Aimed 1.5 mm deep: the joint PID settles near 0.5 mm, about 5 N.

@@ -7,7 +7,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from deburr_drake.fuzzy import RuleBase  # noqa: E402
+from deburr_drake.math.fuzzy import RuleBase
 
 
 def main(n_calls=10_000, seed=0):

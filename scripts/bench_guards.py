@@ -1,4 +1,4 @@
-"""Cost of the runtime guards (deburr_drake.guards) on the paper pass.
+"""Cost of the runtime guards (deburr_drake.cell.guards) on the paper pass.
 
 Runs the paper scenario for DURATION simulated seconds with the guards on
 and off, alternating, REPEATS times each, and prints the process CPU time
@@ -13,10 +13,10 @@ does not depend on what else the machine runs.
 import sys
 import time
 
-from deburr_drake import guards
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.cell import guards
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
-from deburr_drake.simulation import simulate
+from deburr_drake.runs.simulation import simulate
 
 DURATION = float(sys.argv[1]) if len(sys.argv) > 1 else 10.0
 REPEATS = int(sys.argv[2]) if len(sys.argv) > 2 else 3

@@ -25,9 +25,9 @@ import tempfile
 _CHILD = """
 import sys
 from pydrake.common import RandomGenerator
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
-from deburr_drake.simulation import make_simulator
+from deburr_drake.runs.simulation import make_simulator
 scenario = load_scenario(sys.argv[1], text=sys.argv[3] or None)
 diagram = make_deburring_diagram(scenario=scenario)
 simulator = make_simulator(diagram, scenario)

@@ -9,10 +9,10 @@ from pathlib import Path
 
 from pydrake.geometry import Meshcat
 
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
-from deburr_drake.replay import write_recording
-from deburr_drake.simulation import simulate
+from deburr_drake.runs.replay import write_recording
+from deburr_drake.runs.simulation import simulate
 
 
 def run(duration: float, record: bool) -> float:

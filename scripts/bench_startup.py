@@ -17,11 +17,12 @@ import time
 T0 = time.perf_counter()
 from pydrake.common.yaml import yaml_dump_typed  # noqa: E402
 
-from deburr_drake import report  # noqa: E402
-from deburr_drake.cell import (check_part_in_reach,  # noqa: E402
-                               make_deburring_diagram)
+from deburr_drake.runs import report
+from deburr_drake.runs.pass_metrics import pass_metrics
+from deburr_drake.cell.reach import check_part_in_reach
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario  # noqa: E402
-from deburr_drake.simulation import simulate  # noqa: E402
+from deburr_drake.runs.simulation import simulate
 from deburr_drake.sweep import scenario_from_text  # noqa: E402
 
 
@@ -53,7 +54,7 @@ def main(argv):
     t = time.perf_counter()
     log = simulate(diagram, scenario)
     t = lap(f"simulate {duration:g} s", t)
-    values = report.pass_metrics(log, only_cut=True)
+    values = pass_metrics(log, only_cut=True)
     t = lap("metrics", t)
     with tempfile.TemporaryDirectory() as tmp:
         report.write_run(log, tmp, values)

@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from deburr_drake.cell import contact_normal_force
+from deburr_drake.cell.truth import contact_normal_force
 from deburr_drake.config import load_scenario
 
 DEPTHS = (3e-4, 5e-4, 7e-4)

@@ -11,9 +11,10 @@ import time
 
 import numpy as np
 
-from deburr_drake.part import (
-    RingContactProbe, calibrate_hydroelastic_modulus, force_ripple, local_stiffness, measure_normal_force,
-    power_law_exponent)
+from deburr_drake.cell.part import (RingContactProbe,
+                                    calibrate_hydroelastic_modulus,
+                                    force_ripple, local_stiffness,
+                                    measure_normal_force, power_law_exponent)
 
 
 def main():

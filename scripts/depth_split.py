@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from deburr_drake.report import TRANSIENT
+from deburr_drake.runs.pass_metrics import TRANSIENT
 
 
 def split(logs) -> dict:

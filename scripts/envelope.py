@@ -1,7 +1,7 @@
 """The stability envelope of the paper cell over burr size and desired force
 (one burr per run, 40 s at most or until the cutter is past the burr), in
 parallel processes. Prints one line per cell and the pass count; the bounds
-are deburr_drake.envelope's. Usage:
+are deburr_drake.runs.envelope's. Usage:
 
     python scripts/envelope.py [--workers N] [--json PATH]
         [--heights MM,..] [--lengths MM,..] [--forces N,..]
@@ -15,7 +15,7 @@ import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 
-from deburr_drake import envelope
+from deburr_drake.runs import envelope
 
 
 def _floats(text, scale=1.0):

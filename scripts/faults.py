@@ -12,10 +12,11 @@ import sys
 
 import numpy as np
 
-from deburr_drake import metrics, report
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.math import metrics
+from deburr_drake.runs.pass_metrics import pass_metrics
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
-from deburr_drake.simulation import simulate
+from deburr_drake.runs.simulation import simulate
 
 FAULTS = {
     "none": "",
@@ -49,7 +50,7 @@ def run(name: str, duration: float) -> dict:
                    duration=duration, progress_interval=duration)
     ch = log["chamfer"]
     true_f_n = -np.einsum("ij,ij->i", log["tool_force"]["value"], ch["n1"])
-    values = report.pass_metrics(log, only_cut=not log.completed_pass)
+    values = pass_metrics(log, only_cut=not log.completed_pass)
     return {
         "nan": log.stop_reason == "nan" or metrics.any_nan(
             *[v for b in log.signals.values() for v in b.values()]),

@@ -12,10 +12,10 @@ import copy
 
 import numpy as np
 
-from deburr_drake import metrics
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.math import metrics
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
-from deburr_drake.simulation import simulate
+from deburr_drake.runs.simulation import simulate
 
 
 def summarize(log, start):

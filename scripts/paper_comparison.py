@@ -8,7 +8,7 @@ then prints comparison.md. Minutes per controller; not a test. Usage:
 import sys
 from pathlib import Path
 
-from deburr_drake.baselines.compare import DEFAULT_CONTROLLERS, compare
+from deburr_drake.runs.compare import DEFAULT_CONTROLLERS, compare
 from deburr_drake.config import load_scenario
 
 

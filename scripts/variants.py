@@ -5,10 +5,11 @@ prints one line of metrics each. Usage:
 
 import sys
 
-from deburr_drake import demo, report
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.cell.truth import contact_truth
+from deburr_drake.runs.pass_metrics import pass_metrics
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
-from deburr_drake.simulation import simulate
+from deburr_drake.runs.simulation import simulate
 
 BURRS_2MM = ("process: {burrs: ["
              "{center_fraction: 0.125, height: 0.002},"
@@ -40,8 +41,8 @@ def run(name: str) -> dict:
     scenario = load_scenario("paper", text=text)
     scenario.simulation.duration = duration
     log = simulate(make_deburring_diagram(scenario=scenario), scenario)
-    truth = demo.contact_truth(scenario)
-    values = report.pass_metrics(
+    truth = contact_truth(scenario)
+    values = pass_metrics(
         log, true_force_at_desired_depth=truth.force_at_desired_depth,
         only_cut=True)
     return values

@@ -130,7 +130,7 @@ def point_mass_op():
 
 @pytest.mark.slow
 def test_point_mass_depth_mode_matches_eq8(point_mass_op):
-    from deburr_drake.demo import contact_truth
+    from deburr_drake.cell.truth import contact_truth
     sc = point_mass_op.scenario
     truth = contact_truth(sc)
     lin = analysis.linearize_closed_loop(point_mass_op,
@@ -150,7 +150,7 @@ def paper_op():
 
 @pytest.mark.slow
 def test_paper_arm_depth_mode_matches_eq8_and_the_loop_is_stable(paper_op):
-    from deburr_drake.demo import contact_truth
+    from deburr_drake.cell.truth import contact_truth
     op = paper_op
     sc = op.scenario
     truth = contact_truth(sc)
@@ -235,7 +235,7 @@ def test_set_field_by_dotted_name():
 
 
 def test_fuzzy_slope_adds_slope_times_s_to_the_surface():
-    from deburr_drake.cell import make_deburring_diagram
+    from deburr_drake.cell.diagram import make_deburring_diagram
     sc = load_scenario("point_mass")
     diagram = make_deburring_diagram(scenario=sc)
     context = diagram.CreateDefaultContext()
@@ -288,7 +288,7 @@ def test_settings_at_the_operating_point_are_checked():
 
 
 def test_lyapunov_v1_starts_at_the_estimate_error():
-    from deburr_drake.demo import contact_truth
+    from deburr_drake.cell.truth import contact_truth
     sc = load_scenario("point_mass")
     trace = analysis.lyapunov_trace(sc, duration=0.2, sample_period=0.05)
     truth = contact_truth(sc)

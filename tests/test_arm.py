@@ -1,4 +1,4 @@
-"""The 5-DOF arm model (models/arm5.sdf) and its tool-vertical IK (deburr_drake.arm)."""
+"""The 5-DOF arm model (models/arm5.sdf) and its tool-vertical IK (deburr_drake.cell.arm)."""
 
 import math
 import xml.etree.ElementTree as ET
@@ -9,10 +9,10 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.systems.framework import DiagramBuilder
 
-from deburr_drake.arm import (ARM_JOINTS, ARM_URL, DEFAULT_PART_POSITION, Q_READY, add_arm,
-                              solve_tool_pose)
-from deburr_drake.models import make_kinematic_model, models_dir
-from deburr_drake.part import add_cartesian_tool
+from deburr_drake.cell.arm import (ARM_JOINTS, ARM_URL, DEFAULT_PART_POSITION,
+                                   Q_READY, add_arm, solve_tool_pose)
+from deburr_drake.cell.models import make_kinematic_model, models_dir
+from deburr_drake.cell.part import add_cartesian_tool
 
 TIP_Z = 0.048  # m: 2 mm below the tube's top edge at z = 0.05 m
 

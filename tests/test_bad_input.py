@@ -6,7 +6,7 @@ simulation runs here."""
 import pytest
 
 from deburr_drake import cli
-from deburr_drake.tube_mesh import ring_mesh_path, ring_surface_path
+from deburr_drake.cell.tube_mesh import ring_mesh_path, ring_surface_path
 
 SIM = ["simulate", "--duration", "0.01"]
 

@@ -6,14 +6,14 @@ passes are ``scripts/paper_comparison.py``, not tests."""
 import numpy as np
 import pytest
 
-from deburr_drake.baselines.laws import appendix_gains, robust_term
-from deburr_drake.command import CommandGenerator
+from deburr_drake.control.laws import appendix_gains, robust_term
+from deburr_drake.control.command import CommandGenerator
 from deburr_drake.config import (CommandConfig, ConfigError,
                                  ControllerConfig, TaskConfig, load_scenario)
-from deburr_drake.controller import HybridController
-from deburr_drake.layout import COMMAND_STATE, CONTROLLER_DIAGNOSTICS
-from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
-from deburr_drake.observer import chamfer_quantities
+from deburr_drake.control.controller import HybridController
+from deburr_drake.control.layout import COMMAND_STATE, CONTROLLER_DIAGNOSTICS
+from deburr_drake.cell.models import POINT_MASS_URL, make_kinematic_model
+from deburr_drake.control.observer import chamfer_quantities
 # The controller tests' contour and tool point: the laws are checked at
 # the same place.
 from test_controller import CONTOUR, _scenario_point as _point
@@ -186,9 +186,9 @@ def test_constant_feed_is_a_timed_path():
                                   "position"])
 def test_short_closed_loop_run(kind):
     """2 s of the paper cell: in contact from 0.5 s on, no NaN, no guard."""
-    from deburr_drake import metrics
-    from deburr_drake.cell import make_deburring_diagram
-    from deburr_drake.simulation import simulate
+    from deburr_drake.math import metrics
+    from deburr_drake.cell.diagram import make_deburring_diagram
+    from deburr_drake.runs.simulation import simulate
     scenario = load_scenario("paper")
     scenario.controller.kind = kind
     log = simulate(make_deburring_diagram(scenario=scenario), scenario,
@@ -202,7 +202,7 @@ def test_short_closed_loop_run(kind):
 
 
 def test_high_frequency_power_by_hand():
-    from deburr_drake.metrics import high_frequency_power
+    from deburr_drake.math.metrics import high_frequency_power
     t = np.arange(4000) * 0.0025
     x = np.c_[3 * np.sin(2 * np.pi * 100 * t) + 5 * np.sin(2 * np.pi * 10 * t),
               np.sin(2 * np.pi * 60 * t)]
@@ -230,7 +230,7 @@ def test_compare_writes_both_files(tmp_path):
 
 
 def test_cell_crossings_by_hand():
-    from deburr_drake.metrics import cell_crossings
+    from deburr_drake.math.metrics import cell_crossings
     # cells of width 1: [-0.5, 0.5) is 0, [0.5, 1.5) is 1
     assert cell_crossings([0.0, 0.49, 0.5, 0.2, -0.5, -0.51], 1.0) == 3
     assert cell_crossings(np.zeros((5, 2)), 1.0) == 0

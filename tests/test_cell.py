@@ -4,12 +4,12 @@ process's burrs and surface-finish record."""
 import numpy as np
 import pytest
 
-from deburr_drake.cell import (SYSTEM_NAMES, make_contour,
-                               make_deburring_diagram, start_position)
+from deburr_drake.cell.diagram import SYSTEM_NAMES, make_deburring_diagram
+from deburr_drake.cell.edge import make_contour, start_position
 from deburr_drake.config import BurrConfig, ProcessConfig, load_scenario
-from deburr_drake.geometry import CircularContour
-from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
-from deburr_drake.process import CuttingProcess, burr_profile
+from deburr_drake.math.geometry import CircularContour
+from deburr_drake.cell.models import POINT_MASS_URL, make_kinematic_model
+from deburr_drake.cell.process import CuttingProcess, burr_profile
 
 
 @pytest.fixture(scope="module")
@@ -79,7 +79,7 @@ def test_process_records_finish_and_removes_swept_burr():
     state = process.GetOutputPort("process_state").Eval(context)
     # The burr is cut at the cutter's front, s + r: raised cosine there.
     front = burr_profile([s + 0.003], config.burrs, contour.length, True)[0]
-    from deburr_drake.process import PROCESS_STATE
+    from deburr_drake.cell.process import PROCESS_STATE
     area = PROCESS_STATE.get(state, "burr_area")
     bins = process.bins
     assert area == pytest.approx(burr0[bins.index(s + 0.003)] * 0.002)
@@ -102,8 +102,8 @@ def test_process_records_finish_and_removes_swept_burr():
 
 
 def test_straight_edge_cell():
-    from deburr_drake.cell import contact_normal_force
-    from deburr_drake.geometry import StraightContour
+    from deburr_drake.cell.truth import contact_normal_force
+    from deburr_drake.math.geometry import StraightContour
     scenario = load_scenario("paper", text="edge: {kind: straight}")
     contour = make_contour(scenario)
     assert isinstance(contour, StraightContour)

@@ -5,7 +5,9 @@ that assert the foundation's convergence numbers."""
 import numpy as np
 import pytest
 
-from deburr_drake import demo, metrics
+from deburr_drake.cell.truth import contact_truth
+from deburr_drake.runs import demo
+from deburr_drake.math import metrics
 from deburr_drake.config import load_scenario
 
 pytestmark = pytest.mark.slow
@@ -18,7 +20,7 @@ def scenario():
 
 @pytest.fixture(scope="module")
 def truth(scenario):
-    return demo.contact_truth(scenario)
+    return contact_truth(scenario)
 
 
 @pytest.fixture(scope="module")
@@ -86,8 +88,8 @@ def test_no_sample_rate_chatter_after_a_kick(scenario, kick):
     0.05 mm/s instead of 0.5 mm/s this point mass kept alternating by
     about 2 mm/s from sample to sample (its sign flip, treated explicitly
     by the integrator, moves it P'_th h / m = 3 mm/s per step)."""
-    from deburr_drake.cell import make_deburring_diagram
-    from deburr_drake.simulation import make_simulator
+    from deburr_drake.cell.diagram import make_deburring_diagram
+    from deburr_drake.runs.simulation import make_simulator
     diagram = make_deburring_diagram(scenario=scenario)
     simulator = make_simulator(diagram, scenario)
     plant = diagram.GetSubsystemByName("plant")

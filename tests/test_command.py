@@ -7,11 +7,12 @@ from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
                                       SimulatorConfig)
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 
-from deburr_drake.command import CommandGenerator, FirstOrderHold, feedrate
+from deburr_drake.control.command import (CommandGenerator, FirstOrderHold,
+                                          feedrate)
 from deburr_drake.config import CommandConfig, ConfigError, TaskConfig
-from deburr_drake.geometry import CircularContour
-from deburr_drake.layout import COMMAND_STATE
-from deburr_drake.observer import chamfer_quantities
+from deburr_drake.math.geometry import CircularContour
+from deburr_drake.control.layout import COMMAND_STATE
+from deburr_drake.control.observer import chamfer_quantities
 
 CONTOUR = CircularContour([0.0, 0.0, 0.048], 0.027)
 

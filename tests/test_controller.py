@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from deburr_drake.config import ControllerConfig, ConfigError
-from deburr_drake.controller import HybridController, make_rule_bases
-from deburr_drake.geometry import CircularContour
-from deburr_drake.layout import CONTROLLER_DIAGNOSTICS
-from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
-from deburr_drake.observer import chamfer_quantities
+from deburr_drake.control.controller import HybridController, make_rule_bases
+from deburr_drake.math.geometry import CircularContour
+from deburr_drake.control.layout import CONTROLLER_DIAGNOSTICS
+from deburr_drake.cell.models import POINT_MASS_URL, make_kinematic_model
+from deburr_drake.control.observer import chamfer_quantities
 
 CONTOUR = CircularContour([0.0, 0.0, 0.048], 0.027)
 G = 9.81
@@ -230,8 +230,8 @@ def test_shared_tool_point_gives_the_same_law_on_the_arm():
     """On the arm (tilted tool, gravity on every joint) the law with a
     ToolPoint's kinematics and gravity forces equals the law computing its
     own; its AutoDiffXd copy computes its own."""
-    from deburr_drake.arm import ARM_URL
-    from deburr_drake.kinematics import ToolPoint
+    from deburr_drake.cell.arm import ARM_URL
+    from deburr_drake.control.kinematics import ToolPoint
     arm = make_kinematic_model(ARM_URL)
     tool_point = ToolPoint(arm, arm.GetFrameByName("tool_tip"))
     config = ControllerConfig(control_period=0.0)

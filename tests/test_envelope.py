@@ -11,7 +11,7 @@ from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import MatrixGain
 
-from deburr_drake import envelope
+from deburr_drake.runs import envelope
 from deburr_drake.config import load_scenario
 
 
@@ -84,7 +84,7 @@ def test_burr_scenario_places_the_burr_ahead(paper):
     cell = envelope.BurrCell(height=0.002, length=0.02, force=10.0)
     sc = envelope.burr_scenario(paper, cell, lead_time=1.0)
     (burr,) = sc.process.burrs
-    from deburr_drake.cell import make_contour
+    from deburr_drake.cell.edge import make_contour
     L = make_contour(sc).length
     start = burr.center_fraction * L - burr.length / 2
     # The cutter's front (arc + r) reaches it after 2 s + 1 s at 2.42 mm/s.
@@ -159,8 +159,8 @@ def test_tall_long_burr_does_not_surge(paper):
     this very window surged at 15.9 s: 286 N, 18 mm/s. The force stays
     under the envelope's bound and the issue's 30 N, the speed under 1.5
     times the off-burr feed, and the feed on the burr follows the law."""
-    from deburr_drake.cell import make_deburring_diagram
-    from deburr_drake.simulation import simulate
+    from deburr_drake.cell.diagram import make_deburring_diagram
+    from deburr_drake.runs.simulation import simulate
     cell = envelope.BurrCell(height=0.002, length=0.02, force=10.0)
     sc = envelope.burr_scenario(paper, cell)
     log = simulate(make_deburring_diagram(scenario=sc), sc, duration=17.0,

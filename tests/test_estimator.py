@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from deburr_drake.config import EstimatorConfig, TaskConfig
-from deburr_drake.estimator import ContactParameterEstimator
-from deburr_drake.geometry import CircularContour
-from deburr_drake.observer import chamfer_quantities
+from deburr_drake.control.estimator import ContactParameterEstimator
+from deburr_drake.math.geometry import CircularContour
+from deburr_drake.control.observer import chamfer_quantities
 
 CONTOUR = CircularContour([0.0, 0.0, 0.0], 0.027)
 

@@ -4,11 +4,12 @@ touches."""
 import numpy as np
 import pytest
 
-from deburr_drake.cell import believed_contour_step, make_deburring_diagram
+from deburr_drake.cell.edge import believed_contour_step
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import ConfigError, FaultsConfig, load_scenario
-from deburr_drake.faults import SensorFaults
-from deburr_drake.layout import CHAMFER_STATE
-from deburr_drake.simulation import simulate
+from deburr_drake.cell.faults import SensorFaults
+from deburr_drake.control.layout import CHAMFER_STATE
+from deburr_drake.runs.simulation import simulate
 
 
 def _faults(text):

@@ -1,4 +1,4 @@
-"""Tests of deburr_drake.figures (Figs. 8-12 of Hsu & Fu) on synthetic logs."""
+"""Tests of deburr_drake.runs.figures (Figs. 8-12 of Hsu & Fu) on synthetic logs."""
 
 import time
 import warnings
@@ -7,8 +7,8 @@ import matplotlib.image as mpimg
 import numpy as np
 import pytest
 
-from deburr_drake.figures import compare_figures, make_figures
-from deburr_drake.fuzzy import RuleBase
+from deburr_drake.runs.figures import compare_figures, make_figures
+from deburr_drake.math.fuzzy import RuleBase
 
 N, M, B, U, A = 20000, 2000, 200, 5, 2
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

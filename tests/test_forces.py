@@ -7,15 +7,16 @@ import pytest
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import MultibodyForces
 
-from deburr_drake.arm import ARM_URL
-from deburr_drake.cell import make_contour
+from deburr_drake.cell.arm import ARM_URL
+from deburr_drake.cell.edge import make_contour
 from deburr_drake.config import ConfigError, ProcessConfig, RobotConfig, load_scenario
-from deburr_drake.friction import add_joint_friction
-from deburr_drake.kinematics import ToolPoint
-from deburr_drake.models import POINT_MASS_URL, make_kinematic_model, make_parser
-from deburr_drake.process import (cutting_force, force_law_terms,
-                                  generalized_cutting_force,
-                                  make_cutting_force_law)
+from deburr_drake.cell.friction import add_joint_friction
+from deburr_drake.control.kinematics import ToolPoint
+from deburr_drake.cell.models import (POINT_MASS_URL, make_kinematic_model,
+                                      make_parser)
+from deburr_drake.cell.process import (cutting_force, force_law_terms,
+                                       generalized_cutting_force,
+                                       make_cutting_force_law)
 
 CONFIG = ProcessConfig(plunge_coefficient=50.0)
 

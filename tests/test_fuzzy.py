@@ -1,18 +1,14 @@
-"""Tests of deburr_drake.fuzzy: eqs. (24)-(35) of Hsu & Fu, corrections R1, R4, R8."""
+"""Tests of deburr_drake.math.fuzzy: eqs. (24)-(35) of Hsu & Fu, corrections R1, R4, R8."""
 
 import math
 
 import numpy as np
 import pytest
 
-from deburr_drake.fuzzy import (
-    RuleBase,
-    active_indices,
-    bspline_membership,
-    bspline_membership_derivative,
-    dead_zone,
-    default_dead_zone_half_width,
-)
+from deburr_drake.math.fuzzy import (RuleBase, active_indices,
+                                     bspline_membership,
+                                     bspline_membership_derivative, dead_zone,
+                                     default_dead_zone_half_width)
 
 ORDERS = [0, 1, 2, 3]
 

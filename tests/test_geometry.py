@@ -1,11 +1,12 @@
-"""Tests of deburr_drake.geometry (Sec. II eq. 2, corrections R5, R6)."""
+"""Tests of deburr_drake.math.geometry (Sec. II eq. 2, corrections R5, R6)."""
 
 import math
 
 import numpy as np
 import pytest
 
-from deburr_drake.geometry import CircularContour, Contour, StraightContour
+from deburr_drake.math.geometry import (CircularContour, Contour,
+                                        StraightContour)
 
 C = np.array([0.5, -0.2, 0.3])
 R = 0.05

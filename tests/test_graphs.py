@@ -5,8 +5,8 @@ import shutil
 
 import pytest
 
-from deburr_drake import graphs
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.runs import graphs
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
 
 

@@ -11,11 +11,11 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
 from deburr_drake import cli
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import ConfigError, load_scenario
-from deburr_drake.guards import GuardLimits, SafetyGuards
-from deburr_drake.layout import CHAMFER_STATE
-from deburr_drake.simulation import simulate
+from deburr_drake.cell.guards import GuardLimits, SafetyGuards
+from deburr_drake.control.layout import CHAMFER_STATE
+from deburr_drake.runs.simulation import simulate
 
 LIMITS = GuardLimits(
     joint_names=["a", "b"], effort_limits=np.array([10.0, np.inf]),

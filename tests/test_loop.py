@@ -9,8 +9,9 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
 import deburr_drake as dd
-from deburr_drake.loop import DeburringController, add_deburring_controller
-from deburr_drake.models import POINT_MASS_URL, make_kinematic_model
+from deburr_drake.control.loop import (DeburringController,
+                                       add_deburring_controller)
+from deburr_drake.cell.models import POINT_MASS_URL, make_kinematic_model
 
 LOOP_SYSTEMS = ("chamfer_observer", "command_generator", "first_order_hold",
                 "contact_estimator", "controller")
@@ -64,8 +65,8 @@ def test_every_public_name_resolves():
 
 
 def test_importing_the_package_imports_no_drake():
-    code = ("import sys, deburr_drake, deburr_drake.fuzzy, "
-            "deburr_drake.geometry, deburr_drake.metrics; "
+    code = ("import sys, deburr_drake, deburr_drake.math.fuzzy, "
+            "deburr_drake.math.geometry, deburr_drake.math.metrics; "
             "print('pydrake' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True,
                          text=True, check=True)

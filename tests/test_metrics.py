@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from deburr_drake import metrics
+from deburr_drake.math import metrics
 
 
 def test_time_constant_of_an_exponential():
@@ -37,7 +37,7 @@ def test_total_variation_rms_and_speed():
 
 
 def test_surface_roughness_of_a_plane_a_staircase_and_a_parabola():
-    from deburr_drake.metrics import surface_roughness
+    from deburr_drake.math.metrics import surface_roughness
     plane = surface_roughness(lambda y, s: 2.0 + 3.0 * y - 5.0 * s,
                               (0.3, 0.5), (-1.0, 1.0))
     assert plane == pytest.approx(0.0, abs=1e-12)
@@ -57,8 +57,8 @@ def test_the_second_order_surface_is_smoother_than_the_zeroth():
     """The same rule weights (a ramp in s) under m = 0 and m = 2: the
     zeroth-order surface is a staircase, the second-order one nearly the
     plane through it."""
-    from deburr_drake.fuzzy import RuleBase
-    from deburr_drake.metrics import surface_roughness
+    from deburr_drake.math.fuzzy import RuleBase
+    from deburr_drake.math.metrics import surface_roughness
     rough = {}
     for m in (0, 2):
         rb = RuleBase(m=m, upsilon=5, delta0=0.2, deltak=0.004)

@@ -5,10 +5,10 @@ established and the chamfer depth converges. The full pass is
 import numpy as np
 import pytest
 
-from deburr_drake import metrics
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.math import metrics
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
-from deburr_drake.simulation import simulate
+from deburr_drake.runs.simulation import simulate
 
 pytestmark = pytest.mark.slow
 

@@ -3,9 +3,11 @@
 import numpy as np
 import pytest
 
-from deburr_drake.part import (
-    CALIBRATED_FORCE_AT_HALF_MM, CALIBRATED_HYDROELASTIC_MODULUS, RingContactProbe, add_cartesian_tool,
-    measure_normal_force, register_compliant_ring)
+from deburr_drake.cell.part import (CALIBRATED_FORCE_AT_HALF_MM,
+                                    CALIBRATED_HYDROELASTIC_MODULUS,
+                                    RingContactProbe, add_cartesian_tool,
+                                    measure_normal_force,
+                                    register_compliant_ring)
 
 E = CALIBRATED_HYDROELASTIC_MODULUS
 

@@ -7,10 +7,10 @@ import subprocess
 import numpy as np
 import pytest
 
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
-from deburr_drake.replay import write_recording
-from deburr_drake.simulation import simulate
+from deburr_drake.runs.replay import write_recording
+from deburr_drake.runs.simulation import simulate
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 

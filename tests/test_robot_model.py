@@ -1,4 +1,4 @@
-"""Bring your own robot (deburr_drake.robot): the shipped 6-DOF arm
+"""Bring your own robot (deburr_drake.cell.robot): the shipped 6-DOF arm
 (models/arm6.sdf) and its spindle, the one-line errors of a model the cell
 cannot use, a user's model file outside the package, and a short closed
 loop of the paper_6dof scenario."""
@@ -11,13 +11,15 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from deburr_drake import metrics
-from deburr_drake.cell import check_part_in_reach, make_deburring_diagram
+from deburr_drake.math import metrics
+from deburr_drake.cell.reach import check_part_in_reach
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import ConfigError, RobotConfig, load_scenario, scenario_path
-from deburr_drake.models import models_dir
-from deburr_drake.robot import check_robot, loop_numbers, make_robot_model, robot_joints
-from deburr_drake.layout import CHAMFER_STATE
-from deburr_drake.simulation import make_simulator, simulate
+from deburr_drake.cell.models import models_dir
+from deburr_drake.cell.robot import (check_robot, loop_numbers,
+                                     make_robot_model, robot_joints)
+from deburr_drake.control.layout import CHAMFER_STATE
+from deburr_drake.runs.simulation import make_simulator, simulate
 
 ARM6_JOINTS = ("a1", "a2", "a3", "a4", "a5", "a6")
 

@@ -12,10 +12,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from deburr_drake import cli, report
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake import cli
+from deburr_drake.runs import report
+from deburr_drake.runs.pass_metrics import pass_metrics
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
-from deburr_drake.simulation import simulate
+from deburr_drake.runs.simulation import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -128,7 +130,7 @@ def test_an_exception_during_the_run_keeps_the_logs(point_mass, message,
     assert message in log.stop_detail
     assert log.stop_time == pytest.approx(0.1, abs=0.01)
     assert len(log["chamfer"]["t"]) > 10
-    values = report.pass_metrics(log)
+    values = pass_metrics(log)
     summary = report.run_summary(log, values)
     json.dumps(summary, allow_nan=False)
     assert summary["stop_reason"] == reason

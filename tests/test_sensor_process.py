@@ -9,14 +9,14 @@ from pydrake.multibody.plant import (AddMultibodyPlant,
                                      MultibodyPlantConfig)
 from pydrake.systems.framework import DiagramBuilder
 
-from deburr_drake.arm import ARM_URL
+from deburr_drake.cell.arm import ARM_URL
 from deburr_drake.config import ProcessConfig, SensorConfig
-from deburr_drake.geometry import CircularContour
-from deburr_drake.kinematics import ToolPoint
-from deburr_drake.models import make_kinematic_model
-from deburr_drake.part import add_cartesian_tool, add_tool_robot
-from deburr_drake.process import PROCESS_STATE, cutting_force
-from deburr_drake.sensor import ForceSensor
+from deburr_drake.math.geometry import CircularContour
+from deburr_drake.control.kinematics import ToolPoint
+from deburr_drake.cell.models import make_kinematic_model
+from deburr_drake.cell.part import add_cartesian_tool, add_tool_robot
+from deburr_drake.cell.process import PROCESS_STATE, cutting_force
+from deburr_drake.cell.sensor import ForceSensor
 
 CONTOUR = CircularContour([0.0, 0.0, 0.048], 0.027)
 
@@ -157,8 +157,8 @@ def test_force_applied_through_the_joints_is_read_as_on_the_tool():
 
 @pytest.mark.parametrize("closed", [True, False])
 def test_finish_bins_near_covers_every_bin_within_the_radius(closed):
-    from deburr_drake.metrics import arc_distance
-    from deburr_drake.process import FinishBins
+    from deburr_drake.math.metrics import arc_distance
+    from deburr_drake.cell.process import FinishBins
     length, radius = 0.1696, 0.003
     bins = FinishBins(length, 2e-4)
     for s in np.r_[np.linspace(0.0, length, 97, endpoint=False),

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from deburr_drake.cell import LOGGED, make_deburring_diagram
+from deburr_drake.cell.diagram import LOGGED, make_deburring_diagram
 from deburr_drake.config import load_scenario
-from deburr_drake.simulation import logger_names, simulate
+from deburr_drake.runs.simulation import logger_names, simulate
 
 
 def test_extra_logs_come_back_by_name():

@@ -15,7 +15,7 @@ import pytest
 
 from deburr_drake import cli, sweep
 from deburr_drake.config import ConfigError
-from deburr_drake.report import TRANSIENT
+from deburr_drake.runs.pass_metrics import TRANSIENT
 
 # Two runs of 0.4 s of the point mass: one as given, one whose tool-force
 # guard trips at contact.

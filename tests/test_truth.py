@@ -6,11 +6,11 @@ run."""
 import numpy as np
 import pytest
 
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import ProcessConfig, load_scenario
-from deburr_drake.geometry import CircularContour, StraightContour
-from deburr_drake.process import cutting_force, material_overlap
-from deburr_drake.simulation import simulate
+from deburr_drake.math.geometry import CircularContour, StraightContour
+from deburr_drake.cell.process import cutting_force, material_overlap
+from deburr_drake.runs.simulation import simulate
 
 R = 0.003  # m, cutter radius
 LINE = StraightContour([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0],
@@ -70,7 +70,7 @@ guards: {joint_torque_fraction: 1000.0}
 
 
 def test_the_believed_part_is_the_real_one_moved_turned_and_resized():
-    from deburr_drake.cell import believed_contour, make_contour
+    from deburr_drake.cell.edge import believed_contour, make_contour
     real = load_scenario("paper")
     assert believed_contour(real).radius == make_contour(real).radius
     wrong = load_scenario("paper", text="part_error: {offset: [0.001, 0.0, "
@@ -95,7 +95,7 @@ def test_the_metrics_measure_depth_on_the_real_part():
     late = log["chamfer"]["t"] > 3.0
     np.testing.assert_allclose(log["chamfer"]["delta"][late], 5e-4,
                                atol=3e-5)
-    from deburr_drake import report
-    values = report.pass_metrics(log, only_cut=True)
+    from deburr_drake.runs.pass_metrics import pass_metrics
+    values = pass_metrics(log, only_cut=True)
     assert values["chamfer_depth_mean_error_mm"] == pytest.approx(0.3,
                                                                   abs=0.03)

@@ -5,8 +5,10 @@ import collections
 import numpy as np
 import pytest
 
-from deburr_drake.tube_mesh import (
-    make_ring_volume_mesh, polygonal_ring_volume, ring_mesh_path, tet_volumes, write_vtk)
+from deburr_drake.cell.tube_mesh import (make_ring_volume_mesh,
+                                         polygonal_ring_volume,
+                                         ring_mesh_path, tet_volumes,
+                                         write_vtk)
 
 CASES = [
     (0.030, 0.035, 0.044, 0.050, 720, 2, 2),
@@ -114,7 +116,8 @@ def test_drake_reads_mesh_without_refinement(tmp_path):
 
 
 def test_surface_obj_closed_outward(tmp_path):
-    from deburr_drake.tube_mesh import make_ring_surface_mesh, ring_surface_path
+    from deburr_drake.cell.tube_mesh import (make_ring_surface_mesh,
+                                             ring_surface_path)
     args = CASES[1][:5]
     v, q = make_ring_surface_mesh(*args)
     tris = np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])

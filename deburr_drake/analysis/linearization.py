@@ -34,8 +34,8 @@ from pydrake.systems.framework import Context, Diagram
 from deburr_drake.analysis.operating_point import (OperatingPoint,
                                                    frozen_scenario,
                                                    transfer_state)
-from deburr_drake.cell import make_deburring_diagram
-from deburr_drake.layout import CHAMFER_STATE
+from deburr_drake.cell.diagram import make_deburring_diagram
+from deburr_drake.control.layout import CHAMFER_STATE
 
 __all__ = ["numerical_jacobian", "continuous_state_slices",
            "ContinuousLinearization", "linearize_closed_loop",

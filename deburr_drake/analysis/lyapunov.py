@@ -20,10 +20,10 @@ import numpy as np
 from pydrake.common import RandomGenerator
 from pydrake.multibody.tree import JacobianWrtVariable
 
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import Scenario
-from deburr_drake.layout import CONTROLLER_DIAGNOSTICS
-from deburr_drake.simulation import make_simulator
+from deburr_drake.control.layout import CONTROLLER_DIAGNOSTICS
+from deburr_drake.runs.simulation import make_simulator
 
 __all__ = ["LyapunovTrace", "lyapunov_trace", "plot_lyapunov"]
 
@@ -45,7 +45,7 @@ def lyapunov_trace(scenario: Scenario, *, duration: float = 5.0,
     fraction of samples after ``settle`` s where dV/dt > 0 while some
     fuzzy |s_k| is outside its dead zone (where (35) adapts and the proofs
     make V decrease)."""
-    from deburr_drake.demo import contact_truth
+    from deburr_drake.cell.truth import contact_truth
     truth = contact_truth(scenario)
     c_true = np.array([truth.c0, truth.secant_stiffness, truth.c2])
     r_c = np.asarray(scenario.estimator.gains, float)

@@ -124,7 +124,7 @@ def fast_rho(op: OperatingPoint, fields: Sequence[str], *,
     from deburr_drake.analysis.sampled import (cell_map_entries,
                                                period_map, simulator_config,
                                                spectral_radius)
-    from deburr_drake.cell import make_deburring_diagram
+    from deburr_drake.cell.diagram import make_deburring_diagram
     coords = [_affine_coordinate(op.scenario, f) for f in fields]
     base = frozen_scenario(op.scenario)
     if any(c is None for c in coords) or base.simulation.error_control:

@@ -43,12 +43,12 @@ import numpy as np
 from pydrake.common import RandomGenerator
 from pydrake.systems.framework import Context, Diagram
 
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import (ConfigError, Scenario,  # noqa: F401
                                  get_field, set_field)
-from deburr_drake.layout import CHAMFER_STATE
-from deburr_drake.process import PROCESS_STATE
-from deburr_drake.simulation import make_simulator
+from deburr_drake.control.layout import CHAMFER_STATE
+from deburr_drake.cell.process import PROCESS_STATE
+from deburr_drake.runs.simulation import make_simulator
 
 __all__ = ["OperatingPoint", "find_operating_point", "frozen_scenario",
            "transfer_state", "get_field", "set_field",

@@ -55,7 +55,7 @@ def analyze(scenario: Scenario, *, at: float = None,
     given reaches steady cutting, then the loop is analysed with them
     (as the limits of :mod:`deburr_drake.analysis.validation` are)."""
     overrides = dict(overrides or {})
-    from deburr_drake.demo import contact_truth
+    from deburr_drake.cell.truth import contact_truth
     say = progress or (lambda message: None)
     timings = {}
     t0 = time.perf_counter()

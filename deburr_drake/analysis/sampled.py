@@ -32,7 +32,7 @@ from pydrake.systems.framework import Context, Diagram
 from deburr_drake.analysis.operating_point import (OperatingPoint,
                                                    frozen_scenario,
                                                    transfer_state)
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import Scenario
 
 __all__ = ["StateEntry", "period_map", "spectral_radius", "SampledLoop",
@@ -215,7 +215,7 @@ def sampled_loop(op: OperatingPoint, *, modify=None, outer_loop=False,
     ``modify(diagram, context)`` may change the operating point's state
     first (e.g. the fuzzy surface, see
     :func:`deburr_drake.analysis.add_fuzzy_slope`)."""
-    from deburr_drake.layout import CHAMFER_STATE
+    from deburr_drake.control.layout import CHAMFER_STATE
     scenario = frozen_scenario(op.scenario, **overrides)
     period = scenario.controller.control_period
     if not (period > 0 and abs(scenario.sensor.sample_period - period) < 1e-12

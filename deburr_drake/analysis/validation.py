@@ -47,8 +47,8 @@ from deburr_drake.analysis.operating_point import (OperatingPoint,
                                                    frozen_scenario,
                                                    transfer_state)
 from deburr_drake.analysis.sampled import sampled_loop
-from deburr_drake.cell import make_deburring_diagram
-from deburr_drake.simulation import make_simulator
+from deburr_drake.cell.diagram import make_deburring_diagram
+from deburr_drake.runs.simulation import make_simulator
 
 __all__ = ["Parameter", "PARAMETERS", "add_fuzzy_slope",
            "baseline_oscillation",
@@ -155,7 +155,7 @@ def _run(op, scenario, modify, duration, kick):
     """Joint velocities once per period over ``duration`` from the
     operating point (kicked by ``kick`` times the module's kick), or None
     when the run diverges."""
-    from deburr_drake.layout import CHAMFER_STATE
+    from deburr_drake.control.layout import CHAMFER_STATE
     diagram = make_deburring_diagram(scenario=scenario)
     plant = diagram.GetSubsystemByName("plant")
     sensor = diagram.GetSubsystemByName("force_sensor")

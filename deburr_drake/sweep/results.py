@@ -20,7 +20,7 @@ __all__ = ["METRICS", "wilson_interval", "association", "badness",
            "plot_metrics", "plot_failures", "write_results"]
 
 
-#: What a run can report (report.pass_metrics, plus the sweep's own
+#: What a run can report (runs.pass_metrics, plus the sweep's own
 #: ``guard_tripped`` and ``run_failed``: 1.0 or 0.0).
 METRICS = (
     "contact_time_s", "chamfer_depth_mean_error_mm",
@@ -178,7 +178,7 @@ def summarize(study, rows: List[dict], rules, metrics: List[str],
     n = len(rows)
     summary = {"study": study.name, "duration_s": study.duration,
                "metric_window": "from 2 s after the first contact "
-                                "(report.TRANSIENT) to the run's end",
+                                "(pass_metrics.TRANSIENT) to the run's end",
                "runs_requested": runs_total, "runs_finished": n,
                "stop_reasons": {}, "rules": [], "metrics": {}}
     for row in rows:

@@ -25,7 +25,7 @@ __all__ = ["run_scenario", "run_sweep", "result_path", "read_result",
 
 #: Stop reasons of a run that ended as planned.
 NORMAL_STOPS = ("duration", "pass_complete")
-#: Metrics that need the plant's force at delta* (demo.contact_truth).
+#: Metrics that need the plant's force at delta* (cell.truth.contact_truth).
 _TRUTH_METRICS = ("true_force_at_desired_depth_N",
                   "force_prediction_error_rel")
 
@@ -82,9 +82,11 @@ def run_scenario(scenario_text: str, run_dir: str, key: str, *,
     t_start, cpu_start = time.perf_counter(), time.process_time()
     timing = {}
     try:
-        from deburr_drake import report
-        from deburr_drake.cell import make_deburring_diagram
-        from deburr_drake.simulation import simulate
+        from deburr_drake.runs import report
+        from deburr_drake.runs.pass_metrics import (
+            force_at_desired_depth, pass_metrics)
+        from deburr_drake.cell.diagram import make_deburring_diagram
+        from deburr_drake.runs.simulation import simulate
         from deburr_drake.sweep.study import scenario_from_text
         scenario = scenario_from_text(scenario_text)
         (out / "scenario.yaml").write_text(scenario_text)
@@ -93,9 +95,9 @@ def run_scenario(scenario_text: str, run_dir: str, key: str, *,
         timing["build_s"] = time.perf_counter() - t
         log = simulate(diagram, scenario)
         timing["simulate_s"] = log.wall_time
-        truth = report.force_at_desired_depth(scenario) if any(
+        truth = force_at_desired_depth(scenario) if any(
             m in _TRUTH_METRICS for m in metrics) else None
-        values = report.pass_metrics(log, true_force_at_desired_depth=truth,
+        values = pass_metrics(log, true_force_at_desired_depth=truth,
                                      only_cut=not log.completed_pass)
         if keep_logs:
             report.write_run(log, out, values)

@@ -311,7 +311,7 @@ def check_reach(study: Study, runs: List[RunSpec]):
     """ConfigError for the first run whose part the arm cannot reach (the
     inverse kinematics along the edge: about 0.1 s a run, so only for the
     runs about to start)."""
-    from deburr_drake.cell import check_part_in_reach
+    from deburr_drake.cell.reach import check_part_in_reach
     for run in runs:
         try:
             check_part_in_reach(scenario_from_text(run.scenario_text))

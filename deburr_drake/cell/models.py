@@ -20,7 +20,7 @@ def models_dir() -> Path:
     """The ``models/`` directory: $DEBURR_DRAKE_MODELS, else the one beside
     the package (source checkout or editable install)."""
     env = os.environ.get("DEBURR_DRAKE_MODELS")
-    path = Path(env) if env else Path(__file__).resolve().parent.parent / "models"
+    path = Path(env) if env else Path(__file__).resolve().parents[2] / "models"
     if not (path / "package.xml").is_file():
         raise FileNotFoundError(
             f"deburr_drake models not found at {path} (no package.xml): "

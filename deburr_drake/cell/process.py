@@ -16,10 +16,10 @@ from pydrake.systems.primitives import (Demultiplexer, Gain,
                                         Saturation)
 
 from deburr_drake.config import BurrConfig, ProcessConfig
-from deburr_drake.geometry import Contour
-from deburr_drake.kinematics import ToolPoint
-from deburr_drake.layout import VectorLayout
-from deburr_drake.metrics import arc_distance
+from deburr_drake.math.geometry import Contour
+from deburr_drake.control.kinematics import ToolPoint
+from deburr_drake.control.layout import VectorLayout
+from deburr_drake.math.metrics import arc_distance
 
 __all__ = ["CuttingProcess", "PROCESS_STATE", "cutting_force",
            "force_law_terms", "generalized_cutting_force",

@@ -9,7 +9,7 @@ vertical (tool +z = world +z), which fixes the wrist pitch; wrist_roll turns abo
 the tool axis and does not move the tip.
 
 `solve_tool_pose`, `closest_tool_position` and `check_reach` work on any arm of n >= 5
-joints (deburr_drake.robot loads other models): the tool axis vertical, the rest of
+joints (deburr_drake.cell.robot loads other models): the tool axis vertical, the rest of
 the posture (for n = 6 the tool's rotation about its axis) the one nearest the
 initial guess.
 """
@@ -22,7 +22,7 @@ import numpy as np
 from pydrake.multibody.inverse_kinematics import InverseKinematics
 from pydrake.solvers import SnoptSolver, Solve, SolverOptions
 
-from deburr_drake.part import add_tool_robot
+from deburr_drake.cell.part import add_tool_robot
 
 __all__ = ["ARM_URL", "ARM_MODEL_NAME", "ARM_JOINTS", "DEFAULT_PART_POSITION", "Q_READY",
            "add_arm", "solve_tool_pose", "default_q_guess", "closest_tool_position", "check_reach"]

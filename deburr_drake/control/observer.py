@@ -3,7 +3,7 @@ measured robot state, the part geometry and the force sensor (Sec. II).
 
 Use: ``ChamferObserver(plant, "tool_tip", contour,
 min_tangential_speed=scenario.command.min_tangential_speed)``; its
-``chamfer_state`` (layout ``deburr_drake.layout.CHAMFER_STATE``) feeds
+``chamfer_state`` (layout ``deburr_drake.control.layout.CHAMFER_STATE``) feeds
 the command generator, the estimator and the controller."""
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
-from deburr_drake.geometry import Contour, contour_at, direction_of_motion
-from deburr_drake.kinematics import ToolPoint
-from deburr_drake.layout import CHAMFER_STATE
+from deburr_drake.math.geometry import Contour, contour_at, direction_of_motion
+from deburr_drake.control.kinematics import ToolPoint
+from deburr_drake.control.layout import CHAMFER_STATE
 
 __all__ = ["ChamferObserver", "chamfer_quantities", "chamfer_kinematics"]
 

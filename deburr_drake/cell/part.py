@@ -18,8 +18,8 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, ContactModel, CoulombFriction
 from pydrake.systems.framework import DiagramBuilder
 
-from deburr_drake.models import POINT_MASS_URL, make_parser
-from deburr_drake.tube_mesh import ring_mesh_path, ring_surface_path
+from deburr_drake.cell.models import POINT_MASS_URL, make_parser
+from deburr_drake.cell.tube_mesh import ring_mesh_path, ring_surface_path
 
 __all__ = [
     "CALIBRATED_HYDROELASTIC_MODULUS", "CALIBRATED_FORCE_AT_HALF_MM",

@@ -2,54 +2,28 @@
 issue asks for (depth convergence and eq. (8)'s time constant, estimator
 convergence, feedrate, dead zone, NaN).
 
-Also :func:`run` (build a scenario's cell and simulate it in one call) and
-:func:`contact_truth` (the plant's normal-force law near the desired depth,
-what an ideal estimator would report)."""
+Also :func:`run` (build a scenario's cell and simulate it in one call). The
+plant's contact truth it compares with is
+:func:`deburr_drake.cell.truth.contact_truth`."""
 
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass
 from typing import Dict
 
 import numpy as np
 
-from deburr_drake import metrics
+from deburr_drake.cell.diagram import make_deburring_diagram
+from deburr_drake.cell.truth import ContactTruth
 from deburr_drake.config import Scenario
-from deburr_drake.controller import make_rule_bases
-from deburr_drake.cell import contact_normal_force
-from deburr_drake.simulation import RunLog, simulate
-from deburr_drake.cell import make_deburring_diagram
+from deburr_drake.control.controller import make_rule_bases
+from deburr_drake.math import metrics
+from deburr_drake.runs.simulation import RunLog, simulate
 
-__all__ = ["ContactTruth", "contact_truth", "frozen_adaptation",
-           "run", "summarize", "SETTLE_TIME"]
+__all__ = ["frozen_adaptation", "run", "summarize", "SETTLE_TIME"]
 
 #: Samples before this time (s) are the transient.
 SETTLE_TIME = 2.0
-
-
-@dataclass
-class ContactTruth:
-    """The plant's normal-force law near the desired depth, measured on
-    Drake's hydroelastic contact plus the process threshold c0 (N, N/m,
-    N s/m); what an ideal estimator would report."""
-
-    force_at_desired_depth: float  # N, ||f_n|| at delta*
-    c0: float  # N
-    secant_stiffness: float  # N/m, (F(delta*) - c0) / delta*
-    local_stiffness: float  # N/m, dF/d(delta) at delta*
-    c2: float  # N s/m, Hunt-Crossley: d * F_hydro(delta*)
-
-
-def contact_truth(scenario: Scenario, *, step: float = 2e-5) -> ContactTruth:
-    tube, d = scenario.tube, scenario.task.desired_depth
-    forces = contact_normal_force(scenario, [d - step, d, d + step])
-    c0 = scenario.process.contact_threshold_force
-    return ContactTruth(
-        force_at_desired_depth=float(forces[1] + c0), c0=c0,
-        secant_stiffness=float(forces[1] / d),
-        local_stiffness=float((forces[2] - forces[0]) / (2 * step)),
-        c2=float(tube.hunt_crossley_dissipation * forces[1]))
 
 
 def frozen_adaptation(scenario: Scenario, truth: ContactTruth) -> Scenario:

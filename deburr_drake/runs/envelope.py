@@ -22,7 +22,7 @@ engagement), the desired depth delta*, a burr of cross-section A_b
   within 0.05 mm RMS of delta*.
 
 The force and speed bounds hold from the end of the contact transient
-(``report.TRANSIENT`` after first contact, as every pass metric), when the
+(``pass_metrics.TRANSIENT`` after first contact, as every pass metric), when the
 cutter is still ``LEAD_TIME`` of feed short of the burr. Before it the
 depth is still growing and the feed law runs fast on the shallow cut (at
 15 N the tool reached 7.2 mm/s at 0.5 s, depth 0.27 mm): a start-up
@@ -38,8 +38,8 @@ from typing import Dict, Iterable, List, Optional
 
 import numpy as np
 
-from deburr_drake import metrics
-from deburr_drake.report import TRANSIENT
+from deburr_drake.math import metrics
+from deburr_drake.runs.pass_metrics import TRANSIENT
 
 __all__ = ["BurrCell", "burr_bounds", "burr_metrics", "burr_scenario",
            "run_burr_cell", "GRID_HEIGHTS", "GRID_LENGTHS", "GRID_FORCES",
@@ -111,7 +111,7 @@ def burr_scenario(base, cell: BurrCell, *, lead_time: float = LEAD_TIME,
     cutter's front reaches it ``lead_time`` s of off-burr feed after the
     contact transient, the desired force of ``cell``, and a stop once the
     command is 1 mm past the burr (or at ``max_duration`` s)."""
-    from deburr_drake.cell import make_contour
+    from deburr_drake.cell.edge import make_contour
     from deburr_drake.config import BurrConfig
     sc = copy.deepcopy(base)
     sc.task.desired_chamfering_force = cell.force
@@ -189,9 +189,9 @@ def run_burr_cell(cell: BurrCell, base_name: str = "paper",
                   base_text: Optional[str] = None) -> Dict[str, object]:
     """Simulates one cell (in this process) and returns its numbers, the
     bounds and the run's simulated and wall time."""
-    from deburr_drake.cell import make_deburring_diagram
+    from deburr_drake.cell.diagram import make_deburring_diagram
     from deburr_drake.config import load_scenario
-    from deburr_drake.simulation import simulate
+    from deburr_drake.runs.simulation import simulate
     base = load_scenario(base_name, text=base_text)
     sc = burr_scenario(base, cell)
     log = simulate(make_deburring_diagram(scenario=sc), sc,

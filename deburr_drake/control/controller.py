@@ -3,7 +3,7 @@ controller, eqs. (7), (9)-(11), (30), (35)-(37) with R4, R8, R9, R10.
 
 Use: ``HybridController(plant, "tool_tip", scenario.controller)`` is an
 ordinary LeafSystem (float and AutoDiffXd); its input and output ports are
-in the class docstring. :func:`deburr_drake.loop.add_deburring_controller`
+in the class docstring. :func:`deburr_drake.control.loop.add_deburring_controller`
 adds it together with the systems that feed it."""
 
 from __future__ import annotations
@@ -16,10 +16,10 @@ from pydrake.multibody.tree import (BodyIndex, JacobianWrtVariable,
 from pydrake.systems.framework import BasicVector_, LeafSystem_, ValueProducer
 from pydrake.systems.scalar_conversion import TemplateSystem
 
-from deburr_drake.baselines.laws import impedance_force, robust_term
+from deburr_drake.control.laws import impedance_force, robust_term
 from deburr_drake.config import ControllerConfig
-from deburr_drake.fuzzy import RuleBase
-from deburr_drake.layout import CHAMFER_STATE, CONTROLLER_DIAGNOSTICS
+from deburr_drake.math.fuzzy import RuleBase
+from deburr_drake.control.layout import CHAMFER_STATE, CONTROLLER_DIAGNOSTICS
 
 __all__ = ["HybridController", "HybridController_", "make_rule_bases",
            "saturation"]

@@ -1,11 +1,11 @@
 """Running a deburring diagram and collecting its logs as named arrays.
 
 Use: ``log = simulate(diagram, scenario, duration=3.0)`` runs a diagram from
-:func:`deburr_drake.cell.make_deburring_diagram` and returns a
+:func:`deburr_drake.cell.diagram.make_deburring_diagram` and returns a
 :class:`RunLog`: ``log["chamfer"]["f_n"]`` is the array of one named block
 of one logger (``log["chamfer"]["t"]`` its sample times; the loggers are
-``deburr_drake.cell.LOGGED``, the blocks the layouts of
-``deburr_drake.layout``), ``log.stop_reason`` says how the run ended.
+``deburr_drake.cell.diagram.LOGGED``, the blocks the layouts of
+``deburr_drake.control.layout``), ``log.stop_reason`` says how the run ended.
 :func:`make_simulator` gives the scenario's configured ``Simulator`` for a
 diagram of your own."""
 
@@ -24,15 +24,15 @@ from pydrake.systems.framework import Diagram, EventStatus
 from pydrake.systems.primitives import VectorLogSink
 
 from deburr_drake.config import Scenario
-from deburr_drake.layout import (CHAMFER_STATE, COMMAND_STATE,
-                                 CONTROLLER_DIAGNOSTICS)
-from deburr_drake.process import PROCESS_STATE
+from deburr_drake.control.layout import (CHAMFER_STATE, COMMAND_STATE,
+                                         CONTROLLER_DIAGNOSTICS)
+from deburr_drake.cell.process import PROCESS_STATE
 
 __all__ = ["RunLog", "simulate", "make_simulator", "logger_names",
            "STOP_REASONS"]
 
 #: Why a run ended (``RunLog.stop_reason``). ``guard:<name>`` names the
-#: guard that tripped (deburr_drake.guards).
+#: guard that tripped (deburr_drake.cell.guards).
 STOP_REASONS = ("pass_complete", "duration", "interrupted", "guard:<name>",
                 "nan", "error")
 
@@ -112,7 +112,7 @@ def _final_state(diagram, context) -> Dict[str, Dict[str, np.ndarray]]:
 
 def logger_names(diagram: Diagram):
     """The names ``<name>`` of the diagram's loggers ``log_<name>``: those of
-    ``deburr_drake.cell.LOGGED`` and any ``extra_logs``."""
+    ``deburr_drake.cell.diagram.LOGGED`` and any ``extra_logs``."""
     return [s.get_name()[len("log_"):] for s in diagram.GetSystems()
             if s.get_name().startswith("log_")
             and isinstance(s, VectorLogSink)]
@@ -133,7 +133,7 @@ def _collect(diagram, context, loggers) -> Dict[str, Dict[str, np.ndarray]]:
 def _stop_of(status, diagram) -> tuple:
     """(stop_reason, detail) of a simulator status that reached a
     termination condition requested by a system's event or the monitor."""
-    from deburr_drake.guards import GUARDS_SYSTEM
+    from deburr_drake.cell.guards import GUARDS_SYSTEM
     system = status.system()
     name = system.get_name() if system is not None else ""
     message = status.message()

@@ -10,7 +10,7 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from deburr_drake.config import EstimatorConfig, TaskConfig
-from deburr_drake.layout import CHAMFER_STATE
+from deburr_drake.control.layout import CHAMFER_STATE
 
 __all__ = ["ContactParameterEstimator", "estimator_rate"]
 

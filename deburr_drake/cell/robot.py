@@ -22,7 +22,7 @@ The tool is mounted one of two ways:
   +z from the tip, as on arm5).
 
 The controller maps the task-space law through the tool frame's 6 x n
-Jacobian, tau = J_v^T f + J_w^T m (deburr_drake.controller), which needs
+Jacobian, tau = J_v^T f + J_w^T m (deburr_drake.control.controller), which needs
 nothing of the arm's kinematics: with 5 joints the tool axis is held
 vertical and the rotation about it (two orientation axes; the third is not
 in J_w's range), with 6 the full orientation, with more also the start
@@ -36,7 +36,7 @@ model masses are ``controller.model_mass_scale`` times the file's.
 :func:`check_robot` turns every problem with a model (missing file or
 frame, too few or too many actuated joints, a friction list or IK seed of
 the wrong length) into one ConfigError line naming the field, before
-anything runs; ``deburr_drake.cell.check_part_in_reach`` adds the part out
+anything runs; ``deburr_drake.cell.reach.check_part_in_reach`` adds the part out
 of reach.
 """
 
@@ -54,9 +54,9 @@ from pydrake.multibody.tree import (FixedOffsetFrame, FrameIndex,
                                     JacobianWrtVariable, JointIndex,
                                     SpatialInertia, UnitInertia, WeldJoint)
 
-from deburr_drake.arm import ARM_URL, default_q_guess
+from deburr_drake.cell.arm import ARM_URL, default_q_guess
 from deburr_drake.config import ConfigError, RobotConfig
-from deburr_drake.models import POINT_MASS_URL, make_parser
+from deburr_drake.cell.models import POINT_MASS_URL, make_parser
 
 __all__ = ["ARM6_URL", "SHIPPED_ROBOTS", "MIN_JOINTS",
            "add_robot", "make_robot_model", "check_robot", "robot_joints",
@@ -204,7 +204,7 @@ def add_robot(plant: MultibodyPlant, config: RobotConfig, *,
         _attach_spindle(plant, instance, config)
     frame = tool_frame_of(plant, instance, config)
     if cutter is not None:
-        from deburr_drake.part import register_cutter
+        from deburr_drake.cell.part import register_cutter
         register_cutter(plant, frame.body(),
                         X_BT=frame.GetFixedPoseInBodyFrame(), **cutter)
     return instance
@@ -334,8 +334,8 @@ def start_pose(scenario):
     """The arm's joint angles (rad) at the start of the scenario's pass:
     the tool tip at the start of the believed contour, the tool vertical
     (what the cell sets as the plant's default positions)."""
-    from deburr_drake.arm import solve_tool_pose
-    from deburr_drake.cell import believed_contour, start_position
+    from deburr_drake.cell.arm import solve_tool_pose
+    from deburr_drake.cell.edge import believed_contour, start_position
     robot = scenario.robot
     plant = make_robot_model(robot)
     x0 = start_position(scenario, believed_contour(scenario))

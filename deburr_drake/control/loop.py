@@ -21,7 +21,7 @@ plant of their own (``examples/own_plant.py``) calls it the same way::
 
 The systems get the cell's names (``chamfer_observer``,
 ``command_generator``, ``first_order_hold``, ``contact_estimator``,
-``controller``), so :data:`deburr_drake.cell.LOGGED` names their outputs in
+``controller``), so :data:`deburr_drake.cell.diagram.LOGGED` names their outputs in
 a user's diagram too.
 """
 
@@ -33,12 +33,12 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import DiagramBuilder, OutputPort
 
-from deburr_drake.command import CommandGenerator, FirstOrderHold
+from deburr_drake.control.command import CommandGenerator, FirstOrderHold
 from deburr_drake.config import Scenario
-from deburr_drake.controller import HybridController
-from deburr_drake.estimator import ContactParameterEstimator
-from deburr_drake.geometry import Contour
-from deburr_drake.observer import ChamferObserver
+from deburr_drake.control.controller import HybridController
+from deburr_drake.control.estimator import ContactParameterEstimator
+from deburr_drake.math.geometry import Contour
+from deburr_drake.control.observer import ChamferObserver
 
 __all__ = ["DeburringController", "add_deburring_controller"]
 
@@ -82,7 +82,7 @@ def add_deburring_controller(
     it may be the simulated plant itself or a separate copy. ``tool_frame``
     names the frame whose origin is the tool point x_p. ``contour`` is the
     zero-depth path of the tool point along the edge (the part the
-    controller believes in; see :mod:`deburr_drake.geometry`), ``start``
+    controller believes in; see :mod:`deburr_drake.math.geometry`), ``start``
     the tool point where the command starts (m, world; the contour's start
     by default). ``desired_rotation`` (3 x 3) is the tool orientation the
     controller holds (identity by default); ``tool_point``,

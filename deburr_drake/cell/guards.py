@@ -3,7 +3,7 @@ the run at every inner-loop sample and stops the simulation, through
 Drake's event status (``EventStatus.ReachedTermination`` from its periodic
 update, which ``Simulator.AdvanceTo`` returns as its termination
 condition), when one trips. The message names the guard and its values at
-the trip; :func:`deburr_drake.simulation.simulate` turns it into the stop
+the trip; :func:`deburr_drake.runs.simulation.simulate` turns it into the stop
 reason ``guard:<name>``.
 
 Guards (``GuardsConfig``, scenario section ``guards:``):
@@ -34,8 +34,8 @@ from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 from pydrake.systems.primitives import Saturation
 
 from deburr_drake.config import GuardsConfig, Scenario
-from deburr_drake.layout import CHAMFER_STATE
-from deburr_drake.process import PROCESS_STATE
+from deburr_drake.control.layout import CHAMFER_STATE
+from deburr_drake.cell.process import PROCESS_STATE
 
 __all__ = ["GUARDS_SYSTEM", "GUARD_NAMES", "GuardLimits", "SafetyGuards",
            "guard_limits", "add_guards", "effort_limits",

@@ -12,7 +12,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
 from deburr_drake.config import SensorConfig
-from deburr_drake.kinematics import ToolPoint
+from deburr_drake.control.kinematics import ToolPoint
 
 __all__ = ["ForceSensor"]
 

@@ -72,7 +72,7 @@ def smoothness(log, t0: float) -> Dict[str, float]:
     """Torque total variation is in pass_metrics; here the torque's power
     and RMS above HIGH_FREQUENCY Hz after ``t0`` s (the chattering of a
     sampled sign law shows there) and the m = 0 cell crossings of s."""
-    from deburr_drake import metrics
+    from deburr_drake.math import metrics
     act = log["actuation"]
     mask = metrics.window(act["t"], t0)
     power = (metrics.high_frequency_power(act["t"][mask],
@@ -99,16 +99,19 @@ def run_controller(scenario, controller: str, duration: Optional[float],
     scenario's if None) and writes ``out_dir``/logs.npz, metrics.json;
     returns the metrics.json content plus the smoothness metrics and the
     normal force against the plant's true force at delta*."""
-    from deburr_drake import metrics, report
-    from deburr_drake.cell import make_deburring_diagram
-    from deburr_drake.simulation import simulate
+    from deburr_drake.math import metrics
+    from deburr_drake.runs import report
+    from deburr_drake.runs.pass_metrics import (
+        TRANSIENT, force_at_desired_depth, pass_metrics)
+    from deburr_drake.cell.diagram import make_deburring_diagram
+    from deburr_drake.runs.simulation import simulate
     sc = configure(scenario, controller)
     log = simulate(make_deburring_diagram(scenario=sc), sc,
                    duration=duration)
-    truth = report.force_at_desired_depth(sc)
-    values = report.pass_metrics(log, true_force_at_desired_depth=truth,
+    truth = force_at_desired_depth(sc)
+    values = pass_metrics(log, true_force_at_desired_depth=truth,
                                  only_cut=not log.completed_pass)
-    t0 = values.get("contact_time_s", np.nan) + report.TRANSIENT
+    t0 = values.get("contact_time_s", np.nan) + TRANSIENT
     for key, value in smoothness(log, t0).items():
         values[key] = value
     ch = log["chamfer"]

@@ -12,8 +12,8 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from deburr_drake.config import CommandConfig, ConfigError, TaskConfig
-from deburr_drake.geometry import Contour, contour_at
-from deburr_drake.layout import CHAMFER_STATE, COMMAND_STATE
+from deburr_drake.math.geometry import Contour, contour_at
+from deburr_drake.control.layout import CHAMFER_STATE, COMMAND_STATE
 
 __all__ = ["CommandGenerator", "FirstOrderHold", "feedrate"]
 

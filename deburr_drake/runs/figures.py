@@ -32,7 +32,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from .fuzzy import RuleBase
+from deburr_drake.math.fuzzy import RuleBase
 
 __all__ = ["make_figures", "compare_figures", "FIGURE_NAMES", "COMPARE_NAMES"]
 

@@ -4,13 +4,10 @@ edge coloured as it is chamfered (the burrs disappear as the tool passes).
 
 Use: ``meshcat = Meshcat()``, ``make_deburring_diagram(scenario=s,
 meshcat=meshcat)``, ``meshcat.StartRecording(frames_per_second=10.0)``,
-simulate, then ``write_recording(meshcat, "out/replay.html")``: one
-self-contained HTML file to open in a browser (or an IFrame in a
-notebook)."""
+simulate, then :func:`deburr_drake.runs.replay.write_recording`."""
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Dict
 
 import numpy as np
@@ -21,9 +18,9 @@ from pydrake.multibody.meshcat import (ContactVisualizer,
                                        ContactVisualizerParams)
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 
-from deburr_drake.process import CuttingProcess
+from deburr_drake.cell.process import CuttingProcess
 
-__all__ = ["EdgeVisualizer", "add_meshcat", "write_recording", "UNCUT",
+__all__ = ["EdgeVisualizer", "add_meshcat", "UNCUT",
            "CUT", "BURR"]
 
 UNCUT = Rgba(0.55, 0.55, 0.6, 1.0)
@@ -142,14 +139,3 @@ def add_meshcat(builder: DiagramBuilder, meshcat: Meshcat, *, plant,
                     edge.GetInputPort("finish_depth"))
     builder.Connect(process.GetOutputPort("burr_height"),
                     edge.GetInputPort("burr_height"))
-
-
-def write_recording(meshcat: Meshcat, path) -> Path:
-    """Stops Meshcat's recording and writes it as one self-contained HTML
-    file (three.js and the scene inlined) at ``path``."""
-    meshcat.StopRecording()
-    meshcat.PublishRecording()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(meshcat.StaticHtml())
-    return out

@@ -1,0 +1,105 @@
+"""The part's edge as the scenario configures it (pure numpy): the real
+part's zero-depth path (the plant's truth), the part the controller
+believes in (``part_error``, ``faults.part_step``), the start position and
+points on the edge for drawing."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from deburr_drake.config import Scenario
+from deburr_drake.math.geometry import (CircularContour, Contour,
+                                        StraightContour)
+
+__all__ = ["make_contour", "straight_frame", "believed_scenario",
+           "believed_contour", "believed_contour_step", "start_position",
+           "edge_points"]
+
+
+def straight_frame(scenario: Scenario):
+    """(edge midpoint on the wall face at the top, travel direction,
+    material normal) of a straight edge."""
+    edge = scenario.edge
+    tube = scenario.tube
+    mid = np.array(tube.position, float)
+    mid[2] += tube.height
+    tangent = np.array([np.cos(edge.heading), np.sin(edge.heading), 0.0])
+    normal = np.array([tangent[1], -tangent[0], 0.0])  # material on the right
+    return mid, tangent, normal
+
+
+def make_contour(scenario: Scenario) -> Contour:
+    """The zero-depth path of the tool tip: the part's edge offset by the
+    cutter radius, at the height where the cutter tip runs."""
+    tube, tool, edge = scenario.tube, scenario.tool, scenario.edge
+    if edge.kind == "straight":
+        mid, tangent, normal = straight_frame(scenario)
+        start = (mid - tool.cutter_radius * normal
+                 - 0.5 * edge.length * tangent)
+        start[2] -= tool.engagement
+        return StraightContour(start, tangent, normal, length=edge.length)
+    center = np.array(tube.position, float)
+    center[2] += tube.height - tool.engagement
+    return CircularContour(center, tube.inner_radius - tool.cutter_radius,
+                           start_angle=edge.start_angle,
+                           direction=edge.direction)
+
+
+def believed_scenario(scenario: Scenario) -> Scenario:
+    """The scenario with the part the controller believes in
+    (``part_error`` applied to ``tube`` and ``edge``); the scenario itself
+    when there is no error."""
+    e = scenario.part_error
+    if not any(e.offset) and e.yaw == 0.0 and e.radius == 0.0:
+        return scenario
+    believed = copy.deepcopy(scenario)
+    believed.tube.position = [p + d for p, d in zip(scenario.tube.position,
+                                                    e.offset)]
+    believed.tube.inner_radius += e.radius
+    if scenario.edge.kind == "straight":
+        believed.edge.heading += e.yaw
+    else:
+        believed.edge.start_angle += e.yaw
+    return believed
+
+
+def believed_contour(scenario: Scenario) -> Contour:
+    """The zero-depth path on the part the controller believes in."""
+    return make_contour(believed_scenario(scenario))
+
+
+def believed_contour_step(scenario: Scenario):
+    """(time (s), believed contour from then on) of ``faults.part_step``:
+    the believed part moved by minus the real part's step; None without a
+    step."""
+    step = scenario.faults.part_step
+    if not step.active():
+        return None
+    after = copy.deepcopy(scenario)
+    after.part_error.offset = [e - d for e, d in zip(
+        scenario.part_error.offset, step.offset)]
+    return step.time, believed_contour(after)
+
+
+def start_position(scenario: Scenario, contour=None) -> np.ndarray:
+    """Tool tip at the contour start, ``initial_depth`` into the material."""
+    contour = contour or make_contour(scenario)
+    p = contour.point_at(0.0)
+    return p + scenario.simulation.initial_depth * contour.n1(p)
+
+
+def edge_points(scenario: Scenario, arc) -> np.ndarray:
+    """Points (m, world) on the tube's inner top edge at contour arc
+    positions ``arc`` (m): where the chamfer is cut, for drawing."""
+    contour = make_contour(scenario)
+    tube, tool = scenario.tube, scenario.tool
+    top = tube.position[2] + tube.height
+    points = []
+    for s in np.asarray(arc, float):
+        p = contour.point_at(s)
+        q = p + tool.cutter_radius * contour.n1(p)
+        q[2] = top
+        points.append(q)
+    return np.array(points)

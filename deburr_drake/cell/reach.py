@@ -1,0 +1,45 @@
+"""Whether the robot serves the cell: its model (deburr_drake.cell.robot)
+and every point of the tool's path within reach."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from deburr_drake.cell.arm import check_reach
+from deburr_drake.cell.edge import believed_contour, start_position
+from deburr_drake.cell.robot import check_robot, ik_seed
+from deburr_drake.config import ConfigError, Scenario
+
+__all__ = ["check_part_in_reach"]
+
+
+def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
+    """Raises ConfigError if the robot cannot serve the cell
+    (deburr_drake.cell.robot.check_robot: the model file, its frames, its
+    joints), or naming the first point of the tool's path (the start, then
+    ``samples`` points along the edge) the arm cannot reach with the tool
+    vertical, and how far out of reach it is."""
+    robot = scenario.robot
+    model = check_robot(robot)
+    if robot.model == "cartesian_tool":
+        return  # the Cartesian tool reaches everywhere
+    contour = contour or believed_contour(scenario)
+    arcs = np.linspace(0.0, contour.length, samples,
+                       endpoint=not contour.closed)
+    points = [start_position(scenario, contour)] + [
+        contour.point_at(s) for s in arcs]
+    instance = model.GetFrameByName(robot.tool_frame).model_instance()
+    miss = check_reach(model, points, instance=instance,
+                       q_guess=lambda p: ik_seed(robot, p),
+                       tool_frame=robot.tool_frame)
+    if miss is not None:
+        k, p, distance = miss
+        where = "the start point" if k == 0 else \
+            f"the edge point at arc {arcs[k - 1] * 1e3:.1f} mm"
+        raise ConfigError(
+            f"tube.position = {list(scenario.tube.position)} is out of the "
+            f"arm's reach: {where}, tool tip at {np.round(p, 4).tolist()} m, "
+            f"is {distance * 1e3:.1f} mm beyond the nearest reachable tool "
+            "position (tool vertical, joint limits): allowed a part whose "
+            f"edge the arm reaches (arm5: [0.40, 0.0, 0.0]; {robot.model!r}"
+            ": see its robot.ik_seed and the model's joint limits)")

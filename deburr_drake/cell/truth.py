@@ -1,0 +1,75 @@
+"""The plant's contact truth, measured on the part the cell builds: the
+hydroelastic normal force on the cutter at a depth into the part, and the
+normal-force law near the desired depth (what an ideal estimator would
+report). The metrics (force prediction), the analysis and the baselines'
+ideal law read it."""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.systems.framework import DiagramBuilder
+
+from deburr_drake.cell.edge import make_contour
+from deburr_drake.cell.part import contact_force_on_body
+from deburr_drake.cell.plant import add_cell_plant
+from deburr_drake.config import RobotConfig, Scenario
+
+__all__ = ["contact_normal_force", "ContactTruth", "contact_truth"]
+
+
+def contact_normal_force(scenario: Scenario, depths, *,
+                         arc_fraction: float = 0.5) -> np.ndarray:
+    """The hydroelastic normal force (N) on the scenario's cutter at each
+    depth (m) into its part, the tool vertical at ``arc_fraction`` of the
+    edge, at rest: the contact part of (4), measured on the same geometry
+    the cell simulates (a Cartesian tool holds the cutter)."""
+    probe = copy.deepcopy(scenario)
+    probe.robot = RobotConfig(model="cartesian_tool")
+    probe.simulation.plant_time_step = 0.0
+    builder = DiagramBuilder()
+    plant, _ = add_cell_plant(builder, probe)
+    diagram = builder.Build()
+    context = diagram.CreateDefaultContext()
+    pc = plant.GetMyMutableContextFromRoot(context)
+    tool = plant.GetBodyByName("tool")
+    (cutter,) = plant.GetCollisionGeometriesForBody(tool)
+    contour = make_contour(scenario)
+    p = contour.point_at(arc_fraction * contour.length)
+    n1 = contour.n1(p)
+    port = plant.get_contact_results_output_port()
+    forces = []
+    for depth in np.atleast_1d(np.asarray(depths, float)):
+        plant.SetPositions(pc, p + depth * n1)
+        f = contact_force_on_body(port.Eval(pc), cutter, tool.index())
+        forces.append(-float(f @ n1))
+    return np.array(forces)
+
+
+@dataclass
+class ContactTruth:
+    """The plant's normal-force law near the desired depth, measured on
+    Drake's hydroelastic contact plus the process threshold c0 (N, N/m,
+    N s/m); what an ideal estimator would report."""
+
+    force_at_desired_depth: float  # N, ||f_n|| at delta*
+    c0: float  # N
+    secant_stiffness: float  # N/m, (F(delta*) - c0) / delta*
+    local_stiffness: float  # N/m, dF/d(delta) at delta*
+    c2: float  # N s/m, Hunt-Crossley: d * F_hydro(delta*)
+
+
+def contact_truth(scenario: Scenario, *, step: float = 2e-5) -> ContactTruth:
+    """The normal-force law at ``task.desired_depth`` on the scenario's
+    part, by central differences of :func:`contact_normal_force` over
+    +-``step`` (m)."""
+    tube, d = scenario.tube, scenario.task.desired_depth
+    forces = contact_normal_force(scenario, [d - step, d, d + step])
+    c0 = scenario.process.contact_threshold_force
+    return ContactTruth(
+        force_at_desired_depth=float(forces[1] + c0), c0=c0,
+        secant_stiffness=float(forces[1] / d),
+        local_stiffness=float((forces[2] - forces[0]) / (2 * step)),
+        c2=float(tube.hunt_crossley_dissipation * forces[1]))

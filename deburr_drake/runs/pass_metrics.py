@@ -1,0 +1,329 @@
+"""The metrics of a deburring pass (DESIGN §6) from a run's logs, one
+function per family, each usable alone:
+
+- :func:`finish_metrics`: the chamfer left on the edge (Fig. 8), coverage,
+  burr left;
+- :func:`force_metrics`: chamfering force (Fig. 10), normal force and depth
+  tracking (Fig. 9);
+- :func:`feed_metrics`: the feed on and off the burrs, the feed clamp;
+- :func:`estimate_metrics`: the contact estimator's force prediction
+  against the plant's truth;
+- :func:`smoothness_metrics`: torque and fuzzy-term variation, the learned
+  surface's roughness, the sliding variable's range;
+- :func:`status_metrics`: times, completion, NaN.
+
+:func:`pass_metrics` is all of them. Every family takes the run's
+:class:`PassWindow` (contact, then ``TRANSIENT`` s excluded) where it
+needs one, and returns a :class:`PassMetrics`: values by name, nan with a
+reason where this run cannot give a metric. Nothing raises on a short or
+stopped run."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Dict, Optional
+
+import numpy as np
+
+from deburr_drake.cell.edge import make_contour
+from deburr_drake.cell.truth import contact_truth
+from deburr_drake.control.controller import make_rule_bases
+from deburr_drake.math import metrics
+from deburr_drake.runs.simulation import RunLog
+
+__all__ = ["pass_metrics", "PassMetrics", "PassWindow", "pass_window",
+           "finish_metrics", "force_metrics", "feed_metrics",
+           "estimate_metrics", "smoothness_metrics", "status_metrics",
+           "force_at_desired_depth", "TRANSIENT", "CONTACT_FORCE"]
+
+#: Excluded after contact is established (s), as the issue asks.
+TRANSIENT = 2.0
+#: Contact is established when ||f_n|| exceeds this (N).
+CONTACT_FORCE = 1.0
+
+_FINISH = ("chamfer_depth_mean_error_mm", "chamfer_depth_rms_error_mm",
+           "chamfer_depth_max_error_mm")
+
+
+class PassMetrics(dict):
+    """The metrics by name (float, nan where a metric cannot be computed on
+    this run) with ``reasons[name]``: why that metric is nan."""
+
+    def __init__(self):
+        super().__init__()
+        self.reasons: Dict[str, str] = {}
+
+    def unavailable(self, name: str, reason: str):
+        self[name] = float("nan")
+        self.reasons[name] = reason
+
+    def merge(self, other: "PassMetrics") -> "PassMetrics":
+        """Adds ``other``'s values and reasons; returns self."""
+        self.update(other)
+        self.reasons.update(other.reasons)
+        return self
+
+
+@dataclass(frozen=True)
+class PassWindow:
+    """Which samples the metrics read: from ``start`` (first contact plus
+    ``TRANSIENT``, s) on; ``contact`` is the first time ||f_n|| exceeds
+    ``CONTACT_FORCE`` (inf without contact); ``reason`` says why a metric
+    over the window is nan when no sample is in it."""
+
+    contact: float
+    start: float
+    reason: str
+
+    def mask(self, t) -> np.ndarray:
+        return metrics.window(t, self.start)
+
+    def late(self, out: PassMetrics, name: str, t, value_of):
+        """out[name] = value_of(mask) over the samples in the window, or
+        nan with the window's reason."""
+        mask = self.mask(t)
+        if not np.any(mask):
+            out.unavailable(name, self.reason)
+        else:
+            out[name] = value_of(mask)
+
+
+def pass_window(log: RunLog) -> PassWindow:
+    ch = log["chamfer"]
+    contact = metrics.first_time(ch["t"], ch["f_n"] > CONTACT_FORCE)
+    if np.isfinite(contact):
+        reason = (f"no sample after the transient (contact at "
+                  f"{contact:.3f} s + {TRANSIENT:g} s; the run "
+                  f"stopped at {log.sim_time:.3f} s)")
+    else:
+        reason = f"no contact (||f_n|| never above {CONTACT_FORCE:g} N)"
+    return PassWindow(contact=contact, start=contact + TRANSIENT,
+                      reason=reason)
+
+
+def finish_metrics(log: RunLog, window: PassWindow, *,
+                   only_cut: bool = False) -> PassMetrics:
+    """The surface finish (Fig. 8): the depth error of the edge bins cut
+    after the transient (mean, RMS, max, mm), ``edge_coverage`` (the
+    fraction of bins cut) and ``burr_remaining_max_mm``. With ``only_cut``
+    (a run shorter than a pass) the bins the tool has not reached are left
+    out too."""
+    out = PassMetrics()
+    sc = log.scenario
+    finish = log.signals.get("finish")
+    if finish is None:
+        for name in _FINISH + ("edge_coverage", "burr_remaining_max_mm"):
+            out.unavailable(name, "the process's final state could not be "
+                                  "read (" + log.stop_detail + ")")
+        return out
+    contour = make_contour(sc)
+    L, closed = contour.length, contour.closed
+    proc = log["process"]
+    arc, depth = finish["arc"], finish["depth"]
+    transient = metrics.window(proc["t"], window.contact, window.start)
+    if np.any(transient):
+        s_span = np.unwrap(proc["arc_position"][transient] / L * 2 * np.pi) \
+            * L / (2 * np.pi)
+        start = s_span[0]
+        skip = metrics.arc_span_mask(arc, start - sc.tool.cutter_radius,
+                                     max(s_span.max(), start), L, closed)
+    else:
+        skip = np.zeros(arc.shape, bool)
+    if only_cut:
+        skip |= depth <= 0.0
+    error = depth[~skip] - sc.task.desired_depth
+    after = np.any(proc["t"] > window.start)
+    if error.size and after:
+        out["chamfer_depth_mean_error_mm"] = float(np.mean(error)) * 1e3
+        out["chamfer_depth_rms_error_mm"] = metrics.rms(error) * 1e3
+        out["chamfer_depth_max_error_mm"] = \
+            float(np.max(np.abs(error))) * 1e3
+    else:
+        reason = window.reason if not after else \
+            "no edge bin was cut after the transient"
+        for name in _FINISH:
+            out.unavailable(name, reason)
+    out["edge_coverage"] = float(np.mean(depth > 0.0))
+    out["burr_remaining_max_mm"] = \
+        float(np.max(finish["burr_remaining"])) * 1e3 \
+        if finish["burr_remaining"].size else 0.0
+    return out
+
+
+def force_metrics(log: RunLog, window: PassWindow) -> PassMetrics:
+    """After the transient: the chamfering force's RMS error against
+    ``task.desired_chamfering_force`` (Fig. 10), the normal-force error
+    e_f's RMS and the depth tracking error delta - delta_d's RMS (Fig. 9)."""
+    out = PassMetrics()
+    ch, ctl, proc = log["chamfer"], log["controller"], log["process"]
+    f_td = log.scenario.task.desired_chamfering_force
+    window.late(out, "chamfering_force_rms_error_N", proc["t"],
+                lambda m: metrics.rms(proc["f_t"][m] - f_td))
+    window.late(out, "normal_force_rms_error_N", ctl["t"],
+                lambda m: metrics.rms(ctl["e_f"][m]))
+    window.late(out, "depth_tracking_rms_error_mm", ctl["t"],
+                lambda m: metrics.rms(
+                    np.interp(ctl["t"][m], ch["t"], ch["delta"])
+                    - ctl["delta_d"][m]) * 1e3)
+    return out
+
+
+def _burr_spans(scenario, length):
+    return [(b.center_fraction * length, b.length / 2)
+            for b in scenario.process.burrs]
+
+
+def feed_metrics(log: RunLog, window: PassWindow) -> PassMetrics:
+    """The tool's mean speed along the edge after the transient while its
+    front (arc + cutter radius) is on a burr's span and while it is off
+    them (mm/s), and ``feed_at_max_fraction``: the fraction of the run's
+    outer-loop samples held at ``command.max_feed`` (the clamp is never
+    silent)."""
+    out = PassMetrics()
+    sc = log.scenario
+    ch = log["chamfer"]
+    contour = make_contour(sc)
+    L, closed = contour.length, contour.closed
+    late = window.mask(ch["t"])
+    speed = np.abs(np.einsum("ij,ij->i", ch["xdot_p"], ch["n2"]))[late]
+    lead = ch["arc_position"][late] + sc.tool.cutter_radius
+    on = np.zeros(lead.shape, bool)
+    for center, half in _burr_spans(sc, L):
+        on |= np.abs(metrics.arc_distance(lead, center, L, closed)) < half
+    for name, mask, where in (("feed_mean_on_burrs_mm_s", on, "on"),
+                              ("feed_mean_off_burrs_mm_s", ~on, "off")):
+        if np.any(mask):
+            out[name] = float(np.mean(speed[mask])) * 1e3
+        else:
+            out.unavailable(name, window.reason if not np.any(late) else
+                            f"the tool was never {where} a burr after the "
+                            "transient")
+    feed = log["command"]["feed"]
+    if len(feed):
+        out["feed_at_max_fraction"] = float(
+            np.mean(feed >= sc.command.max_feed * (1.0 - 1e-9)))
+    else:
+        out.unavailable("feed_at_max_fraction", "no command sample")
+    return out
+
+
+def force_at_desired_depth(scenario) -> Optional[float]:
+    """The plant's normal force at delta* (cell.truth.contact_truth), or
+    None when it cannot be computed: the metrics that need it are then
+    null with their reason."""
+    try:
+        return contact_truth(scenario).force_at_desired_depth
+    except Exception:
+        return None
+
+
+def estimate_metrics(log: RunLog, true_force_at_desired_depth:
+                     Optional[float] = None) -> PassMetrics:
+    """The estimator's last c0 + c1 delta* (``predicted_...``, N) against
+    ``true_force_at_desired_depth`` (the plant's normal force at delta*,
+    :func:`force_at_desired_depth`): their relative error; nan without a
+    truth."""
+    out = PassMetrics()
+    estimates = log["estimates"]["value"]
+    if not len(estimates):
+        for name in ("predicted_force_at_desired_depth_N",
+                     "force_prediction_error_rel"):
+            out.unavailable(name, "no estimate was logged")
+        return out
+    c_hat = estimates[-1]
+    predicted = float(c_hat[0] + c_hat[1] * log.scenario.task.desired_depth)
+    out["predicted_force_at_desired_depth_N"] = predicted
+    if true_force_at_desired_depth is None:
+        out.unavailable("force_prediction_error_rel",
+                        "the true force at delta* was not given")
+    else:
+        out["true_force_at_desired_depth_N"] = true_force_at_desired_depth
+        out["force_prediction_error_rel"] = abs(
+            predicted - true_force_at_desired_depth) \
+            / true_force_at_desired_depth
+    return out
+
+
+def smoothness_metrics(log: RunLog, window: PassWindow) -> PassMetrics:
+    """What the m = 0 / m = 2 comparison turns on, after the transient:
+    the commanded torque's total variation, the fuzzy term's own, the
+    roughness of the learned surface u_f(y0, s_k) over the region the run
+    visited, and the sliding variable's 1st and 99th percentiles on the
+    fuzzy axes (mm/s, against Delta_k)."""
+    out = PassMetrics()
+    sc = log.scenario
+    ch, ctl, act = log["chamfer"], log["controller"], log["actuation"]
+    window.late(out, "torque_total_variation", act["t"],
+                lambda m: metrics.total_variation(act["value"][m]))
+    axes = list(sc.controller.fuzzy.axes)
+    window.late(out, "fuzzy_term_total_variation", ctl["t"],
+                lambda m: metrics.total_variation(ctl["u_fuzzy"][m][:, axes]))
+    # The roughness over y0 = ||x_p|| and s_k from their least to their
+    # largest value after the transient: the rare excursions into the next
+    # cells are where an m = 0 surface steps; the largest over the axes.
+    theta = log.signals.get("theta", {}).get("final")
+    if theta is not None:
+        window.late(out, "control_surface_roughness_N", ctl["t"],
+                    lambda m: _surface_roughness(
+                        make_rule_bases(sc.controller), theta,
+                        np.linalg.norm(ch["x_p"], axis=1)[
+                            window.mask(ch["t"])],
+                        ctl["s"][m][:, axes]))
+    window.late(out, "sliding_variable_p01_mm_s", ctl["t"],
+                lambda m: float(np.percentile(ctl["s"][m][:, axes], 1))
+                * 1e3)
+    window.late(out, "sliding_variable_p99_mm_s", ctl["t"],
+                lambda m: float(np.percentile(ctl["s"][m][:, axes], 99))
+                * 1e3)
+    return out
+
+
+def _surface_roughness(rule_bases, theta, y0, s) -> float:
+    """metrics.surface_roughness of each fuzzy axis's u_f over the
+    visited ranges of y0 and of its s; the largest (nan when no axis has a
+    range to measure)."""
+    if not len(y0):
+        return float("nan")
+    y0_range = (float(np.min(y0)), float(np.max(y0)))
+    values = [metrics.surface_roughness(
+        lambda a, b, rb=rb, w=theta[k]: rb.evaluate(w, a, b), y0_range,
+        (float(np.min(s[:, k])), float(np.max(s[:, k]))))
+        for k, rb in enumerate(rule_bases)]
+    finite = [v for v in values if np.isfinite(v)]
+    return max(finite) if finite else float("nan")
+
+
+def status_metrics(log: RunLog) -> PassMetrics:
+    """Simulated and wall time (s), whether the pass completed, and
+    whether any logged signal is NaN (or the run stopped on NaN)."""
+    out = PassMetrics()
+    out["sim_time_s"] = log.sim_time
+    out["wall_time_s"] = log.wall_time
+    out["completed_pass"] = float(log.completed_pass)
+    out["nan_detected"] = float(log.stop_reason == "nan" or metrics.any_nan(
+        *[v for blocks in log.signals.values() for v in blocks.values()]))
+    return out
+
+
+def pass_metrics(log: RunLog, *,
+                 true_force_at_desired_depth: Optional[float] = None,
+                 only_cut: bool = False) -> PassMetrics:
+    """Every metric of the pass, SI units unless the name says mm: the
+    families above over :func:`pass_window`, and ``contact_time_s``.
+
+    ``true_force_at_desired_depth`` (N) is the plant's normal force at
+    delta* (:func:`force_at_desired_depth`); without it the
+    force-prediction error is nan. ``only_cut``: see
+    :func:`finish_metrics`."""
+    window = pass_window(log)
+    out = PassMetrics()
+    if np.isfinite(window.contact):
+        out["contact_time_s"] = window.contact
+    else:
+        out.unavailable("contact_time_s", window.reason)
+    for family in (finish_metrics(log, window, only_cut=only_cut),
+                   force_metrics(log, window), feed_metrics(log, window),
+                   estimate_metrics(log, true_force_at_desired_depth),
+                   smoothness_metrics(log, window), status_metrics(log)):
+        out.merge(family)
+    return out
