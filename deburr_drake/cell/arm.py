@@ -32,7 +32,7 @@ ARM_MODEL_NAME = "arm5"
 ARM_JOINTS = ("waist", "shoulder", "elbow", "wrist_pitch", "wrist_roll")
 
 # Where the tube's axis stands (m, world; the tube's bottom at z = 0). Chosen by IK
-# around circles of radius 17..57 mm at z = 0.048 m (tests/test_arm.py): the wrist
+# around circles of radius 17..57 mm at z = 0.048 m (tests/cell/test_arm.py): the wrist
 # centre is then 0.34..0.46 m from the shoulder (links 0.30 + 0.30 m), elbow up, every
 # joint at least 0.78 rad from its limits (the largest margin of x = 0.30..0.50 m), static
 # gravity torques at most 21 % of the effort limits (shoulder, about 31 N m).

@@ -19,8 +19,9 @@ from typing import Dict, List
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
 
-from deburr_drake.config import (ConfigError, Scenario, _check_yaml,
-                                 field_type, load_scenario, set_field)
+from deburr_drake.config import (ConfigError, Scenario, field_type,
+                                 load_scenario, set_field)
+from deburr_drake.config.scenario import _check_yaml
 from deburr_drake.sweep.results import METRICS
 
 __all__ = ["Distribution", "SampleConfig", "Study", "Rule", "RunSpec",

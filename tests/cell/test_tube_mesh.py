@@ -1,4 +1,4 @@
-"""Tests of deburr_drake/tube_mesh.py (pure numpy; pydrake only to read the file back)."""
+"""Tests of deburr_drake.cell.tube_mesh (pure numpy; pydrake only to read the file back)."""
 
 import collections
 

@@ -19,7 +19,7 @@ from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
 from deburr_drake.runs.simulation import simulate
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _strict_json(path):

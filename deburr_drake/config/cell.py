@@ -1,0 +1,396 @@
+"""Configuration of the simulated cell: the part (``tube``, ``edge``,
+``part_error``), the tool, the robot, the cutting process and its burrs,
+the sensor, faults and guards. SI units; each field's comment gives its
+unit."""
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import List
+
+from deburr_drake.config.checks import (_finite, _non_negative, _positive,
+                                        _require, _vector)
+
+__all__ = ["TubeConfig", "ToolConfig", "EdgeConfig", "SensorConfig",
+           "BurrConfig", "ProcessConfig", "RobotConfig", "PartErrorConfig",
+           "DropoutConfig", "PartStepConfig", "FaultsConfig", "GuardsConfig"]
+
+
+@dataclass
+class TubeConfig:
+    """The part: a tube whose inner top edge is chamfered. Only the edge
+    region (the top ``compliant_layer_height`` of the wall) is modelled, as a
+    compliant hydroelastic volume mesh."""
+
+    inner_radius: float = 0.030  # m
+    wall_thickness: float = 0.005  # m, radial thickness of the modelled wall
+    height: float = 0.050  # m, part spans 0 <= z <= height in its frame
+    position: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0])  # m, world, bottom centre
+    compliant_layer_height: float = 0.006  # m, top part of the wall modelled
+    hydroelastic_modulus: float = 4.5e6  # Pa, 10 N/mm at 0.5 mm
+    hunt_crossley_dissipation: float = 5.0  # s/m
+    # Around the circumference. 120 (chord sag 10 um at 30 mm) with the
+    # cutter's 0.6 mm mesh gives within 0.3 % the normal force of 240 with
+    # a 0.4 mm cutter mesh (1.835/1.830, 3.695/3.700, 5.711/5.728 N at 0.3,
+    # 0.5, 0.7 mm), a ripple along the edge of +-0.006 N (against the
+    # sensor's 0.1 N noise) and a contact evaluation 38 % cheaper (188
+    # against 301 us): scripts/contact_mesh.py.
+    mesh_segments: int = 120
+    mesh_radial_cells: int = 2  # through the wall
+    mesh_height_cells: int = 2  # through the modelled layer
+
+    def validate(self):
+        o = "tube"
+        for name in ("inner_radius", "wall_thickness", "height",
+                     "compliant_layer_height", "hydroelastic_modulus"):
+            _positive(o, name, getattr(self, name))
+        _non_negative(o, "hunt_crossley_dissipation",
+                      self.hunt_crossley_dissipation)
+        _vector(o, "position", self.position, 3, _finite)
+        # 1e300 Pa stopped the process inside Drake's contact solver (a
+        # C++ failure Python cannot catch, so nothing was written).
+        _require(self.hydroelastic_modulus <= 1e12,
+                 "tube.hydroelastic_modulus", self.hydroelastic_modulus,
+                 "a number in (0, 1e12] Pa (steel's Young's modulus is "
+                 "2e11)")
+        _require(self.compliant_layer_height <= self.height,
+                 "tube.compliant_layer_height", self.compliant_layer_height,
+                 f"<= tube.height ({self.height})")
+        _require(isinstance(self.mesh_segments, int)
+                 and self.mesh_segments >= 16,
+                 "tube.mesh_segments", self.mesh_segments, "an integer >= 16")
+        for name in ("mesh_radial_cells", "mesh_height_cells"):
+            v = getattr(self, name)
+            _require(isinstance(v, int) and v >= 2, f"tube.{name}", v,
+                     "an integer >= 2 (the mesh needs interior vertices)")
+
+
+@dataclass
+class ToolConfig:
+    """The cylindrical burr cutter (vertical axis)."""
+
+    cutter_radius: float = 0.003  # m
+    cutter_length: float = 0.020  # m
+    engagement: float = 0.002  # m, cutter tip below the top edge
+    resolution_hint: float = 6.0e-4  # m, the cutter's mesh (TubeConfig)
+
+    def validate(self):
+        for name in ("cutter_radius", "cutter_length", "engagement",
+                     "resolution_hint"):
+            _positive("tool", name, getattr(self, name))
+        _require(self.engagement < self.cutter_length, "tool.engagement",
+                 self.engagement,
+                 f"< tool.cutter_length ({self.cutter_length})")
+
+
+@dataclass
+class EdgeConfig:
+    """Which edge, and where and which way the tool runs along it.
+
+    ``circle``: the tube's inner top edge (``tube.*``), from ``start_angle``
+    in ``direction``. ``straight``: the top edge of a straight wall of the
+    ``tube``'s thickness, height and material, ``length`` long, its middle
+    above ``tube.position``; the tool runs along ``heading`` with the
+    material on its right."""
+
+    kind: str = "circle"  # circle or straight
+    start_angle: float = 0.0  # rad, polar angle of the contour start
+    direction: int = 1  # +1 counter-clockwise seen from +z, -1 clockwise
+    length: float = 0.1  # m, straight edge only
+    heading: float = 1.5707963267948966  # rad, straight: travel direction
+
+    KINDS = ("circle", "straight")
+
+    def validate(self):
+        _require(self.kind in self.KINDS, "edge.kind", self.kind,
+                 f"one of {self.KINDS}")
+        for name in ("start_angle", "heading"):
+            v = getattr(self, name)
+            _require(isinstance(v, (int, float)) and math.isfinite(v)
+                     and abs(v) <= 2 * math.pi, f"edge.{name}", v,
+                     "a number in [-2 pi, 2 pi] rad")
+        _require(self.direction in (1, -1), "edge.direction", self.direction,
+                 "1 or -1")
+        _positive("edge", "length", self.length)
+
+
+@dataclass
+class SensorConfig:
+    """Tool force measurement."""
+
+    sample_period: float = 0.0025  # s
+    # Hz, first-order low-pass. The controller cancels the measured force
+    # (-f in (36)), which holds the process damping g of (3) through the
+    # sampled sensor: with the light point-mass testbed that loop went
+    # unstable at 50 Hz and was stable at 20 and 30 Hz (measured).
+    cutoff_frequency: float = 20.0
+    noise_std: float = 0.0  # N, white noise per axis before the filter
+    noise_seed: int = 0  # seeds the noise (RandomSource)
+
+    def validate(self):
+        _positive("sensor", "sample_period", self.sample_period)
+        _positive("sensor", "cutoff_frequency", self.cutoff_frequency)
+        _non_negative("sensor", "noise_std", self.noise_std)
+        _require(self.cutoff_frequency < 0.5 / self.sample_period,
+                 "sensor.cutoff_frequency", self.cutoff_frequency,
+                 f"< the Nyquist frequency {0.5 / self.sample_period:g} Hz")
+        _require(isinstance(self.noise_seed, int) and self.noise_seed >= 0,
+                 "sensor.noise_seed", self.noise_seed, "an integer >= 0")
+
+
+@dataclass
+class BurrConfig:
+    """One burr on the edge: a raised-cosine bump of material the cutter
+    removes (its cross-section area adds to g of (3))."""
+
+    center_fraction: float = 0.125  # of the edge length from the start
+    length: float = 0.008  # m of arc
+    height: float = 0.001  # m
+    thickness: float = 0.002  # m; cross-section area = height * thickness
+
+    def validate(self, owner="process.burrs[]"):
+        _require(isinstance(self.center_fraction, (int, float))
+                 and 0.0 <= self.center_fraction < 1.0,
+                 f"{owner}.center_fraction", self.center_fraction,
+                 "a number in [0, 1)")
+        for name in ("length", "height", "thickness"):
+            _non_negative(owner, name, getattr(self, name))
+        _positive(owner, "length", self.length)
+
+
+@dataclass
+class ProcessConfig:
+    """Plant-side truth of the cutting process, eq. (3) and the threshold
+    c0 of (4). The controller never reads these values."""
+
+    cutting_coefficient: float = 3.3e9  # N s/m^3, k_c: g = k_c * area
+    plunge_coefficient: float = 0.0  # N s/m, h of (3)
+    threshold_power_force: float = 2.0  # N, P'_th
+    contact_threshold_force: float = 2.0  # N, c0 of (4)
+    threshold_depth: float = 2.0e-5  # m, c0 ramps in over this depth
+    # m/s: the direction of the threshold force P'_th is sat(v_t / this).
+    # The integrator treats a sign flip beyond this band explicitly, so the
+    # band must exceed the speed one 2.5 ms step can give it (P'_th h / m:
+    # 3 mm/s on the 1.8 kg point mass): at 0.05 mm/s the point mass chattered
+    # at 200 Hz after a 2 mm/s kick, at 0.5 mm/s it does not
+    # (tests/runs/test_closed_loop.py). No operating point is this slow
+    # (v0 = 1 mm/s).
+    smoothing_speed: float = 5.0e-4
+    burrs: List[BurrConfig] = field(default_factory=list)
+    finish_bin_length: float = 2.0e-4  # m of arc per surface-finish bin
+    # s: the process samples the tool's place on the edge for the force law
+    # (depth, directions, burr at the cutter), records the finish and
+    # removes the burr this often.
+    sample_period: float = 0.0025
+
+    def validate(self):
+        o = "process"
+        for name in ("cutting_coefficient", "plunge_coefficient",
+                     "threshold_power_force", "contact_threshold_force"):
+            _non_negative(o, name, getattr(self, name))
+        _positive(o, "threshold_depth", self.threshold_depth)
+        _positive(o, "smoothing_speed", self.smoothing_speed)
+        _positive(o, "sample_period", self.sample_period)
+        _require(isinstance(self.finish_bin_length, (int, float))
+                 and 0 < self.finish_bin_length <= 2.0e-4,
+                 f"{o}.finish_bin_length", self.finish_bin_length,
+                 "a number in (0, 0.0002] m")
+        for k, burr in enumerate(self.burrs):
+            burr.validate(f"{o}.burrs[{k}]")
+
+
+@dataclass
+class RobotConfig:
+    """Which robot holds the tool, the names the cell needs on it, and the
+    plant's joint friction (the D term of (1)): viscous damping comes from
+    the model file, smooth Coulomb friction F_c tanh(v / v_s) from here.
+
+    ``model`` is a shipped name (``SHIPPED``) or a path to a URDF or SDF
+    file (``package://`` URIs inside it resolve as Drake's parser resolves
+    them: the ``package.xml`` files in the directories above the file, and
+    ``ROS_PACKAGE_PATH``); a relative path in a scenario file is relative to
+    that file. The tool: either the model has a body holding the tool, with
+    frame ``tool_frame`` at the tool tip (+z along the tool axis, away from
+    the part) and a weld joint ``sensor_joint`` (the force/torque sensor)
+    as its parent joint (``flange_frame`` empty: arm5 and cartesian_tool),
+    or ``flange_frame`` names the model's mounting face (+z out of the
+    flange) and the cell welds the sensor (joint ``sensor_joint``) and a
+    spindle of ``tool_mass`` there, its tip ``tool_length`` along the
+    flange's +z (deburr_drake.cell.robot). The controller's model of the arm
+    differs from the plant by ``controller.model_mass_scale``."""
+
+    model: str = "cartesian_tool"  # shipped name, or a .urdf / .sdf path
+    joint_coulomb_friction: List[float] = field(
+        default_factory=list)  # N or N m per joint; empty: none
+    friction_smoothing_speed: float = 1.0e-3  # m/s or rad/s
+    tool_frame: str = "tool_tip"  # frame at the tool tip
+    sensor_joint: str = "ft_sensor"  # weld joint: the force/torque sensor
+    flange_frame: str = ""  # frame the spindle is mounted on; "": none
+    tool_length: float = 0.12  # m, flange face to tool tip (flange_frame)
+    tool_mass: float = 1.5  # kg, sensor and spindle (flange_frame)
+    # rad, one per joint: the inverse kinematics' start and the posture it
+    # stays near (elbow up, wrist flipped or not); empty: the model's
+    # default (arm5: its ready pose turned towards the part).
+    ik_seed: List[float] = field(default_factory=list)
+
+    #: Models shipped in models/ (deburr_drake.cell.robot.SHIPPED_ROBOTS).
+    SHIPPED = ("cartesian_tool", "arm5", "arm6")
+    FILE_SUFFIXES = (".urdf", ".sdf")
+
+    def is_file(self) -> bool:
+        """Whether ``model`` names a file rather than a shipped model."""
+        return self.model not in self.SHIPPED
+
+    def validate(self):
+        o = "robot"
+        _require(isinstance(self.model, str) and (
+            self.model in self.SHIPPED
+            or Path(self.model).suffix.lower() in self.FILE_SUFFIXES),
+            f"{o}.model", self.model,
+            f"one of {self.SHIPPED} or a path to a .urdf or .sdf file")
+        if self.is_file():
+            _require(Path(self.model).is_file(), f"{o}.model", self.model,
+                     "an existing .urdf or .sdf file (no such file)")
+        for i, f in enumerate(self.joint_coulomb_friction):
+            _non_negative(o, f"joint_coulomb_friction[{i}]", f)
+        _positive(o, "friction_smoothing_speed",
+                  self.friction_smoothing_speed)
+        for name in ("tool_frame", "sensor_joint"):
+            _require(isinstance(getattr(self, name), str)
+                     and getattr(self, name) != "", f"{o}.{name}",
+                     getattr(self, name), "a frame or joint name")
+        _positive(o, "tool_length", self.tool_length)
+        _positive(o, "tool_mass", self.tool_mass)
+        for i, q in enumerate(self.ik_seed):
+            _require(isinstance(q, (int, float)) and math.isfinite(q),
+                     f"{o}.ik_seed[{i}]", q, "a finite angle (rad)")
+
+
+@dataclass
+class PartErrorConfig:
+    """How the part the controller believes in differs from the real one.
+    ``tube`` and ``edge`` describe the real part (the plant, the contact,
+    the cutting process and the metrics use it); the command generator,
+    the first-order hold, the observer and the start pose use the believed
+    part: the real one moved by ``offset``, turned by ``yaw`` about its
+    vertical axis (circle: the start angle; straight: the heading about
+    ``tube.position``) and with an inner radius ``radius`` larger."""
+
+    offset: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0])  # m, believed - real
+    yaw: float = 0.0  # rad, believed - real, about the vertical
+    radius: float = 0.0  # m, believed - real inner radius (circle)
+
+    def validate(self):
+        o = "part_error"
+        _vector(o, "offset", self.offset, 3, _finite)
+        _require(isinstance(self.yaw, (int, float)) and math.isfinite(
+            self.yaw) and abs(self.yaw) <= math.pi, f"{o}.yaw", self.yaw,
+            "a number in [-pi, pi] rad")
+        _finite(o, "radius", self.radius)
+
+
+@dataclass
+class DropoutConfig:
+    """A window in which the force sensor's reading is lost."""
+
+    start: float = 0.0  # s
+    duration: float = 0.0  # s
+    mode: str = "hold"  # hold: the last reading; zero: 0 N
+
+    MODES = ("hold", "zero")
+
+    def validate(self, owner="faults.dropouts[]"):
+        _non_negative(owner, "start", self.start)
+        _positive(owner, "duration", self.duration)
+        _require(self.mode in self.MODES, f"{owner}.mode", self.mode,
+                 f"one of {self.MODES}")
+
+
+@dataclass
+class PartStepConfig:
+    """The part moves in its fixture at ``time`` by ``offset``. The real
+    part is fixed in the plant (welded hydroelastic geometry), so the step
+    is applied to the part the controller believes in, by -``offset``:
+    from ``time`` on, the observer and the command generator see the part
+    where it was before while it is ``offset`` away, the error a slipped
+    fixture gives the controller (without the contact's own jolt)."""
+
+    time: float = 0.0  # s; 0: no step
+    offset: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0])  # m, world, real part's move
+
+    def validate(self, owner="faults.part_step"):
+        _non_negative(owner, "time", self.time)
+        _vector(owner, "offset", self.offset, 3, _finite)
+        _require(self.time == 0.0 or any(self.offset), f"{owner}.offset",
+                 self.offset, f"not all zero when {owner}.time > 0")
+
+    def active(self) -> bool:
+        return self.time > 0.0
+
+
+@dataclass
+class FaultsConfig:
+    """Faults a deburring cell meets, injected by Drake systems in the
+    diagram (deburr_drake.cell.faults); none by default. See also
+    ``part_error`` (the part not where the controller thinks it is)."""
+
+    # N, world, added to the force reading the controller and observer get
+    sensor_bias: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    noise_scale: float = 1.0  # x sensor.noise_std
+    dropouts: List[DropoutConfig] = field(default_factory=list)
+    part_step: PartStepConfig = field(default_factory=PartStepConfig)
+
+    def validate(self):
+        o = "faults"
+        _vector(o, "sensor_bias", self.sensor_bias, 3, _finite)
+        _non_negative(o, "noise_scale", self.noise_scale)
+        for k, d in enumerate(self.dropouts):
+            d.validate(f"{o}.dropouts[{k}]")
+        self.part_step.validate(f"{o}.part_step")
+
+    def sensor_faults(self) -> bool:
+        """True if the force reading is biased or drops out."""
+        return any(self.sensor_bias) or bool(self.dropouts)
+
+
+@dataclass
+class GuardsConfig:
+    """Runtime safety guards (deburr_drake.cell.guards): each stops the run with
+    ``stop_reason`` ``guard:<name>`` and its values at the trip. A limit of
+    0 takes the default derived from the models and the task."""
+
+    enabled: bool = True
+    # Trip when any |tau_i| exceeds this fraction of the joint's effort
+    # limit (the robot model's <effort>); joints without one are not checked.
+    joint_torque_fraction: float = 1.0
+    tool_force: float = 0.0  # N, |measured f|; 0: 10 x desired |f_t|
+    depth: float = 0.0  # m, chamfer depth; 0: min(4 x desired, cutter radius)
+    workspace_margin: float = 0.02  # m, around the edge's bounding box
+    contact_lost_time: float = 1.0  # s below contact_force after contact
+    contact_force: float = 1.0  # N, ||f_n|| above it is contact
+    nan: bool = True  # any NaN or infinity in a logged signal
+    # s; all guards are checked this often, the joint torque also at every
+    # inner-loop sample. A multiple of the 2.5 ms inner loop adds no
+    # integrator steps. On a 10 s paper run (scripts/bench_guards.py) all
+    # guards every 2.5 ms took 4.5-4.7 % of the CPU time; every 10 ms with
+    # the torque every 2.5 ms 2.7-2.8 %.
+    check_period: float = 0.02
+    # The drives clamp the commanded torque at the effort limits, as real
+    # ones do: a guard sees a torque one sample after it is commanded, so
+    # without the clamp the plant would take one sample of it.
+    saturate_effort: bool = True
+
+    def validate(self):
+        o = "guards"
+        _positive(o, "joint_torque_fraction", self.joint_torque_fraction)
+        for name in ("tool_force", "depth"):
+            _non_negative(o, name, getattr(self, name))
+        for name in ("workspace_margin", "contact_lost_time",
+                     "contact_force", "check_period"):
+            _positive(o, name, getattr(self, name))
+        _require(self.contact_lost_time > self.check_period,
+                 "guards.contact_lost_time", self.contact_lost_time,
+                 f"> guards.check_period ({self.check_period})")
