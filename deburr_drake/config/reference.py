@@ -315,10 +315,11 @@ def scenario_reference_markdown() -> str:
         "`--scenario-text`, `--set`, `set_field` and the study files use "
         "(`process.burrs[].height`: each element of a list; index it as "
         "`process.burrs[0].height`). *default* is the package's "
-        "(`Scenario()`, the `point_mass` cell); *paper* is "
-        "`load_scenario(\"paper\")`'s. *allowed* is what `validate()` "
-        "accepts (a bad value is one `ConfigError` line naming the field); "
-        "empty: any value of the type. SI units throughout.",
+        "(`Scenario()`, the `point_mass` cell), followed by the `paper` "
+        "scenario's (`load_scenario(\"paper\")`) where that differs. "
+        "*Allowed* is what `validate()` accepts (a bad value is one "
+        "`ConfigError` line naming the field); none given: any value of "
+        "the type. SI units throughout (`-`: no unit).",
         "",
         "The unit and meaning come from each field's comment "
         "(`name: type = default  # UNIT, meaning`; see "
@@ -332,13 +333,17 @@ def scenario_reference_markdown() -> str:
         if dataclasses.is_dataclass(cls) and cls.__doc__:
             out.append(" ".join(cls.__doc__.split()))
             out.append("")
-        out.append("| field | type | unit | default | paper | allowed | "
-                   "meaning |")
-        out.append("|---|---|---|---|---|---|---|")
+        out.append("| field (type) | unit | default | meaning; *allowed* |")
+        out.append("|---|---|---|---|")
         for d in docs:
+            default = f"`{_shown(d.default)}`"
+            if _shown(d.paper) != _shown(d.default):
+                default += f"; paper `{_shown(d.paper)}`"
+            allowed = f" *Allowed:* {d.allowed}." if d.allowed else ""
             out.append("| " + " | ".join(_cell(x) for x in (
-                f"`{d.path}`", d.type, d.unit, f"`{_shown(d.default)}`",
-                f"`{_shown(d.paper)}`", d.allowed, d.meaning)) + " |")
+                f"`{d.path}` ({d.type})", d.unit, default,
+                (d.meaning.rstrip(".") + "." if allowed else d.meaning)
+                + allowed)) + " |")
         out.append("")
         notes = [d for d in docs if d.detail]
         if notes:

@@ -35,7 +35,7 @@ class SimulationConfig:
     # damping the step can hold: cenic treats only the diagonal of the
     # applied forces' d tau / dv implicitly, and the cutting force's g a a^T
     # (a = J^T n2) is off-diagonal on an arm; the paper scenarios take two
-    # steps per 2.5 ms sample (README, numerical choices).
+    # steps per 2.5 ms sample (docs/numerics.md).
     max_step: float = 0.01
     # -; false: fixed steps of max_step (accuracy unused). With the 2.5 ms
     # sampled loop every step ends at a sample anyway; on 12 s of the paper
