@@ -756,6 +756,78 @@ class ProfileContour(Contour):
                         float(self._U[k]), float(self._seg_len[k])))
         return out
 
+    def _segment_point(self, k, local):
+        """(point (2,), normal into the material (2,)) at ``local`` metres
+        into segment k (counter-clockwise)."""
+        i = self._index[k]
+        if self._kinds[k] == 0:
+            return (self._lA[i] + local * self._lD[i], -self._lN[i])
+        sw = self._aSw[i]
+        th = self._aT0[i] + math.copysign(local / self._aR[i], sw)
+        e = np.array([math.cos(th), math.sin(th)])
+        return self._aC[i] + self._aR[i] * e, -self._aSig[i] * e
+
+    def material_band(self, width, *, segments_per_turn, max_step):
+        """Stations along the profile for a mesh of the material next to
+        it, ``width`` (m) deep: (points (N, 2) about ``center``, unit
+        normals into the material (N, 2), depths (N,)), counter-clockwise
+        from the path's origin. Arcs get one station every 2 pi /
+        ``segments_per_turn`` rad, lines one every ``max_step`` m at
+        least. Where a fillet's centre lies in the material the band is
+        at most half the fillet's radius deep there (its far side would
+        fold over the centre), deepening again at 1 m per m along the
+        path. ValueError if the band's far side overlaps itself or the
+        profile (walls closer than ``width``)."""
+        width = _finite_scalar(width, "width")
+        if width <= 0.0:
+            raise ValueError(f"width must be > 0, got {width}")
+        us, points, normals = [], [], []
+        for k in range(len(self._kinds)):
+            L = self._seg_len[k]
+            if L <= 1e-12:
+                continue
+            if self._kinds[k] == 0:
+                n = max(1, math.ceil(L / max_step - 1e-9))
+            else:
+                sweep = abs(self._aSw[self._index[k]])
+                n = max(1, math.ceil(sweep * segments_per_turn / (2 * math.pi)
+                                     - 1e-9))
+            for j in range(n):
+                q, m = self._segment_point(k, L * j / n)
+                us.append(self._U[k] + L * j / n)
+                points.append(q)
+                normals.append(m)
+        us = np.array(us)
+        depth = np.full(len(us), width)
+        Ltot = self._length
+        for k in np.flatnonzero(self._kinds == 1):
+            i = self._index[k]
+            if self._aSig[i] < 0:
+                continue   # the centre on the free side: no fold
+            cap = min(width, 0.5 * self._aR[i])
+            a, b = self._U[k], self._U[k] + self._seg_len[k]
+            before = (a - us) % Ltot
+            after = (us - b) % Ltot
+            inside = (us >= a - 1e-12) & (us <= b + 1e-12)
+            dist = np.where(inside, 0.0, np.minimum(before, after))
+            depth = np.minimum(depth, cap + dist)
+        points, normals = np.array(points), np.array(normals)
+        far = points + depth[:, None] * normals
+        hit = polyline_self_intersection(far)
+        if hit is None:
+            near_end = np.roll(points, -1, axis=0)
+            far_end = np.roll(far, -1, axis=0)
+            hits = _segments_cross(far, far_end, points, near_end,
+                                   (1e-12 * Ltot) ** 2)
+            hit = tuple(np.argwhere(hits)[0]) if hits.any() else None
+        if hit is not None:
+            raise ValueError(
+                f"the material {width} m deep along the profile overlaps "
+                f"itself (near {us[hit[0]] * 1e3:.1f} and "
+                f"{us[hit[1]] * 1e3:.1f} mm along it): walls closer than "
+                "that")
+        return points, normals, depth
+
     def parameter_to_arc(self, u):
         """Arc position (traversal from the start) of counter-clockwise
         parameter(s) u."""
