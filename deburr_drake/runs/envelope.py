@@ -6,7 +6,8 @@ table. The numbers of one run come from :func:`burr_metrics`, a pure numpy
 function of the logged arrays; the bounds from :func:`burr_bounds`.
 
 Bounds (SI units), for desired chamfering force f_d, the threshold force
-P'_th, the cutting coefficient k_c, the cut height h (the cutter's
+P'_th, the cutting coefficient k_c (times the edge's removal_scale at
+delta*), the cut height h (the cutter's
 engagement), the desired depth delta*, a burr of cross-section A_b
 (height x thickness):
 
@@ -83,10 +84,22 @@ def grid(heights: Iterable[float] = GRID_HEIGHTS,
             for length in lengths]
 
 
+def _cutting_coefficient(scenario) -> float:
+    """k_c times the edge's removal_scale at its start at delta* (N s/m^3):
+    g per area of cross-section there (1.1 k_c on the paper's bore)."""
+    from deburr_drake.cell.edge import make_contour
+    from deburr_drake.math.geometry import removal_scale
+    contour = make_contour(scenario)
+    return scenario.process.cutting_coefficient * removal_scale(
+        contour.curvature(contour.point_at(0.0)),
+        scenario.task.desired_depth, scenario.tool.cutter_radius)
+
+
 def off_burr_feed(scenario) -> float:
-    """v_off (m/s): the feed law's steady feed off the burrs, or v0."""
+    """v_off (m/s): the feed law's steady feed off the burrs at the edge's
+    start, or v0."""
     p, c = scenario.process, scenario.command
-    g = p.cutting_coefficient * scenario.task.desired_depth \
+    g = _cutting_coefficient(scenario) * scenario.task.desired_depth \
         * scenario.tool.engagement
     excess = scenario.task.desired_chamfering_force \
         - p.threshold_power_force
@@ -96,7 +109,7 @@ def off_burr_feed(scenario) -> float:
 def burr_bounds(scenario, cell: BurrCell) -> Dict[str, float]:
     """The pass bounds of a cell (N, m/s, m); see the module docstring."""
     v_off = off_burr_feed(scenario)
-    k_c = scenario.process.cutting_coefficient
+    k_c = _cutting_coefficient(scenario)
     return {
         "max_chamfering_force_N": 2 * cell.force
         + k_c * cell.height * cell.thickness * v_off,
