@@ -10,12 +10,11 @@ one line per cell and the pass count. Usage:
 
 import argparse
 import json
-import multiprocessing
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 
 from deburr_drake.runs import profile_envelope as pe
+from deburr_drake.runs.envelope import run_cells
 
 
 def _floats(text, scale=1.0):
@@ -51,30 +50,24 @@ def main(argv=None) -> int:
           f"{'mm/s':>5s} | {'mm/s':>6s} {'mm/s':>5s} | {'':>5s} | "
           f"{'':>13s} | {'s':>4s} {'s':>4s} |")
     start = time.perf_counter()
-    rows = []
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(args.workers, mp_context=context) as pool:
-        futures = [pool.submit(pe.run_fillet_cell, cell, args.scenario,
-                               args.scenario_text) for cell in cells]
-        for cell, future in zip(cells, futures):
-            try:
-                row = future.result()
-            except Exception as e:  # a crashed run is a failed cell
-                rows.append({"cell": vars(cell), "error": repr(e),
-                             "passed": 0.0})
-                print(f"{cell.label:>26s}: ERROR {e!r}", flush=True)
-                continue
-            rows.append(row)
-            print(f"{cell.label:>26s} | "
-                  f"{row['chamfer_depth_rms_error_mm']:9.4f} "
-                  f"{row['chamfer_depth_max_error_mm']:6.3f} | "
-                  f"{row['chamfering_force_rms_error_N']:7.3f} | "
-                  f"{row['feed_line_mm_s']:9.2f} {row['law_line_mm_s']:5.2f} "
-                  f"| {row['feed_fillet_mm_s']:6.2f} "
-                  f"{row['law_fillet_mm_s']:5.2f} | "
-                  f"{row['edge_coverage']:5.3f} | {row['stop_reason']:>13s} "
-                  f"| {row['sim_time_s']:4.0f} {row['wall_time_s']:4.0f} | "
-                  f"{'PASS' if row['passed'] else 'FAIL'}", flush=True)
+
+    def show(cell, row):
+        if "error" in row:
+            print(f"{cell.label:>26s}: ERROR {row['error']}", flush=True)
+            return
+        print(f"{cell.label:>26s} | "
+              f"{row['chamfer_depth_rms_error_mm']:9.4f} "
+              f"{row['chamfer_depth_max_error_mm']:6.3f} | "
+              f"{row['chamfering_force_rms_error_N']:7.3f} | "
+              f"{row['feed_line_mm_s']:9.2f} {row['law_line_mm_s']:5.2f} "
+              f"| {row['feed_fillet_mm_s']:6.2f} "
+              f"{row['law_fillet_mm_s']:5.2f} | "
+              f"{row['edge_coverage']:5.3f} | {row['stop_reason']:>13s} "
+              f"| {row['sim_time_s']:4.0f} {row['wall_time_s']:4.0f} | "
+              f"{'PASS' if row['passed'] else 'FAIL'}", flush=True)
+
+    rows = run_cells(pe.run_fillet_cell, cells, args.scenario,
+                     args.scenario_text, workers=args.workers, on_row=show)
     wall = time.perf_counter() - start
     passed = sum(int(r["passed"]) for r in rows)
     print(f"\n{passed}/{len(rows)} cells pass; wall time {wall:.0f} s "

@@ -712,22 +712,6 @@ class ProfileContour(Contour):
         return self._center.copy()
 
     @property
-    def vertices(self):
-        return self._vertices.copy()
-
-    @property
-    def fillet_radius(self):
-        return self._fillet
-
-    @property
-    def material(self):
-        return self._material
-
-    @property
-    def offset(self):
-        return self._offset
-
-    @property
     def start_angle(self):
         return self._start_angle
 

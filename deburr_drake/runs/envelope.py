@@ -35,7 +35,7 @@ from __future__ import annotations
 import copy
 import math
 from dataclasses import asdict, dataclass
-from typing import Dict, Iterable, List, Optional
+from typing import Callable, Dict, Iterable, List, Optional
 
 import numpy as np
 
@@ -45,7 +45,7 @@ from deburr_drake.runs.pass_metrics import TRANSIENT
 __all__ = ["BurrCell", "burr_bounds", "burr_metrics", "burr_scenario",
            "run_burr_cell", "GRID_HEIGHTS", "GRID_LENGTHS", "GRID_FORCES",
            "grid", "off_burr_feed", "DEPTH_RMS_LIMIT", "SPEED_FACTOR",
-           "LEAD_TIME"]
+           "LEAD_TIME", "run_cells"]
 
 #: The grid of the issue: burr height (m), burr length (m of arc), desired
 #: chamfering force (N).
@@ -212,3 +212,25 @@ def run_burr_cell(cell: BurrCell, base_name: str = "paper",
     return {"cell": asdict(cell), "bounds": burr_bounds(sc, cell),
             "sim_time_s": log.sim_time, "wall_time_s": log.wall_time,
             **burr_metrics(log.signals, sc, cell)}
+
+
+def run_cells(run: Callable, cells: list, *args, workers: int = 2,
+              on_row: Optional[Callable] = None) -> List[dict]:
+    """``run(cell, *args)`` for every cell in ``workers`` spawned
+    processes; the rows in the cells' order, a crashed run as {"cell",
+    "error", "passed": 0.0}; ``on_row(cell, row)`` as each is ready."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+    rows = []
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(workers, mp_context=context) as pool:
+        futures = [pool.submit(run, cell, *args) for cell in cells]
+        for cell, future in zip(cells, futures):
+            try:
+                row = future.result()
+            except Exception as e:  # a crashed run is a failed cell
+                row = {"cell": vars(cell), "error": repr(e), "passed": 0.0}
+            rows.append(row)
+            if on_row is not None:
+                on_row(cell, row)
+    return rows
