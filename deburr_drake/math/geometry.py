@@ -788,7 +788,7 @@ class ProfileContour(Contour):
             i = self._index[k]
             if self._aSig[i] < 0:
                 continue   # the centre on the free side: no fold
-            cap = min(width, 0.5 * self._aR[i])
+            cap = min(width, 0.9 * self._aR[i])
             a, b = self._U[k], self._U[k] + self._seg_len[k]
             before = (a - us) % Ltot
             after = (us - b) % Ltot
