@@ -758,9 +758,13 @@ class ProfileContour(Contour):
         from the path's origin. Arcs get one station every 2 pi /
         ``segments_per_turn`` rad, lines one every ``max_step`` m at
         least. Where a fillet's centre lies in the material the band is
-        at most half the fillet's radius deep there (its far side would
-        fold over the centre), deepening again at 1 m per m along the
-        path. ValueError if the band's far side overlaps itself or the
+        at most 0.9 times the fillet's radius deep there (its far side
+        would fold over the centre), deepening again at 1 m per m along
+        the path. (Drake's pressure field, E times the distance to the
+        surface over the largest such distance, then rises more slowly
+        under the top face in that thinner wall: at half the radius the
+        force in a boss's 4 mm fillet was 2.10 N at 0.5 mm, at 0.9 times
+        2.49 N, against 3.46 N on a line.) ValueError if the band's far side overlaps itself or the
         profile (walls closer than ``width``)."""
         width = _finite_scalar(width, "width")
         if width <= 0.0:
