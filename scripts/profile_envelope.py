@@ -30,6 +30,9 @@ def main(argv=None) -> int:
     p.add_argument("--forces", default=None, help="desired forces, N")
     p.add_argument("--scenario", default="paper")
     p.add_argument("--scenario-text", default=None)
+    p.add_argument("--from-json", default=None,
+                   help="print the table of a --json file instead of running"
+                   " (the feed law's columns recomputed)")
     args = p.parse_args(argv)
     if args.workers < 1:
         p.error("--workers must be >= 1")
@@ -66,8 +69,23 @@ def main(argv=None) -> int:
               f"| {row['sim_time_s']:4.0f} {row['wall_time_s']:4.0f} | "
               f"{'PASS' if row['passed'] else 'FAIL'}", flush=True)
 
-    rows = run_cells(pe.run_fillet_cell, cells, args.scenario,
-                     args.scenario_text, workers=args.workers, on_row=show)
+    if args.from_json:
+        from deburr_drake.config import load_scenario
+        with open(args.from_json) as f:
+            rows = json.load(f)["rows"]
+        base = load_scenario(args.scenario, text=args.scenario_text)
+        for row in rows:
+            cell = pe.FilletCell(**row["cell"])
+            if "error" not in row:
+                laws = pe.law_feeds(pe.fillet_scenario(base, cell),
+                                    row["fillet_curvature_1_m"])
+                row["law_line_mm_s"], row["law_fillet_mm_s"] = (
+                    v * 1e3 for v in laws)
+            show(cell, row)
+    else:
+        rows = run_cells(pe.run_fillet_cell, cells, args.scenario,
+                         args.scenario_text, workers=args.workers,
+                         on_row=show)
     wall = time.perf_counter() - start
     passed = sum(int(r["passed"]) for r in rows)
     print(f"\n{passed}/{len(rows)} cells pass; wall time {wall:.0f} s "

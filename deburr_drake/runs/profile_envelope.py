@@ -35,7 +35,7 @@ from deburr_drake.runs.pass_metrics import TRANSIENT, pass_metrics
 
 __all__ = ["FilletCell", "GRID_FILLETS", "GRID_SIDES", "GRID_FORCES",
            "HALF_SIDE", "LEAD", "TAIL", "LIMITS", "grid", "fillet_scenario",
-           "first_fillet", "fillet_metrics", "run_fillet_cell"]
+           "first_fillet", "fillet_metrics", "run_fillet_cell", "law_feeds"]
 
 #: m: cutter radius + 1 mm to 30 mm (the 60 mm square's circle) on the
 #: paper's 3 mm cutter.
@@ -116,12 +116,23 @@ def fillet_scenario(base, cell: FilletCell, *, max_duration: float = 90.0):
 
 
 def _law_feed(scenario, scale: float) -> float:
+    """The feed law's steady feed (m/s) where g is ``scale`` times the
+    line's: (f_d - P'_th) / g (control.command.feedrate's fixed point), v0
+    when f_d - P'_th is within v_eps."""
     p, c = scenario.process, scenario.command
     g = p.cutting_coefficient * scale * scenario.task.desired_depth \
         * scenario.tool.engagement
     excess = scenario.task.desired_chamfering_force \
         - p.threshold_power_force
-    return max(c.default_feed, excess / g)
+    return excess / g if excess > c.force_offset else c.default_feed
+
+
+def law_feeds(scenario, curvature: float):
+    """(line, fillet) steady feeds (m/s) of the feed law, the fillet's of
+    ``curvature`` (1/m)."""
+    d, r = scenario.task.desired_depth, scenario.tool.cutter_radius
+    return (_law_feed(scenario, 1.0),
+            _law_feed(scenario, removal_scale(curvature, d, r)))
 
 
 def fillet_metrics(log, scenario) -> Dict[str, float]:
@@ -154,9 +165,8 @@ def fillet_metrics(log, scenario) -> Dict[str, float]:
         if np.any(on_line) else math.nan,
         "feed_fillet_mm_s": float(np.mean(v[in_fillet]) * 1e3)
         if np.any(in_fillet) else math.nan,
-        "law_line_mm_s": _law_feed(scenario, 1.0) * 1e3,
-        "law_fillet_mm_s": _law_feed(scenario,
-                                     removal_scale(kappa, d, r)) * 1e3,
+        "law_line_mm_s": law_feeds(scenario, kappa)[0] * 1e3,
+        "law_fillet_mm_s": law_feeds(scenario, kappa)[1] * 1e3,
     })
     ok = log.completed_pass and all(
         np.isfinite(out[k]) and out[k] <= limit
