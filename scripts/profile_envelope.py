@@ -72,7 +72,8 @@ def main(argv=None) -> int:
     if args.from_json:
         from deburr_drake.config import load_scenario
         with open(args.from_json) as f:
-            rows = json.load(f)["rows"]
+            saved = json.load(f)
+        rows = saved["rows"]
         base = load_scenario(args.scenario, text=args.scenario_text)
         for row in rows:
             cell = pe.FilletCell(**row["cell"])
@@ -86,11 +87,12 @@ def main(argv=None) -> int:
         rows = run_cells(pe.run_fillet_cell, cells, args.scenario,
                          args.scenario_text, workers=args.workers,
                          on_row=show)
-    wall = time.perf_counter() - start
+    wall = saved["wall_time_s"] if args.from_json \
+        else time.perf_counter() - start
     passed = sum(int(r["passed"]) for r in rows)
     print(f"\n{passed}/{len(rows)} cells pass; wall time {wall:.0f} s "
           f"with {args.workers} workers")
-    if args.json:
+    if args.json and not args.from_json:
         with open(args.json, "w") as f:
             json.dump({"rows": rows, "wall_time_s": wall}, f, indent=2)
     return 0 if passed == len(rows) else 1
