@@ -232,22 +232,13 @@ class Contour(abc.ABC):
         return s
 
 
-class CircularContour(Contour):
-    """Circle of ``radius`` around ``center`` = (x, y, z); z is the contour height.
+class _ClosedAboutCenter(Contour):
+    """A closed contour about ``center`` (x, y, z; z its height), its
+    start at polar angle ``start_angle`` (rad), run in ``direction`` (+1
+    counter-clockwise seen from +z, -1 clockwise)."""
 
-    Material lies OUTSIDE the circle (inner edge of a tube, tool inside):
-    phi = radius - rho, n1 = radial outward (rho = planar distance to the centre).
-    ``direction`` +1 = counter-clockwise seen from +z, -1 = clockwise; arc
-    position 0 at polar angle ``start_angle`` [rad].  Points closer than 1e-9 m
-    to the centre axis raise ValueError (n1 undefined).
-    """
-
-    def __init__(self, center, radius, start_angle=0.0, direction=1):
+    def _set_frame(self, center, start_angle, direction):
         self._center = _vec3_float(center, "center")
-        radius = _finite_scalar(radius, "radius")
-        if radius <= 0.0:
-            raise ValueError(f"radius must be > 0, got {radius}")
-        self._radius = radius
         self._start_angle = _finite_scalar(start_angle, "start_angle")
         if direction not in (1, -1):
             raise ValueError(f"direction must be +1 (counter-clockwise) or -1 (clockwise), got {direction}")
@@ -258,10 +249,6 @@ class CircularContour(Contour):
         return self._center.copy()
 
     @property
-    def radius(self):
-        return self._radius
-
-    @property
     def start_angle(self):
         return self._start_angle
 
@@ -270,16 +257,38 @@ class CircularContour(Contour):
         return self._direction
 
     @property
-    def length(self):
-        return 2.0 * math.pi * self._radius
-
-    @property
     def closed(self):
         return True
 
     @property
     def height(self):
         return float(self._center[2])
+
+
+class CircularContour(_ClosedAboutCenter):
+    """Circle of ``radius`` around ``center`` = (x, y, z); z is the contour height.
+
+    Material lies OUTSIDE the circle (inner edge of a tube, tool inside):
+    phi = radius - rho, n1 = radial outward (rho = planar distance to the centre).
+    ``direction`` +1 = counter-clockwise seen from +z, -1 = clockwise; arc
+    position 0 at polar angle ``start_angle`` [rad].  Points closer than 1e-9 m
+    to the centre axis raise ValueError (n1 undefined).
+    """
+
+    def __init__(self, center, radius, start_angle=0.0, direction=1):
+        self._set_frame(center, start_angle, direction)
+        radius = _finite_scalar(radius, "radius")
+        if radius <= 0.0:
+            raise ValueError(f"radius must be > 0, got {radius}")
+        self._radius = radius
+
+    @property
+    def radius(self):
+        return self._radius
+
+    @property
+    def length(self):
+        return 2.0 * math.pi * self._radius
 
     def _planar(self, p):
         """(dx, dy, rho) of p relative to the centre axis (T-generic)."""
@@ -497,7 +506,7 @@ def polyline_self_intersection(points, *, closed=True):
     return None
 
 
-class ProfileContour(Contour):
+class ProfileContour(_ClosedAboutCenter):
     """A closed planar profile: the polygon ``vertices`` (N >= 3, (x, y) in
     m about ``center``, counter-clockwise, not self-intersecting) with
     every corner rounded by an arc of ``fillet_radius``, then offset by
@@ -539,12 +548,7 @@ class ProfileContour(Contour):
         if material not in self.MATERIALS:
             raise ValueError(f"material must be one of {self.MATERIALS}, "
                              f"got {material!r}")
-        if direction not in (1, -1):
-            raise ValueError("direction must be +1 (counter-clockwise) or -1 "
-                             f"(clockwise), got {direction}")
-        self._center = _vec3_float(center, "center")
-        self._direction = int(direction)
-        self._start_angle = _finite_scalar(start_angle, "start_angle")
+        self._set_frame(center, start_angle, direction)
         offset = _finite_scalar(offset, "offset")
         self._vertices, self._fillet, self._material = V.copy(), R, material
         self._offset = offset
@@ -694,30 +698,9 @@ class ProfileContour(Contour):
                 hi = mid
         return 0.5 * (lo + hi)
 
-    # ----- properties -----------------------------------------------------
     @property
     def length(self):
         return self._length
-
-    @property
-    def closed(self):
-        return True
-
-    @property
-    def height(self):
-        return float(self._center[2])
-
-    @property
-    def center(self):
-        return self._center.copy()
-
-    @property
-    def start_angle(self):
-        return self._start_angle
-
-    @property
-    def direction(self):
-        return self._direction
 
     def with_offset(self, offset):
         """The same profile offset by ``offset`` (m) towards the free side
