@@ -8,8 +8,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import List
 
-from deburr_drake.config.checks import (_finite, _non_negative, _positive,
-                                        _require, _vector)
+from deburr_drake.config.checks import (ConfigError, _finite,
+                                        _non_negative, _positive, _require,
+                                        _vector)
+from deburr_drake.math.geometry import ProfileContour
 
 __all__ = ["TubeConfig", "ToolConfig", "EdgeConfig", "SensorConfig",
            "BurrConfig", "ProcessConfig", "RobotConfig", "PartErrorConfig",
@@ -92,15 +94,70 @@ class EdgeConfig:
     in ``direction``. ``straight``: the top edge of a straight wall of the
     ``tube``'s thickness, height and material, ``length`` long, its middle
     above ``tube.position``; the tool runs along ``heading`` with the
-    material on its right."""
+    material on its right. ``profile``: the top edge of a closed profile,
+    the polygon ``vertices`` about ``tube.position`` with every corner
+    rounded by ``fillet_radius``; ``side`` inner: a pocket's edge (the
+    material outside, as the tube's bore), outer: a boss's edge (the
+    material inside); the tube's wall thickness, height, compliant layer
+    and modulus describe its material. The pass starts where the ray from
+    ``tube.position`` at polar angle ``start_angle`` meets the cutter's
+    path (the crossing nearest to ``tube.position``) and runs in
+    ``direction``."""
 
-    kind: str = "circle"  # -, circle or straight
+    kind: str = "circle"  # -, circle, straight or profile
     start_angle: float = 0.0  # rad, polar angle of the contour start
     direction: int = 1  # -, +1 counter-clockwise seen from +z, -1 clockwise
     length: float = 0.1  # m, straight edge only
     heading: float = 1.5707963267948966  # rad, straight: travel direction
+    # m, [x, y] about tube.position, counter-clockwise, at least 3, not
+    # self-intersecting (profile only)
+    vertices: list[list[float]] = field(default_factory=list)
+    fillet_radius: float = 0.008  # m, every corner rounded (profile)
+    side: str = "inner"  # -, profile: inner (pocket) or outer (boss)
 
-    KINDS = ("circle", "straight")
+    KINDS = ("circle", "straight", "profile")
+    SIDES = ("inner", "outer")
+
+    def profile_path(self, center, offset, *, grow=0.0) -> ProfileContour:
+        """The profile's edge grown outward by ``grow`` (m: a pocket
+        larger, a boss larger), offset by ``offset`` (m, the cutter radius)
+        towards the free side, at ``center`` (x, y, z; z the path's
+        height). ValueError says what is wrong with the profile."""
+        pocket = self.side == "inner"
+        return ProfileContour(
+            self.vertices, self.fillet_radius,
+            material="outside" if pocket else "inside",
+            offset=offset - grow if pocket else offset + grow,
+            center=center, start_angle=self.start_angle,
+            direction=self.direction)
+
+    def check_profile(self, tube, tool, part_error):
+        """One ConfigError naming the field if the profile, the cutter's
+        path on it (real and believed), or the wall ``tube.wall_thickness``
+        deep along it cannot be built."""
+        center = list(tube.position[:2]) + [0.0]
+        field, value = "edge.vertices", self.vertices
+        try:
+            path = self.profile_path(center, tool.cutter_radius)
+            field, value = "tube.wall_thickness", tube.wall_thickness
+            path.with_offset(0.0).material_band(
+                tube.wall_thickness, segments_per_turn=tube.mesh_segments,
+                max_step=tube.wall_thickness)
+            field, value = "part_error.radius", part_error.radius
+            self.profile_path(center, tool.cutter_radius,
+                              grow=part_error.radius)
+        except ValueError as e:
+            message = str(e)
+            if "larger than the cutter" in message:
+                field, value = ("edge.fillet_radius", self.fillet_radius) \
+                    if field == "edge.vertices" else (field, value)
+                message = (f"a fillet whose centre is on the free side must "
+                           f"be larger than tool.cutter_radius "
+                           f"({tool.cutter_radius}): {message}")
+            elif "start_angle" in message:
+                field, value = "edge.start_angle", self.start_angle
+            raise ConfigError(f"{field} = {value!r} is invalid: "
+                              f"{message}") from None
 
     def validate(self):
         _require(self.kind in self.KINDS, "edge.kind", self.kind,
@@ -113,6 +170,15 @@ class EdgeConfig:
         _require(self.direction in (1, -1), "edge.direction", self.direction,
                  "1 or -1")
         _positive("edge", "length", self.length)
+        _positive("edge", "fillet_radius", self.fillet_radius)
+        _require(self.side in self.SIDES, "edge.side", self.side,
+                 f"one of {self.SIDES}")
+        if self.kind != "profile":
+            return
+        _require(len(self.vertices) >= 3, "edge.vertices", self.vertices,
+                 "at least 3 points [x, y] (m) for a profile edge")
+        for i, v in enumerate(self.vertices):
+            _vector("edge", f"vertices[{i}]", v, 2, _finite)
 
 
 @dataclass
@@ -275,12 +341,14 @@ class PartErrorConfig:
     the first-order hold, the observer and the start pose use the believed
     part: the real one moved by ``offset``, turned by ``yaw`` about its
     vertical axis (circle: the start angle; straight: the heading about
-    ``tube.position``) and with an inner radius ``radius`` larger."""
+    ``tube.position``; profile: its vertices and start angle about
+    ``tube.position``) and with an inner radius ``radius`` larger (profile:
+    grown outward by ``radius``, a pocket's or a boss's)."""
 
     offset: List[float] = field(
         default_factory=lambda: [0.0, 0.0, 0.0])  # m, believed - real
     yaw: float = 0.0  # rad, believed - real, about the vertical
-    radius: float = 0.0  # m, believed - real inner radius (circle)
+    radius: float = 0.0  # m, believed - real inner radius; profile: growth
 
     def validate(self):
         o = "part_error"

@@ -121,6 +121,8 @@ class Scenario:
                  "simulation.initial_depth", self.simulation.initial_depth,
                  "< tool.cutter_radius and tube.wall_thickness "
                  f"({min(self.tool.cutter_radius, self.tube.wall_thickness)})")
+        if self.edge.kind == "profile":
+            self.edge.check_profile(self.tube, self.tool, self.part_error)
         believed = self.tube.inner_radius + self.part_error.radius
         _require(self.tool.cutter_radius < believed
                  and abs(self.part_error.radius) < self.tube.wall_thickness,
