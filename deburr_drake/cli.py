@@ -497,10 +497,12 @@ def _analyze(args) -> int:
             scenario, at=args.at, after_contact=args.after_contact,
             overrides=overrides,
             progress=lambda m: print(f"  {m}", flush=True))
-    except ConfigError as e:
-        raise explain_no_operating_point(scenario, e, at=args.at,
-                                         after_contact=args.after_contact) \
-            from None
+    except (ConfigError, RuntimeError) as e:
+        explained = explain_no_operating_point(
+            scenario, e, at=args.at, after_contact=args.after_contact)
+        if explained is e:
+            raise
+        raise explained from None
     out.mkdir(parents=True, exist_ok=True)
     if args.validate:
         result["boundaries"] = analysis.validate_boundaries(

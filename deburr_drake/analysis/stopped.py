@@ -32,7 +32,7 @@ def check_analyze_options(*, at=None, after_contact=DEFAULT_TIME_AFTER_CONTACT,
                           "finite duration > 0 s")
 
 
-def explain_no_operating_point(scenario: Scenario, error: ConfigError, *,
+def explain_no_operating_point(scenario: Scenario, error: Exception, *,
                                at=None,
                                after_contact=DEFAULT_TIME_AFTER_CONTACT
                                ) -> ConfigError:
@@ -40,8 +40,11 @@ def explain_no_operating_point(scenario: Scenario, error: ConfigError, *,
     scenario's own run stops (a guard, NaN, an error) before the operating
     point's time, that, with its values and time; otherwise ``error``. Runs
     the scenario as ``simulate`` would, up to the time the operating point
-    would have been taken."""
-    if "no operating point" not in str(error):
+    would have been taken. ``error``: what the analysis raised (a
+    ConfigError saying "no operating point", or a RuntimeError from the
+    simulation, e.g. a NaN)."""
+    if isinstance(error, ConfigError) and \
+            "no operating point" not in str(error):
         return error
     from deburr_drake.cell.diagram import make_deburring_diagram
     from deburr_drake.runs.simulation import simulate

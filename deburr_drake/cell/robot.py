@@ -52,7 +52,8 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.multibody.tree import (FixedOffsetFrame, FrameIndex,
-                                    JacobianWrtVariable, JointIndex,
+                                    JacobianWrtVariable, JointActuatorIndex,
+                                    JointIndex,
                                     SpatialInertia, UnitInertia, WeldJoint)
 
 from deburr_drake.cell.arm import ARM_URL, default_q_guess
@@ -122,8 +123,9 @@ def _set_reflected_inertia(plant, instance, config: RobotConfig):
             f"robot.reflected_inertia = {config.reflected_inertia} is "
             f"invalid: allowed a list of {len(joints)} numbers >= 0 (kg m^2,"
             f" one per joint: {[j.name() for j in joints]}) or an empty list")
-    by_joint = {plant.get_joint_actuator(i).joint().index(): i
-                for i in plant.GetJointActuatorIndices(instance)}
+    # (GetJointActuatorIndices(instance) is empty before Finalize.)
+    by_joint = {plant.get_joint_actuator(JointActuatorIndex(i)).joint().index():
+                JointActuatorIndex(i) for i in range(plant.num_actuators())}
     for joint, inertia in zip(joints, config.reflected_inertia):
         if joint.index() in by_joint:
             actuator = plant.get_mutable_joint_actuator(by_joint[joint.index()])
