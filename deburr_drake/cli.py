@@ -247,7 +247,8 @@ def _run_and_write(args, scenario, out, received, running, found) -> int:
     print()
     _print_metrics(values)
     print(f"\nwrote {files['logs']}, {files['metrics']}, scenario.yaml "
-          + ("" if found is None else "(the designed gains), preflight.json ")
+          + ("(the designed gains) " if found is not None and found.design
+             else "") + ("" if found is None else "preflight.json ")
           + f"and {len(pngs)} figures in {out}/")
     return _exit_code(log, signal_number)
 

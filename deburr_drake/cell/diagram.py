@@ -92,6 +92,11 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
     inverse kinematics for the arm), in contact. With a ``meshcat``, the
     cell is drawn there too (see :mod:`deburr_drake.cell.meshcat`).
 
+    With ``controller.design`` auto (the default for a robot from a file)
+    the gains are designed from the model first and written into
+    ``scenario`` (deburr_drake.cell.gains.resolve_gains; the command line
+    also proves them, deburr_drake.analysis.preflight).
+
     ``extra_logs`` ({name: (system name, output port name)}) logs more
     signals at ``simulation.log_period``, e.g. ``{"feed": ("command_generator",
     "feed"), "state": ("plant", "state")}``: loggers ``log_<name>`` that

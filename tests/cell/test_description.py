@@ -85,14 +85,20 @@ def test_an_unknown_package_is_one_line_naming_it_and_where_it_was_looked_for(tm
     assert "robot.package_paths" in message and "ROS_PACKAGE_PATH" in message
 
 
-def test_stl_and_dae_visuals_are_converted_and_collisions_left_out(tmp_path):
-    share, _ = _package(tmp_path)
+def _meshes(share):
+    """The package's arm: its visual meshes and its geometries by role."""
     config = RobotConfig(model="package://my_arm_data/arm6.urdf", package_paths=[str(share)],
                          flange_frame="flange")
     plant, inspector, roles = _geometries(config)
-    # Two converted meshes (plus the spindle's cylinder); no collision geometry.
     meshes = [g for g in roles[Role.kIllustration]
               if type(inspector.GetShape(g)).__name__ == "Mesh"]
+    return inspector, meshes, roles
+
+
+def test_stl_and_dae_visuals_are_converted_and_collisions_left_out(tmp_path):
+    share, _ = _package(tmp_path)
+    inspector, meshes, roles = _meshes(share)
+    # Two converted meshes (plus the spindle's cylinder); no collision geometry.
     assert len(meshes) == 2
     assert roles[Role.kProximity] == []
     for g in meshes:
@@ -105,11 +111,7 @@ def test_stl_and_dae_visuals_are_converted_and_collisions_left_out(tmp_path):
 def test_a_mesh_that_cannot_be_converted_is_dropped_with_one_warning(tmp_path, capsys):
     share, _ = _package(tmp_path)
     (share / "my_arm_data" / "meshes" / "link5.dae").write_text("not a mesh")
-    config = RobotConfig(model="package://my_arm_data/arm6.urdf", package_paths=[str(share)],
-                         flange_frame="flange")
-    plant, inspector, roles = _geometries(config)
-    meshes = [g for g in roles[Role.kIllustration]
-              if type(inspector.GetShape(g)).__name__ == "Mesh"]
+    _, meshes, _ = _meshes(share)
     assert len(meshes) == 1
     warnings = [line for line in capsys.readouterr().err.splitlines() if "link5.dae" in line]
     assert len(warnings) == 1 and "dropped" in warnings[0]
