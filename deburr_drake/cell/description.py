@@ -23,9 +23,10 @@ the text Drake's parser reads:
 - **drives**: a URDF joint with an effort limit and no ``<transmission>``
   gets one (a simple transmission, gear ratio 1, the effort limit the
   file's);
-- **past the flange**: joints in the subtree below ``robot.flange_frame``
-  (a gripper's fingers) are welded at their default position (0, or the
-  nearest limit), their ``<mimic>`` and transmissions removed.
+- **past the flange**: joints that move off the chain from the base to
+  ``robot.flange_frame`` (a gripper's fingers, past the flange or beside
+  it) are welded at their default position (0, or the nearest limit), their
+  ``<mimic>`` and transmissions removed.
 
 Every change is said once per process in one line on stderr.
 """
@@ -294,15 +295,28 @@ def _weld_urdf_joint(joint):
             joint.remove(child)
 
 
-def _subtree_joints(joints, top: str) -> List:
-    """The joints below link ``top`` (``joints``: (element, parent link,
-    child link))."""
-    below, frontier = [], {top}
-    while frontier:
-        found = [j for j in joints if j[1] in frontier and j not in below]
-        below += found
-        frontier = {j[2] for j in found}
-    return [j[0] for j in below]
+def _off_chain_joints(joints, flange: str) -> List:
+    """The joints not on the chain from the base to link ``flange``
+    (``joints``: (element, parent link, child link)): a gripper's fingers
+    past the flange or beside it."""
+    by_child = {j[2]: j for j in joints}
+    chain, link = set(), flange
+    while link in by_child and by_child[link][0] not in chain:
+        chain.add(by_child[link][0])
+        link = by_child[link][1]
+    return [j[0] for j in joints if j[0] not in chain]
+
+
+def _flange_link(root, name: str):
+    """The link ``robot.flange_frame`` names: a link, or an SDF frame's
+    link (``attached_to``, through other frames); None if neither."""
+    links = {link.get("name") for link in root.iter("link")}
+    frames = {f.get("name"): f.get("attached_to") for f in root.iter("frame")}
+    seen = set()
+    while name not in links and name in frames and name not in seen:
+        seen.add(name)
+        name = frames[name]
+    return name if name in links else None
 
 
 def _urdf_joints(root):
@@ -322,11 +336,15 @@ def _sdf_joints(root):
 
 
 def _weld_past_flange(root, urdf, config, notes):
-    if not config.flange_frame:
+    """Every joint that moves off the chain from the base to the flange
+    (fingers) welded at its default position; the joint names."""
+    flange = _flange_link(root, config.flange_frame) \
+        if config.flange_frame else None
+    if flange is None:
         return set()
     joints = _urdf_joints(root) if urdf else _sdf_joints(root)
     welded = []
-    for joint in _subtree_joints(joints, config.flange_frame):
+    for joint in _off_chain_joints(joints, flange):
         if joint.get("type") in _MOVING:
             welded.append(joint.get("name"))
             if urdf:
@@ -337,9 +355,9 @@ def _weld_past_flange(root, urdf, config, notes):
                     if child.tag not in ("parent", "child", "pose"):
                         joint.remove(child)
     if welded:
-        notes.append(f"joints past robot.flange_frame "
-                     f"{config.flange_frame!r} welded at their default "
-                     f"position: {welded}")
+        notes.append(f"joints off the chain to robot.flange_frame "
+                     f"{config.flange_frame!r} (past it or beside it) welded "
+                     f"at their default position: {welded}")
     return set(welded)
 
 

@@ -133,7 +133,8 @@ def test_conversion_is_done_once(tmp_path):
 def _with_gripper(path):
     """arm6's URDF without transmissions, with a two-finger gripper past
     the flange (prismatic fingers, the second mimicking the first, and 0
-    outside one finger's limits)."""
+    outside one finger's limits) and a joint beside it (on link6, off the
+    chain to the flange)."""
     text = path.read_text()
     gripper = """
 <link name="hand"><inertial><mass value="0.5"/><inertia ixx="1e-3" iyy="1e-3" izz="1e-3" ixy="0" ixz="0" iyz="0"/></inertial></link>
@@ -145,6 +146,9 @@ def _with_gripper(path):
 <joint name="finger_joint2" type="prismatic"><parent link="hand"/><child link="finger2"/>
   <origin xyz="0 0 0.05"/><axis xyz="0 -1 0"/><limit effort="100" lower="0.0" upper="0.04" velocity="0.2"/>
   <mimic joint="finger_joint1"/></joint>
+<link name="side"><inertial><mass value="0.05"/><inertia ixx="1e-5" iyy="1e-5" izz="1e-5" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="side_joint" type="revolute"><parent link="link6"/><child link="side"/>
+  <axis xyz="0 0 1"/><limit effort="10" lower="-1" upper="1" velocity="1"/></joint>
 </robot>"""
     path.write_text(text.replace("</robot>", gripper))
     return path
@@ -172,7 +176,9 @@ def test_a_urdf_without_transmissions_gets_drives_and_its_fingers_are_welded(tmp
     err = capsys.readouterr().err
     lines = [line for line in err.splitlines() if "get a drive" in line]
     assert len(lines) == 1 and "'a1'" in lines[0] and "finger" not in lines[0]
-    assert any("welded" in line and "finger_joint1" in line for line in err.splitlines())
+    welded = [line for line in err.splitlines() if "welded" in line]
+    assert len(welded) == 1
+    assert all(name in welded[0] for name in ("finger_joint1", "finger_joint2", "side_joint"))
 
 
 def test_reflected_inertia_sets_the_drives_rotor_inertia(tmp_path):
