@@ -183,8 +183,8 @@ def closest_tool_position(plant, p_W_tip, *, instance=None, q_guess=None, tool_f
     return (reached, q_sol[arm_idx]) if return_positions else reached
 
 
-#: A point the closest-position search reaches within this (m) is reachable.
-REACHED = 1e-6
+#: A point the closest-position search reaches within this (m) is tried from there.
+REACHED = 1e-5
 
 
 def check_reach(plant, points, *, instance=None, q_guess=None, tool_frame="tool_tip"):

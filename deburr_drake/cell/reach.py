@@ -13,6 +13,12 @@ from deburr_drake.config import ConfigError, Scenario
 __all__ = ["check_part_in_reach"]
 
 
+def _mm(distance: float) -> str:
+    """A distance (m) in mm: one decimal, two digits below 0.1 mm."""
+    mm = distance * 1e3
+    return f"{mm:.1f}" if mm >= 0.1 else f"{mm:.2g}"
+
+
 def _mtime(robot):
     """The model file's modification time (a file rewritten is checked
     again)."""
@@ -71,7 +77,7 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
         raise ConfigError(
             f"tube.position = {list(scenario.tube.position)} is out of the "
             f"arm's reach: {where}, tool tip at {np.round(p, 4).tolist()} m, "
-            f"is {distance * 1e3:.1f} mm beyond the nearest reachable tool "
+            f"is {_mm(distance)} mm beyond the nearest reachable tool "
             "position (tool vertical, joint limits): allowed a part whose "
             f"edge the arm reaches (arm5: [0.40, 0.0, 0.0]; {robot.model!r}"
             ": see its robot.ik_seed and the model's joint limits)")
