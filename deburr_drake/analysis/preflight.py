@@ -21,7 +21,8 @@ on every scenario before anything runs (``--no-preflight`` skips it):
 The map is :func:`deburr_drake.analysis.sampled.period_map` on the cell
 frozen as the analysis freezes it (:func:`frozen_scenario`), taken at the
 first inner-loop sample after the start (2.5 ms), the tool at the start of
-the edge. It is split, as :func:`deburr_drake.analysis.maps.fast_rho`
+the edge, reached with the feedback gains near zero (so the state is the
+same for every gain checked). It is split, as :func:`deburr_drake.analysis.maps.fast_rho`
 does, into the sample at t_k (affine in each gain: f_tau = K s ..., m = K_o
 s_o) and the integration over the period, so rho at other gains costs an
 eigenvalue problem each.
@@ -43,7 +44,8 @@ from deburr_drake.analysis.sampled import (_one_period, _read, _write,
                                            simulator_config,
                                            spectral_radius)
 from deburr_drake.cell.diagram import make_deburring_diagram
-from deburr_drake.cell.gains import GainDesign, design_gains, apply_gains
+from deburr_drake.cell.gains import (GainDesign, apply_gains, design_gains,
+                                     resolve_gains)
 from deburr_drake.config import ConfigError, Scenario, get_field
 from deburr_drake.runs.simulation import make_simulator
 
@@ -60,9 +62,17 @@ _SPLIT = 1e-9  # s: the sample's end within the period
 def start_operating_point(scenario: Scenario) -> OperatingPoint:
     """The cell at the first inner-loop sample after the start that is not
     an outer-loop sample (2.5 ms: the tool at the start of the edge), its
-    updates pending, as an :class:`OperatingPoint`."""
-    diagram = make_deburring_diagram(scenario=scenario)
-    simulator = make_simulator(diagram, scenario)
+    updates pending, as an :class:`OperatingPoint` of ``scenario``. The
+    first period is run with K and K_o at 1e-9 of theirs, so the state
+    does not depend on the gains checked (a gain far too high moves the
+    arm within one sample)."""
+    quiet = copy.deepcopy(scenario)
+    resolve_gains(quiet)
+    c = quiet.controller
+    c.sliding_gain = [1e-9 * k for k in c.sliding_gain]
+    c.orientation_gain = [1e-9 * k for k in c.orientation_gain]
+    diagram = make_deburring_diagram(scenario=quiet)
+    simulator = make_simulator(diagram, quiet)
     simulator.Initialize()
     inner = scenario.controller.control_period
     t = _next_analysis_time(0.5 * inner, inner, scenario.command.period)
