@@ -215,7 +215,8 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
         "tool_distance_m": x_p,
     }
     return GainDesign(K, lam, K_o, lam_o,
-                      [delta_k / c.fuzzy.width_fraction] * len(c.fuzzy.axes),
+                      [round(delta_k / c.fuzzy.width_fraction, 12)]
+                      * len(c.fuzzy.axes),
                       x_max, max_step, numbers)
 
 
