@@ -246,10 +246,12 @@ def _run_and_write(args, scenario, out, received, running, found) -> int:
         pngs = []
     print()
     _print_metrics(values)
-    print(f"\nwrote {files['logs']}, {files['metrics']}, scenario.yaml "
-          + ("(the designed gains) " if found is not None and found.design
-             else "") + ("" if found is None else "preflight.json ")
-          + f"and {len(pngs)} figures in {out}/")
+    written = "scenario.yaml" + (
+        " (the designed gains)" if found is not None and found.design else "")
+    if found is not None:
+        written += ", preflight.json"
+    print(f"\nwrote {files['logs']}, {files['metrics']}, {written} and "
+          f"{len(pngs)} figures in {out}/")
     return _exit_code(log, signal_number)
 
 

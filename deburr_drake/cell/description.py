@@ -173,19 +173,18 @@ def _mesh_file(uri: str, package_map, config, model_dir: Path):
 
 
 def _visual_meshes(root, urdf: bool):
-    """(parent element, visual element, the element holding the URI,
-    setter) of every visual mesh."""
+    """(visual element, the element holding its mesh URI, the URI) of
+    every visual mesh (URDF: ``mesh@filename``; SDF: ``mesh/uri``)."""
     for visual in list(root.iter("visual")):
         mesh = visual.find("geometry/mesh")
         if mesh is None:
             continue
         if urdf:
-            yield visual, mesh, mesh.get("filename", ""), \
-                lambda m=mesh, v="": m.set("filename", v)
+            yield visual, mesh, mesh.get("filename", "")
         else:
             uri = mesh.find("uri")
             if uri is not None:
-                yield visual, uri, (uri.text or "").strip(), None
+                yield visual, uri, (uri.text or "").strip()
 
 
 def _parents(root):
@@ -194,8 +193,8 @@ def _parents(root):
 
 def _convert_visuals(root, urdf, package_map, config, model_dir, notes):
     parents = _parents(root)
-    converted, dropped = 0, []
-    for visual, element, uri, _ in list(_visual_meshes(root, urdf)):
+    converted = 0
+    for visual, element, uri in list(_visual_meshes(root, urdf)):
         try:
             path = _mesh_file(uri, package_map, config, model_dir)
         except ConfigError as e:
@@ -217,7 +216,6 @@ def _convert_visuals(root, urdf, package_map, config, model_dir, notes):
                     reason = f"cannot be converted ({e})"
         if target is None:
             parents[visual].remove(visual)
-            dropped.append(uri)
             notice(f"warning: robot.model {config.model!r}: visual mesh "
                    f"{uri} {reason}: dropped")
             continue
