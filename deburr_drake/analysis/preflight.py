@@ -54,8 +54,11 @@ __all__ = ["Preflight", "preflight", "start_operating_point",
 
 #: The designed K and K_o times this must still give rho < 1.
 GAIN_MARGIN = 2.0
+#: The design's K and K_o are scaled down for the margin to this at most.
+MIN_MARGIN_SCALE = 0.25
 #: Gains the pre-flight names, element by element, then as groups.
-GAIN_FIELDS = ("controller.sliding_gain", "controller.orientation_gain")
+GAIN_FIELDS = ("controller.sliding_gain", "controller.orientation_gain",
+               "controller.null_space_damping")
 _SPLIT = 1e-9  # s: the sample's end within the period
 
 
@@ -190,17 +193,26 @@ class Preflight:
         return out
 
 
+def op_joints(maps: GainMaps) -> int:
+    """The robot's joints (the plant's velocities) at the operating point."""
+    return maps.op.diagram.GetSubsystemByName("plant").num_velocities()
+
+
 def _refusal(scenario: Scenario, maps: GainMaps, rho: float) -> str:
     """The one line naming the gain to lower: an element whose largest
     stable value is the smallest change, else a whole gain vector scaled,
     else all of K and K_o scaled together."""
     candidates = []
     for path in GAIN_FIELDS:
-        values = list(get_field(scenario, path))
+        if path == "controller.null_space_damping" and \
+                op_joints(maps) <= 6:
+            continue
+        value = get_field(scenario, path)
+        values = value if isinstance(value, list) else [value]
         for i, v in enumerate(values):
             if v <= 0:
                 continue
-            name = f"{path}[{i}]"
+            name = f"{path}[{i}]" if isinstance(value, list) else path
             maps.add_path(name, lambda c, n=name, v=v: {n: c * v})
             c = maps.largest_stable(name)
             if c is not None:
@@ -211,7 +223,7 @@ def _refusal(scenario: Scenario, maps: GainMaps, rho: float) -> str:
                 f"at the start pose has rho = {rho:.4f} (> 1); the largest "
                 f"stable {name} is {stable:.3g} with the other gains as "
                 "written (--no-preflight runs anyway)")
-    for path in GAIN_FIELDS:
+    for path in GAIN_FIELDS[:2]:
         values = list(get_field(scenario, path))
         maps.add_path(path, lambda c, p=path, v=values: _scaled(p, v, c))
         c = maps.largest_stable(path)
@@ -276,15 +288,21 @@ def preflight(scenario: Scenario, *,
     maps = GainMaps(op)
     rho = maps.rho_full
     result = Preflight(rho=rho, time=op.time, design=design)
-    if design is not None:
+    scale = 1.0
+    if design is not None and rho < 1.0:
         _both_paths(maps, scenario)
         result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
         scale = 1.0
-        while result.rho_at_margin >= 1.0 and scale > 1e-3:
+        while result.rho_at_margin >= 1.0 and scale > MIN_MARGIN_SCALE:
             scale *= 0.7
             result.rho_at_margin = maps.rho(K=GAIN_MARGIN * scale,
                                             K_o=GAIN_MARGIN * scale)
-        if scale < 1.0:
+        if result.rho_at_margin >= 1.0:
+            # Not the gains (twice a quarter of them is not stable either):
+            # the design as it is, and the margin it does not hold said.
+            scale = 1.0
+            result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
+        elif scale < 1.0:
             design = design.scaled(scale)
             apply_gains(scenario, design)
             result.design, result.margin_scale = design, scale
@@ -293,7 +311,12 @@ def preflight(scenario: Scenario, *,
             _both_paths(maps, scenario)
             result.rho = rho = maps.rho_full
             result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
+    if design is not None:
         n = design.numbers
+        margin = "not computed (unstable at the design)" \
+            if result.rho_at_margin is None else \
+            f"{result.rho_at_margin:.5f}" + (
+                "" if result.rho_at_margin < 1.0 else " (the margin is NOT held)")
         result.lines += [
             f"gains designed from the model (controller.design: auto; "
             f"lightest task mass {n['lightest_task_mass_kg']:.2f} kg, "
@@ -309,16 +332,17 @@ def preflight(scenario: Scenario, *,
             f"  fuzzy.sliding_scales {design.sliding_scales} m/s (Delta_k "
             f"{design.sliding_scales[0] * c.fuzzy.width_fraction * 1e3:g} "
             f"mm/s), fuzzy.position_scale {design.position_scale:g} m",
-            f"  predicted rho {rho:.5f} at the start pose, "
-            f"{result.rho_at_margin:.5f} with K and K_o x {GAIN_MARGIN:g}"]
-    result.seconds = time.perf_counter() - t0
+            f"  predicted rho {rho:.5f} at the start pose, {margin} with K "
+            f"and K_o x {GAIN_MARGIN:g}"]
+    for line in result.lines:
+        say(line)
     if not rho < 1.0:
         raise ConfigError(_refusal(scenario, maps, rho))
+    result.seconds = time.perf_counter() - t0
     result.lines.append(
         f"pre-flight: the sampled loop at the start pose is stable, "
         f"rho = {rho:.5f} ({result.seconds:.1f} s)")
-    for line in result.lines:
-        say(line)
+    say(result.lines[-1])
     return result
 
 

@@ -183,6 +183,28 @@ def closest_tool_position(plant, p_W_tip, *, instance=None, q_guess=None, tool_f
     return (reached, q_sol[arm_idx]) if return_positions else reached
 
 
+def _closest_of_many(plant, p, instance, guess, tool_frame, starts=8):
+    """closest_tool_position from the guess, the model's default posture and
+    ``starts`` postures drawn (seeded) within the joint limits: the nearest
+    of them (one local solve can stop far from the nearest reachable
+    position)."""
+    instance = _arm_instance(plant, instance)
+    arm_idx = _arm_positions(plant, instance)
+    lower = np.maximum(plant.GetPositionLowerLimits()[arm_idx], -np.pi)
+    upper = np.minimum(plant.GetPositionUpperLimits()[arm_idx], np.pi)
+    rng = np.random.default_rng(0)
+    guesses = [guess, plant.GetDefaultPositions()[arm_idx]] + [
+        rng.uniform(lower, upper) for _ in range(starts)]
+    best = None
+    for g in guesses:
+        reached, q = closest_tool_position(plant, p, instance=instance, q_guess=g,
+                                           tool_frame=tool_frame, return_positions=True)
+        d = np.linalg.norm(reached - p)
+        if best is None or d < best[0]:
+            best = (d, reached, q)
+    return best[1], best[2]
+
+
 #: A point the closest-position search reaches within this (m) is tried from there.
 REACHED = 1e-5
 
@@ -207,9 +229,7 @@ def check_reach(plant, points, *, instance=None, q_guess=None, tool_frame="tool_
             except RuntimeError:
                 continue
         else:
-            reached, q_near = closest_tool_position(
-                plant, p, instance=instance, q_guess=guess, tool_frame=tool_frame,
-                return_positions=True)
+            reached, q_near = _closest_of_many(plant, p, instance, guess, tool_frame)
             distance = float(np.linalg.norm(reached - p))
             if distance < REACHED:
                 try:

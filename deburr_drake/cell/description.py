@@ -428,11 +428,34 @@ def prepared_model(package_map, config: RobotConfig):
     for url in sorted(set(re.findall(r"package://[^\s\"'<>]+", text))):
         _package_path(package_map, config, url, "robot.model URI")
     # Joint tags Drake does not read (it warns at every parse); the cell
-    # uses neither.
+    # uses neither. URDF joint friction Drake does not model either: said
+    # once, with the values, for robot.joint_coulomb_friction.
+    friction = {}
     for joint in root.iter("joint"):
         for tag in ("safety_controller", "calibration"):
             for child in joint.findall(tag):
                 joint.remove(child)
+        dynamics = joint.find("dynamics")
+        if dynamics is not None and "friction" in dynamics.attrib:
+            value = dynamics.attrib.pop("friction")
+            if float(value) != 0.0:
+                friction[joint.get("name")] = float(value)
+    # A transmission's mechanicalReduction: Drake warns at every parse and
+    # ignores it (the reflected inertia is drake:rotor_inertia x
+    # drake:gear_ratio^2, robot.reflected_inertia).
+    reductions = 0
+    for actuator in root.iter("actuator"):
+        for child in actuator.findall("mechanicalReduction"):
+            reductions += child.text is not None and \
+                child.text.strip() not in ("1", "1.0")
+            actuator.remove(child)
+    if reductions:
+        notes.append(f"{reductions} <mechanicalReduction>s are not modelled "
+                     "(no rotor inertia with them): give the drives' "
+                     "reflected inertia in robot.reflected_inertia")
+    if friction:
+        notes.append(f"its joint friction {friction} (N m) is not modelled: "
+                     "give it in robot.joint_coulomb_friction")
     collisions = _strip_collisions(root)
     if collisions:
         notes.append(f"its {collisions} collision geometries are not loaded "

@@ -30,6 +30,9 @@ file gives or ``robot.reflected_inertia``):
   the tool-force guard on the first burr). The step keeps g_max h / m
   below :data:`STEP_RATE` (2.5), g_max = k_c (delta* x engagement + the
   tallest burr's area): arm5 and arm6 two steps per sample, as written;
+- more than 6 joints: the null-space posture PD keeps 200 N m/rad and
+  10 N m s/rad unless its damping d (I - J^T J^T+) alone takes more than
+  half the rate's limit, then d to that half and k = 20 d;
 - x_max (``fuzzy.position_scale``): 1.25 ||x_p|| at the part rounded up to
   0.5 m, at least 1 m (y0 = ||x_p|| / x_max inside the rule base).
 
@@ -71,7 +74,8 @@ DESIGNED_FIELDS = ("controller.sliding_gain", "controller.sliding_lambda",
                    "controller.orientation_lambda",
                    "controller.fuzzy.sliding_scales",
                    "controller.fuzzy.position_scale",
-                   "simulation.max_step")
+                   "simulation.max_step", "controller.null_space_stiffness",
+                   "controller.null_space_damping")
 
 
 @dataclass
@@ -85,6 +89,8 @@ class GainDesign:
     sliding_scales: list
     position_scale: float
     max_step: float
+    null_space_stiffness: float = 200.0
+    null_space_damping: float = 10.0
     numbers: Dict[str, float] = field(default_factory=dict)
 
     def as_fields(self) -> Dict[str, object]:
@@ -96,7 +102,9 @@ class GainDesign:
                     list(self.orientation_lambda),
                 "controller.fuzzy.sliding_scales": list(self.sliding_scales),
                 "controller.fuzzy.position_scale": self.position_scale,
-                "simulation.max_step": self.max_step}
+                "simulation.max_step": self.max_step,
+                "controller.null_space_stiffness": self.null_space_stiffness,
+                "controller.null_space_damping": self.null_space_damping}
 
     def scaled(self, factor: float) -> "GainDesign":
         """The design with K and K_o times ``factor`` (the rest as is)."""
@@ -104,7 +112,8 @@ class GainDesign:
             [k * factor for k in self.sliding_gain], list(self.sliding_lambda),
             [k * factor for k in self.orientation_gain],
             list(self.orientation_lambda), list(self.sliding_scales),
-            self.position_scale, self.max_step, dict(self.numbers))
+            self.position_scale, self.max_step, self.null_space_stiffness,
+            self.null_space_damping, dict(self.numbers))
 
 
 def _ceil_to(x: float, step: float) -> float:
@@ -120,8 +129,9 @@ def _nice(v: float) -> float:
     return float(round(math.floor(v / e + 1e-9) * e, 12))
 
 
-def _rates(plant, q, frame_name, K, K_o, period):
-    """The sampled rate of D_v alone, D_w alone and of both."""
+def _rates(plant, q, frame_name, K, K_o, period, d_n=0.0):
+    """The sampled rate of D_v alone, D_w alone and of both (with the
+    null-space damping d_n (I - J^T J^T+) on more than 6 joints)."""
     from pydrake.multibody.tree import JacobianWrtVariable
     context = plant.CreateDefaultContext()
     plant.SetPositions(context, q)
@@ -136,7 +146,9 @@ def _rates(plant, q, frame_name, K, K_o, period):
             np.linalg.solve(M, D)).real) * period)
     D_v = J[3:].T @ np.diag(K) @ J[3:]
     D_w = J[:3].T @ np.diag(K_o) @ J[:3]
-    return rate(D_v), rate(D_w), rate(D_v + D_w)
+    D_n = d_n * (np.eye(J.shape[1]) - J.T @ np.linalg.pinv(J.T)) \
+        if J.shape[1] > 6 else 0.0
+    return rate(D_v), rate(D_w), rate(D_v + D_w + D_n)
 
 
 def design_gains(scenario: Scenario, q=None) -> GainDesign:
@@ -183,6 +195,21 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
         K_o = [_nice(min(k, kw * up)) for k, kw in zip(K_o, K_w)]
         rate_v, rate_w, rate = _rates(plant, q, scenario.robot.tool_frame,
                                       K, K_o, period)
+    # More than 6 joints: the null-space posture PD (stiffness / damping
+    # 20 1/s as written, 200 / 10) within what the rate leaves.
+    d_n, k_n = c.null_space_damping, c.null_space_stiffness
+    n_joints = len(q)
+    if n_joints > 6 and period > 0:
+        d_n, k_n = 10.0, 200.0
+        with_null = _rates(plant, q, scenario.robot.tool_frame, K, K_o,
+                           period, d_n)[2]
+        if with_null > SAMPLED_RATE * 1.2:
+            alone = _rates(plant, q, scenario.robot.tool_frame, [0.0] * 3,
+                           [0.0] * 3, period, 1.0)[2]  # per unit of d_n
+            d_n = _nice(min(10.0, 0.5 * SAMPLED_RATE / alone))
+            k_n = _nice(20.0 * d_n)
+        rate = _rates(plant, q, scenario.robot.tool_frame, K, K_o, period,
+                      d_n)[2]
     slope = min(SLOPE_MAX, SLOPE_RATE * mass / period) if period > 0 \
         else SLOPE_MAX
     learned = max(abs(f[a]) for a in c.fuzzy.axes) if c.fuzzy.axes else 0.0
@@ -217,7 +244,7 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
     return GainDesign(K, lam, K_o, lam_o,
                       [round(delta_k / c.fuzzy.width_fraction, 12)]
                       * len(c.fuzzy.axes),
-                      x_max, max_step, numbers)
+                      x_max, max_step, k_n, d_n, numbers)
 
 
 def apply_gains(scenario: Scenario, design: GainDesign) -> Scenario:
