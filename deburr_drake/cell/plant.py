@@ -3,6 +3,7 @@ friction, and the compliant hydroelastic part its edge belongs to."""
 
 from __future__ import annotations
 
+
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.systems.framework import DiagramBuilder
 
@@ -12,11 +13,10 @@ from deburr_drake.cell.part import (register_compliant_profile,
                                     register_compliant_ring,
                                     register_compliant_wall,
                                     register_tube_visual)
-from deburr_drake.cell.robot import add_robot
+from deburr_drake.cell.robot import add_robot, finalize
 from deburr_drake.config import Scenario
 
 __all__ = ["add_cell_plant"]
-
 
 def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
     """(plant, scene_graph), finalized: the robot (``robot``), its
@@ -46,7 +46,7 @@ def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
             # (process.material_overlap), and off its ends there is no
             # contact either.
             margin=0.0)
-        plant.Finalize()
+        finalize(plant)
         return plant, scene_graph
     tube = scenario.tube
     z_top = tube.position[2] + tube.height
@@ -77,5 +77,5 @@ def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
         outer_radius=tube.inner_radius + tube.wall_thickness,
         z_bottom=tube.position[2], z_top=z_top - tube.compliant_layer_height,
         center_xy=tube.position[:2], n_theta=tube.mesh_segments)
-    plant.Finalize()
+    finalize(plant)
     return plant, scene_graph

@@ -6,14 +6,14 @@ unit."""
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import List
+from typing import Dict, List
 
 from deburr_drake.config.checks import (ConfigError, _finite,
                                         _non_negative, _positive, _require,
                                         _vector)
 from deburr_drake.math.geometry import ProfileContour
 
-__all__ = ["TubeConfig", "ToolConfig", "EdgeConfig", "SensorConfig",
+__all__ = ["package_folder", "PIP_PREFIX", "TubeConfig", "ToolConfig", "EdgeConfig", "SensorConfig",
            "BurrConfig", "ProcessConfig", "RobotConfig", "PartErrorConfig",
            "DropoutConfig", "PartStepConfig", "FaultsConfig", "GuardsConfig"]
 
@@ -299,6 +299,18 @@ class RobotConfig:
     # stays near (elbow up, wrist flipped or not); empty: the model's
     # default (arm5: its ready pose turned towards the part).
     ik_seed: List[float] = field(default_factory=list)
+    # Where the model's package:// URIs (and a package:// robot.model)
+    # resolve, beside the package.xml files above the model and
+    # ROS_PACKAGE_PATH. Relative to the scenario file; an entry
+    # "pip:DIST/sub/folder" is a folder inside the installed Python
+    # distribution DIST (e.g. "pip:example-robot-data/cmeel.prefix/share").
+    package_paths: List[str] = field(
+        default_factory=list)  # -, folders whose sub-folders are packages by name
+    packages: Dict[str, str] = field(
+        default_factory=dict)  # -, {package name: its folder}
+    # Where the model file gives none (drake:rotor_inertia); empty: the file's.
+    reflected_inertia: List[float] = field(
+        default_factory=list)  # kg m^2, per joint: the drives' reflected inertia
 
     #: Models shipped in models/ (deburr_drake.cell.robot.SHIPPED_ROBOTS).
     SHIPPED = ("cartesian_tool", "arm5", "arm6")
@@ -308,14 +320,21 @@ class RobotConfig:
         """Whether ``model`` names a file rather than a shipped model."""
         return self.model not in self.SHIPPED
 
+    def is_package_url(self) -> bool:
+        """Whether ``model`` is a ``package://NAME/...`` URL (resolved
+        through the package folders)."""
+        return isinstance(self.model, str) and \
+            self.model.startswith("package://")
+
     def validate(self):
         o = "robot"
         _require(isinstance(self.model, str) and (
             self.model in self.SHIPPED
             or Path(self.model).suffix.lower() in self.FILE_SUFFIXES),
             f"{o}.model", self.model,
-            f"one of {self.SHIPPED} or a path to a .urdf or .sdf file")
-        if self.is_file():
+            f"one of {self.SHIPPED} or a path (or package:// URL) to a .urdf "
+            "or .sdf file")
+        if self.is_file() and not self.is_package_url():
             _require(Path(self.model).is_file(), f"{o}.model", self.model,
                      "an existing .urdf or .sdf file (no such file)")
         for i, f in enumerate(self.joint_coulomb_friction):
@@ -331,6 +350,53 @@ class RobotConfig:
         for i, q in enumerate(self.ik_seed):
             _require(isinstance(q, (int, float)) and math.isfinite(q),
                      f"{o}.ik_seed[{i}]", q, "a finite angle (rad)")
+        for i, inertia in enumerate(self.reflected_inertia):
+            _non_negative(o, f"reflected_inertia[{i}]", inertia)
+        for i, entry in enumerate(self.package_paths):
+            _require(package_folder(entry).is_dir(),
+                     f"{o}.package_paths[{i}]", entry,
+                     "an existing folder" + _dist_hint(entry))
+        for name, entry in self.packages.items():
+            _require(name != "" and "/" not in name, f"{o}.packages",
+                     name, "package names without '/'")
+            _require(package_folder(entry).is_dir(), f"{o}.packages.{name}",
+                     entry, "an existing folder" + _dist_hint(entry))
+
+
+#: A package folder inside an installed Python distribution:
+#: ``pip:DIST/sub/folder``.
+PIP_PREFIX = "pip:"
+
+
+def package_folder(entry: str) -> Path:
+    """The folder a ``robot.package_paths`` / ``robot.packages`` entry
+    names: a path, or ``pip:DIST/sub/folder``, the folder ``sub/folder``
+    where pip installed the distribution DIST (its site-packages, e.g.
+    ``pip:example-robot-data/cmeel.prefix/share``); a distribution that is
+    not installed gives a path that does not exist."""
+    if not isinstance(entry, str):
+        return Path("/nonexistent")
+    if not entry.startswith(PIP_PREFIX):
+        return Path(entry)
+    from importlib import metadata
+    dist, _, rest = entry[len(PIP_PREFIX):].partition("/")
+    try:
+        root = Path(str(metadata.distribution(dist).locate_file("")))
+    except metadata.PackageNotFoundError:
+        return Path("/nonexistent") / dist
+    return root / rest
+
+
+def _dist_hint(entry) -> str:
+    if isinstance(entry, str) and entry.startswith(PIP_PREFIX):
+        dist = entry[len(PIP_PREFIX):].partition("/")[0]
+        from importlib import metadata
+        try:
+            metadata.distribution(dist)
+        except metadata.PackageNotFoundError:
+            return (f" (no installed Python distribution {dist!r}: "
+                    f"pip install {dist})")
+    return " (relative to the scenario file, or pip:DIST/sub/folder)"
 
 
 @dataclass

@@ -194,6 +194,11 @@ class ControllerConfig:
     CONSTANT_FEED_KINDS = ("impedance", "position")
 
     kind: str = "fuzzy"  # -, the inner-loop law (KINDS)
+    # Where K, lambda, the orientation gains, Delta_k and x_max come from:
+    # designed from the robot model at the start pose
+    # (deburr_drake.cell.gains) and proven by the one-period map
+    # (deburr_drake.analysis.preflight), or as written here.
+    design: str = ""  # -, auto, written, or "": auto for a robot from a file
     sliding_lambda: List[float] = field(
         default_factory=lambda: [40.0, 40.0, 80.0])  # 1/s, lambda
     sliding_gain: List[float] = field(
@@ -228,8 +233,19 @@ class ControllerConfig:
     impedance: ImpedanceConfig = field(default_factory=ImpedanceConfig)
     position: PositionConfig = field(default_factory=PositionConfig)
 
+    DESIGNS = ("", "auto", "written")
+
+    def resolved_design(self, robot) -> str:
+        """``auto`` or ``written``: ``design``, or by default auto for a
+        robot from a file (``robot``: a RobotConfig)."""
+        if self.design:
+            return self.design
+        return "auto" if robot.is_file() else "written"
+
     def validate(self):
         o = "controller"
+        _require(self.design in self.DESIGNS, f"{o}.design", self.design,
+                 "auto, written or '' (auto for a robot from a file)")
         _require(self.kind in self.KINDS, f"{o}.kind", self.kind,
                  "one of " + ", ".join(self.KINDS))
         _vector(o, "sliding_lambda", self.sliding_lambda, 3, _positive)

@@ -11,7 +11,7 @@ from typing import List, Optional
 
 from pydrake.common.yaml import yaml_load_typed
 
-from deburr_drake.config.cell import (EdgeConfig, FaultsConfig, GuardsConfig,
+from deburr_drake.config.cell import (PIP_PREFIX, EdgeConfig, FaultsConfig, GuardsConfig,
                                       PartErrorConfig, ProcessConfig,
                                       RobotConfig, SensorConfig, ToolConfig,
                                       TubeConfig)
@@ -77,6 +77,9 @@ class Scenario:
     """Everything one simulation needs."""
 
     name: str = "point_mass"  # -, names the output directory out/<name>
+    # Its part, task, controller and simulation settings, not its robot
+    # (this file's robot section starts from the defaults).
+    base: str = ""  # -, a shipped scenario or YAML file this one starts from
     robot: RobotConfig = field(default_factory=RobotConfig)
     tube: TubeConfig = field(default_factory=TubeConfig)
     tool: ToolConfig = field(default_factory=ToolConfig)
@@ -357,11 +360,46 @@ def _scenario_file(name_or_path: str) -> Path:
 
 
 def _resolve_robot_model(robot: RobotConfig, directory: Path):
-    """A relative model file in a scenario file is relative to that file."""
-    if robot.is_file() and not Path(robot.model).is_absolute():
+    """A relative model file, package folder or package in a scenario file
+    is relative to that file (``pip:`` entries stay as they are)."""
+    if robot.is_file() and not robot.is_package_url() and \
+            not Path(robot.model).is_absolute():
         candidate = directory / robot.model
         if candidate.is_file():
             robot.model = str(candidate.resolve())
+
+    def resolved(entry):
+        if not isinstance(entry, str) or entry.startswith(PIP_PREFIX) or \
+                Path(entry).is_absolute():
+            return entry
+        candidate = directory / entry
+        return str(candidate.resolve()) if candidate.is_dir() else entry
+    robot.package_paths = [resolved(e) for e in robot.package_paths]
+    robot.packages = {k: resolved(v) for k, v in robot.packages.items()}
+
+
+def _base_of(source: str, path: Path, depth: int = 0) -> Scenario:
+    """The defaults a scenario file starts from: its ``base`` scenario
+    (a shipped name or a file relative to it) with the robot section reset,
+    or the dataclasses' defaults."""
+    import yaml
+    data = yaml.safe_load(source)
+    base = data.get("base", "") if isinstance(data, dict) else ""
+    if not base:
+        return Scenario()
+    _require(isinstance(base, str) and depth < 8, "base", base,
+             "a shipped scenario name or a YAML file (no cycle)")
+    if not (base in scenario_names()):
+        candidate = path.parent / base
+        base = str(candidate) if candidate.is_file() else base
+    base_path = _scenario_file(base)
+    text = base_path.read_text()
+    _check_yaml(text, str(base_path))
+    scenario = yaml_load_typed(filename=str(base_path),
+                               defaults=_base_of(text, base_path, depth + 1))
+    scenario.robot = RobotConfig()
+    scenario.base = ""
+    return scenario
 
 
 def load_scenario(name_or_path: Optional[str] = None, *,
@@ -381,6 +419,7 @@ def load_scenario(name_or_path: Optional[str] = None, *,
                 raise ConfigError(f"--scenario {path}: cannot read: {e}") \
                     from None
             _check_yaml(source, str(path))
+            scenario = _base_of(source, path)
             scenario = yaml_load_typed(filename=str(path), defaults=scenario)
             _resolve_robot_model(scenario.robot, path.parent)
         if text:
