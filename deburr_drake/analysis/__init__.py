@@ -1,5 +1,8 @@
 """Closed-loop stability analysis of the deburring cell with Drake's tools:
-the operating point in steady cutting, the continuous-time linearization
+the verdict on the scenario's run (settled into steady cutting, or an
+oscillation with its frequency, growth and the guard that would stop it),
+the operating point in steady cutting, the 2.5 ms map along the run and
+over the uncertain parameters' ranges, the continuous-time linearization
 and its modes (eq. (8)'s depth time constant), the one-period map of the
 2.5 ms sampled loop and its spectral radius, the normal-force loop's
 margins, predicted against simulated stability limits, and stability
@@ -12,8 +15,8 @@ from deburr_drake.analysis.linearization import (
     ContinuousLinearization, Mode, classify_modes, continuous_state_slices,
     eq8_time_constant, linearize_closed_loop, numerical_jacobian)
 from deburr_drake.analysis.sampled import (
-    SampledLoop, StateEntry, cell_map_entries, period_map, sampled_loop,
-    simulator_config, spectral_radius)
+    FrozenMap, SampledLoop, StateEntry, cell_map_entries, period_map,
+    sampled_loop, simulator_config, spectral_radius)
 from deburr_drake.analysis.frequency import (
     NormalForceLoop, frequency_response, loop_from_map, margins,
     normal_force_loop, plot_bode_nyquist)
@@ -25,6 +28,14 @@ from deburr_drake.analysis.validation import (
     simulated_boundary, simulated_growth, validate_boundaries)
 from deburr_drake.analysis.lyapunov import (
     LyapunovTrace, lyapunov_trace, plot_lyapunov)
+from deburr_drake.analysis.settled import (
+    RunSignals, SettleCheck, SettleTolerances, describe_oscillation,
+    fast_part, first_guard_trip, scan_run, settle_check)
+from deburr_drake.analysis.along import (
+    DEFAULT_SPACING, AnalysisRun, RhoPoint, analysis_run,
+    guard_that_would_stop, plot_rho_along_run, rho_of_map)
+from deburr_drake.analysis.robust import (
+    UNCERTAIN_PARAMETERS, UncertainParameter, robust_margin)
 from deburr_drake.analysis.report import (
     SUMMARY_KEYS, analyze, plot_poles, summary_text, write_analysis)
 
@@ -42,6 +53,12 @@ __all__ = [
     "PARAMETERS", "Parameter", "add_fuzzy_slope", "predicted_boundary",
     "simulated_boundary", "simulated_growth", "validate_boundaries",
     "LyapunovTrace", "lyapunov_trace", "plot_lyapunov",
+    "RunSignals", "SettleCheck", "SettleTolerances", "describe_oscillation",
+    "fast_part", "first_guard_trip", "scan_run", "settle_check",
+    "DEFAULT_SPACING", "AnalysisRun", "RhoPoint", "analysis_run",
+    "guard_that_would_stop", "plot_rho_along_run", "rho_of_map",
+    "UNCERTAIN_PARAMETERS", "UncertainParameter", "robust_margin",
+    "FrozenMap",
     "SUMMARY_KEYS", "analyze", "plot_poles", "summary_text",
     "write_analysis",
 ]
