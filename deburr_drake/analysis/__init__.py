@@ -21,11 +21,12 @@ from deburr_drake.analysis.frequency import (
     NormalForceLoop, frequency_response, loop_from_map, margins,
     normal_force_loop, plot_bode_nyquist)
 from deburr_drake.analysis.maps import (
-    MapAxis, StabilityMap, fast_rho, parse_map, parse_settings, plot_map,
-    stability_map)
+    MapAxis, StabilityMap, fast_rho, field_unit, parse_map, parse_settings,
+    plot_map, stability_map)
 from deburr_drake.analysis.validation import (
-    PARAMETERS, Parameter, add_fuzzy_slope, predicted_boundary,
-    simulated_boundary, simulated_growth, validate_boundaries)
+    PARAMETERS, VERDICT_SCENARIOS, Parameter, add_fuzzy_slope,
+    predicted_boundary, simulated_boundary, simulated_growth,
+    simulated_verdict, validate_boundaries, verdict_row)
 from deburr_drake.analysis.lyapunov import (
     LyapunovTrace, lyapunov_trace, plot_lyapunov)
 from deburr_drake.analysis.settled import (
@@ -33,7 +34,7 @@ from deburr_drake.analysis.settled import (
     fast_part, first_guard_trip, scan_run, settle_check)
 from deburr_drake.analysis.along import (
     DEFAULT_SPACING, AnalysisRun, RhoPoint, analysis_run,
-    guard_that_would_stop, plot_rho_along_run, rho_of_map)
+    guard_that_would_stop, plot_rho_along_run, rho_of_map, without_guards)
 from deburr_drake.analysis.robust import (
     UNCERTAIN_PARAMETERS, UncertainParameter, robust_margin)
 from deburr_drake.analysis.report import (
@@ -50,13 +51,16 @@ __all__ = [
     "NormalForceLoop", "frequency_response", "loop_from_map", "margins",
     "normal_force_loop", "plot_bode_nyquist",
     "MapAxis", "StabilityMap", "fast_rho", "parse_map", "parse_settings", "plot_map", "stability_map",
+    "field_unit",
     "PARAMETERS", "Parameter", "add_fuzzy_slope", "predicted_boundary",
     "simulated_boundary", "simulated_growth", "validate_boundaries",
+    "VERDICT_SCENARIOS", "simulated_verdict", "verdict_row",
     "LyapunovTrace", "lyapunov_trace", "plot_lyapunov",
     "RunSignals", "SettleCheck", "SettleTolerances", "describe_oscillation",
     "fast_part", "first_guard_trip", "scan_run", "settle_check",
     "DEFAULT_SPACING", "AnalysisRun", "RhoPoint", "analysis_run",
     "guard_that_would_stop", "plot_rho_along_run", "rho_of_map",
+    "without_guards",
     "UNCERTAIN_PARAMETERS", "UncertainParameter", "robust_margin",
     "FrozenMap",
     "SUMMARY_KEYS", "analyze", "plot_poles", "summary_text",

@@ -9,7 +9,10 @@ or pass, or ``until`` seconds. On the way it
 
 - captures the operating point (the full Context) at ``at``, moved to the
   next inner-loop sample that is not an outer-loop sample, and on past a
-  burr (as :func:`deburr_drake.analysis.find_operating_point`);
+  burr (as :func:`deburr_drake.analysis.find_operating_point`); without
+  ``at`` (``after_contact`` s after the first contact) also on, 0.5 s at a
+  time, while the run is not steady there (a transient), to the end of
+  the run at most;
 - takes the one-period (2.5 ms) map of the frozen loop
   (:class:`deburr_drake.analysis.FrozenMap`, one diagram for the whole
   run) at points along the pass: in the contact transient (0.25 s after
@@ -45,7 +48,7 @@ from deburr_drake.runs.simulation import _collect, logger_names, \
     make_simulator
 
 __all__ = ["RhoPoint", "AnalysisRun", "analysis_run", "rho_of_map",
-           "guard_that_would_stop", "plot_rho_along_run",
+           "guard_that_would_stop", "plot_rho_along_run", "without_guards",
            "DEFAULT_SPACING"]
 
 #: Seconds of cutting between two maps along the run (default).
@@ -105,7 +108,9 @@ class AnalysisRun:
     map_time_s: float = 0.0
 
 
-def _run_scenario(scenario: Scenario) -> Scenario:
+def without_guards(scenario: Scenario) -> Scenario:
+    """A copy of ``scenario`` with its runtime guards off (the drives'
+    torque clamp as configured: it is the drives, not a guard)."""
     run = copy.deepcopy(scenario)
     run.guards.enabled = False
     return run.validate()
@@ -132,7 +137,7 @@ def analysis_run(scenario: Scenario, *, at: Optional[float] = None,
         raise ConfigError(f"--spacing = {spacing!r} is invalid: allowed a "
                           "time > 0 s")
     scenario.validate()
-    run = _run_scenario(scenario)
+    run = without_guards(scenario)
     duration = run.simulation.duration if until is None else until
     if not (np.isfinite(duration) and duration > 0):
         raise ConfigError(f"--until = {until!r} is invalid: allowed a time "
@@ -223,6 +228,13 @@ def analysis_run(scenario: Scenario, *, at: Optional[float] = None,
                         f"{s['depth']:.3g} m, ||f_n|| "
                         f"{s['normal_force']:.3g} N): no operating point")
                     op_time = np.inf
+                elif at is None and not settle_check(
+                        RunSignals.from_log(_collect(
+                            diagram, context, ["chamfer", "controller"]),
+                            run), t).settled:
+                    # still in a transient (or oscillating): look again
+                    # 0.5 s later; the user's own --at is kept as given
+                    op_time = _next_analysis_time(t + 0.5, period, outer)
                 else:
                     result.op = OperatingPoint(
                         scenario=scenario, diagram=diagram,

@@ -15,7 +15,47 @@ from deburr_drake.analysis.operating_point import (OperatingPoint,
 from deburr_drake.config import ConfigError, Scenario
 
 __all__ = ["MapAxis", "StabilityMap", "parse_map", "parse_settings",
-           "stability_map", "fast_rho", "plot_map"]
+           "stability_map", "fast_rho", "plot_map", "field_unit",
+           "rho_colour_norm"]
+
+
+def field_unit(scenario: Scenario, path: str) -> str:
+    """The unit of a scenario field by dotted name, read from its
+    dataclass's source comment (STYLE: "A field's comment gives its
+    unit"): the comment on the field's line, or the first line of the
+    comment just above it, up to the first comma or full stop; "" when it
+    has none that reads as a unit."""
+    import inspect
+    import re
+    parent_path, _, leaf = path.rpartition(".")
+    leaf = leaf.split("[")[0]
+    parent = get_field(scenario, parent_path) if parent_path else scenario
+    try:
+        lines = inspect.getsource(type(parent)).splitlines()
+    except (OSError, TypeError):
+        return ""
+    for i, line in enumerate(lines):
+        if re.match(rf"\s*{re.escape(leaf)}\s*:", line):
+            j = i
+            while "#" not in lines[j] and j + 1 < len(lines) and \
+                    not re.match(r"\s*\w+\s*:", lines[j + 1]):
+                j += 1  # a default spread over lines
+            comment = lines[j].split("#", 1)[1] if "#" in lines[j] else ""
+            k = i - 1
+            while not comment.strip() and k >= 0 and \
+                    lines[k].strip().startswith("#"):
+                if k == 0 or not lines[k - 1].strip().startswith("#"):
+                    comment = lines[k].strip()[1:]
+                k -= 1
+            unit = re.split(r"[,;]|\.\s|\.$", comment.strip(),
+                            maxsplit=1)[0].strip()
+            symbol = (r"^\(?(m|s|N|Pa|Hz|rad|kg|J|W|mm|1)([/*^]\(?"
+                      r"(m|s|N|Pa|Hz|rad|kg|J|W|mm|\d)\)?)*\)?(\^\d)?\)?$")
+            words = unit.split()
+            ok = words and all(re.match(symbol, w) or w == "per"
+                               for w in words)
+            return unit if ok else ""
+    return ""
 
 
 def parse_settings(scenario: Scenario, specs: Sequence[str]):
@@ -84,9 +124,14 @@ class StabilityMap:
     axes: List[MapAxis]
     rho: np.ndarray  # (n0,) or (n0, n1)
     scenario: str = ""
+    units: dict = None  # field -> unit ("" none)
+
+    def __post_init__(self):
+        self.units = self.units or {}
 
     def to_dict(self):
         return {"fields": [a.field for a in self.axes],
+                "units": [self.units.get(a.field, "") for a in self.axes],
                 "values": [a.values.tolist() for a in self.axes],
                 "rho": self.rho.tolist()}
 
@@ -195,20 +240,40 @@ def stability_map(op: OperatingPoint, axes: Sequence[MapAxis], *,
         rho[index] = rho_of(**overrides)
         if progress:
             progress(f"map {index}: rho = {rho[index]:.4f}")
-    return StabilityMap(list(axes), rho, op.scenario.name)
+    return StabilityMap(list(axes), rho, op.scenario.name,
+                        {a.field: field_unit(op.scenario, a.field)
+                         for a in axes})
 
 
-def plot_map(m: StabilityMap, path, *, boundaries=None):
-    """Heat map of rho with the rho = 1 contour (one field: rho against
-    it), and simulated boundary points on top when given."""
+def rho_colour_norm(rho):
+    """The colour scale of a stability map: centred on rho = 1 (the
+    colour map's middle, yellow in RdYlGn_r), symmetric, wide enough for
+    every value: a cell is green only if rho < 1."""
+    from matplotlib.colors import TwoSlopeNorm
+    spread = max(1e-3, float(np.max(np.abs(np.asarray(rho) - 1.0))))
+    return TwoSlopeNorm(vcenter=1.0, vmin=1.0 - spread, vmax=1.0 + spread)
+
+
+def plot_map(m: StabilityMap, path, *, boundaries=None, units=None):
+    """Heat map of rho with the rho = 1 contour, the colour scale centred
+    on rho = 1 (green below, red above; one field: rho against it), axes
+    labelled with the fields' ``units`` (by field; "" none), simulated
+    boundary points on top when given."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    units = units or m.units
+
+    def label(field):
+        unit = units.get(field, "")
+        return f"{field} ({unit})" if unit else field
+
     fig, ax = plt.subplots(figsize=(6.5, 5))
+    rho_label = "rho, spectral radius of the 2.5 ms map (-)"
     if len(m.axes) == 1:
         ax.plot(m.axes[0].values, m.rho, "o-")
-        ax.axhline(1.0, color="r", lw=1)
-        ax.set(xlabel=m.axes[0].field, ylabel="rho")
+        ax.axhline(1.0, color="r", lw=1, label="rho = 1")
+        ax.set(xlabel=label(m.axes[0].field), ylabel=rho_label)
         for b in boundaries or []:
             if b["parameter"] == m.axes[0].field and b.get("simulated"):
                 ax.axvline(b["simulated"], color="k", ls="--",
@@ -216,18 +281,18 @@ def plot_map(m: StabilityMap, path, *, boundaries=None):
     else:
         x, y = m.axes[0].values, m.axes[1].values
         mesh = ax.pcolormesh(x, y, m.rho.T, shading="nearest",
-                             cmap="RdYlGn_r", vmin=min(0.9, m.rho.min()),
-                             vmax=max(1.1, m.rho.max()))
-        fig.colorbar(mesh, ax=ax, label="rho (spectral radius)")
+                             cmap="RdYlGn_r", norm=rho_colour_norm(m.rho))
+        fig.colorbar(mesh, ax=ax, label=rho_label + ", centred on 1")
         if m.rho.min() < 1 < m.rho.max():
             ax.contour(x, y, m.rho.T, levels=[1.0], colors="k")
-        ax.set(xlabel=m.axes[0].field, ylabel=m.axes[1].field)
+        ax.set(xlabel=label(m.axes[0].field), ylabel=label(m.axes[1].field))
         for b in boundaries or []:
             if b["parameter"] == m.axes[0].field and b.get("simulated"):
                 ax.axvline(b["simulated"], color="k", ls="--")
             if b["parameter"] == m.axes[1].field and b.get("simulated"):
                 ax.axhline(b["simulated"], color="k", ls="--")
-    ax.set_title(f"{m.scenario}: stability of the sampled loop")
+    ax.set_title(f"{m.scenario}: stability of the sampled loop "
+                 "(rho < 1 stable)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -131,37 +131,56 @@ def analyze(scenario: Scenario, *, at: float = None,
     if op is not None:
         check = settle_check(sig, op.time, tol)
     else:
-        from deburr_drake.analysis.settled import SettleCheck
-        end = at if at is not None else run.contact_time + after_contact
-        check = SettleCheck(False, end - tol.window, end, reasons=[
-            run.op_note or f"the run ended at {run.end_time:.3f} s "
-            f"({run.stop_reason}) before the analysed time"])
+        check = settle_check(sig, run.end_time, tol)
+        check.settled = False
+        check.reasons.append(run.op_note or (
+            f"no steady operating point from "
+            f"{at if at is not None else run.contact_time + after_contact:.3f}"
+            f" s to the end of the run ({run.end_time:.3f} s, "
+            f"{run.stop_reason})"))
     result["settle_check"] = check.to_dict()
     guard = guard_that_would_stop(run, scenario)
     result["guard_that_would_stop"] = guard
-    oscillating = any("oscillat" in r for r in check.reasons)
-    late = None
+    final = settle_check(sig, run.end_time, tol)
+    late, osc = None, None
     if check.settled:
         late = scan_run(sig, op.time, run.end_time, tol)
-    if not check.settled or late is not None:
-        start = (late.start if late is not None
-                 else run.contact_time + 0.5)
-        osc = describe_oscillation(sig, start, tol)
-        result["oscillation"] = osc
-        if late is not None or oscillating or osc["start_time"] is not None:
+        if late is not None:
+            osc = describe_oscillation(sig, late.start, tol)
+            if osc["start_time"] is None or not (
+                    osc.get("sustained") or not final.settled):
+                late = None  # a passing transient (a burr's entry)
+    if not check.settled:
+        osc = describe_oscillation(sig, run.contact_time + 0.5, tol)
+        transient = op is not None and final.settled
+        if run.stop_reason in ("nan", "error"):
             result["verdict"] = "unstable"
-            where = (f"steady at the analysed time {op.time:.3f} s but not "
-                     f"from {late.end - tol.window:.2f} s: "
-                     if late is not None else
-                     f"not steady over [{check.start:.3f}, {check.end:.3f}]"
-                     " s: ")
-            reasons = (late or check).reasons
             result["verdict_reason"] = (
-                where + "; ".join(reasons[:2]) + "; "
-                + _oscillation_reason(osc, guard))
-        else:
+                f"the run failed at {run.end_time:.3f} s "
+                f"({run.stop_detail}); " + _oscillation_reason(osc, guard))
+        elif transient or (op is None and run.op_note):
             result["verdict"] = "not settled"
-            result["verdict_reason"] = "; ".join(check.reasons)
+            result["verdict_reason"] = (
+                f"not steady over [{check.start:.3f}, {check.end:.3f}] s: "
+                + "; ".join(check.reasons[:3])
+                + (f"; steady at the end of the run ({run.end_time:.2f} s):"
+                   " analyse a later time (--at)" if transient else ""))
+        else:
+            result["verdict"] = "unstable"
+            result["verdict_reason"] = (
+                f"not steady over [{check.start:.3f}, {check.end:.3f}] s "
+                "and at the end of the run: " + "; ".join(
+                    check.reasons[:2]) + "; "
+                + _oscillation_reason(osc, guard))
+        result["oscillation"] = osc
+    elif late is not None:
+        result["oscillation"] = osc
+        result["verdict"] = "unstable"
+        result["verdict_reason"] = (
+            f"steady at the analysed time {op.time:.3f} s but not over "
+            f"[{late.start:.2f}, {late.end:.2f}] s: "
+            + "; ".join(late.reasons[:2]) + "; "
+            + _oscillation_reason(osc, guard))
     if not check.settled:
         result["operating_point"] = op.summary() if op is not None else None
         result["rho_along_run"] = [p.to_dict() for p in run.points]
@@ -432,5 +451,6 @@ def write_analysis(result: Dict, out) -> Dict[str, Path]:
     if "map" in objects:
         from deburr_drake.analysis.maps import plot_map
         files["map"] = plot_map(objects["map"], out / "stability_map.png",
-                                boundaries=result.get("boundaries"))
+                                boundaries=result.get("boundaries"),
+                                units=objects["map"].units)
     return files

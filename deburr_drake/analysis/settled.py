@@ -130,7 +130,7 @@ def fast_part(t, x, average: float) -> np.ndarray:
     if len(t) < 2:
         return np.zeros_like(x)
     dt = float(np.median(np.diff(t)))
-    n = max(1, int(round(average / dt)))
+    n = 2 * int(round(average / dt / 2)) + 1  # odd: centred
     kernel = np.ones(n)
     total = np.convolve(x, kernel, mode="same")
     count = np.convolve(np.ones_like(x), kernel, mode="same")
@@ -243,7 +243,7 @@ def describe_oscillation(sig: RunSignals, after: float,
     t = sig.t[keep]
     f = sig.chamfering_force[keep]
     out = {"start_time": None, "frequency_hz": None, "amplitude_N": None,
-           "growth_per_s": None, "rms_N": None}
+           "growth_per_s": None, "rms_N": None, "sustained": False}
     if len(t) < 8:
         return out
     r = fast_part(t, f, tol.average)
@@ -258,9 +258,13 @@ def describe_oscillation(sig: RunSignals, after: float,
     hold = max(1, int(round(0.5 / block)))  # sustained for 0.5 s
     sustained = [k for k in range(len(rms))
                  if over[k:k + hold].all() and k + hold <= len(rms)]
-    if not sustained:
+    out["sustained"] = bool(sustained)
+    if sustained:
+        k0 = int(sustained[0])
+    elif over.any():  # over the tolerance, but never for 0.5 s
+        k0 = int(np.argmax(over))
+    else:
         return out
-    k0 = int(sustained[0])
     t0 = float(edges[k0])
     out["start_time"] = t0
     after0 = t >= t0
