@@ -66,6 +66,7 @@ class RhoPoint:
     rho: Optional[float] = None
     frequency_hz: Optional[float] = None  # of the dominant eigenvalue
     decay_rate: Optional[float] = None  # 1/s, -ln(rho) / T
+    rho_oscillatory: Optional[float] = None  # modes above 1 Hz
     burr_area: float = 0.0  # m^2 under the tool
     note: str = ""
     context: object = None  # the run's Context there (robust margin)
@@ -75,16 +76,25 @@ class RhoPoint:
                 "rho": self.rho, "kind": self.kind,
                 "frequency_hz": self.frequency_hz,
                 "decay_rate_per_s": self.decay_rate,
+                "rho_oscillatory": self.rho_oscillatory,
                 "on_burr": self.burr_area > 0, "note": self.note}
 
 
-def rho_of_map(Phi: np.ndarray, period: float) -> Dict[str, float]:
-    """rho, the dominant eigenvalue's frequency (Hz) and the decay rate
-    -ln(rho) / T (1/s: the slowest mode's, negative when it grows)."""
+def rho_of_map(Phi: np.ndarray, period: float, *,
+               oscillatory_hz: float = 1.0) -> Dict[str, float]:
+    """rho, the dominant eigenvalue's frequency (Hz), the decay rate
+    -ln(rho) / T (1/s: the slowest mode's, negative when it grows) and
+    ``rho_oscillatory``, the largest |eig| of the modes above
+    ``oscillatory_hz`` (the loop's oscillations; rho itself is usually
+    the arm's slow joint mode near z = 1, which the contact does not
+    move)."""
     eigs = np.linalg.eigvals(Phi)
     worst = eigs[int(np.argmax(np.abs(eigs)))]
     rho = spectral_radius(Phi)
+    fast = np.abs(np.angle(eigs)) > 2 * np.pi * oscillatory_hz * period
     return {"rho": rho,
+            "rho_oscillatory": float(np.max(np.abs(eigs[fast])))
+            if fast.any() else 0.0,
             "frequency_hz": float(abs(np.angle(worst)) / (2 * np.pi
                                                           * period)),
             "decay_rate": float(-np.log(rho) / period) if rho > 0 else
@@ -177,6 +187,7 @@ def analysis_run(scenario: Scenario, *, at: Optional[float] = None,
                 r = rho_of_map(frozen.at(diagram, context), frozen.period)
                 point.rho, point.frequency_hz, point.decay_rate = \
                     r["rho"], r["frequency_hz"], r["decay_rate"]
+                point.rho_oscillatory = r["rho_oscillatory"]
             except (RuntimeError, ValueError) as e:
                 point.note = f"map failed: {type(e).__name__}: {e}"
             map_time += time.perf_counter() - t0
@@ -287,6 +298,7 @@ def analysis_run(scenario: Scenario, *, at: Optional[float] = None,
         if p.kind != "transient" and not check.settled:
             p.note = "not steady: " + "; ".join(check.reasons[:2])
             p.rho = p.frequency_hz = p.decay_rate = None
+            p.rho_oscillatory = None
     return result
 
 

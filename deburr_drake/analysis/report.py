@@ -215,7 +215,7 @@ def analyze(scenario: Scenario, *, at: float = None,
             t=op.time, arc_position=op.signals["arc_position"],
             kind="operating point", rho=r["rho"],
             frequency_hz=r["frequency_hz"], decay_rate=r["decay_rate"],
-            burr_area=op.signals["burr_area"], context=op.context))
+            rho_oscillatory=r["rho_oscillatory"], burr_area=op.signals["burr_area"], context=op.context))
     points.sort(key=lambda p: p.t)
     steady = [p for p in points if p.rho is not None]
     result.update({
@@ -260,6 +260,10 @@ def analyze(scenario: Scenario, *, at: float = None,
             "arc_position": w.arc_position, "kind": w.kind,
             "frequency_hz": w.frequency_hz,
             "decay_rate_per_s": w.decay_rate}
+        o = max(steady, key=lambda p: p.rho_oscillatory)
+        result["smallest_oscillatory_margin"] = {
+            "rho_oscillatory": o.rho_oscillatory, "t": o.t,
+            "arc_position": o.arc_position, "kind": o.kind}
     else:
         w = None
         result["smallest_margin"] = None
@@ -364,13 +368,23 @@ def summary_text(result: Dict) -> str:
             f"{sm['rho']:.5f}, {sm['frequency_hz']:.1f} Hz, decay "
             f"{sm['decay_rate_per_s']:.3g} 1/s) at t = {sm['t']:.2f} s, arc "
             f"{sm['arc_position'] * 1e3:.1f} mm ({sm['kind']})")
+    so = result.get("smallest_oscillatory_margin")
+    if so:
+        lines.append(
+            f"  the loop's oscillatory modes (above 1 Hz): largest |z| "
+            f"{so['rho_oscillatory']:.5f} at t = {so['t']:.2f} s "
+            f"({so['kind']})")
     rb = result.get("robust")
     if rb:
-        at = ", ".join(f"{k} {v:.4g}" for k, v in rb["at"].items())
-        lines.append(
-            f"robust: worst rho {rb['rho_worst']:.5f} (nominal "
-            f"{rb['rho_nominal']:.5f}) over {len(rb['maps'])} maps at "
-            f"t = {rb['point']['t']:.2f} s, at {at}")
+        for key, label in (("", "rho"), ("_oscillatory",
+                                         "|z| of the modes above 1 Hz")):
+            at = ", ".join(f"{k} {v:.4g}" for k, v in
+                           rb["at" + key].items())
+            lines.append(
+                f"robust: worst {label} {rb['rho_worst' + key]:.5f} "
+                f"(nominal {rb['rho_nominal' + key]:.5f}) over "
+                f"{len(rb['maps'])} maps at t = {rb['point']['t']:.2f} s, "
+                f"at {at}")
     lines.append(
         f"normal-force loop: gain margin {result['gain_margin_dB']:.1f} dB "
         f"(at {result['phase_crossover_hz']:.2f} Hz), phase margin "

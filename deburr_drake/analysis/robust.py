@@ -27,7 +27,7 @@ from typing import Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 
-from deburr_drake.analysis.sampled import FrozenMap, spectral_radius
+from deburr_drake.analysis.sampled import FrozenMap
 from deburr_drake.config import Scenario, get_field
 
 __all__ = ["UncertainParameter", "UNCERTAIN_PARAMETERS", "robust_margin"]
@@ -86,7 +86,10 @@ def robust_margin(scenario: Scenario, diagram, context, *,
                   parameters=UNCERTAIN_PARAMETERS,
                   progress: Optional[Callable[[str], None]] = None
                   ) -> Dict:
-    """{rho_nominal, rho_worst, at {name: value}, maps [{values, rho}],
+    """{rho_nominal, rho_worst, at {name: value}, the same for the
+    oscillatory modes (``_oscillatory``: the modes above 1 Hz, see
+    :func:`deburr_drake.analysis.rho_of_map`, with its own corner when it
+    differs), maps [{values, rho, rho_oscillatory}],
     parameters [{name, field, unit, range}], method} at the state
     ``context`` of ``diagram`` (a run of ``scenario``)."""
     say = progress or (lambda m: None)
@@ -100,30 +103,40 @@ def robust_margin(scenario: Scenario, diagram, context, *,
                      and values[p.name] != nominal[p.name]}
         burr = [values[p.name] for p in active if p.field is None]
         modify = _scale_burr(burr[0]) if burr and burr[0] != 1.0 else None
+        from deburr_drake.analysis.along import rho_of_map
         frozen = FrozenMap(scenario, **overrides)
-        rho = spectral_radius(frozen.at(diagram, context, modify))
-        maps.append({"values": dict(values), "rho": rho})
+        r = rho_of_map(frozen.at(diagram, context, modify), frozen.period)
+        rho = r["rho"]
+        maps.append({"values": dict(values), "rho": rho,
+                     "rho_oscillatory": r["rho_oscillatory"]})
         say(f"robust: {overrides or ''}{' burr x' + str(burr[0]) if modify else ''}"
             f" rho = {rho:.5f}")
         return rho
 
     rho0 = rho_at(nominal)
-    worst_end = {}
+    worst_end, worst_fast_end = {}, {}
     for p in active:
         _, lo, hi = p.values(scenario)
         ends = {}
         for v in (lo, hi):
             values = dict(nominal)
             values[p.name] = v
-            ends[v] = rho_at(values)
-        worst_end[p.name] = max(ends, key=ends.get)
-    corner = {p.name: worst_end[p.name] for p in active}
-    rho_at(corner)
+            rho_at(values)
+            ends[v] = (maps[-1]["rho"], maps[-1]["rho_oscillatory"])
+        worst_end[p.name] = max(ends, key=lambda v: ends[v][0])
+        worst_fast_end[p.name] = max(ends, key=lambda v: ends[v][1])
+    rho_at(worst_end)
+    if worst_fast_end != worst_end:
+        rho_at(worst_fast_end)
     worst = max(maps, key=lambda m: m["rho"])
+    fast = max(maps, key=lambda m: m["rho_oscillatory"])
     return {
         "rho_nominal": rho0,
         "rho_worst": worst["rho"],
         "at": worst["values"],
+        "rho_nominal_oscillatory": maps[0]["rho_oscillatory"],
+        "rho_worst_oscillatory": fast["rho_oscillatory"],
+        "at_oscillatory": fast["values"],
         "maps": maps,
         "parameters": [{"name": p.name, "field": p.field, "unit": p.unit,
                         "range": list(p.values(scenario)[1:])}
