@@ -336,15 +336,17 @@ def guard_that_would_stop(run: AnalysisRun, scenario: Scenario
 def plot_rho_along_run(points: List[Dict], path, *, title: str = "",
                        contour_length: float = None):
     """rho against time and against arc position (mm), the unit circle's
-    rho = 1 marked, points not steady (rho None) as crosses at the
-    bottom."""
+    rho = 1 marked, the largest |z| of the oscillatory modes as open
+    circles, points not steady (rho None) as crosses at the bottom."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.2), sharey=True)
+    fig, axes = plt.subplots(1, 2, figsize=(13.5, 4.2), sharey=True)
     good = [p for p in points if p["rho"] is not None]
     bad = [p for p in points if p["rho"] is None]
-    rhos = [p["rho"] for p in good] or [1.0]
+    rhos = [p["rho"] for p in good] + [
+        p["rho_oscillatory"] for p in good if p.get("rho_oscillatory")] \
+        or [1.0]
     lo = min(min(rhos), 0.99)
     hi = max(max(rhos), 1.001)
     pad = 0.1 * (hi - lo)
@@ -366,6 +368,12 @@ def plot_rho_along_run(points: List[Dict], path, *, title: str = "",
             ax.plot([p[key] * scale for p in order],
                     [p["rho"] for p in order], "-", color="0.6", lw=0.7,
                     zorder=0)
+            fast = [p for p in order if p.get("rho_oscillatory")]
+            if fast:
+                ax.plot([p[key] * scale for p in fast],
+                        [p["rho_oscillatory"] for p in fast], "o",
+                        mfc="none", color="0.4", ms=5,
+                        label="|z| of the modes above 1 Hz")
         if bad:
             ax.plot([p[key] * scale for p in bad], [lo - 0.5 * pad] *
                     len(bad), "x", color="r", label="not steady (no map)")
@@ -373,7 +381,7 @@ def plot_rho_along_run(points: List[Dict], path, *, title: str = "",
         ax.set(xlabel=label)
     axes[0].set(ylabel="rho, spectral radius of the 2.5 ms map (-)",
                 ylim=(lo - pad, hi + pad))
-    axes[1].legend(fontsize=8, loc="lower right")
+    axes[1].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.suptitle(f"{title}: stability of the sampled loop along the run "
                  "(rho < 1 stable)")
     fig.tight_layout()

@@ -300,6 +300,11 @@ VERDICT_SCENARIOS = (
      "process: {burrs: [{center_fraction: 0.03, length: 0.008, height: "
      "0.004, thickness: 0.002}]}"),
     ("depth gain x 10", "paper", "controller: {depth_gain: 4.0e-3}"),
+    ("fuzzy: steep surface learned fast (Delta_k 0.5 mm/s, r x 20)",
+     "paper", "controller: {fuzzy: {sliding_scales: [0.0025, 0.0025], "
+     "adaptation_gain: 100000.0}}"),
+    ("sliding lambda 400/s", "paper",
+     "controller: {sliding_lambda: [400.0, 400.0, 50.0]}"),
     ("6-DOF arm as shipped", "paper_6dof", ""),
     ("6-DOF arm, K = 6000", "paper_6dof",
      "controller: {sliding_gain: [6000.0, 6000.0, 4000.0]}"),
