@@ -38,7 +38,7 @@ from pydrake.common import RandomGenerator
 
 from deburr_drake.analysis.operating_point import (
     CONTACT_FORCE, DEFAULT_TIME_AFTER_CONTACT, MAX_TIME_TO_CONTACT,
-    OperatingPoint, _next_analysis_time, _signals)
+    OperatingPoint, _next_analysis_time, _signals, first_contact)
 from deburr_drake.analysis.sampled import FrozenMap, spectral_radius
 from deburr_drake.analysis.settled import (RunSignals, SettleTolerances,
                                            first_guard_trip, settle_check)
@@ -196,19 +196,10 @@ def analysis_run(scenario: Scenario, *, at: Optional[float] = None,
         result.points.append(point)
 
     try:
-        t, contact = 0.0, None
-        while contact is None:
-            s = _signals(diagram, context)
-            if s["depth"] > 0 and s["normal_force"] > CONTACT_FORCE:
-                contact = t
-                break
-            if t >= min(MAX_TIME_TO_CONTACT, duration) - 1e-12:
-                raise ConfigError(
-                    f"scenario '{scenario.name}': the tool never reached "
-                    f"contact (depth > 0, ||f_n|| > {CONTACT_FORCE} N) "
-                    f"within {min(MAX_TIME_TO_CONTACT, duration):g} s: no "
-                    "operating point")
-            t = advance(t + 0.01)
+        contact = first_contact(diagram, context, advance,
+                                limit=min(MAX_TIME_TO_CONTACT, duration),
+                                name=scenario.name)
+        t = context.get_time()
         result.contact_time = contact
         target = at if at is not None else contact + after_contact
         op_time = _next_analysis_time(target, period, outer)

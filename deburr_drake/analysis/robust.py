@@ -25,7 +25,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, Dict, List, Optional, Tuple
 
-import numpy as np
 
 from deburr_drake.analysis.sampled import FrozenMap
 from deburr_drake.config import Scenario, get_field
