@@ -145,7 +145,7 @@ def plot_bode_nyquist(result: NormalForceLoop, path, *, title: str = ""):
     ax.plot(L.real, -L.imag, "--", color="C0", lw=0.7, label="w < 0")
     ax.plot([-1], [0], "r+", ms=14, mew=2, label="-1")
     near = np.abs(L + 1) < 2.5
-    for fk in (0.1, 1.0, 10.0, 100.0):
+    for fk in (0.1, 1.0, 10.0):
         if f[0] <= fk <= f[-1]:
             Lk = frequency_response(result.loop, [fk])[0]
             if abs(Lk + 1) < 2.5:
@@ -161,7 +161,7 @@ def plot_bode_nyquist(result: NormalForceLoop, path, *, title: str = ""):
     ax.set(xlim=(-3.0, 1.0), ylim=(-2.0, 2.0), aspect="equal",
            xlabel="Re L (-)", ylabel="Im L (-)",
            title="Nyquist around -1")
-    ax.legend(fontsize=7, loc="lower right")
+    ax.legend(fontsize=7, loc="upper left")
     fig.suptitle(f"{title} normal-force loop: GM "
                  f"{result.gain_margin_dB:.1f} dB, PM "
                  f"{result.phase_margin_deg:.1f} deg")

@@ -246,6 +246,11 @@ def test_analyze_does_not_linearize_an_oscillating_run(tmp_path, capsys):
     assert data["eigenvalues"] is None and data["robust"] is None
     assert data["oscillation"]["frequency_hz"] > 150.0
     assert "oscillat" in data["verdict_reason"]
+    # the drives' 200 N limit of the shipped point mass (its guard's
+    # joint_torque) would have stopped this run
+    guard = data["guard_that_would_stop"]
+    assert guard["guard"] == "joint_torque" and guard["time"] < 2.5
+    assert guard["guard"] in data["verdict_reason"]
     assert all(p["rho"] is None for p in data["rho_along_run"]
                if p["kind"] != "transient")
     assert not (tmp_path / "poles.png").exists()
