@@ -167,10 +167,13 @@ def analyze(scenario: Scenario, *, at: float = None,
                    " analyse a later time (--at)" if transient else ""))
         else:
             result["verdict"] = "unstable"
+            where = (f"not steady over [{check.start:.3f}, "
+                     f"{check.end:.3f}] s and at the end of the run: "
+                     if op is not None else
+                     "never steady from the analysed time to the end of "
+                     f"the run; over its last {tol.window:g} s: ")
             result["verdict_reason"] = (
-                f"not steady over [{check.start:.3f}, {check.end:.3f}] s "
-                "and at the end of the run: " + "; ".join(
-                    check.reasons[:2]) + "; "
+                where + "; ".join(check.reasons[:2]) + "; "
                 + _oscillation_reason(osc, guard))
         result["oscillation"] = osc
     elif late is not None:

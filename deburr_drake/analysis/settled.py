@@ -187,7 +187,7 @@ def settle_check(sig: RunSignals, end: float,
     if lost.any():
         check.settled = False
         check.reasons.append(
-            f"out of contact in {100 * lost.mean():.0f} % of the window "
+            f"out of contact in {100 * lost.mean():.1f} % of the window "
             f"(depth <= 0 or ||f_n|| <= {tol.contact_force:g} N)")
     growing = []
     for name, x in sig.series().items():
