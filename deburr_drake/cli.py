@@ -229,6 +229,10 @@ def _demo(args) -> int:
     scenario = _load(args)
     if args.duration is not None:
         _check_duration(args.duration)
+        if args.duration <= demo.SETTLE_TIME:
+            _bad(f"--duration = {args.duration!r} is too short for the demo:"
+                 f" allowed more than its {demo.SETTLE_TIME:g} s settling "
+                 "time (it measures after it)")
     duration = 5.0 if args.duration is None else args.duration
     print(f"deburr-drake demo: point-mass testbed, scenario "
           f"'{scenario.name}', {duration:g} s")

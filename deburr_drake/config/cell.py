@@ -22,23 +22,23 @@ class TubeConfig:
     region (the top ``compliant_layer_height`` of the wall) is modelled, as a
     compliant hydroelastic volume mesh."""
 
-    inner_radius: float = 0.030  # m
+    inner_radius: float = 0.030  # m, the edge's radius: the inner wall
     wall_thickness: float = 0.005  # m, radial thickness of the modelled wall
     height: float = 0.050  # m, part spans 0 <= z <= height in its frame
     position: List[float] = field(
         default_factory=lambda: [0.0, 0.0, 0.0])  # m, world, bottom centre
     compliant_layer_height: float = 0.006  # m, top part of the wall modelled
     hydroelastic_modulus: float = 4.5e6  # Pa, 10 N/mm at 0.5 mm
-    hunt_crossley_dissipation: float = 5.0  # s/m
-    # Around the circumference. 120 (chord sag 10 um at 30 mm) with the
+    hunt_crossley_dissipation: float = 5.0  # s/m, the contact's Hunt-Crossley dissipation
+    # -, segments around the circumference. 120 (chord sag 10 um at 30 mm) with the
     # cutter's 0.6 mm mesh gives within 0.3 % the normal force of 240 with
     # a 0.4 mm cutter mesh (1.835/1.830, 3.695/3.700, 5.711/5.728 N at 0.3,
     # 0.5, 0.7 mm), a ripple along the edge of +-0.006 N (against the
     # sensor's 0.1 N noise) and a contact evaluation 38 % cheaper (188
     # against 301 us): scripts/contact_mesh.py.
     mesh_segments: int = 120
-    mesh_radial_cells: int = 2  # through the wall
-    mesh_height_cells: int = 2  # through the modelled layer
+    mesh_radial_cells: int = 2  # -, mesh cells through the wall
+    mesh_height_cells: int = 2  # -, mesh cells through the modelled layer
 
     def validate(self):
         o = "tube"
@@ -70,8 +70,8 @@ class TubeConfig:
 class ToolConfig:
     """The cylindrical burr cutter (vertical axis)."""
 
-    cutter_radius: float = 0.003  # m
-    cutter_length: float = 0.020  # m
+    cutter_radius: float = 0.003  # m, of the cylindrical cutter
+    cutter_length: float = 0.020  # m, along the tool axis
     engagement: float = 0.002  # m, cutter tip below the top edge
     resolution_hint: float = 6.0e-4  # m, the cutter's mesh (TubeConfig)
 
@@ -94,9 +94,9 @@ class EdgeConfig:
     above ``tube.position``; the tool runs along ``heading`` with the
     material on its right."""
 
-    kind: str = "circle"  # circle or straight
+    kind: str = "circle"  # -, circle or straight
     start_angle: float = 0.0  # rad, polar angle of the contour start
-    direction: int = 1  # +1 counter-clockwise seen from +z, -1 clockwise
+    direction: int = 1  # -, +1 counter-clockwise seen from +z, -1 clockwise
     length: float = 0.1  # m, straight edge only
     heading: float = 1.5707963267948966  # rad, straight: travel direction
 
@@ -119,14 +119,14 @@ class EdgeConfig:
 class SensorConfig:
     """Tool force measurement."""
 
-    sample_period: float = 0.0025  # s
+    sample_period: float = 0.0025  # s, the reading is sampled this often
     # Hz, first-order low-pass. The controller cancels the measured force
     # (-f in (36)), which holds the process damping g of (3) through the
     # sampled sensor: with the light point-mass testbed that loop went
     # unstable at 50 Hz and was stable at 20 and 30 Hz (measured).
     cutoff_frequency: float = 20.0
     noise_std: float = 0.0  # N, white noise per axis before the filter
-    noise_seed: int = 0  # seeds the noise (RandomSource)
+    noise_seed: int = 0  # -, seeds the noise (RandomSource)
 
     def validate(self):
         _positive("sensor", "sample_period", self.sample_period)
@@ -144,9 +144,9 @@ class BurrConfig:
     """One burr on the edge: a raised-cosine bump of material the cutter
     removes (its cross-section area adds to g of (3))."""
 
-    center_fraction: float = 0.125  # of the edge length from the start
-    length: float = 0.008  # m of arc
-    height: float = 0.001  # m
+    center_fraction: float = 0.125  # -, fraction of the edge length from the start
+    length: float = 0.008  # m, of arc
+    height: float = 0.001  # m, above the edge
     thickness: float = 0.002  # m; cross-section area = height * thickness
 
     def validate(self, owner="process.burrs[]"):
@@ -178,7 +178,7 @@ class ProcessConfig:
     # (v0 = 1 mm/s).
     smoothing_speed: float = 5.0e-4
     burrs: List[BurrConfig] = field(default_factory=list)
-    finish_bin_length: float = 2.0e-4  # m of arc per surface-finish bin
+    finish_bin_length: float = 2.0e-4  # m, of arc per surface-finish bin
     # s: the process samples the tool's place on the edge for the force law
     # (depth, directions, burr at the cutter), records the finish and
     # removes the burr this often.
@@ -220,13 +220,13 @@ class RobotConfig:
     flange's +z (deburr_drake.cell.robot). The controller's model of the arm
     differs from the plant by ``controller.model_mass_scale``."""
 
-    model: str = "cartesian_tool"  # shipped name, or a .urdf / .sdf path
+    model: str = "cartesian_tool"  # -, shipped name, or a .urdf / .sdf path
     joint_coulomb_friction: List[float] = field(
-        default_factory=list)  # N or N m per joint; empty: none
-    friction_smoothing_speed: float = 1.0e-3  # m/s or rad/s
-    tool_frame: str = "tool_tip"  # frame at the tool tip
-    sensor_joint: str = "ft_sensor"  # weld joint: the force/torque sensor
-    flange_frame: str = ""  # frame the spindle is mounted on; "": none
+        default_factory=list)  # N or N m, per joint; empty: none
+    friction_smoothing_speed: float = 1.0e-3  # m/s or rad/s, v_s of F_c tanh(v / v_s)
+    tool_frame: str = "tool_tip"  # -, frame at the tool tip
+    sensor_joint: str = "ft_sensor"  # -, weld joint: the force/torque sensor
+    flange_frame: str = ""  # -, frame the spindle is mounted on; "": none
     tool_length: float = 0.12  # m, flange face to tool tip (flange_frame)
     tool_mass: float = 1.5  # kg, sensor and spindle (flange_frame)
     # rad, one per joint: the inverse kinematics' start and the posture it
@@ -295,9 +295,9 @@ class PartErrorConfig:
 class DropoutConfig:
     """A window in which the force sensor's reading is lost."""
 
-    start: float = 0.0  # s
-    duration: float = 0.0  # s
-    mode: str = "hold"  # hold: the last reading; zero: 0 N
+    start: float = 0.0  # s, when the reading is lost
+    duration: float = 0.0  # s, for how long
+    mode: str = "hold"  # -, hold: the last reading; zero: 0 N
 
     MODES = ("hold", "zero")
 
@@ -339,7 +339,7 @@ class FaultsConfig:
 
     # N, world, added to the force reading the controller and observer get
     sensor_bias: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
-    noise_scale: float = 1.0  # x sensor.noise_std
+    noise_scale: float = 1.0  # -, multiplies sensor.noise_std
     dropouts: List[DropoutConfig] = field(default_factory=list)
     part_step: PartStepConfig = field(default_factory=PartStepConfig)
 
@@ -362,23 +362,23 @@ class GuardsConfig:
     ``stop_reason`` ``guard:<name>`` and its values at the trip. A limit of
     0 takes the default derived from the models and the task."""
 
-    enabled: bool = True
-    # Trip when any |tau_i| exceeds this fraction of the joint's effort
+    enabled: bool = True  # -, false: no guard runs
+    # -, trip when any |tau_i| exceeds this fraction of the joint's effort
     # limit (the robot model's <effort>); joints without one are not checked.
     joint_torque_fraction: float = 1.0
     tool_force: float = 0.0  # N, |measured f|; 0: 10 x desired |f_t|
     depth: float = 0.0  # m, chamfer depth; 0: min(4 x desired, cutter radius)
     workspace_margin: float = 0.02  # m, around the edge's bounding box
-    contact_lost_time: float = 1.0  # s below contact_force after contact
+    contact_lost_time: float = 1.0  # s, below contact_force after contact
     contact_force: float = 1.0  # N, ||f_n|| above it is contact
-    nan: bool = True  # any NaN or infinity in a logged signal
+    nan: bool = True  # -, any NaN or infinity in a logged signal
     # s; all guards are checked this often, the joint torque also at every
     # inner-loop sample. A multiple of the 2.5 ms inner loop adds no
     # integrator steps. On a 10 s paper run (scripts/bench_guards.py) all
     # guards every 2.5 ms took 4.5-4.7 % of the CPU time; every 10 ms with
     # the torque every 2.5 ms 2.7-2.8 %.
     check_period: float = 0.02
-    # The drives clamp the commanded torque at the effort limits, as real
+    # -; the drives clamp the commanded torque at the effort limits, as real
     # ones do: a guard sees a torque one sample after it is commanded, so
     # without the clamp the plant would take one sample of it.
     saturate_effort: bool = True

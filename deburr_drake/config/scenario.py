@@ -26,18 +26,18 @@ __all__ = ["SimulationConfig", "Scenario", "get_field", "set_field",
 
 @dataclass
 class SimulationConfig:
-    duration: float = 10.0  # s
+    duration: float = 10.0  # s, simulated time (--duration overrides it)
     plant_time_step: float = 0.0  # s; 0: continuous plant
-    contact_approximation: str = "lagged"  # discrete plant only
-    integrator: str = "cenic"
-    accuracy: float = 1.0e-4
+    contact_approximation: str = "lagged"  # -, discrete plant only
+    integrator: str = "cenic"  # -, Drake integrator (INTEGRATORS)
+    accuracy: float = 1.0e-4  # -, the integrator's error-control accuracy
     # s. With cenic and fixed steps it bounds the cutting process's
     # damping the step can hold: cenic treats only the diagonal of the
     # applied forces' d tau / dv implicitly, and the cutting force's g a a^T
     # (a = J^T n2) is off-diagonal on an arm; the paper scenarios take two
-    # steps per 2.5 ms sample (README, numerical choices).
+    # steps per 2.5 ms sample (docs/numerics.md).
     max_step: float = 0.01
-    # False: fixed steps of max_step (accuracy unused). With the 2.5 ms
+    # -; false: fixed steps of max_step (accuracy unused). With the 2.5 ms
     # sampled loop every step ends at a sample anyway; on 12 s of the paper
     # run cenic's error control at 1e-4 took 14 % more steps and 19 % more
     # wall time for means within 1.5e-4 (scripts/integrator_check.py).
@@ -48,7 +48,7 @@ class SimulationConfig:
     # a constant as a 5 ms log did.
     log_period: float = 0.0025
     initial_depth: float = 0.0  # m, tool starts at this depth (in contact)
-    # Stop when the command has run this many edge lengths (0: run for the
+    # -, stop when the command has run this many edge lengths (0: run for the
     # whole duration). 1.0 is one full pass of a closed edge.
     stop_after_passes: float = 0.0
 
@@ -76,7 +76,7 @@ class SimulationConfig:
 class Scenario:
     """Everything one simulation needs."""
 
-    name: str = "point_mass"
+    name: str = "point_mass"  # -, names the output directory out/<name>
     robot: RobotConfig = field(default_factory=RobotConfig)
     tube: TubeConfig = field(default_factory=TubeConfig)
     tool: ToolConfig = field(default_factory=ToolConfig)
