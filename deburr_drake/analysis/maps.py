@@ -20,42 +20,27 @@ __all__ = ["MapAxis", "StabilityMap", "parse_map", "parse_settings",
 
 
 def field_unit(scenario: Scenario, path: str) -> str:
-    """The unit of a scenario field by dotted name, read from its
-    dataclass's source comment (STYLE: "A field's comment gives its
-    unit"): the comment on the field's line, or the first line of the
-    comment just above it, up to the first comma or full stop; "" when it
-    has none that reads as a unit."""
-    import inspect
-    import re
+    """The unit of a scenario field by dotted name, from its dataclass's
+    comment by the configuration's convention
+    (:func:`deburr_drake.config.reference.field_comments`,
+    ``split_unit``): "" when there is none or it is ``-``; an element's
+    unit for an indexed field whose elements differ (``[N, N/m, N s/m]``)."""
+    from deburr_drake.config.reference import field_comments, split_unit
     parent_path, _, leaf = path.rpartition(".")
-    leaf = leaf.split("[")[0]
+    name, _, index = leaf.partition("[")
     parent = get_field(scenario, parent_path) if parent_path else scenario
     try:
-        lines = inspect.getsource(type(parent)).splitlines()
+        comment = field_comments(type(parent)).get(name)
     except (OSError, TypeError):
         return ""
-    for i, line in enumerate(lines):
-        if re.match(rf"\s*{re.escape(leaf)}\s*:", line):
-            j = i
-            while "#" not in lines[j] and j + 1 < len(lines) and \
-                    not re.match(r"\s*\w+\s*:", lines[j + 1]):
-                j += 1  # a default spread over lines
-            comment = lines[j].split("#", 1)[1] if "#" in lines[j] else ""
-            k = i - 1
-            while not comment.strip() and k >= 0 and \
-                    lines[k].strip().startswith("#"):
-                if k == 0 or not lines[k - 1].strip().startswith("#"):
-                    comment = lines[k].strip()[1:]
-                k -= 1
-            unit = re.split(r"[,;]|\.\s|\.$", comment.strip(),
-                            maxsplit=1)[0].strip()
-            symbol = (r"^\(?(m|s|N|Pa|Hz|rad|kg|J|W|mm|1)([/*^]\(?"
-                      r"(m|s|N|Pa|Hz|rad|kg|J|W|mm|\d)\)?)*\)?(\^\d)?\)?$")
-            words = unit.split()
-            ok = words and all(re.match(symbol, w) or w == "per"
-                               for w in words)
-            return unit if ok else ""
-    return ""
+    if comment is None:
+        return ""
+    unit = split_unit(comment.trailing)[0] or split_unit(comment.block)[0]
+    if unit.startswith("["):
+        units = [u.strip() for u in unit[1:-1].split(",")]
+        k = int(index.rstrip("]")) if index else -1
+        unit = units[k] if index and -len(units) <= k < len(units) else ""
+    return "" if unit == "-" else unit
 
 
 def parse_settings(scenario: Scenario, specs: Sequence[str]):
