@@ -490,28 +490,31 @@ def _analyze(args) -> int:
 
     from deburr_drake import analysis
     scenario = _load(args)
-    from deburr_drake.analysis.stopped import (check_analyze_options,
-                                               explain_no_operating_point)
-    from deburr_drake.config import ConfigError
     grid = analysis.parse_map(scenario, args.map) if args.map else None
     overrides = analysis.parse_settings(scenario, args.set or [])
-    check_analyze_options(at=args.at, after_contact=args.after_contact,
-                          lyapunov=args.lyapunov)
+    for name in ("at", "until", "spacing", "lyapunov"):
+        value = getattr(args, name)
+        if value is not None and not (np.isfinite(value) and value > 0):
+            _bad(f"--{name} = {value!r} is invalid: allowed a time > 0 s")
+    if not (np.isfinite(args.after_contact) and args.after_contact >= 0):
+        _bad(f"--after-contact = {args.after_contact!r} is invalid: "
+             "allowed a time >= 0 s")
+    if args.at is not None and args.until is not None and \
+            args.at >= args.until:
+        _bad(f"--at = {args.at!r} is invalid: allowed a time before "
+             f"--until ({args.until!r} s)")
     out = Path(args.out or f"out/{scenario.name}/analysis")
     _check_writable_target(out, "--out", True, is_dir=True)
-    try:
-        result = analysis.analyze(
-            scenario, at=args.at, after_contact=args.after_contact,
-            overrides=overrides,
-            progress=lambda m: print(f"  {m}", flush=True))
-    except (ConfigError, RuntimeError) as e:
-        explained = explain_no_operating_point(
-            scenario, e, at=args.at, after_contact=args.after_contact)
-        if explained is e:
-            raise
-        raise explained from None
     out.mkdir(parents=True, exist_ok=True)
-    if args.validate:
+    result = analysis.analyze(scenario, at=args.at,
+                              after_contact=args.after_contact,
+                              overrides=overrides, until=args.until,
+                              spacing=args.spacing or
+                              analysis.DEFAULT_SPACING,
+                              robust=not args.no_robust,
+                              progress=lambda m: print(f"  {m}", flush=True))
+    settled = result.get("eigenvalues") is not None
+    if args.validate and settled:
         result["boundaries"] = analysis.validate_boundaries(
             result["_objects"]["op"],
             progress=lambda m: print(f"  {m}", flush=True))
@@ -520,13 +523,16 @@ def _analyze(args) -> int:
         result["lyapunov"] = trace.summary
         analysis.plot_lyapunov(trace, out / "lyapunov.png",
                                title=scenario.name)
-    if grid is not None:
+    if grid is not None and settled:
         result["_objects"]["map"] = analysis.stability_map(
             result["_objects"]["op"], grid)
         result["map"] = result["_objects"]["map"].to_dict()
     files = analysis.write_analysis(result, out)
     print()
     print(analysis.summary_text(result))
+    if (args.validate or grid is not None) and not settled:
+        print("no --map / --validate: they need an operating point in "
+              "steady cutting")
     print("\nwrote " + ", ".join(str(p) for p in files.values()))
     return 0
 
@@ -635,8 +641,9 @@ def main(argv=None) -> int:
     _preflight_argument(p)
     p.set_defaults(func=_sweep)
 
-    p = sub.add_parser("analyze", help="closed-loop stability at an "
-                                       "operating point in steady cutting")
+    p = sub.add_parser("analyze", help="is the run stable? the verdict on "
+                                       "the scenario's run, then the "
+                                       "analysis in steady cutting")
     _scenario_arguments(p, "paper", None)
     p.add_argument("--at", type=float, default=None,
                    help="simulated time (s) of the operating point "
@@ -664,6 +671,17 @@ def main(argv=None) -> int:
     p.add_argument("--validate", action="store_true",
                    help="predicted against simulated stability boundaries "
                         "(short runs from the operating point)")
+    p.add_argument("--until", type=float, default=None, metavar="SECONDS",
+                   help="end the analysed run here (default: the "
+                        "scenario's duration or pass)")
+    p.add_argument("--spacing", type=float, default=None,
+                   metavar="SECONDS",
+                   help="seconds of cutting between the maps along the run "
+                        "(default 5; burrs and curvature changes add "
+                        "their own)")
+    p.add_argument("--no-robust", action="store_true",
+                   help="skip the robust margin over the uncertain "
+                        "parameters (11 maps)")
     p.add_argument("--out", default=None,
                    help="output directory (default out/<scenario>/analysis)")
     p.set_defaults(func=_analyze)

@@ -1,5 +1,8 @@
 """Closed-loop stability analysis of the deburring cell with Drake's tools:
-the operating point in steady cutting, the continuous-time linearization
+the verdict on the scenario's run (settled into steady cutting, or an
+oscillation with its frequency, growth and the guard that would stop it),
+the operating point in steady cutting, the 2.5 ms map along the run and
+over the uncertain parameters' ranges, the continuous-time linearization
 and its modes (eq. (8)'s depth time constant), the one-period map of the
 2.5 ms sampled loop and its spectral radius, the normal-force loop's
 margins, predicted against simulated stability limits, and stability
@@ -12,25 +15,32 @@ from deburr_drake.analysis.linearization import (
     ContinuousLinearization, Mode, classify_modes, continuous_state_slices,
     eq8_time_constant, linearize_closed_loop, numerical_jacobian)
 from deburr_drake.analysis.sampled import (
-    SampledLoop, StateEntry, cell_map_entries, period_map, sampled_loop,
-    simulator_config, spectral_radius)
+    FrozenMap, SampledLoop, StateEntry, cell_map_entries, period_map,
+    sampled_loop, simulator_config, spectral_radius)
 from deburr_drake.analysis.frequency import (
     NormalForceLoop, frequency_response, loop_from_map, margins,
     normal_force_loop, plot_bode_nyquist)
 from deburr_drake.analysis.maps import (
-    MapAxis, StabilityMap, fast_rho, parse_map, parse_settings, plot_map,
-    stability_map)
+    MapAxis, StabilityMap, fast_rho, field_unit, parse_map, parse_settings,
+    plot_map, stability_map)
 from deburr_drake.analysis.validation import (
-    PARAMETERS, Parameter, add_fuzzy_slope, predicted_boundary,
-    simulated_boundary, simulated_growth, validate_boundaries)
+    PARAMETERS, VERDICT_SCENARIOS, Parameter, add_fuzzy_slope,
+    predicted_boundary, simulated_boundary, simulated_growth,
+    simulated_verdict, validate_boundaries, verdict_row)
 from deburr_drake.analysis.lyapunov import (
     LyapunovTrace, lyapunov_trace, plot_lyapunov)
 # The pre-flight's function is deburr_drake.analysis.preflight.preflight
 # (not exported here: the name would hide its module).
 from deburr_drake.analysis.preflight import (
     GAIN_MARGIN, GainMaps, Preflight, start_operating_point)
-from deburr_drake.analysis.stopped import (check_analyze_options,
-                                           explain_no_operating_point)
+from deburr_drake.analysis.settled import (
+    RunSignals, SettleCheck, SettleTolerances, describe_oscillation,
+    fast_part, first_guard_trip, scan_run, settle_check)
+from deburr_drake.analysis.along import (
+    DEFAULT_SPACING, AnalysisRun, RhoPoint, analysis_run,
+    guard_that_would_stop, plot_rho_along_run, rho_of_map, without_guards)
+from deburr_drake.analysis.robust import (
+    UNCERTAIN_PARAMETERS, UncertainParameter, robust_margin)
 from deburr_drake.analysis.report import (
     SUMMARY_KEYS, analyze, plot_poles, summary_text, write_analysis)
 
@@ -45,12 +55,20 @@ __all__ = [
     "NormalForceLoop", "frequency_response", "loop_from_map", "margins",
     "normal_force_loop", "plot_bode_nyquist",
     "MapAxis", "StabilityMap", "fast_rho", "parse_map", "parse_settings", "plot_map", "stability_map",
+    "field_unit",
     "PARAMETERS", "Parameter", "add_fuzzy_slope", "predicted_boundary",
     "simulated_boundary", "simulated_growth", "validate_boundaries",
+    "VERDICT_SCENARIOS", "simulated_verdict", "verdict_row",
     "LyapunovTrace", "lyapunov_trace", "plot_lyapunov",
     "GAIN_MARGIN", "GainMaps", "Preflight",
-    "start_operating_point", "check_analyze_options",
-    "explain_no_operating_point",
+    "start_operating_point",
+    "RunSignals", "SettleCheck", "SettleTolerances", "describe_oscillation",
+    "fast_part", "first_guard_trip", "scan_run", "settle_check",
+    "DEFAULT_SPACING", "AnalysisRun", "RhoPoint", "analysis_run",
+    "guard_that_would_stop", "plot_rho_along_run", "rho_of_map",
+    "without_guards",
+    "UNCERTAIN_PARAMETERS", "UncertainParameter", "robust_margin",
+    "FrozenMap",
     "SUMMARY_KEYS", "analyze", "plot_poles", "summary_text",
     "write_analysis",
 ]

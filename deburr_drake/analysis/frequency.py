@@ -129,15 +129,39 @@ def plot_bode_nyquist(result: NormalForceLoop, path, *, title: str = ""):
     axes[0].semilogx(f, 20 * np.log10(np.abs(L)))
     axes[0].axhline(0, color="k", lw=0.5)
     axes[0].set(xlabel="frequency (Hz)", ylabel="|L| (dB)", title="Bode")
+    if np.isfinite(result.phase_crossover_hz):
+        axes[0].axvline(result.phase_crossover_hz, color="r", lw=0.5)
     axes[1].semilogx(f, np.degrees(np.unwrap(np.angle(L))))
     axes[1].axhline(-180, color="k", lw=0.5)
     axes[1].set(xlabel="frequency (Hz)", ylabel="phase (deg)")
-    axes[2].plot(L.real, L.imag, label="L")
-    axes[2].plot(L.real, -L.imag, "--", color="C0", lw=0.7)
-    axes[2].plot([-1], [0], "r+", ms=12)
-    lim = max(2.0, min(10.0, 1.2 * np.max(np.abs(L))))
-    axes[2].set(xlim=(-lim, lim), ylim=(-lim, lim), aspect="equal",
-                xlabel="Re L", ylabel="Im L", title="Nyquist")
+    # Nyquist around -1: the unit circle, -1, both branches (w > 0 solid,
+    # w < 0 dashed), the direction of increasing frequency and a few
+    # frequencies marked; what lies far from -1 is clipped.
+    ax = axes[2]
+    th = np.linspace(0, 2 * np.pi, 200)
+    ax.plot(np.cos(th), np.sin(th), ":", color="0.5", lw=0.8,
+            label="|L| = 1")
+    ax.plot(L.real, L.imag, color="C0", label="L(e^{j w T}), w > 0")
+    ax.plot(L.real, -L.imag, "--", color="C0", lw=0.7, label="w < 0")
+    ax.plot([-1], [0], "r+", ms=14, mew=2, label="-1")
+    near = np.abs(L + 1) < 2.5
+    for fk in (0.1, 1.0, 10.0):
+        if f[0] <= fk <= f[-1]:
+            Lk = frequency_response(result.loop, [fk])[0]
+            if abs(Lk + 1) < 2.5:
+                ax.plot(Lk.real, Lk.imag, "k.", ms=5)
+                ax.annotate(f"{fk:g} Hz", (Lk.real, Lk.imag), fontsize=7,
+                            xytext=(3, 3), textcoords="offset points")
+    idx = np.flatnonzero(near[:-1] & near[1:])
+    if idx.size:
+        i = int(idx[len(idx) // 2])
+        ax.annotate("", xy=(L[i + 1].real, L[i + 1].imag),
+                    xytext=(L[i].real, L[i].imag),
+                    arrowprops=dict(arrowstyle="->", color="C0"))
+    ax.set(xlim=(-3.0, 1.0), ylim=(-2.0, 2.0), aspect="equal",
+           xlabel="Re L (-)", ylabel="Im L (-)",
+           title="Nyquist around -1")
+    ax.legend(fontsize=7, loc="upper left")
     fig.suptitle(f"{title} normal-force loop: GM "
                  f"{result.gain_margin_dB:.1f} dB, PM "
                  f"{result.phase_margin_deg:.1f} deg")

@@ -15,7 +15,32 @@ from deburr_drake.analysis.operating_point import (OperatingPoint,
 from deburr_drake.config import ConfigError, Scenario
 
 __all__ = ["MapAxis", "StabilityMap", "parse_map", "parse_settings",
-           "stability_map", "fast_rho", "plot_map"]
+           "stability_map", "fast_rho", "plot_map", "field_unit",
+           "rho_colour_norm"]
+
+
+def field_unit(scenario: Scenario, path: str) -> str:
+    """The unit of a scenario field by dotted name, from its dataclass's
+    comment by the configuration's convention
+    (:func:`deburr_drake.config.reference.field_comments`,
+    ``split_unit``): "" when there is none or it is ``-``; an element's
+    unit for an indexed field whose elements differ (``[N, N/m, N s/m]``)."""
+    from deburr_drake.config.reference import field_comments, split_unit
+    parent_path, _, leaf = path.rpartition(".")
+    name, _, index = leaf.partition("[")
+    parent = get_field(scenario, parent_path) if parent_path else scenario
+    try:
+        comment = field_comments(type(parent)).get(name)
+    except (OSError, TypeError):
+        return ""
+    if comment is None:
+        return ""
+    unit = split_unit(comment.trailing)[0] or split_unit(comment.block)[0]
+    if unit.startswith("["):
+        units = [u.strip() for u in unit[1:-1].split(",")]
+        k = int(index.rstrip("]")) if index else -1
+        unit = units[k] if index and -len(units) <= k < len(units) else ""
+    return "" if unit == "-" else unit
 
 
 def parse_settings(scenario: Scenario, specs: Sequence[str]):
@@ -84,9 +109,14 @@ class StabilityMap:
     axes: List[MapAxis]
     rho: np.ndarray  # (n0,) or (n0, n1)
     scenario: str = ""
+    units: dict = None  # field -> unit ("" none)
+
+    def __post_init__(self):
+        self.units = self.units or {}
 
     def to_dict(self):
         return {"fields": [a.field for a in self.axes],
+                "units": [self.units.get(a.field, "") for a in self.axes],
                 "values": [a.values.tolist() for a in self.axes],
                 "rho": self.rho.tolist()}
 
@@ -195,20 +225,40 @@ def stability_map(op: OperatingPoint, axes: Sequence[MapAxis], *,
         rho[index] = rho_of(**overrides)
         if progress:
             progress(f"map {index}: rho = {rho[index]:.4f}")
-    return StabilityMap(list(axes), rho, op.scenario.name)
+    return StabilityMap(list(axes), rho, op.scenario.name,
+                        {a.field: field_unit(op.scenario, a.field)
+                         for a in axes})
 
 
-def plot_map(m: StabilityMap, path, *, boundaries=None):
-    """Heat map of rho with the rho = 1 contour (one field: rho against
-    it), and simulated boundary points on top when given."""
+def rho_colour_norm(rho):
+    """The colour scale of a stability map: centred on rho = 1 (the
+    colour map's middle, yellow in RdYlGn_r), symmetric, wide enough for
+    every value: a cell is green only if rho < 1."""
+    from matplotlib.colors import TwoSlopeNorm
+    spread = max(1e-3, float(np.max(np.abs(np.asarray(rho) - 1.0))))
+    return TwoSlopeNorm(vcenter=1.0, vmin=1.0 - spread, vmax=1.0 + spread)
+
+
+def plot_map(m: StabilityMap, path, *, boundaries=None, units=None):
+    """Heat map of rho with the rho = 1 contour, the colour scale centred
+    on rho = 1 (green below, red above; one field: rho against it), axes
+    labelled with the fields' ``units`` (by field; "" none), simulated
+    boundary points on top when given."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    units = units or m.units
+
+    def label(field):
+        unit = units.get(field, "")
+        return f"{field} ({unit})" if unit else field
+
     fig, ax = plt.subplots(figsize=(6.5, 5))
+    rho_label = "rho, spectral radius of the 2.5 ms map (-)"
     if len(m.axes) == 1:
         ax.plot(m.axes[0].values, m.rho, "o-")
-        ax.axhline(1.0, color="r", lw=1)
-        ax.set(xlabel=m.axes[0].field, ylabel="rho")
+        ax.axhline(1.0, color="r", lw=1, label="rho = 1")
+        ax.set(xlabel=label(m.axes[0].field), ylabel=rho_label)
         for b in boundaries or []:
             if b["parameter"] == m.axes[0].field and b.get("simulated"):
                 ax.axvline(b["simulated"], color="k", ls="--",
@@ -216,18 +266,18 @@ def plot_map(m: StabilityMap, path, *, boundaries=None):
     else:
         x, y = m.axes[0].values, m.axes[1].values
         mesh = ax.pcolormesh(x, y, m.rho.T, shading="nearest",
-                             cmap="RdYlGn_r", vmin=min(0.9, m.rho.min()),
-                             vmax=max(1.1, m.rho.max()))
-        fig.colorbar(mesh, ax=ax, label="rho (spectral radius)")
+                             cmap="RdYlGn_r", norm=rho_colour_norm(m.rho))
+        fig.colorbar(mesh, ax=ax, label=rho_label + ", centred on 1")
         if m.rho.min() < 1 < m.rho.max():
             ax.contour(x, y, m.rho.T, levels=[1.0], colors="k")
-        ax.set(xlabel=m.axes[0].field, ylabel=m.axes[1].field)
+        ax.set(xlabel=label(m.axes[0].field), ylabel=label(m.axes[1].field))
         for b in boundaries or []:
             if b["parameter"] == m.axes[0].field and b.get("simulated"):
                 ax.axvline(b["simulated"], color="k", ls="--")
             if b["parameter"] == m.axes[1].field and b.get("simulated"):
                 ax.axhline(b["simulated"], color="k", ls="--")
-    ax.set_title(f"{m.scenario}: stability of the sampled loop")
+    ax.set_title(f"{m.scenario}: stability of the sampled loop "
+                 "(rho < 1 stable)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -163,6 +163,25 @@ def _signals(diagram: Diagram, context: Context) -> Dict[str, float]:
     }
 
 
+def first_contact(diagram: Diagram, context: Context, advance_to, *,
+                  limit: float, name: str, step: float = 0.01) -> float:
+    """Advances the run (``advance_to(t)``) in ``step`` s until the first
+    contact (depth > 0, ||f_n|| > CONTACT_FORCE) and returns its time;
+    ConfigError when there is none within ``limit`` s."""
+    t = context.get_time()
+    while True:
+        s = _signals(diagram, context)
+        if s["depth"] > 0 and s["normal_force"] > CONTACT_FORCE:
+            return t
+        if t >= limit - 1e-12:
+            raise ConfigError(
+                f"scenario '{name}': the tool never reached contact (depth "
+                f"> 0, ||f_n|| > {CONTACT_FORCE} N) within {limit:g} s: no "
+                "operating point")
+        t += step
+        advance_to(t)
+
+
 def _next_analysis_time(t: float, inner: float, outer: float) -> float:
     """The first inner-loop sample time >= t that is not an outer-loop
     sample time (so the analysed period starts with no 25 ms update)."""
@@ -200,20 +219,8 @@ def find_operating_point(scenario: Scenario, *,
     diagram.SetRandomContext(
         context, RandomGenerator(scenario.sensor.noise_seed))
     simulator.Initialize()
-    step = 0.01
-    t, contact = 0.0, None
-    while contact is None:
-        s = _signals(diagram, context)
-        if s["depth"] > 0 and s["normal_force"] > CONTACT_FORCE:
-            contact = t
-            break
-        if t >= max_time_to_contact - 1e-12:
-            raise ConfigError(
-                f"scenario '{scenario.name}': the tool never reached "
-                f"contact (depth > 0, ||f_n|| > {CONTACT_FORCE} N) within "
-                f"{max_time_to_contact:g} s: no operating point")
-        t += step
-        simulator.AdvanceTo(t)
+    contact = first_contact(diagram, context, simulator.AdvanceTo,
+                            limit=max_time_to_contact, name=scenario.name)
     target = at if at is not None else contact + after_contact
     target = _next_analysis_time(target, period, scenario.command.period)
     simulator.AdvanceTo(target)

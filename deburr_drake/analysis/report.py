@@ -1,9 +1,12 @@
-"""``analyze``: the whole analysis of one scenario at its operating point,
-as a plain dict (what ``analysis.json`` holds), its one-screen summary and
-its figures (pole map, Bode/Nyquist)."""
+"""``analyze``: the verdict on the run the user will run and, when it
+settles into steady cutting, the analysis at its operating point, along
+the run and over the uncertain parameters, as a plain dict (what
+``analysis.json`` holds), its one-screen summary (the verdict first) and
+its figures (pole map, rho along the run, Bode/Nyquist)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import time
@@ -12,20 +15,29 @@ from typing import Callable, Dict, Optional
 
 import numpy as np
 
+from deburr_drake.analysis.along import (DEFAULT_SPACING, RhoPoint,
+                                         analysis_run, guard_that_would_stop,
+                                         plot_rho_along_run, rho_of_map)
 from deburr_drake.analysis.frequency import (normal_force_loop,
                                              plot_bode_nyquist)
 from deburr_drake.analysis.linearization import (eq8_time_constant,
                                                  linearize_closed_loop)
 from deburr_drake.analysis.operating_point import (
-    DEFAULT_TIME_AFTER_CONTACT, find_operating_point)
+    DEFAULT_TIME_AFTER_CONTACT, frozen_scenario)
+from deburr_drake.analysis.robust import robust_margin
 from deburr_drake.analysis.sampled import sampled_loop
+from deburr_drake.analysis.settled import (SettleTolerances,
+                                           describe_oscillation, scan_run,
+                                           settle_check)
 from deburr_drake.config import Scenario
 
 __all__ = ["analyze", "summary_text", "write_analysis", "plot_poles",
            "SUMMARY_KEYS"]
 
-#: Keys analysis.json always holds.
-SUMMARY_KEYS = ("eigenvalues", "depth_time_constant_s",
+#: Keys analysis.json always holds (null where the run gives no value:
+#: no linearization of a run that is not steady).
+SUMMARY_KEYS = ("verdict", "verdict_reason", "rho_along_run", "robust",
+                "eigenvalues", "depth_time_constant_s",
                 "depth_time_constant_eq8_s", "sampled_spectral_radius",
                 "gain_margin_dB", "phase_margin_deg", "operating_point")
 
@@ -43,51 +55,173 @@ def _finite(x):
     return x
 
 
+def _oscillation_reason(osc: Dict, guard: Optional[Dict]) -> str:
+    parts = []
+    if osc.get("start_time") is not None:
+        parts.append(f"from t = {osc['start_time']:.2f} s")
+    if osc.get("frequency_hz") is not None:
+        parts.append(f"{osc['frequency_hz']:.1f} Hz")
+    if osc.get("amplitude_N") is not None:
+        parts.append(f"|f_t| up to {osc['amplitude_N']:.1f} N (measured)")
+    g = osc.get("growth")
+    if g:
+        parts.append(f"growing {g['from_N']:.2g} -> {g['to_N']:.3g} N RMS "
+                     f"from {g['t0']:.2f} to {g['t1']:.2f} s "
+                     f"(x {osc['growth_per_s']:.3g} per s)")
+    elif osc.get("rms_N") is not None:
+        parts.append(f"sustained, {osc['rms_N']:.3g} N RMS (a limit "
+                     "cycle)")
+    text = "the run oscillates" + (": " + ", ".join(parts) if parts else "")
+    if guard:
+        text += (f"; the guard {guard['guard']} would have stopped it at "
+                 f"t = {guard['time']:.3f} s ({guard['detail']})")
+    return text
+
+
 def analyze(scenario: Scenario, *, at: float = None,
             after_contact: float = DEFAULT_TIME_AFTER_CONTACT,
             overrides: Optional[Dict[str, float]] = None,
+            until: Optional[float] = None,
+            spacing: float = DEFAULT_SPACING, robust: bool = True,
             progress: Optional[Callable[[str], None]] = None) -> Dict:
-    """Operating point, continuous linearization (modes, eq. (8) check),
-    sampled one-period map (rho), normal-force loop margins. Returns the
-    dict of analysis.json (SI units) with the live objects under
-    ``"_objects"`` (for figures; not written). ``overrides`` (scenario
-    fields by dotted name) apply at the operating point: the scenario as
-    given reaches steady cutting, then the loop is analysed with them
-    (as the limits of :mod:`deburr_drake.analysis.validation` are)."""
+    """The verdict on the run the user will run, then (only if the run
+    settled into steady cutting) the operating point's analysis:
+    continuous linearization (modes, eq. (8) check), sampled one-period
+    map (rho), normal-force loop margins; rho along the run; the robust
+    margin. Returns the dict of analysis.json (SI units) with the live
+    objects under ``"_objects"`` (for figures; not written).
+
+    The verdict (``verdict``: "stable", "unstable" or "not settled";
+    ``verdict_reason``): "unstable" when the run oscillates at ``at`` or
+    later (:mod:`deburr_drake.analysis.settled`, with the oscillation's
+    frequency, start, amplitude, growth and the guard that would have
+    stopped it) or when rho >= 1 at a steady point along it; "not
+    settled" when it is out of contact without oscillating; otherwise
+    "stable". ``overrides`` (scenario fields by dotted name) apply at the
+    operating point only: a what-if on the run as given (the verdict is
+    the run's)."""
     overrides = dict(overrides or {})
     from deburr_drake.cell.truth import contact_truth
     say = progress or (lambda message: None)
     timings = {}
+    tol = SettleTolerances()
     t0 = time.perf_counter()
-    say("operating point: simulating to steady cutting")
-    op = find_operating_point(scenario, at=at, after_contact=after_contact)
-    timings["operating_point_s"] = time.perf_counter() - t0
+    say("the run: simulating the scenario (guards off), with the 2.5 ms "
+        "map at points along it")
+    run = analysis_run(scenario, at=at, after_contact=after_contact,
+                       until=until, spacing=spacing, progress=say)
+    timings["run_s"] = run.wall_time_s - run.map_time_s
+    timings["maps_along_run_s"] = run.map_time_s
+    op = run.op
+    sig = run.signals
+    result = {
+        "scenario": scenario.name,
+        "overrides_at_operating_point": overrides,
+        "run": {"contact_time": run.contact_time, "end_time": run.end_time,
+                "stop_reason": run.stop_reason,
+                "stop_detail": run.stop_detail,
+                "guards": "off in the run; the first one that would have "
+                          "tripped is named"},
+        "settle_tolerances": dataclasses.asdict(tol),
+    }
+    for key in SUMMARY_KEYS:
+        result.setdefault(key, None)
+    objects = {"run": run}
+    result["_objects"] = objects
+    if op is not None:
+        check = settle_check(sig, op.time, tol)
+    else:
+        check = settle_check(sig, run.end_time, tol)
+        check.settled = False
+        check.reasons.append(run.op_note or (
+            f"no steady operating point from "
+            f"{at if at is not None else run.contact_time + after_contact:.3f}"
+            f" s to the end of the run ({run.end_time:.3f} s, "
+            f"{run.stop_reason})"))
+    result["settle_check"] = check.to_dict()
+    guard = guard_that_would_stop(run, scenario)
+    result["guard_that_would_stop"] = guard
+    final = settle_check(sig, run.end_time, tol)
+    late, osc = None, None
+    if check.settled:
+        late = scan_run(sig, op.time, run.end_time, tol)
+        if late is not None:
+            osc = describe_oscillation(sig, late.start, tol)
+            if osc["start_time"] is None or not (
+                    osc.get("sustained") or not final.settled):
+                late = None  # a passing transient (a burr's entry)
+    if not check.settled:
+        osc = describe_oscillation(sig, run.contact_time + 0.5, tol)
+        transient = op is not None and final.settled
+        if run.stop_reason in ("nan", "error"):
+            result["verdict"] = "unstable"
+            result["verdict_reason"] = (
+                f"the run failed at {run.end_time:.3f} s "
+                f"({run.stop_detail}); " + _oscillation_reason(osc, guard))
+        elif transient or (op is None and run.op_note):
+            result["verdict"] = "not settled"
+            result["verdict_reason"] = (
+                f"not steady over [{check.start:.3f}, {check.end:.3f}] s: "
+                + "; ".join(check.reasons[:3])
+                + (f"; steady at the end of the run ({run.end_time:.2f} s):"
+                   " analyse a later time (--at)" if transient else ""))
+        else:
+            result["verdict"] = "unstable"
+            where = (f"not steady over [{check.start:.3f}, "
+                     f"{check.end:.3f}] s and at the end of the run: "
+                     if op is not None else
+                     "never steady from the analysed time to the end of "
+                     f"the run; over its last {tol.window:g} s: ")
+            result["verdict_reason"] = (
+                where + "; ".join(check.reasons[:2]) + "; "
+                + _oscillation_reason(osc, guard))
+        result["oscillation"] = osc
+    elif late is not None:
+        result["oscillation"] = osc
+        result["verdict"] = "unstable"
+        result["verdict_reason"] = (
+            f"steady at the analysed time {op.time:.3f} s but not over "
+            f"[{late.start:.2f}, {late.end:.2f}] s: "
+            + "; ".join(late.reasons[:2]) + "; "
+            + _oscillation_reason(osc, guard))
+    if not check.settled:
+        result["operating_point"] = op.summary() if op is not None else None
+        result["rho_along_run"] = [p.to_dict() for p in run.points]
+        result["robust"] = None
+        result["timings_s"] = timings
+        say("not steady at the analysed time: no linearization (a limit "
+            "cycle is not an operating point)")
+        return result
+
     truth = contact_truth(scenario)
     t1 = time.perf_counter()
     say("continuous-time linearization")
     lin = linearize_closed_loop(op, stiffness=truth.local_stiffness,
                                 **overrides)
     timings["linearization_s"] = time.perf_counter() - t1
-    from deburr_drake.analysis.operating_point import frozen_scenario
     analysed = frozen_scenario(scenario, **overrides)
     tau_eq8 = eq8_time_constant(analysed.controller.depth_gain,
                                 truth.local_stiffness, truth.c2)
     t2 = time.perf_counter()
-    say("one-period map of the sampled loop")
+    say("one-period map of the sampled loop at the operating point")
     sampled = sampled_loop(op, **overrides)
     loop = normal_force_loop(sampled)
     tangential = normal_force_loop(sampled, direction=sampled.n2)
     timings["sampled_map_s"] = time.perf_counter() - t2
-    t3 = time.perf_counter()
-    say("map over one outer-loop period (feed law live)")
-    frame = sampled_loop(op, outer_loop=True, **overrides)
-    timings["outer_period_map_s"] = time.perf_counter() - t3
     z_eigs = sampled.eigenvalues
     z_eigs = z_eigs[np.argsort(-np.abs(z_eigs))]
     worst = z_eigs[0]
-    result = {
-        "scenario": scenario.name,
-        "overrides_at_operating_point": overrides,
+    points = list(run.points)
+    if not overrides:  # the operating point is a point of the run
+        r = rho_of_map(sampled.Phi, sampled.period)
+        points.append(RhoPoint(
+            t=op.time, arc_position=op.signals["arc_position"],
+            kind="operating point", rho=r["rho"],
+            frequency_hz=r["frequency_hz"], decay_rate=r["decay_rate"],
+            rho_oscillatory=r["rho_oscillatory"], burr_area=op.signals["burr_area"], context=op.context))
+    points.sort(key=lambda p: p.t)
+    steady = [p for p in points if p.rho is not None]
+    result.update({
         "operating_point": op.summary(),
         "contact_truth": {"local_stiffness": truth.local_stiffness,
                           "secant_stiffness": truth.secant_stiffness,
@@ -111,37 +245,94 @@ def analyze(scenario: Scenario, *, at: float = None,
             abs(np.angle(worst)) / (2 * np.pi * sampled.period)),
         "sampled_eigenvalues": [[float(e.real), float(e.imag)]
                                 for e in z_eigs],
-        "outer_period_s": frame.period,
-        "outer_period_spectral_radius": frame.spectral_radius,
         "gain_margin_dB": loop.gain_margin_dB,
         "phase_margin_deg": loop.phase_margin_deg,
         "phase_crossover_hz": loop.phase_crossover_hz,
         "gain_crossover_hz": loop.gain_crossover_hz,
         "tangential_gain_margin_dB": tangential.gain_margin_dB,
         "tangential_phase_margin_deg": tangential.phase_margin_deg,
-        "timings_s": timings,
+        "rho_along_run": [p.to_dict() for p in points],
         "frozen": ["outer loop (command generator, first-order hold)",
                    "adaptation (estimator c-hat, fuzzy theta)",
-                   "burr (operating point off the burrs)",
                    "sensor noise"],
-    }
-    result["_objects"] = {"op": op, "linearization": lin,
-                          "sampled": sampled, "loop": loop}
+    })
+    if steady:
+        w = max(steady, key=lambda p: p.rho)
+        result["smallest_margin"] = {
+            "rho": w.rho, "margin": 1.0 - w.rho, "t": w.t,
+            "arc_position": w.arc_position, "kind": w.kind,
+            "frequency_hz": w.frequency_hz,
+            "decay_rate_per_s": w.decay_rate}
+        o = max(steady, key=lambda p: p.rho_oscillatory)
+        result["smallest_oscillatory_margin"] = {
+            "rho_oscillatory": o.rho_oscillatory, "t": o.t,
+            "arc_position": o.arc_position, "kind": o.kind}
+    else:
+        w = None
+        result["smallest_margin"] = None
+    if result.get("verdict") is None:
+        if w is not None and w.rho >= 1.0:
+            result["verdict"] = "unstable"
+            result["verdict_reason"] = (
+                f"the run is steady, but the sampled loop is unstable at "
+                f"t = {w.t:.2f} s ({w.kind}, arc "
+                f"{w.arc_position * 1e3:.1f} mm): rho = {w.rho:.5f}, "
+                f"dominant eigenvalue at {w.frequency_hz:.1f} Hz")
+        else:
+            result["verdict"] = "stable"
+            result["verdict_reason"] = (
+                f"steady cutting at {op.time:.3f} s (all signals within "
+                f"their tolerances over the {tol.window:g} s before) and "
+                f"to the end of the run ({run.end_time:.2f} s, "
+                f"{run.stop_reason}); rho < 1 at all {len(steady)} steady "
+                "points along it"
+                + (f", largest {w.rho:.5f} at t = {w.t:.2f} s ({w.kind})"
+                   if w is not None else ""))
+    if robust and w is not None:
+        t3 = time.perf_counter()
+        say("robust margin over the uncertain parameters' ranges")
+        result["robust"] = robust_margin(
+            scenario, run.diagram, w.context, on_burr=w.burr_area > 0,
+            progress=say)
+        result["robust"]["point"] = {"t": w.t, "kind": w.kind,
+                                     "arc_position": w.arc_position}
+        timings["robust_s"] = time.perf_counter() - t3
+    else:
+        result["robust"] = None
+    result["timings_s"] = timings
+    objects.update({"op": op, "linearization": lin, "sampled": sampled,
+                    "loop": loop})
     return result
 
 
 def summary_text(result: Dict) -> str:
-    """One screen: the operating point, the modes by group, eq. (8),
-    rho, the margins."""
-    op = result["operating_point"]
-    lines = [
-        f"deburr-drake analyze: scenario '{result['scenario']}'",
+    """One screen: the verdict first, then the operating point, the modes
+    by group, eq. (8), rho at the operating point and along the run, the
+    robust margin, the margins."""
+    lines = [f"verdict: {result['verdict'].upper()}: "
+             f"{result['verdict_reason']}",
+             f"deburr-drake analyze: scenario '{result['scenario']}', run "
+             f"to {result['run']['end_time']:.2f} s "
+             f"({result['run']['stop_reason']}, guards off)"]
+    op = result.get("operating_point")
+    if result.get("eigenvalues") is None:
+        g = result.get("guard_that_would_stop")
+        if g:
+            lines.append(f"guard that would have stopped the run: "
+                         f"{g['guard']} at t = {g['time']:.3f} s "
+                         f"({g['detail']})")
+        lines.append("no linearization: the run is not in steady cutting "
+                     "at the analysed time (a limit cycle is not an "
+                     "operating point)")
+        return "\n".join(lines)
+    lines += [
         f"operating point t = {op['time']:.4f} s (contact at "
         f"{op['contact_time']:.3f} s): depth {op['depth'] * 1e3:.4f} mm, "
         f"feed {op['feed'] * 1e3:.3f} mm/s, |f_n| {op['normal_force']:.2f} N,"
         f" |f_t| {op['chamfering_force']:.2f} N",
-        "frozen: outer loop, adaptation, burr, noise"
-        + (f"; analysed with {result['overrides_at_operating_point']}"
+        "frozen: outer loop, adaptation, noise"
+        + (f"; analysed with {result['overrides_at_operating_point']} (a "
+           "what-if: the verdict is the run's as given)"
            if result.get("overrides_at_operating_point") else ""),
         "",
         "continuous-time modes (controller continuous, sensor low-pass "
@@ -163,20 +354,45 @@ def summary_text(result: Dict) -> str:
         f"{result['contact_truth']['local_stiffness'] / 1e3:.2f} N/mm local: "
         f"{result['depth_time_constant_eq8_s']:.4f} s "
         f"({100 * result['depth_time_constant_error_rel']:.1f} % apart)",
-        f"sampled loop ({result['sampled_period_s'] * 1e3:g} ms): "
-        f"spectral radius rho = {result['sampled_spectral_radius']:.5f} "
+        f"sampled loop ({result['sampled_period_s'] * 1e3:g} ms) at the "
+        f"operating point: spectral radius rho = "
+        f"{result['sampled_spectral_radius']:.5f} "
         f"({'stable' if result['sampled_spectral_radius'] < 1 else 'UNSTABLE'}"
         f"), dominant eigenvalue at "
         f"{result['sampled_dominant_frequency_hz']:.1f} Hz",
-        f"with the feed law live ({result['outer_period_s'] * 1e3:g} ms "
-        f"map, shift along the edge left out; experimental, see README): "
-        f"rho = "
-        f"{result['outer_period_spectral_radius']:.5f}",
+    ]
+    along = result.get("rho_along_run") or []
+    steady = [p for p in along if p["rho"] is not None]
+    sm = result.get("smallest_margin")
+    if sm:
+        lines.append(
+            f"along the run: {len(steady)} steady points of {len(along)}; "
+            f"smallest margin 1 - rho = {sm['margin']:.5f} (rho "
+            f"{sm['rho']:.5f}, {sm['frequency_hz']:.1f} Hz, decay "
+            f"{sm['decay_rate_per_s']:.3g} 1/s) at t = {sm['t']:.2f} s, arc "
+            f"{sm['arc_position'] * 1e3:.1f} mm ({sm['kind']})")
+    so = result.get("smallest_oscillatory_margin")
+    if so:
+        lines.append(
+            f"  the loop's oscillatory modes (above 1 Hz): largest |z| "
+            f"{so['rho_oscillatory']:.5f} at t = {so['t']:.2f} s "
+            f"({so['kind']})")
+    rb = result.get("robust")
+    if rb:
+        for key, label in (("", "rho"), ("_oscillatory",
+                                         "|z| of the modes above 1 Hz")):
+            at = ", ".join(f"{k} {v:.4g}" for k, v in
+                           rb["at" + key].items())
+            lines.append(
+                f"robust: worst {label} {rb['rho_worst' + key]:.5f} "
+                f"(nominal {rb['rho_nominal' + key]:.5f}) over "
+                f"{len(rb['maps'])} maps at t = {rb['point']['t']:.2f} s, "
+                f"at {at}")
+    lines.append(
         f"normal-force loop: gain margin {result['gain_margin_dB']:.1f} dB "
         f"(at {result['phase_crossover_hz']:.2f} Hz), phase margin "
         f"{result['phase_margin_deg']:.1f} deg (at "
-        f"{result['gain_crossover_hz']:.2f} Hz)",
-    ]
+        f"{result['gain_crossover_hz']:.2f} Hz)")
     if "lyapunov" in result:
         ly = result["lyapunov"]
         lines.append(
@@ -238,8 +454,13 @@ def write_analysis(result: Dict, out) -> Dict[str, Path]:
     files["json"] = out / "analysis.json"
     files["json"].write_text(json.dumps(_finite(data), indent=2))
     objects = result.get("_objects", {})
-    files["poles"] = plot_poles(result, out / "poles.png",
-                                title=result["scenario"])
+    if result.get("eigenvalues") is not None:
+        files["poles"] = plot_poles(result, out / "poles.png",
+                                    title=result["scenario"])
+    if result.get("rho_along_run"):
+        files["rho_along_run"] = plot_rho_along_run(
+            result["rho_along_run"], out / "rho_along_run.png",
+            title=result["scenario"])
     if "loop" in objects:
         files["bode_nyquist"] = plot_bode_nyquist(
             objects["loop"], out / "bode_nyquist.png",
@@ -247,5 +468,6 @@ def write_analysis(result: Dict, out) -> Dict[str, Path]:
     if "map" in objects:
         from deburr_drake.analysis.maps import plot_map
         files["map"] = plot_map(objects["map"], out / "stability_map.png",
-                                boundaries=result.get("boundaries"))
+                                boundaries=result.get("boundaries"),
+                                units=objects["map"].units)
     return files

@@ -36,8 +36,8 @@ from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import Scenario
 
 __all__ = ["StateEntry", "period_map", "spectral_radius", "SampledLoop",
-           "sampled_loop", "cell_map_entries", "outer_loop_entries",
-           "simulator_config"]
+           "sampled_loop", "cell_map_entries", "simulator_config",
+           "FrozenMap"]
 
 
 @dataclass(frozen=True)
@@ -195,59 +195,68 @@ class SampledLoop:
         return np.linalg.eigvals(self.Phi)
 
 
-def outer_loop_entries(diagram: Diagram) -> List[StateEntry]:
-    """The outer loop's states: the command generator's x_c(kT), feed and
-    arc position, the first-order hold's x*(t) and its knots."""
-    return [
-        StateEntry("command_generator", "discrete", 0, step=1e-7,
-                   label="command_state"),
-        StateEntry("first_order_hold", "continuous", step=1e-7,
-                   label="x_star"),
-        StateEntry("first_order_hold", "discrete", 0, step=1e-7,
-                   label="hold_knots"),
-    ]
+class FrozenMap:
+    """The frozen variant of a scenario (with ``overrides`` by dotted
+    name), built once, whose one-period map can be taken at any state of a
+    run of the scenario's own diagram (:meth:`at`): the maps along a run
+    reuse one diagram."""
+
+    def __init__(self, scenario: Scenario, **overrides):
+        from deburr_drake.config import ConfigError
+        self.scenario = frozen_scenario(scenario, **overrides)
+        period = self.scenario.controller.control_period
+        if not (period > 0 and abs(self.scenario.sensor.sample_period
+                                   - period) < 1e-12
+                and abs(self.scenario.process.sample_period - period)
+                < 1e-12):
+            raise ConfigError(
+                "the sampled-loop analysis needs controller.control_period "
+                "> 0 equal to sensor.sample_period and "
+                f"process.sample_period, got {period}, "
+                f"{self.scenario.sensor.sample_period}, "
+                f"{self.scenario.process.sample_period}")
+        self.period = period
+        self.config = simulator_config(self.scenario)
+        self.diagram = make_deburring_diagram(scenario=self.scenario)
+        self.entries = cell_map_entries(self.diagram)
+
+    def context_from(self, source: Diagram, source_context: Context,
+                     modify=None) -> Context:
+        """A context of the frozen diagram holding ``source_context``'s
+        state (subsystems matched by name), changed by ``modify(diagram,
+        context)`` if given."""
+        context = self.diagram.CreateDefaultContext()
+        transfer_state(source, source_context, self.diagram, context)
+        if modify is not None:
+            modify(self.diagram, context)
+        return context
+
+    def at(self, source: Diagram, source_context: Context,
+           modify=None) -> np.ndarray:
+        """The one-period map at ``source_context`` (just before a
+        sample)."""
+        context = self.context_from(source, source_context, modify)
+        return period_map(self.diagram, context, self.entries,
+                          period=self.period, config=self.config)
 
 
-def sampled_loop(op: OperatingPoint, *, modify=None, outer_loop=False,
+def sampled_loop(op: OperatingPoint, *, modify=None,
                  **overrides) -> SampledLoop:
     """The one-period map of ``op``'s sampled loop, with scenario
     ``overrides`` by dotted name (e.g. ``sensor.cutoff_frequency``);
     ``modify(diagram, context)`` may change the operating point's state
     first (e.g. the fuzzy surface, see
-    :func:`deburr_drake.analysis.add_fuzzy_slope`)."""
+    :func:`deburr_drake.analysis.add_fuzzy_slope`). (The map over one
+    25 ms outer period with the feed law live is no longer offered: on the
+    paper arm it said rho = 1.008 for a gain whose run is stable and 0.988
+    for one whose run oscillates at 150 N; see docs/drafts/stability.md.)"""
     from deburr_drake.control.layout import CHAMFER_STATE
-    scenario = frozen_scenario(op.scenario, **overrides)
-    period = scenario.controller.control_period
-    if not (period > 0 and abs(scenario.sensor.sample_period - period) < 1e-12
-            and abs(scenario.process.sample_period - period) < 1e-12):
-        from deburr_drake.config import ConfigError
-        raise ConfigError(
-            "the sampled-loop analysis needs controller.control_period > 0 "
-            "equal to sensor.sample_period and process.sample_period, got "
-            f"{period}, {scenario.sensor.sample_period}, "
-            f"{scenario.process.sample_period}")
-    diagram = make_deburring_diagram(scenario=scenario)
-    context = diagram.CreateDefaultContext()
-    transfer_state(op.diagram, op.context, diagram, context)
-    if modify is not None:
-        modify(diagram, context)
-    entries = cell_map_entries(diagram)
-    if outer_loop:
-        outer = scenario.command.period
-        t = context.get_time()
-        start = np.ceil(t / outer - 1e-9) * outer
-        if start > t:  # run on to just before the next outer sample
-            simulator = Simulator(diagram, context)
-            config = copy.copy(simulator_config(scenario))
-            config.start_time = t
-            ApplySimulatorConfig(config, simulator)
-            simulator.Initialize(
-                InitializeParams(suppress_initialization_events=True))
-            simulator.AdvanceTo(start)
-        period = outer
-        entries = entries + outer_loop_entries(diagram)
-    Phi = period_map(diagram, context, entries, period=period,
-                     config=simulator_config(scenario))
+    frozen = FrozenMap(op.scenario, **overrides)
+    scenario, diagram, entries = frozen.scenario, frozen.diagram, \
+        frozen.entries
+    context = frozen.context_from(op.diagram, op.context, modify)
+    Phi = period_map(diagram, context, entries, period=frozen.period,
+                     config=frozen.config)
     labels, start, rows = [], 0, None
     for e in entries:
         n = e.get(diagram, context).size
@@ -262,8 +271,7 @@ def sampled_loop(op: OperatingPoint, *, modify=None, outer_loop=False,
     n2 = CHAMFER_STATE.get(chamfer, "n2")
     alpha = 1.0 - np.exp(-2 * np.pi * scenario.sensor.cutoff_frequency
                          * scenario.sensor.sample_period)
-    return SampledLoop(Phi=Phi, labels=labels, period=period,
-                       spectral_radius=spectral_radius(
-                           Phi, neutral=1 if outer_loop else 0),
-                       sensor_alpha=alpha, sensor_rows=rows, n1=n1.copy(), n2=n2.copy(),
-                       diagram=diagram, context=context)
+    return SampledLoop(Phi=Phi, labels=labels, period=frozen.period,
+                       spectral_radius=spectral_radius(Phi),
+                       sensor_alpha=alpha, sensor_rows=rows, n1=n1.copy(),
+                       n2=n2.copy(), diagram=diagram, context=context)

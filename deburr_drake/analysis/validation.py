@@ -53,7 +53,8 @@ from deburr_drake.runs.simulation import make_simulator
 __all__ = ["Parameter", "PARAMETERS", "add_fuzzy_slope",
            "baseline_oscillation",
            "predicted_boundary", "simulated_growth", "simulated_boundary",
-           "validate_boundaries"]
+           "validate_boundaries", "VERDICT_SCENARIOS", "simulated_verdict",
+           "verdict_row"]
 
 
 def add_fuzzy_slope(diagram, context, slope: float):
@@ -271,3 +272,112 @@ def validate_boundaries(op: OperatingPoint, *, parameters=None,
                      "range": [lo, hi], "predicted": pred,
                      "simulated": sim, "error_rel": err})
     return rows
+
+
+# --- the verdict against simulation ---------------------------------------
+
+#: Scenarios of the verdict table: (label, base scenario, --scenario-text).
+VERDICT_SCENARIOS = (
+    ("paper as shipped", "paper", ""),
+    ("K = 5500", "paper",
+     "controller: {sliding_gain: [5500.0, 5500.0, 1500.0]}"),
+    ("K = 5656", "paper",
+     "controller: {sliding_gain: [5656.0, 5656.0, 1500.0]}"),
+    ("K = 6000", "paper",
+     "controller: {sliding_gain: [6000.0, 6000.0, 1500.0]}"),
+    ("K = 7000", "paper",
+     "controller: {sliding_gain: [7000.0, 7000.0, 1500.0]}"),
+    ("sensor cutoff 40 Hz", "paper", "sensor: {cutoff_frequency: 40.0}"),
+    ("sensor cutoff 120 Hz", "paper", "sensor: {cutoff_frequency: 120.0}"),
+    ("fuzzy: steep surface (Delta_k 0.5 mm/s)", "paper",
+     "controller: {fuzzy: {sliding_scales: [0.0025, 0.0025]}}"),
+    ("fuzzy: adaptation gain x 40", "paper",
+     "controller: {fuzzy: {adaptation_gain: 200000.0}}"),
+    ("burrs 2 mm, first at 10 deg", "paper",
+     "process: {burrs: [{center_fraction: 0.03, length: 0.008, height: "
+     "0.002, thickness: 0.002}]}"),
+    ("burr 4 mm at 10 deg", "paper",
+     "process: {burrs: [{center_fraction: 0.03, length: 0.008, height: "
+     "0.004, thickness: 0.002}]}"),
+    ("depth gain x 10", "paper", "controller: {depth_gain: 4.0e-3}"),
+    ("fuzzy: steep surface learned fast (Delta_k 0.5 mm/s, r x 20)",
+     "paper", "controller: {fuzzy: {sliding_scales: [0.0025, 0.0025], "
+     "adaptation_gain: 100000.0}}"),
+    ("sliding lambda 400/s", "paper",
+     "controller: {sliding_lambda: [400.0, 400.0, 50.0]}"),
+    ("6-DOF arm as shipped", "paper_6dof", ""),
+    ("6-DOF arm, K = 6000", "paper_6dof",
+     "controller: {sliding_gain: [6000.0, 6000.0, 4000.0]}"),
+)
+
+
+def simulated_verdict(log, scenario, *, transient: float = 2.0,
+                      force_factor: float = 2.0,
+                      depth_band: float = 0.5) -> Dict:
+    """The reference verdict of a run without guards, by a rule that
+    shares nothing with the settled test: "unstable" when the run did not
+    reach its duration (NaN, error), or after ``transient`` s of contact
+    the measured chamfering force exceeds ``force_factor`` x the desired
+    one, or the depth leaves delta* (1 +- ``depth_band``); else "stable".
+    Returns {verdict, max_f_t_N, depth_range_mm, stop_reason}."""
+    ch = log["chamfer"]
+    t = np.asarray(ch["t"])
+    on = (np.asarray(ch["delta"]) > 0) & (np.asarray(ch["f_n"]) > 0.5)
+    start = (t[np.argmax(on)] if on.any() else np.inf) + transient
+    after = t >= start
+    d_star = scenario.task.desired_depth
+    f_star = scenario.task.desired_chamfering_force
+    out = {"stop_reason": log.stop_reason, "max_f_t_N": None,
+           "depth_range_mm": None}
+    if log.stop_reason not in ("duration", "pass_complete") or \
+            not after.any():
+        out["verdict"] = "unstable"
+        return out
+    ft = np.abs(np.asarray(ch["f_t"])[after])
+    depth = np.asarray(ch["delta"])[after]
+    out["max_f_t_N"] = float(np.max(ft))
+    out["depth_range_mm"] = [float(depth.min() * 1e3),
+                             float(depth.max() * 1e3)]
+    bad = (np.max(ft) > force_factor * f_star
+           or depth.min() < (1 - depth_band) * d_star
+           or depth.max() > (1 + depth_band) * d_star)
+    out["verdict"] = "unstable" if bad else "stable"
+    return out
+
+
+def verdict_row(label: str, base: str, text: str, *,
+                duration: float = 20.0, progress=None) -> Dict:
+    """analyze's verdict on the scenario's run to ``duration`` against a
+    ``duration`` s simulation with the guards off judged by
+    :func:`simulated_verdict`."""
+    import time
+
+    from deburr_drake.analysis.report import analyze
+    from deburr_drake.config import load_scenario
+    from deburr_drake.runs.simulation import simulate
+    scenario = load_scenario(base, text=text or None)
+    t0 = time.perf_counter()
+    result = analyze(scenario, until=duration, robust=False,
+                     progress=progress)
+    wall_analyze = time.perf_counter() - t0
+    from deburr_drake.analysis.along import without_guards
+    sim_scenario = without_guards(scenario)
+    t1 = time.perf_counter()
+    log = simulate(make_deburring_diagram(scenario=sim_scenario),
+                   sim_scenario, duration=duration)
+    reference = simulated_verdict(log, scenario)
+    sm = result.get("smallest_margin") or {}
+    osc = result.get("oscillation") or {}
+    guard = result.get("guard_that_would_stop") or {}
+    return {"label": label, "base": base, "scenario_text": text,
+            "verdict": result["verdict"],
+            "verdict_reason": result["verdict_reason"],
+            "rho_max_along_run": sm.get("rho"),
+            "oscillation_hz": osc.get("frequency_hz"),
+            "oscillation_start_s": osc.get("start_time"),
+            "guard": guard.get("guard"), "guard_time_s": guard.get("time"),
+            "simulation": reference,
+            "agree": result["verdict"] == reference["verdict"],
+            "wall_analyze_s": wall_analyze,
+            "wall_simulation_s": time.perf_counter() - t1}
+

@@ -197,19 +197,100 @@ def test_operating_point_without_contact_is_a_config_error():
 @pytest.mark.slow
 def test_analyze_writes_the_summary_keys(tmp_path, capsys):
     code = main(["analyze", "--scenario", "point_mass", "--after-contact",
-                 "1.0", "--out", str(tmp_path)])
+                 "1.0", "--until", "3.5", "--out", str(tmp_path)])
     assert code == 0
     data = json.loads((tmp_path / "analysis.json").read_text())
     for key in analysis.SUMMARY_KEYS:
         assert key in data, key
+    assert data["verdict"] == "stable"
     assert all(len(e) == 2 for e in data["eigenvalues"])
     assert 0.5 < data["sampled_spectral_radius"] < 1.0
     for key in ("time", "depth", "feed", "normal_force",
                 "chamfering_force"):
         assert key in data["operating_point"]
-    assert (tmp_path / "poles.png").stat().st_size > 0
-    assert (tmp_path / "bode_nyquist.png").stat().st_size > 0
-    assert "spectral radius" in capsys.readouterr().out
+    along = data["rho_along_run"]
+    assert [p["kind"] for p in along][:2] == ["transient", "cutting"]
+    assert all(0 < p["rho"] < 1 and 0 <= p["t"] <= 3.5 for p in along)
+    # 1 s after contact the point mass is still in its transient: the
+    # operating point moves on to where the run is steady
+    assert data["operating_point"]["time"] > 1.5
+    assert "operating point" in [p["kind"] for p in along]
+    robust = data["robust"]
+    assert robust["rho_worst"] >= max(m["rho"] for m in robust["maps"]) \
+        - 1e-12 and robust["rho_worst"] >= robust["rho_nominal"]
+    # off the burrs: nominal, both ends of 4 parameters, 1 or 2 corners
+    assert len(robust["maps"]) in (10, 11)
+    assert robust["rho_worst_oscillatory"] == max(
+        m["rho_oscillatory"] for m in robust["maps"])
+    assert "outer_period_spectral_radius" not in data
+    for name in ("poles.png", "bode_nyquist.png", "rho_along_run.png"):
+        assert (tmp_path / name).stat().st_size > 0
+    out = capsys.readouterr().out
+    summary = out[out.index("verdict:"):]
+    assert summary.startswith("verdict: STABLE")
+    assert "spectral radius" in summary
+
+
+@pytest.mark.slow
+def test_analyze_does_not_linearize_an_oscillating_run(tmp_path, capsys):
+    # The 1.8 kg point mass with a sliding gain K = 3000 N s/m above
+    # M / T = 720 N s/m of the 2.5 ms loop: a 200 Hz limit cycle from the
+    # first contact on.
+    code = main(["analyze", "--scenario", "point_mass", "--scenario-text",
+                 "controller: {sliding_gain: [3000.0, 3000.0, 1500.0]}",
+                 "--after-contact", "1.0", "--until", "2.5", "--out",
+                 str(tmp_path)])
+    assert code == 0
+    data = json.loads((tmp_path / "analysis.json").read_text())
+    assert data["verdict"] == "unstable"
+    assert data["eigenvalues"] is None and data["robust"] is None
+    assert data["oscillation"]["frequency_hz"] > 150.0
+    assert "oscillat" in data["verdict_reason"]
+    # the drives' 200 N limit of the shipped point mass (its guard's
+    # joint_torque) would have stopped this run
+    guard = data["guard_that_would_stop"]
+    assert guard["guard"] == "joint_torque" and guard["time"] < 2.5
+    assert guard["guard"] in data["verdict_reason"]
+    assert all(p["rho"] is None for p in data["rho_along_run"]
+               if p["kind"] != "transient")
+    assert not (tmp_path / "poles.png").exists()
+    out = capsys.readouterr().out
+    assert out[out.index("verdict:"):].startswith("verdict: UNSTABLE")
+
+
+@pytest.mark.parametrize("option", [["--at", "-3"], ["--until", "0"],
+                                    ["--at", "5", "--until", "4"],
+                                    ["--spacing", "nan"]])
+def test_bad_times_are_refused_before_anything_runs(tmp_path, option,
+                                                    capsys):
+    out = tmp_path / "analysis"
+    assert main(["analyze", "--scenario", "point_mass", *option, "--out",
+                 str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and option[-2] in err
+    assert not out.exists()
+
+
+def test_rho_of_map_of_a_rotation_and_a_decay():
+    T = 0.0025
+    a, r = 2 * np.pi * 50 * T, 0.9
+    Phi = np.diag([0.5, 0.0, 0.0])
+    Phi[1:, 1:] = r * np.array([[np.cos(a), -np.sin(a)],
+                                [np.sin(a), np.cos(a)]])
+    out = analysis.rho_of_map(Phi, T)
+    assert out["rho"] == pytest.approx(r)
+    assert out["frequency_hz"] == pytest.approx(50.0)
+    assert out["decay_rate"] == pytest.approx(-np.log(r) / T)
+
+
+def test_field_units_come_from_the_config_comments():
+    sc = load_scenario("paper")
+    assert analysis.field_unit(sc, "sensor.cutoff_frequency") == "Hz"
+    assert analysis.field_unit(sc, "controller.sliding_gain[0]") == \
+        "N s/m"
+    assert analysis.field_unit(sc, "controller.depth_gain") == "m/(N s)"
+    assert analysis.field_unit(sc, "tube.hydroelastic_modulus") == "Pa"
+    assert analysis.field_unit(sc, "controller.model_mass_scale") == ""
 
 
 @pytest.mark.parametrize("spec, message", [
@@ -272,6 +353,12 @@ def test_stability_map_grid_and_figure(tmp_path):
     m = analysis.stability_map(_Op(), axes, rho_of=rho_of)
     assert m.rho.shape == (4, 3) and len(seen) == 12
     np.testing.assert_allclose(m.rho[:, 0], [0.4, 0.8, 1.2, 1.6])
+    assert m.units == {"sensor.cutoff_frequency": "Hz",
+                       "controller.sliding_gain[0]": "N s/m"}
+    from deburr_drake.analysis.maps import rho_colour_norm
+    norm = rho_colour_norm(m.rho)
+    assert norm(1.0) == pytest.approx(0.5)  # the middle of the scale
+    assert norm(1.05) > 0.5 > norm(0.95)  # 1.05 is on the red side
     path = analysis.plot_map(m, tmp_path / "map.png")
     assert path.stat().st_size > 0
 

@@ -1,6 +1,8 @@
 """analyze's own checks before it simulates, and what it says for a
-scenario that never reaches steady cutting (deburr_drake.analysis.stopped)."""
+scenario that never reaches steady cutting: the verdict, the oscillation
+and the guard that would have stopped the run (issues 19 and 24)."""
 
+import json
 import time
 
 import pytest
@@ -8,9 +10,12 @@ import pytest
 from deburr_drake.cli import main
 
 
-@pytest.mark.parametrize("args", [["--at", "-3"], ["--at", "nan"], ["--after-contact", "-1"],
-                                  ["--lyapunov", "0"]])
-def test_bad_options_are_refused_before_anything_runs(tmp_path, capsys, args):
+@pytest.mark.parametrize("args", [["--at", "-3"], ["--at", "nan"],
+                                  ["--after-contact", "-1"],
+                                  ["--lyapunov", "0"], ["--until", "0"],
+                                  ["--at", "3", "--until", "2"]])
+def test_bad_options_are_refused_before_anything_runs(tmp_path, capsys,
+                                                      args):
     out = tmp_path / "analysis"
     start = time.perf_counter()
     assert main(["analyze", *args, "--out", str(out)]) == 2
@@ -21,14 +26,24 @@ def test_bad_options_are_refused_before_anything_runs(tmp_path, capsys, args):
 
 
 @pytest.mark.slow
-def test_a_run_that_never_reaches_an_operating_point_says_what_stopped_it(tmp_path, capsys):
+def test_a_run_that_never_reaches_steady_cutting_says_what_stopped_it(
+        tmp_path, capsys):
     out = tmp_path / "analysis"
     code = main(["analyze", "--scenario", "paper", "--scenario-text",
-                 "controller: {sliding_gain: [20000.0, 400.0, 1500.0]}", "--out", str(out)])
-    assert code == 2
-    err = [line for line in capsys.readouterr().err.splitlines()
-           if line.startswith("deburr-drake: error:")]
-    assert len(err) == 1
-    assert "never reaches steady cutting" in err[0]
-    assert "guard:joint_torque" in err[0] and "at t = " in err[0]
-    assert not out.exists()
+                 "controller: {sliding_gain: [20000.0, 400.0, 1500.0]}",
+                 "--until", "2", "--no-robust", "--out", str(out)])
+    assert code == 0
+    lines = capsys.readouterr().out.splitlines()
+    # the summary's first line is the verdict
+    first = next(i for i, line in enumerate(lines)
+                 if line.startswith("verdict:"))
+    assert lines[first].startswith("verdict: UNSTABLE")
+    assert lines[first - 1] == ""
+    assert lines[first + 1].startswith("deburr-drake analyze:")
+    result = json.loads((out / "analysis.json").read_text())
+    assert result["verdict"] == "unstable"
+    assert "eigenvalues" not in result or result["eigenvalues"] is None
+    guard = result["guard_that_would_stop"]
+    assert guard["guard"] == "joint_torque" and guard["time"] < 2.0
+    assert guard["value"] > guard["limit"]
+    assert "joint_torque" in result["verdict_reason"]
