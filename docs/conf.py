@@ -50,7 +50,9 @@ autodoc_default_options = {"members": True, "show-inheritance": False}
 autodoc_typehints = "none"
 # Types in docstrings name numpy and pydrake classes this site does not
 # document; a link that cannot resolve is not a broken link of the site.
-nitpick_ignore_regex = [(r"py:.*", r".*")]
+# (?s): a role whose target a docstring wraps over two lines (``Contour.
+# curvature`` in math.geometry.removal_scale) has a newline in its target.
+nitpick_ignore_regex = [(r"py:.*", r"(?s).*")]
 
 
 def _modules():
