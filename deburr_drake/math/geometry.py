@@ -458,8 +458,8 @@ def removal_scale(curvature, delta, cutter_radius):
     (1 + kappa (r + delta / 2)) / (1 + kappa delta).
 
     ``curvature`` kappa (1/m) is the zero-depth path's
-    (:meth:`Contour.curvature`: > 0 concave, the centre of the arc on the free side), r the
-    cutter radius, delta the depth (m). On a concave arc the edge has
+    (:meth:`Contour.curvature`: > 0 concave, the centre of the arc on the
+    free side), r the cutter radius, delta the depth (m). On a concave arc the edge has
     radius rho_e = rho + r (rho = 1 / kappa, the path's); at depth delta
     the cutter centre runs on rho + delta and removes the band rho_e ..
     rho_e + delta, delta (rho_e + delta / 2) per radian: more per metre
