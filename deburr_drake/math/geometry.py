@@ -459,14 +459,14 @@ def removal_scale(curvature, delta, cutter_radius):
 
     ``curvature`` kappa (1/m) is the zero-depth path's
     (:meth:`Contour.curvature`: > 0 concave, the centre of the arc on the
-    free side), r the cutter radius, delta the depth (m). On a concave arc
-    the edge has radius rho_e = rho + r (rho = 1 / kappa, the path's); at
-    depth delta the cutter centre runs on rho + delta and removes the band
-    rho_e .. rho_e + delta, delta (rho_e + delta / 2) per radian: more per
-    metre of centre travel than on a line. On a convex arc (kappa < 0) the
-    band is rho_e - delta .. rho_e = rho - r and less is removed.""" k =
-    float(curvature) return (1.0 + k * (cutter_radius + 0.5 * delta)) / (1.0
-    + k * delta)
+    free side), r the cutter radius, delta the depth (m). On a concave
+    arc the edge has radius rho_e = rho + r (rho = 1 / kappa, the path's);
+    at depth delta the cutter centre runs on rho + delta and removes the
+    band rho_e .. rho_e + delta, delta (rho_e + delta / 2) per radian: more
+    per metre of centre travel than on a line. On a convex arc (kappa < 0)
+    the band is rho_e - delta .. rho_e = rho - r and less is removed."""
+    k = float(curvature)
+    return (1.0 + k * (cutter_radius + 0.5 * delta)) / (1.0 + k * delta)
 
 
 def _segments_cross(a, b, c, d, eps):
