@@ -148,44 +148,83 @@ def _force(config: ProcessConfig, n1, tangent, delta, arc, xdot_p,
 def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, xdot_p,
                     *, cut_height: float,
                     burr_area: float = 0.0,
-                    overlap: float = 1.0) -> np.ndarray:
+                    overlap: float = 1.0, v=None,
+                    inertia=None) -> np.ndarray:
     """The terms of :func:`make_cutting_force_law` that make it give
     :func:`cutting_force` (J: the tool point's translational Jacobian, 3 x
     nv; xdot_p: the tool point's velocity, m/s). With u = a.v (v the joint
     velocities: the speed along the edge) and s = sat(u / v_s):
 
-        tau = A [u, s] + b (joint space),  f = B [u, s] + f0 (world),
+        tau = A [u, s] + b + S (v - v0) (joint space),
+        f = B [u, s] + f0 (world),
         a = J^T tangent,  A = [-on g a, -on (P'_th + h |v_n|) a],
         b = -on c0 J^T n1,  B, f0 the same with J = I.
 
-    Returns [a, A by column, b, B by column, f0] (4 nv + 9). The place on
-    the edge (tangent, n1, g, the engagement) and the plunge speed v_n are
-    the sample's; u and s follow the velocities."""
+    Returns [a, A by column, b - S v0, B by column, f0, S by column]
+    (4 nv + 9 + nv^2). The place on the edge (tangent, n1, g, the
+    engagement) and the plunge speed v_n are the sample's; u and s follow
+    the velocities.
+
+    S (nv x nv) is zero without the sample's joint velocities ``v`` (v0).
+    With them it is c a a^T - D, c = -dF/du >= 0 the law's damping along
+    the edge at v0 (g, plus P'_th / v_s inside the direction's ramp) and
+    D = diag(c |a_i| sqrt(m_i) sum_j |a_j| / sqrt(m_j)), m = ``inertia``
+    (the diagonal of the mass matrix; ones if not given: Gershgorin's
+    bound), a diagonal that dominates c a a^T (Cauchy-Schwarz, for any
+    positive m; with m = diag(M) it spreads D as the arm's inertia is
+    spread, and when a lies along one joint D = c a a^T, exact implicit
+    Euler): the term vanishes at the sample's velocities (so the
+    force there is exactly eq. (3)) and makes d tau / dv = -D, diagonal.
+    cenic treats only the diagonal of d tau / dv implicitly; with the
+    full derivative diagonal nothing of the law is explicit, and since D
+    dominates c a a^T, (M + h D)^-1 h c a a^T has its eigenvalues in [0,
+    1]: the cutting damping cannot drive a step-to-step oscillation
+    however large g is (what two steps per sample used to bound)."""
     on, g = _engagement(config, delta, cut_height, burr_area, overlap)
     v_n = float(n1 @ np.asarray(xdot_p, float))
     power = config.threshold_power_force + config.plunge_coefficient * abs(v_n)
     threshold = on * config.contact_threshold_force
     a = J.T @ tangent
+    nv = a.size
+    b = -threshold * (J.T @ n1)
+    S = np.zeros((nv, nv))
+    if v is not None:
+        u = float(a @ v)
+        c = on * g + (on * power / config.smoothing_speed
+                      if abs(u) < config.smoothing_speed else 0.0)
+        abs_a = np.abs(a)
+        root_m = np.ones(nv) if inertia is None else np.sqrt(inertia)
+        S = c * np.outer(a, a)
+        S[np.diag_indices(nv)] -= c * abs_a * root_m * (abs_a / root_m).sum()
+        b = b - S @ np.asarray(v, float)
     return np.concatenate([
-        a, -on * g * a, -on * power * a, -threshold * (J.T @ n1),
-        -on * g * tangent, -on * power * tangent, -threshold * n1])
+        a, -on * g * a, -on * power * a, b,
+        -on * g * tangent, -on * power * tangent, -threshold * n1,
+        S.ravel(order="F")])
+
+
+def _split_terms(terms):
+    """(a, A, b, B, f0, S) of :func:`force_law_terms`, as flat arrays."""
+    terms = np.asarray(terms, float)
+    nv = int(round(math.sqrt(len(terms) - 5) - 2))
+    return np.split(terms, np.cumsum([nv, 2 * nv, nv, 6, 3])), nv
 
 
 def generalized_cutting_force(terms, v, smoothing_speed: float):
     """(tau, f) of :func:`make_cutting_force_law` in numpy (for tests)."""
-    nv = (len(terms) - 9) // 4
-    a, A, b, B, f0 = np.split(np.asarray(terms, float),
-                              np.cumsum([nv, 2 * nv, nv, 6]))
+    (a, A, b, B, f0, S), nv = _split_terms(terms)
+    v = np.asarray(v, float)
     u = float(a @ v)
     w = np.array([u, _sat(u / smoothing_speed)])
-    return A.reshape(2, nv).T @ w + b, B.reshape(2, 3).T @ w + f0
+    return (A.reshape(2, nv).T @ w + b + S.reshape(nv, nv).T @ v,
+            B.reshape(2, 3).T @ w + f0)
 
 
 def make_cutting_force_law(nq: int, nv: int,
                            smoothing_speed: float) -> Diagram:
     """``cutting_force``: the law of :func:`force_law_terms`, from
     ``plant_state`` (nq + nv; the velocities are read) and the process's
-    held ``force_law_terms`` (4 nv + 9), outputs ``generalized_force`` (nv, for the
+    held ``force_law_terms`` (4 nv + 9 + nv^2), outputs ``generalized_force`` (nv, for the
     plant's applied generalized force) and ``tool_force`` (3, N, world: the
     same force on the tool, for the force sensor: a force applied through
     the joints does not pass the sensor's weld).
@@ -207,13 +246,15 @@ def make_cutting_force_law(nq: int, nv: int,
             RandomDistribution.kGaussian, n_in, n_out))
 
     state = add("state", Demultiplexer([nq, nv]))
-    terms = add("terms", Demultiplexer([nv, 2 * nv, nv, 6, 3]))
+    terms = add("terms", Demultiplexer([nv, 2 * nv, nv, 6, 3, nv * nv]))
     speed = affine("speed_along_edge", nv, 1)
     scale = add("per_smoothing_speed", Gain(1.0 / smoothing_speed, 1))
     sign = add("direction", Saturation([-1.0], [1.0]))
     mux = add("speed_and_direction", Multiplexer([1, 1]))
     joint_force = affine("generalized_force", 2, nv)
     tool_force = affine("tool_force", 2, 3)
+    # S (v - v0): the diagonal-making term (force_law_terms).
+    stabilized = affine("stabilized_generalized_force", nv, nv)
     connect = builder.Connect
     connect(state.get_output_port(1), speed.GetInputPort("w_in"))
     connect(terms.get_output_port(0), speed.GetInputPort("A"))
@@ -225,9 +266,12 @@ def make_cutting_force_law(nq: int, nv: int,
         connect(mux.get_output_port(), law.GetInputPort("w_in"))
         connect(terms.get_output_port(k), law.GetInputPort("A"))
         connect(terms.get_output_port(k + 1), law.GetInputPort("b"))
+    connect(state.get_output_port(1), stabilized.GetInputPort("w_in"))
+    connect(terms.get_output_port(5), stabilized.GetInputPort("A"))
+    connect(joint_force.GetOutputPort("w_out"), stabilized.GetInputPort("b"))
     builder.ExportInput(state.get_input_port(), "plant_state")
     builder.ExportInput(terms.get_input_port(), "force_law_terms")
-    builder.ExportOutput(joint_force.GetOutputPort("w_out"),
+    builder.ExportOutput(stabilized.GetOutputPort("w_out"),
                          "generalized_force")
     builder.ExportOutput(tool_force.GetOutputPort("w_out"), "tool_force")
     diagram = builder.Build()
@@ -251,7 +295,7 @@ class CuttingProcess(LeafSystem):
         - finish_depth
 
     - ``plant_state`` (nq + nv): the true robot state.
-    - ``force_law_terms`` (4 nv + 9): the chamfering and threshold forces'
+    - ``force_law_terms`` (4 nv + 9 + nv^2): the chamfering and threshold forces'
       dependence on the joint velocities (:func:`force_law_terms`) at the
       last sample, for :func:`make_cutting_force_law`, whose outputs go to
       the plant's ``applied_generalized_force`` input and to the force
@@ -294,7 +338,8 @@ class CuttingProcess(LeafSystem):
         self._burr_index = self.DeclareDiscreteState(
             self.initial_burr_height())
         self._finish_index = self.DeclareDiscreteState(self._bins.count)
-        self._terms_index = self.DeclareDiscreteState(4 * self._nv + 9)
+        self._terms_index = self.DeclareDiscreteState(
+            4 * self._nv + 9 + self._nv ** 2)
         self._state_port = self.DeclareVectorInputPort(
             "plant_state", plant.num_multibody_states())
         self._state_index = self.DeclareDiscreteState(PROCESS_STATE.size)
@@ -365,6 +410,12 @@ class CuttingProcess(LeafSystem):
         _, state = _force(self._config, n1, tangent, delta, arc, xdot_p,
                           self._cut_height, area, overlap)
         discrete_state.set_value(self._state_index, state)
+        v = inertia = None
+        if self._config.implicit_damping:
+            state = self._state_port.Eval(context)
+            v = state[self._nq:]
+            inertia = np.diag(self._tool_point.mass_matrix(state))
         discrete_state.set_value(self._terms_index, force_law_terms(
             self._config, n1, tangent, delta, J, xdot_p,
-            cut_height=self._cut_height, burr_area=area, overlap=overlap))
+            cut_height=self._cut_height, burr_area=area, overlap=overlap,
+            v=v, inertia=inertia))

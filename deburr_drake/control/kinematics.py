@@ -16,7 +16,7 @@ __all__ = ["ToolPoint"]
 class _Anchor:
     """The kinematics at one q (arrays read-only); gravity on request."""
 
-    __slots__ = ("q", "key", "x", "J", "R", "gravity")
+    __slots__ = ("q", "key", "x", "J", "R", "gravity", "mass_matrix")
 
     def __init__(self, q, key, x, J, R):
         self.q, self.key = q.copy(), key  # key: q as a list, to compare
@@ -24,6 +24,7 @@ class _Anchor:
         for array in (x, J, R):
             array.flags.writeable = False
         self.gravity = None
+        self.mass_matrix = None
 
 
 class ToolPoint:
@@ -99,6 +100,16 @@ class ToolPoint:
                 self._context)
             anchor.gravity.flags.writeable = False
         return anchor.J, anchor.R, anchor.gravity
+
+    def mass_matrix(self, state) -> np.ndarray:
+        """M(q) of the plant at the anchor (nv x nv, read-only; computed on
+        first request)."""
+        anchor = self._anchor_of(state)
+        if anchor.mass_matrix is None:
+            self._plant.SetPositions(self._context, anchor.q)
+            anchor.mass_matrix = self._plant.CalcMassMatrix(self._context)
+            anchor.mass_matrix.flags.writeable = False
+        return anchor.mass_matrix
 
     def _anchor_of(self, state) -> _Anchor:
         return self._anchor(np.asarray(state, float)[:self._nq])[0]

@@ -120,6 +120,114 @@ def test_cutting_force_law_follows_the_velocity_between_samples(arm):
     assert f1 @ tangent < 0
 
 
+@pytest.mark.parametrize("inertia", [None, [1.0, 4.0, 0.5, 2.0, 1.0]])
+def test_implicit_damping_term_makes_the_law_diagonal_and_vanishes_at_v0(
+        arm, inertia):
+    """With the sample's joint velocities the law gains S (v - v0): at v0
+    the torque is still J^T of eq. (3); d tau / dv is diagonal (-D, what
+    cenic treats implicitly), and D - c a a^T is positive semidefinite
+    (D dominates the true damping), inside the direction's ramp too."""
+    frame = arm.GetFrameByName("tool_tip")
+    x = _arm_state(arm, 3)
+    _, _, J = ToolPoint(arm, frame).evaluate(x)
+    tangent, n1 = np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0])
+    for speed in (2.4e-3, 1e-4):  # outside and inside the ramp
+        v0 = np.linalg.lstsq(J, speed * tangent + 1e-4 * n1,
+                             rcond=None)[0]
+        plain = force_law_terms(CONFIG, n1, tangent, 5e-4, J, J @ v0,
+                                cut_height=0.002)
+        terms = force_law_terms(CONFIG, n1, tangent, 5e-4, J, J @ v0,
+                                cut_height=0.002, v=v0, inertia=inertia)
+        tau0, f0 = generalized_cutting_force(terms, v0,
+                                             CONFIG.smoothing_speed)
+        ref_tau, ref_f = generalized_cutting_force(plain, v0,
+                                                   CONFIG.smoothing_speed)
+        np.testing.assert_allclose(tau0, ref_tau, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(f0, ref_f, rtol=1e-12)
+        eps = 1e-9
+        jac = np.column_stack([
+            (generalized_cutting_force(terms, v0 + eps * e,
+                                       CONFIG.smoothing_speed)[0] - tau0)
+            / eps for e in np.eye(5)])
+        off = jac - np.diag(np.diag(jac))
+        assert np.max(np.abs(off)) < 1e-6 * np.max(np.abs(jac))
+        true_jac = np.column_stack([
+            (generalized_cutting_force(plain, v0 + eps * e,
+                                       CONFIG.smoothing_speed)[0] - ref_tau)
+            / eps for e in np.eye(5)])
+        # -jac (= D) minus the true damping -true_jac is PSD.
+        gap = -jac + true_jac
+        assert np.min(np.linalg.eigvalsh(0.5 * (gap + gap.T))) > \
+            -1e-6 * np.max(np.abs(jac))
+
+
+def _one_step_decay(implicit, h=0.0025):
+    """Speed along a = (1, 1, 1)/sqrt(3) of a 1 kg point (three prismatic
+    joints) under the cutting law alone, g = 3000 N s/m (h g / m = 7.5),
+    after each of 4 fixed cenic steps of h, the process's terms sampled
+    at each step's start."""
+    from pydrake.multibody.plant import (AddMultibodyPlant,
+                                         MultibodyPlantConfig)
+    from pydrake.multibody.tree import PrismaticJoint, SpatialInertia
+    from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
+                                          SimulatorConfig)
+    from pydrake.systems.framework import DiagramBuilder
+    builder = DiagramBuilder()
+    plant, _ = AddMultibodyPlant(MultibodyPlantConfig(time_step=0.0),
+                                 builder)
+    parent = plant.world_body()
+    for i, axis in enumerate(np.eye(3)):
+        body = plant.AddRigidBody(f"body{i}", SpatialInertia.
+                                  SolidSphereWithMass(
+                                      1.0 if i == 2 else 1e-6, 0.01))
+        plant.AddJoint(PrismaticJoint(f"joint{i}", parent.body_frame(),
+                                      body.body_frame(), axis))
+        parent = body
+    plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
+    plant.Finalize()
+    config = ProcessConfig(cutting_coefficient=3.0e9,
+                           threshold_power_force=0.0,
+                           contact_threshold_force=0.0)
+    law = builder.AddSystem(make_cutting_force_law(
+        3, 3, config.smoothing_speed))
+    builder.Connect(plant.get_state_output_port(),
+                    law.GetInputPort("plant_state"))
+    builder.Connect(law.GetOutputPort("generalized_force"),
+                    plant.get_applied_generalized_force_input_port())
+    terms_port = builder.ExportInput(law.GetInputPort("force_law_terms"))
+    diagram = builder.Build()
+    simulator = Simulator(diagram)
+    ApplySimulatorConfig(SimulatorConfig(
+        integration_scheme="cenic", max_step_size=h,
+        use_error_control=False), simulator)
+    root = simulator.get_mutable_context()
+    context = plant.GetMyMutableContextFromRoot(root)
+    a = np.ones(3) / np.sqrt(3.0)
+    n1 = np.array([1.0, -1.0, 0.0]) / np.sqrt(2.0)
+    plant.SetVelocities(context, 0.05 * a)
+    speeds = []
+    for k in range(1, 5):
+        v = plant.GetVelocities(context)
+        diagram.get_input_port(terms_port).FixValue(root, force_law_terms(
+            config, n1, a, 5e-4, np.eye(3), v, cut_height=0.002,
+            v=v if implicit else None))
+        simulator.AdvanceTo(k * h)
+        speeds.append(plant.GetVelocities(context) @ a)
+    return np.array(speeds)
+
+
+def test_implicit_damping_holds_any_g_at_one_cenic_step():
+    """The rank-one damping g a a^T along (1, 1, 1) at h g / m = 7.5:
+    eq. (3) as is alternates and grows in cenic ((1 - 2 h g / 3 m) / (1 +
+    h g / 3 m) = -1.14 per step); with the implicit-damping term it decays
+    as implicit Euler, 1 / (1 + h g / m) (here D = g I exactly)."""
+    plain = _one_step_decay(False)
+    np.testing.assert_allclose(plain[1:] / plain[:-1], -4.0 / 3.5,
+                               rtol=1e-3)
+    held = _one_step_decay(True)
+    np.testing.assert_allclose(held[1:] / held[:-1], 1 / 8.5, rtol=1e-3)
+
+
 def test_joint_friction_is_smooth_coulomb_in_the_plant():
     plant = MultibodyPlant(0.0)
     make_parser(plant).AddModels(url=ARM_URL)
