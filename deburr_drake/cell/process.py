@@ -180,27 +180,62 @@ def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, xdot_p,
     dominates c a a^T, (M + h D)^-1 h c a a^T has its eigenvalues in [0,
     1]: the cutting damping cannot drive a step-to-step oscillation
     however large g is (what two steps per sample used to bound)."""
+    _, terms = _sample(config, n1, tangent, delta, 0.0,
+                       np.asarray(J, float), np.asarray(xdot_p, float),
+                       cut_height, burr_area, overlap,
+                       None if v is None else np.asarray(v, float),
+                       None if inertia is None else np.asarray(inertia,
+                                                               float))
+    return terms
+
+
+#: PROCESS_STATE's blocks in order (all scalars): _sample fills it by
+#: position.
+_STATE_BLOCKS = ("delta", "engagement", "g", "f_t", "f_threshold", "v_t",
+                 "burr_area", "arc_position")
+assert PROCESS_STATE.blocks == _STATE_BLOCKS
+
+
+def _sample(config: ProcessConfig, n1, tangent, delta, arc, J, xdot_p,
+            cut_height, burr_area, overlap, v, inertia):
+    """(PROCESS_STATE vector, :func:`force_law_terms`) at one sample: one
+    pass over the engagement, speeds and directions (float arrays in)."""
     on, g = _engagement(config, delta, cut_height, burr_area, overlap)
-    v_n = float(n1 @ np.asarray(xdot_p, float))
+    v_n = float(n1 @ xdot_p)
+    v_along = float(tangent @ xdot_p)
     power = config.threshold_power_force + config.plunge_coefficient * abs(v_n)
     threshold = on * config.contact_threshold_force
-    a = J.T @ tangent
+    along = on * (g * v_along + power * _sat(v_along
+                                             / config.smoothing_speed))
+    state = np.array([delta, on, g, abs(along), threshold, abs(v_along),
+                      burr_area, arc])
+    a = tangent @ J
     nv = a.size
-    b = -threshold * (J.T @ n1)
-    S = np.zeros((nv, nv))
-    if v is not None:
+    terms = np.empty(nv * nv + 4 * nv + 9)
+    terms[:nv] = a
+    np.multiply(a, -on * g, out=terms[nv:2 * nv])
+    np.multiply(a, -on * power, out=terms[2 * nv:3 * nv])
+    b = terms[3 * nv:4 * nv]
+    np.multiply(n1 @ J, -threshold, out=b)
+    k = 4 * nv
+    terms[k:k + 3] = (-on * g) * tangent
+    terms[k + 3:k + 6] = (-on * power) * tangent
+    terms[k + 6:k + 9] = (-threshold) * n1
+    # S is symmetric: its column-major and row-major layouts agree.
+    S = terms[k + 9:].reshape(nv, nv)
+    if v is None:
+        S[:] = 0.0
+    else:
         u = float(a @ v)
         c = on * g + (on * power / config.smoothing_speed
                       if abs(u) < config.smoothing_speed else 0.0)
         abs_a = np.abs(a)
         root_m = np.ones(nv) if inertia is None else np.sqrt(inertia)
-        S = c * np.outer(a, a)
-        S[np.diag_indices(nv)] -= c * abs_a * root_m * (abs_a / root_m).sum()
-        b = b - S @ np.asarray(v, float)
-    return np.concatenate([
-        a, -on * g * a, -on * power * a, b,
-        -on * g * tangent, -on * power * tangent, -threshold * n1,
-        S.ravel(order="F")])
+        np.multiply.outer(c * a, a, out=S)
+        S.flat[::nv + 1] -= (c * float((abs_a / root_m).sum())) \
+            * abs_a * root_m
+        b -= S @ v
+    return state, terms
 
 
 def _split_terms(terms):
@@ -365,13 +400,6 @@ class CuttingProcess(LeafSystem):
         return burr_profile(self._bins.centers, self._config.burrs,
                             self._contour.length, self._contour.closed)
 
-    def _place(self, context):
-        """(n1, tangent, delta, arc, xdot_p, J) of the tool now."""
-        x_p, xdot_p, J = self._tool_point.evaluate(
-            self._state_port.Eval(context))
-        n1, tangent, delta, arc = self._contour.frame(x_p)
-        return n1, tangent, delta, arc, xdot_p, J
-
     def _leading_edge(self, s):
         """Arc position of the cutter's front (the traversal direction is
         +arc): the burr is cut there."""
@@ -391,13 +419,16 @@ class CuttingProcess(LeafSystem):
 
     def _update(self, context, discrete_state):
         burr = discrete_state.get_mutable_value(self._burr_index)
-        n1, tangent, delta, arc, xdot_p, J = self._place(context)
+        state = self._state_port.Eval(context)
+        x_p, xdot_p, J = self._tool_point.evaluate(state)
+        n1, tangent, delta, arc = self._contour.frame(x_p)
         overlap = material_overlap(self._contour, arc, delta,
                                    self._cutter_radius)
         if delta > 0.0 and overlap > 0.0:
             finish = discrete_state.get_mutable_value(self._finish_index)
             k = self._bins.index(arc)
-            finish[k] = max(finish[k], delta)
+            if delta > finish[k]:
+                finish[k] = delta
             # The cutter (diameter 2 r) has swept the burr behind its front.
             r, w = self._cutter_radius, self._bins.width
             closed = self._contour.closed
@@ -407,15 +438,12 @@ class CuttingProcess(LeafSystem):
             burr[near[(d >= -r) & (d < r - w)]] = 0.0
         k = self._bins.index(self._leading_edge(arc))
         area = burr[k] * self._thickness[k]
-        _, state = _force(self._config, n1, tangent, delta, arc, xdot_p,
-                          self._cut_height, area, overlap)
-        discrete_state.set_value(self._state_index, state)
         v = inertia = None
         if self._config.implicit_damping:
-            state = self._state_port.Eval(context)
             v = state[self._nq:]
             inertia = np.diag(self._tool_point.mass_matrix(state))
-        discrete_state.set_value(self._terms_index, force_law_terms(
-            self._config, n1, tangent, delta, J, xdot_p,
-            cut_height=self._cut_height, burr_area=area, overlap=overlap,
-            v=v, inertia=inertia))
+        process_state, terms = _sample(
+            self._config, n1, tangent, delta, arc, J, xdot_p,
+            self._cut_height, area, overlap, v, inertia)
+        discrete_state.set_value(self._state_index, process_state)
+        discrete_state.set_value(self._terms_index, terms)
