@@ -61,6 +61,7 @@ class ToolPoint:
         # The last few anchors: a step evaluates at the states before and
         # after it in turn.
         self._anchors = []
+        self._context_anchor = None  # the anchor whose q the context holds
         self.full_evaluations = 0
 
     _MAX_ANCHORS = 3
@@ -95,7 +96,7 @@ class ToolPoint:
         request)."""
         anchor = self._anchor_of(state)
         if anchor.gravity is None:
-            self._plant.SetPositions(self._context, anchor.q)
+            self._set_positions(anchor)
             anchor.gravity = self._plant.CalcGravityGeneralizedForces(
                 self._context)
             anchor.gravity.flags.writeable = False
@@ -106,10 +107,16 @@ class ToolPoint:
         first request)."""
         anchor = self._anchor_of(state)
         if anchor.mass_matrix is None:
-            self._plant.SetPositions(self._context, anchor.q)
+            self._set_positions(anchor)
             anchor.mass_matrix = self._plant.CalcMassMatrix(self._context)
             anchor.mass_matrix.flags.writeable = False
         return anchor.mass_matrix
+
+    def _set_positions(self, anchor):
+        # Setting the same q again would drop the context's kinematics.
+        if self._context_anchor is not anchor:
+            self._plant.SetPositions(self._context, anchor.q)
+            self._context_anchor = anchor
 
     def _anchor_of(self, state) -> _Anchor:
         return self._anchor(np.asarray(state, float)[:self._nq])[0]
@@ -131,6 +138,7 @@ class ToolPoint:
             self._world, self._world)
         anchor = _Anchor(q, key, X_WF.translation(), J,
                          X_WF.rotation().matrix())
+        self._context_anchor = anchor
         self._anchors.insert(0, anchor)
         del self._anchors[self._MAX_ANCHORS:]
         self.full_evaluations += 1

@@ -69,6 +69,24 @@ def test_tool_point_matches_drake_and_reuses_only_nearby_states(arm):
         ToolPoint(arm, frame, reuse_tolerance=-1.0)
 
 
+def test_tool_point_mass_matrix_and_gravity_are_the_plants(arm):
+    """At the anchor's q, whatever was asked before (the context keeps
+    the anchor's q and its kinematics between requests)."""
+    tool = ToolPoint(arm, arm.GetFrameByName("tool_tip"))
+    context = arm.CreateDefaultContext()
+    for seed in (4, 5, 4):
+        x = _arm_state(arm, seed)
+        tool.evaluate(x)
+        M = tool.mass_matrix(x)
+        _, _, tau_g = tool.control_terms(x)
+        arm.SetPositions(context, x[:5])
+        np.testing.assert_allclose(M, arm.CalcMassMatrix(context),
+                                   rtol=1e-12)
+        np.testing.assert_allclose(
+            tau_g, arm.CalcGravityGeneralizedForces(context), rtol=1e-12)
+        assert not M.flags.writeable
+
+
 @pytest.mark.parametrize("speed", [2.4e-3, -1.1e-3, 1e-4, 0.0])
 def test_cutting_force_law_is_eq3_through_the_jacobian(arm, speed):
     """The C++ law, its numpy twin and J^T of the world-frame eq. (3) agree
