@@ -33,15 +33,9 @@ from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.cell.process import force_law_terms, make_cutting_force_law
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--duration", type=float, default=6.0, help="s")
-    ap.add_argument("--step", type=float, default=None,
-                    help="s, the fixed cenic step (default: the control "
-                    "period, 2.5 ms)")
-    ap.add_argument("--sensor", action=argparse.BooleanOptionalAction,
-                    default=True, help="sample the reaction forces")
-    args = ap.parse_args()
+def make_floor_simulator(step=None, sensor=True):
+    """(simulator, plant) of the floor, initialized; ``step`` (s) the fixed
+    cenic step, the control period by default."""
     scenario = load_scenario("paper")
     T = scenario.controller.control_period
     builder = DiagramBuilder()
@@ -88,21 +82,38 @@ def main():
     hold = builder.AddSystem(ZeroOrderHold(T, nv))
     builder.Connect(total.get_output_port(), hold.get_input_port())
     builder.Connect(hold.get_output_port(), plant.get_actuation_input_port())
-    if args.sensor:
+    if sensor:
         reactions = plant.get_reaction_forces_output_port()
         sample = builder.AddSystem(ZeroOrderHold(
             T, AbstractValue.Make(reactions.Allocate().get_value())))
         builder.Connect(reactions, sample.get_input_port())
     diagram = builder.Build()
 
-    step = T if args.step is None else args.step
+    step = T if step is None else step
     if not 0 < step <= T:
-        ap.error(f"--step must be in (0, {T}] s")
+        raise ValueError(f"step must be in (0, {T}] s, got {step}")
     simulator = Simulator(diagram)
     ApplySimulatorConfig(SimulatorConfig(
         integration_scheme="cenic", max_step_size=step,
         use_error_control=False), simulator)
     simulator.Initialize()
+    return simulator, plant
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--duration", type=float, default=6.0, help="s")
+    ap.add_argument("--step", type=float, default=None,
+                    help="s, the fixed cenic step (default: the control "
+                    "period, 2.5 ms)")
+    ap.add_argument("--sensor", action=argparse.BooleanOptionalAction,
+                    default=True, help="sample the reaction forces")
+    args = ap.parse_args()
+    try:
+        simulator, plant = make_floor_simulator(args.step, args.sensor)
+    except ValueError as e:
+        ap.error(str(e))
+    step = simulator.get_integrator().get_maximum_step_size()
     simulator.AdvanceTo(1.0)
     steps = simulator.get_num_steps_taken()
     wall = time.perf_counter()
