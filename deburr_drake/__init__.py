@@ -28,7 +28,8 @@ API"; ``examples/`` and ``examples/tutorial.ipynb`` use it)::
   and the systems :class:`HybridController`, :class:`CommandGenerator`,
   :class:`FirstOrderHold`, :class:`ContactParameterEstimator`,
   :class:`ChamferObserver`, :class:`ForceSensor`, :class:`CuttingProcess`;
-  edge geometry :class:`CircularContour`, :class:`StraightContour`; signal
+  edge geometry :class:`CircularContour`, :class:`StraightContour`,
+  :class:`ProfileContour`; signal
   layouts :data:`CHAMFER_STATE`, :data:`CONTROLLER_DIAGNOSTICS`,
   :data:`COMMAND_STATE`.
 
@@ -37,7 +38,7 @@ modules of ``deburr_drake.math``: ``fuzzy``, ``geometry``, ``metrics``)
 import no Drake.
 
 The package is layered (pyproject.toml's import-linter contracts hold it):
-``math`` and ``config`` at the ground, ``control`` (the paper's systems),
+``math`` at the ground, ``config`` on it, ``control`` (the paper's systems),
 ``cell`` (the simulated cell), ``runs`` (simulating and reporting), the
 capabilities ``analysis``, ``sweep``, and ``cli`` on top. A module imports
 only from its own layer or below.
@@ -66,7 +67,7 @@ _MODULES = {
     "control.observer": ("ChamferObserver",),
     "cell.sensor": ("ForceSensor",),
     "cell.process": ("CuttingProcess",),
-    "math.geometry": ("CircularContour", "StraightContour"),
+    "math.geometry": ("CircularContour", "StraightContour", "ProfileContour"),
     "control.layout": ("CHAMFER_STATE", "CONTROLLER_DIAGNOSTICS",
                        "COMMAND_STATE"),
 }

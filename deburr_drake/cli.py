@@ -109,6 +109,32 @@ def _print_metrics(values: dict):
         print(f"  n/a: {reason}: {', '.join(keys)}")
 
 
+def _preflight(args, scenario):
+    """The designed gains (controller.design auto) and the sampled loop's
+    check at the start pose (deburr_drake.analysis.preflight), unless
+    --no-preflight; ConfigError (exit 2) if predicted unstable. Returns
+    what it found, or None."""
+    from deburr_drake.analysis.preflight import preflight
+    if getattr(args, "no_preflight", False):
+        print("pre-flight skipped (--no-preflight)", flush=True)
+        return None
+    return preflight(scenario, say=lambda line: print(line, flush=True))
+
+
+def _write_resolved(out, scenario, found):
+    """scenario.yaml (the scenario as run: the designed gains written) and,
+    after a pre-flight, preflight.json, so the run can be repeated."""
+    from pathlib import Path
+
+    from pydrake.common.yaml import yaml_dump_typed
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "scenario.yaml").write_text(yaml_dump_typed(scenario))
+    if found is not None:
+        (out / "preflight.json").write_text(json.dumps(
+            found.to_dict(), indent=2, sort_keys=True))
+
+
 def _simulate(args) -> int:
     import signal
     from pathlib import Path
@@ -130,6 +156,7 @@ def _simulate(args) -> int:
         _check_writable_target(args.record, "--record", args.force,
                                is_dir=False)
     check_part_in_reach(scenario)
+    found = _preflight(args, scenario)
     passes = scenario.simulation.stop_after_passes
     print(f"deburr-drake simulate: scenario '{scenario.name}' "
           f"({scenario.robot.model}, m = {scenario.controller.fuzzy.order}), "
@@ -150,13 +177,13 @@ def _simulate(args) -> int:
     previous = {n: signal.signal(n, on_signal)
                 for n in (signal.SIGINT, signal.SIGTERM)}
     try:
-        return _run_and_write(args, scenario, out, received, running)
+        return _run_and_write(args, scenario, out, received, running, found)
     finally:
         for number, handler in previous.items():
             signal.signal(number, handler)
 
 
-def _run_and_write(args, scenario, out, received, running) -> int:
+def _run_and_write(args, scenario, out, received, running, found) -> int:
     import signal
 
     from deburr_drake.cell.truth import contact_truth
@@ -206,6 +233,7 @@ def _run_and_write(args, scenario, out, received, running) -> int:
         log, true_force_at_desired_depth=truth,
         only_cut=not log.completed_pass)
     files = report.write_run(log, out, values)
+    _write_resolved(out, scenario, found)
     try:
         with np.load(files["logs"]) as logs:
             pngs = figures.make_figures(
@@ -218,7 +246,11 @@ def _run_and_write(args, scenario, out, received, running) -> int:
         pngs = []
     print()
     _print_metrics(values)
-    print(f"\nwrote {files['logs']}, {files['metrics']} and "
+    written = "scenario.yaml" + (
+        " (the designed gains)" if found is not None and found.design else "")
+    if found is not None:
+        written += ", preflight.json"
+    print(f"\nwrote {files['logs']}, {files['metrics']}, {written} and "
           f"{len(pngs)} figures in {out}/")
     return _exit_code(log, signal_number)
 
@@ -229,6 +261,10 @@ def _demo(args) -> int:
     scenario = _load(args)
     if args.duration is not None:
         _check_duration(args.duration)
+        if args.duration <= demo.SETTLE_TIME:
+            _bad(f"--duration = {args.duration!r} is too short for the demo:"
+                 f" allowed more than its {demo.SETTLE_TIME:g} s settling "
+                 "time (it measures after it)")
     duration = 5.0 if args.duration is None else args.duration
     print(f"deburr-drake demo: point-mass testbed, scenario "
           f"'{scenario.name}', {duration:g} s")
@@ -314,12 +350,14 @@ def _compare(args) -> int:
     _check_writable_target(out, "--out", args.force, is_dir=True,
                            names=("comparison.json", "comparison.md"))
     check_part_in_reach(scenario)
+    found = _preflight(args, scenario)
     print(f"deburr-drake compare: scenario '{scenario.name}', "
           f"{', '.join(controllers)}, "
           + (f"{args.duration:g} s" if args.duration else "full run")
           + f", {args.workers} worker(s), output {out}/", flush=True)
     rows = cmp.compare(scenario, controllers, duration=args.duration,
                        out_dir=out, workers=args.workers)
+    _write_resolved(out, scenario, found)
     print((out / "comparison.md").read_text())
     worst = 0
     for row in rows:
@@ -350,8 +388,9 @@ def _sweep(args) -> int:
     runs = runs[:args.limit] if args.limit else runs
     if args.no_run:
         return _sweep_report(study, runs, out)
-    sweep.check_reach(study, [r for r in runs
-                              if sweep.read_result(out, r.key) is None])
+    pending = [r for r in runs if sweep.read_result(out, r.key) is None]
+    sweep.check_reach(study, pending)
+    _sweep_preflight(args, study, pending)
     print(f"deburr-drake sweep: study '{study.name}', {len(runs)} run(s) of "
           f"{study.duration:g} s, output {out}/", flush=True)
     received = []
@@ -382,6 +421,34 @@ def _sweep(args) -> int:
               "are kept; the same command resumes")
         return 143 if received else 130
     return 1 if outcome.errors else 0
+
+
+def _sweep_preflight(args, study, runs):
+    """The pre-flight of the runs about to run, once per distinct loop
+    (analysis.preflight.loop_key: burrs, noise and duration aside); the
+    first refused run is one line naming it."""
+    from deburr_drake.analysis.preflight import loop_key, preflight
+    from deburr_drake.config import ConfigError
+    from deburr_drake.sweep.study import scenario_from_text
+    if args.no_preflight:
+        print("pre-flight skipped (--no-preflight)", flush=True)
+        return
+    checked = set()
+    for run in runs:
+        scenario = scenario_from_text(run.scenario_text)
+        key = loop_key(scenario)
+        if key in checked:
+            continue
+        try:
+            found = preflight(scenario)
+        except ConfigError as e:
+            section = "grid" if study.grid else "sample.fields"
+            shown = ", ".join(f"{n} = {v:.6g}" for n, v in run.params.items())
+            raise ConfigError(f"study.{section}: run {run.index} ({shown}): "
+                              f"{e}") from None
+        checked.add(key)
+        print(f"pre-flight of run {run.index}: rho = {found.rho:.5f} at the "
+              "start pose", flush=True)
 
 
 def _sweep_report(study, runs, out, outcome=None):
@@ -423,14 +490,27 @@ def _analyze(args) -> int:
 
     from deburr_drake import analysis
     scenario = _load(args)
+    from deburr_drake.analysis.stopped import (check_analyze_options,
+                                               explain_no_operating_point)
+    from deburr_drake.config import ConfigError
     grid = analysis.parse_map(scenario, args.map) if args.map else None
     overrides = analysis.parse_settings(scenario, args.set or [])
+    check_analyze_options(at=args.at, after_contact=args.after_contact,
+                          lyapunov=args.lyapunov)
     out = Path(args.out or f"out/{scenario.name}/analysis")
+    _check_writable_target(out, "--out", True, is_dir=True)
+    try:
+        result = analysis.analyze(
+            scenario, at=args.at, after_contact=args.after_contact,
+            overrides=overrides,
+            progress=lambda m: print(f"  {m}", flush=True))
+    except (ConfigError, RuntimeError) as e:
+        explained = explain_no_operating_point(
+            scenario, e, at=args.at, after_contact=args.after_contact)
+        if explained is e:
+            raise
+        raise explained from None
     out.mkdir(parents=True, exist_ok=True)
-    result = analysis.analyze(scenario, at=args.at,
-                              after_contact=args.after_contact,
-                              overrides=overrides,
-                              progress=lambda m: print(f"  {m}", flush=True))
     if args.validate:
         result["boundaries"] = analysis.validate_boundaries(
             result["_objects"]["op"],
@@ -459,6 +539,14 @@ def _scenario_arguments(parser, default: str, duration_help: str):
     if duration_help:
         parser.add_argument("--duration", type=float, default=None,
                             help=duration_help)
+
+
+def _preflight_argument(parser):
+    parser.add_argument(
+        "--no-preflight", action="store_true",
+        help="run even if the sampled loop at the start pose is predicted "
+             "unstable (the gains of controller.design: auto are still "
+             "designed, not proven)")
 
 
 def main(argv=None) -> int:
@@ -490,6 +578,7 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true",
                    help="overwrite existing logs.npz / metrics.json in "
                         "--out and an existing --record file")
+    _preflight_argument(p)
     p.set_defaults(func=_simulate)
 
     p = sub.add_parser("compare", help="run several controllers on one "
@@ -509,6 +598,7 @@ def main(argv=None) -> int:
                         "out/<scenario>_comparison)")
     p.add_argument("--force", action="store_true",
                    help="overwrite an existing comparison in --out")
+    _preflight_argument(p)
     p.set_defaults(func=_compare)
 
     p = sub.add_parser("diagram", help="export the diagram and the "
@@ -542,6 +632,7 @@ def main(argv=None) -> int:
                    help="run nothing: write the table, summary and figures "
                         "from the runs finished so far (e.g. while a sweep "
                         "is going)")
+    _preflight_argument(p)
     p.set_defaults(func=_sweep)
 
     p = sub.add_parser("analyze", help="closed-loop stability at an "

@@ -10,10 +10,8 @@ are deburr_drake.runs.envelope's. Usage:
 
 import argparse
 import json
-import multiprocessing
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 
 from deburr_drake.runs import envelope
 
@@ -52,33 +50,28 @@ def main(argv=None) -> int:
           f"{'mm/s':>6s} | {'mm':>9s} | {'mm/s':>7s} {'mm/s':>6s} | "
           f"{'':>3s} | {'s':>5s} {'s':>5s} |")
     start = time.perf_counter()
-    rows = []
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(args.workers, mp_context=context) as pool:
-        futures = [pool.submit(envelope.run_burr_cell, cell, args.scenario,
-                               args.scenario_text) for cell in cells]
-        for cell, future in zip(cells, futures):
-            try:
-                row = future.result()
-            except Exception as e:  # a crashed run is a failed cell
-                row = {"cell": vars(cell), "error": repr(e), "passed": 0.0}
-                print(f"{cell.label}: ERROR {e!r}", flush=True)
-                rows.append(row)
-                continue
-            rows.append(row)
-            b = row["bounds"]
-            print(f"{cell.height * 1e3:7.1f} x {cell.length * 1e3:5.0f} "
-                  f"{cell.force:4.0f} | "
-                  f"{row['max_chamfering_force_N']:8.2f} "
-                  f"{b['max_chamfering_force_N']:6.1f} | "
-                  f"{row['max_tool_speed_m_s'] * 1e3:6.2f} "
-                  f"{b['max_tool_speed_m_s'] * 1e3:6.2f} | "
-                  f"{row['depth_rms_error_on_burr_m'] * 1e3:9.4f} | "
-                  f"{row['feed_on_burr_m_s'] * 1e3:7.3f} "
-                  f"{row['feed_law_on_burr_m_s'] * 1e3:6.3f} | "
-                  f"{'yes' if row['nan'] else 'no':>3s} | "
-                  f"{row['sim_time_s']:5.1f} {row['wall_time_s']:5.1f} | "
-                  f"{'PASS' if row['passed'] else 'FAIL'}", flush=True)
+
+    def show(cell, row):
+        if "error" in row:
+            print(f"{cell.label}: ERROR {row['error']}", flush=True)
+            return
+        b = row["bounds"]
+        print(f"{cell.height * 1e3:7.1f} x {cell.length * 1e3:5.0f} "
+              f"{cell.force:4.0f} | "
+              f"{row['max_chamfering_force_N']:8.2f} "
+              f"{b['max_chamfering_force_N']:6.1f} | "
+              f"{row['max_tool_speed_m_s'] * 1e3:6.2f} "
+              f"{b['max_tool_speed_m_s'] * 1e3:6.2f} | "
+              f"{row['depth_rms_error_on_burr_m'] * 1e3:9.4f} | "
+              f"{row['feed_on_burr_m_s'] * 1e3:7.3f} "
+              f"{row['feed_law_on_burr_m_s'] * 1e3:6.3f} | "
+              f"{'yes' if row['nan'] else 'no':>3s} | "
+              f"{row['sim_time_s']:5.1f} {row['wall_time_s']:5.1f} | "
+              f"{'PASS' if row['passed'] else 'FAIL'}", flush=True)
+
+    rows = envelope.run_cells(envelope.run_burr_cell, cells, args.scenario,
+                              args.scenario_text, workers=args.workers,
+                              on_row=show)
     wall = time.perf_counter() - start
     passed = sum(int(r["passed"]) for r in rows)
     print(f"\n{passed}/{len(rows)} cells pass; wall time {wall:.0f} s "

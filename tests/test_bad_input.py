@@ -32,6 +32,8 @@ CASES = {
         ["simulate", "--duration", "0"], ["--duration = 0.0", "> 0"]),
     "demo duration 0": (
         ["demo", "--duration", "0"], ["--duration = 0.0", "> 0"]),
+    "demo shorter than its settling time": (
+        ["demo", "--duration", "1"], ["--duration = 1.0", "more than its 2 s"]),
     "outer period shorter than the inner loop": (
         SIM + ["--scenario-text", "command: {period: 0.001}"],
         ["command.period = 0.001", "controller.control_period (0.0025"]),

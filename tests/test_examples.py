@@ -1,5 +1,6 @@
 """The user-facing Python: every example script runs from the command line
-(short durations), the README's "Python API" blocks run as written, and
+(short durations), the ```python blocks of the README and of every page
+of the docs site run as written, and
 the tutorial notebook executes top to bottom (nbclient) and is committed
 without outputs."""
 
@@ -72,24 +73,41 @@ def test_own_robot_runs_the_cell_on_a_model_file(tmp_path):
     assert _numbers(normal[0])[0] < 0.5
 
 
-def readme_api_code():
-    """The ```python blocks of the README's "Python API" section."""
-    text = (ROOT / "README.md").read_text()
-    section = text[text.index("## Python API"):]
-    section = section[:section.index("\n## ", 1)]
-    return re.findall(r"```python\n(.*?)```", section, re.S)
+DOCS = ROOT / "docs"
 
 
-def test_readme_python_api_runs(tmp_path):
-    blocks = readme_api_code()
-    assert len(blocks) >= 4
-    script = tmp_path / "readme_api.py"
-    script.write_text("\n".join(blocks))
+def pages_with_python():
+    """README.md and every page of the site (not docs/drafts/, not the
+    generated scenario reference) that has ```python blocks."""
+    pages = [ROOT / "README.md"] + sorted(
+        p for p in DOCS.glob("*.md") if p.name != "scenario-reference.md")
+    return [p for p in pages if python_blocks(p)]
+
+
+def python_blocks(page):
+    """The ```python blocks of a Markdown page, in order."""
+    return re.findall(r"^```python\n(.*?)^```", page.read_text(), re.S | re.M)
+
+
+def test_the_pages_with_python_are_found():
+    names = {p.name for p in pages_with_python()}
+    assert {"README.md", "python-api.md", "own-robot.md"} <= names
+    assert len(python_blocks(DOCS / "python-api.md")) >= 4
+
+
+@pytest.mark.parametrize("page", pages_with_python(),
+                         ids=lambda p: p.name)
+def test_page_python_runs(page, tmp_path):
+    """A page's blocks run in order as one script (a later block uses what
+    an earlier one made), in a fresh directory."""
+    script = tmp_path / f"{page.stem}.py"
+    script.write_text("\n".join(python_blocks(page)))
     _run([script], tmp_path)
-    out = tmp_path / "out" / "api"
-    for name in ("logs.npz", "metrics.json", "diagram.dot", "replay.html",
-                 "fig08_surface_finish.png"):
-        assert (out / name).exists(), name
+    if page.name == "python-api.md":
+        out = tmp_path / "out" / "api"
+        for name in ("logs.npz", "metrics.json", "diagram.dot",
+                     "replay.html", "fig08_surface_finish.png"):
+            assert (out / name).exists(), name
 
 
 def test_notebook_is_committed_without_outputs():

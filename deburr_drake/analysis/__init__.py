@@ -25,6 +25,12 @@ from deburr_drake.analysis.validation import (
     simulated_boundary, simulated_growth, validate_boundaries)
 from deburr_drake.analysis.lyapunov import (
     LyapunovTrace, lyapunov_trace, plot_lyapunov)
+# The pre-flight's function is deburr_drake.analysis.preflight.preflight
+# (not exported here: the name would hide its module).
+from deburr_drake.analysis.preflight import (
+    GAIN_MARGIN, GainMaps, Preflight, start_operating_point)
+from deburr_drake.analysis.stopped import (check_analyze_options,
+                                           explain_no_operating_point)
 from deburr_drake.analysis.report import (
     SUMMARY_KEYS, analyze, plot_poles, summary_text, write_analysis)
 
@@ -42,6 +48,9 @@ __all__ = [
     "PARAMETERS", "Parameter", "add_fuzzy_slope", "predicted_boundary",
     "simulated_boundary", "simulated_growth", "validate_boundaries",
     "LyapunovTrace", "lyapunov_trace", "plot_lyapunov",
+    "GAIN_MARGIN", "GainMaps", "Preflight",
+    "start_operating_point", "check_analyze_options",
+    "explain_no_operating_point",
     "SUMMARY_KEYS", "analyze", "plot_poles", "summary_text",
     "write_analysis",
 ]

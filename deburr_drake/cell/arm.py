@@ -156,9 +156,11 @@ def solve_tool_pose(plant, p_W_tip, *, q_guess=None, instance=None, tolerance=1e
     return q_sol[arm_idx]
 
 
-def closest_tool_position(plant, p_W_tip, *, instance=None, q_guess=None, tool_frame="tool_tip"):
+def closest_tool_position(plant, p_W_tip, *, instance=None, q_guess=None, tool_frame="tool_tip",
+                          return_positions=False):
     """The tool tip position (m, world) nearest to p_W_tip that the arm reaches with the tool
-    axis vertical within its joint limits: how far out of reach a target is."""
+    axis vertical within its joint limits: how far out of reach a target is. With
+    ``return_positions`` also the arm's joint angles there (rad)."""
     p = np.asarray(p_W_tip, dtype=float).reshape(3)
     instance = _arm_instance(plant, instance)
     tip = plant.GetFrameByName(tool_frame, instance)
@@ -175,20 +177,66 @@ def closest_tool_position(plant, p_W_tip, *, instance=None, q_guess=None, tool_f
                              else q_guess)
     result = Solve(ik.get_mutable_prog(), q_full_guess)
     context = plant.CreateDefaultContext()
-    plant.SetPositions(context, result.GetSolution(q))
-    return tip.CalcPoseInWorld(context).translation()
+    q_sol = result.GetSolution(q)
+    plant.SetPositions(context, q_sol)
+    reached = tip.CalcPoseInWorld(context).translation()
+    return (reached, q_sol[arm_idx]) if return_positions else reached
+
+
+def _closest_of_many(plant, p, instance, guess, tool_frame, starts=8):
+    """closest_tool_position from the guess, the model's default posture and
+    ``starts`` postures drawn (seeded) within the joint limits: the nearest
+    of them (one local solve can stop far from the nearest reachable
+    position)."""
+    instance = _arm_instance(plant, instance)
+    arm_idx = _arm_positions(plant, instance)
+    lower = np.maximum(plant.GetPositionLowerLimits()[arm_idx], -np.pi)
+    upper = np.minimum(plant.GetPositionUpperLimits()[arm_idx], np.pi)
+    rng = np.random.default_rng(0)
+    guesses = [guess, plant.GetDefaultPositions()[arm_idx]] + [
+        rng.uniform(lower, upper) for _ in range(starts)]
+    best = None
+    for g in guesses:
+        reached, q = closest_tool_position(plant, p, instance=instance, q_guess=g,
+                                           tool_frame=tool_frame, return_positions=True)
+        d = np.linalg.norm(reached - p)
+        if best is None or d < best[0]:
+            best = (d, reached, q)
+    return best[1], best[2]
+
+
+#: A point the closest-position search reaches within this (m) is tried from there.
+REACHED = 1e-5
 
 
 def check_reach(plant, points, *, instance=None, q_guess=None, tool_frame="tool_tip"):
     """None if the tool reaches every point (m, world, rows) vertically; otherwise
-    (index, point, distance (m) to the nearest reachable tool position) of the first one
-    it does not reach. `q_guess` (a function of the point, or None) seeds each solve."""
+    (index, point, distance (m) to the nearest reachable tool position, joint angles) of the
+    first one it does not reach. `q_guess` (a function of the point, or None) seeds each
+    solve; a point it does not reach from there is tried from the previous point's solution
+    (the arm moves along the path), then from the nearest reachable position's posture. A
+    point reached only from that last one gives distance 0 and the posture (rad) that
+    reaches it (the seed to give); otherwise the posture is None."""
+    previous = None
     for k, p in enumerate(np.asarray(points, dtype=float)):
         guess = None if q_guess is None else q_guess(p)
-        try:
-            solve_tool_pose(plant, p, instance=instance, q_guess=guess, tool_frame=tool_frame)
-        except RuntimeError:
-            reached = closest_tool_position(plant, p, instance=instance, q_guess=guess,
-                                            tool_frame=tool_frame)
-            return k, p, float(np.linalg.norm(reached - p))
+        guesses = [guess] + ([previous] if previous is not None else [])
+        for g in guesses:
+            try:
+                previous = solve_tool_pose(plant, p, instance=instance, q_guess=g,
+                                           tool_frame=tool_frame)
+                break
+            except RuntimeError:
+                continue
+        else:
+            reached, q_near = _closest_of_many(plant, p, instance, guess, tool_frame)
+            distance = float(np.linalg.norm(reached - p))
+            if distance < REACHED:
+                try:
+                    q_other = solve_tool_pose(plant, p, instance=instance, q_guess=q_near,
+                                              tool_frame=tool_frame)
+                    return k, p, 0.0, q_other
+                except RuntimeError:
+                    pass
+            return k, p, distance, None
     return None

@@ -25,6 +25,7 @@ from deburr_drake.cell.edge import (believed_contour, believed_contour_step,
                                     edge_points, make_contour,
                                     start_position)
 from deburr_drake.cell.faults import add_noise_scale, add_sensor_faults
+from deburr_drake.cell.gains import resolve_gains
 from deburr_drake.cell.guards import add_effort_saturation, add_guards
 from deburr_drake.cell.plant import add_cell_plant
 from deburr_drake.cell.process import CuttingProcess
@@ -91,6 +92,11 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
     inverse kinematics for the arm), in contact. With a ``meshcat``, the
     cell is drawn there too (see :mod:`deburr_drake.cell.meshcat`).
 
+    With ``controller.design`` auto (the default for a robot from a file)
+    the gains are designed from the model first and written into
+    ``scenario`` (deburr_drake.cell.gains.resolve_gains; the command line
+    also proves them, deburr_drake.analysis.preflight).
+
     ``extra_logs`` ({name: (system name, output port name)}) logs more
     signals at ``simulation.log_period``, e.g. ``{"feed": ("command_generator",
     "feed"), "state": ("plant", "state")}``: loggers ``log_<name>`` that
@@ -99,6 +105,9 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
     scenario.validate()
     c = scenario
     check_part_in_reach(c)
+    # controller.design auto: the gains from the model, written into the
+    # scenario (deburr_drake.cell.gains).
+    resolve_gains(c)
     builder = DiagramBuilder()
     plant, _ = add_cell_plant(builder, c)
     contour = make_contour(c)  # the real part: the plant's truth

@@ -13,7 +13,7 @@ from deburr_drake.config import Scenario
 from deburr_drake.math.geometry import (CircularContour, Contour,
                                         StraightContour)
 
-__all__ = ["make_contour", "straight_frame", "believed_scenario",
+__all__ = ["make_contour", "straight_frame", "profile_center", "believed_scenario",
            "believed_contour", "believed_contour_step", "start_position",
            "edge_points"]
 
@@ -30,10 +30,22 @@ def straight_frame(scenario: Scenario):
     return mid, tangent, normal
 
 
-def make_contour(scenario: Scenario) -> Contour:
+def profile_center(scenario: Scenario) -> np.ndarray:
+    """(x, y, z) of a profile's origin at the height the cutter tip runs."""
+    tube, tool = scenario.tube, scenario.tool
+    center = np.array(tube.position, float)
+    center[2] += tube.height - tool.engagement
+    return center
+
+
+def make_contour(scenario: Scenario, *, grow: float = 0.0) -> Contour:
     """The zero-depth path of the tool tip: the part's edge offset by the
-    cutter radius, at the height where the cutter tip runs."""
+    cutter radius, at the height where the cutter tip runs. ``grow`` (m):
+    a profile grown outward by it (the believed part's radius error)."""
     tube, tool, edge = scenario.tube, scenario.tool, scenario.edge
+    if edge.kind == "profile":
+        return edge.profile_path(profile_center(scenario), tool.cutter_radius,
+                                 grow=grow)
     if edge.kind == "straight":
         mid, tangent, normal = straight_frame(scenario)
         start = (mid - tool.cutter_radius * normal
@@ -62,12 +74,19 @@ def believed_scenario(scenario: Scenario) -> Scenario:
         believed.edge.heading += e.yaw
     else:
         believed.edge.start_angle += e.yaw
+    if scenario.edge.kind == "profile":  # turned about tube.position
+        c, s = np.cos(e.yaw), np.sin(e.yaw)
+        believed.edge.vertices = [[c * x - s * y, s * x + c * y]
+                                  for x, y in scenario.edge.vertices]
     return believed
 
 
 def believed_contour(scenario: Scenario) -> Contour:
-    """The zero-depth path on the part the controller believes in."""
-    return make_contour(believed_scenario(scenario))
+    """The zero-depth path on the part the controller believes in (a
+    profile: moved, turned and grown by ``part_error``)."""
+    grow = scenario.part_error.radius if scenario.edge.kind == "profile" \
+        else 0.0
+    return make_contour(believed_scenario(scenario), grow=grow)
 
 
 def believed_contour_step(scenario: Scenario):
@@ -91,8 +110,8 @@ def start_position(scenario: Scenario, contour=None) -> np.ndarray:
 
 
 def edge_points(scenario: Scenario, arc) -> np.ndarray:
-    """Points (m, world) on the tube's inner top edge at contour arc
-    positions ``arc`` (m): where the chamfer is cut, for drawing."""
+    """Points (m, world) on the part's top edge at contour arc positions
+    ``arc`` (m): where the chamfer is cut, for drawing."""
     contour = make_contour(scenario)
     tube, tool = scenario.tube, scenario.tool
     top = tube.position[2] + tube.height

@@ -19,11 +19,12 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, ContactModel, C
 from pydrake.systems.framework import DiagramBuilder
 
 from deburr_drake.cell.models import POINT_MASS_URL, make_parser
-from deburr_drake.cell.tube_mesh import ring_mesh_path, ring_surface_path
+from deburr_drake.cell.tube_mesh import (profile_mesh_paths, ring_mesh_path,
+                                         ring_surface_path)
 
 __all__ = [
     "CALIBRATED_HYDROELASTIC_MODULUS", "CALIBRATED_FORCE_AT_HALF_MM",
-    "contact_force_on_body", "register_compliant_ring", "register_compliant_wall", "register_tube_visual", "register_cutter", "add_tool_robot", "add_cartesian_tool", "RingContactProbe", "measure_normal_force",
+    "contact_force_on_body", "register_compliant_ring", "register_compliant_wall", "register_compliant_profile", "register_tube_visual", "register_cutter", "add_tool_robot", "add_cartesian_tool", "RingContactProbe", "measure_normal_force",
     "local_stiffness", "power_law_exponent", "calibrate_hydroelastic_modulus", "force_ripple"]
 
 # Calibration by scripts/contact_stiffness.py (n_theta = 240, n_radial = n_z = 2, the
@@ -108,6 +109,42 @@ def register_compliant_wall(plant, *, mid, tangent, normal, length, thickness, h
     X_body = RigidTransform(R, top - [0.0, 0.0, layer_height + 0.5 * body_height])
     plant.RegisterVisualGeometry(world, X_body, Box(length + 2 * margin, thickness, body_height),
                                  name + "_body", np.array([0.6, 0.6, 0.65, 1.0]))
+    return geometry_id
+
+
+def register_compliant_profile(plant, edge, *, wall_thickness, z_bottom, z_top, hydroelastic_modulus,
+                               hunt_crossley_dissipation, segments_per_turn=120, n_radial=2, n_z=2,
+                               visual_z_bottom=None, name="profile_edge"):
+    """The material along a closed profile's edge (`edge`: a
+    math.geometry.ProfileContour with offset 0, its centre's x, y in the
+    world): `wall_thickness` deep into the material (a pocket's plate
+    around it, a boss's outer wall; thinner only inside fillets whose centre
+    is in the material, ProfileContour.material_band), z_bottom <= z <= z_top,
+    as a compliant hydroelastic tetrahedral mesh made and cached as the
+    ring's is (tube_mesh.profile_mesh_paths: our structured sweep of the
+    ring's cross-section along the profile, stations every 2 pi /
+    `segments_per_turn` on the fillets and at most `wall_thickness` apart on
+    the lines), frictionless; visuals of the layer and of the wall down to
+    `visual_z_bottom`. Call before Finalize. Returns the collision GeometryId."""
+    _check_positive("hydroelastic_modulus", hydroelastic_modulus)
+    points, normals, depths = edge.material_band(
+        wall_thickness, segments_per_turn=segments_per_turn, max_step=wall_thickness)
+    volume, surface, body = profile_mesh_paths(points, normals, depths, z_bottom, z_top, n_radial, n_z,
+                                               visual_z_bottom=visual_z_bottom)
+    props = ProximityProperties()
+    AddCompliantHydroelasticProperties(resolution_hint=wall_thickness, hydroelastic_modulus=hydroelastic_modulus,
+                                       properties=props)
+    AddContactMaterial(dissipation=hunt_crossley_dissipation, friction=CoulombFriction(0.0, 0.0),
+                       properties=props)
+    world = plant.world_body()
+    center = edge.center
+    X_WG = RigidTransform([float(center[0]), float(center[1]), 0.0])
+    geometry_id = plant.RegisterCollisionGeometry(world, X_WG, Mesh(str(volume)), name, props)
+    for path, label, rgba in ((surface, "_visual", [0.7, 0.6, 0.4, 1.0]), (body, "_body", [0.6, 0.6, 0.65, 1.0])):
+        if path is not None:
+            visual = GeometryInstance(X_WG, Mesh(str(path)), name + label)
+            visual.set_illustration_properties(MakePhongIllustrationProperties(np.array(rgba)))
+            plant.RegisterVisualGeometry(world, visual)
     return geometry_id
 
 

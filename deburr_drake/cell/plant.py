@@ -3,19 +3,20 @@ friction, and the compliant hydroelastic part its edge belongs to."""
 
 from __future__ import annotations
 
+
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.systems.framework import DiagramBuilder
 
-from deburr_drake.cell.edge import straight_frame
+from deburr_drake.cell.edge import make_contour, straight_frame
 from deburr_drake.cell.friction import add_joint_friction
-from deburr_drake.cell.part import (register_compliant_ring,
+from deburr_drake.cell.part import (register_compliant_profile,
+                                    register_compliant_ring,
                                     register_compliant_wall,
                                     register_tube_visual)
-from deburr_drake.cell.robot import add_robot
+from deburr_drake.cell.robot import add_robot, finalize
 from deburr_drake.config import Scenario
 
 __all__ = ["add_cell_plant"]
-
 
 def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
     """(plant, scene_graph), finalized: the robot (``robot``), its
@@ -45,10 +46,22 @@ def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
             # (process.material_overlap), and off its ends there is no
             # contact either.
             margin=0.0)
-        plant.Finalize()
+        finalize(plant)
         return plant, scene_graph
     tube = scenario.tube
     z_top = tube.position[2] + tube.height
+    if scenario.edge.kind == "profile":
+        register_compliant_profile(
+            plant, make_contour(scenario).with_offset(0.0),
+            wall_thickness=tube.wall_thickness,
+            z_bottom=z_top - tube.compliant_layer_height, z_top=z_top,
+            hydroelastic_modulus=tube.hydroelastic_modulus,
+            hunt_crossley_dissipation=tube.hunt_crossley_dissipation,
+            segments_per_turn=tube.mesh_segments,
+            n_radial=tube.mesh_radial_cells, n_z=tube.mesh_height_cells,
+            visual_z_bottom=tube.position[2])
+        plant.Finalize()
+        return plant, scene_graph
     register_compliant_ring(
         plant,
         inner_radius=tube.inner_radius,
@@ -64,5 +77,5 @@ def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
         outer_radius=tube.inner_radius + tube.wall_thickness,
         z_bottom=tube.position[2], z_top=z_top - tube.compliant_layer_height,
         center_xy=tube.position[:2], n_theta=tube.mesh_segments)
-    plant.Finalize()
+    finalize(plant)
     return plant, scene_graph

@@ -16,7 +16,7 @@ from pydrake.systems.primitives import (Demultiplexer, Gain,
                                         Saturation)
 
 from deburr_drake.config import BurrConfig, ProcessConfig
-from deburr_drake.math.geometry import Contour
+from deburr_drake.math.geometry import Contour, removal_scale
 from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.control.layout import VectorLayout
 from deburr_drake.math.metrics import arc_distance
@@ -88,11 +88,14 @@ class FinishBins:
 
 def cutting_force(config: ProcessConfig, contour: Contour, x_p, xdot_p, *,
                   cut_height: float, burr_area: float = 0.0,
-                  overlap: float = 1.0):
+                  overlap: float = 1.0, cutter_radius: float = None):
     """(force on the tool (3, N, world), PROCESS_STATE vector).
 
-    ||f_t|| = g |v_t| + h |v_n| + P'_th (3), g = k_c (chamfer area + burr
-    area), chamfer area = delta * cut_height, v_t the speed along the edge
+    ||f_t|| = g |v_t| + h |v_n| + P'_th (3), g = k_c s (chamfer area + burr
+    area), chamfer area = delta * cut_height, s the material removed per
+    metre of the cutter centre's travel on the edge's curvature against a
+    straight edge (math.geometry.removal_scale, with ``cutter_radius``;
+    None: 1, the straight-edge law), v_t the speed along the edge
     (R5: motion along the wall's vertical cuts no chamfer), directed against
     that motion; the direction is sat(v_along / v_s), v_s =
     ``smoothing_speed``, so the force is continuous. Plus the contact
@@ -100,8 +103,11 @@ def cutting_force(config: ProcessConfig, contour: Contour, x_p, xdot_p, *,
     ``threshold_depth`` of depth; ``overlap`` (material_overlap) scales
     both where the cutter runs off an open edge's end."""
     n1, tangent, delta, arc = contour.frame(x_p)
+    removal = 1.0 if cutter_radius is None else removal_scale(
+        contour.curvature(x_p), delta, cutter_radius)
     return _force(config, n1, tangent, delta, arc,
-                  np.asarray(xdot_p, float), cut_height, burr_area, overlap)
+                  np.asarray(xdot_p, float), cut_height, burr_area, overlap,
+                  removal)
 
 
 def _sat(x):
@@ -122,19 +128,20 @@ def material_overlap(contour: Contour, arc: float, delta: float,
 
 
 def _engagement(config: ProcessConfig, delta, cut_height, burr_area,
-                overlap=1.0):
+                overlap=1.0, removal=1.0):
     """(engagement 0..1, g of (3) in N s/m)."""
     on = _smoothstep(delta / config.threshold_depth) * overlap
-    g = config.cutting_coefficient * (max(delta, 0.0) * cut_height
-                                      + burr_area)
+    g = config.cutting_coefficient * removal * (max(delta, 0.0) * cut_height
+                                                + burr_area)
     return on, g
 
 
 def _force(config: ProcessConfig, n1, tangent, delta, arc, xdot_p,
-           cut_height, burr_area, overlap=1.0):
+           cut_height, burr_area, overlap=1.0, removal=1.0):
     v_n = float(n1 @ xdot_p)
     v_along = float(tangent @ xdot_p)
-    on, g = _engagement(config, delta, cut_height, burr_area, overlap)
+    on, g = _engagement(config, delta, cut_height, burr_area, overlap,
+                        removal)
     along = on * (g * v_along + (config.threshold_power_force
                                  + config.plunge_coefficient * abs(v_n))
                   * _sat(v_along / config.smoothing_speed))
@@ -148,8 +155,8 @@ def _force(config: ProcessConfig, n1, tangent, delta, arc, xdot_p,
 def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, xdot_p,
                     *, cut_height: float,
                     burr_area: float = 0.0,
-                    overlap: float = 1.0, v=None,
-                    inertia=None) -> np.ndarray:
+                    overlap: float = 1.0, removal: float = 1.0,
+                    v=None, inertia=None) -> np.ndarray:
     """The terms of :func:`make_cutting_force_law` that make it give
     :func:`cutting_force` (J: the tool point's translational Jacobian, 3 x
     nv; xdot_p: the tool point's velocity, m/s). With u = a.v (v the joint
@@ -163,7 +170,8 @@ def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, xdot_p,
     Returns [a, A by column, b - S v0, B by column, f0, S by column]
     (4 nv + 9 + nv^2). The place on the edge (tangent, n1, g, the
     engagement) and the plunge speed v_n are the sample's; u and s follow
-    the velocities.
+    the velocities. ``removal``: the edge's curvature factor on g
+    (:func:`cutting_force`).
 
     S (nv x nv) is zero without the sample's joint velocities ``v`` (v0).
     With them it is c a a^T - D, c = -dF/du >= 0 the law's damping along
@@ -182,7 +190,7 @@ def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, xdot_p,
     however large g is (what two steps per sample used to bound)."""
     _, terms = _sample(config, n1, tangent, delta, 0.0,
                        np.asarray(J, float), np.asarray(xdot_p, float),
-                       cut_height, burr_area, overlap,
+                       cut_height, burr_area, overlap, removal,
                        None if v is None else np.asarray(v, float),
                        None if inertia is None else np.asarray(inertia,
                                                                float))
@@ -197,10 +205,11 @@ assert PROCESS_STATE.blocks == _STATE_BLOCKS
 
 
 def _sample(config: ProcessConfig, n1, tangent, delta, arc, J, xdot_p,
-            cut_height, burr_area, overlap, v, inertia):
+            cut_height, burr_area, overlap, removal, v, inertia):
     """(PROCESS_STATE vector, :func:`force_law_terms`) at one sample: one
     pass over the engagement, speeds and directions (float arrays in)."""
-    on, g = _engagement(config, delta, cut_height, burr_area, overlap)
+    on, g = _engagement(config, delta, cut_height, burr_area, overlap,
+                        removal)
     v_n = float(n1 @ xdot_p)
     v_along = float(tangent @ xdot_p)
     power = config.threshold_power_force + config.plunge_coefficient * abs(v_n)
@@ -422,6 +431,9 @@ class CuttingProcess(LeafSystem):
         state = self._state_port.Eval(context)
         x_p, xdot_p, J = self._tool_point.evaluate(state)
         n1, tangent, delta, arc = self._contour.frame(x_p)
+        # math.geometry.removal_scale on the edge's curvature.
+        removal = removal_scale(self._contour.curvature(x_p), delta,
+                                self._cutter_radius)
         overlap = material_overlap(self._contour, arc, delta,
                                    self._cutter_radius)
         if delta > 0.0 and overlap > 0.0:
@@ -444,6 +456,6 @@ class CuttingProcess(LeafSystem):
             inertia = np.diag(self._tool_point.mass_matrix(state))
         process_state, terms = _sample(
             self._config, n1, tangent, delta, arc, J, xdot_p,
-            self._cut_height, area, overlap, v, inertia)
+            self._cut_height, area, overlap, removal, v, inertia)
         discrete_state.set_value(self._state_index, process_state)
         discrete_state.set_value(self._terms_index, terms)

@@ -13,6 +13,27 @@ from deburr_drake.config import ConfigError, Scenario
 __all__ = ["check_part_in_reach"]
 
 
+def _mm(distance: float) -> str:
+    """A distance (m) in mm: one decimal, two digits below 0.1 mm."""
+    mm = distance * 1e3
+    return f"{mm:.1f}" if mm >= 0.1 else f"{mm:.2g}"
+
+
+def _mtime(robot):
+    """The model file's modification time (a file rewritten is checked
+    again)."""
+    import os
+    try:
+        return os.stat(robot.model).st_mtime_ns
+    except (OSError, TypeError, ValueError):
+        return None
+
+
+#: Scenarios already checked (the robot, part and tool as text): a diagram
+#: built again for the same cell (the analysis builds many) checks once.
+_REACHED = set()
+
+
 def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
     """Raises ConfigError if the robot cannot serve the cell
     (deburr_drake.cell.robot.check_robot: the model file, its frames, its
@@ -20,6 +41,11 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
     ``samples`` points along the edge) the arm cannot reach with the tool
     vertical, and how far out of reach it is."""
     robot = scenario.robot
+    key = repr((robot, _mtime(robot), scenario.tube, scenario.edge,
+                scenario.part_error, scenario.tool, samples)) \
+        if contour is None else None
+    if key is not None and key in _REACHED:
+        return
     model = check_robot(robot)
     if robot.model == "cartesian_tool":
         return  # the Cartesian tool reaches everywhere
@@ -32,14 +58,26 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
     miss = check_reach(model, points, instance=instance,
                        q_guess=lambda p: ik_seed(robot, p),
                        tool_frame=robot.tool_frame)
+    if miss is None:
+        if key is not None:
+            _REACHED.add(key)
+        return
     if miss is not None:
-        k, p, distance = miss
+        k, p, distance, q_other = miss
         where = "the start point" if k == 0 else \
             f"the edge point at arc {arcs[k - 1] * 1e3:.1f} mm"
+        if q_other is not None:
+            raise ConfigError(
+                f"robot.ik_seed = {list(robot.ik_seed)} is invalid: {where},"
+                f" tool tip at {np.round(p, 4).tolist()} m, is in reach, but "
+                "the inverse kinematics (tool vertical, joint limits) does "
+                "not find it from the seed nor along the edge; it does from "
+                f"{np.round(q_other, 3).tolist()} rad: allowed a seed "
+                "near that posture")
         raise ConfigError(
             f"tube.position = {list(scenario.tube.position)} is out of the "
             f"arm's reach: {where}, tool tip at {np.round(p, 4).tolist()} m, "
-            f"is {distance * 1e3:.1f} mm beyond the nearest reachable tool "
+            f"is {_mm(distance)} mm beyond the nearest reachable tool "
             "position (tool vertical, joint limits): allowed a part whose "
             f"edge the arm reaches (arm5: [0.40, 0.0, 0.0]; {robot.model!r}"
             ": see its robot.ik_seed and the model's joint limits)")

@@ -42,6 +42,7 @@ of reach.
 
 from __future__ import annotations
 
+import logging
 import math
 from pathlib import Path
 
@@ -51,16 +52,19 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.multibody.tree import (FixedOffsetFrame, FrameIndex,
-                                    JacobianWrtVariable, JointIndex,
+                                    JacobianWrtVariable, JointActuatorIndex,
+                                    JointIndex,
                                     SpatialInertia, UnitInertia, WeldJoint)
 
 from deburr_drake.cell.arm import ARM_URL, default_q_guess
 from deburr_drake.config import ConfigError, RobotConfig
+from deburr_drake.cell.description import (add_packages, model_path, notice,
+                                           prepared_model)
 from deburr_drake.cell.models import POINT_MASS_URL, make_parser
 
 __all__ = ["ARM6_URL", "SHIPPED_ROBOTS", "MIN_JOINTS",
            "add_robot", "make_robot_model", "check_robot", "robot_joints",
-           "ik_seed", "tool_frame_of", "spindle_inertia", "start_pose",
+           "ik_seed", "tool_frame_of", "finalize", "LIMITS_NOTE", "spindle_inertia", "start_pose",
            "loop_numbers"]
 
 ARM6_URL = "package://deburr_drake_models/arm6.sdf"
@@ -87,33 +91,46 @@ def spindle_inertia(mass: float, length: float) -> SpatialInertia:
     return SpatialInertia(mass, com, unit.ShiftFromCenterOfMass(-com))
 
 
-def _add_package_xmls(package_map, model_file: Path):
-    """The packages a model file's ``package://`` URIs may name: every
-    ``package.xml`` in the file's directory and the directories above it
-    (the ROS layout: the model inside its package), then
-    ``ROS_PACKAGE_PATH``. The nearest package of a name wins."""
-    for directory in model_file.parents:
-        xml = directory / "package.xml"
-        if xml.is_file():
-            try:
-                package_map.AddPackageXml(str(xml))
-            except RuntimeError:
-                pass  # a name already mapped (a nearer package) or bad XML
-    package_map.PopulateFromRosPackagePath()
-
-
 def _add_models(plant: MultibodyPlant, config: RobotConfig):
     parser = make_parser(plant)
     if not config.is_file():
         return parser.AddModels(url=SHIPPED_ROBOTS[config.model])
-    path = Path(config.model).resolve()
+    package_map = parser.package_map()
+    add_packages(package_map, config)
+    path = model_path(package_map, config)
+    add_packages(package_map, config, path)  # the package.xml files above
+    text, kind, path, notes = prepared_model(package_map, config)
+    for line in notes:
+        notice(f"robot.model {Path(path).name}: {line}")
     try:
-        _add_package_xmls(parser.package_map(), path)
-        return parser.AddModels(file_name=str(path))
+        return parser.AddModelsFromString(text, kind)
     except RuntimeError as e:
         first = str(e).strip().splitlines()[0] if str(e).strip() else ""
         raise ConfigError(f"robot.model = {config.model!r} is invalid: "
                           f"Drake cannot parse it ({first})") from None
+
+
+def _set_reflected_inertia(plant, instance, config: RobotConfig):
+    """robot.reflected_inertia (kg m^2 per joint, in joint order) as the
+    drives' rotor inertia at gear ratio 1."""
+    if not config.reflected_inertia:
+        return
+    # Before Finalize: the moving joints in index order (a chain's order).
+    joints = [plant.get_joint(i) for i in plant.GetJointIndices(instance)]
+    joints = [j for j in joints if j.num_velocities() > 0]
+    if len(joints) != len(config.reflected_inertia):
+        raise ConfigError(
+            f"robot.reflected_inertia = {config.reflected_inertia} is "
+            f"invalid: allowed a list of {len(joints)} numbers >= 0 (kg m^2,"
+            f" one per joint: {[j.name() for j in joints]}) or an empty list")
+    # (GetJointActuatorIndices(instance) is empty before Finalize.)
+    by_joint = {plant.get_joint_actuator(JointActuatorIndex(i)).joint().index():
+                JointActuatorIndex(i) for i in range(plant.num_actuators())}
+    for joint, inertia in zip(joints, config.reflected_inertia):
+        if joint.index() in by_joint:
+            actuator = plant.get_mutable_joint_actuator(by_joint[joint.index()])
+            actuator.set_default_rotor_inertia(float(inertia))
+            actuator.set_default_gear_ratio(1.0)
 
 
 def _frame_names(plant, instance):
@@ -200,6 +217,7 @@ def add_robot(plant: MultibodyPlant, config: RobotConfig, *,
     (ConfigError) but the joint count only by :func:`check_robot`."""
     instance = _robot_instance(plant, _add_models(plant, config), config)
     _weld_free_base(plant, instance)
+    _set_reflected_inertia(plant, instance, config)
     if config.flange_frame:
         _attach_spindle(plant, instance, config)
     frame = tool_frame_of(plant, instance, config)
@@ -208,6 +226,37 @@ def add_robot(plant: MultibodyPlant, config: RobotConfig, *,
         register_cutter(plant, frame.body(),
                         X_BT=frame.GetFixedPoseInBodyFrame(), **cutter)
     return instance
+
+
+#: Drake's warning at Finalize of a continuous plant whose joints have
+#: limits (three lines a user cannot act on), and what replaces it.
+_LIMITS_WARNING = "Currently MultibodyPlant does not handle joint limits"
+LIMITS_NOTE = ("joint limits: the start pose is solved within them; the "
+               "continuous plant does not enforce them during the run (the "
+               "guards stop a run whose torque, force, depth or tool "
+               "position leaves its bounds)")
+
+
+class _JointLimitsNote(logging.Filter):
+    def filter(self, record):
+        if record.getMessage().startswith(_LIMITS_WARNING):
+            notice(LIMITS_NOTE)
+            return False
+        return True
+
+
+_LIMITS_FILTER = _JointLimitsNote()
+
+
+def finalize(plant):
+    """plant.Finalize(); Drake's joint-limit warning (logged at the first
+    dynamics evaluation of a continuous plant with limits) is replaced by
+    one line, :data:`LIMITS_NOTE`, once per process (a filter on the
+    ``drake`` logger)."""
+    logger = logging.getLogger("drake")
+    if _LIMITS_FILTER not in logger.filters:
+        logger.addFilter(_LIMITS_FILTER)
+    plant.Finalize()
 
 
 def _require_named(config: RobotConfig, field: str, exists, what: str,
@@ -248,7 +297,7 @@ def _parse_with_geometry(config: RobotConfig):
 def _robot_model(config: RobotConfig):
     plant = MultibodyPlant(0.0)
     instance = add_robot(plant, config)
-    plant.Finalize()
+    finalize(plant)
     return plant, instance
 
 

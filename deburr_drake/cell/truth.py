@@ -17,15 +17,37 @@ from deburr_drake.cell.part import contact_force_on_body
 from deburr_drake.cell.plant import add_cell_plant
 from deburr_drake.config import RobotConfig, Scenario
 
-__all__ = ["contact_normal_force", "ContactTruth", "contact_truth"]
+__all__ = ["contact_normal_force", "ContactTruth", "contact_truth",
+           "truth_stations"]
 
 
 def contact_normal_force(scenario: Scenario, depths, *,
-                         arc_fraction: float = 0.5) -> np.ndarray:
+                         arc_fraction=0.5) -> np.ndarray:
     """The hydroelastic normal force (N) on the scenario's cutter at each
     depth (m) into its part, the tool vertical at ``arc_fraction`` of the
     edge, at rest: the contact part of (4), measured on the same geometry
-    the cell simulates (a Cartesian tool holds the cutter)."""
+    the cell simulates (a Cartesian tool holds the cutter). An array of
+    fractions gives one row of forces per fraction (one plant built)."""
+    fractions = np.asarray(arc_fraction, float)
+    forces = _normal_forces(scenario, depths, np.atleast_1d(fractions))
+    return forces if fractions.ndim else forces[0]
+
+
+def truth_stations(scenario: Scenario) -> np.ndarray:
+    """Fractions of the edge where :func:`contact_truth` measures, the
+    first giving its law: the middle of a circle (every place is alike
+    there) or of a straight edge; on a profile, whose lines and fillets
+    differ, 64 evenly spaced places from the start, which is where a
+    closed pass ends: the estimator follows the local law within a few
+    seconds (on the pocket c0 + c1 delta* rose from 5.1 N on the lines to
+    5.9 N in each fillet and fell back), so its last estimate is that
+    place's."""
+    if scenario.edge.kind == "profile":
+        return np.arange(64) / 64.0
+    return np.array([0.5])
+
+
+def _normal_forces(scenario: Scenario, depths, fractions) -> np.ndarray:
     probe = copy.deepcopy(scenario)
     probe.robot = RobotConfig(model="cartesian_tool")
     probe.simulation.plant_time_step = 0.0
@@ -37,15 +59,18 @@ def contact_normal_force(scenario: Scenario, depths, *,
     tool = plant.GetBodyByName("tool")
     (cutter,) = plant.GetCollisionGeometriesForBody(tool)
     contour = make_contour(scenario)
-    p = contour.point_at(arc_fraction * contour.length)
-    n1 = contour.n1(p)
     port = plant.get_contact_results_output_port()
-    forces = []
-    for depth in np.atleast_1d(np.asarray(depths, float)):
-        plant.SetPositions(pc, p + depth * n1)
-        f = contact_force_on_body(port.Eval(pc), cutter, tool.index())
-        forces.append(-float(f @ n1))
-    return np.array(forces)
+    rows = []
+    for fraction in fractions:
+        p = contour.point_at(fraction * contour.length)
+        n1 = contour.n1(p)
+        forces = []
+        for depth in np.atleast_1d(np.asarray(depths, float)):
+            plant.SetPositions(pc, p + depth * n1)
+            f = contact_force_on_body(port.Eval(pc), cutter, tool.index())
+            forces.append(-float(f @ n1))
+        rows.append(forces)
+    return np.array(rows)
 
 
 @dataclass
@@ -59,17 +84,25 @@ class ContactTruth:
     secant_stiffness: float  # N/m, (F(delta*) - c0) / delta*
     local_stiffness: float  # N/m, dF/d(delta) at delta*
     c2: float  # N s/m, Hunt-Crossley: d * F_hydro(delta*)
+    # N, the least and the greatest ||f_n(delta*)|| where it was measured
+    # (truth_stations): they differ between a profile's lines and fillets
+    force_range: tuple = (float("nan"), float("nan"))
 
 
 def contact_truth(scenario: Scenario, *, step: float = 2e-5) -> ContactTruth:
-    """The normal-force law at ``task.desired_depth`` on the scenario's
-    part, by central differences of :func:`contact_normal_force` over
-    +-``step`` (m)."""
+    """The normal-force law at ``task.desired_depth`` on the part the cell
+    builds for the scenario's edge (ring, wall or profile), by central
+    differences of :func:`contact_normal_force` over +-``step`` (m), at
+    the first of :func:`truth_stations` (``force_range`` over all)."""
     tube, d = scenario.tube, scenario.task.desired_depth
-    forces = contact_normal_force(scenario, [d - step, d, d + step])
+    rows = contact_normal_force(scenario, [d - step, d, d + step],
+                                arc_fraction=truth_stations(scenario))
+    forces = rows[0]
     c0 = scenario.process.contact_threshold_force
     return ContactTruth(
         force_at_desired_depth=float(forces[1] + c0), c0=c0,
         secant_stiffness=float(forces[1] / d),
         local_stiffness=float((forces[2] - forces[0]) / (2 * step)),
-        c2=float(tube.hunt_crossley_dissipation * forces[1]))
+        c2=float(tube.hunt_crossley_dissipation * forces[1]),
+        force_range=(float(rows[:, 1].min() + c0),
+                     float(rows[:, 1].max() + c0)))

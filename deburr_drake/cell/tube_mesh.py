@@ -22,7 +22,8 @@ import tempfile
 import numpy as np
 
 __all__ = ["make_ring_volume_mesh", "write_vtk", "ring_mesh_path", "polygonal_ring_volume",
-           "make_ring_surface_mesh", "write_obj", "ring_surface_path"]
+           "make_ring_surface_mesh", "write_obj", "ring_surface_path",
+           "make_swept_volume_mesh", "make_swept_surface_mesh", "profile_mesh_paths"]
 
 def _check_positive_finite(name, value):
     if not (isinstance(value, (int, float, np.floating, np.integer)) and math.isfinite(value) and value > 0):
@@ -127,11 +128,18 @@ def make_ring_volume_mesh(inner_radius, outer_radius, z_bottom, z_top, n_theta, 
     heights = np.linspace(z_bottom, z_top, n_z + 1)
     T, R, Z = np.meshgrid(theta, radii, heights, indexing="ij")
     vertices = np.stack([R * np.cos(T), R * np.sin(T), Z], axis=-1).reshape(-1, 3)
+    return vertices, _sweep_tets(vertices, n_theta, n_radial, n_z)
 
+
+def _sweep_tets(vertices, n_stations, n_radial, n_z):
+    """Tets (6 n_stations n_radial n_z, 4) of a closed sweep of a
+    (n_radial x n_z)-cell cross-section through n_stations stations, the
+    vertex of station i, radial index j, height index k at
+    (i*(n_radial+1) + j)*(n_z+1) + k; positively oriented."""
     # Global vertex order: interior vertices first, then by index.
     J, K = np.meshgrid(np.arange(n_radial + 1), np.arange(n_z + 1), indexing="ij")
     boundary = ((J == 0) | (J == n_radial) | (K == 0) | (K == n_z)).ravel()
-    boundary = np.tile(boundary, n_theta)
+    boundary = np.tile(boundary, n_stations)
     order = np.lexsort((np.arange(len(vertices)), boundary))
     rank = np.empty(len(vertices), dtype=np.int64)
     rank[order] = np.arange(len(vertices))
@@ -139,9 +147,9 @@ def make_ring_volume_mesh(inner_radius, outer_radius, z_bottom, z_top, n_theta, 
     tris = _cross_section_triangles(n_radial, n_z)            # (T, 3, 2)
     local = tris[..., 0] * (n_z + 1) + tris[..., 1]           # (T, 3)
     stride = (n_radial + 1) * (n_z + 1)
-    i = np.arange(n_theta)[:, None, None]
-    bottom = i * stride + local[None]                          # (n_theta, T, 3)
-    top = ((i + 1) % n_theta) * stride + local[None]
+    i = np.arange(n_stations)[:, None, None]
+    bottom = i * stride + local[None]                          # (n_stations, T, 3)
+    top = ((i + 1) % n_stations) * stride + local[None]
     prisms = np.concatenate([bottom, top], axis=2).reshape(-1, 6)
     tets = _split_prisms(prisms, rank)
 
@@ -149,6 +157,34 @@ def make_ring_volume_mesh(inner_radius, outer_radius, z_bottom, z_top, n_theta, 
     signed = np.einsum("ij,ij->i", np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), p[:, 3] - p[:, 0])
     negative = signed < 0
     tets[negative] = tets[negative][:, [0, 2, 1, 3]]
+    return tets
+
+
+def make_swept_volume_mesh(points, normals, depths, z_bottom, z_top, n_radial=2, n_z=2):
+    """Tetrahedral mesh of the material along a closed planar profile: at
+    each station (points (N, 2), m) the wall runs ``depths`` (N,) along
+    ``normals`` (N, 2, unit, into the material), z_bottom <= z <= z_top;
+    the ring's cross-section and tet split (:func:`make_ring_volume_mesh`)
+    swept through the stations in order. Returns (vertices, tets) as
+    make_ring_volume_mesh does, station i in place of angle index i."""
+    points = np.asarray(points, float)
+    normals = np.asarray(normals, float)
+    depths = np.asarray(depths, float)
+    n = len(points)
+    if points.shape != (n, 2) or normals.shape != (n, 2) or depths.shape != (n,) or n < 3:
+        raise ValueError("points and normals must have shape (N, 2) and depths (N,), N >= 3")
+    if not np.all(depths > 0):
+        raise ValueError("depths must be > 0")
+    _validate(1.0, 2.0, z_bottom, z_top, 3, n_radial, n_z)
+    frac = np.arange(n_radial + 1) / n_radial
+    xy = points[:, None, :] + (frac[None, :, None] * depths[:, None, None]) * normals[:, None, :]
+    heights = np.linspace(z_bottom, z_top, n_z + 1)
+    XY = np.broadcast_to(xy[:, :, None, :], (n, n_radial + 1, n_z + 1, 2))
+    Z = np.broadcast_to(heights[None, None, :, None], (n, n_radial + 1, n_z + 1, 1))
+    vertices = np.concatenate([XY, Z], axis=-1).reshape(-1, 3)
+    tets = _sweep_tets(vertices, n, n_radial, n_z)
+    if np.any(tet_volumes(vertices, tets) <= 0):
+        raise ValueError("the swept mesh has flat or inverted tetrahedra")
     return vertices, tets
 
 
@@ -272,3 +308,48 @@ def ring_surface_path(inner_radius, outer_radius, z_bottom, z_top, n_theta, cach
     digest = _key("ring-obj-v1", inner_radius, outer_radius, z_bottom, z_top, (n_theta,))
     return _cached(cache_dir, f"ring_{int(n_theta)}_{digest}.obj",
                    lambda: _obj_text(*make_ring_surface_mesh(inner_radius, outer_radius, z_bottom, z_top, n_theta)))
+
+
+def make_swept_surface_mesh(points, normals, depths, z_bottom, z_top):
+    """Boundary quads of :func:`make_swept_volume_mesh`'s wall (for
+    visuals), outward normals: (vertices (4 N, 3), quads (4 N, 4))."""
+    points = np.asarray(points, float)
+    far = points + np.asarray(depths, float)[:, None] * np.asarray(normals, float)
+    n = len(points)
+    # Cross-section loop: near-bottom, far-bottom, far-top, near-top.
+    loop_xy = np.stack([points, far, far, points], axis=1)            # (n, 4, 2)
+    loop_z = np.broadcast_to(np.array([z_bottom, z_bottom, z_top, z_top]), (n, 4))
+    vertices = np.concatenate([loop_xy, loop_z[..., None]], axis=-1).reshape(-1, 3)
+    i = np.arange(n)[:, None]
+    s = np.arange(4)[None, :]
+    v = lambda ii, ss: (ii % n) * 4 + ss % 4  # noqa: E731
+    quads = np.stack([v(i, s), v(i + 1, s), v(i + 1, s + 1), v(i, s + 1)], axis=-1).reshape(-1, 4)
+    # Outward: the quad's normal must point away from the wall's middle.
+    p = vertices[quads]
+    normal = np.cross(p[:, 1] - p[:, 0], p[:, 3] - p[:, 0])
+    middle = np.repeat((points + 0.5 * (far - points)), 4, axis=0)
+    mid_z = 0.5 * (z_bottom + z_top)
+    out = p.mean(axis=1) - np.column_stack([middle, np.full(len(middle), mid_z)])
+    flip = np.einsum("ij,ij->i", normal, out) < 0
+    quads[flip] = quads[flip][:, ::-1]
+    return vertices, quads
+
+
+def profile_mesh_paths(points, normals, depths, z_bottom, z_top, n_radial=2, n_z=2,
+                       visual_z_bottom=None, cache_dir=None):
+    """(volume .vtk path, surface .obj path of the compliant layer, surface
+    .obj of the wall below it or None) of a profile's wall, cached like
+    :func:`ring_mesh_path` by a SHA-256 of the stations."""
+    arrays = [np.asarray(a, float) for a in (points, normals, depths)]
+    digest = hashlib.sha256(b"".join(a.tobytes() for a in arrays) + repr(
+        (float(z_bottom), float(z_top), int(n_radial), int(n_z), visual_z_bottom)).encode()).hexdigest()[:16]
+    n = len(arrays[0])
+    volume = _cached(cache_dir, f"profile_{n}x{int(n_radial)}x{int(n_z)}_{digest}.vtk", lambda: _vtk_text(
+        *make_swept_volume_mesh(*arrays, z_bottom, z_top, n_radial, n_z)))
+    surface = _cached(cache_dir, f"profile_{n}_{digest}.obj", lambda: _obj_text(
+        *make_swept_surface_mesh(*arrays, z_bottom, z_top)))
+    body = None
+    if visual_z_bottom is not None and visual_z_bottom < z_bottom:
+        body = _cached(cache_dir, f"profile_{n}_{digest}_body.obj", lambda: _obj_text(
+            *make_swept_surface_mesh(*arrays, visual_z_bottom, z_bottom)))
+    return volume, surface, body

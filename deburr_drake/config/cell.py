@@ -6,12 +6,14 @@ unit."""
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import List
+from typing import Dict, List
 
-from deburr_drake.config.checks import (_finite, _non_negative, _positive,
-                                        _require, _vector)
+from deburr_drake.config.checks import (ConfigError, _finite,
+                                        _non_negative, _positive, _require,
+                                        _vector)
+from deburr_drake.math.geometry import ProfileContour
 
-__all__ = ["TubeConfig", "ToolConfig", "EdgeConfig", "SensorConfig",
+__all__ = ["package_folder", "PIP_PREFIX", "TubeConfig", "ToolConfig", "EdgeConfig", "SensorConfig",
            "BurrConfig", "ProcessConfig", "RobotConfig", "PartErrorConfig",
            "DropoutConfig", "PartStepConfig", "FaultsConfig", "GuardsConfig"]
 
@@ -22,23 +24,23 @@ class TubeConfig:
     region (the top ``compliant_layer_height`` of the wall) is modelled, as a
     compliant hydroelastic volume mesh."""
 
-    inner_radius: float = 0.030  # m
+    inner_radius: float = 0.030  # m, the edge's radius: the inner wall
     wall_thickness: float = 0.005  # m, radial thickness of the modelled wall
     height: float = 0.050  # m, part spans 0 <= z <= height in its frame
     position: List[float] = field(
         default_factory=lambda: [0.0, 0.0, 0.0])  # m, world, bottom centre
     compliant_layer_height: float = 0.006  # m, top part of the wall modelled
     hydroelastic_modulus: float = 4.5e6  # Pa, 10 N/mm at 0.5 mm
-    hunt_crossley_dissipation: float = 5.0  # s/m
-    # Around the circumference. 120 (chord sag 10 um at 30 mm) with the
+    hunt_crossley_dissipation: float = 5.0  # s/m, the contact's Hunt-Crossley dissipation
+    # -, segments around the circumference. 120 (chord sag 10 um at 30 mm) with the
     # cutter's 0.6 mm mesh gives within 0.3 % the normal force of 240 with
     # a 0.4 mm cutter mesh (1.835/1.830, 3.695/3.700, 5.711/5.728 N at 0.3,
     # 0.5, 0.7 mm), a ripple along the edge of +-0.006 N (against the
     # sensor's 0.1 N noise) and a contact evaluation 38 % cheaper (188
     # against 301 us): scripts/contact_mesh.py.
     mesh_segments: int = 120
-    mesh_radial_cells: int = 2  # through the wall
-    mesh_height_cells: int = 2  # through the modelled layer
+    mesh_radial_cells: int = 2  # -, mesh cells through the wall
+    mesh_height_cells: int = 2  # -, mesh cells through the modelled layer
 
     def validate(self):
         o = "tube"
@@ -70,8 +72,8 @@ class TubeConfig:
 class ToolConfig:
     """The cylindrical burr cutter (vertical axis)."""
 
-    cutter_radius: float = 0.003  # m
-    cutter_length: float = 0.020  # m
+    cutter_radius: float = 0.003  # m, of the cylindrical cutter
+    cutter_length: float = 0.020  # m, along the tool axis
     engagement: float = 0.002  # m, cutter tip below the top edge
     resolution_hint: float = 6.0e-4  # m, the cutter's mesh (TubeConfig)
 
@@ -92,15 +94,70 @@ class EdgeConfig:
     in ``direction``. ``straight``: the top edge of a straight wall of the
     ``tube``'s thickness, height and material, ``length`` long, its middle
     above ``tube.position``; the tool runs along ``heading`` with the
-    material on its right."""
+    material on its right. ``profile``: the top edge of a closed profile,
+    the polygon ``vertices`` about ``tube.position`` with every corner
+    rounded by ``fillet_radius``; ``side`` inner: a pocket's edge (the
+    material outside, as the tube's bore), outer: a boss's edge (the
+    material inside); the tube's wall thickness, height, compliant layer
+    and modulus describe its material. The pass starts where the ray from
+    ``tube.position`` at polar angle ``start_angle`` meets the cutter's
+    path (the crossing nearest to ``tube.position``) and runs in
+    ``direction``."""
 
-    kind: str = "circle"  # circle or straight
+    kind: str = "circle"  # -, circle, straight or profile
     start_angle: float = 0.0  # rad, polar angle of the contour start
-    direction: int = 1  # +1 counter-clockwise seen from +z, -1 clockwise
+    direction: int = 1  # -, +1 counter-clockwise seen from +z, -1 clockwise
     length: float = 0.1  # m, straight edge only
     heading: float = 1.5707963267948966  # rad, straight: travel direction
+    # m, [x, y] about tube.position, counter-clockwise, at least 3, not
+    # self-intersecting (profile only)
+    vertices: list[list[float]] = field(default_factory=list)
+    fillet_radius: float = 0.008  # m, every corner rounded (profile)
+    side: str = "inner"  # -, profile: inner (pocket) or outer (boss)
 
-    KINDS = ("circle", "straight")
+    KINDS = ("circle", "straight", "profile")
+    SIDES = ("inner", "outer")
+
+    def profile_path(self, center, offset, *, grow=0.0) -> ProfileContour:
+        """The profile's edge grown outward by ``grow`` (m: a pocket
+        larger, a boss larger), offset by ``offset`` (m, the cutter radius)
+        towards the free side, at ``center`` (x, y, z; z the path's
+        height). ValueError says what is wrong with the profile."""
+        pocket = self.side == "inner"
+        return ProfileContour(
+            self.vertices, self.fillet_radius,
+            material="outside" if pocket else "inside",
+            offset=offset - grow if pocket else offset + grow,
+            center=center, start_angle=self.start_angle,
+            direction=self.direction)
+
+    def check_profile(self, tube, tool, part_error):
+        """One ConfigError naming the field if the profile, the cutter's
+        path on it (real and believed), or the wall ``tube.wall_thickness``
+        deep along it cannot be built."""
+        center = list(tube.position[:2]) + [0.0]
+        field, value = "edge.vertices", self.vertices
+        try:
+            path = self.profile_path(center, tool.cutter_radius)
+            field, value = "tube.wall_thickness", tube.wall_thickness
+            path.with_offset(0.0).material_band(
+                tube.wall_thickness, segments_per_turn=tube.mesh_segments,
+                max_step=tube.wall_thickness)
+            field, value = "part_error.radius", part_error.radius
+            self.profile_path(center, tool.cutter_radius,
+                              grow=part_error.radius)
+        except ValueError as e:
+            message = str(e)
+            if "larger than the cutter" in message:
+                field, value = ("edge.fillet_radius", self.fillet_radius) \
+                    if field == "edge.vertices" else (field, value)
+                message = (f"a fillet whose centre is on the free side must "
+                           f"be larger than tool.cutter_radius "
+                           f"({tool.cutter_radius}): {message}")
+            elif "start_angle" in message:
+                field, value = "edge.start_angle", self.start_angle
+            raise ConfigError(f"{field} = {value!r} is invalid: "
+                              f"{message}") from None
 
     def validate(self):
         _require(self.kind in self.KINDS, "edge.kind", self.kind,
@@ -113,20 +170,29 @@ class EdgeConfig:
         _require(self.direction in (1, -1), "edge.direction", self.direction,
                  "1 or -1")
         _positive("edge", "length", self.length)
+        _positive("edge", "fillet_radius", self.fillet_radius)
+        _require(self.side in self.SIDES, "edge.side", self.side,
+                 f"one of {self.SIDES}")
+        if self.kind != "profile":
+            return
+        _require(len(self.vertices) >= 3, "edge.vertices", self.vertices,
+                 "at least 3 points [x, y] (m) for a profile edge")
+        for i, v in enumerate(self.vertices):
+            _vector("edge", f"vertices[{i}]", v, 2, _finite)
 
 
 @dataclass
 class SensorConfig:
     """Tool force measurement."""
 
-    sample_period: float = 0.0025  # s
+    sample_period: float = 0.0025  # s, the reading is sampled this often
     # Hz, first-order low-pass. The controller cancels the measured force
     # (-f in (36)), which holds the process damping g of (3) through the
     # sampled sensor: with the light point-mass testbed that loop went
     # unstable at 50 Hz and was stable at 20 and 30 Hz (measured).
     cutoff_frequency: float = 20.0
     noise_std: float = 0.0  # N, white noise per axis before the filter
-    noise_seed: int = 0  # seeds the noise (RandomSource)
+    noise_seed: int = 0  # -, seeds the noise (RandomSource)
 
     def validate(self):
         _positive("sensor", "sample_period", self.sample_period)
@@ -144,9 +210,9 @@ class BurrConfig:
     """One burr on the edge: a raised-cosine bump of material the cutter
     removes (its cross-section area adds to g of (3))."""
 
-    center_fraction: float = 0.125  # of the edge length from the start
-    length: float = 0.008  # m of arc
-    height: float = 0.001  # m
+    center_fraction: float = 0.125  # -, fraction of the edge length from the start
+    length: float = 0.008  # m, of arc
+    height: float = 0.001  # m, above the edge
     thickness: float = 0.002  # m; cross-section area = height * thickness
 
     def validate(self, owner="process.burrs[]"):
@@ -178,12 +244,12 @@ class ProcessConfig:
     # (v0 = 1 mm/s).
     smoothing_speed: float = 5.0e-4
     burrs: List[BurrConfig] = field(default_factory=list)
-    finish_bin_length: float = 2.0e-4  # m of arc per surface-finish bin
+    finish_bin_length: float = 2.0e-4  # m, of arc per surface-finish bin
     # s: the process samples the tool's place on the edge for the force law
     # (depth, directions, burr at the cutter), records the finish and
     # removes the burr this often.
     sample_period: float = 0.0025
-    # True: the force law adds S (v - v0), zero at each sample's joint
+    # -; true: the force law adds S (v - v0), zero at each sample's joint
     # velocities v0, that makes its derivative in v diagonal and
     # dominant (cell.process.force_law_terms), so cenic, which treats only
     # that diagonal implicitly, holds any g of (3) at one step per sample.
@@ -231,19 +297,31 @@ class RobotConfig:
     flange's +z (deburr_drake.cell.robot). The controller's model of the arm
     differs from the plant by ``controller.model_mass_scale``."""
 
-    model: str = "cartesian_tool"  # shipped name, or a .urdf / .sdf path
+    model: str = "cartesian_tool"  # -, shipped name, or a .urdf / .sdf path
     joint_coulomb_friction: List[float] = field(
-        default_factory=list)  # N or N m per joint; empty: none
-    friction_smoothing_speed: float = 1.0e-3  # m/s or rad/s
-    tool_frame: str = "tool_tip"  # frame at the tool tip
-    sensor_joint: str = "ft_sensor"  # weld joint: the force/torque sensor
-    flange_frame: str = ""  # frame the spindle is mounted on; "": none
+        default_factory=list)  # N or N m, per joint; empty: none
+    friction_smoothing_speed: float = 1.0e-3  # m/s or rad/s, v_s of F_c tanh(v / v_s)
+    tool_frame: str = "tool_tip"  # -, frame at the tool tip
+    sensor_joint: str = "ft_sensor"  # -, weld joint: the force/torque sensor
+    flange_frame: str = ""  # -, frame the spindle is mounted on; "": none
     tool_length: float = 0.12  # m, flange face to tool tip (flange_frame)
     tool_mass: float = 1.5  # kg, sensor and spindle (flange_frame)
     # rad, one per joint: the inverse kinematics' start and the posture it
     # stays near (elbow up, wrist flipped or not); empty: the model's
     # default (arm5: its ready pose turned towards the part).
     ik_seed: List[float] = field(default_factory=list)
+    # Where the model's package:// URIs (and a package:// robot.model)
+    # resolve, beside the package.xml files above the model and
+    # ROS_PACKAGE_PATH. Relative to the scenario file; an entry
+    # "pip:DIST/sub/folder" is a folder inside the installed Python
+    # distribution DIST (e.g. "pip:example-robot-data/cmeel.prefix/share").
+    package_paths: List[str] = field(
+        default_factory=list)  # -, folders whose sub-folders are packages by name
+    packages: Dict[str, str] = field(
+        default_factory=dict)  # -, {package name: its folder}
+    # Where the model file gives none (drake:rotor_inertia); empty: the file's.
+    reflected_inertia: List[float] = field(
+        default_factory=list)  # kg m^2, per joint: the drives' reflected inertia
 
     #: Models shipped in models/ (deburr_drake.cell.robot.SHIPPED_ROBOTS).
     SHIPPED = ("cartesian_tool", "arm5", "arm6")
@@ -253,14 +331,21 @@ class RobotConfig:
         """Whether ``model`` names a file rather than a shipped model."""
         return self.model not in self.SHIPPED
 
+    def is_package_url(self) -> bool:
+        """Whether ``model`` is a ``package://NAME/...`` URL (resolved
+        through the package folders)."""
+        return isinstance(self.model, str) and \
+            self.model.startswith("package://")
+
     def validate(self):
         o = "robot"
         _require(isinstance(self.model, str) and (
             self.model in self.SHIPPED
             or Path(self.model).suffix.lower() in self.FILE_SUFFIXES),
             f"{o}.model", self.model,
-            f"one of {self.SHIPPED} or a path to a .urdf or .sdf file")
-        if self.is_file():
+            f"one of {self.SHIPPED} or a path (or package:// URL) to a .urdf "
+            "or .sdf file")
+        if self.is_file() and not self.is_package_url():
             _require(Path(self.model).is_file(), f"{o}.model", self.model,
                      "an existing .urdf or .sdf file (no such file)")
         for i, f in enumerate(self.joint_coulomb_friction):
@@ -276,6 +361,53 @@ class RobotConfig:
         for i, q in enumerate(self.ik_seed):
             _require(isinstance(q, (int, float)) and math.isfinite(q),
                      f"{o}.ik_seed[{i}]", q, "a finite angle (rad)")
+        for i, inertia in enumerate(self.reflected_inertia):
+            _non_negative(o, f"reflected_inertia[{i}]", inertia)
+        for i, entry in enumerate(self.package_paths):
+            _require(package_folder(entry).is_dir(),
+                     f"{o}.package_paths[{i}]", entry,
+                     "an existing folder" + _dist_hint(entry))
+        for name, entry in self.packages.items():
+            _require(name != "" and "/" not in name, f"{o}.packages",
+                     name, "package names without '/'")
+            _require(package_folder(entry).is_dir(), f"{o}.packages.{name}",
+                     entry, "an existing folder" + _dist_hint(entry))
+
+
+#: A package folder inside an installed Python distribution:
+#: ``pip:DIST/sub/folder``.
+PIP_PREFIX = "pip:"
+
+
+def package_folder(entry: str) -> Path:
+    """The folder a ``robot.package_paths`` / ``robot.packages`` entry
+    names: a path, or ``pip:DIST/sub/folder``, the folder ``sub/folder``
+    where pip installed the distribution DIST (its site-packages, e.g.
+    ``pip:example-robot-data/cmeel.prefix/share``); a distribution that is
+    not installed gives a path that does not exist."""
+    if not isinstance(entry, str):
+        return Path("/nonexistent")
+    if not entry.startswith(PIP_PREFIX):
+        return Path(entry)
+    from importlib import metadata
+    dist, _, rest = entry[len(PIP_PREFIX):].partition("/")
+    try:
+        root = Path(str(metadata.distribution(dist).locate_file("")))
+    except metadata.PackageNotFoundError:
+        return Path("/nonexistent") / dist
+    return root / rest
+
+
+def _dist_hint(entry) -> str:
+    if isinstance(entry, str) and entry.startswith(PIP_PREFIX):
+        dist = entry[len(PIP_PREFIX):].partition("/")[0]
+        from importlib import metadata
+        try:
+            metadata.distribution(dist)
+        except metadata.PackageNotFoundError:
+            return (f" (no installed Python distribution {dist!r}: "
+                    f"pip install {dist})")
+    return " (relative to the scenario file, or pip:DIST/sub/folder)"
 
 
 @dataclass
@@ -286,12 +418,14 @@ class PartErrorConfig:
     the first-order hold, the observer and the start pose use the believed
     part: the real one moved by ``offset``, turned by ``yaw`` about its
     vertical axis (circle: the start angle; straight: the heading about
-    ``tube.position``) and with an inner radius ``radius`` larger."""
+    ``tube.position``; profile: its vertices and start angle about
+    ``tube.position``) and with an inner radius ``radius`` larger (profile:
+    grown outward by ``radius``, a pocket's or a boss's)."""
 
     offset: List[float] = field(
         default_factory=lambda: [0.0, 0.0, 0.0])  # m, believed - real
     yaw: float = 0.0  # rad, believed - real, about the vertical
-    radius: float = 0.0  # m, believed - real inner radius (circle)
+    radius: float = 0.0  # m, believed - real inner radius; profile: growth
 
     def validate(self):
         o = "part_error"
@@ -306,9 +440,9 @@ class PartErrorConfig:
 class DropoutConfig:
     """A window in which the force sensor's reading is lost."""
 
-    start: float = 0.0  # s
-    duration: float = 0.0  # s
-    mode: str = "hold"  # hold: the last reading; zero: 0 N
+    start: float = 0.0  # s, when the reading is lost
+    duration: float = 0.0  # s, for how long
+    mode: str = "hold"  # -, hold: the last reading; zero: 0 N
 
     MODES = ("hold", "zero")
 
@@ -350,7 +484,7 @@ class FaultsConfig:
 
     # N, world, added to the force reading the controller and observer get
     sensor_bias: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
-    noise_scale: float = 1.0  # x sensor.noise_std
+    noise_scale: float = 1.0  # -, multiplies sensor.noise_std
     dropouts: List[DropoutConfig] = field(default_factory=list)
     part_step: PartStepConfig = field(default_factory=PartStepConfig)
 
@@ -373,23 +507,23 @@ class GuardsConfig:
     ``stop_reason`` ``guard:<name>`` and its values at the trip. A limit of
     0 takes the default derived from the models and the task."""
 
-    enabled: bool = True
-    # Trip when any |tau_i| exceeds this fraction of the joint's effort
+    enabled: bool = True  # -, false: no guard runs
+    # -, trip when any |tau_i| exceeds this fraction of the joint's effort
     # limit (the robot model's <effort>); joints without one are not checked.
     joint_torque_fraction: float = 1.0
     tool_force: float = 0.0  # N, |measured f|; 0: 10 x desired |f_t|
     depth: float = 0.0  # m, chamfer depth; 0: min(4 x desired, cutter radius)
     workspace_margin: float = 0.02  # m, around the edge's bounding box
-    contact_lost_time: float = 1.0  # s below contact_force after contact
+    contact_lost_time: float = 1.0  # s, below contact_force after contact
     contact_force: float = 1.0  # N, ||f_n|| above it is contact
-    nan: bool = True  # any NaN or infinity in a logged signal
+    nan: bool = True  # -, any NaN or infinity in a logged signal
     # s; all guards are checked this often, the joint torque also at every
     # inner-loop sample. A multiple of the 2.5 ms inner loop adds no
     # integrator steps. On a 10 s paper run (scripts/bench_guards.py) all
     # guards every 2.5 ms took 4.5-4.7 % of the CPU time; every 10 ms with
     # the torque every 2.5 ms 2.7-2.8 %.
     check_period: float = 0.02
-    # The drives clamp the commanded torque at the effort limits, as real
+    # -; the drives clamp the commanded torque at the effort limits, as real
     # ones do: a guard sees a torque one sample after it is commanded, so
     # without the clamp the plant would take one sample of it.
     saturate_effort: bool = True

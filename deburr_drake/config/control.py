@@ -64,13 +64,13 @@ class EstimatorConfig:
     """Contact-parameter estimator (13)-(18) with R3."""
 
     initial_estimates: List[float] = field(
-        default_factory=lambda: [3.0, 4000.0, 20.0])  # N, N/m, N s/m
+        default_factory=lambda: [3.0, 4000.0, 20.0])  # [N, N/m, N s/m], c0, c1, c2 at the start
     gains: List[float] = field(
-        default_factory=lambda: [20.0, 2.0e7, 0.0])  # per parameter
+        default_factory=lambda: [20.0, 2.0e7, 0.0])  # -, r_i per parameter (R3)
     lower_bounds: List[float] = field(
-        default_factory=lambda: [0.1, 100.0, 0.0])  # eps_i: N, N/m, N s/m
+        default_factory=lambda: [0.1, 100.0, 0.0])  # [N, N/m, N s/m], eps_i (R3)
     contact_force_threshold: float = 0.2  # N, adapt only above it
-    adapt: bool = True
+    adapt: bool = True  # -, false: the estimates stay at their start
 
     def validate(self):
         o = "estimator"
@@ -90,17 +90,17 @@ class EstimatorConfig:
 class FuzzyConfig:
     """B-spline adaptive fuzzy compensator (24)-(35), R1, R4, R8."""
 
-    order: int = 2  # m, 0..3
-    upsilon: int = 5  # rules per input: 2*upsilon + 1
+    order: int = 2  # -, m: the B-splines' order, 0..3
+    upsilon: int = 5  # -, Upsilon: rules per input 2*upsilon + 1
     position_scale: float = 0.1  # m, x_max normalizing ||x|| (R8)
     sliding_scales: List[float] = field(
         default_factory=lambda: [0.005, 0.005])  # m/s, s_k,max per axis
-    width_fraction: float = 0.2  # Delta = width_fraction * scale
-    # m/s per axis; empty: (m+1)/2 * Delta_k (R4).
+    width_fraction: float = 0.2  # -, Delta = width_fraction * scale
+    # m/s, per axis; empty: (m+1)/2 * Delta_k (R4).
     dead_zone_half_widths: List[float] = field(default_factory=list)
-    adaptation_gain: float = 2000.0  # r of (35), N s/m per s
-    axes: List[int] = field(default_factory=lambda: [0, 1])  # task axes
-    adapt: bool = True
+    adaptation_gain: float = 2000.0  # N s/m per s, r of (35)
+    axes: List[int] = field(default_factory=lambda: [0, 1])  # -, task axes
+    adapt: bool = True  # -, false: the rule weights stay fixed
 
     def deltas(self):
         """(Delta_0, [Delta_k]) in m and m/s."""
@@ -143,9 +143,9 @@ class RobustConfig:
     here (h2: the gravity model's 20 % error and joint friction along x1,
     x2, a few N; m d2: about 1.4 N), see docs in ``laws``."""
 
+    # [N, N/m, N/m^2, N s/m, N s/m^2], b1..b5 of (22)
     gains: List[float] = field(
         default_factory=lambda: [5.0, 0.0, 0.0, 0.0, 0.0])
-    # b1 N, b2 N/m, b3 N/m^2, b4 N s/m, b5 N s/m^2
 
     def validate(self, o="controller.robust"):
         _vector(o, "gains", self.gains, 5, _non_negative)
@@ -158,8 +158,8 @@ class ImpedanceConfig:
     desired depth, a PD (K s) on the other directions, no force feedback,
     no feedrate law (``command.constant_feed``), no contact estimator."""
 
-    stiffness: float = 40000.0  # N/m along n1 (= lambda K of the x1, x2 PD)
-    damping: float = 400.0  # N s/m along n1
+    stiffness: float = 40000.0  # N/m, along n1 (= lambda K of the x1, x2 PD)
+    damping: float = 400.0  # N s/m, along n1
 
     def validate(self, o="controller.impedance"):
         _positive(o, "stiffness", self.stiffness)
@@ -174,7 +174,7 @@ class PositionConfig:
     2800 N s/m) keeps it stable."""
 
     sliding_gain: List[float] = field(
-        default_factory=lambda: [1500.0, 1500.0, 1500.0])  # N s/m
+        default_factory=lambda: [1500.0, 1500.0, 1500.0])  # N s/m, K_p
 
     def validate(self, o="controller.position"):
         _vector(o, "sliding_gain", self.sliding_gain, 3, _positive)
@@ -193,7 +193,12 @@ class ControllerConfig:
     #: Kinds that run at constant feed and ignore the estimator.
     CONSTANT_FEED_KINDS = ("impedance", "position")
 
-    kind: str = "fuzzy"
+    kind: str = "fuzzy"  # -, the inner-loop law (KINDS)
+    # Where K, lambda, the orientation gains, Delta_k and x_max come from:
+    # designed from the robot model at the start pose
+    # (deburr_drake.cell.gains) and proven by the one-period map
+    # (deburr_drake.analysis.preflight), or as written here.
+    design: str = ""  # -, auto, written, or "": auto for a robot from a file
     sliding_lambda: List[float] = field(
         default_factory=lambda: [40.0, 40.0, 80.0])  # 1/s, lambda
     sliding_gain: List[float] = field(
@@ -212,7 +217,7 @@ class ControllerConfig:
     orientation_lambda: List[float] = field(
         default_factory=lambda: [20.0, 20.0, 20.0])  # 1/s
     orientation_gain: List[float] = field(
-        default_factory=lambda: [0.0, 0.0, 0.0])  # N m s/rad
+        default_factory=lambda: [0.0, 0.0, 0.0])  # N m s/rad, K_o
     # A robot of more than 6 joints: a joint-space PD towards the start
     # posture, projected into the null space of the tool frame's Jacobian
     # (tau_n = (I - J^T J^T+) (k (q_0 - q) - d v)), so the redundancy does
@@ -220,16 +225,27 @@ class ControllerConfig:
     # flange rolls) held its null coordinate within 1 mrad against 0.04 N m
     # of joint friction; d T / I = 0.13 on its lightest joint.
     null_space_stiffness: float = 200.0  # N m/rad
-    null_space_damping: float = 10.0  # N m s/rad
-    gravity_compensation: bool = True
-    model_mass_scale: float = 1.2  # controller's model masses / true masses
+    null_space_damping: float = 10.0  # N m s/rad, d
+    gravity_compensation: bool = True  # -, -tau_g from the controller's model
+    model_mass_scale: float = 1.2  # -, controller's model masses / true masses
     fuzzy: FuzzyConfig = field(default_factory=FuzzyConfig)
     robust: RobustConfig = field(default_factory=RobustConfig)
     impedance: ImpedanceConfig = field(default_factory=ImpedanceConfig)
     position: PositionConfig = field(default_factory=PositionConfig)
 
+    DESIGNS = ("", "auto", "written")
+
+    def resolved_design(self, robot) -> str:
+        """``auto`` or ``written``: ``design``, or by default auto for a
+        robot from a file (``robot``: a RobotConfig)."""
+        if self.design:
+            return self.design
+        return "auto" if robot.is_file() else "written"
+
     def validate(self):
         o = "controller"
+        _require(self.design in self.DESIGNS, f"{o}.design", self.design,
+                 "auto, written or '' (auto for a robot from a file)")
         _require(self.kind in self.KINDS, f"{o}.kind", self.kind,
                  "one of " + ", ".join(self.KINDS))
         _vector(o, "sliding_lambda", self.sliding_lambda, 3, _positive)

@@ -11,7 +11,7 @@ from typing import List, Optional
 
 from pydrake.common.yaml import yaml_load_typed
 
-from deburr_drake.config.cell import (EdgeConfig, FaultsConfig, GuardsConfig,
+from deburr_drake.config.cell import (PIP_PREFIX, EdgeConfig, FaultsConfig, GuardsConfig,
                                       PartErrorConfig, ProcessConfig,
                                       RobotConfig, SensorConfig, ToolConfig,
                                       TubeConfig)
@@ -26,18 +26,18 @@ __all__ = ["SimulationConfig", "Scenario", "get_field", "set_field",
 
 @dataclass
 class SimulationConfig:
-    duration: float = 10.0  # s
+    duration: float = 10.0  # s, simulated time (--duration overrides it)
     plant_time_step: float = 0.0  # s; 0: continuous plant
-    contact_approximation: str = "lagged"  # discrete plant only
-    integrator: str = "cenic"
-    accuracy: float = 1.0e-4
-    # s. With cenic and fixed steps it bounds the cutting process's
-    # damping the step can hold: cenic treats only the diagonal of the
-    # applied forces' d tau / dv implicitly, and the cutting force's g a a^T
-    # (a = J^T n2) is off-diagonal on an arm; the paper scenarios take two
-    # steps per 2.5 ms sample (README, numerical choices).
+    contact_approximation: str = "lagged"  # -, discrete plant only
+    integrator: str = "cenic"  # -, Drake integrator (INTEGRATORS)
+    accuracy: float = 1.0e-4  # -, the integrator's error-control accuracy
+    # s. cenic treats only the diagonal of the applied forces' d tau / dv
+    # implicitly; the cutting force's g a a^T (a = J^T n2) is off-diagonal
+    # on an arm, and process.implicit_damping makes the law's derivative
+    # diagonal, so the paper scenarios take one step per 2.5 ms sample
+    # (paper_6dof two, for its depth's accuracy; docs/numerics.md).
     max_step: float = 0.01
-    # False: fixed steps of max_step (accuracy unused). With the 2.5 ms
+    # -; false: fixed steps of max_step (accuracy unused). With the 2.5 ms
     # sampled loop every step ends at a sample anyway; on 12 s of the paper
     # run cenic's error control at 1e-4 took 14 % more steps and 19 % more
     # wall time for means within 1.5e-4 (scripts/integrator_check.py).
@@ -48,7 +48,7 @@ class SimulationConfig:
     # a constant as a 5 ms log did.
     log_period: float = 0.0025
     initial_depth: float = 0.0  # m, tool starts at this depth (in contact)
-    # Stop when the command has run this many edge lengths (0: run for the
+    # -, stop when the command has run this many edge lengths (0: run for the
     # whole duration). 1.0 is one full pass of a closed edge.
     stop_after_passes: float = 0.0
 
@@ -76,7 +76,10 @@ class SimulationConfig:
 class Scenario:
     """Everything one simulation needs."""
 
-    name: str = "point_mass"
+    name: str = "point_mass"  # -, names the output directory out/<name>
+    # Its part, task, controller and simulation settings, not its robot
+    # (this file's robot section starts from the defaults).
+    base: str = ""  # -, a shipped scenario or YAML file this one starts from
     robot: RobotConfig = field(default_factory=RobotConfig)
     tube: TubeConfig = field(default_factory=TubeConfig)
     tool: ToolConfig = field(default_factory=ToolConfig)
@@ -121,6 +124,8 @@ class Scenario:
                  "simulation.initial_depth", self.simulation.initial_depth,
                  "< tool.cutter_radius and tube.wall_thickness "
                  f"({min(self.tool.cutter_radius, self.tube.wall_thickness)})")
+        if self.edge.kind == "profile":
+            self.edge.check_profile(self.tube, self.tool, self.part_error)
         believed = self.tube.inner_radius + self.part_error.radius
         _require(self.tool.cutter_radius < believed
                  and abs(self.part_error.radius) < self.tube.wall_thickness,
@@ -355,11 +360,46 @@ def _scenario_file(name_or_path: str) -> Path:
 
 
 def _resolve_robot_model(robot: RobotConfig, directory: Path):
-    """A relative model file in a scenario file is relative to that file."""
-    if robot.is_file() and not Path(robot.model).is_absolute():
+    """A relative model file, package folder or package in a scenario file
+    is relative to that file (``pip:`` entries stay as they are)."""
+    if robot.is_file() and not robot.is_package_url() and \
+            not Path(robot.model).is_absolute():
         candidate = directory / robot.model
         if candidate.is_file():
             robot.model = str(candidate.resolve())
+
+    def resolved(entry):
+        if not isinstance(entry, str) or entry.startswith(PIP_PREFIX) or \
+                Path(entry).is_absolute():
+            return entry
+        candidate = directory / entry
+        return str(candidate.resolve()) if candidate.is_dir() else entry
+    robot.package_paths = [resolved(e) for e in robot.package_paths]
+    robot.packages = {k: resolved(v) for k, v in robot.packages.items()}
+
+
+def _base_of(source: str, path: Path, depth: int = 0) -> Scenario:
+    """The defaults a scenario file starts from: its ``base`` scenario
+    (a shipped name or a file relative to it) with the robot section reset,
+    or the dataclasses' defaults."""
+    import yaml
+    data = yaml.safe_load(source)
+    base = data.get("base", "") if isinstance(data, dict) else ""
+    if not base:
+        return Scenario()
+    _require(isinstance(base, str) and depth < 8, "base", base,
+             "a shipped scenario name or a YAML file (no cycle)")
+    if not (base in scenario_names()):
+        candidate = path.parent / base
+        base = str(candidate) if candidate.is_file() else base
+    base_path = _scenario_file(base)
+    text = base_path.read_text()
+    _check_yaml(text, str(base_path))
+    scenario = yaml_load_typed(filename=str(base_path),
+                               defaults=_base_of(text, base_path, depth + 1))
+    scenario.robot = RobotConfig()
+    scenario.base = ""
+    return scenario
 
 
 def load_scenario(name_or_path: Optional[str] = None, *,
@@ -379,6 +419,7 @@ def load_scenario(name_or_path: Optional[str] = None, *,
                 raise ConfigError(f"--scenario {path}: cannot read: {e}") \
                     from None
             _check_yaml(source, str(path))
+            scenario = _base_of(source, path)
             scenario = yaml_load_typed(filename=str(path), defaults=scenario)
             _resolve_robot_model(scenario.robot, path.parent)
         if text:

@@ -6,7 +6,8 @@ table. The numbers of one run come from :func:`burr_metrics`, a pure numpy
 function of the logged arrays; the bounds from :func:`burr_bounds`.
 
 Bounds (SI units), for desired chamfering force f_d, the threshold force
-P'_th, the cutting coefficient k_c, the cut height h (the cutter's
+P'_th, the cutting coefficient k_c (times the edge's removal_scale at
+delta*), the cut height h (the cutter's
 engagement), the desired depth delta*, a burr of cross-section A_b
 (height x thickness):
 
@@ -34,7 +35,7 @@ from __future__ import annotations
 import copy
 import math
 from dataclasses import asdict, dataclass
-from typing import Dict, Iterable, List, Optional
+from typing import Callable, Dict, Iterable, List, Optional
 
 import numpy as np
 
@@ -44,7 +45,7 @@ from deburr_drake.runs.pass_metrics import TRANSIENT
 __all__ = ["BurrCell", "burr_bounds", "burr_metrics", "burr_scenario",
            "run_burr_cell", "GRID_HEIGHTS", "GRID_LENGTHS", "GRID_FORCES",
            "grid", "off_burr_feed", "DEPTH_RMS_LIMIT", "SPEED_FACTOR",
-           "LEAD_TIME"]
+           "LEAD_TIME", "run_cells"]
 
 #: The grid of the issue: burr height (m), burr length (m of arc), desired
 #: chamfering force (N).
@@ -83,10 +84,22 @@ def grid(heights: Iterable[float] = GRID_HEIGHTS,
             for length in lengths]
 
 
+def _cutting_coefficient(scenario) -> float:
+    """k_c times the edge's removal_scale at its start at delta* (N s/m^3):
+    g per area of cross-section there (1.1 k_c on the paper's bore)."""
+    from deburr_drake.cell.edge import make_contour
+    from deburr_drake.math.geometry import removal_scale
+    contour = make_contour(scenario)
+    return scenario.process.cutting_coefficient * removal_scale(
+        contour.curvature(contour.point_at(0.0)),
+        scenario.task.desired_depth, scenario.tool.cutter_radius)
+
+
 def off_burr_feed(scenario) -> float:
-    """v_off (m/s): the feed law's steady feed off the burrs, or v0."""
+    """v_off (m/s): the feed law's steady feed off the burrs at the edge's
+    start, or v0."""
     p, c = scenario.process, scenario.command
-    g = p.cutting_coefficient * scenario.task.desired_depth \
+    g = _cutting_coefficient(scenario) * scenario.task.desired_depth \
         * scenario.tool.engagement
     excess = scenario.task.desired_chamfering_force \
         - p.threshold_power_force
@@ -96,7 +109,7 @@ def off_burr_feed(scenario) -> float:
 def burr_bounds(scenario, cell: BurrCell) -> Dict[str, float]:
     """The pass bounds of a cell (N, m/s, m); see the module docstring."""
     v_off = off_burr_feed(scenario)
-    k_c = scenario.process.cutting_coefficient
+    k_c = _cutting_coefficient(scenario)
     return {
         "max_chamfering_force_N": 2 * cell.force
         + k_c * cell.height * cell.thickness * v_off,
@@ -199,3 +212,25 @@ def run_burr_cell(cell: BurrCell, base_name: str = "paper",
     return {"cell": asdict(cell), "bounds": burr_bounds(sc, cell),
             "sim_time_s": log.sim_time, "wall_time_s": log.wall_time,
             **burr_metrics(log.signals, sc, cell)}
+
+
+def run_cells(run: Callable, cells: list, *args, workers: int = 2,
+              on_row: Optional[Callable] = None) -> List[dict]:
+    """``run(cell, *args)`` for every cell in ``workers`` spawned
+    processes; the rows in the cells' order, a crashed run as {"cell",
+    "error", "passed": 0.0}; ``on_row(cell, row)`` as each is ready."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+    rows = []
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(workers, mp_context=context) as pool:
+        futures = [pool.submit(run, cell, *args) for cell in cells]
+        for cell, future in zip(cells, futures):
+            try:
+                row = future.result()
+            except Exception as e:  # a crashed run is a failed cell
+                row = {"cell": vars(cell), "error": repr(e), "passed": 0.0}
+            rows.append(row)
+            if on_row is not None:
+                on_row(cell, row)
+    return rows

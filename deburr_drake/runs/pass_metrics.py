@@ -217,9 +217,27 @@ def force_at_desired_depth(scenario) -> Optional[float]:
         return None
 
 
+def _last_estimate_on_the_part(log: RunLog) -> int:
+    """Index of the last estimate logged while the cutter was wholly on the
+    part (the process's engagement 1): where an open edge ends, the cutter
+    runs off it and the estimator learns the partial contact there (on the
+    100 mm straight wall c0 + c1 delta* fell from 5.13 to 2.91 N in the
+    last 1.5 s); on a closed edge it is the last estimate."""
+    process = log.signals.get("process", {})
+    engagement = process.get("engagement")
+    if engagement is None or not len(engagement):
+        return -1
+    full = process["t"][engagement >= 1.0 - 1e-9]
+    if not len(full):
+        return -1
+    times = log["estimates"]["t"]
+    return max(int(np.searchsorted(times, full[-1], side="right")) - 1, 0)
+
+
 def estimate_metrics(log: RunLog, true_force_at_desired_depth:
                      Optional[float] = None) -> PassMetrics:
-    """The estimator's last c0 + c1 delta* (``predicted_...``, N) against
+    """The estimator's c0 + c1 delta* (``predicted_...``, N) at the end of
+    the pass on the part (:func:`_last_estimate_on_the_part`) against
     ``true_force_at_desired_depth`` (the plant's normal force at delta*,
     :func:`force_at_desired_depth`): their relative error; nan without a
     truth."""
@@ -230,7 +248,7 @@ def estimate_metrics(log: RunLog, true_force_at_desired_depth:
                      "force_prediction_error_rel"):
             out.unavailable(name, "no estimate was logged")
         return out
-    c_hat = estimates[-1]
+    c_hat = estimates[_last_estimate_on_the_part(log)]
     predicted = float(c_hat[0] + c_hat[1] * log.scenario.task.desired_depth)
     out["predicted_force_at_desired_depth_N"] = predicted
     if true_force_at_desired_depth is None:

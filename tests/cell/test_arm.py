@@ -139,3 +139,33 @@ def test_task_space_inertia_positive(plant):
     Lam = np.linalg.inv(J @ np.linalg.solve(M, J.T))
     eig = np.linalg.eigvalsh(0.5 * (Lam + Lam.T))
     assert np.all(eig > 1.0) and np.all(eig < 100.0)   # kg
+
+
+def test_check_reach_follows_the_edge_and_names_another_seed(monkeypatch):
+    """A point the seed's inverse kinematics misses is tried from the
+    previous point's solution; one reached only from the nearest reachable
+    posture gives distance 0 and that posture, never "0.0 mm beyond"."""
+    from deburr_drake.cell import arm
+    plant = make_kinematic_model(ARM_URL)
+    x, y, z = DEFAULT_PART_POSITION
+    points = [[x + 0.03, y, 0.048], [x, y + 0.03, 0.048]]
+    real, calls = arm.solve_tool_pose, []
+
+    def misses_from_the_seed(plant_, p, *, q_guess=None, **kw):
+        calls.append(q_guess)
+        if len(calls) in (2, 3):  # the second point: from the seed and from the first
+            raise RuntimeError("missed")
+        return real(plant_, p, q_guess=q_guess, **kw)
+
+    monkeypatch.setattr(arm, "solve_tool_pose", misses_from_the_seed)
+    k, p, distance, q = arm.check_reach(plant, points, q_guess=arm.default_q_guess)
+    assert (k, distance) == (1, 0.0)
+    np.testing.assert_allclose(p, points[1])
+    np.testing.assert_allclose(real(plant, points[1], q_guess=q), q, atol=1e-6)
+    # The previous point's solution was tried before the nearest posture.
+    np.testing.assert_allclose(calls[2], real(plant, points[0]), atol=1e-6)
+    # Out of reach: the true distance, no posture.
+    far = np.array([x + 2.0, y, 0.048])
+    monkeypatch.setattr(arm, "solve_tool_pose", real)
+    k, p, distance, q = arm.check_reach(plant, [far])
+    assert k == 0 and q is None and distance > 1.0

@@ -86,7 +86,10 @@ def test_process_records_finish_and_removes_swept_burr():
     assert 0 < area <= 0.001 * 0.002
     assert front > 0
     g = PROCESS_STATE.get(state, "g")
-    assert g == pytest.approx(config.cutting_coefficient
+    # the bore (path radius 27 mm, cutter 3 mm): the band 30 .. 30.4 mm
+    # per metre of the cutter centre's travel at 27.4 mm
+    scale = (0.0304 ** 2 - 0.03 ** 2) / 2 / 0.0274 / 4e-4
+    assert g == pytest.approx(config.cutting_coefficient * scale
                               * (4e-4 * 0.002 + area), rel=1e-3)
     burr1 = process.GetOutputPort("burr_height").Eval(context)
     finish = process.GetOutputPort("finish_depth").Eval(context)

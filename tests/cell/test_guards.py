@@ -113,9 +113,11 @@ def test_the_drives_clamp_the_commanded_torque_at_the_effort_limits():
 def test_a_runaway_gain_stops_on_the_torque_guard(tmp_path, capsys):
     """The issue's runaway: 16,566 N m through an 80 N m elbow and exit 0.
     Now the first commanded torque above the limit stops the run (exit 3)
-    and the plant never takes more than the limit."""
+    and the plant never takes more than the limit (run past the pre-flight,
+    which refuses these gains: tests/analysis/test_preflight.py)."""
     out = tmp_path / "run"
-    code = cli.main(["simulate", "--out", str(out), "--scenario-text",
+    code = cli.main(["simulate", "--out", str(out), "--no-preflight",
+                     "--scenario-text",
                      "controller: {sliding_gain: [20000.0, 20000.0, "
                      "1500.0]}"])
     assert code == 3

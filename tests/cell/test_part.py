@@ -91,3 +91,23 @@ def test_cartesian_tool_model():
     plant.SetPositions(context, [0.1, -0.2, 0.3])
     tip = plant.GetFrameByName("tool_tip", instance)
     np.testing.assert_allclose(tip.CalcPoseInWorld(context).translation(), [0.1, -0.2, 0.3])
+
+
+def test_a_profile_part_is_a_compliant_mesh_with_visuals():
+    from pydrake.geometry import Role
+    from pydrake.systems.framework import DiagramBuilder
+
+    from deburr_drake.cell.plant import add_cell_plant
+    from deburr_drake.config import load_scenario
+    builder = DiagramBuilder()
+    plant, scene_graph = add_cell_plant(builder, load_scenario("boss"))
+    inspector = scene_graph.model_inspector()
+    names = {inspector.GetName(g): g for g in inspector.GetAllGeometryIds()}
+    edge = names["profile_edge"]
+    assert type(inspector.GetShape(edge)).__name__ == "Mesh"
+    props = inspector.GetProximityProperties(edge)
+    assert props.HasProperty("hydroelastic", "compliance_type")
+    assert props.GetProperty("hydroelastic", "hydroelastic_modulus") == 4.5e6
+    for visual in ("profile_edge_visual", "profile_edge_body"):
+        assert inspector.GetIllustrationProperties(names[visual]) is not None
+    assert "tube_edge" not in names

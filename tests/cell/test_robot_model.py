@@ -3,6 +3,7 @@
 cannot use, a user's model file outside the package, and a short closed
 loop of the paper_6dof scenario."""
 
+import re
 import shutil
 import subprocess
 import sys
@@ -206,8 +207,13 @@ def test_a_urdf_arm_is_the_same_arm(tmp_path):
         assert drives["a6"].effort_limit() == pytest.approx(70.0)
     np.testing.assert_allclose(frames[0], frames[1], atol=1e-12)
     np.testing.assert_allclose(mass[0], mass[1], rtol=1e-9, atol=1e-9)
-    bare = RobotConfig(model=str(_urdf_of_arm6(tmp_path / "bare.urdf", transmissions=False)),
-                       flange_frame="flange")
+    # Without <transmission>s each joint gets a drive at its effort limit
+    # (tests/cell/test_description.py); a joint without an effort limit
+    # gets none, which is one line.
+    path = _urdf_of_arm6(tmp_path / "bare.urdf", transmissions=False)
+    bare = RobotConfig(model=str(path), flange_frame="flange")
+    assert check_robot(bare).num_actuators() == 6
+    path.write_text(re.sub(r'effort="[^"]+"', 'effort="0"', path.read_text(), count=1))
     assert "have no actuator" in _one_line_error(lambda: check_robot(bare), "robot.model")
 
 

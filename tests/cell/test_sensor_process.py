@@ -171,3 +171,34 @@ def test_finish_bins_near_covers_every_bin_within_the_radius(closed):
     np.testing.assert_array_equal(FinishBins(0.001, 2e-4).near(5e-4, radius,
                                                                 closed),
                                   np.arange(5))
+
+
+def test_chamfering_force_on_fillets_follows_the_material_removed():
+    """On a pocket's (concave) fillet the cutter centre runs a shorter path
+    than the edge: more chamfer per metre of feed, a larger g; on a boss's
+    (convex) fillet less. g = k_c s (delta h + burr), s = removal_scale."""
+    from deburr_drake.cell.process import PROCESS_STATE, cutting_force
+    from deburr_drake.math.geometry import ProfileContour, removal_scale
+    config = ProcessConfig(cutting_coefficient=3.0e9)
+    r, delta, h = 0.003, 5e-4, 0.002
+    rect = [[-0.03, -0.02], [0.03, -0.02], [0.03, 0.02], [-0.03, 0.02]]
+    g = {}
+    for name, material, fillet in (("pocket", "outside", 0.008),
+                                   ("boss", "inside", 0.010)):
+        c = ProfileContour(rect, fillet, material=material, offset=r)
+        for where, s in (("line", 0.0),
+                         ("fillet", 0.02 - fillet + 0.25 * c.arcs()[0][4])):
+            p = c.point_at(s)
+            x = p + delta * c.n1(p)
+            _, state = cutting_force(config, c, x, 2e-3 * c.tangent(x),
+                                     cut_height=h, cutter_radius=r)
+            g[name, where] = PROCESS_STATE.get(state, "g")
+            assert g[name, where] == pytest.approx(
+                3.0e9 * delta * h * removal_scale(c.curvature(x), delta, r))
+    assert g["pocket", "line"] == pytest.approx(3.0e9 * delta * h)
+    # pocket fillet: path radius 5 mm, the edge's 8 mm
+    assert g["pocket", "fillet"] / g["pocket", "line"] == pytest.approx(
+        (0.008 + delta / 2) / (0.005 + delta))
+    # boss fillet: path radius 13 mm, the edge's 10 mm
+    assert g["boss", "fillet"] / g["boss", "line"] == pytest.approx(
+        (0.010 - delta / 2) / (0.013 - delta))

@@ -99,3 +99,31 @@ def test_the_metrics_measure_depth_on_the_real_part():
     values = pass_metrics(log, only_cut=True)
     assert values["chamfer_depth_mean_error_mm"] == pytest.approx(0.3,
                                                                   abs=0.03)
+
+
+SQUARE_2R = ("edge: {kind: profile, vertices: [[-0.03, -0.03], [0.03, -0.03], "
+             "[0.03, 0.03], [-0.03, 0.03]], fillet_radius: 0.03}")
+
+
+def test_truth_is_measured_on_the_body_built_for_the_edge():
+    from deburr_drake.cell.truth import contact_normal_force, contact_truth
+    tube = load_scenario("paper")
+    square = load_scenario("paper", text=SQUARE_2R)
+    depths = [2e-4, 5e-4, 8e-4]
+    # the square pocket of side 2R with fillets R is the ring: same mesh
+    np.testing.assert_allclose(
+        contact_normal_force(square, depths, arc_fraction=[0.1, 0.6]),
+        contact_normal_force(tube, depths, arc_fraction=[0.1, 0.6]),
+        rtol=1e-9)
+    pocket = contact_truth(load_scenario("pocket"))
+    low, high = pocket.force_range
+    # the lines' force at delta*, below the concave fillets'
+    line = contact_normal_force(load_scenario("pocket"), [5e-4])[0] + 2.0
+    assert low == pytest.approx(line, rel=0.01)
+    assert high > 1.1 * low
+    # measured where the pass ends: the middle of the right side, a line
+    assert pocket.force_at_desired_depth == pytest.approx(line, rel=1e-9)
+    boss = contact_truth(load_scenario("boss"))
+    # a convex fillet touches less material than a line
+    assert boss.force_range[0] < 0.95 * boss.force_range[1]
+    assert boss.force_range[1] == pytest.approx(low, rel=0.01)

@@ -129,3 +129,74 @@ def test_surface_obj_closed_outward(tmp_path):
     text = path.read_text()
     assert path.suffix == ".obj" and text.count("\nv ") == len(v) and text.count("\nf ") == len(q)
     assert ring_surface_path(*args, cache_dir=tmp_path).read_bytes() == path.read_bytes()
+
+
+# ------------------------------------------------------------ profile walls
+from deburr_drake.cell.tube_mesh import (make_swept_surface_mesh,  # noqa: E402
+                                         make_swept_volume_mesh,
+                                         profile_mesh_paths)
+from deburr_drake.math.geometry import ProfileContour  # noqa: E402
+
+L_SHAPE = [[-0.03, -0.03], [0.03, -0.03], [0.03, 0.0], [0.0, 0.0],
+           [0.0, 0.03], [-0.03, 0.03]]
+
+
+def _shoelace(p):
+    return 0.5 * abs(np.sum(p[:, 0] * np.roll(p[:, 1], -1)
+                            - np.roll(p[:, 0], -1) * p[:, 1]))
+
+
+@pytest.mark.parametrize("vertices, fillet, material", [
+    ([[-0.03, -0.03], [0.03, -0.03], [0.03, 0.03], [-0.03, 0.03]], 0.03,
+     "outside"),
+    ([[-0.03, -0.02], [0.03, -0.02], [0.03, 0.02], [-0.03, 0.02]], 0.008,
+     "outside"),
+    ([[-0.025, -0.025], [0.025, -0.025], [0.025, 0.025], [-0.025, 0.025]],
+     0.004, "inside"),   # the wall thinner inside the small fillets
+    (L_SHAPE, 0.004, "outside"),
+    (L_SHAPE, 0.004, "inside"),
+])
+def test_profile_wall_mesh_fills_the_band(vertices, fillet, material):
+    edge = ProfileContour(vertices, fillet, material=material)
+    points, normals, depths = edge.material_band(
+        0.005, segments_per_turn=120, max_step=0.005)
+    assert depths.max() == pytest.approx(0.005)
+    assert depths.min() > 0
+    v, t = make_swept_volume_mesh(points, normals, depths, 0.044, 0.050)
+    vol = tet_volumes(v, t)
+    assert vol.min() > 0
+    far = points + depths[:, None] * normals
+    area = abs(_shoelace(far) - _shoelace(points))
+    np.testing.assert_allclose(vol.sum(), area * 0.006, rtol=1e-9)
+    faces = _faces(t)
+    assert max(faces.values()) == 2     # no face shared by three tets
+    # every tet touches an interior vertex (the middle of the wall)
+    interior = np.zeros(len(v), bool)
+    interior.reshape(len(points), 3, 3)[:, 1, 1] = True
+    assert interior[t].any(axis=1).all()
+    sv, quads = make_swept_surface_mesh(points, normals, depths, 0.0, 0.044)
+    assert quads.shape == (4 * len(points), 4)
+
+
+def test_square_pocket_of_fillet_R_is_the_ring():
+    R = 0.03
+    edge = ProfileContour([[-R, -R], [R, -R], [R, R], [-R, R]], R)
+    points, normals, depths = edge.material_band(
+        0.005, segments_per_turn=120, max_step=0.005)
+    assert len(points) == 120
+    v, t = make_swept_volume_mesh(points, normals, depths, 0.044, 0.050)
+    np.testing.assert_allclose(
+        tet_volumes(v, t).sum(),
+        polygonal_ring_volume(0.030, 0.035, 0.044, 0.050, 120), rtol=1e-12)
+
+
+def test_profile_mesh_is_cached(tmp_path):
+    edge = ProfileContour([[-0.03, -0.02], [0.03, -0.02], [0.03, 0.02],
+                           [-0.03, 0.02]], 0.008)
+    band = edge.material_band(0.005, segments_per_turn=120, max_step=0.005)
+    first = profile_mesh_paths(*band, 0.044, 0.05, visual_z_bottom=0.0,
+                               cache_dir=tmp_path)
+    again = profile_mesh_paths(*band, 0.044, 0.05, visual_z_bottom=0.0,
+                               cache_dir=tmp_path)
+    assert first == again and all(p.is_file() for p in first)
+    assert first[0].read_text().startswith("# vtk DataFile")

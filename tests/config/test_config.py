@@ -61,3 +61,46 @@ def test_unknown_scenario_lists_the_known_ones():
 def test_wrong_type_is_an_error():
     with pytest.raises(ConfigError):
         load_scenario("point_mass", text="command: {period: fast}")
+
+
+@pytest.mark.parametrize("text, field, words", [
+    ("edge: {fillet_radius: 0.002}", "edge.fillet_radius",
+     "larger than tool.cutter_radius"),
+    ("edge: {vertices: [[0, 0], [0.03, 0.03], [0.03, 0], [0, 0.03]]}",
+     "edge.vertices", "intersects itself|counter-clockwise"),
+    ("edge: {vertices: [[0, 0], [0.03, 0], [0.03, 0], [0, 0.03]]}",
+     "edge.vertices", "coincide"),
+    ("edge: {vertices: [[-0.03, 0.02], [0.03, 0.02], [0.03, -0.02], "
+     "[-0.03, -0.02]]}", "edge.vertices", "counter-clockwise"),
+    ("edge: {vertices: [[0, 0], [0.03, 0]]}", "edge.vertices",
+     "at least 3"),
+    ("edge: {vertices: [[0, 0], [0.03, 0, 1], [0, 0.03]]}",
+     "edge.vertices[1]", "2 numbers"),
+    ("edge: {fillet_radius: 0.03}", "edge.vertices", "do not fit"),
+    ("edge: {side: left}", "edge.side", "inner"),
+    ("edge: {start_angle: 0.0, vertices: [[0.01, 0.01], [0.05, 0.01], "
+     "[0.05, 0.05], [0.01, 0.05]]}", "edge.start_angle", "meets no point"),
+    # a U-shaped pocket around a tongue 8 mm wide: the 5 mm walls on its
+    # two sides would overlap
+    ("edge: {vertices: [[-0.04, -0.02], [0.04, -0.02], [0.04, 0.02], "
+     "[0.004, 0.02], [0.004, -0.005], [-0.004, -0.005], [-0.004, 0.02], "
+     "[-0.04, 0.02]], fillet_radius: 0.0035}",
+     "tube.wall_thickness", "overlaps itself"),
+    ("{edge: {fillet_radius: 0.0035}, part_error: {radius: -0.001}}",
+     "part_error.radius", "larger than the cutter"),
+])
+def test_bad_profiles_name_the_field(text, field, words):
+    with pytest.raises(ConfigError) as error:
+        load_scenario("pocket", text=text)
+    message = str(error.value)
+    assert message.startswith(field + " = ") or f"{field} = " in message
+    assert "\n" not in message
+    import re
+    assert re.search(words, message), message
+
+
+def test_shipped_profile_scenarios():
+    for name in ("pocket", "boss"):
+        scenario = load_scenario(name)
+        assert scenario.edge.kind == "profile"
+        assert len(scenario.edge.vertices) == 4

@@ -120,6 +120,27 @@ def test_estimate_metrics_against_a_truth():
     assert "not given" in alone.reasons["force_prediction_error_rel"]
 
 
+def test_estimate_metrics_read_the_estimate_before_the_cutter_left_the_part():
+    log = _log()
+    t = log["estimates"]["t"]
+    # an open edge's end: the cutter runs off it over the last second and
+    # the estimator learns the partial contact
+    off = t > t[-1] - 1.0
+    log["estimates"]["value"] = log["estimates"]["value"].copy()
+    log["estimates"]["value"][off] = [1.0, 4000.0, 0.0]
+    process = log.signals["process"]
+    process["engagement"] = np.where(
+        np.isin(process["t"], t[off]), 0.5, 1.0)
+    d_star = log.scenario.task.desired_depth
+    out = estimate_metrics(log, 6.0)
+    assert out["predicted_force_at_desired_depth_N"] == pytest.approx(
+        2.0 + 8000.0 * d_star)
+    process["engagement"][:] = 1.0   # a closed edge: the last estimate
+    out = estimate_metrics(log, 6.0)
+    assert out["predicted_force_at_desired_depth_N"] == pytest.approx(
+        1.0 + 4000.0 * d_star)
+
+
 def test_smoothness_metrics_count_only_after_the_transient():
     log = _log()
     out = smoothness_metrics(log, pass_window(log))

@@ -289,3 +289,23 @@ def test_a_crashed_or_failed_run_fails_every_rule_and_is_a_row():
     rows = table_rows(runs, results, ["guard_tripped"], [rule])
     assert [(r["index"], r["stop_reason"], r["pass_all"]) for r in rows] == \
         [(0, "crash", False), (1, "duration", True)]
+
+
+@pytest.mark.slow
+def test_a_run_the_preflight_refuses_is_one_line_naming_it(tmp_path, capsys):
+    path = write(tmp_path, """\
+        name: unstable
+        base: paper
+        duration: 0.05
+        grid:
+          controller.sliding_gain[0]: [400.0, 20000.0]
+        rules: ["guard_tripped == 0"]
+        """)
+    out = tmp_path / "out"
+    assert cli.main(["sweep", str(path), "--out", str(out)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("deburr-drake: error: study.grid: run 1 "
+                               "(controller.sliding_gain[0] = 20000): "
+                               "controller.sliding_gain[0] = 20000 is predicted unstable")
+    assert not (out / "runs").exists()

@@ -1,0 +1,360 @@
+"""Pre-flight: the sampled loop at the start pose, before a run.
+
+``deburr-drake simulate``, ``compare`` and ``sweep`` call :func:`preflight`
+on every scenario before anything runs (``--no-preflight`` skips it):
+
+- with ``controller.design: auto`` (the default for a robot from a file)
+  the gains are designed from the model (deburr_drake.cell.gains) and
+  proven here: the one-period map of the 2.5 ms loop at the start pose
+  must have rho < 1 at the designed gains **and at twice their K and K_o**
+  (a gain margin of 2, 6 dB). A margin on rho itself says nothing: at any
+  pose rho sits within 1e-3 of 1 from the slow depth and posture modes
+  (the paper arm's 0.99915), while what goes unstable when a gain is too
+  high for the sampled loop is a fast mode near the Nyquist frequency,
+  whose distance from the unit circle a factor on the gains measures.
+  Where twice the gains are not stable, K and K_o are scaled down
+  together until they are;
+- for every robot and written gains too, rho >= 1 at the start pose
+  refuses the run: one ConfigError line naming the gain, the predicted
+  rho and the largest stable value of that gain (the others as written).
+
+The map is :func:`deburr_drake.analysis.sampled.period_map` on the cell
+frozen as the analysis freezes it (:func:`frozen_scenario`), taken at the
+first inner-loop sample after the start (2.5 ms), the tool at the start of
+the edge, reached with the feedback gains near zero (so the state is the
+same for every gain checked). It is split, as :func:`deburr_drake.analysis.maps.fast_rho`
+does, into the sample at t_k (affine in each gain: f_tau = K s ..., m = K_o
+s_o) and the integration over the period, so rho at other gains costs an
+eigenvalue problem each.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from typing import Callable, Dict, List, Optional
+
+import numpy as np
+
+from deburr_drake.analysis.operating_point import (
+    OperatingPoint, _next_analysis_time, _signals, frozen_scenario,
+    transfer_state)
+from deburr_drake.analysis.sampled import (_one_period, _read, _write,
+                                           cell_map_entries, period_map,
+                                           simulator_config,
+                                           spectral_radius)
+from deburr_drake.cell.diagram import make_deburring_diagram
+from deburr_drake.cell.gains import (GainDesign, apply_gains, design_gains,
+                                     resolve_gains)
+from deburr_drake.config import ConfigError, Scenario, get_field
+from deburr_drake.runs.simulation import make_simulator
+
+__all__ = ["Preflight", "preflight", "start_operating_point",
+           "GainMaps", "GAIN_MARGIN"]
+
+#: The designed K and K_o times this must still give rho < 1.
+GAIN_MARGIN = 2.0
+#: The design's K and K_o are scaled down for the margin to this at most.
+MIN_MARGIN_SCALE = 0.25
+#: Gains the pre-flight names, element by element, then as groups.
+GAIN_FIELDS = ("controller.sliding_gain", "controller.orientation_gain",
+               "controller.null_space_damping")
+_SPLIT = 1e-9  # s: the sample's end within the period
+
+
+def start_operating_point(scenario: Scenario) -> OperatingPoint:
+    """The cell at the first inner-loop sample after the start that is not
+    an outer-loop sample (2.5 ms: the tool at the start of the edge), its
+    updates pending, as an :class:`OperatingPoint` of ``scenario``. The
+    first period is run with K and K_o at 1e-9 of theirs, so the state
+    does not depend on the gains checked (a gain far too high moves the
+    arm within one sample)."""
+    quiet = copy.deepcopy(scenario)
+    resolve_gains(quiet)
+    c = quiet.controller
+    c.sliding_gain = [1e-9 * k for k in c.sliding_gain]
+    c.orientation_gain = [1e-9 * k for k in c.orientation_gain]
+    diagram = make_deburring_diagram(scenario=quiet)
+    simulator = make_simulator(diagram, quiet)
+    simulator.Initialize()
+    inner = scenario.controller.control_period
+    t = _next_analysis_time(0.5 * inner, inner, scenario.command.period)
+    simulator.AdvanceTo(t)
+    context = simulator.get_context()
+    return OperatingPoint(scenario=scenario, diagram=diagram,
+                          context=context.Clone(), time=t, contact_time=0.0,
+                          signals=_signals(diagram, context))
+
+
+class GainMaps:
+    """The one-period map at an operating point split into the sample
+    (affine in each gain) and the integration; :meth:`rho` at any gains
+    along the paths given to :meth:`add_path`."""
+
+    def __init__(self, op: OperatingPoint):
+        self.op = op
+        base = frozen_scenario(op.scenario)
+        self.config = simulator_config(base)
+        self.period = base.controller.control_period
+        diagram, context, entries = self._prepared({})
+        self.sample0 = period_map(diagram, context, entries, period=_SPLIT,
+                                  config=self.config)
+        after = context.Clone()
+        _write(entries, diagram, after, _one_period(
+            diagram, context, entries, _read(entries, diagram, context),
+            _SPLIT, self.config))
+        after.SetTime(context.get_time() + _SPLIT)
+        self.integrate = period_map(diagram, after, entries,
+                                    period=self.period - _SPLIT,
+                                    config=self.config)
+        self.full = period_map(diagram, context, entries, period=self.period,
+                               config=self.config)
+        self.slopes: Dict[str, np.ndarray] = {}
+
+    def _prepared(self, overrides):
+        scenario = frozen_scenario(self.op.scenario, **overrides)
+        diagram = make_deburring_diagram(scenario=scenario)
+        context = diagram.CreateDefaultContext()
+        transfer_state(self.op.diagram, self.op.context, diagram, context)
+        return diagram, context, cell_map_entries(diagram)
+
+    def add_path(self, name: str, overrides_at: Callable[[float], dict]):
+        """A path through the gains: ``overrides_at(c)`` the scenario
+        fields at coordinate c (c = 1: as the scenario has them), affine in
+        c."""
+        d, c, e = self._prepared(overrides_at(2.0))
+        sample = period_map(d, c, e, period=_SPLIT, config=self.config)
+        self.slopes[name] = sample - self.sample0  # per unit of c
+
+    def rho(self, **coordinates) -> float:
+        """rho with each path's coordinate (default 1)."""
+        S = self.sample0.copy()
+        for name, c in coordinates.items():
+            S += (c - 1.0) * self.slopes[name]
+        return spectral_radius(self.integrate @ S)
+
+    @property
+    def rho_full(self) -> float:
+        """rho of the whole period's map (not split)."""
+        return spectral_radius(self.full)
+
+    def largest_stable(self, name: str, *, iterations: int = 20
+                       ) -> Optional[float]:
+        """The largest coordinate in (0, 1] of path ``name`` with rho < 1
+        (the others at 1): down from 1 by factors of 0.7 to the first
+        stable one, then bisection; None if none down to 1e-3 is (a gain
+        of zero leaves a position loop open: rho = 1 there)."""
+        hi = 1.0
+        if self.rho(**{name: hi}) < 1.0:
+            return hi
+        lo = hi
+        while True:
+            lo *= 0.7
+            if lo < 1e-3:
+                return None
+            if self.rho(**{name: lo}) < 1.0:
+                break
+            hi = lo
+        for _ in range(iterations):
+            mid = 0.5 * (lo + hi)
+            if self.rho(**{name: mid}) < 1.0:
+                lo = mid
+            else:
+                hi = mid
+        return lo
+
+
+def _scaled(path: str, values, c: float) -> dict:
+    return {f"{path}[{i}]": c * v for i, v in enumerate(values)}
+
+
+@dataclass
+class Preflight:
+    """What the pre-flight found (SI units)."""
+
+    rho: float  # the one-period map's spectral radius at the start pose
+    time: float  # s, where it was taken
+    design: Optional[GainDesign] = None  # when controller.design is auto
+    rho_at_margin: Optional[float] = None  # rho at GAIN_MARGIN x K, K_o
+    margin_scale: float = 1.0  # the design's K, K_o scaled by this
+    seconds: float = 0.0
+    lines: List[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        out = {"predicted_rho": self.rho, "time_s": self.time,
+               "seconds": self.seconds}
+        if self.design is not None:
+            out.update({"design": "auto",
+                        "gains": self.design.as_fields(),
+                        "numbers": self.design.numbers,
+                        "gain_margin": GAIN_MARGIN,
+                        "rho_at_gain_margin": self.rho_at_margin,
+                        "margin_scale": self.margin_scale})
+        return out
+
+
+def op_joints(maps: GainMaps) -> int:
+    """The robot's joints (the plant's velocities) at the operating point."""
+    return maps.op.diagram.GetSubsystemByName("plant").num_velocities()
+
+
+def _refusal(scenario: Scenario, maps: GainMaps, rho: float) -> str:
+    """The one line naming the gain to lower: an element whose largest
+    stable value is the smallest change, else a whole gain vector scaled,
+    else all of K and K_o scaled together."""
+    candidates = []
+    for path in GAIN_FIELDS:
+        if path == "controller.null_space_damping" and \
+                op_joints(maps) <= 6:
+            continue
+        value = get_field(scenario, path)
+        values = value if isinstance(value, list) else [value]
+        for i, v in enumerate(values):
+            if v <= 0:
+                continue
+            name = f"{path}[{i}]" if isinstance(value, list) else path
+            maps.add_path(name, lambda c, n=name, v=v: {n: c * v})
+            c = maps.largest_stable(name)
+            if c is not None:
+                candidates.append((c, name, v, c * v))
+    if candidates:
+        c, name, v, stable = max(candidates)
+        return (f"{name} = {v:g} is predicted unstable: the sampled loop "
+                f"at the start pose has rho = {rho:.4f} (> 1); the largest "
+                f"stable {name} is {stable:.3g} with the other gains as "
+                "written (--no-preflight runs anyway)")
+    for path in GAIN_FIELDS[:2]:
+        values = list(get_field(scenario, path))
+        maps.add_path(path, lambda c, p=path, v=values: _scaled(p, v, c))
+        c = maps.largest_stable(path)
+        if c is not None:
+            candidates.append((c, path, values))
+    if candidates:
+        c, path, values = max(candidates)
+        return (f"{path} = {values} is predicted unstable: the sampled loop"
+                f" at the start pose has rho = {rho:.4f} (> 1); the largest "
+                f"stable {path}, scaled together, is "
+                f"{[float(f'{c * v:.3g}') for v in values]} with the other "
+                "gains as written (--no-preflight runs anyway)")
+    K = list(scenario.controller.sliding_gain)
+    K_o = list(scenario.controller.orientation_gain)
+    maps.add_path("both", lambda c: {
+        **_scaled("controller.sliding_gain", K, c),
+        **_scaled("controller.orientation_gain", K_o, c)})
+    c = maps.largest_stable("both")
+    if c is None:
+        return (f"controller.sliding_gain = {K} and "
+                f"controller.orientation_gain = {K_o} are predicted "
+                f"unstable: the sampled loop at the start pose has rho = "
+                f"{rho:.4f} (> 1), and lowering them does not make it "
+                "stable (--no-preflight runs anyway)")
+    return (f"controller.sliding_gain = {K} and controller.orientation_gain"
+            f" = {K_o} are predicted unstable: the sampled loop at the start "
+            f"pose has rho = {rho:.4f} (> 1), and neither lowered alone makes"
+            f" it stable; the largest stable, both scaled together: "
+            f"{[float(f'{c * v:.3g}') for v in K]} and "
+            f"{[float(f'{c * v:.3g}') for v in K_o]} (x {c:.3g}; "
+            "controller.design: auto designs them; --no-preflight runs "
+            "anyway)")
+
+
+def _both_paths(maps: GainMaps, scenario: Scenario):
+    K = list(scenario.controller.sliding_gain)
+    K_o = list(scenario.controller.orientation_gain)
+    maps.add_path("K", lambda c: _scaled("controller.sliding_gain", K, c))
+    maps.add_path("K_o", lambda c: _scaled("controller.orientation_gain",
+                                           K_o, c))
+
+
+def preflight(scenario: Scenario, *,
+              say: Callable[[str], None] = lambda line: None) -> Preflight:
+    """Designs the gains if ``controller.design`` is auto (written into
+    ``scenario``, in place) and proves them, then checks the sampled loop
+    at the start pose; ConfigError (one line: the gain, rho, its largest
+    stable value) if it is predicted unstable. Returns what it found."""
+    import time
+    t0 = time.perf_counter()
+    c = scenario.controller
+    if not c.control_period > 0:
+        return Preflight(rho=float("nan"), time=0.0,
+                         lines=["pre-flight: controller.control_period 0 "
+                                "(a continuous controller): no sampled "
+                                "loop to check"])
+    design = None
+    if c.resolved_design(scenario.robot) == "auto":
+        design = design_gains(scenario)
+        apply_gains(scenario, design)
+    op = start_operating_point(scenario)
+    maps = GainMaps(op)
+    rho = maps.rho_full
+    result = Preflight(rho=rho, time=op.time, design=design)
+    scale = 1.0
+    if design is not None and rho < 1.0:
+        _both_paths(maps, scenario)
+        result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
+        scale = 1.0
+        while result.rho_at_margin >= 1.0 and scale > MIN_MARGIN_SCALE:
+            scale *= 0.7
+            result.rho_at_margin = maps.rho(K=GAIN_MARGIN * scale,
+                                            K_o=GAIN_MARGIN * scale)
+        if result.rho_at_margin >= 1.0:
+            # Not the gains (twice a quarter of them is not stable either):
+            # the design as it is, and the margin it does not hold said.
+            scale = 1.0
+            result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
+        elif scale < 1.0:
+            design = design.scaled(scale)
+            apply_gains(scenario, design)
+            result.design, result.margin_scale = design, scale
+            op = start_operating_point(scenario)
+            maps = GainMaps(op)
+            _both_paths(maps, scenario)
+            result.rho = rho = maps.rho_full
+            result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
+    if design is not None:
+        n = design.numbers
+        margin = "not computed (unstable at the design)" \
+            if result.rho_at_margin is None else \
+            f"{result.rho_at_margin:.5f}" + (
+                "" if result.rho_at_margin < 1.0 else " (the margin is NOT held)")
+        result.lines += [
+            f"gains designed from the model (controller.design: auto; "
+            f"lightest task mass {n['lightest_task_mass_kg']:.2f} kg, "
+            f"gravity error at the tool "
+            f"{np.round(n['gravity_error_force_N'], 1).tolist()} N, "
+            f"max eig(M^-1 D) T = {n['sampled_rate']:.2f}"
+            + (f", K and K_o x {scale:.3g} for the gain margin"
+               if scale < 1.0 else "") + "):",
+            f"  sliding_gain {design.sliding_gain} N s/m, sliding_lambda "
+            f"{design.sliding_lambda} 1/s, orientation_gain "
+            f"{design.orientation_gain} N m s/rad, orientation_lambda "
+            f"{design.orientation_lambda} 1/s",
+            f"  fuzzy.sliding_scales {design.sliding_scales} m/s (Delta_k "
+            f"{design.sliding_scales[0] * c.fuzzy.width_fraction * 1e3:g} "
+            f"mm/s), fuzzy.position_scale {design.position_scale:g} m",
+            f"  predicted rho {rho:.5f} at the start pose, {margin} with K "
+            f"and K_o x {GAIN_MARGIN:g}"]
+    for line in result.lines:
+        say(line)
+    if not rho < 1.0:
+        raise ConfigError(_refusal(scenario, maps, rho))
+    result.seconds = time.perf_counter() - t0
+    result.lines.append(
+        f"pre-flight: the sampled loop at the start pose is stable, "
+        f"rho = {rho:.5f} ({result.seconds:.1f} s)")
+    say(result.lines[-1])
+    return result
+
+
+def loop_key(scenario: Scenario) -> str:
+    """What the pre-flight's answer depends on, as text: the scenario
+    without its name, burrs and sensor noise (a sweep checks each distinct
+    key once)."""
+    from pydrake.common.yaml import yaml_dump_typed
+    s = copy.deepcopy(scenario)
+    s.name = "x"
+    s.process.burrs = []
+    s.sensor.noise_std = 0.0
+    s.sensor.noise_seed = 0
+    s.simulation.duration = 1.0
+    return yaml_dump_typed(s)

@@ -1,0 +1,268 @@
+"""Gains designed from the robot model (``controller.design: auto``).
+
+The rules the README states for arm6 (bring your own robot, "Gains"), made
+code, from the numbers :func:`deburr_drake.cell.robot.loop_numbers` gives
+at the start pose (the robot model's masses, with the rotor inertia the
+file gives or ``robot.reflected_inertia``):
+
+- x1, x2 (the fuzzy axes): the paper's K = 400 N s/m and lambda = 100 1/s;
+- x3 (a PD axis, R9): K lambda large enough that the gravity error the
+  controller's model leaves at the tool (``model_mass_scale``) holds the
+  tool at most :data:`VERTICAL_ERROR` (0.2 mm) low: lambda 100 1/s, K
+  rounded up to 1000 N s/m;
+- the orientation PD: the paper's K_o = 20 N m s/rad, lambda_o = 20 1/s;
+- the 2.5 ms loop: the sampled rate max eig(M^-1 D) T (D = J_v^T K J_v +
+  J_w^T K_o J_w) at most :data:`SAMPLED_RATE` (0.35; arm5 with paper.yaml
+  0.30, arm6 0.33, the measured limit about 1.6): above it the
+  translational and orientation gains are scaled down, each part to half
+  the limit (the rate is linear in the gains), then both up together to
+  the limit (never above the rule's values);
+- Delta_k (``fuzzy.sliding_scales`` x ``width_fraction``): the learned
+  surface's slope, about f / Delta_k for a learned force f (the gravity
+  error along x1, x2), must stay below :data:`SLOPE_RATE` (0.4) of the
+  lightest task mass over T and below arm5's 3.9 N / 4 mm/s; at least
+  4 mm/s, rounded up (1 mm/s steps below 10 mm/s, 5 mm/s above);
+- the plant's integration step (``simulation.max_step``, only ever
+  lowered, to a whole fraction of T): cenic treats the cutting force's
+  damping g a a^T explicitly but for its diagonal, and on a light arm it
+  oscillates once g h / m exceeds about 4-5 (arm6: 11,700 N s/m at one
+  2.5 ms step, 20,500 at two; the Panda at two steps and 1.6 kg tripped
+  the tool-force guard on the first burr). The step keeps g_max h / m
+  below :data:`STEP_RATE` (2.5), g_max = k_c (delta* x engagement + the
+  tallest burr's area): arm5 and arm6 two steps per sample, as written;
+- more than 6 joints: the null-space posture PD keeps 200 N m/rad and
+  10 N m s/rad unless its damping d (I - J^T J^T+) alone takes more than
+  half the rate's limit, then d to that half and k = 20 d;
+- x_max (``fuzzy.position_scale``): 1.25 ||x_p|| at the part rounded up to
+  0.5 m, at least 1 m (y0 = ||x_p|| / x_max inside the rule base).
+
+:func:`design_gains` returns them with the numbers they came from;
+:func:`resolve_gains` writes them into a scenario whose
+``controller.design`` is ``auto``. The analysis package proves the choice
+with the one-period map (deburr_drake.analysis.preflight).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Dict
+
+import numpy as np
+
+from deburr_drake.config import Scenario
+
+__all__ = ["GainDesign", "design_gains", "resolve_gains", "apply_gains",
+           "VERTICAL_ERROR", "SAMPLED_RATE", "SLOPE_RATE"]
+
+#: m: the vertical error x3's PD may leave under the gravity error.
+VERTICAL_ERROR = 2.0e-4
+#: max eig(M^-1 D) T the design allows (arm5 0.30, arm6 0.33 as written).
+SAMPLED_RATE = 0.35
+#: The fuzzy surface's slope f / Delta_k, at most this x (lightest task
+#: mass / T) ...
+SLOPE_RATE = 0.4
+#: ... and at most arm5's (3.9 N over 4 mm/s, rounded), N s/m.
+SLOPE_MAX = 1000.0
+MIN_DELTA_K = 0.004  # m/s, paper.yaml's
+#: g_max h / (lightest task mass) the integration step allows.
+STEP_RATE = 2.5
+
+#: The fields the design sets (dotted names).
+DESIGNED_FIELDS = ("controller.sliding_gain", "controller.sliding_lambda",
+                   "controller.orientation_gain",
+                   "controller.orientation_lambda",
+                   "controller.fuzzy.sliding_scales",
+                   "controller.fuzzy.position_scale",
+                   "simulation.max_step", "controller.null_space_stiffness",
+                   "controller.null_space_damping")
+
+
+@dataclass
+class GainDesign:
+    """Designed gains (SI) and the numbers behind them."""
+
+    sliding_gain: list
+    sliding_lambda: list
+    orientation_gain: list
+    orientation_lambda: list
+    sliding_scales: list
+    position_scale: float
+    max_step: float
+    null_space_stiffness: float = 200.0
+    null_space_damping: float = 10.0
+    numbers: Dict[str, float] = field(default_factory=dict)
+
+    def as_fields(self) -> Dict[str, object]:
+        """{dotted field: value} of the designed gains."""
+        return {"controller.sliding_gain": list(self.sliding_gain),
+                "controller.sliding_lambda": list(self.sliding_lambda),
+                "controller.orientation_gain": list(self.orientation_gain),
+                "controller.orientation_lambda":
+                    list(self.orientation_lambda),
+                "controller.fuzzy.sliding_scales": list(self.sliding_scales),
+                "controller.fuzzy.position_scale": self.position_scale,
+                "simulation.max_step": self.max_step,
+                "controller.null_space_stiffness": self.null_space_stiffness,
+                "controller.null_space_damping": self.null_space_damping}
+
+    def scaled(self, factor: float) -> "GainDesign":
+        """The design with K and K_o times ``factor`` (the rest as is)."""
+        return GainDesign(
+            [k * factor for k in self.sliding_gain], list(self.sliding_lambda),
+            [k * factor for k in self.orientation_gain],
+            list(self.orientation_lambda), list(self.sliding_scales),
+            self.position_scale, self.max_step, self.null_space_stiffness,
+            self.null_space_damping, dict(self.numbers))
+
+
+def _ceil_to(x: float, step: float) -> float:
+    # 0.5 % tolerance: a value the rule gives exactly stays (arm5's 4 mm/s).
+    return float(round(step * math.ceil(x / step * (1 - 5e-3)), 12))
+
+
+def _nice(v: float) -> float:
+    """Two significant digits, rounded down (a gain scaled to a limit)."""
+    if v <= 0:
+        return 0.0
+    e = 10 ** (math.floor(math.log10(v)) - 1)
+    return float(round(math.floor(v / e + 1e-9) * e, 12))
+
+
+def _rates(plant, q, frame_name, K, K_o, period, d_n=0.0):
+    """The sampled rate of D_v alone, D_w alone and of both (with the
+    null-space damping d_n (I - J^T J^T+) on more than 6 joints)."""
+    from pydrake.multibody.tree import JacobianWrtVariable
+    context = plant.CreateDefaultContext()
+    plant.SetPositions(context, q)
+    frame = plant.GetFrameByName(frame_name)
+    J = plant.CalcJacobianSpatialVelocity(
+        context, JacobianWrtVariable.kV, frame, np.zeros(3),
+        plant.world_frame(), plant.world_frame())
+    M = plant.CalcMassMatrix(context)
+
+    def rate(D):
+        return float(np.max(np.linalg.eigvals(
+            np.linalg.solve(M, D)).real) * period)
+    D_v = J[3:].T @ np.diag(K) @ J[3:]
+    D_w = J[:3].T @ np.diag(K_o) @ J[:3]
+    D_n = d_n * (np.eye(J.shape[1]) - J.T @ np.linalg.pinv(J.T)) \
+        if J.shape[1] > 6 else 0.0
+    return rate(D_v), rate(D_w), rate(D_v + D_w + D_n)
+
+
+def design_gains(scenario: Scenario, q=None) -> GainDesign:
+    """The gains the rules of the module docstring give for ``scenario``'s
+    robot at joint angles ``q`` (default: the start pose)."""
+    from deburr_drake.cell.edge import believed_contour, start_position
+    from deburr_drake.cell.robot import (loop_numbers, make_robot_model,
+                                         start_pose)
+    c = scenario.controller
+    period = c.control_period
+    if q is None:
+        q = start_pose(scenario)
+    numbers = loop_numbers(scenario, q)
+    f = numbers["gravity_error_force"]
+    mass = numbers["lightest_task_mass"]
+    lam = [100.0, 100.0, 100.0]
+    K3 = max(1000.0, _ceil_to(abs(f[2]) / (VERTICAL_ERROR * lam[2]), 1000.0))
+    K = [400.0, 400.0, K3]
+    K_o = [20.0, 20.0, 20.0]
+    lam_o = [20.0, 20.0, 20.0]
+    plant = make_robot_model(scenario.robot)
+    rate_v, rate_w, rate = _rates(
+        plant, q, scenario.robot.tool_frame, K, K_o, period) \
+        if period > 0 else (0.0, 0.0, 0.0)
+    if rate > SAMPLED_RATE:
+        # Each part to its share of the limit, as the rate is linear in
+        # the gains (lambda max of a sum of PSD pencils <= the sum).
+        share = SAMPLED_RATE / 2
+        sv = min(1.0, share / rate_v) if rate_v > 0 else 1.0
+        sw = min(1.0, share / rate_w) if rate_w > 0 else 1.0
+        if sv == 1.0:
+            sw = min(1.0, (SAMPLED_RATE - rate_v) / rate_w)
+        elif sw == 1.0:
+            sv = min(1.0, (SAMPLED_RATE - rate_w) / rate_v)
+        K_v = [k * sv for k in K]
+        K_w = [k * sw for k in K_o]
+        # Both parts act on different joints mostly: the sum's rate is
+        # below the parts' sum; scale both up to the limit again (never
+        # above the rule's gains).
+        both = _rates(plant, q, scenario.robot.tool_frame, K_v, K_w,
+                      period)[2]
+        up = SAMPLED_RATE / both
+        K = [_nice(min(k, kv * up)) for k, kv in zip(K, K_v)]
+        K_o = [_nice(min(k, kw * up)) for k, kw in zip(K_o, K_w)]
+        rate_v, rate_w, rate = _rates(plant, q, scenario.robot.tool_frame,
+                                      K, K_o, period)
+    # More than 6 joints: the null-space posture PD (stiffness / damping
+    # 20 1/s as written, 200 / 10) within what the rate leaves.
+    d_n, k_n = c.null_space_damping, c.null_space_stiffness
+    n_joints = len(q)
+    if n_joints > 6 and period > 0:
+        d_n, k_n = 10.0, 200.0
+        with_null = _rates(plant, q, scenario.robot.tool_frame, K, K_o,
+                           period, d_n)[2]
+        if with_null > SAMPLED_RATE * 1.2:
+            alone = _rates(plant, q, scenario.robot.tool_frame, [0.0] * 3,
+                           [0.0] * 3, period, 1.0)[2]  # per unit of d_n
+            d_n = _nice(min(10.0, 0.5 * SAMPLED_RATE / alone))
+            k_n = _nice(20.0 * d_n)
+        rate = _rates(plant, q, scenario.robot.tool_frame, K, K_o, period,
+                      d_n)[2]
+    slope = min(SLOPE_MAX, SLOPE_RATE * mass / period) if period > 0 \
+        else SLOPE_MAX
+    learned = max(abs(f[a]) for a in c.fuzzy.axes) if c.fuzzy.axes else 0.0
+    delta_k = max(MIN_DELTA_K, learned / slope)
+    delta_k = _ceil_to(delta_k, 0.001 if delta_k < 0.01 else 0.005)
+    contour = believed_contour(scenario)
+    x_p = float(np.linalg.norm(start_position(scenario, contour)))
+    x_max = max(1.0, _ceil_to(1.25 * x_p, 0.5))
+    p = scenario.process
+    g_max = p.cutting_coefficient * (
+        scenario.task.desired_depth * scenario.tool.engagement
+        + max([b.height * b.thickness for b in p.burrs], default=0.0))
+    max_step = scenario.simulation.max_step
+    if period > 0 and g_max > 0:
+        steps = max(1, math.ceil(g_max * period / (STEP_RATE * mass)
+                                 * (1 - 5e-3)))
+        max_step = min(max_step, period / steps)
+    numbers = {
+        "cutting_damping_max_Ns_per_m": float(g_max),
+        "gravity_error_force_N": [float(v) for v in f],
+        "gravity_error_moment_Nm": [float(v) for v in
+                                    numbers["gravity_error_moment"]],
+        "lightest_task_mass_kg": float(mass),
+        "sampled_rate": rate,
+        "sampled_rate_translation": rate_v,
+        "sampled_rate_orientation": rate_w,
+        "vertical_error_m": float(abs(f[2]) / (K[2] * lam[2])),
+        "learned_force_N": float(learned),
+        "fuzzy_slope_Ns_per_m": float(learned / delta_k),
+        "tool_distance_m": x_p,
+    }
+    return GainDesign(K, lam, K_o, lam_o,
+                      [round(delta_k / c.fuzzy.width_fraction, 12)]
+                      * len(c.fuzzy.axes),
+                      x_max, max_step, k_n, d_n, numbers)
+
+
+def apply_gains(scenario: Scenario, design: GainDesign) -> Scenario:
+    """Writes ``design``'s gains into ``scenario`` (in place) and marks
+    them written (``controller.design: written``)."""
+    from deburr_drake.config import set_field
+    for path, value in design.as_fields().items():
+        set_field(scenario, path, value)
+    scenario.controller.design = "written"
+    return scenario.validate()
+
+
+def resolve_gains(scenario: Scenario) -> GainDesign:
+    """If ``controller.design`` resolves to ``auto`` (the default for a
+    robot from a file), designs the gains (:func:`design_gains`), writes
+    them into ``scenario`` and returns the design; otherwise None."""
+    if scenario.controller.resolved_design(scenario.robot) != "auto":
+        return None
+    design = design_gains(scenario)
+    apply_gains(scenario, design)
+    return design

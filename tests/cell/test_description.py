@@ -1,0 +1,236 @@
+"""A robot description package as the cell reads it
+(deburr_drake.cell.description): packages by folder name, visual meshes
+converted, collision geometry left out, drives for joints without a
+transmission, joints past the flange welded."""
+
+import xml.etree.ElementTree as ET
+from importlib import metadata
+
+import numpy as np
+import pytest
+import trimesh
+from pydrake.geometry import Role
+from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
+from pydrake.systems.framework import DiagramBuilder
+
+from deburr_drake.cell.description import convert_mesh
+from deburr_drake.cell.robot import add_robot, check_robot, robot_joints
+from deburr_drake.config import ConfigError, RobotConfig, load_scenario
+
+from test_robot_model import _urdf_of_arm6
+
+
+def _geometries(config):
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, 0.0)
+    add_robot(plant, config)
+    plant.Finalize()
+    inspector = scene_graph.model_inspector()
+    ids = inspector.GetAllGeometryIds()
+    roles = {role: [g for g in ids if inspector.GetProperties(g, role) is not None]
+             for role in (Role.kIllustration, Role.kProximity)}
+    return plant, inspector, roles
+
+
+def _package(tmp_path, *, xml_name="not_the_folder_name"):
+    """A description package laid out as pip wheels ship them: folder
+    ``my_arm_data`` (the name the URIs use) whose package.xml names another
+    package; an STL and a DAE visual, an STL collision mesh."""
+    share = tmp_path / "share"
+    root = share / "my_arm_data"
+    (root / "meshes").mkdir(parents=True)
+    (root / "package.xml").write_text(
+        f'<?xml version="1.0"?><package format="3"><name>{xml_name}</name>'
+        '<version>1.0.0</version><description>d</description>'
+        '<maintainer email="m@example.com">m</maintainer><license>BSD</license></package>')
+    box = trimesh.creation.box([0.1, 0.1, 0.2])
+    box.export(str(root / "meshes" / "link3.stl"))
+    box.export(str(root / "meshes" / "link5.dae"))
+    box.export(str(root / "meshes" / "collision.STL"))
+    urdf = _urdf_of_arm6(root / "arm6.urdf", world_joint=False)
+    text = urdf.read_text()
+    uri = "package://my_arm_data/meshes"
+    for link, mesh in (("link3", "link3.stl"), ("link5", "link5.dae")):
+        text = text.replace(
+            f'<link name="{link}"><inertial>',
+            f'<link name="{link}"><visual><geometry><mesh filename="{uri}/{mesh}"/></geometry>'
+            f'</visual><collision><geometry><mesh filename="{uri}/collision.STL"/></geometry>'
+            '</collision><inertial>')
+    urdf.write_text(text)
+    return share, urdf
+
+
+def test_a_package_resolves_by_folder_name_whose_package_xml_says_otherwise(tmp_path):
+    share, _ = _package(tmp_path)
+    config = RobotConfig(model="package://my_arm_data/arm6.urdf", package_paths=[str(share)],
+                         flange_frame="flange")
+    plant, inspector, roles = _geometries(config)
+    assert [j.name() for j in robot_joints(plant)] == ["a1", "a2", "a3", "a4", "a5", "a6"]
+    # robot.packages names a package's folder directly.
+    named = RobotConfig(model="package://arm/arm6.urdf",
+                        packages={"arm": str(share / "my_arm_data"),
+                                  "my_arm_data": str(share / "my_arm_data")},
+                        flange_frame="flange")
+    assert check_robot(named).num_positions() == 6
+
+
+def test_an_unknown_package_is_one_line_naming_it_and_where_it_was_looked_for(tmp_path):
+    share, urdf = _package(tmp_path)
+    config = RobotConfig(model=str(urdf), flange_frame="flange")  # no package folders
+    with pytest.raises(ConfigError) as e:
+        check_robot(config)
+    message = str(e.value)
+    assert "\n" not in message
+    assert "package 'my_arm_data' is unknown" in message
+    assert "robot.package_paths" in message and "ROS_PACKAGE_PATH" in message
+
+
+def _meshes(share):
+    """The package's arm: its visual meshes and its geometries by role."""
+    config = RobotConfig(model="package://my_arm_data/arm6.urdf", package_paths=[str(share)],
+                         flange_frame="flange")
+    plant, inspector, roles = _geometries(config)
+    meshes = [g for g in roles[Role.kIllustration]
+              if type(inspector.GetShape(g)).__name__ == "Mesh"]
+    return inspector, meshes, roles
+
+
+def test_stl_and_dae_visuals_are_converted_and_collisions_left_out(tmp_path):
+    share, _ = _package(tmp_path)
+    inspector, meshes, roles = _meshes(share)
+    # Two converted meshes (plus the spindle's cylinder); no collision geometry.
+    assert len(meshes) == 2
+    assert roles[Role.kProximity] == []
+    for g in meshes:
+        path = str(inspector.GetShape(g).source().path())
+        assert path.endswith(".obj")
+        converted = trimesh.load(path, force="mesh")
+        np.testing.assert_allclose(converted.extents, [0.1, 0.1, 0.2], atol=1e-9)
+
+
+def test_a_mesh_that_cannot_be_converted_is_dropped_with_one_warning(tmp_path, capsys):
+    share, _ = _package(tmp_path)
+    (share / "my_arm_data" / "meshes" / "link5.dae").write_text("not a mesh")
+    _, meshes, _ = _meshes(share)
+    assert len(meshes) == 1
+    warnings = [line for line in capsys.readouterr().err.splitlines() if "link5.dae" in line]
+    assert len(warnings) == 1 and "dropped" in warnings[0]
+
+
+def test_conversion_is_done_once(tmp_path):
+    source = tmp_path / "part.stl"
+    trimesh.creation.box([1, 2, 3]).export(str(source))
+    first = convert_mesh(source, tmp_path / "cache")
+    stamp = first.stat().st_mtime_ns
+    assert convert_mesh(source, tmp_path / "cache") == first
+    assert first.stat().st_mtime_ns == stamp
+    with pytest.raises(ValueError):
+        bad = tmp_path / "bad.stl"
+        bad.write_bytes(b"\x00" * 10)
+        convert_mesh(bad, tmp_path / "cache")
+
+
+def _with_gripper(path):
+    """arm6's URDF without transmissions, with a two-finger gripper past
+    the flange (prismatic fingers, the second mimicking the first, and 0
+    outside one finger's limits) and a joint beside it (on link6, off the
+    chain to the flange)."""
+    text = path.read_text()
+    gripper = """
+<link name="hand"><inertial><mass value="0.5"/><inertia ixx="1e-3" iyy="1e-3" izz="1e-3" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="hand_mount" type="fixed"><parent link="flange"/><child link="hand"/></joint>
+<link name="finger1"><inertial><mass value="0.05"/><inertia ixx="1e-5" iyy="1e-5" izz="1e-5" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<link name="finger2"><inertial><mass value="0.05"/><inertia ixx="1e-5" iyy="1e-5" izz="1e-5" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="finger_joint1" type="prismatic"><parent link="hand"/><child link="finger1"/>
+  <origin xyz="0 0 0.05"/><axis xyz="0 1 0"/><limit effort="100" lower="0.01" upper="0.04" velocity="0.2"/></joint>
+<joint name="finger_joint2" type="prismatic"><parent link="hand"/><child link="finger2"/>
+  <origin xyz="0 0 0.05"/><axis xyz="0 -1 0"/><limit effort="100" lower="0.0" upper="0.04" velocity="0.2"/>
+  <mimic joint="finger_joint1"/></joint>
+<link name="side"><inertial><mass value="0.05"/><inertia ixx="1e-5" iyy="1e-5" izz="1e-5" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="side_joint" type="revolute"><parent link="link6"/><child link="side"/>
+  <axis xyz="0 0 1"/><limit effort="10" lower="-1" upper="1" velocity="1"/></joint>
+</robot>"""
+    path.write_text(text.replace("</robot>", gripper))
+    return path
+
+
+def test_a_urdf_without_transmissions_gets_drives_and_its_fingers_are_welded(tmp_path, capsys):
+    path = _with_gripper(_urdf_of_arm6(tmp_path / "bare.urdf", transmissions=False))
+    config = RobotConfig(model=str(path), flange_frame="flange")
+    plant = check_robot(config)
+    joints = robot_joints(plant)
+    assert [j.name() for j in joints] == ["a1", "a2", "a3", "a4", "a5", "a6"]
+    assert plant.num_actuators() == 6
+    limits = {j.get("name"): float(j.find("limit").get("effort"))
+              for j in ET.parse(path).getroot().findall("joint") if j.find("limit") is not None}
+    for i in plant.GetJointActuatorIndices():
+        actuator = plant.get_joint_actuator(i)
+        assert actuator.effort_limit() == pytest.approx(limits[actuator.joint().name()])
+    # finger1 welded at its lower limit (0 is outside [0.01, 0.04]), finger2 at 0.
+    context = plant.CreateDefaultContext()
+    X_1 = plant.GetFrameByName("finger1").CalcPoseInWorld(context)
+    X_2 = plant.GetFrameByName("finger2").CalcPoseInWorld(context)
+    X_H = plant.GetFrameByName("hand").CalcPoseInWorld(context)
+    offset = X_H.rotation().inverse() @ (X_1.translation() - X_2.translation())
+    np.testing.assert_allclose(offset, [0.0, 0.01, 0.0], atol=1e-12)
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if "get a drive" in line]
+    assert len(lines) == 1 and "'a1'" in lines[0] and "finger" not in lines[0]
+    welded = [line for line in err.splitlines() if "welded" in line]
+    assert len(welded) == 1
+    assert all(name in welded[0] for name in ("finger_joint1", "finger_joint2", "side_joint"))
+
+
+def test_reflected_inertia_sets_the_drives_rotor_inertia(tmp_path):
+    path = _urdf_of_arm6(tmp_path / "bare.urdf", transmissions=False)
+    inertia = [1.0, 2.0, 0.5, 0.1, 0.1, 0.05]
+    plant = check_robot(RobotConfig(model=str(path), flange_frame="flange",
+                                    reflected_inertia=inertia))
+    by_joint = {plant.get_joint_actuator(i).joint().name(): plant.get_joint_actuator(i)
+                for i in plant.GetJointActuatorIndices()}
+    for k, value in enumerate(inertia):
+        assert by_joint[f"a{k + 1}"].default_reflected_inertia() == pytest.approx(value)
+    with pytest.raises(ConfigError, match="robot.reflected_inertia"):
+        check_robot(RobotConfig(model=str(path), flange_frame="flange",
+                                reflected_inertia=[1.0, 2.0]))
+
+
+def test_pip_package_folders_and_a_missing_distribution(tmp_path):
+    with pytest.raises(ConfigError) as e:
+        RobotConfig(model="arm6", package_paths=["pip:no-such-dist-xyz/share"]).validate()
+    assert "robot.package_paths[0]" in str(e.value) and "pip install no-such-dist-xyz" in str(e.value)
+    scenario = tmp_path / "cell.yaml"
+    (tmp_path / "pkgs").mkdir()
+    scenario.write_text("name: c\nbase: paper_6dof\nrobot: {model: arm6, flange_frame: flange,"
+                        " package_paths: [pkgs]}\n")
+    loaded = load_scenario(str(scenario))
+    assert loaded.robot.package_paths == [str((tmp_path / "pkgs").resolve())]
+    # base: the part and the task of paper_6dof, the robot's own section.
+    assert loaded.tube.position == [0.95, 0.0, 0.45]
+    assert loaded.robot.joint_coulomb_friction == []
+
+
+def _has_example_robot_data():
+    try:
+        metadata.distribution("example-robot-data")
+        return True
+    except metadata.PackageNotFoundError:
+        return False
+
+
+needs_erd = pytest.mark.skipif(not _has_example_robot_data(),
+                               reason="example-robot-data is not installed (the test extra)")
+
+
+@needs_erd
+@pytest.mark.parametrize("urdf, flange, joints", [
+    ("ur_description/urdf/ur10_robot.urdf", "tool0", 6),
+    ("panda_description/urdf/panda.urdf", "panda_link8", 7),
+    ("xarm_description/urdf/xarm7.urdf", "link7", 7),
+])
+def test_example_robot_data_arms_load(urdf, flange, joints):
+    config = RobotConfig(model=f"package://example-robot-data/robots/{urdf}",
+                         package_paths=["pip:example-robot-data/cmeel.prefix/share"],
+                         flange_frame=flange)
+    plant = check_robot(config)
+    assert len(robot_joints(plant)) == joints == plant.num_actuators()
