@@ -1,13 +1,15 @@
 #!/usr/bin/env python3
 """The cost of the paper cell's physics alone, without any Python in the
 loop: the same plant (arm, joint friction, compliant ring, cutter), the
-same cutting-force law (its terms fixed at the start's values), cenic in
-fixed 2.5 ms steps, the weld's reaction forces sampled every 2.5 ms (as the
-force sensor does) and a C++ joint PID through a 2.5 ms hold pressing the
-tool 0.5 mm into the edge. What an 80 s pass costs at best on this host,
-whatever the controller is written in.
+same cutting-force law (its terms, the implicit-damping term included,
+fixed at the start's values), cenic in fixed steps of ``--step`` (the
+2.5 ms control period by default: one step per sample), the weld's
+reaction forces sampled every 2.5 ms (as the force sensor does) and a C++
+joint PID through a 2.5 ms hold pressing the tool 0.5 mm into the edge.
+What an 80 s pass costs at best on this host, whatever the controller is
+written in. Prints seconds per simulated second and per 80 s pass.
 
-    python scripts/bench_floor.py [--duration 6]
+    python scripts/bench_floor.py [--duration 6] [--step 0.0025]
 """
 
 import argparse
@@ -31,12 +33,9 @@ from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.cell.process import force_law_terms, make_cutting_force_law
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--duration", type=float, default=6.0, help="s")
-    ap.add_argument("--sensor", action=argparse.BooleanOptionalAction,
-                    default=True, help="sample the reaction forces")
-    args = ap.parse_args()
+def make_floor_simulator(step=None, sensor=True):
+    """(simulator, plant) of the floor, initialized; ``step`` (s) the fixed
+    cenic step, the control period by default."""
     scenario = load_scenario("paper")
     T = scenario.controller.control_period
     builder = DiagramBuilder()
@@ -51,8 +50,11 @@ def main():
     _, _, J = ToolPoint(plant, plant.GetFrameByName(TOOL_FRAME)).evaluate(
         np.concatenate([q0, np.zeros(nv)]))
     n1, tangent, delta, _ = contour.frame(p + 5e-4 * contour.n1(p))
+    context = plant.CreateDefaultContext()
     terms = force_law_terms(scenario.process, n1, tangent, delta, J,
-                            np.zeros(3), cut_height=scenario.tool.engagement)
+                            np.zeros(3), cut_height=scenario.tool.engagement,
+                            v=np.zeros(nv),
+                            inertia=np.diag(plant.CalcMassMatrix(context)))
     law = builder.AddSystem(make_cutting_force_law(
         nq, nv, scenario.process.smoothing_speed))
     source = builder.AddSystem(ConstantVectorSource(terms))
@@ -72,7 +74,6 @@ def main():
     builder.Connect(plant.get_state_output_port(),
                     pid.get_input_port_estimated_state())
     # Gravity feedforward at q0 (the arm barely moves).
-    context = plant.CreateDefaultContext()
     gravity = builder.AddSystem(ConstantVectorSource(
         -plant.CalcGravityGeneralizedForces(context)))
     total = builder.AddSystem(Adder(2, nv))
@@ -81,18 +82,38 @@ def main():
     hold = builder.AddSystem(ZeroOrderHold(T, nv))
     builder.Connect(total.get_output_port(), hold.get_input_port())
     builder.Connect(hold.get_output_port(), plant.get_actuation_input_port())
-    if args.sensor:
+    if sensor:
         reactions = plant.get_reaction_forces_output_port()
         sample = builder.AddSystem(ZeroOrderHold(
             T, AbstractValue.Make(reactions.Allocate().get_value())))
         builder.Connect(reactions, sample.get_input_port())
     diagram = builder.Build()
 
+    step = T if step is None else step
+    if not 0 < step <= T:
+        raise ValueError(f"step must be in (0, {T}] s, got {step}")
     simulator = Simulator(diagram)
     ApplySimulatorConfig(SimulatorConfig(
-        integration_scheme="cenic", max_step_size=T,
+        integration_scheme="cenic", max_step_size=step,
         use_error_control=False), simulator)
     simulator.Initialize()
+    return simulator, plant
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--duration", type=float, default=6.0, help="s")
+    ap.add_argument("--step", type=float, default=None,
+                    help="s, the fixed cenic step (default: the control "
+                    "period, 2.5 ms)")
+    ap.add_argument("--sensor", action=argparse.BooleanOptionalAction,
+                    default=True, help="sample the reaction forces")
+    args = ap.parse_args()
+    try:
+        simulator, plant = make_floor_simulator(args.step, args.sensor)
+    except ValueError as e:
+        ap.error(str(e))
+    step = simulator.get_integrator().get_maximum_step_size()
     simulator.AdvanceTo(1.0)
     steps = simulator.get_num_steps_taken()
     wall = time.perf_counter()
@@ -106,10 +127,11 @@ def main():
                   for i in range(results.num_hydroelastic_contacts()))
     print(f"contact force at the end: {contact:.2f} N")
     sensor = "with" if args.sensor else "without"
-    print(f"physics only, {sensor} the sampled reaction forces: "
-          f"{steps / args.duration:.0f} steps per simulated second, "
-          f"{1e3 * wall / steps:.3f} ms per step; an 80 s pass: "
-          f"{80 * wall / args.duration:.1f} s")
+    print(f"physics only, {1e3 * step:g} ms steps, {sensor} the sampled "
+          f"reaction forces: {steps / args.duration:.0f} steps per "
+          f"simulated second, {1e3 * wall / steps:.3f} ms per step, "
+          f"{wall / args.duration:.3f} s per simulated second; an 80 s "
+          f"pass: {80 * wall / args.duration:.1f} s")
 
 
 if __name__ == "__main__":

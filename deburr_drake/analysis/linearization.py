@@ -162,6 +162,12 @@ def linearize_closed_loop(op: OperatingPoint, *, stiffness: float = None,
     diagram = make_deburring_diagram(scenario=scenario)
     context = diagram.CreateDefaultContext()
     transfer_state(op.diagram, op.context, diagram, context)
+    # The process's held law again, at this state, without the sampled
+    # law's implicit-damping term (frozen_scenario).
+    process = diagram.GetSubsystemByName("cutting_process")
+    process_context = process.GetMyMutableContextFromRoot(context)
+    process_context.SetDiscreteState(
+        process.EvalUniquePeriodicDiscreteUpdate(process_context))
     plant = diagram.GetSubsystemByName("plant")
     sensor = diagram.GetSubsystemByName("force_sensor")
     sensor_context = sensor.GetMyMutableContextFromRoot(context)

@@ -107,6 +107,9 @@ def frozen_scenario(scenario: Scenario, *, continuous: bool = False,
         frozen.simulation.max_step = frozen.controller.control_period
     if continuous:
         frozen.controller.control_period = 0.0
+        # The law's implicit-damping term is cenic's discretization device,
+        # not continuous-time physics.
+        frozen.process.implicit_damping = False
     for path, value in overrides.items():
         set_field(frozen, path, value)
     return frozen.validate()

@@ -198,6 +198,15 @@ def op_joints(maps: GainMaps) -> int:
     return maps.op.diagram.GetSubsystemByName("plant").num_velocities()
 
 
+def _down(x: float) -> str:
+    """x to 3 significant digits, rounded toward zero: a largest stable
+    value printed is itself stable (rounding up may cross the limit)."""
+    if not x > 0:
+        return f"{x:.3g}"
+    unit = 10.0 ** (np.floor(np.log10(x)) - 2)
+    return f"{np.floor(x / unit) * unit:.3g}"
+
+
 def _refusal(scenario: Scenario, maps: GainMaps, rho: float) -> str:
     """The one line naming the gain to lower: an element whose largest
     stable value is the smallest change, else a whole gain vector scaled,
@@ -221,7 +230,7 @@ def _refusal(scenario: Scenario, maps: GainMaps, rho: float) -> str:
         c, name, v, stable = max(candidates)
         return (f"{name} = {v:g} is predicted unstable: the sampled loop "
                 f"at the start pose has rho = {rho:.4f} (> 1); the largest "
-                f"stable {name} is {stable:.3g} with the other gains as "
+                f"stable {name} is {_down(stable)} with the other gains as "
                 "written (--no-preflight runs anyway)")
     for path in GAIN_FIELDS[:2]:
         values = list(get_field(scenario, path))
@@ -252,8 +261,8 @@ def _refusal(scenario: Scenario, maps: GainMaps, rho: float) -> str:
             f" = {K_o} are predicted unstable: the sampled loop at the start "
             f"pose has rho = {rho:.4f} (> 1), and neither lowered alone makes"
             f" it stable; the largest stable, both scaled together: "
-            f"{[float(f'{c * v:.3g}') for v in K]} and "
-            f"{[float(f'{c * v:.3g}') for v in K_o]} (x {c:.3g}; "
+            f"{[float(_down(c * v)) for v in K]} and "
+            f"{[float(_down(c * v)) for v in K_o]} (x {_down(c)}; "
             "controller.design: auto designs them; --no-preflight runs "
             "anyway)")
 

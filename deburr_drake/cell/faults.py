@@ -37,7 +37,10 @@ class SensorFaults(LeafSystem):
                          for d in config.dropouts]
         self._input = self.DeclareVectorInputPort("tool_force", 3)
         self._last = self.DeclareDiscreteState(BasicVector(np.zeros(3)))
-        self.DeclareVectorOutputPort("tool_force", 3, self._output)
+        self.DeclareVectorOutputPort(
+            "tool_force", 3, self._output,
+            prerequisites_of_calc={self._input.ticket(), self.time_ticket(),
+                                   self.xd_ticket()})
         self.DeclarePeriodicDiscreteUpdateEvent(sample_period, 0.0,
                                                 self._store)
 

@@ -155,47 +155,120 @@ def _force(config: ProcessConfig, n1, tangent, delta, arc, xdot_p,
 def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, xdot_p,
                     *, cut_height: float,
                     burr_area: float = 0.0,
-                    overlap: float = 1.0,
-                    removal: float = 1.0) -> np.ndarray:
+                    overlap: float = 1.0, removal: float = 1.0,
+                    v=None, inertia=None) -> np.ndarray:
     """The terms of :func:`make_cutting_force_law` that make it give
     :func:`cutting_force` (J: the tool point's translational Jacobian, 3 x
     nv; xdot_p: the tool point's velocity, m/s). With u = a.v (v the joint
     velocities: the speed along the edge) and s = sat(u / v_s):
 
-        tau = A [u, s] + b (joint space),  f = B [u, s] + f0 (world),
+        tau = A [u, s] + b + S (v - v0) (joint space),
+        f = B [u, s] + f0 (world),
         a = J^T tangent,  A = [-on g a, -on (P'_th + h |v_n|) a],
         b = -on c0 J^T n1,  B, f0 the same with J = I.
 
-    Returns [a, A by column, b, B by column, f0] (4 nv + 9). The place on
-    the edge (tangent, n1, g, the engagement) and the plunge speed v_n are
-    the sample's; u and s follow the velocities. ``removal``: the
-    edge's curvature factor on g (:func:`cutting_force`)."""
+    Returns [a, A by column, b - S v0, B by column, f0, S by column]
+    (4 nv + 9 + nv^2). The place on the edge (tangent, n1, g, the
+    engagement) and the plunge speed v_n are the sample's; u and s follow
+    the velocities. ``removal``: the edge's curvature factor on g
+    (:func:`cutting_force`).
+
+    S (nv x nv) is zero without the sample's joint velocities ``v`` (v0).
+    With them it is c a a^T - D, c = -dF/du >= 0 the law's damping along
+    the edge at v0 (g, plus P'_th / v_s inside the direction's ramp) and
+    D = diag(c |a_i| sqrt(m_i) sum_j |a_j| / sqrt(m_j)), m = ``inertia``
+    (the diagonal of the mass matrix; ones if not given: Gershgorin's
+    bound), a diagonal that dominates c a a^T (Cauchy-Schwarz, for any
+    positive m; with m = diag(M) it spreads D as the arm's inertia is
+    spread, and when a lies along one joint D = c a a^T, exact implicit
+    Euler): the term vanishes at the sample's velocities (so the
+    force there is exactly eq. (3)) and makes d tau / dv = -D, diagonal.
+    cenic treats only the diagonal of d tau / dv implicitly; with the
+    full derivative diagonal nothing of the law is explicit, and since D
+    dominates c a a^T, (M + h D)^-1 h c a a^T has its eigenvalues in [0,
+    1]: the cutting damping cannot drive a step-to-step oscillation
+    however large g is (what two steps per sample used to bound)."""
+    _, terms = _sample(config, n1, tangent, delta, 0.0,
+                       np.asarray(J, float), np.asarray(xdot_p, float),
+                       cut_height, burr_area, overlap, removal,
+                       None if v is None else np.asarray(v, float),
+                       None if inertia is None else np.asarray(inertia,
+                                                               float))
+    return terms
+
+
+#: PROCESS_STATE's blocks in order (all scalars): _sample fills it by
+#: position.
+_STATE_BLOCKS = ("delta", "engagement", "g", "f_t", "f_threshold", "v_t",
+                 "burr_area", "arc_position")
+assert PROCESS_STATE.blocks == _STATE_BLOCKS
+
+
+def _sample(config: ProcessConfig, n1, tangent, delta, arc, J, xdot_p,
+            cut_height, burr_area, overlap, removal, v, inertia):
+    """(PROCESS_STATE vector, :func:`force_law_terms`) at one sample: one
+    pass over the engagement, speeds and directions (float arrays in)."""
     on, g = _engagement(config, delta, cut_height, burr_area, overlap,
                         removal)
-    v_n = float(n1 @ np.asarray(xdot_p, float))
+    v_n = float(n1 @ xdot_p)
+    v_along = float(tangent @ xdot_p)
     power = config.threshold_power_force + config.plunge_coefficient * abs(v_n)
     threshold = on * config.contact_threshold_force
-    a = J.T @ tangent
-    return np.concatenate([
-        a, -on * g * a, -on * power * a, -threshold * (J.T @ n1),
-        -on * g * tangent, -on * power * tangent, -threshold * n1])
+    along = on * (g * v_along + power * _sat(v_along
+                                             / config.smoothing_speed))
+    state = np.array([delta, on, g, abs(along), threshold, abs(v_along),
+                      burr_area, arc])
+    a = tangent @ J
+    nv = a.size
+    terms = np.empty(nv * nv + 4 * nv + 9)
+    terms[:nv] = a
+    np.multiply(a, -on * g, out=terms[nv:2 * nv])
+    np.multiply(a, -on * power, out=terms[2 * nv:3 * nv])
+    b = terms[3 * nv:4 * nv]
+    np.multiply(n1 @ J, -threshold, out=b)
+    k = 4 * nv
+    terms[k:k + 3] = (-on * g) * tangent
+    terms[k + 3:k + 6] = (-on * power) * tangent
+    terms[k + 6:k + 9] = (-threshold) * n1
+    # S is symmetric: its column-major and row-major layouts agree.
+    S = terms[k + 9:].reshape(nv, nv)
+    if v is None:
+        S[:] = 0.0
+    else:
+        u = float(a @ v)
+        c = on * g + (on * power / config.smoothing_speed
+                      if abs(u) < config.smoothing_speed else 0.0)
+        abs_a = np.abs(a)
+        root_m = np.ones(nv) if inertia is None else np.sqrt(inertia)
+        np.multiply.outer(c * a, a, out=S)
+        S.flat[::nv + 1] -= (c * float((abs_a / root_m).sum())) \
+            * abs_a * root_m
+        b -= S @ v
+    return state, terms
+
+
+def _split_terms(terms):
+    """(a, A, b, B, f0, S) of :func:`force_law_terms`, as flat arrays."""
+    terms = np.asarray(terms, float)
+    nv = int(round(math.sqrt(len(terms) - 5) - 2))
+    return np.split(terms, np.cumsum([nv, 2 * nv, nv, 6, 3])), nv
 
 
 def generalized_cutting_force(terms, v, smoothing_speed: float):
     """(tau, f) of :func:`make_cutting_force_law` in numpy (for tests)."""
-    nv = (len(terms) - 9) // 4
-    a, A, b, B, f0 = np.split(np.asarray(terms, float),
-                              np.cumsum([nv, 2 * nv, nv, 6]))
+    (a, A, b, B, f0, S), nv = _split_terms(terms)
+    v = np.asarray(v, float)
     u = float(a @ v)
     w = np.array([u, _sat(u / smoothing_speed)])
-    return A.reshape(2, nv).T @ w + b, B.reshape(2, 3).T @ w + f0
+    return (A.reshape(2, nv).T @ w + b + S.reshape(nv, nv).T @ v,
+            B.reshape(2, 3).T @ w + f0)
 
 
 def make_cutting_force_law(nq: int, nv: int,
                            smoothing_speed: float) -> Diagram:
     """``cutting_force``: the law of :func:`force_law_terms`, from
     ``plant_state`` (nq + nv; the velocities are read) and the process's
-    held ``force_law_terms`` (4 nv + 9), outputs ``generalized_force`` (nv, for the
+    held ``force_law_terms`` (4 nv + 9 + nv^2), outputs ``generalized_force`` (nv, for the
     plant's applied generalized force) and ``tool_force`` (3, N, world: the
     same force on the tool, for the force sensor: a force applied through
     the joints does not pass the sensor's weld).
@@ -217,13 +290,15 @@ def make_cutting_force_law(nq: int, nv: int,
             RandomDistribution.kGaussian, n_in, n_out))
 
     state = add("state", Demultiplexer([nq, nv]))
-    terms = add("terms", Demultiplexer([nv, 2 * nv, nv, 6, 3]))
+    terms = add("terms", Demultiplexer([nv, 2 * nv, nv, 6, 3, nv * nv]))
     speed = affine("speed_along_edge", nv, 1)
     scale = add("per_smoothing_speed", Gain(1.0 / smoothing_speed, 1))
     sign = add("direction", Saturation([-1.0], [1.0]))
     mux = add("speed_and_direction", Multiplexer([1, 1]))
     joint_force = affine("generalized_force", 2, nv)
     tool_force = affine("tool_force", 2, 3)
+    # S (v - v0): the diagonal-making term (force_law_terms).
+    stabilized = affine("stabilized_generalized_force", nv, nv)
     connect = builder.Connect
     connect(state.get_output_port(1), speed.GetInputPort("w_in"))
     connect(terms.get_output_port(0), speed.GetInputPort("A"))
@@ -235,9 +310,12 @@ def make_cutting_force_law(nq: int, nv: int,
         connect(mux.get_output_port(), law.GetInputPort("w_in"))
         connect(terms.get_output_port(k), law.GetInputPort("A"))
         connect(terms.get_output_port(k + 1), law.GetInputPort("b"))
+    connect(state.get_output_port(1), stabilized.GetInputPort("w_in"))
+    connect(terms.get_output_port(5), stabilized.GetInputPort("A"))
+    connect(joint_force.GetOutputPort("w_out"), stabilized.GetInputPort("b"))
     builder.ExportInput(state.get_input_port(), "plant_state")
     builder.ExportInput(terms.get_input_port(), "force_law_terms")
-    builder.ExportOutput(joint_force.GetOutputPort("w_out"),
+    builder.ExportOutput(stabilized.GetOutputPort("w_out"),
                          "generalized_force")
     builder.ExportOutput(tool_force.GetOutputPort("w_out"), "tool_force")
     diagram = builder.Build()
@@ -261,7 +339,7 @@ class CuttingProcess(LeafSystem):
         - finish_depth
 
     - ``plant_state`` (nq + nv): the true robot state.
-    - ``force_law_terms`` (4 nv + 9): the chamfering and threshold forces'
+    - ``force_law_terms`` (4 nv + 9 + nv^2): the chamfering and threshold forces'
       dependence on the joint velocities (:func:`force_law_terms`) at the
       last sample, for :func:`make_cutting_force_law`, whose outputs go to
       the plant's ``applied_generalized_force`` input and to the force
@@ -304,7 +382,8 @@ class CuttingProcess(LeafSystem):
         self._burr_index = self.DeclareDiscreteState(
             self.initial_burr_height())
         self._finish_index = self.DeclareDiscreteState(self._bins.count)
-        self._terms_index = self.DeclareDiscreteState(4 * self._nv + 9)
+        self._terms_index = self.DeclareDiscreteState(
+            4 * self._nv + 9 + self._nv ** 2)
         self._state_port = self.DeclareVectorInputPort(
             "plant_state", plant.num_multibody_states())
         self._state_index = self.DeclareDiscreteState(PROCESS_STATE.size)
@@ -330,16 +409,6 @@ class CuttingProcess(LeafSystem):
         return burr_profile(self._bins.centers, self._config.burrs,
                             self._contour.length, self._contour.closed)
 
-    def _place(self, context):
-        """(n1, tangent, delta, arc, xdot_p, J, removal) of the tool now
-        (removal: math.geometry.removal_scale on the edge's curvature)."""
-        x_p, xdot_p, J = self._tool_point.evaluate(
-            self._state_port.Eval(context))
-        n1, tangent, delta, arc = self._contour.frame(x_p)
-        removal = removal_scale(self._contour.curvature(x_p), delta,
-                                self._cutter_radius)
-        return n1, tangent, delta, arc, xdot_p, J, removal
-
     def _leading_edge(self, s):
         """Arc position of the cutter's front (the traversal direction is
         +arc): the burr is cut there."""
@@ -359,13 +428,19 @@ class CuttingProcess(LeafSystem):
 
     def _update(self, context, discrete_state):
         burr = discrete_state.get_mutable_value(self._burr_index)
-        n1, tangent, delta, arc, xdot_p, J, removal = self._place(context)
+        state = self._state_port.Eval(context)
+        x_p, xdot_p, J = self._tool_point.evaluate(state)
+        n1, tangent, delta, arc = self._contour.frame(x_p)
+        # math.geometry.removal_scale on the edge's curvature.
+        removal = removal_scale(self._contour.curvature(x_p), delta,
+                                self._cutter_radius)
         overlap = material_overlap(self._contour, arc, delta,
                                    self._cutter_radius)
         if delta > 0.0 and overlap > 0.0:
             finish = discrete_state.get_mutable_value(self._finish_index)
             k = self._bins.index(arc)
-            finish[k] = max(finish[k], delta)
+            if delta > finish[k]:
+                finish[k] = delta
             # The cutter (diameter 2 r) has swept the burr behind its front.
             r, w = self._cutter_radius, self._bins.width
             closed = self._contour.closed
@@ -375,10 +450,12 @@ class CuttingProcess(LeafSystem):
             burr[near[(d >= -r) & (d < r - w)]] = 0.0
         k = self._bins.index(self._leading_edge(arc))
         area = burr[k] * self._thickness[k]
-        _, state = _force(self._config, n1, tangent, delta, arc, xdot_p,
-                          self._cut_height, area, overlap, removal)
-        discrete_state.set_value(self._state_index, state)
-        discrete_state.set_value(self._terms_index, force_law_terms(
-            self._config, n1, tangent, delta, J, xdot_p,
-            cut_height=self._cut_height, burr_area=area, overlap=overlap,
-            removal=removal))
+        v = inertia = None
+        if self._config.implicit_damping:
+            v = state[self._nq:]
+            inertia = np.diag(self._tool_point.mass_matrix(state))
+        process_state, terms = _sample(
+            self._config, n1, tangent, delta, arc, J, xdot_p,
+            self._cut_height, area, overlap, removal, v, inertia)
+        discrete_state.set_value(self._state_index, process_state)
+        discrete_state.set_value(self._terms_index, terms)

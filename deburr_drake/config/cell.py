@@ -249,9 +249,20 @@ class ProcessConfig:
     # (depth, directions, burr at the cutter), records the finish and
     # removes the burr this often.
     sample_period: float = 0.0025
+    # -; true: the force law adds S (v - v0), zero at each sample's joint
+    # velocities v0, that makes its derivative in v diagonal and
+    # dominant (cell.process.force_law_terms), so cenic, which treats only
+    # that diagonal implicitly, holds any g of (3) at one step per sample.
+    # False: eq. (3) between samples as is (cenic then treats the
+    # off-diagonal of g a a^T explicitly: on the arm that needs two steps
+    # per 2.5 ms sample for burrs above about 1.2 mm).
+    implicit_damping: bool = True
 
     def validate(self):
         o = "process"
+        _require(isinstance(self.implicit_damping, bool),
+                 f"{o}.implicit_damping", self.implicit_damping,
+                 "true or false")
         for name in ("cutting_coefficient", "plunge_coefficient",
                      "threshold_power_force", "contact_threshold_force"):
             _non_negative(o, name, getattr(self, name))

@@ -31,11 +31,11 @@ class SimulationConfig:
     contact_approximation: str = "lagged"  # -, discrete plant only
     integrator: str = "cenic"  # -, Drake integrator (INTEGRATORS)
     accuracy: float = 1.0e-4  # -, the integrator's error-control accuracy
-    # s. With cenic and fixed steps it bounds the cutting process's
-    # damping the step can hold: cenic treats only the diagonal of the
-    # applied forces' d tau / dv implicitly, and the cutting force's g a a^T
-    # (a = J^T n2) is off-diagonal on an arm; the paper scenarios take two
-    # steps per 2.5 ms sample (docs/numerics.md).
+    # s. cenic treats only the diagonal of the applied forces' d tau / dv
+    # implicitly; the cutting force's g a a^T (a = J^T n2) is off-diagonal
+    # on an arm, and process.implicit_damping makes the law's derivative
+    # diagonal, so the paper scenarios take one step per 2.5 ms sample
+    # (paper_6dof two, for its depth's accuracy; docs/numerics.md).
     max_step: float = 0.01
     # -; false: fixed steps of max_step (accuracy unused). With the 2.5 ms
     # sampled loop every step ends at a sample anyway; on 12 s of the paper

@@ -16,7 +16,7 @@ __all__ = ["ToolPoint"]
 class _Anchor:
     """The kinematics at one q (arrays read-only); gravity on request."""
 
-    __slots__ = ("q", "key", "x", "J", "R", "gravity")
+    __slots__ = ("q", "key", "x", "J", "R", "gravity", "mass_matrix")
 
     def __init__(self, q, key, x, J, R):
         self.q, self.key = q.copy(), key  # key: q as a list, to compare
@@ -24,6 +24,7 @@ class _Anchor:
         for array in (x, J, R):
             array.flags.writeable = False
         self.gravity = None
+        self.mass_matrix = None
 
 
 class ToolPoint:
@@ -60,6 +61,7 @@ class ToolPoint:
         # The last few anchors: a step evaluates at the states before and
         # after it in turn.
         self._anchors = []
+        self._context_anchor = None  # the anchor whose q the context holds
         self.full_evaluations = 0
 
     _MAX_ANCHORS = 3
@@ -94,11 +96,27 @@ class ToolPoint:
         request)."""
         anchor = self._anchor_of(state)
         if anchor.gravity is None:
-            self._plant.SetPositions(self._context, anchor.q)
+            self._set_positions(anchor)
             anchor.gravity = self._plant.CalcGravityGeneralizedForces(
                 self._context)
             anchor.gravity.flags.writeable = False
         return anchor.J, anchor.R, anchor.gravity
+
+    def mass_matrix(self, state) -> np.ndarray:
+        """M(q) of the plant at the anchor (nv x nv, read-only; computed on
+        first request)."""
+        anchor = self._anchor_of(state)
+        if anchor.mass_matrix is None:
+            self._set_positions(anchor)
+            anchor.mass_matrix = self._plant.CalcMassMatrix(self._context)
+            anchor.mass_matrix.flags.writeable = False
+        return anchor.mass_matrix
+
+    def _set_positions(self, anchor):
+        # Setting the same q again would drop the context's kinematics.
+        if self._context_anchor is not anchor:
+            self._plant.SetPositions(self._context, anchor.q)
+            self._context_anchor = anchor
 
     def _anchor_of(self, state) -> _Anchor:
         return self._anchor(np.asarray(state, float)[:self._nq])[0]
@@ -120,6 +138,7 @@ class ToolPoint:
             self._world, self._world)
         anchor = _Anchor(q, key, X_WF.translation(), J,
                          X_WF.rotation().matrix())
+        self._context_anchor = anchor
         self._anchors.insert(0, anchor)
         del self._anchors[self._MAX_ANCHORS:]
         self.full_evaluations += 1

@@ -96,8 +96,14 @@ class ChamferObserver(LeafSystem):
         # discrete state changes (every sample) or the integrator perturbs
         # and restores the state.
         self._last = None  # (plant state's bytes, its kinematics): a memo
+        # Narrow: the state, the force and (a part that moves) the time;
+        # not every discrete update of the diagram.
+        prerequisites = {self._state_port.ticket(), self._force_port.ticket()}
+        if contour_step is not None:
+            prerequisites.add(self.time_ticket())
         self.DeclareVectorOutputPort("chamfer_state", CHAMFER_STATE.size,
-                                     self._calc)
+                                     self._calc,
+                                     prerequisites_of_calc=prerequisites)
 
     def tool_point(self, plant_state):
         """(x_p, xdot_p) in world for a plant state vector."""

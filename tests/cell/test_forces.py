@@ -69,6 +69,24 @@ def test_tool_point_matches_drake_and_reuses_only_nearby_states(arm):
         ToolPoint(arm, frame, reuse_tolerance=-1.0)
 
 
+def test_tool_point_mass_matrix_and_gravity_are_the_plants(arm):
+    """At the anchor's q, whatever was asked before (the context keeps
+    the anchor's q and its kinematics between requests)."""
+    tool = ToolPoint(arm, arm.GetFrameByName("tool_tip"))
+    context = arm.CreateDefaultContext()
+    for seed in (4, 5, 4):
+        x = _arm_state(arm, seed)
+        tool.evaluate(x)
+        M = tool.mass_matrix(x)
+        _, _, tau_g = tool.control_terms(x)
+        arm.SetPositions(context, x[:5])
+        np.testing.assert_allclose(M, arm.CalcMassMatrix(context),
+                                   rtol=1e-12)
+        np.testing.assert_allclose(
+            tau_g, arm.CalcGravityGeneralizedForces(context), rtol=1e-12)
+        assert not M.flags.writeable
+
+
 @pytest.mark.parametrize("speed", [2.4e-3, -1.1e-3, 1e-4, 0.0])
 def test_cutting_force_law_is_eq3_through_the_jacobian(arm, speed):
     """The C++ law, its numpy twin and J^T of the world-frame eq. (3) agree
@@ -118,6 +136,47 @@ def test_cutting_force_law_follows_the_velocity_between_samples(arm):
     g = CONFIG.cutting_coefficient * 5e-4 * 0.002
     assert f2 @ tangent - f1 @ tangent == pytest.approx(-g * 2e-3, rel=1e-9)
     assert f1 @ tangent < 0
+
+
+@pytest.mark.parametrize("inertia", [None, [1.0, 4.0, 0.5, 2.0, 1.0]])
+def test_implicit_damping_term_makes_the_law_diagonal_and_vanishes_at_v0(
+        arm, inertia):
+    """With the sample's joint velocities the law gains S (v - v0): at v0
+    the torque is still J^T of eq. (3); d tau / dv is diagonal (-D, what
+    cenic treats implicitly), and D - c a a^T is positive semidefinite
+    (D dominates the true damping), inside the direction's ramp too."""
+    frame = arm.GetFrameByName("tool_tip")
+    x = _arm_state(arm, 3)
+    _, _, J = ToolPoint(arm, frame).evaluate(x)
+    tangent, n1 = np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0])
+    for speed in (2.4e-3, 1e-4):  # outside and inside the ramp
+        v0 = np.linalg.lstsq(J, speed * tangent + 1e-4 * n1,
+                             rcond=None)[0]
+        plain = force_law_terms(CONFIG, n1, tangent, 5e-4, J, J @ v0,
+                                cut_height=0.002)
+        terms = force_law_terms(CONFIG, n1, tangent, 5e-4, J, J @ v0,
+                                cut_height=0.002, v=v0, inertia=inertia)
+        tau0, f0 = generalized_cutting_force(terms, v0,
+                                             CONFIG.smoothing_speed)
+        ref_tau, ref_f = generalized_cutting_force(plain, v0,
+                                                   CONFIG.smoothing_speed)
+        np.testing.assert_allclose(tau0, ref_tau, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(f0, ref_f, rtol=1e-12)
+        eps = 1e-9
+        jac = np.column_stack([
+            (generalized_cutting_force(terms, v0 + eps * e,
+                                       CONFIG.smoothing_speed)[0] - tau0)
+            / eps for e in np.eye(5)])
+        off = jac - np.diag(np.diag(jac))
+        assert np.max(np.abs(off)) < 1e-6 * np.max(np.abs(jac))
+        true_jac = np.column_stack([
+            (generalized_cutting_force(plain, v0 + eps * e,
+                                       CONFIG.smoothing_speed)[0] - ref_tau)
+            / eps for e in np.eye(5)])
+        # -jac (= D) minus the true damping -true_jac is PSD.
+        gap = -jac + true_jac
+        assert np.min(np.linalg.eigvalsh(0.5 * (gap + gap.T))) > \
+            -1e-6 * np.max(np.abs(jac))
 
 
 def test_joint_friction_is_smooth_coulomb_in_the_plant():

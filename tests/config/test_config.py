@@ -41,6 +41,7 @@ task: {desired_depth: 0.0008}
     ("simulation: {integrator: euler}", "simulation.integrator"),
     ("edge: {direction: 2}", "edge.direction"),
     ("tube: {inner_radius: 0.002}", "tool.cutter_radius"),
+    ("process: {implicit_damping: 3}", "process.implicit_damping"),
 ])
 def test_invalid_values_name_the_field(text, field):
     with pytest.raises(ConfigError, match=field.replace(".", r"\.")):

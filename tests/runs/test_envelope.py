@@ -93,13 +93,9 @@ def test_burr_scenario_places_the_burr_ahead(paper):
         start + 0.02 + 1e-3)
 
 
-def _rank_one_damper_velocities(direction, *, g=3000.0, mass=1.0,
-                                h=0.0025):
-    """A point mass on three prismatic joints under the force -g a a^T v,
-    a the unit ``direction``, from an initial speed along a: its speed
-    along a after each of 5 fixed cenic steps of ``h`` (later steps reach
-    the solver's tolerance when the speed decays)."""
-    builder = DiagramBuilder()
+def _point_on_three_joints(builder, mass):
+    """A continuous plant: a point of ``mass`` on three prismatic joints
+    along x, y, z (massless links), no gravity."""
     plant, _ = AddMultibodyPlant(MultibodyPlantConfig(time_step=0.0),
                                  builder)
     parent = plant.world_body()
@@ -112,16 +108,32 @@ def _rank_one_damper_velocities(direction, *, g=3000.0, mass=1.0,
         parent = body
     plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
     plant.Finalize()
+    return plant
+
+
+def _fixed_cenic(diagram, h):
+    simulator = Simulator(diagram)
+    ApplySimulatorConfig(SimulatorConfig(
+        integration_scheme="cenic", max_step_size=h,
+        use_error_control=False), simulator)
+    return simulator
+
+
+def _rank_one_damper_velocities(direction, *, g=3000.0, mass=1.0,
+                                h=0.0025):
+    """A point mass on three prismatic joints under the force -g a a^T v,
+    a the unit ``direction``, from an initial speed along a: its speed
+    along a after each of 5 fixed cenic steps of ``h`` (later steps reach
+    the solver's tolerance when the speed decays)."""
+    builder = DiagramBuilder()
+    plant = _point_on_three_joints(builder, mass)
     a = np.asarray(direction, float) / np.linalg.norm(direction)
     damper = builder.AddSystem(MatrixGain(
         np.hstack([np.zeros((3, 3)), -g * np.outer(a, a)])))
     builder.Connect(plant.get_state_output_port(), damper.get_input_port())
     builder.Connect(damper.get_output_port(),
                     plant.get_applied_generalized_force_input_port())
-    simulator = Simulator(builder.Build())
-    ApplySimulatorConfig(SimulatorConfig(
-        integration_scheme="cenic", max_step_size=h,
-        use_error_control=False), simulator)
+    simulator = _fixed_cenic(builder.Build(), h)
     context = plant.GetMyMutableContextFromRoot(
         simulator.get_mutable_context())
     plant.SetVelocities(context, 1e-3 * a)
@@ -149,6 +161,56 @@ def test_cenic_treats_only_the_diagonal_of_an_applied_damping_implicitly():
     half = _rank_one_damper_velocities([1, 1, 1], h=0.00125)
     np.testing.assert_allclose(half[1:] / half[:-1],
                                -1.5 / 2.25, rtol=1e-3)
+
+
+def _cutting_law_velocities(implicit, h=0.0025):
+    """Speed along a = (1, 1, 1)/sqrt(3) of a 1 kg point on three
+    prismatic joints under the cutting law alone (g = 3000 N s/m, h g / m
+    = 7.5, no threshold forces), after each of 4 fixed cenic steps of h,
+    the law's terms sampled at each step's start as the process does."""
+    from deburr_drake.cell.process import (force_law_terms,
+                                           make_cutting_force_law)
+    from deburr_drake.config import ProcessConfig
+    builder = DiagramBuilder()
+    plant = _point_on_three_joints(builder, 1.0)
+    config = ProcessConfig(cutting_coefficient=3.0e9,
+                           threshold_power_force=0.0,
+                           contact_threshold_force=0.0)
+    law = builder.AddSystem(make_cutting_force_law(
+        3, 3, config.smoothing_speed))
+    builder.Connect(plant.get_state_output_port(),
+                    law.GetInputPort("plant_state"))
+    builder.Connect(law.GetOutputPort("generalized_force"),
+                    plant.get_applied_generalized_force_input_port())
+    terms_port = builder.ExportInput(law.GetInputPort("force_law_terms"))
+    diagram = builder.Build()
+    simulator = _fixed_cenic(diagram, h)
+    root = simulator.get_mutable_context()
+    context = plant.GetMyMutableContextFromRoot(root)
+    a = np.ones(3) / np.sqrt(3.0)
+    n1 = np.array([1.0, -1.0, 0.0]) / np.sqrt(2.0)
+    plant.SetVelocities(context, 0.05 * a)
+    speeds = []
+    for k in range(1, 5):
+        v = plant.GetVelocities(context)
+        diagram.get_input_port(terms_port).FixValue(root, force_law_terms(
+            config, n1, a, 5e-4, np.eye(3), v, cut_height=0.002,
+            v=v if implicit else None))
+        simulator.AdvanceTo(k * h)
+        speeds.append(plant.GetVelocities(context) @ a)
+    return np.array(speeds)
+
+
+def test_cutting_laws_implicit_damping_holds_any_g_at_one_cenic_step():
+    """The cutting law along (1, 1, 1) at h g / m = 7.5: eq. (3) as is
+    alternates and grows in cenic, -1.14 per step (as the rank-one damper
+    above); with process.implicit_damping's term it decays as implicit
+    Euler, 1 / (1 + h g / m) (here D = g I exactly)."""
+    plain = _cutting_law_velocities(False)
+    np.testing.assert_allclose(plain[1:] / plain[:-1], -4.0 / 3.5,
+                               rtol=1e-3)
+    held = _cutting_law_velocities(True)
+    np.testing.assert_allclose(held[1:] / held[:-1], 1 / 8.5, rtol=1e-3)
 
 
 @pytest.mark.slow
