@@ -29,10 +29,7 @@ file gives or ``robot.reflected_inertia``):
   2.5 ms step, 20,500 at two; the Panda at two steps and 1.6 kg tripped
   the tool-force guard on the first burr). The step keeps g_max h / m
   below :data:`STEP_RATE` (2.5), g_max = k_c (delta* x engagement + the
-  tallest burr's area). Only with ``process.implicit_damping`` false:
-  with it (the default) the law's derivative is diagonal and dominant,
-  cenic treats all of it implicitly, and the step is left as written
-  (one per sample on arm5, two on arm6 for its depth's accuracy);
+  tallest burr's area): arm5 and arm6 two steps per sample, as written;
 - more than 6 joints: the null-space posture PD keeps 200 N m/rad and
   10 N m s/rad unless its damping d (I - J^T J^T+) alone takes more than
   half the rate's limit, then d to that half and k = 20 d;
@@ -226,7 +223,7 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
         scenario.task.desired_depth * scenario.tool.engagement
         + max([b.height * b.thickness for b in p.burrs], default=0.0))
     max_step = scenario.simulation.max_step
-    if period > 0 and g_max > 0 and not p.implicit_damping:
+    if period > 0 and g_max > 0:
         steps = max(1, math.ceil(g_max * period / (STEP_RATE * mass)
                                  * (1 - 5e-3)))
         max_step = min(max_step, period / steps)
