@@ -253,10 +253,15 @@ class ProcessConfig:
     # velocities v0, that makes its derivative in v diagonal and
     # dominant (cell.process.force_law_terms), so cenic, which treats only
     # that diagonal implicitly, holds any g of (3) at one step per sample.
-    # False: eq. (3) between samples as is (cenic then treats the
-    # off-diagonal of g a a^T explicitly: on the arm that needs two steps
-    # per 2.5 ms sample for burrs above about 1.2 mm).
-    implicit_damping: bool = True
+    # False (the default): eq. (3) between samples as is (cenic then
+    # treats the off-diagonal of g a a^T explicitly: on the arm that needs
+    # two steps per 2.5 ms sample for burrs above about 1.2 mm). The term
+    # is a discretization device: within a step it adds h (D - g a a^T) of
+    # inertia across the cut, which moves a light tool's sampled-loop
+    # limits (the point mass's sliding-gain limit 1548 -> 3579 N s/m at
+    # its own step, 1548 at 0.625 ms without it), so it is on only where
+    # it was shown not to: the paper arm (paper, paper_m0, paper_cells).
+    implicit_damping: bool = False
 
     def validate(self):
         o = "process"
