@@ -183,11 +183,15 @@ class ProcessConfig:
     # (depth, directions, burr at the cutter), records the finish and
     # removes the burr this often.
     sample_period: float = 0.0025
+    # N/m: with the spindle off (touch probing) a burr is not cut: it
+    # pushes the tool back along -n1 where the tool reaches into it.
+    burr_contact_stiffness: float = 1.0e4
 
     def validate(self):
         o = "process"
         for name in ("cutting_coefficient", "plunge_coefficient",
-                     "threshold_power_force", "contact_threshold_force"):
+                     "threshold_power_force", "contact_threshold_force",
+                     "burr_contact_stiffness"):
             _non_negative(o, name, getattr(self, name))
         _positive(o, "threshold_depth", self.threshold_depth)
         _positive(o, "smoothing_speed", self.smoothing_speed)

@@ -1,0 +1,117 @@
+"""Registration of the believed part (pure numpy): the correction
+``r = (dx, dy, dyaw, dradius)`` (m, m, rad, m) that moves the believed edge
+onto the real one, the contour it gives, and ``r`` from probed points.
+
+- :func:`moved_contour`: the believed contour moved by (dx, dy), turned by
+  dyaw about its pivot (a circle: its centre, dyaw turns its start angle; a
+  straight edge: its midpoint, or its start when it is endless) and, a
+  circle, with a radius dradius larger.
+- :func:`registration_from_points`: the circle or straight-edge fit
+  (deburr_drake.math.fits) of touch points on the real edge's zero-depth
+  path, with the points off by more than ``max_residual`` dropped.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from deburr_drake.math.fits import fit_circle, fit_line, fit_rejecting
+from deburr_drake.math.geometry import (CircularContour, Contour,
+                                        StraightContour)
+
+__all__ = ["REGISTRATION_SIZE", "moved_contour", "ProbeFit",
+           "registration_from_points"]
+
+#: (dx, dy, dyaw, dradius).
+REGISTRATION_SIZE = 4
+
+
+def _rot(yaw):
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s], [s, c]])
+
+
+def _pivot(contour: StraightContour) -> np.ndarray:
+    half = 0.5 * contour.length if math.isfinite(contour.length) else 0.0
+    return contour.point_at(half)
+
+
+def moved_contour(contour: Contour, registration) -> Contour:
+    """``contour`` moved by ``registration`` (dx, dy, dyaw, dradius)."""
+    dx, dy, dyaw, dradius = (float(v) for v in registration)
+    if not any((dx, dy, dyaw, dradius)):
+        return contour
+    if isinstance(contour, CircularContour):
+        center = contour.center + np.array([dx, dy, 0.0])
+        return CircularContour(center, contour.radius + dradius,
+                               start_angle=contour.start_angle + dyaw,
+                               direction=contour.direction)
+    if isinstance(contour, StraightContour):
+        R = _rot(dyaw)
+        pivot = _pivot(contour)
+        start = contour.point_at(0.0)
+        start[:2] = pivot[:2] + R @ (start[:2] - pivot[:2]) + [dx, dy]
+        t = contour.tangent(start)
+        n = contour.material_normal
+        t[:2] = R @ t[:2]
+        n[:2] = R @ n[:2]
+        return StraightContour(start, t, n, length=contour.length)
+    raise TypeError(f"registration of a {type(contour).__name__} is not "
+                    "supported: a circle or a straight edge")
+
+
+@dataclass
+class ProbeFit:
+    registration: np.ndarray  # (4,) dx, dy, dyaw, dradius
+    kept: np.ndarray          # (N,) bool, the points the fit used
+    residuals: np.ndarray     # (N,) m, of every point to the final fit
+    rms: float                # m, of the kept points
+
+
+def registration_from_points(contour: Contour, points, *,
+                             max_residual: float,
+                             fit_radius: bool = False) -> ProbeFit:
+    """The registration of ``contour`` (the believed zero-depth path) that
+    best puts it through ``points`` ((N, 2 or 3), m, world; the touch
+    points already compensated to the zero-depth path). A circle: its
+    centre (and, ``fit_radius``, its radius), at least 3 points; a
+    straight edge: its offset and heading, at least 3 points (2 are fitted
+    exactly, the third shows an outlier)."""
+    p = np.asarray(points, float)[:, :2]
+    if isinstance(contour, CircularContour):
+        radius = None if fit_radius else contour.radius
+        minimum = 3 if fit_radius else 2
+        fit, kept = fit_rejecting(
+            fit_circle, p, max_residual=max_residual, minimum=minimum,
+            radius=radius, seed=contour.center[:2])
+        if fit_radius:
+            # The seed fixes nothing with the radius free; Taubin's fit
+            # seeds the geometric one of the kept points.
+            fit = fit_circle(p[kept])
+        d = fit.center - contour.center[:2]
+        reg = np.array([d[0], d[1], 0.0, fit.radius - contour.radius])
+        all_res = np.linalg.norm(p - fit.center, axis=1) - fit.radius
+        return ProbeFit(reg, kept, all_res, fit.rms)
+    if isinstance(contour, StraightContour):
+        fit, kept = fit_rejecting(fit_line, p, max_residual=max_residual,
+                                  minimum=2)
+        t = contour.tangent(contour.point_at(0.0))[:2]
+        direction = fit.direction if fit.direction @ t >= 0 else \
+            -fit.direction
+        dyaw = math.atan2(t[0] * direction[1] - t[1] * direction[0],
+                          t @ direction)
+        # Turn about the pivot, then shift along the turned normal so the
+        # line passes through the fitted point.
+        turned = moved_contour(contour, [0.0, 0.0, dyaw, 0.0])
+        n = turned.material_normal[:2]
+        q = np.array([fit.point[0], fit.point[1], turned.height])
+        shift = -turned.phi(q) * n  # phi < 0 on the material side
+        reg = np.array([shift[0], shift[1], dyaw, 0.0])
+        normal = np.array([-direction[1], direction[0]])
+        all_res = (p - fit.point) @ normal
+        return ProbeFit(reg, kept, all_res, fit.rms)
+    raise TypeError(f"registration of a {type(contour).__name__} is not "
+                    "supported: a circle or a straight edge")
