@@ -33,7 +33,7 @@ class ProbeConfig:
     settle_time: float = 0.15  # s, held at the standoff before each guarded move
     # N/m, the contact stiffness the detection bias is modelled with
     # (threshold / stiffness of penetration at the threshold).
-    contact_stiffness: float = 1.0e4
+    contact_stiffness: float = 5.0e3
     fit_radius: bool = False  # circle: fit the radius too (else the drawing's)
     max_residual: float = 1.0e-4  # m, a touch off the fit by more is dropped
 

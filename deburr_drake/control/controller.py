@@ -119,6 +119,7 @@ def HybridController_(T):
             - commanded_position
             - commanded_velocity
             - desired_normal_force
+            - adapt (optional)
             output_ports:
             - actuation
             - diagnostics
@@ -129,6 +130,9 @@ def HybridController_(T):
         - ``commanded_position`` (3, m), ``commanded_velocity`` (3, m/s):
           x_c*(t) and its derivative from the first-order hold.
         - ``desired_normal_force`` (1, N): ||f_nd hat|| from the estimator.
+        - ``adapt`` (1; only with ``adapt_input=True``): below 0.5 theta is
+          not adapted (touch probing: the travel between touches is not
+          the cutting the rules learn).
         - ``actuation`` (nu, N or N m): actuator efforts.
         - ``diagnostics`` (CONTROLLER_DIAGNOSTICS layout).
         - Continuous state: delta_d (m), then theta_k ((2 Upsilon + 1)^2
@@ -149,8 +153,9 @@ def HybridController_(T):
         def _construct(self, plant, tool_frame_name, config,
                        desired_rotation=None, converter=None, *,
                        tool_point=None, nominal_depth=None,
-                       true_plant=None, posture=None):
+                       true_plant=None, posture=None, adapt_input=False):
             LeafSystem_[T].__init__(self, converter)
+            self._adapt_input = adapt_input
             config.validate()
             if (config.kind in config.CONSTANT_FEED_KINDS
                     and nominal_depth is None):
@@ -218,7 +223,8 @@ def HybridController_(T):
                     ("tool_force", 3),
                     ("commanded_position", 3),
                     ("commanded_velocity", 3),
-                    ("desired_normal_force", 1)]}
+                    ("desired_normal_force", 1)]
+                + ([("adapt", 1)] if adapt_input else [])}
             self._cache = self.DeclareCacheEntry(
                 "control_terms",
                 ValueProducer(allocate=AbstractValue.Make(dict()).Clone,
@@ -252,7 +258,8 @@ def HybridController_(T):
                             other._desired_rotation, converter=converter,
                             nominal_depth=other._nominal_depth,
                             true_plant=other._float_true_plant,
-                            posture=other._posture)
+                            posture=other._posture,
+                            adapt_input=other._adapt_input)
 
         @property
         def rule_bases(self):
@@ -322,6 +329,8 @@ def HybridController_(T):
                 y0 = np.sqrt(x_p @ x_p)
                 if c.kind == "fuzzy":
                     self._fuzzy(theta, y0, s, u_fuzzy, zeta, derivatives)
+                    if "adapt" in p and _value(p["adapt"][0]) < 0.5:
+                        derivatives[1:] = 0.0  # theta frozen (probing)
                 elif c.kind == "robust":
                     for axis in self._axes:
                         u_fuzzy[axis] = robust_term(s[axis], y0,

@@ -77,20 +77,23 @@ def registration_from_points(contour: Contour, points, *,
     """The registration of ``contour`` (the believed zero-depth path) that
     best puts it through ``points`` ((N, 2 or 3), m, world; the touch
     points already compensated to the zero-depth path). A circle: its
-    centre (and, ``fit_radius``, its radius), at least 3 points; a
+    centre (and, ``fit_radius``, its radius), at least 3 points (4 to
+    find an outlier); a
     straight edge: its offset and heading, at least 3 points (2 are fitted
     exactly, the third shows an outlier)."""
     p = np.asarray(points, float)[:, :2]
     if isinstance(contour, CircularContour):
-        radius = None if fit_radius else contour.radius
-        minimum = 3 if fit_radius else 2
-        fit, kept = fit_rejecting(
-            fit_circle, p, max_residual=max_residual, minimum=minimum,
-            radius=radius, seed=contour.center[:2])
-        if fit_radius:
-            # The seed fixes nothing with the radius free; Taubin's fit
-            # seeds the geometric one of the kept points.
-            fit = fit_circle(p[kept])
+        # Outliers are found with the radius free, so that a bias common to
+        # every touch (the same depth at each detection) goes into the
+        # radius rather than into the residuals; the centre is then fitted
+        # to the kept points with the radius held unless ``fit_radius``.
+        if len(p) >= 4:
+            _, kept = fit_rejecting(fit_circle, p, max_residual=max_residual,
+                                    minimum=3)
+        else:
+            kept = np.ones(len(p), bool)
+        fit = fit_circle(p[kept], radius=None if fit_radius
+                         else contour.radius, seed=contour.center[:2])
         d = fit.center - contour.center[:2]
         reg = np.array([d[0], d[1], 0.0, fit.radius - contour.radius])
         all_res = np.linalg.norm(p - fit.center, axis=1) - fit.radius

@@ -55,3 +55,15 @@ def test_straight_edge_offset_and_heading(heading):
 def test_zero_registration_is_the_same_contour():
     c = CircularContour([0.0, 0.0, 0.0], 0.03)
     assert moved_contour(c, np.zeros(4)) is c
+
+
+def test_common_bias_kept_out_of_the_centre_and_no_point_dropped():
+    # Every touch 0.15 mm past the edge (an uncompensated detection depth):
+    # with the radius held, the centre is right and nothing is dropped.
+    believed = CircularContour([0.4, 0.0, 0.048], 0.027)
+    real = CircularContour([0.4003, 0.0002, 0.048], 0.027)
+    pts = np.array([real.point_at(x) + 1.5e-4 * real.n1(real.point_at(x))
+                    for x in np.linspace(0, real.length, 8, endpoint=False)])
+    fit = registration_from_points(believed, pts, max_residual=1e-4)
+    assert fit.kept.all()
+    np.testing.assert_allclose(fit.registration[:2], [3e-4, 2e-4], atol=1e-9)
