@@ -9,6 +9,10 @@ onto the real one, the contour it gives, and ``r`` from probed points.
 - :func:`registration_from_points`: the circle or straight-edge fit
   (deburr_drake.math.fits) of touch points on the real edge's zero-depth
   path, with the points off by more than ``max_residual`` dropped.
+- while cutting (:func:`offset_regressor`, :func:`rls_update`,
+  :func:`registration_of`): the force loop holds the real depth, so the
+  depth on a reference contour shows how far the real edge lies beyond it:
+  d = a + w . n1 + psi (s - s_pivot), fitted by recursive least squares.
 """
 
 from __future__ import annotations
@@ -23,7 +27,9 @@ from deburr_drake.math.geometry import (CircularContour, Contour,
                                         StraightContour)
 
 __all__ = ["REGISTRATION_SIZE", "moved_contour", "ProbeFit",
-           "registration_from_points"]
+           "registration_from_points", "ONLINE_PARAMETERS",
+           "offset_regressor", "onset_regressor", "registration_of",
+           "rls_update"]
 
 #: (dx, dy, dyaw, dradius).
 REGISTRATION_SIZE = 4
@@ -118,3 +124,60 @@ def registration_from_points(contour: Contour, points, *,
         return ProbeFit(reg, kept, all_res, fit.rms)
     raise TypeError(f"registration of a {type(contour).__name__} is not "
                     "supported: a circle or a straight edge")
+
+
+# -- registration while cutting -------------------------------------------
+#: The online model's parameters: a (m, the part of the depth the force
+#: loop cannot tell from the contact threshold), w_x, w_y (m, the offset of
+#: the real edge from the reference along n1's components), psi (rad, a
+#: straight edge's heading error: the offset grows by psi per m of arc).
+ONLINE_PARAMETERS = ("a", "w_x", "w_y", "psi")
+
+
+def offset_regressor(contour: Contour, x_p) -> np.ndarray:
+    """phi of d = a + w . n1 + psi (s - s_pivot): how far the real edge
+    lies beyond ``contour`` (the reference) along n1 at the tool point
+    ``x_p``. A circle has no psi (its yaw moves nothing); on a straight
+    edge w . n1 is a constant, told apart from ``a`` only by the contact
+    onset (:func:`onset_regressor`) and the prior."""
+    n1 = contour.n1(x_p)
+    if isinstance(contour, StraightContour):
+        s = contour.arc_position(x_p) - contour.arc_position(_pivot(contour))
+        return np.array([1.0, n1[0], n1[1], s])
+    return np.array([1.0, n1[0], n1[1], 0.0])
+
+
+def onset_regressor(contour: Contour, x_p) -> np.ndarray:
+    """phi of the contact onset: where contact first comes the real edge
+    lies d = w . n1 + psi (s - s_pivot) beyond the reference, no ``a``."""
+    phi = offset_regressor(contour, x_p)
+    phi[0] = 0.0
+    return phi
+
+
+def registration_of(contour: Contour, params) -> np.ndarray:
+    """(dx, dy, dyaw, dradius) that moves ``contour`` onto the edge of the
+    online model's ``params`` (ONLINE_PARAMETERS)."""
+    _, wx, wy, psi = (float(v) for v in params)
+    if isinstance(contour, StraightContour):
+        n = contour.material_normal[:2]
+        w = (wx * n[0] + wy * n[1]) * n
+        # Turning by beta (counter-clockwise) about the pivot moves the
+        # point at arc s by -beta (s - s_pivot) along n1 (material on the
+        # right of the tangent): beta = -psi.
+        return np.array([w[0], w[1], -psi, 0.0])
+    return np.array([wx, wy, 0.0, 0.0])
+
+
+def rls_update(theta, P, phi, y, *, noise_var: float, forgetting: float):
+    """One recursive least-squares step with exponential forgetting
+    (``forgetting`` in (0, 1]): (theta, P) after measuring y = phi . theta
+    + noise of variance ``noise_var``."""
+    theta = np.asarray(theta, float)
+    P = np.asarray(P, float)
+    phi = np.asarray(phi, float)
+    Pphi = P @ phi
+    gain = Pphi / (forgetting * noise_var + phi @ Pphi)
+    theta = theta + gain * (y - phi @ theta)
+    P = (P - np.outer(gain, Pphi)) / forgetting
+    return theta, 0.5 * (P + P.T)
