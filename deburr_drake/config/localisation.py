@@ -62,16 +62,17 @@ class OnlineRegistrationConfig:
     """Registration while cutting: the part of the offset the force loop
     can tell apart from the contact threshold (around a circle the first
     harmonic of the offset, along a straight edge the heading) estimated by
-    recursive least squares together with c0 and c1, and the believed part
-    moved smoothly towards the estimate."""
+    recursive least squares together with c0 and c1 (from the contact
+    onset at the entry as well), and the believed part moved smoothly
+    towards the estimate."""
 
     enabled: bool = False
     sample_period: float = 0.025  # s
     forgetting_time: float = 60.0  # s, RLS exponential forgetting horizon
-    # Prior standard deviation of the offset (m) and the contact
-    # parameters' scale (c0 in N, c1 in N/m).
+    # Prior standard deviation of the offset (m; c0 and c1 start from
+    # estimator.initial_estimates with their own size as prior).
     offset_prior: float = 0.001  # m
-    force_noise: float = 0.3  # N, RLS measurement weight
+    force_noise: float = 0.3  # N, the RLS measurement's standard deviation
     # The believed part moves towards the estimate with this time constant
     # (s), no faster than ``max_rate`` (m/s): no step in the command.
     time_constant: float = 1.0  # s

@@ -43,6 +43,7 @@ from deburr_drake.math.geometry import Contour
 from deburr_drake.control.observer import ChamferObserver
 from deburr_drake.control.probe import (ProbeGate, ProbingSequence,
                                         filter_latency)
+from deburr_drake.control.registration import OnlineRegistration
 from deburr_drake.math.registration import REGISTRATION_SIZE
 
 __all__ = ["DeburringController", "add_deburring_controller"]
@@ -62,7 +63,7 @@ class DeburringController:
     probe: Optional[ProbingSequence] = None
     gate: Optional[ProbeGate] = None
     #: ``localisation.online.enabled``: registration while cutting.
-    online: Optional[object] = None
+    online: Optional[OnlineRegistration] = None
 
     @property
     def actuation(self) -> OutputPort:
@@ -184,11 +185,27 @@ def add_deburring_controller(
             generator.GetInputPort("hold"))
     online = None
     if localised:
-        registration = (probe.GetOutputPort("registration") if probing else
-                        builder.AddNamedSystem(
-                            "probe_registration", ConstantVectorSource(
-                                np.zeros(REGISTRATION_SIZE))
-                        ).get_output_port())
+        def constant(name, value):
+            return builder.AddNamedSystem(name, ConstantVectorSource(
+                np.asarray(value, float))).get_output_port()
+
+        registration = (probe.GetOutputPort("registration") if probing
+                        else constant("no_probe_registration",
+                                      np.zeros(REGISTRATION_SIZE)))
+        if c.localisation.online.enabled:
+            online = builder.AddNamedSystem(
+                "online_registration", OnlineRegistration(
+                    contour, c.localisation.online, c.estimator,
+                    latency=filter_latency(c.sensor.sample_period,
+                                           c.sensor.cutoff_frequency)))
+            builder.Connect(observer.GetOutputPort("chamfer_state"),
+                            online.GetInputPort("chamfer_state"))
+            builder.Connect(registration,
+                            online.GetInputPort("base_registration"))
+            builder.Connect(probe.GetOutputPort("spindle") if probing
+                            else constant("spindle_on", [1.0]),
+                            online.GetInputPort("active"))
+            registration = online.GetOutputPort("registration")
         for system in (observer, generator):
             builder.Connect(registration, system.GetInputPort("registration"))
     for system in (generator, estimator, controller):

@@ -9,10 +9,12 @@ onto the real one, the contour it gives, and ``r`` from probed points.
 - :func:`registration_from_points`: the circle or straight-edge fit
   (deburr_drake.math.fits) of touch points on the real edge's zero-depth
   path, with the points off by more than ``max_residual`` dropped.
-- while cutting (:func:`offset_regressor`, :func:`rls_update`,
-  :func:`registration_of`): the force loop holds the real depth, so the
-  depth on a reference contour shows how far the real edge lies beyond it:
-  d = a + w . n1 + psi (s - s_pivot), fitted by recursive least squares.
+- while cutting (:func:`contact_regressor`, :func:`rls_update`,
+  :func:`registration_of`): the contact force against the depth on a
+  reference contour, ||f_n|| = c0 + c1 (delta_0 - d), shows how far the
+  real edge lies beyond it, d = w . n1 + psi (s - s_pivot), the offset
+  estimated together with the contact parameters by recursive least
+  squares.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from deburr_drake.math.geometry import (CircularContour, Contour,
 
 __all__ = ["REGISTRATION_SIZE", "moved_contour", "ProbeFit",
            "registration_from_points", "ONLINE_PARAMETERS",
-           "offset_regressor", "onset_regressor", "registration_of",
+           "contact_regressor", "onset_regressor", "registration_of",
            "rls_update"]
 
 #: (dx, dy, dyaw, dradius).
@@ -127,38 +129,50 @@ def registration_from_points(contour: Contour, points, *,
 
 
 # -- registration while cutting -------------------------------------------
-#: The online model's parameters: a (m, the part of the depth the force
-#: loop cannot tell from the contact threshold), w_x, w_y (m, the offset of
-#: the real edge from the reference along n1's components), psi (rad, a
-#: straight edge's heading error: the offset grows by psi per m of arc).
-ONLINE_PARAMETERS = ("a", "w_x", "w_y", "psi")
+#: The online model's parameters: the contact force is
+#: ||f_n|| = c0 + c1 (delta_0 - d), d = w . n1 + psi (s - s_pivot) how far
+#: the real edge lies beyond the reference contour along n1 (w: m, the
+#: offset; psi: rad, a straight edge's heading error), delta_0 the depth on
+#: the reference; linear in (c0, c1, c1 w_x, c1 w_y, c1 psi).
+ONLINE_PARAMETERS = ("c0", "c1", "c1_w_x", "c1_w_y", "c1_psi")
 
 
-def offset_regressor(contour: Contour, x_p) -> np.ndarray:
-    """phi of d = a + w . n1 + psi (s - s_pivot): how far the real edge
-    lies beyond ``contour`` (the reference) along n1 at the tool point
-    ``x_p``. A circle has no psi (its yaw moves nothing); on a straight
-    edge w . n1 is a constant, told apart from ``a`` only by the contact
-    onset (:func:`onset_regressor`) and the prior."""
+def _offset_terms(contour: Contour, x_p) -> np.ndarray:
+    """(n1_x, n1_y, s - s_pivot): d = w . n1 + psi (s - s_pivot). A circle
+    has no psi (its yaw moves nothing); on a straight edge w . n1 is a
+    constant, told apart from c0 only by the contact onset."""
     n1 = contour.n1(x_p)
     if isinstance(contour, StraightContour):
         s = contour.arc_position(x_p) - contour.arc_position(_pivot(contour))
-        return np.array([1.0, n1[0], n1[1], s])
-    return np.array([1.0, n1[0], n1[1], 0.0])
+        return np.array([n1[0], n1[1], s])
+    return np.array([n1[0], n1[1], 0.0])
 
 
-def onset_regressor(contour: Contour, x_p) -> np.ndarray:
-    """phi of the contact onset: where contact first comes the real edge
-    lies d = w . n1 + psi (s - s_pivot) beyond the reference, no ``a``."""
-    phi = offset_regressor(contour, x_p)
+def contact_regressor(contour: Contour, x_p) -> np.ndarray:
+    """phi with ||f_n|| = phi . theta (ONLINE_PARAMETERS) at the tool point
+    ``x_p`` (m) on the reference ``contour``."""
+    return np.concatenate([[1.0, float(contour.depth(x_p))],
+                           -_offset_terms(contour, x_p)])
+
+
+def onset_regressor(contour: Contour, x_p, depth_at_detection=0.0):
+    """phi with 0 = phi . theta where contact first comes: the real depth
+    there is ``depth_at_detection`` (m, how far the tool moved in before
+    the sensor showed it), so delta_0 - d = that depth, and no c0."""
+    phi = contact_regressor(contour, x_p)
     phi[0] = 0.0
+    phi[1] -= depth_at_detection
     return phi
 
 
 def registration_of(contour: Contour, params) -> np.ndarray:
     """(dx, dy, dyaw, dradius) that moves ``contour`` onto the edge of the
-    online model's ``params`` (ONLINE_PARAMETERS)."""
-    _, wx, wy, psi = (float(v) for v in params)
+    online model's ``params`` (ONLINE_PARAMETERS; zero while c1 is not
+    positive)."""
+    c1 = float(params[1])
+    if not c1 > 0.0:
+        return np.zeros(REGISTRATION_SIZE)
+    wx, wy, psi = (float(v) / c1 for v in params[2:5])
     if isinstance(contour, StraightContour):
         n = contour.material_normal[:2]
         w = (wx * n[0] + wy * n[1]) * n
