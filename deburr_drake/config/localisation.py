@@ -71,22 +71,26 @@ class OnlineRegistrationConfig:
     forgetting_time: float = 60.0  # s, RLS exponential forgetting horizon
     # Prior standard deviation of the offset (m; c0 and c1 start from
     # estimator.initial_estimates with their own size as prior).
-    offset_prior: float = 0.001  # m
-    force_noise: float = 0.3  # N, the RLS measurement's standard deviation
+    offset_prior: float = 0.001  # m, without probing (the fixture's)
+    probed_offset_prior: float = 5.0e-5  # m, after probing (the probe's)
+    # N, the RLS measurement's standard deviation: the sensor's noise and
+    # what the linear contact model leaves (the force loop's transients).
+    force_noise: float = 1.0
     # The believed part moves towards the estimate with this time constant
     # (s), no faster than ``max_rate`` (m/s): no step in the command.
     time_constant: float = 1.0  # s
     max_rate: float = 0.0005  # m/s
     # The estimate is used only after the tool has cut this much arc
     # (m): a short arc does not separate the offset from c0.
-    min_arc: float = 0.01  # m
+    min_arc: float = 0.0  # m
 
     def validate(self):
         o = "localisation.online"
         _require(isinstance(self.enabled, bool), f"{o}.enabled",
                  self.enabled, "true or false")
         for name in ("sample_period", "forgetting_time", "offset_prior",
-                     "force_noise", "time_constant", "max_rate"):
+                     "probed_offset_prior", "force_noise", "time_constant",
+                     "max_rate"):
             _positive(o, name, getattr(self, name))
         _non_negative(o, "min_arc", self.min_arc)
 

@@ -197,7 +197,8 @@ def add_deburring_controller(
                 "online_registration", OnlineRegistration(
                     contour, c.localisation.online, c.estimator,
                     latency=filter_latency(c.sensor.sample_period,
-                                           c.sensor.cutoff_frequency)))
+                                           c.sensor.cutoff_frequency),
+                    probed=probing))
             builder.Connect(observer.GetOutputPort("chamfer_state"),
                             online.GetInputPort("chamfer_state"))
             builder.Connect(registration,

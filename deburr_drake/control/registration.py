@@ -73,10 +73,15 @@ class OnlineRegistration(LeafSystem):
       command generator.
     - ``registration_state`` (ONLINE_STATE layout): the discrete state, for
       the logs.
+
+    ``probed``: the reference is the probe's fit, so the offset's prior is
+    ``probed_offset_prior`` (the probe's accuracy) rather than
+    ``offset_prior`` (the fixture's).
     """
 
     def __init__(self, contour: Contour, config: OnlineRegistrationConfig,
-                 estimator: EstimatorConfig, *, latency: float):
+                 estimator: EstimatorConfig, *, latency: float,
+                 probed: bool = False):
         super().__init__()
         config.validate()
         self.set_name("online_registration")
@@ -91,7 +96,8 @@ class OnlineRegistration(LeafSystem):
                 else 0.05)
         self._max_step = config.max_rate * T * np.array(
             [1.0, 1.0, 1.0 / half, 1.0])
-        prior = config.offset_prior
+        prior = (config.probed_offset_prior if probed
+                 else config.offset_prior)
         c0, c1, _ = estimator.initial_estimates
         # Priors: c0 and c1 within their own size, c1 w within c1 x prior.
         P0 = np.diag([c0 ** 2, c1 ** 2, (c1 * prior) ** 2,
