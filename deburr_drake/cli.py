@@ -348,7 +348,11 @@ def _batch(args) -> int:
           f"offsets up to {args.max_offset * 1e3:g} mm (seed {args.seed}), "
           f"{mode}, output {out}/", flush=True)
 
+    done = []
+
     def on_part(part, log):
+        done.append(part)
+        write_batch(done, out, label=f"{scenario.name}, {mode}")
         m = part.metrics
         print(f"  part {part.part}: offset ({part.offset[0] * 1e3:+.3f}, "
               f"{part.offset[1] * 1e3:+.3f}) mm, {log.stop_reason} at "
@@ -377,7 +381,7 @@ def _sweep(args) -> int:
     from pathlib import Path
 
     from deburr_drake import sweep
-    study = sweep.load_study(args.study)
+    study = sweep.load_study(args.study, text=args.study_text)
     if args.limit is not None and args.limit < 1:
         _bad(f"--limit = {args.limit!r} is invalid: allowed an integer >= 1")
     workers = args.workers or os.cpu_count() or 1
@@ -598,6 +602,10 @@ def main(argv=None) -> int:
                         "rerun skips the runs it already holds")
     p.add_argument("--limit", type=int, default=None,
                    help="only the study's first N runs")
+    p.add_argument("--study-text", default=None,
+                   help="YAML overrides of the study's own fields, e.g. "
+                        "'{name: robustness_localised, base: "
+                        "paper_localised, duration: 50.0}'")
     p.add_argument("--no-run", action="store_true",
                    help="run nothing: write the table, summary and figures "
                         "from the runs finished so far (e.g. while a sweep "
