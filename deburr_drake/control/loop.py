@@ -42,7 +42,7 @@ from deburr_drake.control.estimator import ContactParameterEstimator
 from deburr_drake.math.geometry import Contour
 from deburr_drake.control.observer import ChamferObserver
 from deburr_drake.control.probe import (ProbeGate, ProbingSequence,
-                                        filter_latency)
+                                        filter_latency, sensor_timing)
 from deburr_drake.control.registration import OnlineRegistration
 from deburr_drake.math.registration import REGISTRATION_SIZE
 
@@ -160,8 +160,8 @@ def add_deburring_controller(
         probe = builder.AddNamedSystem("probing_sequence", ProbingSequence(
             contour, c.localisation.probe,
             sample_period=c.sensor.sample_period,
-            latency=filter_latency(c.sensor.sample_period,
-                                   c.sensor.cutoff_frequency),
+            timing=sensor_timing(c.sensor.sample_period,
+                                 c.sensor.cutoff_frequency),
             initial_position=x0, start_depth=c.simulation.initial_depth))
         gate = builder.AddNamedSystem("probe_gate", ProbeGate())
         builder.Connect(chamfer, probe.GetInputPort("chamfer_state"))

@@ -19,6 +19,7 @@ model.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from pydrake.systems.framework import LeafSystem
@@ -31,7 +32,8 @@ from deburr_drake.math.registration import (REGISTRATION_SIZE,
                                             registration_from_points)
 
 __all__ = ["ProbingSequence", "ProbeGate", "PROBE_STATE", "PHASES",
-           "probe_arcs", "detection_depth", "filter_latency"]
+           "probe_arcs", "detection_depth", "filter_latency",
+           "sensor_timing", "SensorTiming"]
 
 #: The phases of the sequence, in order.
 PHASES = ("travel", "settle", "approach", "retract", "return", "enter",
@@ -56,24 +58,61 @@ PROBE_STATE = VectorLayout("probe_state", [
 ])
 
 
-def filter_latency(sample_period: float, cutoff_frequency: float) -> float:
-    """s: how far a force ramp read by a system sampled with the sensor
-    lags the truth: the first-order filter y += a (raw - y),
-    a = 1 - exp(-2 pi f_c T), lags a ramp by T (1 - a) / a, the reader
-    sees the value before the filter's update at the same instant (one
-    more T), and the crossing falls on average T / 2 before the sample that
-    detects it: T / a + T / 2."""
+class SensorTiming(NamedTuple):
+    """How a force reading lags the truth, for a system sampled with the
+    sensor (s): ``lag``, the first-order filter y += a (raw - y),
+    a = 1 - exp(-2 pi f_c T), lags a ramp by T (1 - a) / a once settled;
+    ``delay``, the reader sees the value before the filter's update at the
+    same instant (T) and a crossing falls on average T / 2 before the
+    sample that detects it (1.5 T)."""
+
+    lag: float
+    delay: float
+
+    @property
+    def latency(self) -> float:
+        """s, the settled total: lag + delay."""
+        return self.lag + self.delay
+
+
+def sensor_timing(sample_period: float, cutoff_frequency: float
+                  ) -> SensorTiming:
+    """The :class:`SensorTiming` of the sensor's filter and sampling."""
     a = 1.0 - math.exp(-2.0 * math.pi * cutoff_frequency * sample_period)
-    return sample_period / a + 0.5 * sample_period
+    return SensorTiming(lag=sample_period * (1.0 - a) / a,
+                        delay=1.5 * sample_period)
+
+
+def filter_latency(sample_period: float, cutoff_frequency: float) -> float:
+    """s: the settled latency of :func:`sensor_timing`."""
+    return sensor_timing(sample_period, cutoff_frequency).latency
 
 
 def detection_depth(speed: float, threshold: float, stiffness: float,
-                    latency: float) -> float:
+                    timing: SensorTiming) -> float:
     """m: how deep past the zero-depth path the tool is when a guarded move
-    at ``speed`` (m/s) detects contact: threshold / stiffness (where the
-    force reaches the threshold) plus speed x latency (how far it moved
-    before the sensor showed it)."""
-    return threshold / stiffness + max(speed, 0.0) * latency
+    at ``speed`` (m/s) detects contact on a contact of linear
+    ``stiffness`` (N/m): the filtered force of the ramp k v t,
+    k v (t - lag (1 - exp(-t / lag))), reaches ``threshold`` at t, and the
+    tool moves on for ``delay``: v (t + delay). At rest: threshold /
+    stiffness."""
+    v = max(float(speed), 0.0)
+    if v == 0.0:
+        return threshold / stiffness
+    rate = stiffness * v  # N/s
+    lag = timing.lag
+    t = threshold / rate + lag  # the settled answer, an upper bound
+    for _ in range(50):  # Newton on g(t) = t - lag (1 - e^(-t/lag)) - F/kv
+        e = math.exp(-t / lag) if lag > 0 else 0.0
+        g = t - lag * (1.0 - e) - threshold / rate
+        dg = 1.0 - e
+        if dg <= 0.0:
+            break
+        step = g / dg
+        t -= step
+        if abs(step) < 1e-12:
+            break
+    return v * (t + timing.delay)
 
 
 def probe_arcs(contour: Contour, config: ProbeConfig) -> np.ndarray:
@@ -137,14 +176,15 @@ class ProbingSequence(LeafSystem):
     """
 
     def __init__(self, contour: Contour, config: ProbeConfig, *,
-                 sample_period: float, latency: float, initial_position,
+                 sample_period: float, timing: SensorTiming,
+                 initial_position,
                  start_depth: float = 0.0):
         super().__init__()
         config.validate()
         self.set_name("probing_sequence")
         self._contour = contour
         self._config = config
-        self._latency = latency
+        self._timing = timing
         self._start_depth = start_depth
         self._arcs = probe_arcs(contour, config)
         self._n = len(self._arcs)
@@ -244,7 +284,7 @@ class ProbingSequence(LeafSystem):
                 speed = float(CHAMFER_STATE.get(chamfer, "xdot_p") @ n)
                 touch = x_p - n * detection_depth(
                     speed, c.force_threshold, c.contact_stiffness,
-                    self._latency)
+                    self._timing)
                 touches[4 * i:4 * i + 4] = [*touch, 1.0]
                 x[PROBE_STATE.slice("touches")] += 1.0
                 back = x_p - c.retract * n

@@ -153,6 +153,7 @@ def load_study(path, text=None) -> Study:
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"study {path}: no such file")
+    overrides = text
     try:
         text = path.read_text()
     except (OSError, UnicodeDecodeError) as e:
@@ -162,10 +163,10 @@ def load_study(path, text=None) -> Study:
         study = yaml_load_typed(schema=Study, data=text, defaults=Study())
     except (RuntimeError, ValueError, TypeError, AssertionError) as e:
         raise _study_error(e, str(path)) from None
-    if text:
-        _check_yaml(text, "--study-text", Study, "study")
+    if overrides:
+        _check_yaml(overrides, "--study-text", Study, "study")
         try:
-            study = yaml_load_typed(schema=Study, data=text, defaults=study)
+            study = yaml_load_typed(data=overrides, defaults=study)
         except (RuntimeError, ValueError, TypeError, AssertionError) as e:
             raise _study_error(e, "--study-text") from None
     study._dir = path.resolve().parent
