@@ -42,7 +42,7 @@ from deburr_drake.control.estimator import ContactParameterEstimator
 from deburr_drake.math.geometry import Contour
 from deburr_drake.control.observer import ChamferObserver
 from deburr_drake.control.probe import (ProbeGate, ProbingSequence,
-                                        filter_latency, sensor_timing)
+                                        sensor_timing)
 from deburr_drake.control.registration import OnlineRegistration
 from deburr_drake.math.registration import REGISTRATION_SIZE
 
@@ -84,6 +84,72 @@ class DeburringController:
         if self.gate is not None:
             return self.gate.GetOutputPort("chamfer_state")
         return self.observer.GetOutputPort("chamfer_state")
+
+
+def _connect(builder: DiagramBuilder, pairs):
+    for output, input_port in pairs:
+        builder.Connect(output, input_port)
+
+
+def _add_localisation(builder, c: Scenario, *, contour, x0, observer,
+                      generator, controller, chamfer, command, desired,
+                      tool_force):
+    """The localisation systems (issue 21) between the loops: with
+    ``localisation.probe`` the probing sequence and its gate (which then
+    stand between the observer, the generator and the estimator and the
+    rest), with ``localisation.online`` the registration while cutting; the
+    registration into the observer and the generator. Returns the chamfer
+    state, the command and the desired normal force the loops use from
+    then on, and the systems (probe, gate, online; None when off)."""
+    timing = sensor_timing(c.sensor.sample_period, c.sensor.cutoff_frequency)
+
+    def constant(name, value):
+        return builder.AddNamedSystem(name, ConstantVectorSource(
+            np.asarray(value, float))).get_output_port()
+
+    probe = gate = online = None
+    if c.localisation.probe.enabled:
+        probe = builder.AddNamedSystem("probing_sequence", ProbingSequence(
+            contour, c.localisation.probe,
+            sample_period=c.sensor.sample_period, timing=timing,
+            initial_position=x0, start_depth=c.simulation.initial_depth))
+        gate = builder.AddNamedSystem("probe_gate", ProbeGate())
+        probing = probe.GetOutputPort("probing")
+        spindle = probe.GetOutputPort("spindle")
+        registration = probe.GetOutputPort("registration")
+        _connect(builder, [
+            (chamfer, probe.GetInputPort("chamfer_state")),
+            (tool_force, probe.GetInputPort("tool_force")),
+            (command, probe.GetInputPort("command_in")),
+            (probing, gate.GetInputPort("probing")),
+            (chamfer, gate.GetInputPort("chamfer_state")),
+            (desired, gate.GetInputPort("desired_normal_force")),
+            (probing, generator.GetInputPort("hold")),
+            (spindle, controller.GetInputPort("adapt"))])
+        chamfer = gate.GetOutputPort("chamfer_state")
+        command = probe.GetOutputPort("command")
+        desired = gate.GetOutputPort("desired_normal_force")
+    else:
+        builder.Connect(constant("no_probing", [0.0]),
+                        generator.GetInputPort("hold"))
+        spindle = None
+        registration = constant("no_probe_registration",
+                                np.zeros(REGISTRATION_SIZE))
+    if c.localisation.online.enabled:
+        online = builder.AddNamedSystem(
+            "online_registration", OnlineRegistration(
+                contour, c.localisation.online, c.estimator,
+                latency=timing.latency, probed=probe is not None))
+        _connect(builder, [
+            (observer.GetOutputPort("chamfer_state"),
+             online.GetInputPort("chamfer_state")),
+            (registration, online.GetInputPort("base_registration")),
+            (spindle or constant("spindle_on", [1.0]),
+             online.GetInputPort("active"))])
+        registration = online.GetOutputPort("registration")
+    for system in (observer, generator):
+        builder.Connect(registration, system.GetInputPort("registration"))
+    return chamfer, command, desired, probe, gate, online
 
 
 def add_deburring_controller(
@@ -155,60 +221,12 @@ def add_deburring_controller(
     chamfer = observer.GetOutputPort("chamfer_state")
     command = generator.GetOutputPort("command")
     desired = estimator.GetOutputPort("desired_normal_force")
-    probe = gate = None
-    if probing:
-        probe = builder.AddNamedSystem("probing_sequence", ProbingSequence(
-            contour, c.localisation.probe,
-            sample_period=c.sensor.sample_period,
-            timing=sensor_timing(c.sensor.sample_period,
-                                 c.sensor.cutoff_frequency),
-            initial_position=x0, start_depth=c.simulation.initial_depth))
-        gate = builder.AddNamedSystem("probe_gate", ProbeGate())
-        builder.Connect(chamfer, probe.GetInputPort("chamfer_state"))
-        builder.Connect(tool_force, probe.GetInputPort("tool_force"))
-        builder.Connect(command, probe.GetInputPort("command_in"))
-        builder.Connect(probe.GetOutputPort("probing"),
-                        gate.GetInputPort("probing"))
-        builder.Connect(chamfer, gate.GetInputPort("chamfer_state"))
-        builder.Connect(desired, gate.GetInputPort("desired_normal_force"))
-        builder.Connect(probe.GetOutputPort("probing"),
-                        generator.GetInputPort("hold"))
-        builder.Connect(probe.GetOutputPort("spindle"),
-                        controller.GetInputPort("adapt"))
-        chamfer = gate.GetOutputPort("chamfer_state")
-        command = probe.GetOutputPort("command")
-        desired = gate.GetOutputPort("desired_normal_force")
-    elif localised:
-        builder.Connect(
-            builder.AddNamedSystem("no_probing", ConstantVectorSource(
-                np.zeros(1))).get_output_port(),
-            generator.GetInputPort("hold"))
-    online = None
+    probe = gate = online = None
     if localised:
-        def constant(name, value):
-            return builder.AddNamedSystem(name, ConstantVectorSource(
-                np.asarray(value, float))).get_output_port()
-
-        registration = (probe.GetOutputPort("registration") if probing
-                        else constant("no_probe_registration",
-                                      np.zeros(REGISTRATION_SIZE)))
-        if c.localisation.online.enabled:
-            online = builder.AddNamedSystem(
-                "online_registration", OnlineRegistration(
-                    contour, c.localisation.online, c.estimator,
-                    latency=filter_latency(c.sensor.sample_period,
-                                           c.sensor.cutoff_frequency),
-                    probed=probing))
-            builder.Connect(observer.GetOutputPort("chamfer_state"),
-                            online.GetInputPort("chamfer_state"))
-            builder.Connect(registration,
-                            online.GetInputPort("base_registration"))
-            builder.Connect(probe.GetOutputPort("spindle") if probing
-                            else constant("spindle_on", [1.0]),
-                            online.GetInputPort("active"))
-            registration = online.GetOutputPort("registration")
-        for system in (observer, generator):
-            builder.Connect(registration, system.GetInputPort("registration"))
+        chamfer, command, desired, probe, gate, online = _add_localisation(
+            builder, c, contour=contour, x0=x0, observer=observer,
+            generator=generator, controller=controller, chamfer=chamfer,
+            command=command, desired=desired, tool_force=tool_force)
     for system in (generator, estimator, controller):
         builder.Connect(chamfer, system.GetInputPort("chamfer_state"))
     builder.Connect(command, foh.GetInputPort("sampled"))
