@@ -351,8 +351,10 @@ def _batch(args) -> int:
     done = []
 
     def on_part(part, log):
+        from deburr_drake.runs import report
         done.append(part)
         write_batch(done, out, label=f"{scenario.name}, {mode}")
+        report.write_run(log, out / f"part{part.part}", part.values)
         m = part.metrics
         print(f"  part {part.part}: offset ({part.offset[0] * 1e3:+.3f}, "
               f"{part.offset[1] * 1e3:+.3f}) mm, {log.stop_reason} at "

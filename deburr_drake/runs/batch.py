@@ -94,6 +94,8 @@ class BatchPart:
     yaw: float  # rad
     metrics: Dict[str, float] = field(default_factory=dict)
     stop_reason: str = ""
+    #: The pass's PassMetrics (values with the reasons of the missing).
+    values: Optional[object] = field(default=None, repr=False)
 
     def row(self) -> Dict[str, object]:
         m = self.metrics
@@ -166,7 +168,8 @@ def run_batch(scenario: Scenario, *, count: int, seed: int,
             metrics["c0_hat_N"] = float(est["value"][-1][0])
             metrics["c1_hat_N_per_mm"] = float(est["value"][-1][1]) / 1e3
         part = BatchPart(part=k, offset=list(offset), yaw=yaw,
-                         metrics=metrics, stop_reason=log.stop_reason)
+                         metrics=metrics, stop_reason=log.stop_reason,
+                         values=values)
         parts.append(part)
         if on_part is not None:
             on_part(part, log)
