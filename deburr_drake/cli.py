@@ -342,8 +342,10 @@ def _batch(args) -> int:
     if not args.parts >= 1:
         _bad(f"--parts = {args.parts!r} is invalid: allowed an integer >= 1")
     out = Path(args.out or f"out/batch_{scenario.name}")
+    carried = {"all": "c hat and theta", "estimates": "c hat",
+               "weights": "theta"}[args.carry]
     mode = "fresh (a cold start per part)" if args.fresh else \
-        "carrying c hat and theta from part to part"
+        f"carrying {carried} from part to part"
     print(f"deburr-drake batch: {args.parts} parts of '{scenario.name}', "
           f"offsets up to {args.max_offset * 1e3:g} mm (seed {args.seed}), "
           f"{mode}, output {out}/", flush=True)
@@ -366,8 +368,8 @@ def _batch(args) -> int:
 
     parts = run_batch(scenario, count=args.parts, seed=args.seed,
                       max_offset=args.max_offset, max_yaw=args.max_yaw,
-                      fresh=args.fresh, duration=args.duration,
-                      on_part=on_part)
+                      fresh=args.fresh, carry=args.carry,
+                      duration=args.duration, on_part=on_part)
     paths = write_batch(parts, out, label=f"{scenario.name}, {mode}")
     print()
     print(batch_table(parts))
@@ -554,6 +556,11 @@ def main(argv=None) -> int:
                    help="rad: part yaw uniform within +- this (default 0)")
     p.add_argument("--fresh", action="store_true",
                    help="a cold start per part (nothing carried over)")
+    p.add_argument("--carry", choices=["all", "estimates", "weights"],
+                   default="all",
+                   help="what passes from part to part: the contact "
+                        "estimates c hat and the fuzzy weights theta (all, "
+                        "default), or one of them")
     p.add_argument("--out", default=None,
                    help="output directory (default out/batch_<scenario>)")
     p.set_defaults(func=_batch)

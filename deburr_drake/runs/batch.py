@@ -36,7 +36,7 @@ from deburr_drake.runs.pass_metrics import first_edge_error, pass_metrics
 from deburr_drake.runs.simulation import RunLog, simulate
 
 __all__ = ["BatchPart", "CarriedState", "draw_part_errors", "run_batch",
-           "write_batch", "BATCH_COLUMNS"]
+           "write_batch", "batch_table", "BATCH_COLUMNS", "CARRY"]
 
 #: The table's columns: (key, header).
 BATCH_COLUMNS = (
@@ -130,14 +130,25 @@ def draw_part_errors(count: int, *, seed: int, max_offset: float,
     return out
 
 
+#: What a batch carries from part to part (``carry``).
+CARRY = ("all", "estimates", "weights")
+
+
 def run_batch(scenario: Scenario, *, count: int, seed: int,
               max_offset: float, max_yaw: float = 0.0, fresh: bool = False,
+              carry: str = "all",
               duration: Optional[float] = None,
               on_part: Optional[Callable[[BatchPart, RunLog], None]] = None
               ) -> List[BatchPart]:
     """Runs ``count`` parts of ``scenario`` in sequence (see the module);
     ``duration`` (s) caps each part's run (the scenario's by default).
-    ``on_part(part, log)`` is called after each part (progress, files)."""
+    ``carry``: ``all`` (c hat and theta), ``estimates`` (c hat only) or
+    ``weights`` (theta only) pass from part to part (nothing with
+    ``fresh``). ``on_part(part, log)`` is called after each part (progress,
+    files)."""
+    if carry not in CARRY:
+        raise ConfigError(f"carry = {carry!r} is invalid: allowed one of "
+                          f"{CARRY}")
     scenario.validate()
     errors = draw_part_errors(count, seed=seed, max_offset=max_offset,
                               max_yaw=max_yaw)
@@ -148,13 +159,14 @@ def run_batch(scenario: Scenario, *, count: int, seed: int,
         s.name = f"{scenario.name}_part{k}"
         s.part_error.offset = list(offset)
         s.part_error.yaw = yaw
-        if carried is not None and not fresh:
+        use = carried is not None and not fresh
+        if use and carry in ("all", "estimates"):
             s = carried.apply(s)
         s.validate()
         diagram = make_deburring_diagram(scenario=s)
         log = simulate(diagram, s, duration=duration,
-                       initial_state=(carried.set_theta if carried is not None
-                                      and not fresh else None))
+                       initial_state=(carried.set_theta if use and carry in (
+                           "all", "weights") else None))
         try:
             truth = contact_truth(s).force_at_desired_depth
         except Exception:  # the metrics then leave it out

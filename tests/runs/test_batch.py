@@ -40,6 +40,16 @@ def test_batch_carries_the_estimates_and_weights(fresh, tmp_path):
     assert paths["md"].read_text().count("\n") == 4  # header, rule, 2 parts
 
 
+def test_carry_estimates_only_and_a_bad_carry():
+    logs = []
+    run_batch(_short(), count=2, seed=1, max_offset=0.0002,
+              carry="estimates", on_part=lambda p, log: logs.append(log))
+    np.testing.assert_allclose(logs[1]["estimates"]["value"][0],
+                               logs[0]["estimates"]["value"][-1], rtol=1e-9)
+    with pytest.raises(ConfigError, match="carry"):
+        run_batch(_short(), count=1, seed=1, max_offset=0.0, carry="some")
+
+
 def test_carried_weights_set_in_the_next_parts_context():
     from deburr_drake.cell.diagram import make_deburring_diagram
     scenario = _short()
