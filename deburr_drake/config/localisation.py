@@ -36,6 +36,11 @@ class ProbeConfig:
     contact_stiffness: float = 5.0e3
     fit_radius: bool = False  # circle: fit the radius too (else the drawing's)
     max_residual: float = 1.0e-4  # m, a touch off the fit by more is dropped
+    # s: after probing the controller's fuzzy compensator (off while
+    # probing) ramps back in over this time, so weights learned on an
+    # earlier part (a batch) do not push the tool along before the cut is
+    # established; 0: at once.
+    fuzzy_ramp_time: float = 2.0
 
     def validate(self):
         o = "localisation.probe"
@@ -50,6 +55,7 @@ class ProbeConfig:
                      "contact_stiffness", "max_residual"):
             _positive(o, name, getattr(self, name))
         _non_negative(o, "settle_time", self.settle_time)
+        _non_negative(o, "fuzzy_ramp_time", self.fuzzy_ramp_time)
         _require(self.search_distance > self.standoff,
                  f"{o}.search_distance", self.search_distance,
                  f"> {o}.standoff ({self.standoff})")

@@ -119,7 +119,7 @@ def HybridController_(T):
             - commanded_position
             - commanded_velocity
             - desired_normal_force
-            - adapt (optional)
+            - fuzzy_weight (optional)
             output_ports:
             - actuation
             - diagnostics
@@ -130,9 +130,12 @@ def HybridController_(T):
         - ``commanded_position`` (3, m), ``commanded_velocity`` (3, m/s):
           x_c*(t) and its derivative from the first-order hold.
         - ``desired_normal_force`` (1, N): ||f_nd hat|| from the estimator.
-        - ``adapt`` (1; only with ``adapt_input=True``): below 0.5 theta is
-          not adapted (touch probing: the travel between touches is not
-          the cutting the rules learn).
+        - ``fuzzy_weight`` (1; only with ``fuzzy_weight_input=True``): w
+          scales the fuzzy compensator's u_f; theta is not adapted while
+          w <= 0 (touch probing: the travel between touches is not the
+          cutting the rules learn; after it w ramps in, so weights learned
+          on an earlier part do not push the tool along before the cut is
+          established).
         - ``actuation`` (nu, N or N m): actuator efforts.
         - ``diagnostics`` (CONTROLLER_DIAGNOSTICS layout).
         - Continuous state: delta_d (m), then theta_k ((2 Upsilon + 1)^2
@@ -153,9 +156,10 @@ def HybridController_(T):
         def _construct(self, plant, tool_frame_name, config,
                        desired_rotation=None, converter=None, *,
                        tool_point=None, nominal_depth=None,
-                       true_plant=None, posture=None, adapt_input=False):
+                       true_plant=None, posture=None,
+                       fuzzy_weight_input=False):
             LeafSystem_[T].__init__(self, converter)
-            self._adapt_input = adapt_input
+            self._fuzzy_weight_input = fuzzy_weight_input
             config.validate()
             if (config.kind in config.CONSTANT_FEED_KINDS
                     and nominal_depth is None):
@@ -224,7 +228,7 @@ def HybridController_(T):
                     ("commanded_position", 3),
                     ("commanded_velocity", 3),
                     ("desired_normal_force", 1)]
-                + ([("adapt", 1)] if adapt_input else [])}
+                + ([("fuzzy_weight", 1)] if fuzzy_weight_input else [])}
             self._cache = self.DeclareCacheEntry(
                 "control_terms",
                 ValueProducer(allocate=AbstractValue.Make(dict()).Clone,
@@ -259,7 +263,7 @@ def HybridController_(T):
                             nominal_depth=other._nominal_depth,
                             true_plant=other._float_true_plant,
                             posture=other._posture,
-                            adapt_input=other._adapt_input)
+                            fuzzy_weight_input=other._fuzzy_weight_input)
 
         @property
         def rule_bases(self):
@@ -329,8 +333,9 @@ def HybridController_(T):
                 y0 = np.sqrt(x_p @ x_p)
                 if c.kind == "fuzzy":
                     self._fuzzy(theta, y0, s, u_fuzzy, zeta, derivatives)
-                    if "adapt" in p and _value(p["adapt"][0]) < 0.5:
-                        derivatives[1:] = 0.0  # theta frozen (probing)
+                    if "fuzzy_weight" in p:
+                        self._weigh_fuzzy(_value(p["fuzzy_weight"][0]),
+                                          u_fuzzy, zeta, derivatives)
                 elif c.kind == "robust":
                     for axis in self._axes:
                         u_fuzzy[axis] = robust_term(s[axis], y0,
@@ -378,6 +383,15 @@ def HybridController_(T):
                     u = c.robust_gain[k] * saturation(
                         s_k / c.robust_boundary_layer[k])
                 u_fuzzy[axis] = u
+
+        def _weigh_fuzzy(self, w, u_fuzzy, zeta, derivatives):
+            """The ``fuzzy_weight`` input w: the fuzzy compensator's u_f
+            scaled by w, theta frozen while w <= 0."""
+            if w <= 0.0:
+                derivatives[1:] = 0.0
+            for axis in self._axes:
+                if zeta[axis] == 1.0:
+                    u_fuzzy[axis] = w * u_fuzzy[axis]
 
         def _null_space_posture(self, state, J):
             """(I - J^T J^T+) (k_n (q_posture - q) - d_n v): the posture PD

@@ -125,7 +125,8 @@ def _add_localisation(builder, c: Scenario, *, contour, x0, observer,
             (chamfer, gate.GetInputPort("chamfer_state")),
             (desired, gate.GetInputPort("desired_normal_force")),
             (probing, generator.GetInputPort("hold")),
-            (spindle, controller.GetInputPort("adapt"))])
+            (probe.GetOutputPort("fuzzy_weight"),
+             controller.GetInputPort("fuzzy_weight"))])
         chamfer = gate.GetOutputPort("chamfer_state")
         command = probe.GetOutputPort("command")
         desired = gate.GetOutputPort("desired_normal_force")
@@ -213,7 +214,7 @@ def add_deburring_controller(
         plant, tool_frame, c.controller, desired_rotation,
         tool_point=tool_point, nominal_depth=c.task.desired_depth,
         true_plant=true_plant if c.controller.kind == "ideal" else None,
-        posture=posture, adapt_input=probing))
+        posture=posture, fuzzy_weight_input=probing))
 
     for system in (observer, controller):
         builder.Connect(plant_state, system.GetInputPort("plant_state"))

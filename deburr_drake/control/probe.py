@@ -148,6 +148,7 @@ class ProbingSequence(LeafSystem):
         - command
         - probing
         - spindle
+        - fuzzy_weight
         - registration
         - probe_state
         - touch_points
@@ -158,6 +159,10 @@ class ProbingSequence(LeafSystem):
       ``command`` once probing is done.
     - ``command`` (3, m): the commanded tool point (to the first-order hold).
     - ``probing`` (1): 1 while probing, then 0. ``spindle`` (1): 1 - probing.
+    - ``fuzzy_weight`` (1): 0 while probing, then ramps to 1 over
+      ``fuzzy_ramp_time`` (the weight of the controller's fuzzy
+      compensator: rules learned on earlier parts come in as the cut is
+      established).
     - ``registration`` (4): dx, dy (m), dyaw (rad), dradius (m): the
       correction of the believed part, zero until the fit.
     - ``probe_state`` (PROBE_STATE layout), ``touch_points`` (N x 4: x, y,
@@ -213,6 +218,9 @@ class ProbingSequence(LeafSystem):
                                      prerequisites_of_calc=state)
         self.DeclareVectorOutputPort("spindle", 1, self._calc_spindle,
                                      prerequisites_of_calc=state)
+        self.DeclareVectorOutputPort(
+            "fuzzy_weight", 1, self._calc_fuzzy_weight,
+            prerequisites_of_calc={self.xd_ticket(), self.time_ticket()})
         self.DeclareVectorOutputPort(
             "registration", REGISTRATION_SIZE, self._calc_registration,
             prerequisites_of_calc=state)
@@ -358,6 +366,13 @@ class ProbingSequence(LeafSystem):
 
     def _calc_spindle(self, context, output):
         output.SetAtIndex(0, 1.0 if self._done(context) else 0.0)
+
+    def _calc_fuzzy_weight(self, context, output):
+        done = float(PROBE_STATE.get(self._x(context), "done_time"))
+        ramp = self._config.fuzzy_ramp_time
+        w = 0.0 if done < 0 else (1.0 if ramp <= 0 else min(
+            1.0, (context.get_time() - done) / ramp))
+        output.SetAtIndex(0, w)
 
     def _calc_registration(self, context, output):
         output.SetFromVector(PROBE_STATE.get(self._x(context),

@@ -6,7 +6,8 @@ yaw uniform within +-``max_yaw``): probe, cut, next. The cell learns across
 parts: the contact estimates c hat (``estimator.initial_estimates`` of the
 next part, which also start the online registration's contact parameters)
 and the learned fuzzy weights theta (the controller's state at the start
-of the next part) carry over from one part to the next; ``fresh`` starts
+of the next part) carry over from one part to the next (from the last part
+that ended well: a part a guard stopped leaves nothing); ``fresh`` starts
 every part cold. Per part: the pass's metrics, the cycle time, and the
 depth error over the first 10 % of the edge (:func:`first_edge_error`).
 
@@ -185,7 +186,10 @@ def run_batch(scenario: Scenario, *, count: int, seed: int,
         parts.append(part)
         if on_part is not None:
             on_part(part, log)
-        carried = CarriedState.of(log) or carried
+        # A part a guard stopped (or NaN) leaves nothing to learn from: the
+        # next part starts from what the last good part left.
+        if log.stop_reason in ("pass_complete", "duration"):
+            carried = CarriedState.of(log) or carried
     return parts
 
 
