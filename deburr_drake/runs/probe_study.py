@@ -1,5 +1,5 @@
 """Studies of touch probing (issue 21), each run probing only (the pass is
-not cut: the run stops once the sequence has had time to finish):
+not cut: the run stops once the sequence is done):
 
 - :func:`probe_once`: one probing of a scenario; the registration found
   against the truth (minus ``part_error``);
@@ -66,7 +66,7 @@ def probing_duration(scenario: Scenario) -> float:
     per = (spacing / p.travel_speed * 1.5 + 0.1 + p.settle_time
            + p.search_distance / p.approach_speed
            + p.retract / p.travel_speed * 1.5 + 0.1)
-    back = min(contour.length, spacing * p.points)
+    back = spacing if contour.closed else spacing * p.points
     return p.points * per + back / p.travel_speed * 1.5 + \
         p.standoff / p.approach_speed + 1.0
 
@@ -79,10 +79,23 @@ def probe_once(scenario: Scenario) -> ProbeResult:
     s.localisation.online.enabled = False
     s.simulation.stop_after_passes = 0.0
     s.validate()
+    seen = {}
+
+    def capture(diagram, context):
+        seen["probe"] = diagram.GetSubsystemByName("probing_sequence")
+        seen["context"] = seen["probe"].GetMyContextFromRoot(context)
+
+    def probed():
+        x = seen["context"].get_discrete_state(0).get_value()
+        return "probed" if PROBE_STATE.get(x, "done_time") >= 0 else None
+
     log = simulate(make_deburring_diagram(scenario=s), s,
-                   duration=probing_duration(s),
-                   loggers=["probe"])
-    last = log["probe"]["value"][-1]
+                   duration=probing_duration(s), loggers=["probe"],
+                   initial_state=capture, should_stop=probed)
+    # The sequence's state where the run stopped (the log's last sample
+    # may be one before the update that finished it).
+    last = (seen["context"].get_discrete_state(0).get_value()
+            if "context" in seen else log["probe"]["value"][-1])
     done = float(PROBE_STATE.get(last, "done_time"))
     return ProbeResult(
         points=s.localisation.probe.points, noise_std=s.sensor.noise_std,
