@@ -43,7 +43,7 @@ from deburr_drake.math.geometry import Contour
 from deburr_drake.control.observer import ChamferObserver
 from deburr_drake.control.probe import (ProbeGate, ProbingSequence,
                                         sensor_timing)
-from deburr_drake.control.registration import OnlineRegistration
+from deburr_drake.control.online import OnlineRegistration
 from deburr_drake.math.registration import REGISTRATION_SIZE
 
 __all__ = ["DeburringController", "add_deburring_controller"]

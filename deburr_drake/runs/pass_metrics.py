@@ -33,7 +33,7 @@ from deburr_drake.cell.edge import make_contour
 from deburr_drake.cell.truth import contact_truth
 from deburr_drake.control.controller import make_rule_bases
 from deburr_drake.control.probe import PROBE_STATE
-from deburr_drake.control.registration import ONLINE_STATE
+from deburr_drake.control.online import ONLINE_STATE
 from deburr_drake.math import metrics
 from deburr_drake.runs.simulation import RunLog
 

@@ -7,7 +7,7 @@ import pytest
 
 from deburr_drake.config import EstimatorConfig, OnlineRegistrationConfig
 from deburr_drake.control.layout import CHAMFER_STATE
-from deburr_drake.control.registration import (ONLINE_STATE,
+from deburr_drake.control.online import (ONLINE_STATE,
                                                 OnlineRegistration)
 from deburr_drake.math.geometry import CircularContour
 from deburr_drake.math.registration import moved_contour
