@@ -37,7 +37,7 @@ from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.control.loop import add_deburring_controller
 
 __all__ = ["make_deburring_diagram", "MakeDeburringDiagram", "TOOL_FRAME",
-           "SENSOR_JOINT", "LOGGED", "SYSTEM_NAMES"]
+           "SENSOR_JOINT", "LOGGED", "LOCALISATION_LOGGED", "SYSTEM_NAMES"]
 
 #: The default names of the tool frame and the sensor joint
 #: (``robot.tool_frame``, ``robot.sensor_joint`` name them per robot).
@@ -55,6 +55,13 @@ LOGGED = {
     "reference": ("first_order_hold", "position"),
     "process": ("cutting_process", "process_state"),
     "tool_force": ("force_sensor", "tool_force"),
+}
+
+#: Logged when localisation adds the system (issue 21).
+LOCALISATION_LOGGED = {
+    "probe": ("probing_sequence", "probe_state"),
+    "touch_points": ("probing_sequence", "touch_points"),
+    "registration": ("online_registration", "registration_state"),
 }
 
 #: Every system the builder adds (besides the loggers ``log_<name>``).
@@ -113,7 +120,11 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
     contour = make_contour(c)  # the real part: the plant's truth
     belief = believed_contour(c)  # the part the controller believes in
     belief_step = believed_contour_step(c)  # ... after the part moved
+    probing = c.localisation.probe.enabled
     x0 = start_position(c, belief)
+    if probing:  # off the part, the probe's standoff before the start
+        x0 = x0 - (c.simulation.initial_depth + c.localisation.probe.standoff
+                   ) * belief.n1(x0)
     q0 = _initial_positions(plant, c, x0)
     plant.SetDefaultPositions(q0)
 
@@ -132,7 +143,8 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
     tool_point = ToolPoint(model, model.GetFrameByName(tool_frame))
     process = builder.AddNamedSystem("cutting_process", CuttingProcess(
         plant, tool_frame, contour, c.process, cut_height=c.tool.engagement,
-        cutter_radius=c.tool.cutter_radius, tool_point=tool_point))
+        cutter_radius=c.tool.cutter_radius, tool_point=tool_point,
+        spindle_input=probing))
     sensor = builder.AddNamedSystem("force_sensor", ForceSensor(
         plant, c.robot.sensor_joint, c.sensor, tool_point=tool_point))
     noise = builder.AddNamedSystem("sensor_noise", RandomSource(
@@ -163,6 +175,8 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
         plant_state=state, tool_force=force, tool_frame=tool_frame,
         start=x0, desired_rotation=desired_rotation, tool_point=tool_point,
         contour_step=belief_step, true_plant=plant, posture=q0)
+    if probing:
+        builder.Connect(loops.spindle, process.GetInputPort("spindle"))
     builder.Connect(
         add_effort_saturation(builder, c, plant, loops.actuation),
         plant.get_actuation_input_port())
@@ -176,6 +190,15 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
 
     logged = {name: builder.GetSubsystemByName(system).GetOutputPort(port)
               for name, (system, port) in LOGGED.items()}
+    if probing:
+        # The guards and the metrics see the pass: no contact while probing.
+        logged["chamfer"] = loops.chamfer
+        logged["desired_normal_force"] = loops.gate.GetOutputPort(
+            "desired_normal_force")
+    for name, (system, port) in LOCALISATION_LOGGED.items():
+        if builder.HasSubsystemNamed(system):
+            logged[name] = builder.GetSubsystemByName(system).GetOutputPort(
+                port)
     add_guards(builder, c, plant, contour, logged)
     for name, (system, port) in (extra_logs or {}).items():
         if name in logged:

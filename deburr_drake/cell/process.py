@@ -332,6 +332,7 @@ class CuttingProcess(LeafSystem):
         name: CuttingProcess
         input_ports:
         - plant_state
+        - spindle (optional)
         output_ports:
         - force_law_terms
         - process_state
@@ -339,6 +340,11 @@ class CuttingProcess(LeafSystem):
         - finish_depth
 
     - ``plant_state`` (nq + nv): the true robot state.
+    - ``spindle`` (1; only with ``spindle_input=True``): 1 the spindle
+      turns (cutting as above), 0 it is off (touch probing): no chamfering
+      or threshold force, nothing cut or recorded; a burr pushes the tool
+      back along -n1 with ``burr_contact_stiffness`` times the depth the
+      tool reaches into it.
     - ``force_law_terms`` (4 nv + 9 + nv^2): the chamfering and threshold forces'
       dependence on the joint velocities (:func:`force_law_terms`) at the
       last sample, for :func:`make_cutting_force_law`, whose outputs go to
@@ -364,7 +370,7 @@ class CuttingProcess(LeafSystem):
     def __init__(self, plant: MultibodyPlant, tool_frame_name: str,
                  contour: Contour, config: ProcessConfig, *,
                  cut_height: float, cutter_radius: float,
-                 tool_point: ToolPoint = None):
+                 tool_point: ToolPoint = None, spindle_input: bool = False):
         super().__init__()
         config.validate()
         self.set_name("cutting_process")
@@ -386,6 +392,8 @@ class CuttingProcess(LeafSystem):
             4 * self._nv + 9 + self._nv ** 2)
         self._state_port = self.DeclareVectorInputPort(
             "plant_state", plant.num_multibody_states())
+        self._spindle_port = (self.DeclareVectorInputPort("spindle", 1)
+                              if spindle_input else None)
         self._state_index = self.DeclareDiscreteState(PROCESS_STATE.size)
         self.DeclareStateOutputPort("force_law_terms", self._terms_index)
         self.DeclareStateOutputPort("process_state", self._state_index)
@@ -426,7 +434,36 @@ class CuttingProcess(LeafSystem):
                 thickness = max(thickness, burr.thickness)
         return thickness
 
+    def _spindle_off(self, context) -> bool:
+        return (self._spindle_port is not None
+                and self._spindle_port.Eval(context)[0] < 0.5)
+
+    def _update_probing(self, context, discrete_state):
+        """The spindle is off: only a burr the tool reaches into acts, as
+        a spring along -n1 (what a touch probe on a burr feels)."""
+        burr = discrete_state.get_value(self._burr_index)
+        x_p, xdot_p, J = self._tool_point.evaluate(
+            self._state_port.Eval(context))
+        n1, tangent, delta, arc = self._contour.frame(x_p)
+        k = self._bins.index(arc)
+        push = self._config.burr_contact_stiffness * max(
+            0.0, delta + burr[k]) if burr[k] > 0.0 else 0.0
+        nv = self._nv
+        # no chamfering force, so no implicit-damping term (S = 0)
+        terms = np.zeros(4 * nv + 9 + nv * nv)
+        terms[:nv] = J.T @ tangent
+        terms[3 * nv:4 * nv] = -push * (J.T @ n1)
+        terms[4 * nv + 6:] = -push * n1
+        discrete_state.set_value(self._terms_index, terms)
+        discrete_state.set_value(self._state_index, PROCESS_STATE.pack(
+            delta=delta, engagement=0.0, g=0.0, f_t=0.0, f_threshold=push,
+            v_t=abs(float(tangent @ xdot_p)), burr_area=0.0,
+            arc_position=arc))
+
     def _update(self, context, discrete_state):
+        if self._spindle_off(context):
+            self._update_probing(context, discrete_state)
+            return
         burr = discrete_state.get_mutable_value(self._burr_index)
         state = self._state_port.Eval(context)
         x_p, xdot_p, J = self._tool_point.evaluate(state)

@@ -21,6 +21,8 @@ from deburr_drake.config.cell import (
 from deburr_drake.config.control import (
     CommandConfig, ControllerConfig, EstimatorConfig, FuzzyConfig,
     ImpedanceConfig, PositionConfig, RobustConfig, TaskConfig)
+from deburr_drake.config.localisation import (
+    LocalisationConfig, OnlineRegistrationConfig, ProbeConfig)
 from deburr_drake.config.scenario import (
     Scenario, SimulationConfig, field_type, get_field, load_scenario,
     scenario_names, scenario_path, set_field)
@@ -31,6 +33,7 @@ __all__ = [
     "ImpedanceConfig", "PositionConfig", "ControllerConfig", "SensorConfig",
     "ProcessConfig", "BurrConfig", "RobotConfig", "SimulationConfig",
     "GuardsConfig", "PartErrorConfig", "DropoutConfig", "PartStepConfig",
-    "FaultsConfig", "Scenario", "load_scenario", "scenario_names",
+    "FaultsConfig", "LocalisationConfig", "ProbeConfig",
+    "OnlineRegistrationConfig", "Scenario", "load_scenario", "scenario_names",
     "scenario_path", "get_field", "set_field", "field_type",
 ]

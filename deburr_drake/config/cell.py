@@ -262,6 +262,9 @@ class ProcessConfig:
     # its own step, 1548 at 0.625 ms without it), so it is on only where
     # it was shown not to: the paper arm (paper, paper_m0, paper_cells).
     implicit_damping: bool = False
+    # N/m: with the spindle off (touch probing) a burr is not cut: it
+    # pushes the tool back along -n1 where the tool reaches into it.
+    burr_contact_stiffness: float = 1.0e4
 
     def validate(self):
         o = "process"
@@ -269,7 +272,8 @@ class ProcessConfig:
                  f"{o}.implicit_damping", self.implicit_damping,
                  "true or false")
         for name in ("cutting_coefficient", "plunge_coefficient",
-                     "threshold_power_force", "contact_threshold_force"):
+                     "threshold_power_force", "contact_threshold_force",
+                     "burr_contact_stiffness"):
             _non_negative(o, name, getattr(self, name))
         _positive(o, "threshold_depth", self.threshold_depth)
         _positive(o, "smoothing_speed", self.smoothing_speed)

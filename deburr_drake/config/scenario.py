@@ -19,6 +19,7 @@ from deburr_drake.config.checks import (ConfigError, _non_negative,
                                         _positive, _require)
 from deburr_drake.config.control import (CommandConfig, ControllerConfig,
                                          EstimatorConfig, TaskConfig)
+from deburr_drake.config.localisation import LocalisationConfig
 
 __all__ = ["SimulationConfig", "Scenario", "get_field", "set_field",
            "field_type", "scenario_names", "scenario_path", "load_scenario"]
@@ -94,6 +95,8 @@ class Scenario:
     guards: GuardsConfig = field(default_factory=GuardsConfig)
     part_error: PartErrorConfig = field(default_factory=PartErrorConfig)
     faults: FaultsConfig = field(default_factory=FaultsConfig)
+    localisation: LocalisationConfig = field(
+        default_factory=LocalisationConfig)
 
     def validate(self):
         # The default output directory is out/<name>: a plain file name.

@@ -14,6 +14,8 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 from deburr_drake.config import CommandConfig, ConfigError, TaskConfig
 from deburr_drake.math.geometry import Contour, contour_at
 from deburr_drake.control.layout import CHAMFER_STATE, COMMAND_STATE
+from deburr_drake.control.observer import RegisteredContour
+from deburr_drake.math.registration import REGISTRATION_SIZE
 
 __all__ = ["CommandGenerator", "FirstOrderHold", "feedrate"]
 
@@ -49,6 +51,8 @@ class CommandGenerator(LeafSystem):
         name: CommandGenerator
         input_ports:
         - chamfer_state
+        - registration (optional)
+        - hold (optional)
         output_ports:
         - command
         - feed
@@ -57,6 +61,11 @@ class CommandGenerator(LeafSystem):
       and ||f_t|| (N) are read.
     - ``command`` (3, m): x_c(kT), world frame.
     - ``feed`` (1, m/s): the commanded feed speed v.
+    - ``registration`` (4) and ``hold`` (1), only with ``registered=True``:
+      the contour moved by the registration (as the observer's); while
+      ``hold`` > 0.5 (touch probing) no feed: x_c is the projection of x_p
+      and the arc position the one nearest the start, so the pass starts
+      from where the probe leaves the tool.
     - Discrete state (COMMAND_STATE layout): x_c (m), feed (m/s), arc
       position of x_c (m, unwrapped, counts progress past one revolution).
 
@@ -68,7 +77,8 @@ class CommandGenerator(LeafSystem):
 
     def __init__(self, config: CommandConfig, task: TaskConfig,
                  contour: Contour, initial_position, *,
-                 constant_feed=None, contour_step=None):
+                 constant_feed=None, contour_step=None,
+                 registered: bool = False):
         super().__init__()
         config.validate()
         task.validate()
@@ -96,6 +106,12 @@ class CommandGenerator(LeafSystem):
                              else constant_feed), arc_position=s0))
         self._chamfer_port = self.DeclareVectorInputPort(
             "chamfer_state", CHAMFER_STATE.size)
+        self._registration = RegisteredContour(
+            self.DeclareVectorInputPort("registration", REGISTRATION_SIZE)
+            if registered else None)
+        self._hold = (self.DeclareVectorInputPort("hold", 1) if registered
+                      else None)
+        self._start_arc = s0
         self.DeclarePeriodicDiscreteUpdateEvent(
             config.period, 0.0, self._update)
         self.DeclareStateOutputPort("command_state", self._state_index)
@@ -128,6 +144,9 @@ class CommandGenerator(LeafSystem):
             "arc_position"))
 
     def _update(self, context, discrete_state):
+        if self._hold is not None and self._hold.Eval(context)[0] > 0.5:
+            self._held(context, discrete_state)
+            return
         if self._constant_feed is not None:
             self._advance_timed(context, discrete_state)
             return
@@ -162,9 +181,19 @@ class CommandGenerator(LeafSystem):
             x_c=x_c, feed=v,
             arc_position=COMMAND_STATE.get(xd, "arc_position") + ds))
 
+    def _held(self, context, discrete_state):
+        x_p = CHAMFER_STATE.get(self._chamfer_port.Eval(context), "x_p")
+        contour = self._contour_now(context)
+        discrete_state.set_value(self._state_index, COMMAND_STATE.pack(
+            x_c=contour.project(x_p), feed=(
+                self._config.default_feed if self._constant_feed is None
+                else self._constant_feed),
+            arc_position=contour.unwrapped_arc_position(
+                x_p, self._start_arc)))
+
     def _contour_now(self, context) -> Contour:
-        return contour_at(self._contour, self._contour_step,
-                          context.get_time())
+        return self._registration(context, contour_at(
+            self._contour, self._contour_step, context.get_time()))[0]
 
     def _calc_command(self, context, output):
         xd = context.get_discrete_state(self._state_index).get_value()

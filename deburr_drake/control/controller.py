@@ -119,6 +119,7 @@ def HybridController_(T):
             - commanded_position
             - commanded_velocity
             - desired_normal_force
+            - fuzzy_weight (optional)
             output_ports:
             - actuation
             - diagnostics
@@ -129,6 +130,12 @@ def HybridController_(T):
         - ``commanded_position`` (3, m), ``commanded_velocity`` (3, m/s):
           x_c*(t) and its derivative from the first-order hold.
         - ``desired_normal_force`` (1, N): ||f_nd hat|| from the estimator.
+        - ``fuzzy_weight`` (1; only with ``fuzzy_weight_input=True``): w
+          scales the fuzzy compensator's u_f; theta is not adapted while
+          w <= 0 (touch probing: the travel between touches is not the
+          cutting the rules learn; after it w ramps in, so weights learned
+          on an earlier part do not push the tool along before the cut is
+          established).
         - ``actuation`` (nu, N or N m): actuator efforts.
         - ``diagnostics`` (CONTROLLER_DIAGNOSTICS layout).
         - Continuous state: delta_d (m), then theta_k ((2 Upsilon + 1)^2
@@ -149,8 +156,10 @@ def HybridController_(T):
         def _construct(self, plant, tool_frame_name, config,
                        desired_rotation=None, converter=None, *,
                        tool_point=None, nominal_depth=None,
-                       true_plant=None, posture=None):
+                       true_plant=None, posture=None,
+                       fuzzy_weight_input=False):
             LeafSystem_[T].__init__(self, converter)
+            self._fuzzy_weight_input = fuzzy_weight_input
             config.validate()
             if (config.kind in config.CONSTANT_FEED_KINDS
                     and nominal_depth is None):
@@ -218,7 +227,8 @@ def HybridController_(T):
                     ("tool_force", 3),
                     ("commanded_position", 3),
                     ("commanded_velocity", 3),
-                    ("desired_normal_force", 1)]}
+                    ("desired_normal_force", 1)]
+                + ([("fuzzy_weight", 1)] if fuzzy_weight_input else [])}
             self._cache = self.DeclareCacheEntry(
                 "control_terms",
                 ValueProducer(allocate=AbstractValue.Make(dict()).Clone,
@@ -252,7 +262,8 @@ def HybridController_(T):
                             other._desired_rotation, converter=converter,
                             nominal_depth=other._nominal_depth,
                             true_plant=other._float_true_plant,
-                            posture=other._posture)
+                            posture=other._posture,
+                            fuzzy_weight_input=other._fuzzy_weight_input)
 
         @property
         def rule_bases(self):
@@ -322,6 +333,9 @@ def HybridController_(T):
                 y0 = np.sqrt(x_p @ x_p)
                 if c.kind == "fuzzy":
                     self._fuzzy(theta, y0, s, u_fuzzy, zeta, derivatives)
+                    if "fuzzy_weight" in p:
+                        self._weigh_fuzzy(_value(p["fuzzy_weight"][0]),
+                                          u_fuzzy, zeta, derivatives)
                 elif c.kind == "robust":
                     for axis in self._axes:
                         u_fuzzy[axis] = robust_term(s[axis], y0,
@@ -369,6 +383,15 @@ def HybridController_(T):
                     u = c.robust_gain[k] * saturation(
                         s_k / c.robust_boundary_layer[k])
                 u_fuzzy[axis] = u
+
+        def _weigh_fuzzy(self, w, u_fuzzy, zeta, derivatives):
+            """The ``fuzzy_weight`` input w: the fuzzy compensator's u_f
+            scaled by w, theta frozen while w <= 0."""
+            if w <= 0.0:
+                derivatives[1:] = 0.0
+            for axis in self._axes:
+                if zeta[axis] == 1.0:
+                    u_fuzzy[axis] = w * u_fuzzy[axis]
 
         def _null_space_posture(self, state, J):
             """(I - J^T J^T+) (k_n (q_posture - q) - d_n v): the posture PD

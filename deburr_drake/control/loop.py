@@ -28,10 +28,12 @@ a user's diagram too.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import DiagramBuilder, OutputPort
+from pydrake.systems.primitives import ConstantVectorSource
 
 from deburr_drake.control.command import CommandGenerator, FirstOrderHold
 from deburr_drake.config import Scenario
@@ -39,6 +41,10 @@ from deburr_drake.control.controller import HybridController
 from deburr_drake.control.estimator import ContactParameterEstimator
 from deburr_drake.math.geometry import Contour
 from deburr_drake.control.observer import ChamferObserver
+from deburr_drake.control.probe import (ProbeGate, ProbingSequence,
+                                        sensor_timing)
+from deburr_drake.control.online import OnlineRegistration
+from deburr_drake.math.registration import REGISTRATION_SIZE
 
 __all__ = ["DeburringController", "add_deburring_controller"]
 
@@ -53,11 +59,98 @@ class DeburringController:
     first_order_hold: FirstOrderHold
     estimator: ContactParameterEstimator
     controller: HybridController
+    #: ``localisation.probe.enabled``: the probing sequence and its gate.
+    probe: Optional[ProbingSequence] = None
+    gate: Optional[ProbeGate] = None
+    #: ``localisation.online.enabled``: registration while cutting.
+    online: Optional[OnlineRegistration] = None
 
     @property
     def actuation(self) -> OutputPort:
         """The controller's ``actuation`` output (nu, N or N m)."""
         return self.controller.GetOutputPort("actuation")
+
+    @property
+    def spindle(self) -> Optional[OutputPort]:
+        """1 while the spindle turns, 0 while probing (None: no
+        probing, the spindle always turns)."""
+        return (None if self.probe is None
+                else self.probe.GetOutputPort("spindle"))
+
+    @property
+    def chamfer(self) -> OutputPort:
+        """The chamfer state the loops act on (while probing: no
+        contact)."""
+        if self.gate is not None:
+            return self.gate.GetOutputPort("chamfer_state")
+        return self.observer.GetOutputPort("chamfer_state")
+
+
+def _connect(builder: DiagramBuilder, pairs):
+    for output, input_port in pairs:
+        builder.Connect(output, input_port)
+
+
+def _add_localisation(builder, c: Scenario, *, contour, x0, observer,
+                      generator, controller, chamfer, command, desired,
+                      tool_force):
+    """The localisation systems (issue 21) between the loops: with
+    ``localisation.probe`` the probing sequence and its gate (which then
+    stand between the observer, the generator and the estimator and the
+    rest), with ``localisation.online`` the registration while cutting; the
+    registration into the observer and the generator. Returns the chamfer
+    state, the command and the desired normal force the loops use from
+    then on, and the systems (probe, gate, online; None when off)."""
+    timing = sensor_timing(c.sensor.sample_period, c.sensor.cutoff_frequency)
+
+    def constant(name, value):
+        return builder.AddNamedSystem(name, ConstantVectorSource(
+            np.asarray(value, float))).get_output_port()
+
+    probe = gate = online = None
+    if c.localisation.probe.enabled:
+        probe = builder.AddNamedSystem("probing_sequence", ProbingSequence(
+            contour, c.localisation.probe,
+            sample_period=c.sensor.sample_period, timing=timing,
+            initial_position=x0, start_depth=c.simulation.initial_depth))
+        gate = builder.AddNamedSystem("probe_gate", ProbeGate())
+        probing = probe.GetOutputPort("probing")
+        spindle = probe.GetOutputPort("spindle")
+        registration = probe.GetOutputPort("registration")
+        _connect(builder, [
+            (chamfer, probe.GetInputPort("chamfer_state")),
+            (tool_force, probe.GetInputPort("tool_force")),
+            (command, probe.GetInputPort("command_in")),
+            (probing, gate.GetInputPort("probing")),
+            (chamfer, gate.GetInputPort("chamfer_state")),
+            (desired, gate.GetInputPort("desired_normal_force")),
+            (probing, generator.GetInputPort("hold")),
+            (probe.GetOutputPort("fuzzy_weight"),
+             controller.GetInputPort("fuzzy_weight"))])
+        chamfer = gate.GetOutputPort("chamfer_state")
+        command = probe.GetOutputPort("command")
+        desired = gate.GetOutputPort("desired_normal_force")
+    else:
+        builder.Connect(constant("no_probing", [0.0]),
+                        generator.GetInputPort("hold"))
+        spindle = None
+        registration = constant("no_probe_registration",
+                                np.zeros(REGISTRATION_SIZE))
+    if c.localisation.online.enabled:
+        online = builder.AddNamedSystem(
+            "online_registration", OnlineRegistration(
+                contour, c.localisation.online, c.estimator,
+                latency=timing.latency, probed=probe is not None))
+        _connect(builder, [
+            (observer.GetOutputPort("chamfer_state"),
+             online.GetInputPort("chamfer_state")),
+            (registration, online.GetInputPort("base_registration")),
+            (spindle or constant("spindle_on", [1.0]),
+             online.GetInputPort("active"))])
+        registration = online.GetOutputPort("registration")
+    for system in (observer, generator):
+        builder.Connect(registration, system.GetInputPort("registration"))
+    return chamfer, command, desired, probe, gate, online
 
 
 def add_deburring_controller(
@@ -96,18 +189,22 @@ def add_deburring_controller(
     c = scenario
     x0 = (contour.point_at(0.0) if start is None
           else np.asarray(start, float))
+    localised = c.localisation.enabled
+    probing = c.localisation.probe.enabled
     # The constant-feed baselines (controller.kind) run a timed path.
     constant_feed = (c.command.constant_feed if c.controller.kind
                      in c.controller.CONSTANT_FEED_KINDS else None)
     observer = builder.AddNamedSystem("chamfer_observer", ChamferObserver(
         plant, tool_frame, contour,
         min_tangential_speed=c.command.min_tangential_speed,
-        tool_point=tool_point, contour_step=contour_step))
+        tool_point=tool_point, contour_step=contour_step,
+        registered=localised))
     generator = builder.AddNamedSystem("command_generator", CommandGenerator(
         c.command, c.task, contour, x0, constant_feed=constant_feed,
-        contour_step=contour_step))
+        contour_step=contour_step, registered=localised))
+    # Probing starts off the part, at x0 (the probe's standoff).
     foh = builder.AddNamedSystem("first_order_hold", FirstOrderHold(
-        c.command.period, contour.project(x0)))
+        c.command.period, x0 if probing else contour.project(x0)))
     estimator = builder.AddNamedSystem(
         "contact_estimator", ContactParameterEstimator(
             c.estimator, c.task, sample_period=c.controller.control_period))
@@ -117,22 +214,29 @@ def add_deburring_controller(
         plant, tool_frame, c.controller, desired_rotation,
         tool_point=tool_point, nominal_depth=c.task.desired_depth,
         true_plant=true_plant if c.controller.kind == "ideal" else None,
-        posture=posture))
+        posture=posture, fuzzy_weight_input=probing))
 
     for system in (observer, controller):
         builder.Connect(plant_state, system.GetInputPort("plant_state"))
         builder.Connect(tool_force, system.GetInputPort("tool_force"))
     chamfer = observer.GetOutputPort("chamfer_state")
+    command = generator.GetOutputPort("command")
+    desired = estimator.GetOutputPort("desired_normal_force")
+    probe = gate = online = None
+    if localised:
+        chamfer, command, desired, probe, gate, online = _add_localisation(
+            builder, c, contour=contour, x0=x0, observer=observer,
+            generator=generator, controller=controller, chamfer=chamfer,
+            command=command, desired=desired, tool_force=tool_force)
     for system in (generator, estimator, controller):
         builder.Connect(chamfer, system.GetInputPort("chamfer_state"))
-    builder.Connect(generator.GetOutputPort("command"),
-                    foh.GetInputPort("sampled"))
+    builder.Connect(command, foh.GetInputPort("sampled"))
     builder.Connect(foh.GetOutputPort("position"),
                     controller.GetInputPort("commanded_position"))
     builder.Connect(foh.GetOutputPort("velocity"),
                     controller.GetInputPort("commanded_velocity"))
-    builder.Connect(estimator.GetOutputPort("desired_normal_force"),
-                    controller.GetInputPort("desired_normal_force"))
+    builder.Connect(desired, controller.GetInputPort("desired_normal_force"))
     return DeburringController(observer=observer, command_generator=generator,
                                first_order_hold=foh, estimator=estimator,
-                               controller=controller)
+                               controller=controller, probe=probe, gate=gate,
+                               online=online)

@@ -13,10 +13,34 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
 from deburr_drake.math.geometry import Contour, contour_at, direction_of_motion
+from deburr_drake.math.registration import REGISTRATION_SIZE, moved_contour
 from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.control.layout import CHAMFER_STATE
 
-__all__ = ["ChamferObserver", "chamfer_quantities", "chamfer_kinematics"]
+__all__ = ["ChamferObserver", "RegisteredContour", "chamfer_quantities",
+           "chamfer_kinematics"]
+
+
+class RegisteredContour:
+    """The contour a system works on, moved by the value of its
+    ``registration`` input port (None: no port, the contour as it is).
+    Memo of the last moved contour (not state: a function of the port's
+    value)."""
+
+    def __init__(self, port):
+        self.port = port
+        self._last = None  # (contour id, registration bytes, moved)
+
+    def __call__(self, context, contour):
+        """(contour moved by the port's registration, the registration's
+        bytes: a memo key)."""
+        if self.port is None:
+            return contour, b""
+        reg = self.port.Eval(context)
+        key = (id(contour), reg.tobytes())
+        if self._last is None or self._last[:2] != key:
+            self._last = (*key, moved_contour(contour, reg))
+        return self._last[2], key[1]
 
 
 def chamfer_quantities(contour: Contour, x_p, xdot_p, force, *,
@@ -62,6 +86,7 @@ class ChamferObserver(LeafSystem):
         input_ports:
         - plant_state
         - tool_force
+        - registration (optional)
         output_ports:
         - chamfer_state
 
@@ -69,6 +94,10 @@ class ChamferObserver(LeafSystem):
     - ``tool_force`` (3, N): force of the environment on the tool, world.
     - ``chamfer_state`` (CHAMFER_STATE layout): x_p, xdot_p, n1, n2, delta,
       delta_dot, ||f_n||, ||f_t||, arc position.
+    - ``registration`` (4; only with ``registered=True``): dx, dy (m), dyaw
+      (rad), dradius (m): the believed part moved by it
+      (deburr_drake.math.registration.moved_contour), from touch probing
+      or registration while cutting.
 
     ``plant`` is a kinematic model of the robot (it is not simulated here);
     its Context is scratch memory for kinematics, not state. A ``tool_point``
@@ -80,7 +109,8 @@ class ChamferObserver(LeafSystem):
 
     def __init__(self, plant: MultibodyPlant, tool_frame_name: str,
                  contour: Contour, *, min_tangential_speed: float,
-                 tool_point: ToolPoint = None, contour_step=None):
+                 tool_point: ToolPoint = None, contour_step=None,
+                 registered: bool = False):
         super().__init__()
         self.set_name("chamfer_observer")
         self._tool_point = tool_point or ToolPoint(
@@ -91,6 +121,9 @@ class ChamferObserver(LeafSystem):
         nx = plant.num_multibody_states()
         self._state_port = self.DeclareVectorInputPort("plant_state", nx)
         self._force_port = self.DeclareVectorInputPort("tool_force", 3)
+        self._registration = RegisteredContour(
+            self.DeclareVectorInputPort("registration", REGISTRATION_SIZE)
+            if registered else None)
         # The kinematic part changes with the plant state only, not with
         # each new force sample; Drake invalidates the output whenever any
         # discrete state changes (every sample) or the integrator perturbs
@@ -111,9 +144,10 @@ class ChamferObserver(LeafSystem):
 
     def _calc(self, context, output):
         state = self._state_port.Eval(context)
-        contour = contour_at(self._contour, self._contour_step,
-                             context.get_time())
-        key = (state.tobytes(), id(contour))
+        contour, reg = self._registration(
+            context, contour_at(self._contour, self._contour_step,
+                                context.get_time()))
+        key = (state.tobytes(), id(contour), reg)
         if self._last is None or key != self._last[0]:
             x_p, xdot_p = self.tool_point(state)
             self._last = (key, chamfer_kinematics(

@@ -10,7 +10,11 @@ function per family, each usable alone:
   against the plant's truth;
 - :func:`smoothness_metrics`: torque and fuzzy-term variation, the learned
   surface's roughness, the sliding variable's range;
-- :func:`status_metrics`: times, completion, NaN.
+- :func:`status_metrics`: times, completion, NaN;
+- :func:`localisation_metrics` (runs with localisation only): probing and
+  cycle time, the probe's fit, the registration;
+- :func:`first_edge_error`: the depth error over the first part of the edge
+  cut (the batch's measure of learning from part to part).
 
 :func:`pass_metrics` is all of them. Every family takes the run's
 :class:`PassWindow` (contact, then ``TRANSIENT`` s excluded) where it
@@ -28,12 +32,15 @@ import numpy as np
 from deburr_drake.cell.edge import make_contour
 from deburr_drake.cell.truth import contact_truth
 from deburr_drake.control.controller import make_rule_bases
+from deburr_drake.control.probe import PROBE_STATE
+from deburr_drake.control.online import ONLINE_STATE
 from deburr_drake.math import metrics
 from deburr_drake.runs.simulation import RunLog
 
 __all__ = ["pass_metrics", "PassMetrics", "PassWindow", "pass_window",
            "finish_metrics", "force_metrics", "feed_metrics",
            "estimate_metrics", "smoothness_metrics", "status_metrics",
+           "localisation_metrics", "first_edge_error",
            "force_at_desired_depth", "TRANSIENT", "CONTACT_FORCE"]
 
 #: Excluded after contact is established (s), as the issue asks.
@@ -323,6 +330,70 @@ def status_metrics(log: RunLog) -> PassMetrics:
     return out
 
 
+def localisation_metrics(log: RunLog) -> PassMetrics:
+    """With touch probing: ``probing_time_s`` (when the pass started),
+    ``pass_time_s`` (after it) and ``cycle_time_s`` (both, when the pass
+    completed), the touches made and kept, the fit's residual RMS and the
+    registration it found (mm, rad); with registration while cutting the
+    final correction (mm). Empty without localisation."""
+    out = PassMetrics()
+    probe = log.signals.get("probe")
+    if probe is not None and len(probe["t"]):
+        last = probe["value"][-1]
+        done = float(PROBE_STATE.get(last, "done_time"))
+        if done >= 0.0:
+            out["probing_time_s"] = done
+            out["pass_time_s"] = log.stop_time - done
+        else:
+            out.unavailable("probing_time_s", "probing did not finish "
+                            f"(the run stopped at {log.stop_time:.3f} s)")
+            out.unavailable("pass_time_s", "probing did not finish")
+        if log.completed_pass:
+            out["cycle_time_s"] = log.stop_time
+        else:
+            out.unavailable("cycle_time_s", "the pass did not complete "
+                            f"({log.stop_reason})")
+        out["probe_touches"] = float(PROBE_STATE.get(last, "touches"))
+        out["probe_touches_kept"] = float(PROBE_STATE.get(last, "kept"))
+        out["probe_fit_rms_mm"] = float(PROBE_STATE.get(last, "fit_rms")) \
+            * 1e3
+        reg = PROBE_STATE.get(last, "registration")
+        out["probe_offset_x_mm"] = float(reg[0]) * 1e3
+        out["probe_offset_y_mm"] = float(reg[1]) * 1e3
+        out["probe_yaw_rad"] = float(reg[2])
+        out["probe_radius_mm"] = float(reg[3]) * 1e3
+    online = log.signals.get("registration")
+    if online is not None and len(online["t"]):
+        corr = ONLINE_STATE.get(online["value"][-1], "correction")
+        out["online_offset_x_mm"] = float(corr[0]) * 1e3
+        out["online_offset_y_mm"] = float(corr[1]) * 1e3
+        out["online_yaw_rad"] = float(corr[2])
+    return out
+
+
+def first_edge_error(log: RunLog, fraction: float = 0.1) -> float:
+    """RMS depth error (mm) over the first ``fraction`` of the edge from
+    where the pass made contact, the entry's transient included (what a
+    cell that has learned from earlier parts does better); nan when the
+    run has no finish record or no contact."""
+    finish = log.signals.get("finish")
+    window = pass_window(log)
+    if finish is None or not np.isfinite(window.contact):
+        return float("nan")
+    sc = log.scenario
+    contour = make_contour(sc)
+    L, closed = contour.length, contour.closed
+    proc = log["process"]
+    k = int(np.searchsorted(proc["t"], window.contact))
+    start = float(proc["arc_position"][min(k, len(proc["t"]) - 1)])
+    span = metrics.arc_span_mask(finish["arc"], start, start + fraction * L,
+                                 L, closed)
+    if not np.any(span):
+        return float("nan")
+    error = finish["depth"][span] - sc.task.desired_depth
+    return metrics.rms(error) * 1e3
+
+
 def pass_metrics(log: RunLog, *,
                  true_force_at_desired_depth: Optional[float] = None,
                  only_cut: bool = False) -> PassMetrics:
@@ -342,6 +413,7 @@ def pass_metrics(log: RunLog, *,
     for family in (finish_metrics(log, window, only_cut=only_cut),
                    force_metrics(log, window), feed_metrics(log, window),
                    estimate_metrics(log, true_force_at_desired_depth),
-                   smoothness_metrics(log, window), status_metrics(log)):
+                   smoothness_metrics(log, window), status_metrics(log),
+                   localisation_metrics(log)):
         out.merge(family)
     return out

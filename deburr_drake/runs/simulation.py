@@ -152,8 +152,8 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
              duration: Optional[float] = None,
              progress: Optional[Callable[[float, float, float], None]] = None,
              progress_interval: float = 1.0, loggers=None,
-             should_stop: Optional[Callable[[], Optional[str]]] = None
-             ) -> RunLog:
+             should_stop: Optional[Callable[[], Optional[str]]] = None,
+             initial_state: Optional[Callable] = None) -> RunLog:
     """Simulates from the diagram's default context for ``duration`` (the
     scenario's by default, or until ``stop_after_passes`` edge lengths are
     done) and returns the logs. ``progress(t, wall, feed)`` (s, s, m/s of
@@ -167,7 +167,11 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
     event requested termination), ``should_stop()`` returned a reason
     (checked after every step by the simulator's monitor, e.g. a signal
     handler's flag: "interrupted"), Drake detected a NaN ("nan"), or
-    another exception ("error"; the detail holds its message)."""
+    another exception ("error"; the detail holds its message).
+
+    ``initial_state(diagram, context)``, if given, sets states of the root
+    context before the run starts (after the random context: e.g. the
+    learned fuzzy weights a batch carries from the part before)."""
     duration = scenario.simulation.duration if duration is None else duration
     if not (progress_interval > 0 and np.isfinite(progress_interval)):
         raise ValueError(f"progress_interval = {progress_interval!r} is "
@@ -194,6 +198,8 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
         simulator.set_monitor(monitor)
     diagram.SetRandomContext(
         context, RandomGenerator(scenario.sensor.noise_seed))
+    if initial_state is not None:
+        initial_state(diagram, context)
     wall_start = time.perf_counter()
     t = 0.0
     reason, detail = "duration", ""

@@ -145,12 +145,15 @@ def _study_error(e: Exception, where: str) -> ConfigError:
     return ConfigError(f"{where}: {' '.join(str(e).split())}")
 
 
-def load_study(path) -> Study:
+def load_study(path, text=None) -> Study:
     """Reads and checks a study file (syntax, unknown or duplicate keys and
-    types, with file:line:column; then every value); one ConfigError."""
+    types, with file:line:column; then every value); one ConfigError.
+    ``text``: YAML overrides of the study's fields (``--study-text``), e.g.
+    another base scenario and duration for the same samples."""
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"study {path}: no such file")
+    overrides = text
     try:
         text = path.read_text()
     except (OSError, UnicodeDecodeError) as e:
@@ -160,6 +163,12 @@ def load_study(path) -> Study:
         study = yaml_load_typed(schema=Study, data=text, defaults=Study())
     except (RuntimeError, ValueError, TypeError, AssertionError) as e:
         raise _study_error(e, str(path)) from None
+    if overrides:
+        _check_yaml(overrides, "--study-text", Study, "study")
+        try:
+            study = yaml_load_typed(data=overrides, defaults=study)
+        except (RuntimeError, ValueError, TypeError, AssertionError) as e:
+            raise _study_error(e, "--study-text") from None
     study._dir = path.resolve().parent
     return study
 

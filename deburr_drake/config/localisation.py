@@ -1,0 +1,117 @@
+"""Configuration of localisation (issue 21): touch probing before the pass
+(``localisation.probe``) and registration while cutting
+(``localisation.online``). Both are off by default; the ``paper_localised``
+scenario turns both on. SI units; each field's comment gives its unit."""
+
+from dataclasses import dataclass, field
+
+from deburr_drake.config.checks import (_non_negative, _positive, _require)
+
+__all__ = ["ProbeConfig", "OnlineRegistrationConfig", "LocalisationConfig"]
+
+
+@dataclass
+class ProbeConfig:
+    """Touch probing with the spindle off: guarded moves along the believed
+    normal n1 at ``points`` places of the edge, contact detected on the
+    force sensor, a circle (centre, optionally radius) or a straight edge
+    (offset, heading) fitted, points on a burr dropped by their residual,
+    and the believed part corrected before the pass."""
+
+    enabled: bool = False
+    points: int = 8  # N touches
+    # m of arc between touches; 0: spread evenly over the edge (a closed
+    # edge: L / N apart; an open one: centred, L / N apart).
+    spacing: float = 0.0
+    first_arc: float = 0.0  # m, arc position of the first touch (closed edge)
+    approach_speed: float = 0.002  # m/s, the guarded move along n1
+    travel_speed: float = 0.02  # m/s, between touches at the standoff
+    force_threshold: float = 1.0  # N, contact when -f . n1 exceeds it
+    standoff: float = 0.002  # m, the guarded move starts this far before the believed edge
+    search_distance: float = 0.004  # m, the guarded move gives up after this (a miss)
+    retract: float = 0.002  # m, back from the touch before travelling
+    settle_time: float = 0.15  # s, held at the standoff before each guarded move
+    # N/m, the contact stiffness the detection bias is modelled with
+    # (threshold / stiffness of penetration at the threshold).
+    contact_stiffness: float = 5.0e3
+    fit_radius: bool = False  # circle: fit the radius too (else the drawing's)
+    max_residual: float = 1.0e-4  # m, a touch off the fit by more is dropped
+    # s: after probing the controller's fuzzy compensator (off while
+    # probing) ramps back in over this time, so weights learned on an
+    # earlier part (a batch) do not push the tool along before the cut is
+    # established; 0: at once.
+    fuzzy_ramp_time: float = 2.0
+
+    def validate(self):
+        o = "localisation.probe"
+        _require(isinstance(self.enabled, bool), f"{o}.enabled",
+                 self.enabled, "true or false")
+        _require(isinstance(self.points, int) and self.points >= 3,
+                 f"{o}.points", self.points, "an integer >= 3")
+        _non_negative(o, "spacing", self.spacing)
+        _non_negative(o, "first_arc", self.first_arc)
+        for name in ("approach_speed", "travel_speed", "force_threshold",
+                     "standoff", "search_distance", "retract",
+                     "contact_stiffness", "max_residual"):
+            _positive(o, name, getattr(self, name))
+        _non_negative(o, "settle_time", self.settle_time)
+        _non_negative(o, "fuzzy_ramp_time", self.fuzzy_ramp_time)
+        _require(self.search_distance > self.standoff,
+                 f"{o}.search_distance", self.search_distance,
+                 f"> {o}.standoff ({self.standoff})")
+        _require(isinstance(self.fit_radius, bool), f"{o}.fit_radius",
+                 self.fit_radius, "true or false")
+
+
+@dataclass
+class OnlineRegistrationConfig:
+    """Registration while cutting: the part of the offset the force loop
+    can tell apart from the contact threshold (around a circle the first
+    harmonic of the offset, along a straight edge the heading) estimated by
+    recursive least squares together with c0 and c1 (from the contact
+    onset at the entry as well), and the believed part moved smoothly
+    towards the estimate."""
+
+    enabled: bool = False
+    sample_period: float = 0.025  # s
+    forgetting_time: float = 60.0  # s, RLS exponential forgetting horizon
+    # Prior standard deviation of the offset (m; c0 and c1 start from
+    # estimator.initial_estimates with their own size as prior).
+    offset_prior: float = 0.001  # m, without probing (the fixture's)
+    probed_offset_prior: float = 5.0e-5  # m, after probing (the probe's)
+    # N, the RLS measurement's standard deviation: the sensor's noise and
+    # what the linear contact model leaves (the force loop's transients).
+    force_noise: float = 1.0
+    # The believed part moves towards the estimate with this time constant
+    # (s), no faster than ``max_rate`` (m/s): no step in the command.
+    time_constant: float = 1.0  # s
+    max_rate: float = 0.0005  # m/s
+    # The estimate is used only after the tool has cut this much arc
+    # (m): a short arc does not separate the offset from c0.
+    min_arc: float = 0.0  # m
+
+    def validate(self):
+        o = "localisation.online"
+        _require(isinstance(self.enabled, bool), f"{o}.enabled",
+                 self.enabled, "true or false")
+        for name in ("sample_period", "forgetting_time", "offset_prior",
+                     "probed_offset_prior", "force_noise", "time_constant",
+                     "max_rate"):
+            _positive(o, name, getattr(self, name))
+        _non_negative(o, "min_arc", self.min_arc)
+
+
+@dataclass
+class LocalisationConfig:
+    probe: ProbeConfig = field(default_factory=ProbeConfig)
+    online: OnlineRegistrationConfig = field(
+        default_factory=OnlineRegistrationConfig)
+
+    @property
+    def enabled(self) -> bool:
+        return self.probe.enabled or self.online.enabled
+
+    def validate(self):
+        self.probe.validate()
+        self.online.validate()
+

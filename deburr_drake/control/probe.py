@@ -1,0 +1,428 @@
+"""Touch probing before the pass (issue 21): the robot's procedure, with the
+spindle off, as Drake systems.
+
+- :class:`ProbingSequence`: a state machine in the Context's discrete state
+  that commands guarded moves along the believed normal n1 at N points of
+  the edge, detects each contact on the force sensor, compensates the
+  detection bias (:func:`detection_depth`), fits the circle or straight
+  edge (deburr_drake.math.registration, burr touches dropped by their
+  residual), outputs the registration that corrects the believed part, and
+  brings the tool to the pass's start on the corrected part; then it hands
+  the command over to the command generator.
+- :class:`ProbeGate`: while probing, the estimator, the force loop and the
+  guards see no contact (the touches are not chamfering).
+
+:func:`probe_arcs` places the touches; :func:`detection_depth` is the bias
+model.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from pydrake.systems.framework import LeafSystem
+
+from deburr_drake.config import ProbeConfig
+from deburr_drake.control.layout import CHAMFER_STATE, VectorLayout
+from deburr_drake.math.geometry import CircularContour, Contour
+from deburr_drake.math.registration import (REGISTRATION_SIZE,
+                                            moved_contour,
+                                            registration_from_points)
+
+__all__ = ["ProbingSequence", "ProbeGate", "PROBE_STATE", "PHASES",
+           "probe_arcs", "detection_depth", "filter_latency",
+           "sensor_timing", "SensorTiming"]
+
+#: The phases of the sequence, in order.
+PHASES = ("travel", "settle", "approach", "retract", "return", "enter",
+          "done")
+_P = {name: float(k) for k, name in enumerate(PHASES)}
+
+PROBE_STATE = VectorLayout("probe_state", [
+    ("phase", 1),           # index into PHASES
+    ("index", 1),           # the touch under way
+    ("phase_start", 1),     # s
+    ("segment_start", 3),   # m, world: the command moves from here ...
+    ("segment_end", 3),     # m, ... to here
+    ("segment_duration", 1),  # s
+    ("linear", 1),          # 1: constant speed (guarded), 0: smooth
+    ("command", 3),         # m, the commanded tool point
+    ("tare", 3),            # N, the force reading before the guarded move
+    ("registration", REGISTRATION_SIZE),  # dx, dy, dyaw, dradius
+    ("done_time", 1),       # s, -1 while probing
+    ("touches", 1),         # touches made (contact detected)
+    ("kept", 1),            # touches the fit used
+    ("fit_rms", 1),         # m, the fit's residual RMS
+])
+
+
+class SensorTiming(NamedTuple):
+    """How a force reading lags the truth, for a system sampled with the
+    sensor (s): ``lag``, the first-order filter y += a (raw - y),
+    a = 1 - exp(-2 pi f_c T), lags a ramp by T (1 - a) / a once settled;
+    ``delay``, the reader sees the value before the filter's update at the
+    same instant (T) and a crossing falls on average T / 2 before the
+    sample that detects it (1.5 T)."""
+
+    lag: float
+    delay: float
+
+    @property
+    def latency(self) -> float:
+        """s, the settled total: lag + delay."""
+        return self.lag + self.delay
+
+
+def sensor_timing(sample_period: float, cutoff_frequency: float
+                  ) -> SensorTiming:
+    """The :class:`SensorTiming` of the sensor's filter and sampling."""
+    a = 1.0 - math.exp(-2.0 * math.pi * cutoff_frequency * sample_period)
+    return SensorTiming(lag=sample_period * (1.0 - a) / a,
+                        delay=1.5 * sample_period)
+
+
+def filter_latency(sample_period: float, cutoff_frequency: float) -> float:
+    """s: the settled latency of :func:`sensor_timing`."""
+    return sensor_timing(sample_period, cutoff_frequency).latency
+
+
+def detection_depth(speed: float, threshold: float, stiffness: float,
+                    timing: SensorTiming) -> float:
+    """m: how deep past the zero-depth path the tool is when a guarded move
+    at ``speed`` (m/s) detects contact on a contact of linear
+    ``stiffness`` (N/m): the filtered force of the ramp k v t,
+    k v (t - lag (1 - exp(-t / lag))), reaches ``threshold`` at t, and the
+    tool moves on for ``delay``: v (t + delay). At rest: threshold /
+    stiffness."""
+    v = max(float(speed), 0.0)
+    if v == 0.0:
+        return threshold / stiffness
+    rate = stiffness * v  # N/s
+    lag = timing.lag
+    t = threshold / rate + lag  # the settled answer, an upper bound
+    for _ in range(50):  # Newton on g(t) = t - lag (1 - e^(-t/lag)) - F/kv
+        e = math.exp(-t / lag) if lag > 0 else 0.0
+        g = t - lag * (1.0 - e) - threshold / rate
+        dg = 1.0 - e
+        if dg <= 0.0:
+            break
+        step = g / dg
+        t -= step
+        if abs(step) < 1e-12:
+            break
+    return v * (t + timing.delay)
+
+
+def probe_arcs(contour: Contour, config: ProbeConfig) -> np.ndarray:
+    """Arc positions (m) of the N touches on ``contour``: ``spacing``
+    apart from ``first_arc`` (a closed edge wraps), or spread evenly
+    (``spacing`` 0: a closed edge from ``first_arc``, an open one
+    centred)."""
+    n, L = config.points, contour.length
+    if contour.closed:
+        step = config.spacing or L / n
+        return (config.first_arc + step * np.arange(n)) % L
+    if not math.isfinite(L) and not config.spacing:
+        raise ValueError("localisation.probe.spacing = 0 needs an edge of "
+                         "finite length: allowed > 0 on an endless edge")
+    step = config.spacing or L / n
+    span = step * (n - 1)
+    first = config.first_arc if config.spacing else 0.5 * (L - span)
+    return first + step * np.arange(n)
+
+
+class ProbingSequence(LeafSystem):
+    """Guarded moves at N points of the believed edge, the fit, and the way
+    to the pass's start on the corrected part.
+
+    .. pydrake_system::
+
+        name: ProbingSequence
+        input_ports:
+        - chamfer_state
+        - tool_force
+        - command_in
+        output_ports:
+        - command
+        - probing
+        - spindle
+        - fuzzy_weight
+        - registration
+        - probe_state
+        - touch_points
+
+    - ``chamfer_state`` (CHAMFER_STATE): x_p (m) and xdot_p (m/s) are read.
+    - ``tool_force`` (3, N, world): the force sensor's reading.
+    - ``command_in`` (3, m): the command generator's x_c, passed through to
+      ``command`` once probing is done.
+    - ``command`` (3, m): the commanded tool point (to the first-order hold).
+    - ``probing`` (1): 1 while probing, then 0. ``spindle`` (1): 1 - probing.
+    - ``fuzzy_weight`` (1): 0 while probing, then ramps to 1 over
+      ``fuzzy_ramp_time`` (the weight of the controller's fuzzy
+      compensator: rules learned on earlier parts come in as the cut is
+      established).
+    - ``registration`` (4): dx, dy (m), dyaw (rad), dradius (m): the
+      correction of the believed part, zero until the fit.
+    - ``probe_state`` (PROBE_STATE layout), ``touch_points`` (N x 4: x, y,
+      z of each compensated touch (m), 1 if contact was detected).
+    - Discrete state: the two outputs above, updated every
+      ``sample_period`` (the sensor's).
+
+    Each touch: travel (smooth) to the standoff point ``standoff`` before
+    the believed zero-depth path along -n1, settle, tare the force, move
+    along n1 at ``approach_speed`` until -(f - tare).n1 exceeds
+    ``force_threshold`` (or ``search_distance``: a miss), record x_p minus
+    the :func:`detection_depth` along n1, retract by ``retract``. Then the
+    fit, a travel to the corrected start's standoff and an entry at the
+    approach speed to ``start`` on the corrected part (the tool point the
+    pass starts from); the command generator takes over from there.
+    """
+
+    def __init__(self, contour: Contour, config: ProbeConfig, *,
+                 sample_period: float, timing: SensorTiming,
+                 initial_position,
+                 start_depth: float = 0.0):
+        super().__init__()
+        config.validate()
+        self.set_name("probing_sequence")
+        self._contour = contour
+        self._config = config
+        self._timing = timing
+        self._start_depth = start_depth
+        self._arcs = probe_arcs(contour, config)
+        self._n = len(self._arcs)
+        x0 = np.asarray(initial_position, float)
+        first = self.standoff_point(contour, self._arcs[0])
+        initial = PROBE_STATE.pack(
+            phase=_P["travel"], index=0, phase_start=0.0, segment_start=x0,
+            segment_end=first, segment_duration=self._travel_time(x0, first),
+            linear=0.0, command=x0, tare=np.zeros(3),
+            registration=np.zeros(REGISTRATION_SIZE), done_time=-1.0,
+            touches=0.0, kept=0.0, fit_rms=0.0)
+        self._state = self.DeclareDiscreteState(initial)
+        self._touch_state = self.DeclareDiscreteState(np.zeros(4 * self._n))
+        self._chamfer_port = self.DeclareVectorInputPort(
+            "chamfer_state", CHAMFER_STATE.size)
+        self._force_port = self.DeclareVectorInputPort("tool_force", 3)
+        self._command_in = self.DeclareVectorInputPort("command_in", 3)
+        self.DeclarePeriodicDiscreteUpdateEvent(sample_period, 0.0,
+                                                self._update)
+        state = {self.xd_ticket()}
+        self.DeclareVectorOutputPort(
+            "command", 3, self._calc_command,
+            prerequisites_of_calc={self.xd_ticket(),
+                                   self._command_in.ticket()})
+        self.DeclareVectorOutputPort("probing", 1, self._calc_probing,
+                                     prerequisites_of_calc=state)
+        self.DeclareVectorOutputPort("spindle", 1, self._calc_spindle,
+                                     prerequisites_of_calc=state)
+        self.DeclareVectorOutputPort(
+            "fuzzy_weight", 1, self._calc_fuzzy_weight,
+            prerequisites_of_calc={self.xd_ticket(), self.time_ticket()})
+        self.DeclareVectorOutputPort(
+            "registration", REGISTRATION_SIZE, self._calc_registration,
+            prerequisites_of_calc=state)
+        self.DeclareStateOutputPort("probe_state", self._state)
+        self.DeclareStateOutputPort("touch_points", self._touch_state)
+
+    # -- geometry of the moves -------------------------------------------
+    @property
+    def arcs(self) -> np.ndarray:
+        return self._arcs.copy()
+
+    def standoff_point(self, contour: Contour, s: float) -> np.ndarray:
+        p = contour.point_at(s)
+        return p - self._config.standoff * contour.n1(p)
+
+    def _travel_time(self, a, b) -> float:
+        # A smooth (3u^2 - 2u^3) move peaks at 1.5 x the mean speed.
+        return max(float(np.linalg.norm(np.asarray(b) - a))
+                   / self._config.travel_speed, 0.05)
+
+    def _segment(self, x, t, phase, start, end, duration, linear):
+        x[PROBE_STATE.slice("phase")] = _P[phase]
+        x[PROBE_STATE.slice("phase_start")] = t
+        x[PROBE_STATE.slice("segment_start")] = start
+        x[PROBE_STATE.slice("segment_end")] = end
+        x[PROBE_STATE.slice("segment_duration")] = max(duration, 1e-9)
+        x[PROBE_STATE.slice("linear")] = 1.0 if linear else 0.0
+
+    @staticmethod
+    def _along(x, t):
+        u = (t - PROBE_STATE.get(x, "phase_start")) / PROBE_STATE.get(
+            x, "segment_duration")
+        u = min(max(u, 0.0), 1.0)
+        w = u if PROBE_STATE.get(x, "linear") > 0.5 else u * u * (3 - 2 * u)
+        a = PROBE_STATE.get(x, "segment_start")
+        b = PROBE_STATE.get(x, "segment_end")
+        return a + w * (b - a), u >= 1.0
+
+    # -- the state machine -----------------------------------------------
+    def _update(self, context, discrete_state):
+        x = context.get_discrete_state(self._state).get_value().copy()
+        phase = PHASES[int(round(float(PROBE_STATE.get(x, "phase"))))]
+        if phase == "done":
+            return
+        t = context.get_time()
+        c = self._config
+        command, finished = self._along(x, t)
+        x[PROBE_STATE.slice("command")] = command
+        i = int(round(float(PROBE_STATE.get(x, "index"))))
+        touches = context.get_discrete_state(
+            self._touch_state).get_value().copy()
+        if phase == "travel" and finished:
+            self._segment(x, t, "settle", command, command, c.settle_time,
+                          False)
+        elif phase == "settle" and finished:
+            x[PROBE_STATE.slice("tare")] = self._force_port.Eval(context)
+            n = self._contour.n1(self._contour.point_at(self._arcs[i]))
+            self._segment(x, t, "approach", command,
+                          command + c.search_distance * n,
+                          c.search_distance / c.approach_speed, True)
+        elif phase == "approach":
+            a = PROBE_STATE.get(x, "segment_start")
+            n = PROBE_STATE.get(x, "segment_end") - a
+            n /= np.linalg.norm(n)
+            f = self._force_port.Eval(context) - PROBE_STATE.get(x, "tare")
+            if -float(f @ n) >= c.force_threshold:
+                chamfer = self._chamfer_port.Eval(context)
+                x_p = CHAMFER_STATE.get(chamfer, "x_p")
+                speed = float(CHAMFER_STATE.get(chamfer, "xdot_p") @ n)
+                touch = x_p - n * detection_depth(
+                    speed, c.force_threshold, c.contact_stiffness,
+                    self._timing)
+                touches[4 * i:4 * i + 4] = [*touch, 1.0]
+                x[PROBE_STATE.slice("touches")] += 1.0
+                back = x_p - c.retract * n
+                self._segment(x, t, "retract", command, back,
+                              self._travel_time(command, back), False)
+            elif finished:  # a miss: nothing within the search distance
+                self._segment(x, t, "retract", command, a,
+                              self._travel_time(command, a), False)
+        elif phase == "retract" and finished:
+            i += 1
+            x[PROBE_STATE.slice("index")] = i
+            if i < self._n:
+                target = self.standoff_point(self._contour, self._arcs[i])
+                self._segment(x, t, "travel", command, target,
+                              self._travel_time(command, target), False)
+            else:
+                self._fit(x, touches)
+                target = self.standoff_point(self._registered(x), 0.0)
+                self._segment(x, t, "return", command, target,
+                              self._travel_time(command, target), False)
+        elif phase == "return" and finished:
+            contour = self._registered(x)
+            p = contour.point_at(0.0)
+            start = p + self._start_depth * contour.n1(p)
+            self._segment(x, t, "enter", command, start,
+                          float(np.linalg.norm(start - command))
+                          / c.approach_speed, True)
+        elif phase == "enter" and finished:
+            x[PROBE_STATE.slice("phase")] = _P["done"]
+            x[PROBE_STATE.slice("done_time")] = t
+        discrete_state.set_value(self._state, x)
+        discrete_state.set_value(self._touch_state, touches)
+
+    def _registered(self, x) -> Contour:
+        return moved_contour(self._contour,
+                             PROBE_STATE.get(x, "registration"))
+
+    def _fit(self, x, touches):
+        t = touches.reshape(self._n, 4)
+        hit = t[:, 3] > 0.5
+        minimum = 3
+        if hit.sum() < minimum:
+            return  # too few touches: the believed part stays as it is
+        fit = registration_from_points(
+            self._contour, t[hit, :3], max_residual=self._config.max_residual,
+            fit_radius=(self._config.fit_radius
+                        and isinstance(self._contour, CircularContour)))
+        x[PROBE_STATE.slice("registration")] = fit.registration
+        x[PROBE_STATE.slice("kept")] = float(fit.kept.sum())
+        x[PROBE_STATE.slice("fit_rms")] = fit.rms
+        # Flag the dropped touches (2: touched, dropped by the fit).
+        rows = np.flatnonzero(hit)[~fit.kept]
+        t[rows, 3] = 2.0
+        touches[:] = t.ravel()
+
+    # -- outputs ---------------------------------------------------------
+    def _x(self, context):
+        return context.get_discrete_state(self._state).get_value()
+
+    def _done(self, context) -> bool:
+        return PROBE_STATE.get(self._x(context), "phase") == _P["done"]
+
+    def _calc_command(self, context, output):
+        if self._done(context):
+            output.SetFromVector(self._command_in.Eval(context))
+        else:
+            output.SetFromVector(PROBE_STATE.get(self._x(context), "command"))
+
+    def _calc_probing(self, context, output):
+        output.SetAtIndex(0, 0.0 if self._done(context) else 1.0)
+
+    def _calc_spindle(self, context, output):
+        output.SetAtIndex(0, 1.0 if self._done(context) else 0.0)
+
+    def _calc_fuzzy_weight(self, context, output):
+        done = float(PROBE_STATE.get(self._x(context), "done_time"))
+        ramp = self._config.fuzzy_ramp_time
+        w = 0.0 if done < 0 else (1.0 if ramp <= 0 else min(
+            1.0, (context.get_time() - done) / ramp))
+        output.SetAtIndex(0, w)
+
+    def _calc_registration(self, context, output):
+        output.SetFromVector(PROBE_STATE.get(self._x(context),
+                                             "registration"))
+
+
+_GATED = [CHAMFER_STATE.slice(name).start
+          for name in ("f_n", "f_t", "delta", "delta_dot")]
+
+
+class ProbeGate(LeafSystem):
+    """What the force loop, the estimator and the guards see while the
+    sequence probes: no contact (||f_n||, ||f_t||, delta and delta_dot 0,
+    the desired normal force 0, so delta_d' = 0 in (7) and the estimator
+    does not adapt); afterwards its inputs unchanged.
+
+    .. pydrake_system::
+
+        name: ProbeGate
+        input_ports:
+        - probing
+        - chamfer_state
+        - desired_normal_force
+        output_ports:
+        - chamfer_state
+        - desired_normal_force
+    """
+
+    def __init__(self):
+        super().__init__()
+        self.set_name("probe_gate")
+        self._probing = self.DeclareVectorInputPort("probing", 1)
+        self._chamfer = self.DeclareVectorInputPort("chamfer_state",
+                                                    CHAMFER_STATE.size)
+        self._desired = self.DeclareVectorInputPort("desired_normal_force",
+                                                    1)
+        self.DeclareVectorOutputPort("chamfer_state", CHAMFER_STATE.size,
+                                     self._calc_chamfer)
+        self.DeclareVectorOutputPort("desired_normal_force", 1,
+                                     self._calc_desired)
+
+    def _on(self, context) -> bool:
+        return self._probing.Eval(context)[0] > 0.5
+
+    def _calc_chamfer(self, context, output):
+        chamfer = self._chamfer.Eval(context).copy()
+        if self._on(context):
+            chamfer[_GATED] = 0.0
+        output.SetFromVector(chamfer)
+
+    def _calc_desired(self, context, output):
+        output.SetAtIndex(0, 0.0 if self._on(context)
+                          else self._desired.Eval(context)[0])

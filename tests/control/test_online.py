@@ -1,0 +1,59 @@
+"""OnlineRegistration converges on a known offset of the part from the
+contact force along the cut (open loop: the tool runs on the real edge, the
+force is the contact law of the real depth)."""
+
+import numpy as np
+import pytest
+
+from deburr_drake.config import EstimatorConfig, OnlineRegistrationConfig
+from deburr_drake.control.layout import CHAMFER_STATE
+from deburr_drake.control.online import (ONLINE_STATE,
+                                                OnlineRegistration)
+from deburr_drake.math.geometry import CircularContour
+from deburr_drake.math.registration import moved_contour
+
+
+def _run(offset, *, active=1.0, seconds=40.0, c0=2.0, c1=9000.0, seed=0):
+    believed = CircularContour([0.4, 0.0, 0.048], 0.027)
+    real = moved_contour(believed, [*offset, 0.0, 0.0])
+    config = OnlineRegistrationConfig(enabled=True)
+    system = OnlineRegistration(believed, config, EstimatorConfig(
+        initial_estimates=[3.0, 4000.0, 20.0]), latency=0.018)
+    context = system.CreateDefaultContext()
+    system.GetInputPort("base_registration").FixValue(context, np.zeros(4))
+    system.GetInputPort("active").FixValue(context, [active])
+    rng = np.random.default_rng(seed)
+    T, v = config.sample_period, 0.0024
+    for k in range(int(seconds / T)):
+        t = k * T
+        # The force loop settles the real depth towards 0.5 mm.
+        depth = 5e-4 * (1 - np.exp(-t / 1.5))
+        p = real.point_at(v * t)
+        n1 = real.n1(p)
+        x_p = p + depth * n1
+        f_n = c0 + c1 * depth + 0.1 * rng.standard_normal()
+        chamfer = CHAMFER_STATE.pack(
+            x_p=x_p, xdot_p=v * real.tangent(p), n1=n1, n2=n1, delta=depth,
+            delta_dot=0.0, f_n=f_n, f_t=0.0, arc_position=v * t,
+            n1_rate=np.zeros(3))
+        system.GetInputPort("chamfer_state").FixValue(context, chamfer)
+        context.SetDiscreteState(
+            system.EvalUniquePeriodicDiscreteUpdate(context))
+        context.SetTime(t + T)
+    return system.GetOutputPort("registration").Eval(context), \
+        context.get_discrete_state(0).get_value()
+
+
+def test_online_estimate_converges_on_a_known_offset():
+    reg, state = _run([6e-4, -4e-4])
+    np.testing.assert_allclose(reg[:2], [6e-4, -4e-4], atol=2e-5)
+    theta = ONLINE_STATE.get(state, "theta")
+    assert theta[1] == pytest.approx(9000.0, rel=0.1)  # c1 with it
+
+
+def test_no_offset_no_correction_and_nothing_learned_while_inactive():
+    reg, _ = _run([0.0, 0.0])
+    np.testing.assert_allclose(reg[:2], 0.0, atol=1e-5)
+    reg, state = _run([6e-4, -4e-4], active=0.0, seconds=2.0)
+    np.testing.assert_allclose(reg, 0.0)
+    assert ONLINE_STATE.get(state, "onset") == 0.0

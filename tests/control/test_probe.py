@@ -1,0 +1,167 @@
+"""Touch probing: the layout of the touches, the detection-bias model
+against the sensor's filter, the sequence's state machine (a touch
+compensated by the modelled bias, a burr touch dropped, the hand-over to
+the command generator) and the gate."""
+
+import math
+
+import numpy as np
+import pytest
+
+from deburr_drake.config import ProbeConfig
+from deburr_drake.control.layout import CHAMFER_STATE
+from deburr_drake.control.probe import (PHASES, PROBE_STATE, ProbeGate,
+                                        ProbingSequence, detection_depth,
+                                        probe_arcs, sensor_timing)
+from deburr_drake.math.geometry import CircularContour, StraightContour
+
+
+def test_touches_spread_on_closed_and_open_edges():
+    circle = CircularContour([0, 0, 0], 0.027)
+    arcs = probe_arcs(circle, ProbeConfig(points=4))
+    np.testing.assert_allclose(arcs, np.arange(4) * circle.length / 4)
+    line = StraightContour([0, 0, 0], [1, 0, 0], [0, -1, 0], length=0.06)
+    np.testing.assert_allclose(probe_arcs(line, ProbeConfig(points=3)),
+                               [0.01, 0.03, 0.05])
+    np.testing.assert_allclose(
+        probe_arcs(line, ProbeConfig(points=3, spacing=0.01, first_arc=0.02)),
+        [0.02, 0.03, 0.04])
+
+
+@pytest.mark.parametrize("speed,stiffness", [(0.002, 5e3), (0.004, 1e4)])
+def test_detection_depth_matches_the_sensor_filter(speed, stiffness):
+    # The sensor's filter y += a (raw - y) sampled every T, read by the
+    # probe one sample late, on a linear contact at constant speed; the
+    # contact's phase against the samples uniform. The mean depth at
+    # detection is the model's within 2 um.
+    T, fc, threshold = 0.0025, 10.0, 1.0
+    a = 1 - math.exp(-2 * math.pi * fc * T)
+    depths = []
+    for phase in np.linspace(0, T, 20, endpoint=False):
+        y = 0.0
+        for k in range(1, 2000):
+            t = k * T - phase  # time since contact
+            if y >= threshold:  # read before the filter's update at t
+                depths.append(speed * t)
+                break
+            y += a * (stiffness * speed * max(t, 0.0) - y)
+    model = detection_depth(speed, threshold, stiffness,
+                            sensor_timing(T, fc))
+    assert np.mean(depths) == pytest.approx(model, abs=1e-6)
+
+
+def _chamfer(x_p, xdot_p=(0, 0, 0)):
+    return CHAMFER_STATE.pack(
+        x_p=np.asarray(x_p, float), xdot_p=np.asarray(xdot_p, float),
+        n1=np.zeros(3), n2=np.zeros(3), delta=0.0, delta_dot=0.0, f_n=0.0,
+        f_t=0.0, arc_position=0.0, n1_rate=np.zeros(3))
+
+
+class _Run:
+    """Steps a ProbingSequence's discrete updates with fixed inputs."""
+
+    def __init__(self, probe, x0):
+        self.probe = probe
+        self.context = probe.CreateDefaultContext()
+        self.x_p = np.asarray(x0, float)
+        self.force = np.zeros(3)
+        probe.GetInputPort("command_in").FixValue(self.context, np.zeros(3))
+        self.fix()
+
+    def fix(self, speed=(0, 0, 0)):
+        self.probe.GetInputPort("chamfer_state").FixValue(
+            self.context, _chamfer(self.x_p, speed))
+        self.probe.GetInputPort("tool_force").FixValue(self.context,
+                                                       self.force)
+
+    def state(self):
+        return self.context.get_discrete_state(0).get_value()
+
+    def phase(self):
+        return PHASES[int(round(float(PROBE_STATE.get(self.state(),
+                                                      "phase"))))]
+
+    def step(self, T=0.0025):
+        self.context.SetDiscreteState(
+            self.probe.EvalUniquePeriodicDiscreteUpdate(self.context))
+        self.context.SetTime(self.context.get_time() + T)
+
+    def command(self):
+        return self.probe.GetOutputPort("command").Eval(self.context)
+
+
+def test_sequence_touches_compensates_the_bias_and_drops_a_burr():
+    believed = CircularContour([0.4, 0.0, 0.048], 0.027)
+    real_center = np.array([0.4004, -0.0003])
+    cfg = ProbeConfig(points=6, settle_time=0.01, travel_speed=0.05)
+    timing = sensor_timing(0.0025, 10.0)
+    x0 = believed.point_at(0.0) - cfg.standoff * believed.n1(
+        believed.point_at(0.0))
+    probe = ProbingSequence(believed, cfg, sample_period=0.0025,
+                            timing=timing, initial_position=x0)
+    run = _Run(probe, x0)
+    burr = 3  # this touch lands on a 0.8 mm burr
+    expected = {}
+    for _ in range(40000):
+        if run.phase() == "done":
+            break
+        # The tool follows the command exactly; contact when the tool is
+        # the modelled bias past the real edge (or the burr).
+        run.x_p = run.command().copy()
+        i = int(round(float(PROBE_STATE.get(run.state(), "index"))))
+        d = np.linalg.norm(run.x_p[:2] - real_center) - believed.radius
+        if i == burr:
+            d += 0.0008
+        n = believed.n1(believed.point_at(probe.arcs[min(i, 5)]))
+        v = cfg.approach_speed
+        bias = detection_depth(v, cfg.force_threshold, cfg.contact_stiffness,
+                               timing)
+        touching = run.phase() == "approach" and d >= bias
+        run.force = -2.0 * cfg.force_threshold * n if touching else \
+            np.zeros(3)
+        if touching:
+            expected[i] = run.x_p - bias * n
+        run.fix(speed=v * n if run.phase() == "approach" else (0, 0, 0))
+        run.step()
+    assert run.phase() == "done"
+    x = run.state()
+    assert PROBE_STATE.get(x, "touches") == 6
+    assert PROBE_STATE.get(x, "kept") == 5
+    touches = run.context.get_discrete_state(1).get_value().reshape(6, 4)
+    assert list(np.flatnonzero(touches[:, 3] == 2.0)) == [burr]
+    # The compensated touches lie on the real edge within the command's
+    # 2.5 ms quantisation (v T = 5 um).
+    for i in range(6):
+        if i != burr:
+            r = np.linalg.norm(touches[i, :2] - real_center)
+            assert r == pytest.approx(believed.radius, abs=6e-6)
+    reg = PROBE_STATE.get(x, "registration")
+    np.testing.assert_allclose(reg[:2], real_center - [0.4, 0.0], atol=6e-6)
+    # Done: the spindle on, the generator's command passed through, the
+    # tool brought to the corrected start.
+    assert probe.GetOutputPort("spindle").Eval(run.context)[0] == 1.0
+    start = np.r_[real_center, 0.048] + [believed.radius, 0, 0]
+    np.testing.assert_allclose(PROBE_STATE.get(x, "command"), start,
+                               atol=1e-5)
+    probe.GetInputPort("command_in").FixValue(run.context, [1.0, 2.0, 3.0])
+    np.testing.assert_allclose(run.command(), [1.0, 2.0, 3.0])
+
+
+def test_gate_hides_contact_while_probing():
+    gate = ProbeGate()
+    context = gate.CreateDefaultContext()
+    chamfer = _chamfer([0.4, 0, 0])
+    chamfer[CHAMFER_STATE.slice("f_n")] = 3.0
+    chamfer[CHAMFER_STATE.slice("delta")] = 1e-4
+    gate.GetInputPort("chamfer_state").FixValue(context, chamfer)
+    gate.GetInputPort("desired_normal_force").FixValue(context, [7.0])
+    gate.GetInputPort("probing").FixValue(context, [1.0])
+    out = gate.GetOutputPort("chamfer_state").Eval(context)
+    assert CHAMFER_STATE.get(out, "f_n") == 0.0
+    assert CHAMFER_STATE.get(out, "delta") == 0.0
+    np.testing.assert_allclose(CHAMFER_STATE.get(out, "x_p"), [0.4, 0, 0])
+    assert gate.GetOutputPort("desired_normal_force").Eval(context)[0] == 0
+    gate.GetInputPort("probing").FixValue(context, [0.0])
+    np.testing.assert_allclose(
+        gate.GetOutputPort("chamfer_state").Eval(context), chamfer)
+    assert gate.GetOutputPort("desired_normal_force").Eval(context)[0] == 7
