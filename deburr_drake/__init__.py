@@ -1,8 +1,8 @@
 """deburr_drake: Drake reproduction of Hsu & Fu, adaptive fuzzy hybrid
 position/force control of a deburring robot (IEEE T-RA, 2000).
 
-The public Python API, importable from the package itself (README, "Python
-API"; ``examples/`` and ``examples/tutorial.ipynb`` use it)::
+The public Python API, importable from the package itself (docs/python-api.md;
+``examples/`` and ``examples/tutorial.ipynb`` use it)::
 
     import deburr_drake as dd
 

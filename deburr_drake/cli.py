@@ -22,7 +22,7 @@ def _progress(t, wall, feed):
           f"feed {feed * 1e3:5.2f} mm/s", flush=True)
 
 
-#: Exit codes of ``deburr-drake`` (also in the README and ``--help``).
+#: Exit codes of ``deburr-drake`` (also in docs/scenarios.md, "Stop reasons", and ``--help``).
 EXIT_CODES = {
     "pass_complete": 0, "duration": 0,  # a normal ending
     "error": 1,  # an exception during the run (outputs written)

@@ -6,7 +6,7 @@ directory and uses the copy, as a user's file would be used. The file needs
 what the cell reads on the arm: a frame at the tool tip (``tool_tip``) on
 the body that holds the tool, whose parent joint is a weld named
 ``ft_sensor`` (the force/torque sensor), and actuated joints (see
-models/arm5.sdf and the README's "Python API").
+models/arm5.sdf, docs/own-robot.md and docs/python-api.md).
 
     python examples/own_robot.py --duration 3
     python examples/own_robot.py --model my_arm.sdf --duration 3

@@ -1,6 +1,6 @@
 """Gains designed from the robot model (``controller.design: auto``).
 
-The rules the README states for arm6 (bring your own robot, "Gains"), made
+The rules docs/own-robot.md states ("Gains designed from the model"), made
 code, from the numbers :func:`deburr_drake.cell.robot.loop_numbers` gives
 at the start pose (the robot model's masses, with the rotor inertia the
 file gives or ``robot.reflected_inertia``):

@@ -342,7 +342,8 @@ def check_robot(config: RobotConfig) -> MultibodyPlant:
         raise ConfigError(
             f"robot.model = {config.model!r} is invalid: joints {loose} "
             "have no actuator: allowed a fully actuated arm (SDF: an "
-            "<effort> limit on each joint; URDF: a <transmission> each)")
+            "<effort> limit on each joint; URDF: a <transmission> or an "
+            "effort limit above 0 on each joint)")
     if plant.num_positions() != plant.num_velocities():
         raise ConfigError(
             f"robot.model = {config.model!r} is invalid: allowed revolute "
@@ -397,7 +398,8 @@ def start_pose(scenario):
 
 
 def loop_numbers(scenario, q=None) -> dict:
-    """The numbers that set a robot's gains (README, bring your own robot),
+    """The numbers that set a robot's gains (docs/own-robot.md, "Gains
+    designed from the model"),
     at joint angles ``q`` (default :func:`start_pose`), from the robot
     model alone:
 
