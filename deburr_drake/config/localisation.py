@@ -18,9 +18,9 @@ class ProbeConfig:
     (offset, heading) fitted, points on a burr dropped by their residual,
     and the believed part corrected before the pass."""
 
-    enabled: bool = False
-    points: int = 8  # N touches
-    # m of arc between touches; 0: spread evenly over the edge (a closed
+    enabled: bool = False  # -, touch probing before the pass
+    points: int = 8  # -, number of touches
+    # m, arc between touches; 0: spread evenly over the edge (a closed
     # edge: L / N apart; an open one: centred, L / N apart).
     spacing: float = 0.0
     first_arc: float = 0.0  # m, arc position of the first touch (closed edge)
@@ -34,9 +34,9 @@ class ProbeConfig:
     # N/m, the contact stiffness the detection bias is modelled with
     # (threshold / stiffness of penetration at the threshold).
     contact_stiffness: float = 5.0e3
-    fit_radius: bool = False  # circle: fit the radius too (else the drawing's)
+    fit_radius: bool = False  # -, circle: fit the radius too (else the drawing's)
     max_residual: float = 1.0e-4  # m, a touch off the fit by more is dropped
-    # s: after probing the controller's fuzzy compensator (off while
+    # s, after probing the controller's fuzzy compensator (off while
     # probing) ramps back in over this time, so weights learned on an
     # earlier part (a batch) do not push the tool along before the cut is
     # established; 0: at once.
@@ -72,8 +72,8 @@ class OnlineRegistrationConfig:
     onset at the entry as well), and the believed part moved smoothly
     towards the estimate."""
 
-    enabled: bool = False
-    sample_period: float = 0.025  # s
+    enabled: bool = False  # -, registration while cutting
+    sample_period: float = 0.025  # s, the RLS update's period
     forgetting_time: float = 60.0  # s, RLS exponential forgetting horizon
     # Prior standard deviation of the offset (m; c0 and c1 start from
     # estimator.initial_estimates with their own size as prior).
@@ -84,11 +84,11 @@ class OnlineRegistrationConfig:
     force_noise: float = 1.0
     # The believed part moves towards the estimate with this time constant
     # (s), no faster than ``max_rate`` (m/s): no step in the command.
-    time_constant: float = 1.0  # s
-    max_rate: float = 0.0005  # m/s
+    time_constant: float = 1.0  # s, the believed part's approach to the estimate
+    max_rate: float = 0.0005  # m/s, the believed part's fastest move
     # The estimate is used only after the tool has cut this much arc
     # (m): a short arc does not separate the offset from c0.
-    min_arc: float = 0.0  # m
+    min_arc: float = 0.0  # m, arc cut before the estimate is used
 
     def validate(self):
         o = "localisation.online"
