@@ -453,7 +453,7 @@ class CuttingProcess(LeafSystem):
         terms = np.zeros(4 * nv + 9 + nv * nv)
         terms[:nv] = J.T @ tangent
         terms[3 * nv:4 * nv] = -push * (J.T @ n1)
-        terms[4 * nv + 6:] = -push * n1
+        terms[4 * nv + 6:4 * nv + 9] = -push * n1
         discrete_state.set_value(self._terms_index, terms)
         discrete_state.set_value(self._state_index, PROCESS_STATE.pack(
             delta=delta, engagement=0.0, g=0.0, f_t=0.0, f_threshold=push,
