@@ -86,3 +86,13 @@ def test_no_preflight_runs_anyway_and_the_outputs_hold_the_gains(tmp_path):
                  "--no-preflight", "--out", str(tmp_path / "anyway")])
     assert code == 3  # the joint-torque guard
     assert not (tmp_path / "anyway" / "preflight.json").exists()
+
+
+def test_a_mode_within_the_maps_resolution_of_the_unit_circle_is_neutral():
+    from deburr_drake.analysis.preflight import (NEUTRAL_TOLERANCE,
+                                                 predicted_unstable)
+    assert not predicted_unstable(0.9985)
+    assert not predicted_unstable(1.0 + 0.5 * NEUTRAL_TOLERANCE)
+    assert predicted_unstable(1.0 + 2.0 * NEUTRAL_TOLERANCE)
+    assert predicted_unstable(1.02)
+    assert predicted_unstable(float("nan"))
