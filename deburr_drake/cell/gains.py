@@ -29,9 +29,8 @@ file gives or ``robot.reflected_inertia``):
   2.5 ms step, 20,500 at two; the Panda at two steps and 1.6 kg tripped
   the tool-force guard on the first burr). The step keeps g_max h / m
   below :data:`STEP_RATE` (2.5), g_max = k_c (delta* x engagement + the
-  tallest burr's area): arm5 and arm6 two steps per sample (paper's
-  arm5 runs one with ``process.implicit_damping``, which the design
-  leaves off: that term is shown harmless on the paper arm only);
+  tallest burr's area): arm5 and arm6 two steps per sample, as written
+  (``process.implicit_damping`` stays off: it moves the loop's limits);
 - more than 6 joints: the null-space posture PD keeps 200 N m/rad and
   10 N m s/rad unless its damping d (I - J^T J^T+) alone takes more than
   half the rate's limit, then d to that half and k = 20 d;
@@ -106,7 +105,7 @@ class GainDesign:
                 "controller.fuzzy.position_scale": self.position_scale,
                 "simulation.max_step": self.max_step,
                 # eq. (3) as is at that step: the law's implicit-damping
-                # term is shown harmless on the paper arm only
+                # term moves the sampled loop's limits
                 "process.implicit_damping": False,
                 "controller.null_space_stiffness": self.null_space_stiffness,
                 "controller.null_space_damping": self.null_space_damping}

@@ -257,10 +257,10 @@ class ProcessConfig:
     # treats the off-diagonal of g a a^T explicitly: on the arm that needs
     # two steps per 2.5 ms sample for burrs above about 1.2 mm). The term
     # is a discretization device: within a step it adds h (D - g a a^T) of
-    # inertia across the cut, which moves a light tool's sampled-loop
-    # limits (the point mass's sliding-gain limit 1548 -> 3579 N s/m at
-    # its own step, 1548 at 0.625 ms without it), so it is on only where
-    # it was shown not to: the paper arm (paper, paper_m0, paper_cells).
+    # inertia across the cut, which moves the sampled loop's limits: the
+    # point mass's sliding-gain limit 1548 -> 3579 N s/m (1548 at 0.625 ms
+    # without it), and on the paper arm it hid the 200 Hz limit cycle at
+    # K = 5656-6000 N s/m. No shipped scenario turns it on.
     implicit_damping: bool = False
     # N/m: with the spindle off (touch probing) a burr is not cut: it
     # pushes the tool back along -n1 where the tool reaches into it.
