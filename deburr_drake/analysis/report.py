@@ -105,7 +105,6 @@ def analyze(scenario: Scenario, *, at: float = None,
     say = progress or (lambda message: None)
     timings = {}
     tol = SettleTolerances()
-    t0 = time.perf_counter()
     say("the run: simulating the scenario (guards off), with the 2.5 ms "
         "map at points along it")
     run = analysis_run(scenario, at=at, after_contact=after_contact,

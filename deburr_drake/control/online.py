@@ -130,7 +130,6 @@ class OnlineRegistration(LeafSystem):
         c = self._config
         reference, _ = self._reference(context, self._contour)
         x_p = CHAMFER_STATE.get(chamfer, "x_p")
-        delta_0 = float(reference.depth(x_p))
         theta = ONLINE_STATE.get(x, "theta")
         P = ONLINE_STATE.get(x, "covariance").reshape(_N, _N)
         noise = c.force_noise ** 2

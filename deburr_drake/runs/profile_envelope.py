@@ -152,9 +152,8 @@ def fillet_metrics(log, scenario) -> Dict[str, float]:
     after = t >= (contact if np.isfinite(contact) else 0.0) + TRANSIENT
     on_line = after & (s < start)
     in_fillet = after & (s >= start) & (s <= end)
-    d = scenario.task.desired_depth
-    r = scenario.tool.cutter_radius
     kappa = contour.curvature(contour.point_at(0.5 * (start + end) % L))
+    law_line, law_fillet = law_feeds(scenario, kappa)
     out = {k: float(values[k]) for k in LIMITS}
     out.update({
         "edge_coverage": float(values["edge_coverage"]),
@@ -165,8 +164,8 @@ def fillet_metrics(log, scenario) -> Dict[str, float]:
         if np.any(on_line) else math.nan,
         "feed_fillet_mm_s": float(np.mean(v[in_fillet]) * 1e3)
         if np.any(in_fillet) else math.nan,
-        "law_line_mm_s": law_feeds(scenario, kappa)[0] * 1e3,
-        "law_fillet_mm_s": law_feeds(scenario, kappa)[1] * 1e3,
+        "law_line_mm_s": law_line * 1e3,
+        "law_fillet_mm_s": law_fillet * 1e3,
     })
     ok = log.completed_pass and all(
         np.isfinite(out[k]) and out[k] <= limit
