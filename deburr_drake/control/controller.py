@@ -131,8 +131,8 @@ def HybridController_(T):
           x_c*(t) and its derivative from the first-order hold.
         - ``desired_normal_force`` (1, N): ||f_nd hat|| from the estimator.
         - ``fuzzy_weight`` (1; only with ``fuzzy_weight_input=True``): w
-          scales the fuzzy compensator's u_f; theta is not adapted while
-          w <= 0 (touch probing: the travel between touches is not the
+          scales the fuzzy compensator's u_f and its adaptation rates
+          (35); theta is not adapted while w <= 0 (touch probing: the travel between touches is not the
           cutting the rules learn; after it w ramps in, so weights learned
           on an earlier part do not push the tool along before the cut is
           established).
@@ -386,9 +386,15 @@ def HybridController_(T):
 
         def _weigh_fuzzy(self, w, u_fuzzy, zeta, derivatives):
             """The ``fuzzy_weight`` input w: the fuzzy compensator's u_f
-            scaled by w, theta frozen while w <= 0."""
+            scaled by w, and the rates (35) with it: the output the rules
+            move is w theta . nu, so its gradient is w nu (at w < 1 the
+            unscaled law would keep raising weights that the output uses
+            only in part: on a batch's ramps after probing they grew part
+            after part); theta frozen while w <= 0."""
             if w <= 0.0:
                 derivatives[1:] = 0.0
+            elif w < 1.0:
+                derivatives[1:] = w * derivatives[1:]
             for axis in self._axes:
                 if zeta[axis] == 1.0:
                     u_fuzzy[axis] = w * u_fuzzy[axis]
