@@ -35,7 +35,9 @@ class ProbeConfig:
     # (threshold / stiffness of penetration at the threshold).
     contact_stiffness: float = 5.0e3
     fit_radius: bool = False  # -, circle: fit the radius too (else the drawing's)
-    max_residual: float = 1.0e-4  # m, a touch off the fit by more is dropped
+    # m, a touch off the circle (line) most touches agree on by more is
+    # dropped: a burr under it (math.fits.fit_consensus)
+    max_residual: float = 5.0e-5  # m, a touch off the consensus fit by more is dropped
     # s, after probing the controller's fuzzy compensator (off while
     # probing) ramps back in over this time, so weights learned on an
     # earlier part (a batch) do not push the tool along before the cut is

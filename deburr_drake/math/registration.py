@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from deburr_drake.math.fits import fit_circle, fit_line, fit_rejecting
+from deburr_drake.math.fits import fit_circle, fit_consensus, fit_line
 from deburr_drake.math.geometry import (CircularContour, Contour,
                                         StraightContour)
 
@@ -91,24 +91,35 @@ def registration_from_points(contour: Contour, points, *,
     exactly, the third shows an outlier)."""
     p = np.asarray(points, float)[:, :2]
     if isinstance(contour, CircularContour):
-        # Outliers are found with the radius free, so that a bias common to
-        # every touch (the same depth at each detection) goes into the
-        # radius rather than into the residuals; the centre is then fitted
-        # to the kept points with the radius held unless ``fit_radius``.
+        # The touches are found agreeing with one circle of free radius
+        # (fit_consensus), so that a bias common to every touch (the
+        # detection's depth, which the stiffness of the contact sets) goes
+        # into the radius rather than into the residuals; and the centre
+        # is that circle's: with the drawing's radius held, a common bias
+        # moves the centre whenever the kept touches are not symmetric
+        # (one dropped on a burr: 0.14 mm of common bias put the centre
+        # 50 um off, measured). The drawing's radius is held only when the
+        # kept touches lie within a half circle (the radius is then
+        # poorly known). ``fit_radius``: the fitted radius is applied too
+        # (else the drawing's is kept: a probe cannot tell a radius error
+        # from its own detection bias).
         if len(p) >= 4:
-            _, kept = fit_rejecting(fit_circle, p, max_residual=max_residual,
-                                    minimum=3)
+            _, kept = fit_consensus(fit_circle, p, minimal=3,
+                                    max_residual=max_residual, minimum=3)
         else:
             kept = np.ones(len(p), bool)
-        fit = fit_circle(p[kept], radius=None if fit_radius
-                         else contour.radius, seed=contour.center[:2])
+        spread = _spread_around(p[kept], contour.center[:2])
+        free = fit_radius or spread > math.pi
+        fit = fit_circle(p[kept], radius=None if free else contour.radius,
+                         seed=None if free else contour.center[:2])
         d = fit.center - contour.center[:2]
-        reg = np.array([d[0], d[1], 0.0, fit.radius - contour.radius])
+        reg = np.array([d[0], d[1], 0.0,
+                        fit.radius - contour.radius if fit_radius else 0.0])
         all_res = np.linalg.norm(p - fit.center, axis=1) - fit.radius
         return ProbeFit(reg, kept, all_res, fit.rms)
     if isinstance(contour, StraightContour):
-        fit, kept = fit_rejecting(fit_line, p, max_residual=max_residual,
-                                  minimum=2)
+        fit, kept = fit_consensus(fit_line, p, minimal=2,
+                                  max_residual=max_residual, minimum=2)
         t = contour.tangent(contour.point_at(0.0))[:2]
         direction = fit.direction if fit.direction @ t >= 0 else \
             -fit.direction
@@ -126,6 +137,17 @@ def registration_from_points(contour: Contour, points, *,
         return ProbeFit(reg, kept, all_res, fit.rms)
     raise TypeError(f"registration of a {type(contour).__name__} is not "
                     "supported: a circle or a straight edge")
+
+
+def _spread_around(points, center) -> float:
+    """rad, the smallest arc of directions from ``center`` holding every
+    point (2 pi minus the largest gap between neighbouring directions)."""
+    a = np.sort(np.arctan2(points[:, 1] - center[1],
+                           points[:, 0] - center[0]))
+    if len(a) < 2:
+        return 0.0
+    gaps = np.diff(np.concatenate([a, [a[0] + 2 * math.pi]]))
+    return float(2 * math.pi - gaps.max())
 
 
 # -- registration while cutting -------------------------------------------

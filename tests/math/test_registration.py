@@ -69,6 +69,47 @@ def test_common_bias_kept_out_of_the_centre_and_no_point_dropped():
     np.testing.assert_allclose(fit.registration[:2], [3e-4, 2e-4], atol=1e-9)
 
 
+def test_burr_flank_touches_and_common_bias_leave_the_centre():
+    """Two touches 0.15 and 0.12 mm early (a burr's flanks: within the
+    old 0.1 mm rejection of the worst residual after a fit they pulled),
+    every touch 0.14 mm past the edge (a detection bias), and a third
+    touch on a burr 0.8 mm early: the centre within 1 um. The
+    one-at-a-time rejection with the radius held was 20-60 um off on such
+    touches in the robustness study."""
+    believed = CircularContour([0.4, 0.0, 0.048], 0.049)
+    real = CircularContour([0.3996, -0.0005, 0.048], 0.049)
+    arcs = np.linspace(0, real.length, 8, endpoint=False)
+    pts = []
+    for k, s in enumerate(arcs):
+        x = real.point_at(s)
+        early = {1: 8e-4, 4: 1.5e-4, 6: 1.2e-4}.get(k, 0.0)
+        pts.append(x + (1.4e-4 - early) * real.n1(x))
+    fit = registration_from_points(believed, np.array(pts),
+                                   max_residual=5e-5)
+    assert list(np.flatnonzero(~fit.kept)) == [1, 4, 6]
+    np.testing.assert_allclose(fit.registration, [-4e-4, -5e-4, 0, 0],
+                               atol=1e-6)
+
+
+def test_straight_edge_flank_touches_dropped():
+    believed = StraightContour([0.0, 0.0, 0.0], [1.0, 0.0, 0.0],
+                               [0.0, 1.0, 0.0], length=0.06)
+    real = moved_contour(believed, [2e-4, 5e-4, 0.008, 0.0])
+    arcs = np.linspace(0.004, 0.056, 8)
+    pts = []
+    for k, s in enumerate(arcs):
+        x = real.point_at(s)
+        early = {2: 9e-5, 3: 7e-5, 6: 6e-4}.get(k, 0.0)
+        pts.append(x - early * real.n1(x))
+    fit = registration_from_points(believed, np.array(pts),
+                                   max_residual=5e-5)
+    assert list(np.flatnonzero(~fit.kept)) == [2, 3, 6]
+    moved = moved_contour(believed, fit.registration)
+    for s in (0.0, 0.03, 0.06):
+        x = real.point_at(s)
+        assert abs(moved.phi(x)) < 1e-7
+
+
 def _online_fit(reference, real, arcs, c0=2.0, c1=1.0e4):
     """Fit the online model to exact forces c0 + c1 delta_real along
     ``arcs``, the depth on the reference varying (the force loop
