@@ -8,6 +8,8 @@ adds it together with the systems that feed it."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from pydrake.autodiffutils import AutoDiffXd
 from pydrake.common.value import AbstractValue
@@ -198,6 +200,12 @@ def HybridController_(T):
             self._world = self._plant.world_frame()
             self._config = config
             self._rule_bases = make_rule_bases(config)
+            # fuzzy.max_slope 0 is "designed" (the diagram builder writes
+            # the design, deburr_drake.cell.gains.resolve_slope_bound); a
+            # controller built from a configuration nobody designed bounds
+            # nothing.
+            self._max_slope = (float(config.fuzzy.max_slope)
+                               if config.fuzzy.max_slope > 0 else math.inf)
             self._axes = list(config.fuzzy.axes)
             self._n_rules = self._rule_bases[0].n_rules
             self._nq = plant.num_positions()
@@ -372,16 +380,20 @@ def HybridController_(T):
             theta rates (35) in place."""
             c = self._config
             r = c.fuzzy.adaptation_gain
+            n = self._n_rules
             for k, (axis, rb) in enumerate(zip(self._axes, self._rule_bases)):
                 s_k = s[axis]
                 if rb.in_domain(s_k):
                     u, idx, rate = rb.evaluate_and_rate(theta[k], y0, s_k, r)
                     zeta[axis] = 1.0
                     if c.fuzzy.adapt and len(idx):
-                        derivatives[1 + k * self._n_rules + idx] = rate
+                        derivatives[1 + k * n + idx] = rate
                 else:
                     u = c.robust_gain[k] * saturation(
                         s_k / c.robust_boundary_layer[k])
+                if c.fuzzy.adapt and self._max_slope < math.inf:
+                    derivatives[1 + k * n:1 + (k + 1) * n] += rb.slope_rate(
+                        theta[k], self._max_slope, c.fuzzy.max_slope_rate)
                 u_fuzzy[axis] = u
 
         def _weigh_fuzzy(self, w, u_fuzzy, zeta, derivatives):

@@ -292,3 +292,16 @@ def test_shared_tool_point_gives_the_same_law_on_the_arm():
     with pytest.raises(ValueError, match="tool_point"):
         HybridController(make_kinematic_model(ARM_URL), "tool_tip", config,
                          tool_point=tool_point)
+
+
+def test_slope_rate_autodiff_matches_float():
+    from pydrake.autodiffutils import InitializeAutoDiff
+    from deburr_drake.math.fuzzy import RuleBase
+    rb = RuleBase(m=2, upsilon=5, delta0=0.2, deltak=0.004)
+    rng = np.random.default_rng(3)
+    theta = 30.0 * rng.normal(size=121)
+    ad = InitializeAutoDiff(theta).ravel()
+    rate = rb.slope_rate(ad, 1000.0, 80.0)
+    np.testing.assert_allclose([r.value() if hasattr(r, "value") else r
+                                for r in rate],
+                               rb.slope_rate(theta, 1000.0, 80.0))
