@@ -297,8 +297,8 @@ def resolve_slope_bound(scenario: Scenario):
     N s/m (the sixth then cycled) stays below it."""
     c = scenario.controller
     f = c.fuzzy
-    if f.max_slope != 0 or c.kind != "fuzzy":
-        return None
+    if f.max_slope != 0 or c.kind != "fuzzy" or not c.control_period > 0:
+        return None  # (a continuous law, T = 0, has no sampled limit)
     from deburr_drake.cell.robot import loop_numbers
     m = loop_numbers(scenario)["lightest_task_mass"]
     K = max(c.sliding_gain[a] for a in f.axes)
