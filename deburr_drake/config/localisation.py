@@ -43,6 +43,10 @@ class ProbeConfig:
     # earlier part (a batch) do not push the tool along before the cut is
     # established; 0: at once.
     fuzzy_ramp_time: float = 2.0
+    # s, after probing the feed waits at the start (the command generator
+    # holds) until the cut reaches 0.9 of the desired depth
+    # (control.probe.CUT_ESTABLISHED), at most this long; 0: no dwell.
+    entry_dwell: float = 3.0  # s, longest wait at the entry for the cut's depth
 
     def validate(self):
         o = "localisation.probe"
@@ -58,6 +62,7 @@ class ProbeConfig:
             _positive(o, name, getattr(self, name))
         _non_negative(o, "settle_time", self.settle_time)
         _non_negative(o, "fuzzy_ramp_time", self.fuzzy_ramp_time)
+        _non_negative(o, "entry_dwell", self.entry_dwell)
         _require(self.search_distance > self.standoff,
                  f"{o}.search_distance", self.search_distance,
                  f"> {o}.standoff ({self.standoff})")

@@ -112,7 +112,8 @@ def _add_localisation(builder, c: Scenario, *, contour, x0, observer,
         probe = builder.AddNamedSystem("probing_sequence", ProbingSequence(
             contour, c.localisation.probe,
             sample_period=c.sensor.sample_period, timing=timing,
-            initial_position=x0, start_depth=c.simulation.initial_depth))
+            initial_position=x0, start_depth=c.simulation.initial_depth,
+            desired_depth=c.task.desired_depth))
         gate = builder.AddNamedSystem("probe_gate", ProbeGate())
         probing = probe.GetOutputPort("probing")
         spindle = probe.GetOutputPort("spindle")
@@ -124,7 +125,7 @@ def _add_localisation(builder, c: Scenario, *, contour, x0, observer,
             (probing, gate.GetInputPort("probing")),
             (chamfer, gate.GetInputPort("chamfer_state")),
             (desired, gate.GetInputPort("desired_normal_force")),
-            (probing, generator.GetInputPort("hold")),
+            (probe.GetOutputPort("hold"), generator.GetInputPort("hold")),
             (probe.GetOutputPort("fuzzy_weight"),
              controller.GetInputPort("fuzzy_weight"))])
         chamfer = gate.GetOutputPort("chamfer_state")

@@ -32,6 +32,7 @@ from deburr_drake.math.registration import (REGISTRATION_SIZE,
                                             registration_from_points)
 
 __all__ = ["ProbingSequence", "ProbeGate", "PROBE_STATE", "PHASES",
+           "CUT_ESTABLISHED",
            "probe_arcs", "detection_depth", "filter_latency",
            "sensor_timing", "SensorTiming"]
 
@@ -39,6 +40,11 @@ __all__ = ["ProbingSequence", "ProbeGate", "PROBE_STATE", "PHASES",
 PHASES = ("travel", "settle", "approach", "retract", "return", "enter",
           "done")
 _P = {name: float(k) for k, name in enumerate(PHASES)}
+
+#: The entry's cut counts as established (the command generator starts to
+#: feed) once the depth on the registered part reaches this fraction of
+#: the desired depth (or ``entry_dwell`` has passed).
+CUT_ESTABLISHED = 0.9
 
 PROBE_STATE = VectorLayout("probe_state", [
     ("phase", 1),           # index into PHASES
@@ -52,6 +58,7 @@ PROBE_STATE = VectorLayout("probe_state", [
     ("tare", 3),            # N, the force reading before the guarded move
     ("registration", REGISTRATION_SIZE),  # dx, dy, dyaw, dradius
     ("done_time", 1),       # s, -1 while probing
+    ("cut_time", 1),        # s, the entry's cut established; -1 before
     ("touches", 1),         # touches made (contact detected)
     ("kept", 1),            # touches the fit used
     ("fit_rms", 1),         # m, the fit's residual RMS
@@ -159,6 +166,11 @@ class ProbingSequence(LeafSystem):
       ``command`` once probing is done.
     - ``command`` (3, m): the commanded tool point (to the first-order hold).
     - ``probing`` (1): 1 while probing, then 0. ``spindle`` (1): 1 - probing.
+    - ``hold`` (1): 1 while probing and on the entry's dwell, then 0 (the
+      command generator's ``hold``: no feed). The dwell lasts until the
+      depth on the registered part reaches CUT_ESTABLISHED of
+      ``desired_depth`` (at once with 0), or ``entry_dwell``: the feed
+      starts on a cut at its depth, not on the way down to it.
     - ``fuzzy_weight`` (1): 0 while probing, then ramps to 1 over
       ``fuzzy_ramp_time`` (the weight of the controller's fuzzy
       compensator: rules learned on earlier parts come in as the cut is
@@ -183,7 +195,8 @@ class ProbingSequence(LeafSystem):
     def __init__(self, contour: Contour, config: ProbeConfig, *,
                  sample_period: float, timing: SensorTiming,
                  initial_position,
-                 start_depth: float = 0.0):
+                 start_depth: float = 0.0,
+                 desired_depth: float = 0.0):
         super().__init__()
         config.validate()
         self.set_name("probing_sequence")
@@ -191,6 +204,7 @@ class ProbingSequence(LeafSystem):
         self._config = config
         self._timing = timing
         self._start_depth = start_depth
+        self._established_depth = CUT_ESTABLISHED * desired_depth
         self._arcs = probe_arcs(contour, config)
         self._n = len(self._arcs)
         x0 = np.asarray(initial_position, float)
@@ -200,7 +214,7 @@ class ProbingSequence(LeafSystem):
             segment_end=first, segment_duration=self._travel_time(x0, first),
             linear=0.0, command=x0, tare=np.zeros(3),
             registration=np.zeros(REGISTRATION_SIZE), done_time=-1.0,
-            touches=0.0, kept=0.0, fit_rms=0.0)
+            cut_time=-1.0, touches=0.0, kept=0.0, fit_rms=0.0)
         self._state = self.DeclareDiscreteState(initial)
         self._touch_state = self.DeclareDiscreteState(np.zeros(4 * self._n))
         self._chamfer_port = self.DeclareVectorInputPort(
@@ -215,6 +229,8 @@ class ProbingSequence(LeafSystem):
             prerequisites_of_calc={self.xd_ticket(),
                                    self._command_in.ticket()})
         self.DeclareVectorOutputPort("probing", 1, self._calc_probing,
+                                     prerequisites_of_calc=state)
+        self.DeclareVectorOutputPort("hold", 1, self._calc_hold,
                                      prerequisites_of_calc=state)
         self.DeclareVectorOutputPort("spindle", 1, self._calc_spindle,
                                      prerequisites_of_calc=state)
@@ -263,9 +279,16 @@ class ProbingSequence(LeafSystem):
     def _update(self, context, discrete_state):
         x = context.get_discrete_state(self._state).get_value().copy()
         phase = PHASES[int(round(float(PROBE_STATE.get(x, "phase"))))]
-        if phase == "done":
-            return
         t = context.get_time()
+        if phase == "done":
+            if PROBE_STATE.get(x, "cut_time") < 0 and (
+                    CHAMFER_STATE.get(self._chamfer_port.Eval(context),
+                                      "delta") >= self._established_depth
+                    or t - PROBE_STATE.get(x, "done_time")
+                    >= self._config.entry_dwell):
+                x[PROBE_STATE.slice("cut_time")] = t
+                discrete_state.set_value(self._state, x)
+            return
         c = self._config
         command, finished = self._along(x, t)
         x[PROBE_STATE.slice("command")] = command
@@ -363,6 +386,10 @@ class ProbingSequence(LeafSystem):
 
     def _calc_probing(self, context, output):
         output.SetAtIndex(0, 0.0 if self._done(context) else 1.0)
+
+    def _calc_hold(self, context, output):
+        cut = PROBE_STATE.get(self._x(context), "cut_time")
+        output.SetAtIndex(0, 1.0 if cut < 0 else 0.0)
 
     def _calc_spindle(self, context, output):
         output.SetAtIndex(0, 1.0 if self._done(context) else 0.0)

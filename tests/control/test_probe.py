@@ -147,6 +147,56 @@ def test_sequence_touches_compensates_the_bias_and_drops_a_burr():
     np.testing.assert_allclose(run.command(), [1.0, 2.0, 3.0])
 
 
+def test_feed_holds_at_the_entry_until_the_cut_reaches_its_depth():
+    """After probing, ``hold`` stays 1 (the generator does not feed) until
+    the depth on the registered part reaches CUT_ESTABLISHED of the
+    desired depth, or ``entry_dwell`` passes; ``probing`` is 0 and the
+    spindle on meanwhile."""
+    from deburr_drake.control.probe import CUT_ESTABLISHED
+    believed = CircularContour([0.4, 0.0, 0.048], 0.027)
+    x0 = believed.point_at(0.0)
+
+    def done_run(cfg):
+        probe = ProbingSequence(believed, cfg, sample_period=0.0025,
+                                timing=sensor_timing(0.0025, 10.0),
+                                initial_position=x0, desired_depth=5e-4)
+        run = _Run(probe, x0)
+        x = run.state().copy()
+        x[PROBE_STATE.slice("phase")] = PHASES.index("done")
+        x[PROBE_STATE.slice("done_time")] = 0.0
+        run.context.SetDiscreteState(0, x)
+        return probe, run
+
+    def at_depth(probe, run, delta):
+        chamfer = _chamfer(x0)
+        chamfer[CHAMFER_STATE.slice("delta")] = delta
+        probe.GetInputPort("chamfer_state").FixValue(run.context, chamfer)
+
+    def port(probe, run, name):
+        return probe.GetOutputPort(name).Eval(run.context)[0]
+
+    probe, run = done_run(ProbeConfig(points=3, entry_dwell=3.0))
+    at_depth(probe, run, 0.5 * CUT_ESTABLISHED * 5e-4)  # on the way down
+    for _ in range(400):  # 1 s
+        run.step()
+    assert port(probe, run, "hold") == 1.0
+    assert port(probe, run, "probing") == 0.0
+    assert port(probe, run, "spindle") == 1.0
+    at_depth(probe, run, 1.01 * CUT_ESTABLISHED * 5e-4)
+    run.step()
+    assert port(probe, run, "hold") == 0.0
+    assert PROBE_STATE.get(run.state(), "cut_time") == pytest.approx(1.0)
+    # A cut that never gets there: the feed starts after entry_dwell.
+    probe, run = done_run(ProbeConfig(points=3, entry_dwell=0.5))
+    at_depth(probe, run, 0.0)
+    for _ in range(199):
+        run.step()
+    assert port(probe, run, "hold") == 1.0
+    for _ in range(2):
+        run.step()
+    assert port(probe, run, "hold") == 0.0
+
+
 def test_gate_hides_contact_while_probing():
     gate = ProbeGate()
     context = gate.CreateDefaultContext()
