@@ -14,14 +14,17 @@ __all__ = ["ProbeConfig", "OnlineRegistrationConfig", "LocalisationConfig"]
 class ProbeConfig:
     """Touch probing with the spindle off: guarded moves along the believed
     normal n1 at ``points`` places of the edge, contact detected on the
-    force sensor, a circle (centre, optionally radius) or a straight edge
-    (offset, heading) fitted, points on a burr dropped by their residual,
-    and the believed part corrected before the pass."""
+    force sensor, a circle (centre, optionally radius), a straight edge
+    (offset, heading) or a profile (move and turn) fitted, touches on a
+    burr dropped (they come early), and the believed part corrected before
+    the pass."""
 
     enabled: bool = False  # -, touch probing before the pass
     points: int = 8  # -, number of touches
     # m, arc between touches; 0: spread evenly over the edge (a closed
-    # edge: L / N apart; an open one: centred, L / N apart).
+    # edge: L / N apart; an open one: centred, L / N apart; a profile:
+    # L / N apart, shifted from first_arc by up to L / N where they best
+    # fix its move and turn, control/probe.py probe_arcs).
     spacing: float = 0.0
     first_arc: float = 0.0  # m, arc position of the first touch (closed edge)
     approach_speed: float = 0.002  # m/s, the guarded move along n1
@@ -34,8 +37,13 @@ class ProbeConfig:
     # N/m, the contact stiffness the detection bias is modelled with
     # (threshold / stiffness of penetration at the threshold).
     contact_stiffness: float = 5.0e3
-    fit_radius: bool = False  # -, circle: fit the radius too (else the drawing's)
-    max_residual: float = 1.0e-4  # m, a touch off the fit by more is dropped
+    fit_radius: bool = False  # -, circle: fit the radius too (else the drawing's); only a circle
+    # m, a touch more than this on the tool's side of the fit (early: it
+    # met a burr or a burr's flank) is dropped, the furthest first, and
+    # the fit redone; late touches are kept (nothing on an edge makes
+    # contact come late). About 5 times the probe's qualified touch RMS
+    # (8 um, docs/localisation.md).
+    max_early: float = 4.0e-5
     # s, after probing the controller's fuzzy compensator (off while
     # probing) ramps back in over this time, so weights learned on an
     # earlier part (a batch) do not push the tool along before the cut is
@@ -52,7 +60,7 @@ class ProbeConfig:
         _non_negative(o, "first_arc", self.first_arc)
         for name in ("approach_speed", "travel_speed", "force_threshold",
                      "standoff", "search_distance", "retract",
-                     "contact_stiffness", "max_residual"):
+                     "contact_stiffness", "max_early"):
             _positive(o, name, getattr(self, name))
         _non_negative(o, "settle_time", self.settle_time)
         _non_negative(o, "fuzzy_ramp_time", self.fuzzy_ramp_time)

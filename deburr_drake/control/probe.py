@@ -4,9 +4,9 @@ spindle off, as Drake systems.
 - :class:`ProbingSequence`: a state machine in the Context's discrete state
   that commands guarded moves along the believed normal n1 at N points of
   the edge, detects each contact on the force sensor, compensates the
-  detection bias (:func:`detection_depth`), fits the circle or straight
-  edge (deburr_drake.math.registration, burr touches dropped by their
-  residual), outputs the registration that corrects the believed part, and
+  detection bias (:func:`detection_depth`), fits the circle, straight
+  edge or profile (deburr_drake.math.registration, touches that came
+  early on a burr dropped), outputs the registration that corrects the believed part, and
   brings the tool to the pass's start on the corrected part; then it hands
   the command over to the command generator.
 - :class:`ProbeGate`: while probing, the estimator, the force loop and the
@@ -24,15 +24,18 @@ from typing import NamedTuple
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
-from deburr_drake.config import ProbeConfig
+from deburr_drake.config import ConfigError, ProbeConfig
 from deburr_drake.control.layout import CHAMFER_STATE, VectorLayout
-from deburr_drake.math.geometry import CircularContour, Contour
-from deburr_drake.math.registration import (REGISTRATION_SIZE,
+from deburr_drake.math.geometry import (CircularContour, Contour,
+                                        StraightContour)
+from deburr_drake.math.registration import (MAX_AMPLIFICATION,
+                                            REGISTRATION_SIZE,
                                             moved_contour,
-                                            registration_from_points)
+                                            registration_from_points,
+                                            rigid_fit_amplification)
 
 __all__ = ["ProbingSequence", "ProbeGate", "PROBE_STATE", "PHASES",
-           "probe_arcs", "detection_depth", "filter_latency",
+           "probe_arcs", "check_probe_layout", "detection_depth", "filter_latency",
            "sensor_timing", "SensorTiming"]
 
 #: The phases of the sequence, in order.
@@ -115,15 +118,30 @@ def detection_depth(speed: float, threshold: float, stiffness: float,
     return v * (t + timing.delay)
 
 
+#: Shifts (fractions of L / N) tried for a profile's even layout.
+_LAYOUT_SHIFTS = 32
+
+
 def probe_arcs(contour: Contour, config: ProbeConfig) -> np.ndarray:
     """Arc positions (m) of the N touches on ``contour``: ``spacing``
     apart from ``first_arc`` (a closed edge wraps), or spread evenly
-    (``spacing`` 0: a closed edge from ``first_arc``, an open one
-    centred)."""
+    (``spacing`` 0: a circle from ``first_arc``, an open edge centred, any
+    other closed edge (a profile) L / N apart from ``first_arc`` plus the
+    shift, among 32 steps of L / (32 N), that best fixes its move and turn
+    (the smallest :func:`rigid_fit_amplification`): touches in the middle
+    of every side of a square, and in the middle of its fillets, see no
+    turn)."""
     n, L = config.points, contour.length
     if contour.closed:
         step = config.spacing or L / n
-        return (config.first_arc + step * np.arange(n)) % L
+        arcs = (config.first_arc + step * np.arange(n)) % L
+        if config.spacing or isinstance(contour, CircularContour):
+            return arcs
+        gains = [rigid_fit_amplification(contour, np.array(
+            [contour.point_at(s) for s in arcs + k * step / _LAYOUT_SHIFTS]))
+            for k in range(_LAYOUT_SHIFTS)]
+        best = int(np.argmin(gains))
+        return (arcs + best * step / _LAYOUT_SHIFTS) % L
     if not math.isfinite(L) and not config.spacing:
         raise ValueError("localisation.probe.spacing = 0 needs an edge of "
                          "finite length: allowed > 0 on an endless edge")
@@ -131,6 +149,31 @@ def probe_arcs(contour: Contour, config: ProbeConfig) -> np.ndarray:
     span = step * (n - 1)
     first = config.first_arc if config.spacing else 0.5 * (L - span)
     return first + step * np.arange(n)
+
+
+def check_probe_layout(contour: Contour, config: ProbeConfig,
+                       arcs=None) -> None:
+    """One ConfigError naming ``localisation.probe.points`` (or
+    ``spacing``) when touches at ``arcs`` (default :func:`probe_arcs`) on
+    the believed ``contour`` cannot fix its registration: a profile needs
+    touches on sides that are not parallel
+    (:func:`~deburr_drake.math.registration.rigid_fit_amplification` at
+    most ``MAX_AMPLIFICATION``). A circle and a straight edge are fixed by
+    any 3 distinct touches."""
+    if isinstance(contour, (CircularContour, StraightContour)):
+        return
+    arcs = probe_arcs(contour, config) if arcs is None else arcs
+    points = np.array([contour.point_at(s) for s in arcs])
+    gain = rigid_fit_amplification(contour, points)
+    if gain > MAX_AMPLIFICATION:
+        name = "spacing" if config.spacing else "points"
+        raise ConfigError(
+            f"localisation.probe.{name} = {getattr(config, name)!r} is "
+            f"invalid: the {len(arcs)} touches at arcs "
+            f"{np.round(np.asarray(arcs) * 1e3, 1).tolist()} mm do not fix "
+            f"the {type(contour).__name__}'s position and turn (noise "
+            f"amplification {gain:.3g} > {MAX_AMPLIFICATION:g}): spread "
+            "them over sides that are not parallel")
 
 
 class ProbingSequence(LeafSystem):
@@ -193,6 +236,7 @@ class ProbingSequence(LeafSystem):
         self._start_depth = start_depth
         self._arcs = probe_arcs(contour, config)
         self._n = len(self._arcs)
+        check_probe_layout(contour, config, self._arcs)
         x0 = np.asarray(initial_position, float)
         first = self.standoff_point(contour, self._arcs[0])
         initial = PROBE_STATE.pack(
@@ -336,10 +380,14 @@ class ProbingSequence(LeafSystem):
         minimum = 3
         if hit.sum() < minimum:
             return  # too few touches: the believed part stays as it is
-        fit = registration_from_points(
-            self._contour, t[hit, :3], max_residual=self._config.max_residual,
-            fit_radius=(self._config.fit_radius
-                        and isinstance(self._contour, CircularContour)))
+        try:
+            fit = registration_from_points(
+                self._contour, t[hit, :3], max_early=self._config.max_early,
+                fit_radius=self._config.fit_radius)
+        except ValueError:
+            # The touches made (some missed) do not fix the part: the
+            # believed part stays as it is (probe_state: kept 0).
+            return
         x[PROBE_STATE.slice("registration")] = fit.registration
         x[PROBE_STATE.slice("kept")] = float(fit.kept.sum())
         x[PROBE_STATE.slice("fit_rms")] = fit.rms

@@ -2,39 +2,56 @@
 ``r = (dx, dy, dyaw, dradius)`` (m, m, rad, m) that moves the believed edge
 onto the real one, the contour it gives, and ``r`` from probed points.
 
-- :func:`moved_contour`: the believed contour moved by (dx, dy), turned by
-  dyaw about its pivot (a circle: its centre, dyaw turns its start angle; a
-  straight edge: its midpoint, or its start when it is endless) and, a
-  circle, with a radius dradius larger.
-- :func:`registration_from_points`: the circle or straight-edge fit
-  (deburr_drake.math.fits) of touch points on the real edge's zero-depth
-  path, with the points off by more than ``max_residual`` dropped.
+- :func:`moved_contour`: the believed contour turned by dyaw about its
+  pivot (:func:`pivot_of`) and moved by (dx, dy); a circle also with a
+  radius dradius larger. Circle, straight edge and profile
+  (``ProfileContour``: its vertices turn and move, the fillets are
+  unchanged; dradius must be 0). The pivot moves with (dx, dy), so two
+  registrations compose by adding them.
+- :func:`registration_from_points`: the rigid move (and, a circle, the
+  radius) that puts the contour through touch points on the real edge's
+  zero-depth path: the circle and straight-edge fits of
+  deburr_drake.math.fits in closed form, any other contour (a profile) by
+  Gauss-Newton on the signed distances. Touches more than ``max_early``
+  on the tool's side of the fit (early: they met a burr) are dropped one
+  at a time; late touches are kept (nothing on the edge makes contact come
+  late).
 - while cutting (:func:`contact_regressor`, :func:`rls_update`,
   :func:`registration_of`): the contact force against the depth on a
   reference contour, ||f_n|| = c0 + c1 (delta_0 - d), shows how far the
-  real edge lies beyond it, d = w . n1 + psi (s - s_pivot), the offset
-  estimated together with the contact parameters by recursive least
-  squares.
+  real edge lies beyond it, d = w . n1 + psi (z x (p - pivot)) . n1 (the
+  normal displacement of the rigid move (w, psi) at the tool point p),
+  the move estimated together with the contact parameters by recursive
+  least squares.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
-from deburr_drake.math.fits import fit_circle, fit_line, fit_rejecting
+from deburr_drake.math.fits import fit_circle, fit_line
 from deburr_drake.math.geometry import (CircularContour, Contour,
-                                        StraightContour)
+                                        ProfileContour, StraightContour)
 
-__all__ = ["REGISTRATION_SIZE", "moved_contour", "ProbeFit",
-           "registration_from_points", "ONLINE_PARAMETERS",
-           "contact_regressor", "onset_regressor", "registration_of",
-           "rls_update"]
+__all__ = ["REGISTRATION_SIZE", "pivot_of", "moved_contour", "ProbeFit",
+           "registration_from_points", "rigid_fit_amplification",
+           "MAX_AMPLIFICATION",
+           "ONLINE_PARAMETERS", "contact_regressor", "onset_regressor",
+           "registration_of", "rls_update"]
 
 #: (dx, dy, dyaw, dradius).
 REGISTRATION_SIZE = 4
+
+#: The largest noise amplification a profile's touches may have: the
+#: standard deviation of the worst combination of (dx, dy, L dyaw) per
+#: unit touch noise (L the touches' RMS distance from the pivot). Evenly
+#: spread around a closed edge it is about sqrt(2 / N); touches all on
+#: one straight side fix no position along it (infinite).
+MAX_AMPLIFICATION = 10.0
 
 
 def _rot(yaw):
@@ -42,13 +59,27 @@ def _rot(yaw):
     return np.array([[c, -s], [s, c]])
 
 
-def _pivot(contour: StraightContour) -> np.ndarray:
-    half = 0.5 * contour.length if math.isfinite(contour.length) else 0.0
-    return contour.point_at(half)
+def pivot_of(contour: Contour) -> np.ndarray:
+    """(x, y, z) m, world: the point a registration's dyaw turns the
+    contour about. A circle: its centre; a straight edge: its midpoint
+    (its start when it is endless); a profile: the centroid (mean) of its
+    polygon's vertices."""
+    if isinstance(contour, CircularContour):
+        return contour.center
+    if isinstance(contour, StraightContour):
+        half = 0.5 * contour.length if math.isfinite(contour.length) else 0.0
+        return contour.point_at(half)
+    if isinstance(contour, ProfileContour):
+        return contour.vertex_centroid
+    raise TypeError(f"registration of a {type(contour).__name__} is not "
+                    "supported: a circle, a straight edge or a profile")
 
 
 def moved_contour(contour: Contour, registration) -> Contour:
-    """``contour`` moved by ``registration`` (dx, dy, dyaw, dradius)."""
+    """``contour`` turned by dyaw (rad, counter-clockwise) about
+    :func:`pivot_of` and moved by (dx, dy) (m); a circle's radius grows by
+    dradius (m). ValueError for a nonzero dradius on a straight edge or a
+    profile (their size is the drawing's)."""
     dx, dy, dyaw, dradius = (float(v) for v in registration)
     if not any((dx, dy, dyaw, dradius)):
         return contour
@@ -57,9 +88,14 @@ def moved_contour(contour: Contour, registration) -> Contour:
         return CircularContour(center, contour.radius + dradius,
                                start_angle=contour.start_angle + dyaw,
                                direction=contour.direction)
+    if dradius != 0.0 and isinstance(contour, (StraightContour,
+                                               ProfileContour)):
+        raise ValueError(f"dradius = {dradius!r} m on a "
+                         f"{type(contour).__name__}: only a circle's radius "
+                         "is registered")
+    pivot = pivot_of(contour)
     if isinstance(contour, StraightContour):
         R = _rot(dyaw)
-        pivot = _pivot(contour)
         start = contour.point_at(0.0)
         start[:2] = pivot[:2] + R @ (start[:2] - pivot[:2]) + [dx, dy]
         t = contour.tangent(start)
@@ -67,85 +103,196 @@ def moved_contour(contour: Contour, registration) -> Contour:
         t[:2] = R @ t[:2]
         n[:2] = R @ n[:2]
         return StraightContour(start, t, n, length=contour.length)
+    if isinstance(contour, ProfileContour):
+        return contour.moved((dx, dy), dyaw, pivot[:2])
     raise TypeError(f"registration of a {type(contour).__name__} is not "
-                    "supported: a circle or a straight edge")
+                    "supported: a circle, a straight edge or a profile")
+
+
+def _turn_terms(contour: Contour, p, pivot) -> np.ndarray:
+    """(N, 3): (n1_x, n1_y, (z x (p - pivot)) . n1) at each planar point
+    of ``p`` (N, 2): the displacement along n1 of the edge at p when the
+    contour moves by (dx, dy) and turns by dyaw about ``pivot``."""
+    out = np.empty((len(p), 3))
+    z = contour.height
+    for i, (x, y) in enumerate(p):
+        n1 = contour.n1(np.array([x, y, z]))
+        out[i] = (n1[0], n1[1],
+                  -(y - pivot[1]) * n1[0] + (x - pivot[0]) * n1[1])
+    return out
+
+
+def _phi(contour: Contour, p) -> np.ndarray:
+    z = contour.height
+    return np.array([float(contour.phi(np.array([x, y, z]))) for x, y in p])
+
+
+def rigid_fit_amplification(contour: Contour, points) -> float:
+    """How much a rigid fit (dx, dy, dyaw) of ``contour`` through
+    ``points`` ((N, 2 or 3), m, on or near the edge) amplifies touch noise:
+    the largest standard deviation of (dx, dy, L dyaw) per unit noise, L
+    the points' RMS distance from the pivot (inf when they do not fix the
+    move: fewer than 3, or all on one straight piece)."""
+    p = np.asarray(points, float)[:, :2]
+    if len(p) < 3:
+        return math.inf
+    pivot = pivot_of(contour)[:2]
+    J = _turn_terms(contour, p, pivot)
+    L = float(np.sqrt(np.mean(np.sum((p - pivot) ** 2, axis=1))))
+    J[:, 2] /= max(L, 1e-12)
+    smallest = np.linalg.svd(J, compute_uv=False)[-1]
+    return math.inf if smallest <= 1e-9 else float(1.0 / smallest)
+
+
+def _rigid_fit(contour: Contour, p, *, iterations: int = 50,
+               tolerance: float = 1e-12) -> np.ndarray:
+    """(dx, dy, dyaw) minimising sum phi_moved(p_i)^2 by Gauss-Newton from
+    zero: moving the contour by a small (u, beta) about its (moved) pivot
+    c changes phi at p by -(u + beta z x (p - c)) . grad phi /|grad phi|
+    = +(...) . n1, and registrations compose by adding."""
+    pivot = pivot_of(contour)[:2]
+    reg = np.zeros(3)
+    for _ in range(iterations):
+        moved = moved_contour(contour, [*reg, 0.0])
+        J = _turn_terms(moved, p, pivot + reg[:2])
+        step, *_ = np.linalg.lstsq(J, -_phi(moved, p), rcond=None)
+        reg += step
+        if np.linalg.norm(step[:2]) + abs(step[2]) * 0.1 < tolerance:
+            break
+    return reg
 
 
 @dataclass
 class ProbeFit:
     registration: np.ndarray  # (4,) dx, dy, dyaw, dradius
     kept: np.ndarray          # (N,) bool, the points the fit used
-    residuals: np.ndarray     # (N,) m, of every point to the final fit
+    residuals: np.ndarray     # (N,) m, phi of every point on the fit: > 0 early
     rms: float                # m, of the kept points
 
 
-def registration_from_points(contour: Contour, points, *,
-                             max_residual: float,
+def _drop_early(fit: Callable, contour: Contour, p, *, max_early: float,
+                minimum: int, fixes: Callable = None) -> np.ndarray:
+    """The touches kept: the touch furthest on the tool's side of
+    ``fit(kept)`` (a registration) is dropped, one at a time, while it
+    lies more than ``max_early`` (m) there, more than ``minimum`` remain
+    and (``fixes``) the rest still fix the fit."""
+    kept = np.ones(len(p), bool)
+    while kept.sum() > minimum:
+        res = _phi(moved_contour(contour, fit(kept)), p)
+        worst = int(np.argmax(np.where(kept, res, -np.inf)))
+        if res[worst] <= max_early:
+            break
+        trial = kept.copy()
+        trial[worst] = False
+        if fixes is not None and not fixes(trial):
+            break
+        kept = trial
+    return kept
+
+
+def registration_from_points(contour: Contour, points, *, max_early: float,
                              fit_radius: bool = False) -> ProbeFit:
     """The registration of ``contour`` (the believed zero-depth path) that
     best puts it through ``points`` ((N, 2 or 3), m, world; the touch
-    points already compensated to the zero-depth path). A circle: its
-    centre (and, ``fit_radius``, its radius), at least 3 points (4 to
-    find an outlier); a
-    straight edge: its offset and heading, at least 3 points (2 are fitted
-    exactly, the third shows an outlier)."""
+    points already compensated to the zero-depth path), touches more than
+    ``max_early`` (m) on the tool's side of the fit dropped.
+
+    - A circle: its centre (and, ``fit_radius``, its radius), at least 3
+      points (4 to find an early one: found with the radius free, so that
+      a bias common to every touch goes into the radius rather than into
+      the residuals; the centre is then fitted with the radius held unless
+      ``fit_radius``).
+    - A straight edge: its offset and heading (total least squares), at
+      least 2 points (3 to find an early one).
+    - Any other contour (a profile): its rigid move (dx, dy, dyaw) by
+      Gauss-Newton on the signed distances, at least 3 points that fix it
+      (:func:`rigid_fit_amplification` at most ``MAX_AMPLIFICATION``; 4 to
+      find an early one).
+
+    ``fit_radius`` on anything but a circle is a ValueError.
+
+    ValueError when the points cannot fix the registration."""
     p = np.asarray(points, float)[:, :2]
+    if fit_radius and not isinstance(contour, CircularContour):
+        raise ValueError(f"fit_radius on a {type(contour).__name__}: only "
+                         "a circle's radius is fitted")
     if isinstance(contour, CircularContour):
-        # Outliers are found with the radius free, so that a bias common to
-        # every touch (the same depth at each detection) goes into the
-        # radius rather than into the residuals; the centre is then fitted
-        # to the kept points with the radius held unless ``fit_radius``.
-        if len(p) >= 4:
-            _, kept = fit_rejecting(fit_circle, p, max_residual=max_residual,
-                                    minimum=3)
-        else:
-            kept = np.ones(len(p), bool)
-        fit = fit_circle(p[kept], radius=None if fit_radius
-                         else contour.radius, seed=contour.center[:2])
-        d = fit.center - contour.center[:2]
-        reg = np.array([d[0], d[1], 0.0, fit.radius - contour.radius])
-        all_res = np.linalg.norm(p - fit.center, axis=1) - fit.radius
-        return ProbeFit(reg, kept, all_res, fit.rms)
-    if isinstance(contour, StraightContour):
-        fit, kept = fit_rejecting(fit_line, p, max_residual=max_residual,
-                                  minimum=2)
+        if len(p) < 3:
+            raise ValueError(f"a circle's fit needs at least 3 touches, "
+                             f"got {len(p)}")
+        c0 = contour.center[:2]
+
+        def circle(kept, free=True):
+            fit = fit_circle(p[kept], radius=None if free
+                             else contour.radius, seed=c0)
+            d = fit.center - c0
+            return np.array([d[0], d[1], 0.0, fit.radius - contour.radius])
+        kept = _drop_early(circle, contour, p, max_early=max_early,
+                           minimum=3) if len(p) >= 4 else np.ones(len(p),
+                                                                  bool)
+        reg = circle(kept, free=fit_radius)
+    elif isinstance(contour, StraightContour):
+        if len(p) < 2:
+            raise ValueError(f"a straight edge's fit needs at least 2 "
+                             f"touches, got {len(p)}")
         t = contour.tangent(contour.point_at(0.0))[:2]
-        direction = fit.direction if fit.direction @ t >= 0 else \
-            -fit.direction
-        dyaw = math.atan2(t[0] * direction[1] - t[1] * direction[0],
-                          t @ direction)
-        # Turn about the pivot, then shift along the turned normal so the
-        # line passes through the fitted point.
-        turned = moved_contour(contour, [0.0, 0.0, dyaw, 0.0])
-        n = turned.material_normal[:2]
-        q = np.array([fit.point[0], fit.point[1], turned.height])
-        shift = -turned.phi(q) * n  # phi < 0 on the material side
-        reg = np.array([shift[0], shift[1], dyaw, 0.0])
-        normal = np.array([-direction[1], direction[0]])
-        all_res = (p - fit.point) @ normal
-        return ProbeFit(reg, kept, all_res, fit.rms)
-    raise TypeError(f"registration of a {type(contour).__name__} is not "
-                    "supported: a circle or a straight edge")
+
+        def line(kept):
+            fit = fit_line(p[kept])
+            direction = fit.direction if fit.direction @ t >= 0 else \
+                -fit.direction
+            dyaw = math.atan2(t[0] * direction[1] - t[1] * direction[0],
+                              t @ direction)
+            # Turn about the pivot, then shift along the turned normal so
+            # the line passes through the fitted point.
+            turned = moved_contour(contour, [0.0, 0.0, dyaw, 0.0])
+            n = turned.material_normal[:2]
+            q = np.array([fit.point[0], fit.point[1], turned.height])
+            shift = -turned.phi(q) * n  # phi < 0 on the material side
+            return np.array([shift[0], shift[1], dyaw, 0.0])
+        kept = _drop_early(line, contour, p, max_early=max_early, minimum=2)
+        reg = line(kept)
+    else:
+        pivot_of(contour)  # TypeError for a contour that cannot be moved
+
+        def fixes(kept):
+            return rigid_fit_amplification(contour, p[kept]) <= \
+                MAX_AMPLIFICATION
+        if not fixes(np.ones(len(p), bool)):
+            raise ValueError(
+                f"the {len(p)} touches do not fix the part's position and "
+                "turn (noise amplification "
+                f"{rigid_fit_amplification(contour, p):.3g} > "
+                f"{MAX_AMPLIFICATION:g}): at least 3, spread over sides "
+                "that are not parallel")
+
+        def rigid(kept):
+            return np.array([*_rigid_fit(contour, p[kept]), 0.0])
+        kept = _drop_early(rigid, contour, p, max_early=max_early,
+                           minimum=3, fixes=fixes)
+        reg = rigid(kept)
+    residuals = _phi(moved_contour(contour, reg), p)
+    rms = float(np.sqrt(np.mean(residuals[kept] ** 2)))
+    return ProbeFit(reg, kept, residuals, rms)
 
 
 # -- registration while cutting -------------------------------------------
 #: The online model's parameters: the contact force is
-#: ||f_n|| = c0 + c1 (delta_0 - d), d = w . n1 + psi (s - s_pivot) how far
-#: the real edge lies beyond the reference contour along n1 (w: m, the
-#: offset; psi: rad, a straight edge's heading error), delta_0 the depth on
-#: the reference; linear in (c0, c1, c1 w_x, c1 w_y, c1 psi).
+#: ||f_n|| = c0 + c1 (delta_0 - d), d = w . n1 + psi (z x (p - pivot)) . n1
+#: how far the real edge lies beyond the reference contour along n1 at the
+#: tool point p (w: m, the move; psi: rad, the turn about the pivot,
+#: counter-clockwise), delta_0 the depth on the reference; linear in
+#: (c0, c1, c1 w_x, c1 w_y, c1 psi).
 ONLINE_PARAMETERS = ("c0", "c1", "c1_w_x", "c1_w_y", "c1_psi")
 
 
 def _offset_terms(contour: Contour, x_p) -> np.ndarray:
-    """(n1_x, n1_y, s - s_pivot): d = w . n1 + psi (s - s_pivot). A circle
-    has no psi (its yaw moves nothing); on a straight edge w . n1 is a
-    constant, told apart from c0 only by the contact onset."""
-    n1 = contour.n1(x_p)
-    if isinstance(contour, StraightContour):
-        s = contour.arc_position(x_p) - contour.arc_position(_pivot(contour))
-        return np.array([n1[0], n1[1], s])
-    return np.array([n1[0], n1[1], 0.0])
+    """(n1_x, n1_y, (z x (x_p - pivot)) . n1): d = w . n1 + psi (...).
+    On a circle the last term is zero (n1 is radial: a turn about the
+    centre moves nothing); on a straight edge it is -(s - s_pivot), and
+    w . n1 is a constant, told apart from c0 only by the contact onset."""
+    x_p = np.asarray(x_p, float)
+    return _turn_terms(contour, x_p[None, :2], pivot_of(contour)[:2])[0]
 
 
 def contact_regressor(contour: Contour, x_p) -> np.ndarray:
@@ -166,21 +313,20 @@ def onset_regressor(contour: Contour, x_p, depth_at_detection=0.0):
 
 
 def registration_of(contour: Contour, params) -> np.ndarray:
-    """(dx, dy, dyaw, dradius) that moves ``contour`` onto the edge of the
+    """(dx, dy, dyaw, 0) that moves ``contour`` onto the edge of the
     online model's ``params`` (ONLINE_PARAMETERS; zero while c1 is not
-    positive)."""
+    positive). A straight edge: only the move along its normal (the move
+    along it changes nothing); a circle: no turn (it changes nothing)."""
     c1 = float(params[1])
     if not c1 > 0.0:
         return np.zeros(REGISTRATION_SIZE)
     wx, wy, psi = (float(v) / c1 for v in params[2:5])
     if isinstance(contour, StraightContour):
         n = contour.material_normal[:2]
-        w = (wx * n[0] + wy * n[1]) * n
-        # Turning by beta (counter-clockwise) about the pivot moves the
-        # point at arc s by -beta (s - s_pivot) along n1 (material on the
-        # right of the tangent): beta = -psi.
-        return np.array([w[0], w[1], -psi, 0.0])
-    return np.array([wx, wy, 0.0, 0.0])
+        wx, wy = (wx * n[0] + wy * n[1]) * n
+    if isinstance(contour, CircularContour):
+        psi = 0.0
+    return np.array([wx, wy, psi, 0.0])
 
 
 def rls_update(theta, P, phi, y, *, noise_var: float, forgetting: float):
