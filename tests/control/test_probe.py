@@ -165,3 +165,33 @@ def test_gate_hides_contact_while_probing():
     np.testing.assert_allclose(
         gate.GetOutputPort("chamfer_state").Eval(context), chamfer)
     assert gate.GetOutputPort("desired_normal_force").Eval(context)[0] == 7
+
+
+def _square(**kw):
+    from deburr_drake.math.geometry import ProfileContour
+    return ProfileContour([[-0.025, -0.025], [0.025, -0.025],
+                           [0.025, 0.025], [-0.025, 0.025]], 0.01,
+                          material="inside", offset=0.003, **kw)
+
+
+def test_profile_layout_fixes_the_turn_and_a_bad_one_is_refused():
+    from deburr_drake.config import ConfigError
+    from deburr_drake.control.probe import check_probe_layout
+    from deburr_drake.math.registration import rigid_fit_amplification
+    square = _square()
+    # Evenly from the middle of a side, 8 touches fall on the middles of
+    # the sides and fillets, which see no turn: the layout is shifted.
+    arcs = probe_arcs(square, ProbeConfig(points=8))
+    np.testing.assert_allclose(np.diff(arcs) % square.length,
+                               square.length / 8)
+    assert 0.0 < arcs[0] < square.length / 8
+    points = [square.point_at(s) for s in arcs]
+    assert rigid_fit_amplification(square, points) < 1.0
+    check_probe_layout(square, ProbeConfig(points=8))
+    # Given a spacing it is kept as given; all on one side it is refused.
+    config = ProbeConfig(points=4, spacing=0.005, first_arc=0.0)
+    np.testing.assert_allclose(probe_arcs(square, config),
+                               [0.0, 0.005, 0.010, 0.015])
+    with pytest.raises(ConfigError, match=r"^localisation\.probe\.spacing "
+                       r"= 0\.005 is invalid: .*do not fix"):
+        check_probe_layout(square, config)
