@@ -51,6 +51,11 @@ PROBE_STATE = VectorLayout("probe_state", [
     ("segment_end", 3),     # m, ... to here
     ("segment_duration", 1),  # s
     ("linear", 1),          # 1: constant speed (guarded), 0: smooth
+    # A travel along the edge at the standoff (1), from arc to arc (m;
+    # the registered contour's on the way back), else a straight move.
+    ("along_edge", 1),
+    ("arc_from", 1),
+    ("arc_to", 1),
     ("command", 3),         # m, the commanded tool point
     ("tare", 3),            # N, the force reading before the guarded move
     ("registration", REGISTRATION_SIZE),  # dx, dy, dyaw, dradius
@@ -213,12 +218,14 @@ class ProbingSequence(LeafSystem):
     - Discrete state: the two outputs above, updated every
       ``sample_period`` (the sensor's).
 
-    Each touch: travel (smooth) to the standoff point ``standoff`` before
-    the believed zero-depth path along -n1, settle, tare the force, move
+    Each touch: travel (smooth, along the believed edge at the standoff:
+    a straight move would cut a convex corner) to the standoff point
+    ``standoff`` before the believed zero-depth path along -n1, settle, tare the force, move
     along n1 at ``approach_speed`` until -(f - tare).n1 exceeds
     ``force_threshold`` (or ``search_distance``: a miss), record x_p minus
     the :func:`detection_depth` along n1, retract by ``retract``. Then the
-    fit, a travel to the corrected start's standoff and an entry at the
+    fit, a travel (along the corrected edge) to the corrected start's
+    standoff and an entry at the
     approach speed to ``start`` on the corrected part (the tool point the
     pass starts from); the command generator takes over from there.
     """
@@ -238,13 +245,14 @@ class ProbingSequence(LeafSystem):
         self._n = len(self._arcs)
         check_probe_layout(contour, config, self._arcs)
         x0 = np.asarray(initial_position, float)
-        first = self.standoff_point(contour, self._arcs[0])
         initial = PROBE_STATE.pack(
             phase=_P["travel"], index=0, phase_start=0.0, segment_start=x0,
-            segment_end=first, segment_duration=self._travel_time(x0, first),
-            linear=0.0, command=x0, tare=np.zeros(3),
-            registration=np.zeros(REGISTRATION_SIZE), done_time=-1.0,
-            touches=0.0, kept=0.0, fit_rms=0.0)
+            segment_end=x0, segment_duration=1.0, linear=0.0,
+            along_edge=0.0, arc_from=0.0, arc_to=0.0, command=x0,
+            tare=np.zeros(3), registration=np.zeros(REGISTRATION_SIZE),
+            done_time=-1.0, touches=0.0, kept=0.0, fit_rms=0.0)
+        self._edge_segment(initial, 0.0, "travel", x0, contour,
+                           self._arcs[0])
         self._state = self.DeclareDiscreteState(initial)
         self._touch_state = self.DeclareDiscreteState(np.zeros(4 * self._n))
         self._chamfer_port = self.DeclareVectorInputPort(
@@ -292,13 +300,50 @@ class ProbingSequence(LeafSystem):
         x[PROBE_STATE.slice("segment_end")] = end
         x[PROBE_STATE.slice("segment_duration")] = max(duration, 1e-9)
         x[PROBE_STATE.slice("linear")] = 1.0 if linear else 0.0
+        x[PROBE_STATE.slice("along_edge")] = 0.0
 
-    @staticmethod
-    def _along(x, t):
+    def _edge_point(self, contour, x, w):
+        """The travel along the edge at weight w in [0, 1]: the standoff
+        point at the arc w of the way, plus what is left of the start's
+        offset from it (the move starts where the tool is)."""
+        s0 = float(PROBE_STATE.get(x, "arc_from"))
+        s1 = float(PROBE_STATE.get(x, "arc_to"))
+        off = PROBE_STATE.get(x, "segment_start") - self.standoff_point(
+            contour, s0)
+        return self.standoff_point(contour, s0 + w * (s1 - s0)) + \
+            (1.0 - w) * off
+
+    def _edge_segment(self, x, t, phase, start, contour, s_to):
+        """A smooth travel from ``start`` to the standoff point at arc
+        ``s_to`` along ``contour`` at the standoff (the shorter way round
+        a closed edge): a straight move between two touches would cut the
+        corner of a boss, or any convex edge, through the material."""
+        s_from = float(contour.arc_position(start))
+        if contour.closed:
+            L = contour.length
+            s_to = s_from + ((s_to - s_from + 0.5 * L) % L - 0.5 * L)
+        end = self.standoff_point(contour, s_to)
+        self._segment(x, t, phase, start, end, 1.0, False)
+        x[PROBE_STATE.slice("along_edge")] = 1.0
+        x[PROBE_STATE.slice("arc_from")] = s_from
+        x[PROBE_STATE.slice("arc_to")] = s_to
+        path = np.array([self._edge_point(contour, x, w)
+                         for w in np.linspace(0.0, 1.0, 17)])
+        length = float(np.sum(np.linalg.norm(np.diff(path, axis=0),
+                                             axis=1)))
+        x[PROBE_STATE.slice("segment_duration")] = max(
+            length / self._config.travel_speed, 0.05)
+
+    def _along(self, x, t):
         u = (t - PROBE_STATE.get(x, "phase_start")) / PROBE_STATE.get(
             x, "segment_duration")
         u = min(max(u, 0.0), 1.0)
         w = u if PROBE_STATE.get(x, "linear") > 0.5 else u * u * (3 - 2 * u)
+        if PROBE_STATE.get(x, "along_edge") > 0.5:
+            phase = PHASES[int(round(float(PROBE_STATE.get(x, "phase"))))]
+            contour = self._registered(x) if phase == "return" else \
+                self._contour
+            return self._edge_point(contour, x, w), u >= 1.0
         a = PROBE_STATE.get(x, "segment_start")
         b = PROBE_STATE.get(x, "segment_end")
         return a + w * (b - a), u >= 1.0
@@ -349,14 +394,12 @@ class ProbingSequence(LeafSystem):
             i += 1
             x[PROBE_STATE.slice("index")] = i
             if i < self._n:
-                target = self.standoff_point(self._contour, self._arcs[i])
-                self._segment(x, t, "travel", command, target,
-                              self._travel_time(command, target), False)
+                self._edge_segment(x, t, "travel", command, self._contour,
+                                   self._arcs[i])
             else:
                 self._fit(x, touches)
-                target = self.standoff_point(self._registered(x), 0.0)
-                self._segment(x, t, "return", command, target,
-                              self._travel_time(command, target), False)
+                self._edge_segment(x, t, "return", command,
+                                   self._registered(x), 0.0)
         elif phase == "return" and finished:
             contour = self._registered(x)
             p = contour.point_at(0.0)

@@ -144,50 +144,72 @@ def rigid_fit_amplification(contour: Contour, points) -> float:
     return math.inf if smallest <= 1e-9 else float(1.0 / smallest)
 
 
-def _rigid_fit(contour: Contour, p, *, iterations: int = 50,
-               tolerance: float = 1e-12) -> np.ndarray:
-    """(dx, dy, dyaw) minimising sum phi_moved(p_i)^2 by Gauss-Newton from
-    zero: moving the contour by a small (u, beta) about its (moved) pivot
-    c changes phi at p by -(u + beta z x (p - c)) . grad phi /|grad phi|
-    = +(...) . n1, and registrations compose by adding."""
+def _rigid_fit(contour: Contour, p, *, level: bool = False,
+               iterations: int = 50, tolerance: float = 1e-12):
+    """((dx, dy, dyaw), b) minimising sum (phi_moved(p_i) - b)^2 by
+    Gauss-Newton from zero, b (m) a level common to every touch when
+    ``level`` (else 0): moving the contour by a small (u, beta) about its
+    (moved) pivot c changes phi at p by -(u + beta z x (p - c)) . grad phi
+    / |grad phi| = +(...) . n1, and registrations compose by adding."""
     pivot = pivot_of(contour)[:2]
-    reg = np.zeros(3)
+    reg, b = np.zeros(3), 0.0
     for _ in range(iterations):
         moved = moved_contour(contour, [*reg, 0.0])
         J = _turn_terms(moved, p, pivot + reg[:2])
-        step, *_ = np.linalg.lstsq(J, -_phi(moved, p), rcond=None)
-        reg += step
+        if level:
+            J = np.column_stack([J, -np.ones(len(p))])
+        step, *_ = np.linalg.lstsq(J, b * level - _phi(moved, p),
+                                   rcond=None)
+        reg += step[:3]
+        if level:
+            b += step[3]
         if np.linalg.norm(step[:2]) + abs(step[2]) * 0.1 < tolerance:
             break
-    return reg
+    return reg, b
+
+
+def _early(fit: Callable, contour: Contour, p, mask) -> np.ndarray:
+    """phi of every point of ``p`` on ``fit(mask)`` (a registration, or (a
+    registration, a level common to the touches, m, subtracted)): > 0 on
+    the tool's side."""
+    found = fit(mask)
+    reg, level = found if isinstance(found, tuple) else (found, 0.0)
+    return _phi(moved_contour(contour, reg), p) - level
+
+
+def _drop_early(fit: Callable, contour: Contour, p, *, max_early: float,
+                minimum: int, fixes: Callable = None) -> np.ndarray:
+    """The touches kept: the touch lying furthest on the tool's side of
+    the fit through the kept ones is dropped, one at a time, while it lies
+    more than ``max_early`` (m) on the tool's side of the fit through the
+    others, more than ``minimum`` remain and (``fixes``) the others still
+    fix the fit. Judged against the others' fit: a touch on a burr pulls
+    a fit through all towards itself (by half its own error with 8
+    touches and 4 unknowns)."""
+    kept = np.ones(len(p), bool)
+    while kept.sum() > minimum:
+        early = _early(fit, contour, p, kept)
+        worst = int(np.argmax(np.where(kept, early, -np.inf)))
+        others = kept.copy()
+        others[worst] = False
+        if fixes is not None and not fixes(others):
+            break
+        if _early(fit, contour, p, others)[worst] <= max_early:
+            break
+        kept = others
+    return kept
 
 
 @dataclass
 class ProbeFit:
     registration: np.ndarray  # (4,) dx, dy, dyaw, dradius
     kept: np.ndarray          # (N,) bool, the points the fit used
-    residuals: np.ndarray     # (N,) m, phi of every point on the fit: > 0 early
-    rms: float                # m, of the kept points
-
-
-def _drop_early(fit: Callable, contour: Contour, p, *, max_early: float,
-                minimum: int, fixes: Callable = None) -> np.ndarray:
-    """The touches kept: the touch furthest on the tool's side of
-    ``fit(kept)`` (a registration) is dropped, one at a time, while it
-    lies more than ``max_early`` (m) there, more than ``minimum`` remain
-    and (``fixes``) the rest still fix the fit."""
-    kept = np.ones(len(p), bool)
-    while kept.sum() > minimum:
-        res = _phi(moved_contour(contour, fit(kept)), p)
-        worst = int(np.argmax(np.where(kept, res, -np.inf)))
-        if res[worst] <= max_early:
-            break
-        trial = kept.copy()
-        trial[worst] = False
-        if fixes is not None and not fixes(trial):
-            break
-        kept = trial
-    return kept
+    residuals: np.ndarray     # (N,) m, phi of every point on the fit - level: > 0 early
+    rms: float                # m, of the kept points' residuals
+    # m, a profile's level common to the kept touches (> 0: early on
+    # average: the contact stiffer than modelled or the edge further out
+    # than drawn); 0 on a circle or a straight edge
+    level: float = 0.0
 
 
 def registration_from_points(contour: Contour, points, *, max_early: float,
@@ -207,12 +229,15 @@ def registration_from_points(contour: Contour, points, *, max_early: float,
     - Any other contour (a profile): its rigid move (dx, dy, dyaw) by
       Gauss-Newton on the signed distances, at least 3 points that fix it
       (:func:`rigid_fit_amplification` at most ``MAX_AMPLIFICATION``; 4 to
-      find an early one).
+      find an early one), with 5 or more a level common to every touch
+      fitted too (``ProbeFit.level``; as a circle's radius while finding
+      early touches).
 
     ``fit_radius`` on anything but a circle is a ValueError.
 
     ValueError when the points cannot fix the registration."""
     p = np.asarray(points, float)[:, :2]
+    level = 0.0  # a profile's common level (below)
     if fit_radius and not isinstance(contour, CircularContour):
         raise ValueError(f"fit_radius on a {type(contour).__name__}: only "
                          "a circle's radius is fitted")
@@ -266,14 +291,22 @@ def registration_from_points(contour: Contour, points, *, max_early: float,
                 f"{MAX_AMPLIFICATION:g}): at least 3, spread over sides "
                 "that are not parallel")
 
+        # With 5 touches or more a level common to every touch is fitted
+        # too, so that a detection bias common to all (the contact stiffer
+        # or softer than modelled) is neither taken for burrs nor, when a
+        # burr touch leaves the rest unbalanced, for a move.
+        free = len(p) >= 5
+
         def rigid(kept):
-            return np.array([*_rigid_fit(contour, p[kept]), 0.0])
+            reg, b = _rigid_fit(contour, p[kept], level=free and
+                                kept.sum() >= 5)
+            return np.array([*reg, 0.0]), b
         kept = _drop_early(rigid, contour, p, max_early=max_early,
-                           minimum=3, fixes=fixes)
-        reg = rigid(kept)
-    residuals = _phi(moved_contour(contour, reg), p)
+                           minimum=4 if free else 3, fixes=fixes)
+        reg, level = rigid(kept)
+    residuals = _phi(moved_contour(contour, reg), p) - level
     rms = float(np.sqrt(np.mean(residuals[kept] ** 2)))
-    return ProbeFit(reg, kept, residuals, rms)
+    return ProbeFit(reg, kept, residuals, rms, float(level))
 
 
 # -- registration while cutting -------------------------------------------
