@@ -38,12 +38,13 @@ class ProbeConfig:
     # (threshold / stiffness of penetration at the threshold).
     contact_stiffness: float = 5.0e3
     fit_radius: bool = False  # -, circle: fit the radius too (else the drawing's); only a circle
-    # m, a touch more than this on the tool's side of the fit (early: it
-    # met a burr or a burr's flank) is dropped, the furthest first, and
-    # the fit redone; late touches are kept (nothing on an edge makes
-    # contact come late). About 5 times the probe's qualified touch RMS
-    # (8 um, docs/localisation.md).
-    max_early: float = 4.0e-5
+    # m, a touch more than this on the tool's side of the fit through the
+    # other touches (early: it met a burr or a burr's flank) is dropped,
+    # the furthest first, and the fit redone; late touches are kept (a
+    # burr only makes contact come early). 7 times the probe's qualified
+    # touch RMS on the ring (8 um); on a profile good touches lay up to
+    # about 50 um early, burr flanks from 100 um (docs/localisation.md).
+    max_early: float = 6.0e-5
     # s, after probing the controller's fuzzy compensator (off while
     # probing) ramps back in over this time, so weights learned on an
     # earlier part (a batch) do not push the tool along before the cut is

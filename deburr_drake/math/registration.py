@@ -41,7 +41,7 @@ __all__ = ["REGISTRATION_SIZE", "pivot_of", "moved_contour", "ProbeFit",
            "registration_from_points", "rigid_fit_amplification",
            "MAX_AMPLIFICATION",
            "ONLINE_PARAMETERS", "contact_regressor", "onset_regressor",
-           "registration_of", "rls_update"]
+           "learning_curvature", "registration_of", "rls_update"]
 
 #: (dx, dy, dyaw, dradius).
 REGISTRATION_SIZE = 4
@@ -343,6 +343,21 @@ def onset_regressor(contour: Contour, x_p, depth_at_detection=0.0):
     phi[0] = 0.0
     phi[1] -= depth_at_detection
     return phi
+
+
+def learning_curvature(contour: Contour, samples: int = 720) -> float:
+    """1/m: the curvature of most of ``contour``'s length (over
+    ``samples`` points evenly along it): where the online model learns.
+    The contact law c0 + c1 delta holds with one c1 where the curvature
+    is one: a circle and a straight edge everywhere, a profile on its
+    straight sides (its fillets have their own c1: a pocket's concave
+    corner stiffer, a boss's convex one softer, which the model would take
+    for an offset towards or away from the corner)."""
+    L = contour.length if math.isfinite(contour.length) else 0.0
+    values = np.array([contour.curvature(contour.point_at(s)) for s in
+                       np.linspace(0.0, L, samples, endpoint=False)])
+    kinds, counts = np.unique(np.round(values, 9), return_counts=True)
+    return float(kinds[np.argmax(counts)])
 
 
 def registration_of(contour: Contour, params) -> np.ndarray:
