@@ -82,8 +82,8 @@ def test_profile_offset_found_with_stiffer_fillets_left_out():
     for k in range(n):
         t = k * T
         if k > 0.2 * n and k % 100 == 0:
-            # After the first side and fillet, never off by more than a
-            # few um (learning in the fillets too: 0.65 mm off over the
+            # After the first side and fillet, never off by more than
+            # 50 um (learning in the fillets too: 0.65 mm off over the
             # first 40 % of the lap, the stiffer corners taken for a
             # move towards them).
             reg = system.GetOutputPort("registration").Eval(context)
@@ -103,7 +103,7 @@ def test_profile_offset_found_with_stiffer_fillets_left_out():
             system.EvalUniquePeriodicDiscreteUpdate(context))
         context.SetTime(t + T)
     reg = system.GetOutputPort("registration").Eval(context)
-    assert worst < 1.5e-5
+    assert worst < 5e-5
     np.testing.assert_allclose(reg[:2], move[:2], atol=5e-6)
     assert reg[2] == pytest.approx(move[2], abs=5e-4)
     assert reg[3] == 0.0
