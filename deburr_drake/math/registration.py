@@ -184,8 +184,8 @@ def _drop_early(fit: Callable, contour: Contour, p, *, max_early: float,
     more than ``max_early`` (m) on the tool's side of the fit through the
     others, more than ``minimum`` remain and (``fixes``) the others still
     fix the fit. Judged against the others' fit: a touch on a burr pulls
-    a fit through all towards itself (by half its own error with 8
-    touches and 4 unknowns)."""
+    a fit through all towards itself (of 8 touches on a pocket, one 90 um
+    early lies 30 um from the fit through all with a free level)."""
     kept = np.ones(len(p), bool)
     while kept.sum() > minimum:
         early = _early(fit, contour, p, kept)
