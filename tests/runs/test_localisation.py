@@ -1,5 +1,6 @@
-"""Touch probing closed loop on the paper cell and a boss: the arm's guarded moves,
-contact on the simulated sensor, the bias compensated, the part found."""
+"""Touch probing closed loop on the paper cell and a boss: the arm's
+guarded moves, contact on the simulated sensor, the bias compensated, the
+part found."""
 
 import numpy as np
 import pytest
