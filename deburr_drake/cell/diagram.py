@@ -25,7 +25,7 @@ from deburr_drake.cell.edge import (believed_contour, believed_contour_step,
                                     edge_points, make_contour,
                                     start_position)
 from deburr_drake.cell.faults import add_noise_scale, add_sensor_faults
-from deburr_drake.cell.gains import resolve_gains
+from deburr_drake.cell.gains import resolve_gains, resolve_slope_bound
 from deburr_drake.cell.guards import add_effort_saturation, add_guards
 from deburr_drake.cell.plant import add_cell_plant
 from deburr_drake.cell.process import CuttingProcess
@@ -115,6 +115,8 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
     # controller.design auto: the gains from the model, written into the
     # scenario (deburr_drake.cell.gains).
     resolve_gains(c)
+    # fuzzy.max_slope 0: the learned surface's slope bound from the model.
+    resolve_slope_bound(c)
     builder = DiagramBuilder()
     plant, _ = add_cell_plant(builder, c)
     contour = make_contour(c)  # the real part: the plant's truth

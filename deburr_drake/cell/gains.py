@@ -54,6 +54,7 @@ import numpy as np
 from deburr_drake.config import Scenario
 
 __all__ = ["GainDesign", "design_gains", "resolve_gains", "apply_gains",
+           "resolve_slope_bound", "SLOPE_LIMIT_FRACTION", "MIN_SLOPE_BOUND",
            "VERTICAL_ERROR", "SAMPLED_RATE", "SLOPE_RATE"]
 
 #: m: the vertical error x3's PD may leave under the gravity error.
@@ -270,3 +271,37 @@ def resolve_gains(scenario: Scenario) -> GainDesign:
     design = design_gains(scenario)
     apply_gains(scenario, design)
     return design
+
+
+#: The designed slope bound keeps K_k plus the learned slope at this
+#: fraction of the sampled loop's limit 2 m / T.
+SLOPE_LIMIT_FRACTION = 0.75
+#: N s/m: the designed slope bound when K_k alone already takes that
+#: fraction: the surface may learn a level, not a slope.
+MIN_SLOPE_BOUND = 1.0
+
+
+def resolve_slope_bound(scenario: Scenario):
+    """``controller.fuzzy.max_slope`` 0 (designed) of a fuzzy controller:
+    SLOPE_LIMIT_FRACTION x 2 m / T - max K_k over the fuzzy axes, m the
+    lightest task mass at the start pose
+    (:func:`deburr_drake.cell.robot.loop_numbers`), written into
+    ``scenario``; returns it (None when nothing was designed). The sampled
+    loop's limit on the total gain on s_k is about 2 m / T (a mass under a
+    sampled damper: the per-sample factor 1 - K T / m reaches -1; arm5:
+    m = 7.03 kg, 2 m / T = 5625 N s/m, and validate_stability measured the
+    limit between K = 5500, stable, and 5656, a 200 Hz cycle). arm5 with
+    paper.yaml: 3819 N s/m; its paper pass learns up to 3147 N s/m (axis
+    x1, between s = -4 and 0 mm/s), so the bound leaves the paper's
+    experiment as it was, and a batch whose fifth part had learned 6100
+    N s/m (the sixth then cycled) stays below it."""
+    c = scenario.controller
+    f = c.fuzzy
+    if f.max_slope != 0 or c.kind != "fuzzy" or not c.control_period > 0:
+        return None  # (a continuous law, T = 0, has no sampled limit)
+    from deburr_drake.cell.robot import loop_numbers
+    m = loop_numbers(scenario)["lightest_task_mass"]
+    K = max(c.sliding_gain[a] for a in f.axes)
+    f.max_slope = max(SLOPE_LIMIT_FRACTION * 2.0 * m / c.control_period - K,
+                      MIN_SLOPE_BOUND)
+    return f.max_slope

@@ -101,6 +101,17 @@ class FuzzyConfig:
     adaptation_gain: float = 2000.0  # N s/m per s, r of (35)
     axes: List[int] = field(default_factory=lambda: [0, 1])  # -, task axes
     adapt: bool = True  # -, false: the rule weights stay fixed
+    # N s/m, the learned surface's slope |d u_f / d s_k| at most this on
+    # every fuzzy axis (adjacent weights along s_k differ by at most
+    # max_slope x Delta_k; an excess is pulled back at max_slope_rate).
+    # The slope adds to K_k on the sampled loop, whose limit on the total
+    # gain is about 2 m / T (m the lightest task mass): unbounded, (35)
+    # steepened the surface part after part in a batch until the 2.5 ms
+    # loop cycled at 200 Hz. 0: designed, 1.5 m / T - K_k at the start
+    # pose (the total then at most 3/4 of the limit,
+    # deburr_drake.cell.gains.resolve_slope_bound); inf: no bound.
+    max_slope: float = 0.0  # N s/m, bound on the learned surface's slope in s_k (0: designed)
+    max_slope_rate: float = 80.0  # 1/s, how fast a slope beyond max_slope is pulled back
 
     def deltas(self):
         """(Delta_0, [Delta_k]) in m and m/s."""
@@ -115,6 +126,10 @@ class FuzzyConfig:
         _positive(o, "position_scale", self.position_scale)
         _positive(o, "width_fraction", self.width_fraction)
         _positive(o, "adaptation_gain", self.adaptation_gain)
+        _require(isinstance(self.max_slope, (int, float))
+                 and self.max_slope >= 0.0, f"{o}.max_slope",
+                 self.max_slope, "a number >= 0 (0: designed; .inf: none)")
+        _positive(o, "max_slope_rate", self.max_slope_rate)
         _require(len(set(self.axes)) == len(self.axes)
                  and all(a in (0, 1, 2) for a in self.axes),
                  f"{o}.axes", self.axes, "distinct task axes from {0, 1, 2}")

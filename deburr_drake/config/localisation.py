@@ -38,13 +38,9 @@ class ProbeConfig:
     # (threshold / stiffness of penetration at the threshold).
     contact_stiffness: float = 5.0e3
     fit_radius: bool = False  # -, circle: fit the radius too (else the drawing's); only a circle
-    # m, a touch more than this on the tool's side of the fit through the
-    # other touches (early: it met a burr or a burr's flank) is dropped,
-    # the furthest first, and the fit redone; late touches are kept (a
-    # burr only makes contact come early). 7 times the probe's qualified
-    # touch RMS on the ring (8 um); on a profile good touches lay up to
-    # about 50 um early, burr flanks from 100 um (docs/localisation.md).
-    max_early: float = 6.0e-5
+    # m, a touch off the circle, line or profile most touches agree on by
+    # more is dropped: a burr under it (math.fits.fit_consensus)
+    max_residual: float = 5.0e-5  # m, a touch off the consensus fit by more is dropped
     # s, after probing the controller's fuzzy compensator (off while
     # probing) ramps back in over this time, so weights learned on an
     # earlier part (a batch) do not push the tool along before the cut is
@@ -61,7 +57,7 @@ class ProbeConfig:
         _non_negative(o, "first_arc", self.first_arc)
         for name in ("approach_speed", "travel_speed", "force_threshold",
                      "standoff", "search_distance", "retract",
-                     "contact_stiffness", "max_early"):
+                     "contact_stiffness", "max_residual"):
             _positive(o, name, getattr(self, name))
         _non_negative(o, "settle_time", self.settle_time)
         _non_negative(o, "fuzzy_ramp_time", self.fuzzy_ramp_time)

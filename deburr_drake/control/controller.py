@@ -8,6 +8,8 @@ adds it together with the systems that feed it."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from pydrake.autodiffutils import AutoDiffXd
 from pydrake.common.value import AbstractValue
@@ -131,8 +133,8 @@ def HybridController_(T):
           x_c*(t) and its derivative from the first-order hold.
         - ``desired_normal_force`` (1, N): ||f_nd hat|| from the estimator.
         - ``fuzzy_weight`` (1; only with ``fuzzy_weight_input=True``): w
-          scales the fuzzy compensator's u_f; theta is not adapted while
-          w <= 0 (touch probing: the travel between touches is not the
+          scales the fuzzy compensator's u_f and its adaptation rates
+          (35); theta is not adapted while w <= 0 (touch probing: the travel between touches is not the
           cutting the rules learn; after it w ramps in, so weights learned
           on an earlier part do not push the tool along before the cut is
           established).
@@ -198,6 +200,12 @@ def HybridController_(T):
             self._world = self._plant.world_frame()
             self._config = config
             self._rule_bases = make_rule_bases(config)
+            # fuzzy.max_slope 0 is "designed" (the diagram builder writes
+            # the design, deburr_drake.cell.gains.resolve_slope_bound); a
+            # controller built from a configuration nobody designed bounds
+            # nothing.
+            self._max_slope = (float(config.fuzzy.max_slope)
+                               if config.fuzzy.max_slope > 0 else math.inf)
             self._axes = list(config.fuzzy.axes)
             self._n_rules = self._rule_bases[0].n_rules
             self._nq = plant.num_positions()
@@ -372,23 +380,33 @@ def HybridController_(T):
             theta rates (35) in place."""
             c = self._config
             r = c.fuzzy.adaptation_gain
+            n = self._n_rules
             for k, (axis, rb) in enumerate(zip(self._axes, self._rule_bases)):
                 s_k = s[axis]
                 if rb.in_domain(s_k):
                     u, idx, rate = rb.evaluate_and_rate(theta[k], y0, s_k, r)
                     zeta[axis] = 1.0
                     if c.fuzzy.adapt and len(idx):
-                        derivatives[1 + k * self._n_rules + idx] = rate
+                        derivatives[1 + k * n + idx] = rate
                 else:
                     u = c.robust_gain[k] * saturation(
                         s_k / c.robust_boundary_layer[k])
+                if c.fuzzy.adapt and self._max_slope < math.inf:
+                    derivatives[1 + k * n:1 + (k + 1) * n] += rb.slope_rate(
+                        theta[k], self._max_slope, c.fuzzy.max_slope_rate)
                 u_fuzzy[axis] = u
 
         def _weigh_fuzzy(self, w, u_fuzzy, zeta, derivatives):
             """The ``fuzzy_weight`` input w: the fuzzy compensator's u_f
-            scaled by w, theta frozen while w <= 0."""
+            scaled by w, and the rates (35) with it: the output the rules
+            move is w theta . nu, so its gradient is w nu (at w < 1 the
+            unscaled law would keep raising weights that the output uses
+            only in part: on a batch's ramps after probing they grew part
+            after part); theta frozen while w <= 0."""
             if w <= 0.0:
                 derivatives[1:] = 0.0
+            elif w < 1.0:
+                derivatives[1:] = w * derivatives[1:]
             for axis in self._axes:
                 if zeta[axis] == 1.0:
                     u_fuzzy[axis] = w * u_fuzzy[axis]

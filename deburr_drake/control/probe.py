@@ -425,7 +425,8 @@ class ProbingSequence(LeafSystem):
             return  # too few touches: the believed part stays as it is
         try:
             fit = registration_from_points(
-                self._contour, t[hit, :3], max_early=self._config.max_early,
+                self._contour, t[hit, :3],
+                max_residual=self._config.max_residual,
                 fit_radius=self._config.fit_radius)
         except ValueError:
             # The touches made (some missed) do not fix the part: the

@@ -10,6 +10,8 @@ Use::
     fit = fit_circle(points_xy, radius=0.027)   # the centre only
     fit = fit_line(points_xy)                   # LineFit: point, direction
     fit, kept = fit_rejecting(fit_circle, points_xy, max_residual=1e-4)
+    fit, kept = fit_consensus(fit_circle, points_xy, minimal=3,
+                              max_residual=5e-5)
 
 Points are (N, 2) arrays in a plane (m). With N touches spread around a
 circle and probe noise sigma, the centre is known to about
@@ -24,7 +26,7 @@ from typing import Callable, Optional
 import numpy as np
 
 __all__ = ["CircleFit", "LineFit", "fit_circle", "fit_circle_taubin",
-           "fit_line", "fit_rejecting"]
+           "fit_line", "fit_rejecting", "fit_consensus"]
 
 
 @dataclass
@@ -37,6 +39,11 @@ class CircleFit:
     @property
     def rms(self) -> float:
         return float(np.sqrt(np.mean(self.residuals ** 2)))
+
+    def residuals_of(self, points) -> np.ndarray:
+        """|p - c| - R of any (N, 2) points (m)."""
+        return np.linalg.norm(np.asarray(points, float) - self.center,
+                              axis=1) - self.radius
 
 
 @dataclass
@@ -53,6 +60,11 @@ class LineFit:
     @property
     def rms(self) -> float:
         return float(np.sqrt(np.mean(self.residuals ** 2)))
+
+    def residuals_of(self, points) -> np.ndarray:
+        """Signed distances of any (N, 2) points (m), left > 0."""
+        normal = np.array([-self.direction[1], self.direction[0]])
+        return (np.asarray(points, float) - self.point) @ normal
 
 
 def _points(points, minimum: int) -> np.ndarray:
@@ -165,3 +177,61 @@ def fit_rejecting(fit: Callable, points, *, max_residual: float,
         kept[np.flatnonzero(kept)[worst]] = False
         result = fit(p[kept], **kwargs)
     return result, kept
+
+
+#: Subsets tried by :func:`fit_consensus` at most (all of them when there
+#: are no more; else this many, drawn with a fixed seed).
+CONSENSUS_SUBSETS = 2000
+
+
+def fit_consensus(fit: Callable, points, *, minimal: int,
+                  max_residual: float, minimum: Optional[int] = None,
+                  **kwargs):
+    """(fit, kept): the fit of the largest set of points that agree with
+    one another within ``max_residual`` (m), found from the exact fits of
+    every ``minimal``-point subset (random sample consensus, exhaustive
+    for the few points of a probe: 56 subsets for 8 points and a circle),
+    then refitted to its inliers until the set settles. Unlike
+    :func:`fit_rejecting`, an outlier cannot pull the first fit towards
+    itself: two burr touches 0.15 mm early among eight left the
+    one-at-a-time rejection 30 um off the centre, this exactly on it.
+    Ties go to the smaller inlier RMS. With fewer than ``minimum``
+    (default ``minimal + 1``) agreeing points, :func:`fit_rejecting`
+    decides."""
+    from itertools import combinations
+    from math import comb
+    p = np.asarray(points, float)
+    minimum = minimal + 1 if minimum is None else minimum
+    if len(p) <= minimal:
+        return fit(p, **kwargs), np.ones(len(p), bool)
+    if comb(len(p), minimal) <= CONSENSUS_SUBSETS:
+        subsets = combinations(range(len(p)), minimal)
+    else:
+        rng = np.random.default_rng(0)
+        subsets = (rng.choice(len(p), minimal, replace=False)
+                   for _ in range(CONSENSUS_SUBSETS))
+    best, best_key = None, None
+    for subset in subsets:
+        try:
+            trial = fit(p[list(subset)], **kwargs)
+        except (ValueError, np.linalg.LinAlgError):
+            continue  # e.g. collinear points: no circle
+        res = np.abs(trial.residuals_of(p))
+        if not np.all(np.isfinite(res)):
+            continue
+        inliers = res <= max_residual
+        key = (int(inliers.sum()), -float(np.sqrt(np.mean(
+            res[inliers] ** 2))) if inliers.any() else 0.0)
+        if best_key is None or key > best_key:
+            best, best_key = inliers, key
+    if best is None or best.sum() < minimum:
+        return fit_rejecting(fit, p, max_residual=max_residual,
+                             minimum=minimum, **kwargs)
+    kept = best
+    for _ in range(10):
+        result = fit(p[kept], **kwargs)
+        now = np.abs(result.residuals_of(p)) <= max_residual
+        if now.sum() < minimum or np.array_equal(now, kept):
+            break
+        kept = now
+    return fit(p[kept], **kwargs), kept

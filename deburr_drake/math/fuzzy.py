@@ -383,6 +383,34 @@ class RuleBase:
         idx, nu = self.active_rules(y0, yk)
         return idx, self._rate(nu, yk, r)
 
+    def slope_rate(self, theta, max_slope: float, rate: float):
+        """dtheta (n_rules) that pulls the learned surface's slope in yk
+        back within ``max_slope``: adjacent weights along yk differ by at
+        most c = max_slope * deltak (then |d u / d yk| <= max_slope, a
+        B-spline's derivative being a convex combination of those
+        differences over deltak); a difference d beyond it moves both
+        weights towards each other at ``rate`` (1/s) times the excess
+        (d - c sgn d). Zero while every slope is within the bound (and for
+        ``max_slope`` inf). T-generic (the excess is chosen on values)."""
+        theta = np.asarray(theta)
+        out = np.zeros(theta.shape, dtype=theta.dtype) if theta.dtype == \
+            object else np.zeros(theta.shape)
+        if not math.isfinite(max_slope):
+            return out
+        c = max_slope * self._dk
+        grid = theta.reshape(self._n, self._n)
+        d = grid[:, 1:] - grid[:, :-1]
+        values = d if d.dtype != object else np.vectorize(_value)(d)
+        over = np.abs(values) > c
+        if not over.any():
+            return out
+        pull = np.zeros(d.shape, dtype=d.dtype)
+        pull[over] = rate * (d[over] - c * np.sign(values[over]))
+        rates = out.reshape(self._n, self._n)
+        rates[:, :-1] += pull
+        rates[:, 1:] -= pull
+        return out
+
     def evaluate_and_rate(self, theta, y0, yk, r):
         """(u, idx, dtheta) = evaluate(...) and adaptation_rate(...), memberships once."""
         idx, nu = self.active_rules(y0, yk)

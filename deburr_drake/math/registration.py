@@ -12,10 +12,9 @@ onto the real one, the contour it gives, and ``r`` from probed points.
   radius) that puts the contour through touch points on the real edge's
   zero-depth path: the circle and straight-edge fits of
   deburr_drake.math.fits in closed form, any other contour (a profile) by
-  Gauss-Newton on the signed distances. Touches more than ``max_early``
-  on the tool's side of the fit (early: they met a burr) are dropped one
-  at a time; late touches are kept (nothing on the edge makes contact come
-  late).
+  Gauss-Newton on the signed distances; the touches kept are those the
+  fit most of them agree on within ``max_residual``
+  (deburr_drake.math.fits.fit_consensus: a touch on a burr is left out).
 - while cutting (:func:`contact_regressor`, :func:`rls_update`,
   :func:`registration_of`): the contact force against the depth on a
   reference contour, ||f_n|| = c0 + c1 (delta_0 - d), shows how far the
@@ -29,11 +28,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
-from deburr_drake.math.fits import fit_circle, fit_line
+from deburr_drake.math.fits import fit_circle, fit_consensus, fit_line
 from deburr_drake.math.geometry import (CircularContour, Contour,
                                         ProfileContour, StraightContour)
 
@@ -168,38 +166,6 @@ def _rigid_fit(contour: Contour, p, *, level: bool = False,
     return reg, b
 
 
-def _early(fit: Callable, contour: Contour, p, mask) -> np.ndarray:
-    """phi of every point of ``p`` on ``fit(mask)`` (a registration, or (a
-    registration, a level common to the touches, m, subtracted)): > 0 on
-    the tool's side."""
-    found = fit(mask)
-    reg, level = found if isinstance(found, tuple) else (found, 0.0)
-    return _phi(moved_contour(contour, reg), p) - level
-
-
-def _drop_early(fit: Callable, contour: Contour, p, *, max_early: float,
-                minimum: int, fixes: Callable = None) -> np.ndarray:
-    """The touches kept: the touch lying furthest on the tool's side of
-    the fit through the kept ones is dropped, one at a time, while it lies
-    more than ``max_early`` (m) on the tool's side of the fit through the
-    others, more than ``minimum`` remain and (``fixes``) the others still
-    fix the fit. Judged against the others' fit: a touch on a burr pulls
-    a fit through all towards itself (of 8 touches on a pocket, one 90 um
-    early lies 30 um from the fit through all with a free level)."""
-    kept = np.ones(len(p), bool)
-    while kept.sum() > minimum:
-        early = _early(fit, contour, p, kept)
-        worst = int(np.argmax(np.where(kept, early, -np.inf)))
-        others = kept.copy()
-        others[worst] = False
-        if fixes is not None and not fixes(others):
-            break
-        if _early(fit, contour, p, others)[worst] <= max_early:
-            break
-        kept = others
-    return kept
-
-
 @dataclass
 class ProbeFit:
     registration: np.ndarray  # (4,) dx, dy, dyaw, dradius
@@ -212,30 +178,85 @@ class ProbeFit:
     level: float = 0.0
 
 
-def registration_from_points(contour: Contour, points, *, max_early: float,
+def _spread_around(points, center) -> float:
+    """rad, the smallest arc of directions from ``center`` holding every
+    point (2 pi minus the largest gap between neighbouring directions)."""
+    a = np.sort(np.arctan2(points[:, 1] - center[1],
+                           points[:, 0] - center[0]))
+    if len(a) < 2:
+        return 0.0
+    gaps = np.diff(np.concatenate([a, [a[0] + 2 * math.pi]]))
+    return float(2 * math.pi - gaps.max())
+
+
+@dataclass
+class _RigidFit:
+    """A rigid fit of a contour (fit_consensus's interface): the move
+    (dx, dy, dyaw), the level common to the touches (m), the residuals
+    phi - level of its points."""
+    contour: Contour
+    move: np.ndarray
+    level: float
+    residuals: np.ndarray
+
+    def residuals_of(self, points) -> np.ndarray:
+        q = np.asarray(points, float)[:, :2]
+        return _phi(moved_contour(self.contour, [*self.move, 0.0]), q) - \
+            self.level
+
+    @property
+    def rms(self) -> float:
+        return float(np.sqrt(np.mean(self.residuals ** 2)))
+
+
+def _rigid(contour: Contour, *, level: bool):
+    """fit(points) -> _RigidFit: Gauss-Newton from zero, the level free
+    when ``level``; ValueError when the points do not fix the move."""
+    def fit(points):
+        q = np.asarray(points, float)[:, :2]
+        if rigid_fit_amplification(contour, q) > MAX_AMPLIFICATION:
+            raise ValueError("the points do not fix the move")
+        move, b = _rigid_fit(contour, q, level=level)
+        return _RigidFit(contour, move, b, _RigidFit(
+            contour, move, b, np.zeros(0)).residuals_of(q))
+    return fit
+
+
+def registration_from_points(contour: Contour, points, *,
+                             max_residual: float,
                              fit_radius: bool = False) -> ProbeFit:
     """The registration of ``contour`` (the believed zero-depth path) that
     best puts it through ``points`` ((N, 2 or 3), m, world; the touch
-    points already compensated to the zero-depth path), touches more than
-    ``max_early`` (m) on the tool's side of the fit dropped.
+    points already compensated to the zero-depth path). The touches kept
+    are those the fit most of them agree on within ``max_residual`` (m)
+    (:func:`~deburr_drake.math.fits.fit_consensus`: a touch on a burr
+    cannot pull the first fit towards itself).
 
     - A circle: its centre (and, ``fit_radius``, its radius), at least 3
-      points (4 to find an early one: found with the radius free, so that
-      a bias common to every touch goes into the radius rather than into
-      the residuals; the centre is then fitted with the radius held unless
-      ``fit_radius``).
+      points (4 to find an outlier). The touches are found agreeing with
+      one circle of free radius, so that a bias common to every touch
+      (the detection's depth, which the stiffness of the contact sets)
+      goes into the radius rather than into the residuals; and the centre
+      is that circle's: with the drawing's radius held, a common bias
+      moves the centre whenever the kept touches are not symmetric (one
+      dropped on a burr: 0.14 mm of common bias put the centre 50 um off,
+      measured). The drawing's radius is held only when the kept touches
+      lie within a half circle (the radius is then poorly known).
+      ``fit_radius``: the fitted radius is applied too (else the
+      drawing's is kept: a probe cannot tell a radius error from its own
+      detection bias).
     - A straight edge: its offset and heading (total least squares), at
-      least 2 points (3 to find an early one).
+      least 2 points (3 to find an outlier).
     - Any other contour (a profile): its rigid move (dx, dy, dyaw) by
-      Gauss-Newton on the signed distances, at least 3 points that fix it
-      (:func:`rigid_fit_amplification` at most ``MAX_AMPLIFICATION``; 4 to
-      find an early one), with 5 or more a level common to every touch
-      fitted too (``ProbeFit.level``; as a circle's radius while finding
-      early touches).
+      Gauss-Newton on the signed distances phi, at least 3 points that fix
+      it (:func:`rigid_fit_amplification` at most ``MAX_AMPLIFICATION``;
+      4 to find an outlier). With 5 or more a level common to every touch
+      is fitted too (``ProbeFit.level``), as a circle's radius: a
+      detection bias common to the touches is neither taken for burrs nor,
+      when a burr touch leaves the rest unbalanced, for a move.
 
-    ``fit_radius`` on anything but a circle is a ValueError.
-
-    ValueError when the points cannot fix the registration."""
+    ``fit_radius`` on anything but a circle is a ValueError; so are
+    points that cannot fix the registration."""
     p = np.asarray(points, float)[:, :2]
     level = 0.0  # a profile's common level (below)
     if fit_radius and not isinstance(contour, CircularContour):
@@ -245,65 +266,61 @@ def registration_from_points(contour: Contour, points, *, max_early: float,
         if len(p) < 3:
             raise ValueError(f"a circle's fit needs at least 3 touches, "
                              f"got {len(p)}")
-        c0 = contour.center[:2]
-
-        def circle(kept, free=True):
-            fit = fit_circle(p[kept], radius=None if free
-                             else contour.radius, seed=c0)
-            d = fit.center - c0
-            return np.array([d[0], d[1], 0.0, fit.radius - contour.radius])
-        kept = _drop_early(circle, contour, p, max_early=max_early,
-                           minimum=3) if len(p) >= 4 else np.ones(len(p),
-                                                                  bool)
-        reg = circle(kept, free=fit_radius)
+        if len(p) >= 4:
+            _, kept = fit_consensus(fit_circle, p, minimal=3,
+                                    max_residual=max_residual, minimum=3)
+        else:
+            kept = np.ones(len(p), bool)
+        spread = _spread_around(p[kept], contour.center[:2])
+        free = fit_radius or spread > math.pi
+        fit = fit_circle(p[kept], radius=None if free else contour.radius,
+                         seed=None if free else contour.center[:2])
+        d = fit.center - contour.center[:2]
+        reg = np.array([d[0], d[1], 0.0,
+                        fit.radius - contour.radius if fit_radius else 0.0])
+        level = 0.0 if fit_radius else -(fit.radius - contour.radius)
     elif isinstance(contour, StraightContour):
         if len(p) < 2:
             raise ValueError(f"a straight edge's fit needs at least 2 "
                              f"touches, got {len(p)}")
+        fit, kept = fit_consensus(fit_line, p, minimal=2,
+                                  max_residual=max_residual, minimum=2)
         t = contour.tangent(contour.point_at(0.0))[:2]
-
-        def line(kept):
-            fit = fit_line(p[kept])
-            direction = fit.direction if fit.direction @ t >= 0 else \
-                -fit.direction
-            dyaw = math.atan2(t[0] * direction[1] - t[1] * direction[0],
-                              t @ direction)
-            # Turn about the pivot, then shift along the turned normal so
-            # the line passes through the fitted point.
-            turned = moved_contour(contour, [0.0, 0.0, dyaw, 0.0])
-            n = turned.material_normal[:2]
-            q = np.array([fit.point[0], fit.point[1], turned.height])
-            shift = -turned.phi(q) * n  # phi < 0 on the material side
-            return np.array([shift[0], shift[1], dyaw, 0.0])
-        kept = _drop_early(line, contour, p, max_early=max_early, minimum=2)
-        reg = line(kept)
+        direction = fit.direction if fit.direction @ t >= 0 else \
+            -fit.direction
+        dyaw = math.atan2(t[0] * direction[1] - t[1] * direction[0],
+                          t @ direction)
+        # Turn about the pivot, then shift along the turned normal so the
+        # line passes through the fitted point.
+        turned = moved_contour(contour, [0.0, 0.0, dyaw, 0.0])
+        n = turned.material_normal[:2]
+        q = np.array([fit.point[0], fit.point[1], turned.height])
+        shift = -turned.phi(q) * n  # phi < 0 on the material side
+        reg = np.array([shift[0], shift[1], dyaw, 0.0])
     else:
         pivot_of(contour)  # TypeError for a contour that cannot be moved
-
-        def fixes(kept):
-            return rigid_fit_amplification(contour, p[kept]) <= \
-                MAX_AMPLIFICATION
-        if not fixes(np.ones(len(p), bool)):
+        gain = rigid_fit_amplification(contour, p)
+        if gain > MAX_AMPLIFICATION:
             raise ValueError(
                 f"the {len(p)} touches do not fix the part's position and "
-                "turn (noise amplification "
-                f"{rigid_fit_amplification(contour, p):.3g} > "
+                f"turn (noise amplification {gain:.3g} > "
                 f"{MAX_AMPLIFICATION:g}): at least 3, spread over sides "
                 "that are not parallel")
-
-        # With 5 touches or more a level common to every touch is fitted
-        # too, so that a detection bias common to all (the contact stiffer
-        # or softer than modelled) is neither taken for burrs nor, when a
-        # burr touch leaves the rest unbalanced, for a move.
         free = len(p) >= 5
-
-        def rigid(kept):
-            reg, b = _rigid_fit(contour, p[kept], level=free and
-                                kept.sum() >= 5)
-            return np.array([*reg, 0.0]), b
-        kept = _drop_early(rigid, contour, p, max_early=max_early,
-                           minimum=4 if free else 3, fixes=fixes)
-        reg, level = rigid(kept)
+        fit = _rigid(contour, level=free)
+        if len(p) >= 4:
+            _, kept = fit_consensus(fit, p, minimal=4 if free else 3,
+                                    max_residual=max_residual,
+                                    minimum=4 if free else 3)
+        else:
+            kept = np.ones(len(p), bool)
+        if rigid_fit_amplification(contour, p[kept]) > MAX_AMPLIFICATION:
+            raise ValueError("the touches kept do not fix the part's "
+                             "position and turn")
+        found = _rigid(contour, level=free and kept.sum() >= 5)(p[kept])
+        reg, level = np.array([*found.move, 0.0]), found.level
+    # Residuals: phi of every touch on the fitted contour less the level
+    # (a circle's: its fitted radius less the drawing's): > 0 early.
     residuals = _phi(moved_contour(contour, reg), p) - level
     rms = float(np.sqrt(np.mean(residuals[kept] ** 2)))
     return ProbeFit(reg, kept, residuals, rms, float(level))

@@ -69,3 +69,23 @@ def test_resolve_writes_the_gains_for_a_file_robot_only():
     design = resolve_gains(shipped)
     assert shipped.controller.sliding_gain == design.sliding_gain == written.sliding_gain
     assert shipped.controller.design == "written"
+
+
+def test_slope_bound_designed_from_the_lightest_task_mass():
+    """fuzzy.max_slope 0: 0.75 x 2 m / T - K (m the lightest task mass at
+    the start pose), written into the scenario; a given bound is kept."""
+    from deburr_drake.cell.gains import (SLOPE_LIMIT_FRACTION,
+                                         resolve_slope_bound)
+    from deburr_drake.cell.robot import loop_numbers
+    for name in ("paper", "point_mass"):
+        s = load_scenario(name)
+        m = loop_numbers(s)["lightest_task_mass"]
+        T = s.controller.control_period
+        expected = SLOPE_LIMIT_FRACTION * 2 * m / T - 400.0
+        assert resolve_slope_bound(s) == pytest.approx(expected)
+        assert s.controller.fuzzy.max_slope == pytest.approx(expected)
+        assert resolve_slope_bound(s) is None  # designed once
+    s = load_scenario("paper")
+    s.controller.fuzzy.max_slope = 1234.0
+    assert resolve_slope_bound(s) is None
+    assert s.controller.fuzzy.max_slope == 1234.0

@@ -138,6 +138,37 @@ def test_fuzzy_term_and_adaptation(model):
         assert np.count_nonzero(rate[k]) <= (config.fuzzy.order + 1) ** 2
 
 
+def test_fuzzy_weight_scales_output_and_adaptation(model):
+    """The ``fuzzy_weight`` input w (the ramp after touch probing) scales
+    u_f and the rates (35) alike: the gradient of w theta . nu is w nu;
+    w = 0 freezes theta."""
+    config = ControllerConfig(control_period=0.0)
+    plain = HybridController(model, "tool_tip", config)
+    weighted = HybridController(model, "tool_tip", config,
+                                fuzzy_weight_input=True)
+    rng = np.random.default_rng(1)
+    theta = rng.normal(size=(2, make_rule_bases(config)[0].n_rules))
+    x_p, v, force, x_c, v_c, _ = _scenario_point()
+    v = v + 4e-3 * CONTOUR.tangent(x_p)  # s outside the dead zone
+    inputs = _inputs(x_p, v, force, x_c, v_c, 6.0)
+    full = plain.EvalTimeDerivatives(
+        _context(plain, inputs, 3e-4, theta)).CopyToVector()
+    u_full = CONTROLLER_DIAGNOSTICS.get(plain.GetOutputPort(
+        "diagnostics").Eval(_context(plain, inputs, 3e-4, theta)), "u_fuzzy")
+    assert np.count_nonzero(full[1:]) > 0
+    for w in (1.0, 0.3, 0.0):
+        ctx = _context(weighted, {**inputs, "fuzzy_weight": [w]}, 3e-4,
+                       theta)
+        rate = weighted.EvalTimeDerivatives(ctx).CopyToVector()
+        np.testing.assert_allclose(rate[1:], w * full[1:], rtol=1e-12,
+                                   atol=1e-15)
+        assert rate[0] == pytest.approx(full[0])
+        u = CONTROLLER_DIAGNOSTICS.get(weighted.GetOutputPort(
+            "diagnostics").Eval(ctx), "u_fuzzy")
+        np.testing.assert_allclose(u[:2], w * u_full[:2], rtol=1e-12,
+                                   atol=1e-15)
+
+
 def test_robust_term_outside_omega(model):
     """zeta_k = 0 outside Omega_k: H_bar = h_bar sat(s / phi) (R10)."""
     config = ControllerConfig(control_period=0.0)  # the law itself
@@ -261,3 +292,16 @@ def test_shared_tool_point_gives_the_same_law_on_the_arm():
     with pytest.raises(ValueError, match="tool_point"):
         HybridController(make_kinematic_model(ARM_URL), "tool_tip", config,
                          tool_point=tool_point)
+
+
+def test_slope_rate_autodiff_matches_float():
+    from pydrake.autodiffutils import InitializeAutoDiff
+    from deburr_drake.math.fuzzy import RuleBase
+    rb = RuleBase(m=2, upsilon=5, delta0=0.2, deltak=0.004)
+    rng = np.random.default_rng(3)
+    theta = 30.0 * rng.normal(size=121)
+    ad = InitializeAutoDiff(theta).ravel()
+    rate = rb.slope_rate(ad, 1000.0, 80.0)
+    np.testing.assert_allclose([r.value() if hasattr(r, "value") else r
+                                for r in rate],
+                               rb.slope_rate(theta, 1000.0, 80.0))

@@ -353,3 +353,30 @@ def test_autodiff_rule_base_gradient(m):
         np.testing.assert_allclose(g, [g0, gk], atol=1e-5)
         _, dth_f = rb.adaptation_rate(y0, yk, 2.0)
         np.testing.assert_allclose([d.value() for d in dth], dth_f, atol=1e-14)
+
+
+@pytest.mark.parametrize("m", [1, 2, 3])
+def test_slope_rate_bounds_the_surface_slope(m):
+    """Following slope_rate alone (Euler at 2.5 ms), a steep learned
+    surface settles with |d u / d yk| <= max_slope everywhere (checked on a
+    fine grid of yk), its mean weight kept; a surface within the bound is
+    left alone."""
+    rb = RuleBase(m=m, upsilon=5, delta0=0.2, deltak=0.004)
+    n = 11
+    theta = np.zeros((n, n))
+    theta[7] = [0, 0, 0, 0, -17.6, 12.2, 31.4, 18.5, 21.3, 19.6, 10.7]
+    theta = theta.ravel()
+    bound = 2400.0  # N s/m
+    assert np.all(rb.slope_rate(theta * 0.2, bound, 80.0) == 0.0)
+    assert np.all(rb.slope_rate(theta, math.inf, 80.0) == 0.0)
+    x = theta.copy()
+    for _ in range(2000):
+        x = x + 0.0025 * rb.slope_rate(x, bound, 80.0)
+    assert x.sum() == pytest.approx(theta.sum())
+    yk = np.linspace(-0.018, 0.018, 2001)
+    u = np.array([rb.evaluate(x, 0.4, y) for y in yk])
+    slope = np.abs(np.diff(u) / np.diff(yk))
+    assert slope.max() <= bound * 1.01
+    u0 = np.array([rb.evaluate(theta, 0.4, y) for y in yk])
+    assert np.abs(np.diff(u0) / np.diff(yk)).max() > 1.5 * bound
+
