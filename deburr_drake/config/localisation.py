@@ -14,14 +14,17 @@ __all__ = ["ProbeConfig", "OnlineRegistrationConfig", "LocalisationConfig"]
 class ProbeConfig:
     """Touch probing with the spindle off: guarded moves along the believed
     normal n1 at ``points`` places of the edge, contact detected on the
-    force sensor, a circle (centre, optionally radius) or a straight edge
-    (offset, heading) fitted, points on a burr dropped by their residual,
-    and the believed part corrected before the pass."""
+    force sensor, a circle (centre, optionally radius), a straight edge
+    (offset, heading) or a profile (move and turn) fitted, touches on a
+    burr dropped (they come early), and the believed part corrected before
+    the pass."""
 
     enabled: bool = False  # -, touch probing before the pass
     points: int = 8  # -, number of touches
     # m, arc between touches; 0: spread evenly over the edge (a closed
-    # edge: L / N apart; an open one: centred, L / N apart).
+    # edge: L / N apart; an open one: centred, L / N apart; a profile:
+    # L / N apart, shifted from first_arc by up to L / N where they best
+    # fix its move and turn, control/probe.py probe_arcs).
     spacing: float = 0.0
     first_arc: float = 0.0  # m, arc position of the first touch (closed edge)
     approach_speed: float = 0.002  # m/s, the guarded move along n1
@@ -34,9 +37,9 @@ class ProbeConfig:
     # N/m, the contact stiffness the detection bias is modelled with
     # (threshold / stiffness of penetration at the threshold).
     contact_stiffness: float = 5.0e3
-    fit_radius: bool = False  # -, circle: fit the radius too (else the drawing's)
-    # m, a touch off the circle (line) most touches agree on by more is
-    # dropped: a burr under it (math.fits.fit_consensus)
+    fit_radius: bool = False  # -, circle: fit the radius too (else the drawing's); only a circle
+    # m, a touch off the circle, line or profile most touches agree on by
+    # more is dropped: a burr under it (math.fits.fit_consensus)
     max_residual: float = 5.0e-5  # m, a touch off the consensus fit by more is dropped
     # s, after probing the controller's fuzzy compensator (off while
     # probing) ramps back in over this time, so weights learned on an

@@ -129,6 +129,12 @@ class Scenario:
                  f"({min(self.tool.cutter_radius, self.tube.wall_thickness)})")
         if self.edge.kind == "profile":
             self.edge.check_profile(self.tube, self.tool, self.part_error)
+        probe = self.localisation.probe
+        _require(not (probe.enabled and probe.fit_radius)
+                 or self.edge.kind == "circle",
+                 "localisation.probe.fit_radius", probe.fit_radius,
+                 f"false on a {self.edge.kind} edge (only a circle's radius "
+                 "is fitted)")
         believed = self.tube.inner_radius + self.part_error.radius
         _require(self.tool.cutter_radius < believed
                  and abs(self.part_error.radius) < self.tube.wall_thickness,

@@ -15,7 +15,11 @@ constant part. The parameters (c0, c1, c1 w, c1 psi: the offset estimated
 together with the contact parameters) are fitted by recursive least
 squares with forgetting, starting from the contact estimator's initial
 estimates, and the believed part is moved towards the fit with a
-first-order lag and a rate limit (no step in the command).
+first-order lag and a rate limit (no step in the command). The model
+learns only where the edge's curvature is that of most of it
+(deburr_drake.math.registration.learning_curvature: a profile's straight
+sides; in its fillets the contact is stiffer or softer and the model
+would take that for an offset).
 """
 
 from __future__ import annotations
@@ -32,6 +36,7 @@ from deburr_drake.math.geometry import Contour
 from deburr_drake.math.registration import (ONLINE_PARAMETERS,
                                             REGISTRATION_SIZE,
                                             contact_regressor,
+                                            learning_curvature,
                                             onset_regressor,
                                             registration_of, rls_update)
 
@@ -87,6 +92,9 @@ class OnlineRegistration(LeafSystem):
         self.set_name("online_registration")
         self._contour = contour
         self._config = config
+        # The model learns where the edge's curvature is that of most of
+        # it (a profile: its straight sides, not its fillets).
+        self._curvature = learning_curvature(contour)
         self._threshold = estimator.contact_force_threshold
         self._latency = latency
         T = config.sample_period
@@ -145,10 +153,13 @@ class OnlineRegistration(LeafSystem):
                                   forgetting=1.0)
             x[ONLINE_STATE.slice("onset")] = 1.0
         else:
-            theta, P = rls_update(theta, P,
-                                  contact_regressor(reference, x_p), f_n,
-                                  noise_var=noise,
-                                  forgetting=self._forgetting)
+            if abs(float(reference.curvature(x_p)) - self._curvature) <= \
+                    1e-6 * (1.0 + abs(self._curvature)):
+                # Not in a fillet (another contact law: learning_curvature).
+                theta, P = rls_update(theta, P,
+                                      contact_regressor(reference, x_p),
+                                      f_n, noise_var=noise,
+                                      forgetting=self._forgetting)
             step = abs(arc - float(ONLINE_STATE.get(x, "last_arc")))
             if reference.closed:
                 step = min(step, reference.length - step)

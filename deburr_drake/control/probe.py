@@ -4,9 +4,9 @@ spindle off, as Drake systems.
 - :class:`ProbingSequence`: a state machine in the Context's discrete state
   that commands guarded moves along the believed normal n1 at N points of
   the edge, detects each contact on the force sensor, compensates the
-  detection bias (:func:`detection_depth`), fits the circle or straight
-  edge (deburr_drake.math.registration, burr touches dropped by their
-  residual), outputs the registration that corrects the believed part, and
+  detection bias (:func:`detection_depth`), fits the circle, straight
+  edge or profile (deburr_drake.math.registration, touches that came
+  early on a burr dropped), outputs the registration that corrects the believed part, and
   brings the tool to the pass's start on the corrected part; then it hands
   the command over to the command generator.
 - :class:`ProbeGate`: while probing, the estimator, the force loop and the
@@ -24,16 +24,19 @@ from typing import NamedTuple
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
-from deburr_drake.config import ProbeConfig
+from deburr_drake.config import ConfigError, ProbeConfig
 from deburr_drake.control.layout import CHAMFER_STATE, VectorLayout
-from deburr_drake.math.geometry import CircularContour, Contour
-from deburr_drake.math.registration import (REGISTRATION_SIZE,
+from deburr_drake.math.geometry import (CircularContour, Contour,
+                                        StraightContour)
+from deburr_drake.math.registration import (MAX_AMPLIFICATION,
+                                            REGISTRATION_SIZE,
                                             moved_contour,
-                                            registration_from_points)
+                                            registration_from_points,
+                                            rigid_fit_amplification)
 
 __all__ = ["ProbingSequence", "ProbeGate", "PROBE_STATE", "PHASES",
-           "CUT_ESTABLISHED",
-           "probe_arcs", "detection_depth", "filter_latency",
+           "CUT_ESTABLISHED", "probe_arcs", "check_probe_layout",
+           "detection_depth", "filter_latency",
            "sensor_timing", "SensorTiming"]
 
 #: The phases of the sequence, in order.
@@ -54,6 +57,11 @@ PROBE_STATE = VectorLayout("probe_state", [
     ("segment_end", 3),     # m, ... to here
     ("segment_duration", 1),  # s
     ("linear", 1),          # 1: constant speed (guarded), 0: smooth
+    # A travel along the edge at the standoff (1), from arc to arc (m;
+    # the registered contour's on the way back), else a straight move.
+    ("along_edge", 1),
+    ("arc_from", 1),
+    ("arc_to", 1),
     ("command", 3),         # m, the commanded tool point
     ("tare", 3),            # N, the force reading before the guarded move
     ("registration", REGISTRATION_SIZE),  # dx, dy, dyaw, dradius
@@ -122,15 +130,30 @@ def detection_depth(speed: float, threshold: float, stiffness: float,
     return v * (t + timing.delay)
 
 
+#: Shifts (fractions of L / N) tried for a profile's even layout.
+_LAYOUT_SHIFTS = 32
+
+
 def probe_arcs(contour: Contour, config: ProbeConfig) -> np.ndarray:
     """Arc positions (m) of the N touches on ``contour``: ``spacing``
     apart from ``first_arc`` (a closed edge wraps), or spread evenly
-    (``spacing`` 0: a closed edge from ``first_arc``, an open one
-    centred)."""
+    (``spacing`` 0: a circle from ``first_arc``, an open edge centred, any
+    other closed edge (a profile) L / N apart from ``first_arc`` plus the
+    shift, among 32 steps of L / (32 N), that best fixes its move and turn
+    (the smallest :func:`rigid_fit_amplification`): touches in the middle
+    of every side of a square, and in the middle of its fillets, see no
+    turn)."""
     n, L = config.points, contour.length
     if contour.closed:
         step = config.spacing or L / n
-        return (config.first_arc + step * np.arange(n)) % L
+        arcs = (config.first_arc + step * np.arange(n)) % L
+        if config.spacing or isinstance(contour, CircularContour):
+            return arcs
+        gains = [rigid_fit_amplification(contour, np.array(
+            [contour.point_at(s) for s in arcs + k * step / _LAYOUT_SHIFTS]))
+            for k in range(_LAYOUT_SHIFTS)]
+        best = int(np.argmin(gains))
+        return (arcs + best * step / _LAYOUT_SHIFTS) % L
     if not math.isfinite(L) and not config.spacing:
         raise ValueError("localisation.probe.spacing = 0 needs an edge of "
                          "finite length: allowed > 0 on an endless edge")
@@ -138,6 +161,31 @@ def probe_arcs(contour: Contour, config: ProbeConfig) -> np.ndarray:
     span = step * (n - 1)
     first = config.first_arc if config.spacing else 0.5 * (L - span)
     return first + step * np.arange(n)
+
+
+def check_probe_layout(contour: Contour, config: ProbeConfig,
+                       arcs=None) -> None:
+    """One ConfigError naming ``localisation.probe.points`` (or
+    ``spacing``) when touches at ``arcs`` (default :func:`probe_arcs`) on
+    the believed ``contour`` cannot fix its registration: a profile needs
+    touches on sides that are not parallel
+    (:func:`~deburr_drake.math.registration.rigid_fit_amplification` at
+    most ``MAX_AMPLIFICATION``). A circle and a straight edge are fixed by
+    any 3 distinct touches."""
+    if isinstance(contour, (CircularContour, StraightContour)):
+        return
+    arcs = probe_arcs(contour, config) if arcs is None else arcs
+    points = np.array([contour.point_at(s) for s in arcs])
+    gain = rigid_fit_amplification(contour, points)
+    if gain > MAX_AMPLIFICATION:
+        name = "spacing" if config.spacing else "points"
+        raise ConfigError(
+            f"localisation.probe.{name} = {getattr(config, name)!r} is "
+            f"invalid: the {len(arcs)} touches at arcs "
+            f"{np.round(np.asarray(arcs) * 1e3, 1).tolist()} mm do not fix "
+            f"the {type(contour).__name__}'s position and turn (noise "
+            f"amplification {gain:.3g} > {MAX_AMPLIFICATION:g}): spread "
+            "them over sides that are not parallel")
 
 
 class ProbingSequence(LeafSystem):
@@ -182,12 +230,14 @@ class ProbingSequence(LeafSystem):
     - Discrete state: the two outputs above, updated every
       ``sample_period`` (the sensor's).
 
-    Each touch: travel (smooth) to the standoff point ``standoff`` before
-    the believed zero-depth path along -n1, settle, tare the force, move
+    Each touch: travel (smooth, along the believed edge at the standoff:
+    a straight move would cut a convex corner) to the standoff point
+    ``standoff`` before the believed zero-depth path along -n1, settle, tare the force, move
     along n1 at ``approach_speed`` until -(f - tare).n1 exceeds
     ``force_threshold`` (or ``search_distance``: a miss), record x_p minus
     the :func:`detection_depth` along n1, retract by ``retract``. Then the
-    fit, a travel to the corrected start's standoff and an entry at the
+    fit, a travel (along the corrected edge) to the corrected start's
+    standoff and an entry at the
     approach speed to ``start`` on the corrected part (the tool point the
     pass starts from); the command generator takes over from there.
     """
@@ -207,14 +257,17 @@ class ProbingSequence(LeafSystem):
         self._established_depth = CUT_ESTABLISHED * desired_depth
         self._arcs = probe_arcs(contour, config)
         self._n = len(self._arcs)
+        check_probe_layout(contour, config, self._arcs)
         x0 = np.asarray(initial_position, float)
-        first = self.standoff_point(contour, self._arcs[0])
         initial = PROBE_STATE.pack(
             phase=_P["travel"], index=0, phase_start=0.0, segment_start=x0,
-            segment_end=first, segment_duration=self._travel_time(x0, first),
-            linear=0.0, command=x0, tare=np.zeros(3),
-            registration=np.zeros(REGISTRATION_SIZE), done_time=-1.0,
-            cut_time=-1.0, touches=0.0, kept=0.0, fit_rms=0.0)
+            segment_end=x0, segment_duration=1.0, linear=0.0,
+            along_edge=0.0, arc_from=0.0, arc_to=0.0, command=x0,
+            tare=np.zeros(3), registration=np.zeros(REGISTRATION_SIZE),
+            done_time=-1.0, cut_time=-1.0, touches=0.0, kept=0.0,
+            fit_rms=0.0)
+        self._edge_segment(initial, 0.0, "travel", x0, contour,
+                           self._arcs[0])
         self._state = self.DeclareDiscreteState(initial)
         self._touch_state = self.DeclareDiscreteState(np.zeros(4 * self._n))
         self._chamfer_port = self.DeclareVectorInputPort(
@@ -264,13 +317,50 @@ class ProbingSequence(LeafSystem):
         x[PROBE_STATE.slice("segment_end")] = end
         x[PROBE_STATE.slice("segment_duration")] = max(duration, 1e-9)
         x[PROBE_STATE.slice("linear")] = 1.0 if linear else 0.0
+        x[PROBE_STATE.slice("along_edge")] = 0.0
 
-    @staticmethod
-    def _along(x, t):
+    def _edge_point(self, contour, x, w):
+        """The travel along the edge at weight w in [0, 1]: the standoff
+        point at the arc w of the way, plus what is left of the start's
+        offset from it (the move starts where the tool is)."""
+        s0 = float(PROBE_STATE.get(x, "arc_from"))
+        s1 = float(PROBE_STATE.get(x, "arc_to"))
+        off = PROBE_STATE.get(x, "segment_start") - self.standoff_point(
+            contour, s0)
+        return self.standoff_point(contour, s0 + w * (s1 - s0)) + \
+            (1.0 - w) * off
+
+    def _edge_segment(self, x, t, phase, start, contour, s_to):
+        """A smooth travel from ``start`` to the standoff point at arc
+        ``s_to`` along ``contour`` at the standoff (the shorter way round
+        a closed edge): a straight move between two touches would cut the
+        corner of a boss, or any convex edge, through the material."""
+        s_from = float(contour.arc_position(start))
+        if contour.closed:
+            L = contour.length
+            s_to = s_from + ((s_to - s_from + 0.5 * L) % L - 0.5 * L)
+        end = self.standoff_point(contour, s_to)
+        self._segment(x, t, phase, start, end, 1.0, False)
+        x[PROBE_STATE.slice("along_edge")] = 1.0
+        x[PROBE_STATE.slice("arc_from")] = s_from
+        x[PROBE_STATE.slice("arc_to")] = s_to
+        path = np.array([self._edge_point(contour, x, w)
+                         for w in np.linspace(0.0, 1.0, 17)])
+        length = float(np.sum(np.linalg.norm(np.diff(path, axis=0),
+                                             axis=1)))
+        x[PROBE_STATE.slice("segment_duration")] = max(
+            length / self._config.travel_speed, 0.05)
+
+    def _along(self, x, t):
         u = (t - PROBE_STATE.get(x, "phase_start")) / PROBE_STATE.get(
             x, "segment_duration")
         u = min(max(u, 0.0), 1.0)
         w = u if PROBE_STATE.get(x, "linear") > 0.5 else u * u * (3 - 2 * u)
+        if PROBE_STATE.get(x, "along_edge") > 0.5:
+            phase = PHASES[int(round(float(PROBE_STATE.get(x, "phase"))))]
+            contour = self._registered(x) if phase == "return" else \
+                self._contour
+            return self._edge_point(contour, x, w), u >= 1.0
         a = PROBE_STATE.get(x, "segment_start")
         b = PROBE_STATE.get(x, "segment_end")
         return a + w * (b - a), u >= 1.0
@@ -328,14 +418,12 @@ class ProbingSequence(LeafSystem):
             i += 1
             x[PROBE_STATE.slice("index")] = i
             if i < self._n:
-                target = self.standoff_point(self._contour, self._arcs[i])
-                self._segment(x, t, "travel", command, target,
-                              self._travel_time(command, target), False)
+                self._edge_segment(x, t, "travel", command, self._contour,
+                                   self._arcs[i])
             else:
                 self._fit(x, touches)
-                target = self.standoff_point(self._registered(x), 0.0)
-                self._segment(x, t, "return", command, target,
-                              self._travel_time(command, target), False)
+                self._edge_segment(x, t, "return", command,
+                                   self._registered(x), 0.0)
         elif phase == "return" and finished:
             contour = self._registered(x)
             p = contour.point_at(0.0)
@@ -359,10 +447,15 @@ class ProbingSequence(LeafSystem):
         minimum = 3
         if hit.sum() < minimum:
             return  # too few touches: the believed part stays as it is
-        fit = registration_from_points(
-            self._contour, t[hit, :3], max_residual=self._config.max_residual,
-            fit_radius=(self._config.fit_radius
-                        and isinstance(self._contour, CircularContour)))
+        try:
+            fit = registration_from_points(
+                self._contour, t[hit, :3],
+                max_residual=self._config.max_residual,
+                fit_radius=self._config.fit_radius)
+        except ValueError:
+            # The touches made (some missed) do not fix the part: the
+            # believed part stays as it is (probe_state: kept 0).
+            return
         x[PROBE_STATE.slice("registration")] = fit.registration
         x[PROBE_STATE.slice("kept")] = float(fit.kept.sum())
         x[PROBE_STATE.slice("fit_rms")] = fit.rms

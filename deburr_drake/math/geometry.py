@@ -29,6 +29,7 @@ depth_rate, n2, unwrapped_arc_position and advance are shared.
 from __future__ import annotations
 
 import abc
+import copy
 import math
 
 import numpy as np
@@ -710,6 +711,46 @@ class ProfileContour(_ClosedAboutCenter):
                               center=self._center,
                               start_angle=self._start_angle,
                               direction=self._direction)
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(N, 2) m, the polygon's corners about ``center``."""
+        return self._vertices.copy()
+
+    @property
+    def vertex_centroid(self) -> np.ndarray:
+        """(x, y, z) m, world: the mean of the vertices (z: the height)."""
+        c = self._center.copy()
+        c[:2] += self._vertices.mean(axis=0)
+        return c
+
+    def moved(self, shift, yaw, pivot) -> "ProfileContour":
+        """The same profile moved rigidly: turned by ``yaw`` (rad,
+        counter-clockwise seen from +z) about the planar point ``pivot``
+        ((x, y), m, world), then shifted by ``shift`` ((dx, dy), m). The
+        fillets, the offset, the material side and the direction are
+        unchanged, and arc position 0 moves with the profile (the start
+        ray turns with it). Equal to building the profile again from the
+        turned vertices, ``center`` moved and ``start_angle + yaw``, but
+        without the checks and the start search (the moved profile is as
+        valid as this one): cheap enough to call per control step."""
+        c, s = math.cos(yaw), math.sin(yaw)
+        R = np.array([[c, -s], [s, c]])
+        pivot = np.asarray(pivot, float)[:2]
+        out = copy.copy(self)
+        center = self._center.copy()
+        center[:2] = pivot + R @ (center[:2] - pivot) + np.asarray(
+            shift, float)[:2]
+        out._center = center
+        out._start_angle = self._start_angle + float(yaw)
+        # Everything below is about ``center``: it turns, nothing shifts.
+        out._vertices = self._vertices @ R.T
+        out._lA = self._lA @ R.T
+        out._lD = self._lD @ R.T
+        out._lN = self._lN @ R.T
+        out._aC = self._aC @ R.T
+        out._aT0 = self._aT0 + float(yaw)
+        return out
 
     def arcs(self):
         """Fillet arcs in counter-clockwise order: (centre (2,) about

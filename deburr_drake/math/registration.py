@@ -2,19 +2,26 @@
 ``r = (dx, dy, dyaw, dradius)`` (m, m, rad, m) that moves the believed edge
 onto the real one, the contour it gives, and ``r`` from probed points.
 
-- :func:`moved_contour`: the believed contour moved by (dx, dy), turned by
-  dyaw about its pivot (a circle: its centre, dyaw turns its start angle; a
-  straight edge: its midpoint, or its start when it is endless) and, a
-  circle, with a radius dradius larger.
-- :func:`registration_from_points`: the circle or straight-edge fit
-  (deburr_drake.math.fits) of touch points on the real edge's zero-depth
-  path, with the points off by more than ``max_residual`` dropped.
+- :func:`moved_contour`: the believed contour turned by dyaw about its
+  pivot (:func:`pivot_of`) and moved by (dx, dy); a circle also with a
+  radius dradius larger. Circle, straight edge and profile
+  (``ProfileContour``: its vertices turn and move, the fillets are
+  unchanged; dradius must be 0). The pivot moves with (dx, dy), so two
+  registrations compose by adding them.
+- :func:`registration_from_points`: the rigid move (and, a circle, the
+  radius) that puts the contour through touch points on the real edge's
+  zero-depth path: the circle and straight-edge fits of
+  deburr_drake.math.fits in closed form, any other contour (a profile) by
+  Gauss-Newton on the signed distances; the touches kept are those the
+  fit most of them agree on within ``max_residual``
+  (deburr_drake.math.fits.fit_consensus: a touch on a burr is left out).
 - while cutting (:func:`contact_regressor`, :func:`rls_update`,
   :func:`registration_of`): the contact force against the depth on a
   reference contour, ||f_n|| = c0 + c1 (delta_0 - d), shows how far the
-  real edge lies beyond it, d = w . n1 + psi (s - s_pivot), the offset
-  estimated together with the contact parameters by recursive least
-  squares.
+  real edge lies beyond it, d = w . n1 + psi (z x (p - pivot)) . n1 (the
+  normal displacement of the rigid move (w, psi) at the tool point p),
+  the move estimated together with the contact parameters by recursive
+  least squares.
 """
 
 from __future__ import annotations
@@ -26,15 +33,23 @@ import numpy as np
 
 from deburr_drake.math.fits import fit_circle, fit_consensus, fit_line
 from deburr_drake.math.geometry import (CircularContour, Contour,
-                                        StraightContour)
+                                        ProfileContour, StraightContour)
 
-__all__ = ["REGISTRATION_SIZE", "moved_contour", "ProbeFit",
-           "registration_from_points", "ONLINE_PARAMETERS",
-           "contact_regressor", "onset_regressor", "registration_of",
-           "rls_update"]
+__all__ = ["REGISTRATION_SIZE", "pivot_of", "moved_contour", "ProbeFit",
+           "registration_from_points", "rigid_fit_amplification",
+           "MAX_AMPLIFICATION",
+           "ONLINE_PARAMETERS", "contact_regressor", "onset_regressor",
+           "learning_curvature", "registration_of", "rls_update"]
 
 #: (dx, dy, dyaw, dradius).
 REGISTRATION_SIZE = 4
+
+#: The largest noise amplification a profile's touches may have: the
+#: standard deviation of the worst combination of (dx, dy, L dyaw) per
+#: unit touch noise (L the touches' RMS distance from the pivot). Evenly
+#: spread around a closed edge it is about sqrt(2 / N); touches all on
+#: one straight side fix no position along it (infinite).
+MAX_AMPLIFICATION = 10.0
 
 
 def _rot(yaw):
@@ -42,13 +57,27 @@ def _rot(yaw):
     return np.array([[c, -s], [s, c]])
 
 
-def _pivot(contour: StraightContour) -> np.ndarray:
-    half = 0.5 * contour.length if math.isfinite(contour.length) else 0.0
-    return contour.point_at(half)
+def pivot_of(contour: Contour) -> np.ndarray:
+    """(x, y, z) m, world: the point a registration's dyaw turns the
+    contour about. A circle: its centre; a straight edge: its midpoint
+    (its start when it is endless); a profile: the centroid (mean) of its
+    polygon's vertices."""
+    if isinstance(contour, CircularContour):
+        return contour.center
+    if isinstance(contour, StraightContour):
+        half = 0.5 * contour.length if math.isfinite(contour.length) else 0.0
+        return contour.point_at(half)
+    if isinstance(contour, ProfileContour):
+        return contour.vertex_centroid
+    raise TypeError(f"registration of a {type(contour).__name__} is not "
+                    "supported: a circle, a straight edge or a profile")
 
 
 def moved_contour(contour: Contour, registration) -> Contour:
-    """``contour`` moved by ``registration`` (dx, dy, dyaw, dradius)."""
+    """``contour`` turned by dyaw (rad, counter-clockwise) about
+    :func:`pivot_of` and moved by (dx, dy) (m); a circle's radius grows by
+    dradius (m). ValueError for a nonzero dradius on a straight edge or a
+    profile (their size is the drawing's)."""
     dx, dy, dyaw, dradius = (float(v) for v in registration)
     if not any((dx, dy, dyaw, dradius)):
         return contour
@@ -57,9 +86,14 @@ def moved_contour(contour: Contour, registration) -> Contour:
         return CircularContour(center, contour.radius + dradius,
                                start_angle=contour.start_angle + dyaw,
                                direction=contour.direction)
+    if dradius != 0.0 and isinstance(contour, (StraightContour,
+                                               ProfileContour)):
+        raise ValueError(f"dradius = {dradius!r} m on a "
+                         f"{type(contour).__name__}: only a circle's radius "
+                         "is registered")
+    pivot = pivot_of(contour)
     if isinstance(contour, StraightContour):
         R = _rot(dyaw)
-        pivot = _pivot(contour)
         start = contour.point_at(0.0)
         start[:2] = pivot[:2] + R @ (start[:2] - pivot[:2]) + [dx, dy]
         t = contour.tangent(start)
@@ -67,16 +101,125 @@ def moved_contour(contour: Contour, registration) -> Contour:
         t[:2] = R @ t[:2]
         n[:2] = R @ n[:2]
         return StraightContour(start, t, n, length=contour.length)
+    if isinstance(contour, ProfileContour):
+        return contour.moved((dx, dy), dyaw, pivot[:2])
     raise TypeError(f"registration of a {type(contour).__name__} is not "
-                    "supported: a circle or a straight edge")
+                    "supported: a circle, a straight edge or a profile")
+
+
+def _turn_terms(contour: Contour, p, pivot) -> np.ndarray:
+    """(N, 3): (n1_x, n1_y, (z x (p - pivot)) . n1) at each planar point
+    of ``p`` (N, 2): the displacement along n1 of the edge at p when the
+    contour moves by (dx, dy) and turns by dyaw about ``pivot``."""
+    out = np.empty((len(p), 3))
+    z = contour.height
+    for i, (x, y) in enumerate(p):
+        n1 = contour.n1(np.array([x, y, z]))
+        out[i] = (n1[0], n1[1],
+                  -(y - pivot[1]) * n1[0] + (x - pivot[0]) * n1[1])
+    return out
+
+
+def _phi(contour: Contour, p) -> np.ndarray:
+    z = contour.height
+    return np.array([float(contour.phi(np.array([x, y, z]))) for x, y in p])
+
+
+def rigid_fit_amplification(contour: Contour, points) -> float:
+    """How much a rigid fit (dx, dy, dyaw) of ``contour`` through
+    ``points`` ((N, 2 or 3), m, on or near the edge) amplifies touch noise:
+    the largest standard deviation of (dx, dy, L dyaw) per unit noise, L
+    the points' RMS distance from the pivot (inf when they do not fix the
+    move: fewer than 3, or all on one straight piece)."""
+    p = np.asarray(points, float)[:, :2]
+    if len(p) < 3:
+        return math.inf
+    pivot = pivot_of(contour)[:2]
+    J = _turn_terms(contour, p, pivot)
+    L = float(np.sqrt(np.mean(np.sum((p - pivot) ** 2, axis=1))))
+    J[:, 2] /= max(L, 1e-12)
+    smallest = np.linalg.svd(J, compute_uv=False)[-1]
+    return math.inf if smallest <= 1e-9 else float(1.0 / smallest)
+
+
+def _rigid_fit(contour: Contour, p, *, level: bool = False,
+               iterations: int = 50, tolerance: float = 1e-12):
+    """((dx, dy, dyaw), b) minimising sum (phi_moved(p_i) - b)^2 by
+    Gauss-Newton from zero, b (m) a level common to every touch when
+    ``level`` (else 0): moving the contour by a small (u, beta) about its
+    (moved) pivot c changes phi at p by -(u + beta z x (p - c)) . grad phi
+    / |grad phi| = +(...) . n1, and registrations compose by adding."""
+    pivot = pivot_of(contour)[:2]
+    reg, b = np.zeros(3), 0.0
+    for _ in range(iterations):
+        moved = moved_contour(contour, [*reg, 0.0])
+        J = _turn_terms(moved, p, pivot + reg[:2])
+        if level:
+            J = np.column_stack([J, -np.ones(len(p))])
+        step, *_ = np.linalg.lstsq(J, b * level - _phi(moved, p),
+                                   rcond=None)
+        reg += step[:3]
+        if level:
+            b += step[3]
+        if np.linalg.norm(step[:2]) + abs(step[2]) * 0.1 < tolerance:
+            break
+    return reg, b
 
 
 @dataclass
 class ProbeFit:
     registration: np.ndarray  # (4,) dx, dy, dyaw, dradius
     kept: np.ndarray          # (N,) bool, the points the fit used
-    residuals: np.ndarray     # (N,) m, of every point to the final fit
-    rms: float                # m, of the kept points
+    residuals: np.ndarray     # (N,) m, phi of every point on the fit - level: > 0 early
+    rms: float                # m, of the kept points' residuals
+    # m, a profile's level common to the kept touches (> 0: early on
+    # average: the contact stiffer than modelled or the edge further out
+    # than drawn); 0 on a circle or a straight edge
+    level: float = 0.0
+
+
+def _spread_around(points, center) -> float:
+    """rad, the smallest arc of directions from ``center`` holding every
+    point (2 pi minus the largest gap between neighbouring directions)."""
+    a = np.sort(np.arctan2(points[:, 1] - center[1],
+                           points[:, 0] - center[0]))
+    if len(a) < 2:
+        return 0.0
+    gaps = np.diff(np.concatenate([a, [a[0] + 2 * math.pi]]))
+    return float(2 * math.pi - gaps.max())
+
+
+@dataclass
+class _RigidFit:
+    """A rigid fit of a contour (fit_consensus's interface): the move
+    (dx, dy, dyaw), the level common to the touches (m), the residuals
+    phi - level of its points."""
+    contour: Contour
+    move: np.ndarray
+    level: float
+    residuals: np.ndarray
+
+    def residuals_of(self, points) -> np.ndarray:
+        q = np.asarray(points, float)[:, :2]
+        return _phi(moved_contour(self.contour, [*self.move, 0.0]), q) - \
+            self.level
+
+    @property
+    def rms(self) -> float:
+        return float(np.sqrt(np.mean(self.residuals ** 2)))
+
+
+def _rigid(contour: Contour, *, level: bool):
+    """fit(points) -> _RigidFit: Gauss-Newton from zero, the level free
+    when ``level``; ValueError when the points do not fix the move."""
+    def fit(points):
+        q = np.asarray(points, float)[:, :2]
+        if rigid_fit_amplification(contour, q) > MAX_AMPLIFICATION:
+            raise ValueError("the points do not fix the move")
+        move, b = _rigid_fit(contour, q, level=level)
+        return _RigidFit(contour, move, b, _RigidFit(
+            contour, move, b, np.zeros(0)).residuals_of(q))
+    return fit
 
 
 def registration_from_points(contour: Contour, points, *,
@@ -84,25 +227,45 @@ def registration_from_points(contour: Contour, points, *,
                              fit_radius: bool = False) -> ProbeFit:
     """The registration of ``contour`` (the believed zero-depth path) that
     best puts it through ``points`` ((N, 2 or 3), m, world; the touch
-    points already compensated to the zero-depth path). A circle: its
-    centre (and, ``fit_radius``, its radius), at least 3 points (4 to
-    find an outlier); a
-    straight edge: its offset and heading, at least 3 points (2 are fitted
-    exactly, the third shows an outlier)."""
+    points already compensated to the zero-depth path). The touches kept
+    are those the fit most of them agree on within ``max_residual`` (m)
+    (:func:`~deburr_drake.math.fits.fit_consensus`: a touch on a burr
+    cannot pull the first fit towards itself).
+
+    - A circle: its centre (and, ``fit_radius``, its radius), at least 3
+      points (4 to find an outlier). The touches are found agreeing with
+      one circle of free radius, so that a bias common to every touch
+      (the detection's depth, which the stiffness of the contact sets)
+      goes into the radius rather than into the residuals; and the centre
+      is that circle's: with the drawing's radius held, a common bias
+      moves the centre whenever the kept touches are not symmetric (one
+      dropped on a burr: 0.14 mm of common bias put the centre 50 um off,
+      measured). The drawing's radius is held only when the kept touches
+      lie within a half circle (the radius is then poorly known).
+      ``fit_radius``: the fitted radius is applied too (else the
+      drawing's is kept: a probe cannot tell a radius error from its own
+      detection bias).
+    - A straight edge: its offset and heading (total least squares), at
+      least 2 points (3 to find an outlier).
+    - Any other contour (a profile): its rigid move (dx, dy, dyaw) by
+      Gauss-Newton on the signed distances phi, at least 3 points that fix
+      it (:func:`rigid_fit_amplification` at most ``MAX_AMPLIFICATION``;
+      4 to find an outlier). With 5 or more a level common to every touch
+      is fitted too (``ProbeFit.level``), as a circle's radius: a
+      detection bias common to the touches is neither taken for burrs nor,
+      when a burr touch leaves the rest unbalanced, for a move.
+
+    ``fit_radius`` on anything but a circle is a ValueError; so are
+    points that cannot fix the registration."""
     p = np.asarray(points, float)[:, :2]
+    level = 0.0  # a profile's common level (below)
+    if fit_radius and not isinstance(contour, CircularContour):
+        raise ValueError(f"fit_radius on a {type(contour).__name__}: only "
+                         "a circle's radius is fitted")
     if isinstance(contour, CircularContour):
-        # The touches are found agreeing with one circle of free radius
-        # (fit_consensus), so that a bias common to every touch (the
-        # detection's depth, which the stiffness of the contact sets) goes
-        # into the radius rather than into the residuals; and the centre
-        # is that circle's: with the drawing's radius held, a common bias
-        # moves the centre whenever the kept touches are not symmetric
-        # (one dropped on a burr: 0.14 mm of common bias put the centre
-        # 50 um off, measured). The drawing's radius is held only when the
-        # kept touches lie within a half circle (the radius is then
-        # poorly known). ``fit_radius``: the fitted radius is applied too
-        # (else the drawing's is kept: a probe cannot tell a radius error
-        # from its own detection bias).
+        if len(p) < 3:
+            raise ValueError(f"a circle's fit needs at least 3 touches, "
+                             f"got {len(p)}")
         if len(p) >= 4:
             _, kept = fit_consensus(fit_circle, p, minimal=3,
                                     max_residual=max_residual, minimum=3)
@@ -115,9 +278,11 @@ def registration_from_points(contour: Contour, points, *,
         d = fit.center - contour.center[:2]
         reg = np.array([d[0], d[1], 0.0,
                         fit.radius - contour.radius if fit_radius else 0.0])
-        all_res = np.linalg.norm(p - fit.center, axis=1) - fit.radius
-        return ProbeFit(reg, kept, all_res, fit.rms)
-    if isinstance(contour, StraightContour):
+        level = 0.0 if fit_radius else -(fit.radius - contour.radius)
+    elif isinstance(contour, StraightContour):
+        if len(p) < 2:
+            raise ValueError(f"a straight edge's fit needs at least 2 "
+                             f"touches, got {len(p)}")
         fit, kept = fit_consensus(fit_line, p, minimal=2,
                                   max_residual=max_residual, minimum=2)
         t = contour.tangent(contour.point_at(0.0))[:2]
@@ -132,42 +297,52 @@ def registration_from_points(contour: Contour, points, *,
         q = np.array([fit.point[0], fit.point[1], turned.height])
         shift = -turned.phi(q) * n  # phi < 0 on the material side
         reg = np.array([shift[0], shift[1], dyaw, 0.0])
-        normal = np.array([-direction[1], direction[0]])
-        all_res = (p - fit.point) @ normal
-        return ProbeFit(reg, kept, all_res, fit.rms)
-    raise TypeError(f"registration of a {type(contour).__name__} is not "
-                    "supported: a circle or a straight edge")
-
-
-def _spread_around(points, center) -> float:
-    """rad, the smallest arc of directions from ``center`` holding every
-    point (2 pi minus the largest gap between neighbouring directions)."""
-    a = np.sort(np.arctan2(points[:, 1] - center[1],
-                           points[:, 0] - center[0]))
-    if len(a) < 2:
-        return 0.0
-    gaps = np.diff(np.concatenate([a, [a[0] + 2 * math.pi]]))
-    return float(2 * math.pi - gaps.max())
+    else:
+        pivot_of(contour)  # TypeError for a contour that cannot be moved
+        gain = rigid_fit_amplification(contour, p)
+        if gain > MAX_AMPLIFICATION:
+            raise ValueError(
+                f"the {len(p)} touches do not fix the part's position and "
+                f"turn (noise amplification {gain:.3g} > "
+                f"{MAX_AMPLIFICATION:g}): at least 3, spread over sides "
+                "that are not parallel")
+        free = len(p) >= 5
+        fit = _rigid(contour, level=free)
+        if len(p) >= 4:
+            _, kept = fit_consensus(fit, p, minimal=4 if free else 3,
+                                    max_residual=max_residual,
+                                    minimum=4 if free else 3)
+        else:
+            kept = np.ones(len(p), bool)
+        if rigid_fit_amplification(contour, p[kept]) > MAX_AMPLIFICATION:
+            raise ValueError("the touches kept do not fix the part's "
+                             "position and turn")
+        found = _rigid(contour, level=free and kept.sum() >= 5)(p[kept])
+        reg, level = np.array([*found.move, 0.0]), found.level
+    # Residuals: phi of every touch on the fitted contour less the level
+    # (a circle's: its fitted radius less the drawing's): > 0 early.
+    residuals = _phi(moved_contour(contour, reg), p) - level
+    rms = float(np.sqrt(np.mean(residuals[kept] ** 2)))
+    return ProbeFit(reg, kept, residuals, rms, float(level))
 
 
 # -- registration while cutting -------------------------------------------
 #: The online model's parameters: the contact force is
-#: ||f_n|| = c0 + c1 (delta_0 - d), d = w . n1 + psi (s - s_pivot) how far
-#: the real edge lies beyond the reference contour along n1 (w: m, the
-#: offset; psi: rad, a straight edge's heading error), delta_0 the depth on
-#: the reference; linear in (c0, c1, c1 w_x, c1 w_y, c1 psi).
+#: ||f_n|| = c0 + c1 (delta_0 - d), d = w . n1 + psi (z x (p - pivot)) . n1
+#: how far the real edge lies beyond the reference contour along n1 at the
+#: tool point p (w: m, the move; psi: rad, the turn about the pivot,
+#: counter-clockwise), delta_0 the depth on the reference; linear in
+#: (c0, c1, c1 w_x, c1 w_y, c1 psi).
 ONLINE_PARAMETERS = ("c0", "c1", "c1_w_x", "c1_w_y", "c1_psi")
 
 
 def _offset_terms(contour: Contour, x_p) -> np.ndarray:
-    """(n1_x, n1_y, s - s_pivot): d = w . n1 + psi (s - s_pivot). A circle
-    has no psi (its yaw moves nothing); on a straight edge w . n1 is a
-    constant, told apart from c0 only by the contact onset."""
-    n1 = contour.n1(x_p)
-    if isinstance(contour, StraightContour):
-        s = contour.arc_position(x_p) - contour.arc_position(_pivot(contour))
-        return np.array([n1[0], n1[1], s])
-    return np.array([n1[0], n1[1], 0.0])
+    """(n1_x, n1_y, (z x (x_p - pivot)) . n1): d = w . n1 + psi (...).
+    On a circle the last term is zero (n1 is radial: a turn about the
+    centre moves nothing); on a straight edge it is -(s - s_pivot), and
+    w . n1 is a constant, told apart from c0 only by the contact onset."""
+    x_p = np.asarray(x_p, float)
+    return _turn_terms(contour, x_p[None, :2], pivot_of(contour)[:2])[0]
 
 
 def contact_regressor(contour: Contour, x_p) -> np.ndarray:
@@ -187,22 +362,36 @@ def onset_regressor(contour: Contour, x_p, depth_at_detection=0.0):
     return phi
 
 
+def learning_curvature(contour: Contour, samples: int = 720) -> float:
+    """1/m: the curvature of most of ``contour``'s length (over
+    ``samples`` points evenly along it): where the online model learns.
+    The contact law c0 + c1 delta holds with one c1 where the curvature
+    is one: a circle and a straight edge everywhere, a profile on its
+    straight sides (its fillets have their own c1: a pocket's concave
+    corner stiffer, a boss's convex one softer, which the model would take
+    for an offset towards or away from the corner)."""
+    L = contour.length if math.isfinite(contour.length) else 0.0
+    values = np.array([contour.curvature(contour.point_at(s)) for s in
+                       np.linspace(0.0, L, samples, endpoint=False)])
+    kinds, counts = np.unique(np.round(values, 9), return_counts=True)
+    return float(kinds[np.argmax(counts)])
+
+
 def registration_of(contour: Contour, params) -> np.ndarray:
-    """(dx, dy, dyaw, dradius) that moves ``contour`` onto the edge of the
+    """(dx, dy, dyaw, 0) that moves ``contour`` onto the edge of the
     online model's ``params`` (ONLINE_PARAMETERS; zero while c1 is not
-    positive)."""
+    positive). A straight edge: only the move along its normal (the move
+    along it changes nothing); a circle: no turn (it changes nothing)."""
     c1 = float(params[1])
     if not c1 > 0.0:
         return np.zeros(REGISTRATION_SIZE)
     wx, wy, psi = (float(v) / c1 for v in params[2:5])
     if isinstance(contour, StraightContour):
         n = contour.material_normal[:2]
-        w = (wx * n[0] + wy * n[1]) * n
-        # Turning by beta (counter-clockwise) about the pivot moves the
-        # point at arc s by -beta (s - s_pivot) along n1 (material on the
-        # right of the tangent): beta = -psi.
-        return np.array([w[0], w[1], -psi, 0.0])
-    return np.array([wx, wy, 0.0, 0.0])
+        wx, wy = (wx * n[0] + wy * n[1]) * n
+    if isinstance(contour, CircularContour):
+        psi = 0.0
+    return np.array([wx, wy, psi, 0.0])
 
 
 def rls_update(theta, P, phi, y, *, noise_var: float, forgetting: float):

@@ -29,18 +29,19 @@ from typing import Dict, Optional
 
 import numpy as np
 
-from deburr_drake.cell.edge import make_contour
+from deburr_drake.cell.edge import believed_contour, make_contour
 from deburr_drake.cell.truth import contact_truth
 from deburr_drake.control.controller import make_rule_bases
 from deburr_drake.control.probe import PROBE_STATE
 from deburr_drake.control.online import ONLINE_STATE
 from deburr_drake.math import metrics
+from deburr_drake.math.registration import moved_contour
 from deburr_drake.runs.simulation import RunLog
 
 __all__ = ["pass_metrics", "PassMetrics", "PassWindow", "pass_window",
            "finish_metrics", "force_metrics", "feed_metrics",
            "estimate_metrics", "smoothness_metrics", "status_metrics",
-           "localisation_metrics", "first_edge_error",
+           "localisation_metrics", "registration_error", "first_edge_error",
            "force_at_desired_depth", "TRANSIENT", "CONTACT_FORCE"]
 
 #: Excluded after contact is established (s), as the issue asks.
@@ -330,13 +331,31 @@ def status_metrics(log: RunLog) -> PassMetrics:
     return out
 
 
+def registration_error(scenario, registration, samples: int = 400
+                       ) -> float:
+    """m: the largest distance, along the real edge's normal, between the
+    believed part's zero-depth path moved by ``registration`` (dx, dy,
+    dyaw, dradius) and the real one, over ``samples`` points evenly along
+    it (any contour kind; 0 for a perfect registration)."""
+    moved = moved_contour(believed_contour(scenario), registration)
+    real = make_contour(scenario)
+    L = moved.length if np.isfinite(moved.length) else 1.0
+    return float(max(abs(real.phi(moved.point_at(s)))
+                     for s in np.linspace(0.0, L, samples,
+                                          endpoint=not moved.closed)))
+
+
 def localisation_metrics(log: RunLog) -> PassMetrics:
     """With touch probing: ``probing_time_s`` (when the pass started),
     ``pass_time_s`` (after it) and ``cycle_time_s`` (both, when the pass
     completed), the touches made and kept, the fit's residual RMS and the
-    registration it found (mm, rad); with registration while cutting the
-    final correction (mm). Empty without localisation."""
+    registration it found (mm, rad) and its error
+    (``probe_registration_error_mm``, :func:`registration_error`); with
+    registration while cutting the final correction (mm) and the error of
+    the final registration (the probe's and the correction,
+    ``online_registration_error_mm``). Empty without localisation."""
     out = PassMetrics()
+    base = np.zeros(4)
     probe = log.signals.get("probe")
     if probe is not None and len(probe["t"]):
         last = probe["value"][-1]
@@ -362,12 +381,18 @@ def localisation_metrics(log: RunLog) -> PassMetrics:
         out["probe_offset_y_mm"] = float(reg[1]) * 1e3
         out["probe_yaw_rad"] = float(reg[2])
         out["probe_radius_mm"] = float(reg[3]) * 1e3
+        if done >= 0.0:
+            base = np.array(reg, float)
+            out["probe_registration_error_mm"] = registration_error(
+                log.scenario, base) * 1e3
     online = log.signals.get("registration")
     if online is not None and len(online["t"]):
         corr = ONLINE_STATE.get(online["value"][-1], "correction")
         out["online_offset_x_mm"] = float(corr[0]) * 1e3
         out["online_offset_y_mm"] = float(corr[1]) * 1e3
         out["online_yaw_rad"] = float(corr[2])
+        out["online_registration_error_mm"] = registration_error(
+            log.scenario, base + np.asarray(corr, float)) * 1e3
     return out
 
 

@@ -23,13 +23,14 @@ from typing import Dict, List, Sequence
 import numpy as np
 
 from deburr_drake.cell.diagram import make_deburring_diagram
-from deburr_drake.cell.edge import make_contour
+from deburr_drake.cell.edge import believed_contour, make_contour
 from deburr_drake.config import Scenario
 from deburr_drake.control.probe import PROBE_STATE
 from deburr_drake.runs.simulation import simulate
 
 __all__ = ["ProbeResult", "probe_once", "probe_accuracy",
-           "probe_qualification", "probing_duration", "summarize"]
+           "probe_qualification", "probing_duration", "summarize",
+           "refit_touches"]
 
 
 @dataclass
@@ -168,3 +169,29 @@ def summarize(results: List[ProbeResult]) -> Dict[str, float]:
         "probing_time_mean_s": float(np.nanmean(
             [r.probing_time for r in results])),
     }
+
+
+def refit_touches(scenario: Scenario, touch_points,
+                  thresholds: Sequence[float]) -> List[Dict[str, float]]:
+    """The probe's fit redone on a run's recorded touches (its
+    ``touch_points`` log's last row, N x 4: x, y, z, made) with each
+    ``max_residual`` of ``thresholds`` (m): the touches kept and the
+    registration's error against the real edge (m,
+    runs.pass_metrics.registration_error). What a threshold would have
+    done, without running the cell again."""
+    from deburr_drake.math.registration import registration_from_points
+    from deburr_drake.runs.pass_metrics import registration_error
+    t = np.asarray(touch_points, float).reshape(-1, 4)
+    points = t[t[:, 3] > 0.5, :3]
+    believed = believed_contour(scenario)
+    out = []
+    for threshold in thresholds:
+        fit = registration_from_points(
+            believed, points, max_residual=float(threshold),
+            fit_radius=scenario.localisation.probe.fit_radius)
+        out.append({"max_residual": float(threshold),
+                    "touches": int(len(points)),
+                    "kept": int(fit.kept.sum()),
+                    "error": registration_error(scenario, fit.registration),
+                    "fit_rms": fit.rms})
+    return out

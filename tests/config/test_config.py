@@ -104,3 +104,12 @@ def test_shipped_profile_scenarios():
         scenario = load_scenario(name)
         assert scenario.edge.kind == "profile"
         assert len(scenario.edge.vertices) == 4
+
+
+@pytest.mark.parametrize("name", ["boss", "pocket"])
+def test_probe_fit_radius_only_on_a_circle(name):
+    text = "localisation: {probe: {enabled: true, fit_radius: true}}"
+    with pytest.raises(ConfigError, match=r"^localisation\.probe\.fit_radius"
+                       r" = True is invalid: allowed false on a profile"):
+        load_scenario(name, text=text)
+    load_scenario("paper", text=text)

@@ -215,3 +215,73 @@ def test_gate_hides_contact_while_probing():
     np.testing.assert_allclose(
         gate.GetOutputPort("chamfer_state").Eval(context), chamfer)
     assert gate.GetOutputPort("desired_normal_force").Eval(context)[0] == 7
+
+
+def _square(**kw):
+    from deburr_drake.math.geometry import ProfileContour
+    return ProfileContour([[-0.025, -0.025], [0.025, -0.025],
+                           [0.025, 0.025], [-0.025, 0.025]], 0.01,
+                          material="inside", offset=0.003, **kw)
+
+
+def test_profile_layout_fixes_the_turn_and_a_bad_one_is_refused():
+    from deburr_drake.config import ConfigError
+    from deburr_drake.control.probe import check_probe_layout
+    from deburr_drake.math.registration import rigid_fit_amplification
+    square = _square()
+    # Evenly from the middle of a side, 8 touches fall on the middles of
+    # the sides and fillets, which see no turn: the layout is shifted.
+    arcs = probe_arcs(square, ProbeConfig(points=8))
+    np.testing.assert_allclose(np.diff(arcs) % square.length,
+                               square.length / 8)
+    assert 0.0 < arcs[0] < square.length / 8
+    points = [square.point_at(s) for s in arcs]
+    assert rigid_fit_amplification(square, points) < 1.0
+    check_probe_layout(square, ProbeConfig(points=8))
+    # Given a spacing it is kept as given; all on one side it is refused.
+    config = ProbeConfig(points=4, spacing=0.005, first_arc=0.0)
+    np.testing.assert_allclose(probe_arcs(square, config),
+                               [0.0, 0.005, 0.010, 0.015])
+    with pytest.raises(ConfigError, match=r"^localisation\.probe\.spacing "
+                       r"= 0\.005 is invalid: .*do not fix"):
+        check_probe_layout(square, config)
+
+
+def test_travel_between_touches_stays_off_a_boss():
+    # A straight move from a touch on one side of a boss to one on the
+    # next cuts its corner through the material; the travel follows the
+    # edge at the standoff. The tool follows the command; contact when it
+    # is the modelled bias past the edge.
+    boss = _square(center=[0.4, 0.0, 0.048])
+    cfg = ProbeConfig(points=8, settle_time=0.01, travel_speed=0.05)
+    timing = sensor_timing(0.0025, 10.0)
+    x0 = boss.point_at(0.0) - cfg.standoff * boss.n1(boss.point_at(0.0))
+    probe = ProbingSequence(boss, cfg, sample_period=0.0025, timing=timing,
+                            initial_position=x0)
+    run = _Run(probe, x0)
+    bias = detection_depth(cfg.approach_speed, cfg.force_threshold,
+                           cfg.contact_stiffness, timing)
+    clearance = np.inf
+    for _ in range(40000):
+        if run.phase() == "done":
+            break
+        run.x_p = run.command().copy()
+        depth = float(boss.depth(run.x_p))
+        if run.phase() in ("travel", "return"):
+            clearance = min(clearance, -depth)
+        touching = run.phase() == "approach" and depth >= bias
+        n = boss.n1(run.x_p)
+        run.force = -2.0 * cfg.force_threshold * n if touching else \
+            np.zeros(3)
+        run.fix(speed=cfg.approach_speed * n if run.phase() == "approach"
+                else (0, 0, 0))
+        run.step()
+    assert run.phase() == "done"
+    x = run.state()
+    assert PROBE_STATE.get(x, "touches") == 8
+    assert PROBE_STATE.get(x, "kept") == 8
+    # At the standoff all the way round (the retract ends the bias short
+    # of it).
+    assert clearance > cfg.standoff - 2 * bias
+    np.testing.assert_allclose(PROBE_STATE.get(x, "registration"), 0.0,
+                               atol=2e-5)

@@ -177,3 +177,17 @@ def test_a_run_without_contact_gives_reasons_not_errors():
     out = pass_metrics(log)
     assert math.isnan(out["contact_time_s"])
     assert "no contact" in out.reasons["chamfering_force_rms_error_N"]
+
+
+@pytest.mark.parametrize("name", ["pocket", "boss", "paper"])
+def test_registration_error_of_the_true_registration_is_zero(name):
+    from deburr_drake.runs.pass_metrics import registration_error
+    scenario = load_scenario(name, text=(
+        "part_error: {offset: [0.0006, -0.0004, 0.0], yaw: 0.01}"))
+    # Believed minus real is (offset, yaw), turned about tube.position
+    # (the vertices' centroid and the circle's centre here): the real
+    # part is the believed one turned back and moved back.
+    truth = [-0.0006, 0.0004, -0.01, 0.0]
+    assert registration_error(scenario, truth) < 1e-9
+    # None: the offset and the turn at the far corners.
+    assert registration_error(scenario, np.zeros(4)) > 6e-4
