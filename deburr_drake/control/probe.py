@@ -367,18 +367,20 @@ class ProbingSequence(LeafSystem):
 
     # -- the state machine -----------------------------------------------
     def _update(self, context, discrete_state):
-        x = context.get_discrete_state(self._state).get_value().copy()
+        x = context.get_discrete_state(self._state).get_value()
         phase = PHASES[int(round(float(PROBE_STATE.get(x, "phase"))))]
         t = context.get_time()
-        if phase == "done":
+        if phase == "done":  # every sample of the pass: copy only to write
             if PROBE_STATE.get(x, "cut_time") < 0 and (
                     CHAMFER_STATE.get(self._chamfer_port.Eval(context),
                                       "delta") >= self._established_depth
                     or t - PROBE_STATE.get(x, "done_time")
                     >= self._config.entry_dwell):
+                x = x.copy()
                 x[PROBE_STATE.slice("cut_time")] = t
                 discrete_state.set_value(self._state, x)
             return
+        x = x.copy()
         c = self._config
         command, finished = self._along(x, t)
         x[PROBE_STATE.slice("command")] = command

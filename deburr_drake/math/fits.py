@@ -21,6 +21,8 @@ sigma sqrt(2 / N) per axis.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import combinations
+from math import comb
 from typing import Callable, Optional
 
 import numpy as np
@@ -198,8 +200,6 @@ def fit_consensus(fit: Callable, points, *, minimal: int,
     Ties go to the smaller inlier RMS. With fewer than ``minimum``
     (default ``minimal + 1``) agreeing points, :func:`fit_rejecting`
     decides."""
-    from itertools import combinations
-    from math import comb
     p = np.asarray(points, float)
     minimum = minimal + 1 if minimum is None else minimum
     if len(p) <= minimal:
@@ -228,10 +228,11 @@ def fit_consensus(fit: Callable, points, *, minimal: int,
         return fit_rejecting(fit, p, max_residual=max_residual,
                              minimum=minimum, **kwargs)
     kept = best
+    result = fit(p[kept], **kwargs)
     for _ in range(10):
-        result = fit(p[kept], **kwargs)
         now = np.abs(result.residuals_of(p)) <= max_residual
         if now.sum() < minimum or np.array_equal(now, kept):
             break
         kept = now
-    return fit(p[kept], **kwargs), kept
+        result = fit(p[kept], **kwargs)
+    return result, kept

@@ -393,8 +393,8 @@ class RuleBase:
         (d - c sgn d). Zero while every slope is within the bound (and for
         ``max_slope`` inf). T-generic (the excess is chosen on values)."""
         theta = np.asarray(theta)
-        out = np.zeros(theta.shape, dtype=theta.dtype) if theta.dtype == \
-            object else np.zeros(theta.shape)
+        out = np.zeros(theta.shape,
+                       dtype=object if theta.dtype == object else float)
         if not math.isfinite(max_slope):
             return out
         c = max_slope * self._dk

@@ -189,6 +189,12 @@ def _spread_around(points, center) -> float:
     return float(2 * math.pi - gaps.max())
 
 
+def _level_residuals(contour: Contour, move, level: float, q):
+    """phi - level of planar points ``q`` on ``contour`` moved by
+    ``move`` (dx, dy, dyaw)."""
+    return _phi(moved_contour(contour, [*move, 0.0]), q) - level
+
+
 @dataclass
 class _RigidFit:
     """A rigid fit of a contour (fit_consensus's interface): the move
@@ -200,9 +206,8 @@ class _RigidFit:
     residuals: np.ndarray
 
     def residuals_of(self, points) -> np.ndarray:
-        q = np.asarray(points, float)[:, :2]
-        return _phi(moved_contour(self.contour, [*self.move, 0.0]), q) - \
-            self.level
+        return _level_residuals(self.contour, self.move, self.level,
+                                np.asarray(points, float)[:, :2])
 
     @property
     def rms(self) -> float:
@@ -217,8 +222,8 @@ def _rigid(contour: Contour, *, level: bool):
         if rigid_fit_amplification(contour, q) > MAX_AMPLIFICATION:
             raise ValueError("the points do not fix the move")
         move, b = _rigid_fit(contour, q, level=level)
-        return _RigidFit(contour, move, b, _RigidFit(
-            contour, move, b, np.zeros(0)).residuals_of(q))
+        return _RigidFit(contour, move, b,
+                         _level_residuals(contour, move, b, q))
     return fit
 
 
