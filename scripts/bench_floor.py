@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """The cost of the paper cell's physics alone, without any Python in the
 loop: the same plant (arm, joint friction, compliant ring, cutter), the
-same cutting-force law (its terms, the implicit-damping term included,
-fixed at the start's values), cenic in fixed steps of ``--step`` (the
+same cutting-force law (its terms, the held mean of process.sample_mean
+included, fixed at the start's values, reading the held actuation), cenic
+in fixed steps of ``--step`` (the
 2.5 ms control period by default: one step per sample), the weld's
 reaction forces sampled every 2.5 ms (as the force sensor does) and a C++
 joint PID through a 2.5 ms hold pressing the tool 0.5 mm into the edge.
@@ -30,7 +31,8 @@ from deburr_drake.cell.plant import add_cell_plant
 from deburr_drake.cell.edge import make_contour
 from deburr_drake.config import load_scenario
 from deburr_drake.control.kinematics import ToolPoint
-from deburr_drake.cell.process import force_law_terms, make_cutting_force_law
+from deburr_drake.cell.process import (HeldMean, force_law_terms,
+                                       make_cutting_force_law)
 
 
 def make_floor_simulator(step=None, sensor=True):
@@ -51,12 +53,15 @@ def make_floor_simulator(step=None, sensor=True):
         np.concatenate([q0, np.zeros(nv)]))
     n1, tangent, delta, _ = contour.frame(p + 5e-4 * contour.n1(p))
     context = plant.CreateDefaultContext()
+    a = J.T @ tangent
+    B = plant.MakeActuationMatrix()
+    held = HeldMean(np.linalg.solve(plant.CalcMassMatrix(context), a), 0.0,
+                    B, T)
     terms = force_law_terms(scenario.process, n1, tangent, delta, J,
                             np.zeros(3), cut_height=scenario.tool.engagement,
-                            v=np.zeros(nv),
-                            inertia=np.diag(plant.CalcMassMatrix(context)))
+                            v=np.zeros(nv), nu=B.shape[1], held=held)
     law = builder.AddSystem(make_cutting_force_law(
-        nq, nv, scenario.process.smoothing_speed))
+        nq, nv, scenario.process.smoothing_speed, B.shape[1]))
     source = builder.AddSystem(ConstantVectorSource(terms))
     builder.Connect(source.get_output_port(),
                     law.GetInputPort("force_law_terms"))
@@ -82,6 +87,7 @@ def make_floor_simulator(step=None, sensor=True):
     hold = builder.AddSystem(ZeroOrderHold(T, nv))
     builder.Connect(total.get_output_port(), hold.get_input_port())
     builder.Connect(hold.get_output_port(), plant.get_actuation_input_port())
+    builder.Connect(hold.get_output_port(), law.GetInputPort("actuation"))
     if sensor:
         reactions = plant.get_reaction_forces_output_port()
         sample = builder.AddSystem(ZeroOrderHold(

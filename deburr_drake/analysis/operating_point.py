@@ -108,8 +108,10 @@ def frozen_scenario(scenario: Scenario, *, continuous: bool = False,
     if continuous:
         frozen.controller.control_period = 0.0
         # The law's implicit-damping term is cenic's discretization device,
-        # not continuous-time physics.
+        # and its held mean over a sample a sampled-data one: continuous
+        # time takes eq. (3) as it follows the velocities.
         frozen.process.implicit_damping = False
+        frozen.process.sample_mean = False
     for path, value in overrides.items():
         set_field(frozen, path, value)
     return frozen.validate()

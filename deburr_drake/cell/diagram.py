@@ -179,9 +179,18 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
         contour_step=belief_step, true_plant=plant, posture=q0)
     if probing:
         builder.Connect(loops.spindle, process.GetInputPort("spindle"))
-    builder.Connect(
-        add_effort_saturation(builder, c, plant, loops.actuation),
-        plant.get_actuation_input_port())
+    actuation = add_effort_saturation(builder, c, plant, loops.actuation)
+    builder.Connect(actuation, plant.get_actuation_input_port())
+    # The law's held mean (process.sample_mean) takes the sample's torque.
+    builder.Connect(actuation, force_law.GetInputPort("actuation"))
+    if c.process.sample_mean:
+        for port, source in (
+                ("generalized_acceleration",
+                 plant.get_generalized_acceleration_output_port()),
+                ("applied_generalized_force",
+                 force_law.GetOutputPort("generalized_force")),
+                ("actuation", actuation)):
+            builder.Connect(source, process.GetInputPort(port))
 
     if meshcat is not None:
         from deburr_drake.cell.meshcat import add_meshcat

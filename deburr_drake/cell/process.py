@@ -5,7 +5,7 @@ pass leaves. The controller never reads it."""
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import NamedTuple, Sequence
 
 import numpy as np
 from pydrake.common import RandomDistribution
@@ -16,14 +16,16 @@ from pydrake.systems.primitives import (Demultiplexer, Gain,
                                         Saturation)
 
 from deburr_drake.config import BurrConfig, ProcessConfig
+from deburr_drake.math.damping import held_damper_mean
 from deburr_drake.math.geometry import Contour, removal_scale
 from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.control.layout import VectorLayout
 from deburr_drake.math.metrics import arc_distance
 
 __all__ = ["CuttingProcess", "PROCESS_STATE", "cutting_force",
-           "force_law_terms", "generalized_cutting_force",
-           "make_cutting_force_law", "burr_profile",
+           "force_law_terms", "force_law_terms_size", "HeldMean",
+           "generalized_cutting_force", "make_cutting_force_law",
+           "burr_profile",
            "FinishBins", "material_overlap"]
 
 PROCESS_STATE = VectorLayout("process_state", [
@@ -152,48 +154,80 @@ def _force(config: ProcessConfig, n1, tangent, delta, arc, xdot_p,
         v_t=abs(v_along), burr_area=burr_area, arc_position=arc)
 
 
+class HeldMean(NamedTuple):
+    """What ``process.sample_mean`` needs beside the sample's place on the
+    edge: the arm's response along a = J^T n2 to everything but the
+    cutting force. y = M^-1 a (nv); ``rest`` = a^T M^-1 tau_rest (m/s^2),
+    tau_rest every generalized force but the cutting law's and the
+    actuation (gravity, Coriolis, contact, friction, damping) at the
+    sample; ``actuation_matrix`` B (nv x nu, the plant's); ``period`` the
+    interval the law is held over (s)."""
+
+    y: np.ndarray
+    rest: float
+    actuation_matrix: np.ndarray
+    period: float
+
+
+def force_law_terms_size(nv: int, nu: int) -> int:
+    """Length of :func:`force_law_terms`' vector."""
+    return nv * nv + 4 * nv + 9 + nu + 1
+
+
 def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, xdot_p,
                     *, cut_height: float,
                     burr_area: float = 0.0,
                     overlap: float = 1.0, removal: float = 1.0,
-                    v=None, inertia=None) -> np.ndarray:
+                    v=None, inertia=None, nu: int = None,
+                    held: HeldMean = None) -> np.ndarray:
     """The terms of :func:`make_cutting_force_law` that make it give
     :func:`cutting_force` (J: the tool point's translational Jacobian, 3 x
     nv; xdot_p: the tool point's velocity, m/s). With u = a.v (v the joint
     velocities: the speed along the edge) and s = sat(u / v_s):
 
-        tau = A [u, s] + b + S (v - v0) (joint space),
+        tau = A [u, s] + b + S (v - v0) + a (k . u_act + k0) (joint space),
         f = B [u, s] + f0 (world),
         a = J^T tangent,  A = [-on g a, -on (P'_th + h |v_n|) a],
-        b = -on c0 J^T n1,  B, f0 the same with J = I.
+        b = -on c0 J^T n1,  B, f0 the same with J = I,
 
-    Returns [a, A by column, b - S v0, B by column, f0, S by column]
-    (4 nv + 9 + nv^2). The place on the edge (tangent, n1, g, the
-    engagement) and the plunge speed v_n are the sample's; u and s follow
-    the velocities. ``removal``: the edge's curvature factor on g
-    (:func:`cutting_force`).
+    u_act the plant's actuation (nu; ``nu`` defaults to nv). Returns [a,
+    A by column, b - S v0, B by column, f0, S by column, k, k0] (nv^2 +
+    4 nv + 9 + nu + 1, :func:`force_law_terms_size`). The place on the
+    edge (tangent, n1, g, the engagement) and the plunge speed v_n are the
+    sample's; u and s follow the velocities. ``removal``: the edge's
+    curvature factor on g (:func:`cutting_force`).
 
-    S (nv x nv) is zero without the sample's joint velocities ``v`` (v0).
-    With them it is c a a^T - D, c = -dF/du >= 0 the law's damping along
-    the edge at v0 (g, plus P'_th / v_s inside the direction's ramp) and
-    D = diag(c |a_i| sqrt(m_i) sum_j |a_j| / sqrt(m_j)), m = ``inertia``
-    (the diagonal of the mass matrix; ones if not given: Gershgorin's
-    bound), a diagonal that dominates c a a^T (Cauchy-Schwarz, for any
-    positive m; with m = diag(M) it spreads D as the arm's inertia is
-    spread, and when a lies along one joint D = c a a^T, exact implicit
-    Euler): the term vanishes at the sample's velocities (so the
-    force there is exactly eq. (3)) and makes d tau / dv = -D, diagonal.
-    cenic treats only the diagonal of d tau / dv implicitly; with the
-    full derivative diagonal nothing of the law is explicit, and since D
-    dominates c a a^T, (M + h D)^-1 h c a a^T has its eigenvalues in [0,
-    1]: the cutting damping cannot drive a step-to-step oscillation
-    however large g is (what two steps per sample used to bound)."""
-    _, terms = _sample(config, n1, tangent, delta, 0.0,
-                       np.asarray(J, float), np.asarray(xdot_p, float),
-                       cut_height, burr_area, overlap, removal,
+    ``held`` (``process.sample_mean``, needs ``v``): A = 0, S = 0, and
+    the force along the edge is instead held over the sample at its exact
+    mean (deburr_drake.math.damping.held_damper_mean): F(u) = c u + F_0
+    about the sample's u0 (c = on g, F_0 = on (P'_th + h |v_n|) sign(u0);
+    inside the direction's ramp c = on (g + (P'_th + h |v_n|) / v_s),
+    F_0 = 0), with beta = a . y, the rest a . M^-1 tau_rest plus the
+    sample's threshold force along a, and the actuation's part k . u_act
+    = -k1 y^T B u_act (k0 = -the mean's constant): with the rest and the
+    actuation held over the sample, the speed along the edge at its end is
+    exactly the damper's, however large g is. The world force f (what the
+    force sensor adds back) stays eq. (3) at the velocities.
+
+    Otherwise S (nv x nv) is zero without the sample's joint velocities
+    ``v`` (v0). With them it is c a a^T - D, c = -dF/du >= 0 the law's
+    damping along the edge at v0 (g, plus P'_th / v_s inside the
+    direction's ramp) and D = diag(c |a_i| sqrt(m_i) sum_j |a_j| /
+    sqrt(m_j)), m = ``inertia`` (the diagonal of the mass matrix; ones if
+    not given: Gershgorin's bound), a diagonal that dominates c a a^T
+    (Cauchy-Schwarz, for any positive m; with m = diag(M) it spreads D as
+    the arm's inertia is spread, and when a lies along one joint D = c a
+    a^T, exact implicit Euler): the term vanishes at the sample's
+    velocities (so the force there is exactly eq. (3)) and makes d tau /
+    dv = -D, diagonal (``process.implicit_damping``)."""
+    J = np.asarray(J, float)
+    _, terms = _sample(config, n1, tangent, delta, 0.0, J,
+                       np.asarray(xdot_p, float), cut_height, burr_area,
+                       overlap, removal,
                        None if v is None else np.asarray(v, float),
                        None if inertia is None else np.asarray(inertia,
-                                                               float))
+                                                               float),
+                       J.shape[1] if nu is None else nu, held)
     return terms
 
 
@@ -205,7 +239,8 @@ assert PROCESS_STATE.blocks == _STATE_BLOCKS
 
 
 def _sample(config: ProcessConfig, n1, tangent, delta, arc, J, xdot_p,
-            cut_height, burr_area, overlap, removal, v, inertia):
+            cut_height, burr_area, overlap, removal, v, inertia, nu,
+            held=None):
     """(PROCESS_STATE vector, :func:`force_law_terms`) at one sample: one
     pass over the engagement, speeds and directions (float arrays in)."""
     on, g = _engagement(config, delta, cut_height, burr_area, overlap,
@@ -220,21 +255,32 @@ def _sample(config: ProcessConfig, n1, tangent, delta, arc, J, xdot_p,
                       burr_area, arc])
     a = tangent @ J
     nv = a.size
-    terms = np.empty(nv * nv + 4 * nv + 9)
+    terms = np.zeros(force_law_terms_size(nv, nu))
     terms[:nv] = a
-    np.multiply(a, -on * g, out=terms[nv:2 * nv])
-    np.multiply(a, -on * power, out=terms[2 * nv:3 * nv])
     b = terms[3 * nv:4 * nv]
     np.multiply(n1 @ J, -threshold, out=b)
     k = 4 * nv
     terms[k:k + 3] = (-on * g) * tangent
     terms[k + 3:k + 6] = (-on * power) * tangent
     terms[k + 6:k + 9] = (-threshold) * n1
-    # S is symmetric: its column-major and row-major layouts agree.
-    S = terms[k + 9:].reshape(nv, nv)
-    if v is None:
-        S[:] = 0.0
-    else:
+    if held is not None:
+        # The law holds the exact mean of F over the sample (A, S zero).
+        u = float(a @ v)
+        if abs(u) < config.smoothing_speed:
+            c, offset = on * (g + power / config.smoothing_speed), 0.0
+        else:
+            c, offset = on * g, math.copysign(on * power, u)
+        y = held.y
+        k0, k1 = held_damper_mean(c, offset, u, float(a @ y),
+                                  held.rest + float(y @ b), held.period)
+        terms[-nu - 1:-1] = (-k1 * y) @ held.actuation_matrix
+        terms[-1] = -k0
+        return state, terms
+    np.multiply(a, -on * g, out=terms[nv:2 * nv])
+    np.multiply(a, -on * power, out=terms[2 * nv:3 * nv])
+    if v is not None:
+        # S is symmetric: its column-major and row-major layouts agree.
+        S = terms[k + 9:k + 9 + nv * nv].reshape(nv, nv)
         u = float(a @ v)
         c = on * g + (on * power / config.smoothing_speed
                       if abs(u) < config.smoothing_speed else 0.0)
@@ -247,31 +293,44 @@ def _sample(config: ProcessConfig, n1, tangent, delta, arc, J, xdot_p,
     return state, terms
 
 
-def _split_terms(terms):
-    """(a, A, b, B, f0, S) of :func:`force_law_terms`, as flat arrays."""
+def _split_terms(terms, nv: int, nu: int):
+    """(a, A, b, B, f0, S, k, k0) of :func:`force_law_terms`, as flat
+    arrays."""
     terms = np.asarray(terms, float)
-    nv = int(round(math.sqrt(len(terms) - 5) - 2))
-    return np.split(terms, np.cumsum([nv, 2 * nv, nv, 6, 3])), nv
+    if terms.size != force_law_terms_size(nv, nu):
+        raise ValueError(f"force_law_terms: {terms.size} values for nv = "
+                         f"{nv}, nu = {nu}: expected "
+                         f"{force_law_terms_size(nv, nu)}")
+    return np.split(terms, np.cumsum([nv, 2 * nv, nv, 6, 3, nv * nv, nu]))
 
 
-def generalized_cutting_force(terms, v, smoothing_speed: float):
-    """(tau, f) of :func:`make_cutting_force_law` in numpy (for tests)."""
-    (a, A, b, B, f0, S), nv = _split_terms(terms)
+def generalized_cutting_force(terms, v, smoothing_speed: float,
+                              actuation=None):
+    """(tau, f) of :func:`make_cutting_force_law` in numpy (for tests);
+    ``actuation`` (nu) defaults to nv zeros."""
     v = np.asarray(v, float)
+    nv = v.size
+    actuation = np.zeros(nv) if actuation is None else np.asarray(
+        actuation, float)
+    a, A, b, B, f0, S, k, k0 = _split_terms(terms, nv, actuation.size)
     u = float(a @ v)
     w = np.array([u, _sat(u / smoothing_speed)])
-    return (A.reshape(2, nv).T @ w + b + S.reshape(nv, nv).T @ v,
-            B.reshape(2, 3).T @ w + f0)
+    held = float(k @ actuation + k0[0])
+    return (A.reshape(2, nv).T @ w + b + S.reshape(nv, nv).T @ v
+            + held * a, B.reshape(2, 3).T @ w + f0)
 
 
-def make_cutting_force_law(nq: int, nv: int,
-                           smoothing_speed: float) -> Diagram:
+def make_cutting_force_law(nq: int, nv: int, smoothing_speed: float,
+                           nu: int = None) -> Diagram:
     """``cutting_force``: the law of :func:`force_law_terms`, from
-    ``plant_state`` (nq + nv; the velocities are read) and the process's
-    held ``force_law_terms`` (4 nv + 9 + nv^2), outputs ``generalized_force`` (nv, for the
-    plant's applied generalized force) and ``tool_force`` (3, N, world: the
-    same force on the tool, for the force sensor: a force applied through
-    the joints does not pass the sensor's weld).
+    ``plant_state`` (nq + nv; the velocities are read), ``actuation`` (nu,
+    default nv: what drives the plant's actuation input; only
+    ``process.sample_mean``'s terms read it) and the process's held
+    ``force_law_terms`` (:func:`force_law_terms_size`), outputs
+    ``generalized_force`` (nv, for the plant's applied generalized force)
+    and ``tool_force`` (3, N, world: the same force on the tool, for the
+    force sensor: a force applied through the joints does not pass the
+    sensor's weld).
 
     The integrator evaluates whatever feeds the plant's applied forces
     about eight times a step to linearize it, so the law is built from
@@ -280,6 +339,7 @@ def make_cutting_force_law(nq: int, nv: int,
     it with the plant alone. LinearTransformDensity is the primitive that
     computes A w + b with A and b on input ports (no random input is
     involved)."""
+    nu = nv if nu is None else nu
     builder = DiagramBuilder()
 
     def add(name, system):
@@ -290,7 +350,8 @@ def make_cutting_force_law(nq: int, nv: int,
             RandomDistribution.kGaussian, n_in, n_out))
 
     state = add("state", Demultiplexer([nq, nv]))
-    terms = add("terms", Demultiplexer([nv, 2 * nv, nv, 6, 3, nv * nv]))
+    terms = add("terms", Demultiplexer([nv, 2 * nv, nv, 6, 3, nv * nv,
+                                        nu, 1]))
     speed = affine("speed_along_edge", nv, 1)
     scale = add("per_smoothing_speed", Gain(1.0 / smoothing_speed, 1))
     sign = add("direction", Saturation([-1.0], [1.0]))
@@ -299,6 +360,10 @@ def make_cutting_force_law(nq: int, nv: int,
     tool_force = affine("tool_force", 2, 3)
     # S (v - v0): the diagonal-making term (force_law_terms).
     stabilized = affine("stabilized_generalized_force", nv, nv)
+    # k . u_act + k0: minus the held mean force along the edge, applied
+    # along a (force_law_terms' held).
+    mean = affine("held_mean_force", nu, 1)
+    along_edge = affine("held_generalized_force", 1, nv)
     connect = builder.Connect
     connect(state.get_output_port(1), speed.GetInputPort("w_in"))
     connect(terms.get_output_port(0), speed.GetInputPort("A"))
@@ -313,9 +378,15 @@ def make_cutting_force_law(nq: int, nv: int,
     connect(state.get_output_port(1), stabilized.GetInputPort("w_in"))
     connect(terms.get_output_port(5), stabilized.GetInputPort("A"))
     connect(joint_force.GetOutputPort("w_out"), stabilized.GetInputPort("b"))
+    connect(terms.get_output_port(6), mean.GetInputPort("A"))
+    connect(terms.get_output_port(7), mean.GetInputPort("b"))
+    connect(mean.GetOutputPort("w_out"), along_edge.GetInputPort("w_in"))
+    connect(terms.get_output_port(0), along_edge.GetInputPort("A"))
+    connect(stabilized.GetOutputPort("w_out"), along_edge.GetInputPort("b"))
     builder.ExportInput(state.get_input_port(), "plant_state")
+    builder.ExportInput(mean.GetInputPort("w_in"), "actuation")
     builder.ExportInput(terms.get_input_port(), "force_law_terms")
-    builder.ExportOutput(stabilized.GetOutputPort("w_out"),
+    builder.ExportOutput(along_edge.GetOutputPort("w_out"),
                          "generalized_force")
     builder.ExportOutput(tool_force.GetOutputPort("w_out"), "tool_force")
     diagram = builder.Build()
@@ -345,11 +416,18 @@ class CuttingProcess(LeafSystem):
       or threshold force, nothing cut or recorded; a burr pushes the tool
       back along -n1 with ``burr_contact_stiffness`` times the depth the
       tool reaches into it.
-    - ``force_law_terms`` (4 nv + 9 + nv^2): the chamfering and threshold forces'
-      dependence on the joint velocities (:func:`force_law_terms`) at the
-      last sample, for :func:`make_cutting_force_law`, whose outputs go to
-      the plant's ``applied_generalized_force`` input and to the force
-      sensor.
+    - ``generalized_acceleration``, ``applied_generalized_force`` (nv)
+      and ``actuation`` (nu; only with ``process.sample_mean``): the
+      plant's accelerations, the cutting law's output and what drives the
+      plant's actuation, read at each sample (before the sample's
+      updates): with the mass matrix they give a^T M^-1 of every other
+      force on the arm, for the held mean (:class:`HeldMean`).
+    - ``force_law_terms`` (:func:`force_law_terms_size`): the chamfering
+      and threshold forces' dependence on the joint velocities (and, with
+      ``process.sample_mean``, on the actuation) at the last sample
+      (:func:`force_law_terms`), for :func:`make_cutting_force_law`, whose
+      outputs go to the plant's ``applied_generalized_force`` input and to
+      the force sensor.
     - ``process_state`` (PROCESS_STATE layout): eq. (3) at the last
       sample (for logs; the controller never reads it).
     - ``burr_height`` (bins, m): burr left on the edge.
@@ -378,6 +456,8 @@ class CuttingProcess(LeafSystem):
             plant, plant.GetFrameByName(tool_frame_name))
         self._nq = plant.num_positions()
         self._nv = plant.num_velocities()
+        self._actuation_matrix = plant.MakeActuationMatrix()
+        self._nu = self._actuation_matrix.shape[1]
         self._contour = contour
         self._config = config
         self._cut_height = cut_height
@@ -389,9 +469,17 @@ class CuttingProcess(LeafSystem):
             self.initial_burr_height())
         self._finish_index = self.DeclareDiscreteState(self._bins.count)
         self._terms_index = self.DeclareDiscreteState(
-            4 * self._nv + 9 + self._nv ** 2)
+            force_law_terms_size(self._nv, self._nu))
         self._state_port = self.DeclareVectorInputPort(
             "plant_state", plant.num_multibody_states())
+        self._held_ports = None
+        if config.sample_mean:
+            self._held_ports = (
+                self.DeclareVectorInputPort("generalized_acceleration",
+                                            self._nv),
+                self.DeclareVectorInputPort("applied_generalized_force",
+                                            self._nv),
+                self.DeclareVectorInputPort("actuation", self._nu))
         self._spindle_port = (self.DeclareVectorInputPort("spindle", 1)
                               if spindle_input else None)
         self._state_index = self.DeclareDiscreteState(PROCESS_STATE.size)
@@ -399,7 +487,7 @@ class CuttingProcess(LeafSystem):
         self.DeclareStateOutputPort("process_state", self._state_index)
         self.DeclareStateOutputPort("burr_height", self._burr_index)
         self.DeclareStateOutputPort("finish_depth", self._finish_index)
-        self.DeclareInitializationDiscreteUpdateEvent(self._update)
+        self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
         self.DeclarePeriodicDiscreteUpdateEvent(
             config.sample_period, 0.0, self._update)
 
@@ -410,7 +498,8 @@ class CuttingProcess(LeafSystem):
     def force_law(self) -> Diagram:
         """The ``cutting_force`` law for this process's plant and config."""
         return make_cutting_force_law(self._nq, self._nv,
-                                      self._config.smoothing_speed)
+                                      self._config.smoothing_speed,
+                                      self._nu)
 
     def initial_burr_height(self) -> np.ndarray:
         """Burr height (m) per bin before the pass."""
@@ -449,8 +538,8 @@ class CuttingProcess(LeafSystem):
         push = self._config.burr_contact_stiffness * max(
             0.0, delta + burr[k]) if burr[k] > 0.0 else 0.0
         nv = self._nv
-        # no chamfering force, so no implicit-damping term (S = 0)
-        terms = np.zeros(4 * nv + 9 + nv * nv)
+        # no chamfering force: no implicit-damping term (S = 0), no mean
+        terms = np.zeros(force_law_terms_size(nv, self._nu))
         terms[:nv] = J.T @ tangent
         terms[3 * nv:4 * nv] = -push * (J.T @ n1)
         terms[4 * nv + 6:4 * nv + 9] = -push * n1
@@ -460,7 +549,25 @@ class CuttingProcess(LeafSystem):
             v_t=abs(float(tangent @ xdot_p)), burr_area=0.0,
             arc_position=arc))
 
-    def _update(self, context, discrete_state):
+    def _held_mean(self, context, state, a) -> HeldMean:
+        """a^T M^-1 of every generalized force but the cutting law's and
+        the actuation, from the plant's accelerations at the sample: a^T
+        vdot - y^T (tau_law + B u_act), y = M^-1 a."""
+        accelerations, law, actuation = (port.Eval(context)
+                                          for port in self._held_ports)
+        y = np.linalg.solve(self._tool_point.mass_matrix(state), a)
+        rest = float(a @ accelerations) - float(
+            y @ (law + self._actuation_matrix @ actuation))
+        return HeldMean(y, rest, self._actuation_matrix,
+                        self._config.sample_period)
+
+    def _initialize(self, context, discrete_state):
+        # Before initialization the actuation is not yet held (the
+        # controller's is NaN), so the plant's accelerations are not
+        # defined: eq. (3) at the velocities until the sample at t = 0.
+        self._update(context, discrete_state, held_mean=False)
+
+    def _update(self, context, discrete_state, held_mean=True):
         if self._spindle_off(context):
             self._update_probing(context, discrete_state)
             return
@@ -487,12 +594,16 @@ class CuttingProcess(LeafSystem):
             burr[near[(d >= -r) & (d < r - w)]] = 0.0
         k = self._bins.index(self._leading_edge(arc))
         area = burr[k] * self._thickness[k]
-        v = inertia = None
+        v = inertia = held = None
         if self._config.implicit_damping:
             v = state[self._nq:]
             inertia = np.diag(self._tool_point.mass_matrix(state))
+        elif self._held_ports is not None and held_mean:
+            v = state[self._nq:]
+            held = self._held_mean(context, state, tangent @ J)
         process_state, terms = _sample(
             self._config, n1, tangent, delta, arc, J, xdot_p,
-            self._cut_height, area, overlap, removal, v, inertia)
+            self._cut_height, area, overlap, removal, v, inertia, self._nu,
+            held)
         discrete_state.set_value(self._state_index, process_state)
         discrete_state.set_value(self._terms_index, terms)

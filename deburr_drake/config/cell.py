@@ -249,13 +249,24 @@ class ProcessConfig:
     # (depth, directions, burr at the cutter), records the finish and
     # removes the burr this often.
     sample_period: float = 0.0025
-    # -; true: the force law adds S (v - v0), zero at each sample's joint
-    # velocities v0, that makes its derivative in v diagonal and
-    # dominant (cell.process.force_law_terms), so cenic, which treats only
-    # that diagonal implicitly, holds any g of (3) at one step per sample.
-    # False (the default): eq. (3) between samples as is (cenic then
-    # treats the off-diagonal of g a a^T explicitly: on the arm that needs
-    # two steps per 2.5 ms sample for burrs above about 1.2 mm). The term
+    # -; true (the default): along the edge the cutting law is held over
+    # each sample at its exact mean (cell.process.force_law_terms' held;
+    # math.damping): the damper g a a^T (a = J^T n2) is integrated in
+    # closed form with every other force on the arm held over the sample,
+    # the controller's torque of that sample included, so the speed along
+    # the edge at the sample's end is the damper's own whatever g h / m
+    # is, at any integrator step. cenic, which treats only the diagonal of
+    # the applied forces' d tau / dv implicitly, then holds the tallest
+    # burr at one step per 2.5 ms sample without moving the loop's limits.
+    # False: eq. (3) follows the velocities between samples (then the
+    # off-diagonal of g a a^T is explicit in cenic: two steps per sample
+    # for burrs above about 1.2 mm on the paper arm).
+    sample_mean: bool = True
+    # -; true (with sample_mean false): the force law adds S (v - v0),
+    # zero at each sample's joint velocities v0, that makes its derivative
+    # in v diagonal and dominant (cell.process.force_law_terms), so cenic,
+    # which treats only that diagonal implicitly, holds any g of (3) at one
+    # step per sample. The term
     # is a discretization device: within a step it adds h (D - g a a^T) of
     # inertia across the cut, which moves the sampled loop's limits: the
     # point mass's sliding-gain limit 1548 -> 3579 N s/m (1548 at 0.625 ms
@@ -268,9 +279,13 @@ class ProcessConfig:
 
     def validate(self):
         o = "process"
-        _require(isinstance(self.implicit_damping, bool),
+        for name in ("sample_mean", "implicit_damping"):
+            _require(isinstance(getattr(self, name), bool), f"{o}.{name}",
+                     getattr(self, name), "true or false")
+        _require(not (self.sample_mean and self.implicit_damping),
                  f"{o}.implicit_damping", self.implicit_damping,
-                 "true or false")
+                 "false while process.sample_mean is true (two treatments "
+                 "of the same damping)")
         for name in ("cutting_coefficient", "plunge_coefficient",
                      "threshold_power_force", "contact_threshold_force",
                      "burr_contact_stiffness"):

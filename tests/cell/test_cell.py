@@ -72,6 +72,11 @@ def test_process_records_finish_and_removes_swept_burr():
     v = 2e-3 * contour.tangent(p)
     process.GetInputPort("plant_state").FixValue(context,
                                                  np.concatenate([x_p, v]))
+    # process.sample_mean's inputs: nothing else acts on the point.
+    for name in ("generalized_acceleration", "applied_generalized_force",
+                 "actuation"):
+        port = process.GetInputPort(name)
+        port.FixValue(context, np.zeros(port.size()))
     burr0 = process.GetOutputPort("burr_height").Eval(context).copy()
     # One sample: records the finish, removes the swept burr, samples the
     # process state.

@@ -14,9 +14,11 @@ from deburr_drake.cell.friction import add_joint_friction
 from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.cell.models import (POINT_MASS_URL, make_kinematic_model,
                                       make_parser)
-from deburr_drake.cell.process import (cutting_force, force_law_terms,
+from deburr_drake.cell.process import (HeldMean, cutting_force,
+                                       force_law_terms,
                                        generalized_cutting_force,
                                        make_cutting_force_law)
+from deburr_drake.math.damping import held_damper_mean
 
 CONFIG = ProcessConfig(plunge_coefficient=50.0)
 
@@ -115,6 +117,7 @@ def test_cutting_force_law_is_eq3_through_the_jacobian(arm, speed):
     context = law.CreateDefaultContext()
     law.GetInputPort("plant_state").FixValue(context, state)
     law.GetInputPort("force_law_terms").FixValue(context, terms)
+    law.GetInputPort("actuation").FixValue(context, np.zeros(5))
     np.testing.assert_allclose(
         law.GetOutputPort("generalized_force").Eval(context), tau,
         rtol=1e-12, atol=1e-12)
@@ -214,3 +217,71 @@ def test_joint_friction_rejects_bad_lists_and_prismatic_joints():
         add_joint_friction(gantry, RobotConfig(
             joint_coulomb_friction=[1.0, 1.0, 1.0]))
     assert add_joint_friction(gantry, RobotConfig()) == []
+
+
+@pytest.mark.parametrize("speed", [2.4e-3, -1e-4])
+def test_held_mean_law_is_the_damper_s_mean_and_reads_the_actuation(
+        arm, speed):
+    """process.sample_mean's terms: the joint torque no longer follows v;
+    it is -a (k0 + k1 y^T B u_act) + the threshold's J^T f0, k0, k1 the
+    damper's exact mean (math.damping) with c = g outside the direction's
+    ramp and g + P / v_s inside it; the world force for the sensor stays
+    eq. (3) at the velocities; the C++ law and numpy agree."""
+    frame = arm.GetFrameByName("tool_tip")
+    x = _arm_state(arm, 4)
+    _, _, J = ToolPoint(arm, frame).evaluate(x)
+    tangent, n1 = np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0])
+    v0 = np.linalg.lstsq(J, speed * tangent + 1e-4 * n1, rcond=None)[0]
+    context = arm.CreateDefaultContext()
+    arm.SetPositions(context, x[:5])
+    M = arm.CalcMassMatrix(context)
+    a = J.T @ tangent
+    y = np.linalg.solve(M, a)
+    B = np.diag([1.0, 2.0, 1.0, 0.5, 1.0])[:, :4]  # nu = 4, any B
+    held = HeldMean(y, 0.7, B, 0.0025)
+    terms = force_law_terms(CONFIG, n1, tangent, 5e-4, J, J @ v0,
+                            cut_height=0.002, v=v0, nu=4, held=held)
+    plain = force_law_terms(CONFIG, n1, tangent, 5e-4, J, J @ v0,
+                            cut_height=0.002, nu=4)
+    u_act = np.array([3.0, -1.0, 0.5, 2.0])
+    tau, f = generalized_cutting_force(terms, v0, CONFIG.smoothing_speed,
+                                       u_act)
+    tau_v, f_v = generalized_cutting_force(terms, 3 * v0,
+                                           CONFIG.smoothing_speed, u_act)
+    np.testing.assert_allclose(tau_v, tau, rtol=1e-12)  # not v's
+    _, f_plain = generalized_cutting_force(plain, v0,
+                                           CONFIG.smoothing_speed, u_act)
+    np.testing.assert_allclose(f, f_plain, rtol=1e-12)
+    g = CONFIG.cutting_coefficient * 5e-4 * 0.002
+    power = CONFIG.threshold_power_force + CONFIG.plunge_coefficient * 1e-4
+    u = a @ v0
+    if abs(u) < CONFIG.smoothing_speed:
+        c, offset = g + power / CONFIG.smoothing_speed, 0.0
+    else:
+        c, offset = g, np.sign(u) * power
+    threshold = -CONFIG.contact_threshold_force * (J.T @ n1)
+    k0, k1 = held_damper_mean(c, offset, u, a @ y, 0.7 + y @ threshold,
+                              0.0025)
+    mean = k0 + k1 * (y @ B @ u_act)
+    np.testing.assert_allclose(tau, -mean * a + threshold, rtol=1e-9)
+    law = make_cutting_force_law(5, 5, CONFIG.smoothing_speed, nu=4)
+    context = law.CreateDefaultContext()
+    law.GetInputPort("plant_state").FixValue(
+        context, np.concatenate([x[:5], v0]))
+    law.GetInputPort("force_law_terms").FixValue(context, terms)
+    law.GetInputPort("actuation").FixValue(context, u_act)
+    np.testing.assert_allclose(
+        law.GetOutputPort("generalized_force").Eval(context), tau,
+        rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(law.GetOutputPort("tool_force").Eval(context),
+                               f, rtol=1e-12, atol=1e-12)
+
+
+def test_sample_mean_and_implicit_damping_exclude_each_other():
+    with pytest.raises(ConfigError, match=r"^process\.implicit_damping = "
+                       r"True is invalid: allowed false while "
+                       r"process\.sample_mean is true"):
+        ProcessConfig(implicit_damping=True).validate()
+    ProcessConfig(implicit_damping=True, sample_mean=False).validate()
+    with pytest.raises(ConfigError, match=r"^process\.sample_mean = 'yes'"):
+        ProcessConfig(sample_mean="yes").validate()

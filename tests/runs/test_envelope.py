@@ -95,7 +95,7 @@ def test_burr_scenario_places_the_burr_ahead(paper):
 
 def _point_on_three_joints(builder, mass):
     """A continuous plant: a point of ``mass`` on three prismatic joints
-    along x, y, z (massless links), no gravity."""
+    along x, y, z (massless links), each with an actuator, no gravity."""
     plant, _ = AddMultibodyPlant(MultibodyPlantConfig(time_step=0.0),
                                  builder)
     parent = plant.world_body()
@@ -103,8 +103,9 @@ def _point_on_three_joints(builder, mass):
         body = plant.AddRigidBody(f"body{i}", SpatialInertia.
                                   SolidSphereWithMass(
                                       mass if i == 2 else 1e-6, 0.01))
-        plant.AddJoint(PrismaticJoint(f"joint{i}", parent.body_frame(),
-                                      body.body_frame(), axis))
+        joint = plant.AddJoint(PrismaticJoint(
+            f"joint{i}", parent.body_frame(), body.body_frame(), axis))
+        plant.AddJointActuator(f"actuator{i}", joint)
         parent = body
     plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
     plant.Finalize()
@@ -136,6 +137,7 @@ def _rank_one_damper_velocities(direction, *, g=3000.0, mass=1.0,
     simulator = _fixed_cenic(builder.Build(), h)
     context = plant.GetMyMutableContextFromRoot(
         simulator.get_mutable_context())
+    plant.get_actuation_input_port().FixValue(context, np.zeros(3))
     plant.SetVelocities(context, 1e-3 * a)
     speeds = []
     for k in range(1, 6):
@@ -163,12 +165,15 @@ def test_cenic_treats_only_the_diagonal_of_an_applied_damping_implicitly():
                                -1.5 / 2.25, rtol=1e-3)
 
 
-def _cutting_law_velocities(implicit, h=0.0025):
+def _cutting_law_velocities(treatment, h=0.0025, push=0.0):
     """Speed along a = (1, 1, 1)/sqrt(3) of a 1 kg point on three
-    prismatic joints under the cutting law alone (g = 3000 N s/m, h g / m
-    = 7.5, no threshold forces), after each of 4 fixed cenic steps of h,
-    the law's terms sampled at each step's start as the process does."""
-    from deburr_drake.cell.process import (force_law_terms,
+    prismatic joints under the cutting law (g = 3000 N s/m, h g / m =
+    7.5, no threshold forces) and a constant actuation ``push`` (N) along
+    a, after each of 4 fixed cenic steps of h, the law's terms sampled at
+    each step's start as the process does: ``treatment`` "plain" (eq. (3)
+    between samples), "implicit" (process.implicit_damping) or "held"
+    (process.sample_mean: nothing but the push acts, so the rest is 0)."""
+    from deburr_drake.cell.process import (HeldMean, force_law_terms,
                                            make_cutting_force_law)
     from deburr_drake.config import ProcessConfig
     builder = DiagramBuilder()
@@ -183,19 +188,28 @@ def _cutting_law_velocities(implicit, h=0.0025):
     builder.Connect(law.GetOutputPort("generalized_force"),
                     plant.get_applied_generalized_force_input_port())
     terms_port = builder.ExportInput(law.GetInputPort("force_law_terms"))
+    pushes = [builder.ExportInput(law.GetInputPort("actuation")),
+              builder.ExportInput(plant.get_actuation_input_port())]
     diagram = builder.Build()
     simulator = _fixed_cenic(diagram, h)
     root = simulator.get_mutable_context()
     context = plant.GetMyMutableContextFromRoot(root)
     a = np.ones(3) / np.sqrt(3.0)
     n1 = np.array([1.0, -1.0, 0.0]) / np.sqrt(2.0)
+    for port in pushes:  # the law reads what drives the plant
+        diagram.get_input_port(port).FixValue(root, push * a)
     plant.SetVelocities(context, 0.05 * a)
     speeds = []
     for k in range(1, 5):
         v = plant.GetVelocities(context)
+        held = None
+        if treatment == "held":
+            M = plant.CalcMassMatrix(context)
+            held = HeldMean(np.linalg.solve(M, a), 0.0,
+                            plant.MakeActuationMatrix(), h)
         diagram.get_input_port(terms_port).FixValue(root, force_law_terms(
             config, n1, a, 5e-4, np.eye(3), v, cut_height=0.002,
-            v=v if implicit else None))
+            v=v if treatment != "plain" else None, held=held))
         simulator.AdvanceTo(k * h)
         speeds.append(plant.GetVelocities(context) @ a)
     return np.array(speeds)
@@ -206,11 +220,32 @@ def test_cutting_laws_implicit_damping_holds_any_g_at_one_cenic_step():
     alternates and grows in cenic, -1.14 per step (as the rank-one damper
     above); with process.implicit_damping's term it decays as implicit
     Euler, 1 / (1 + h g / m) (here D = g I exactly)."""
-    plain = _cutting_law_velocities(False)
+    plain = _cutting_law_velocities("plain")
     np.testing.assert_allclose(plain[1:] / plain[:-1], -4.0 / 3.5,
                                rtol=1e-3)
-    held = _cutting_law_velocities(True)
+    held = _cutting_law_velocities("implicit")
     np.testing.assert_allclose(held[1:] / held[:-1], 1 / 8.5, rtol=1e-3)
+
+
+def test_cutting_laws_held_mean_is_the_exact_damper_at_one_cenic_step():
+    """process.sample_mean at h g / m = 7.5 along (1, 1, 1): in cenic, one
+    step per sample, the speed follows the damper's closed form exactly,
+    exp(-7.5) per step with nothing else acting; with a 6 N push on the
+    actuators (the held mean takes the sample's actuation) it settles at
+    push / g = 2 mm/s, as the continuous damper does."""
+    from deburr_drake.math.damping import held_damper_end_speed
+    free = _cutting_law_velocities("held")
+    # (after two steps the speed, 1.5e-8 m/s, is at the solver's
+    # tolerance)
+    np.testing.assert_allclose(free[:2] / [0.05, free[0]], np.exp(-7.5),
+                               rtol=1e-4)
+    pushed = _cutting_law_velocities("held", push=6.0)
+    u, expected = 0.05, []
+    for _ in range(4):
+        u = held_damper_end_speed(3000.0, 0.0, u, 1.0, 6.0, 0.0025)
+        expected.append(u)
+    np.testing.assert_allclose(pushed, expected, rtol=1e-6, atol=1e-9)
+    assert pushed[-1] == pytest.approx(6.0 / 3000.0, rel=1e-3)
 
 
 @pytest.mark.slow
