@@ -23,14 +23,17 @@ file gives or ``robot.reflected_inertia``):
   lightest task mass over T and below arm5's 3.9 N / 4 mm/s; at least
   4 mm/s, rounded up (1 mm/s steps below 10 mm/s, 5 mm/s above);
 - the plant's integration step (``simulation.max_step``, only ever
-  lowered, to a whole fraction of T): cenic treats the cutting force's
-  damping g a a^T explicitly but for its diagonal, and on a light arm it
-  oscillates once g h / m exceeds about 4-5 (arm6: 11,700 N s/m at one
-  2.5 ms step, 20,500 at two; the Panda at two steps and 1.6 kg tripped
-  the tool-force guard on the first burr). The step keeps g_max h / m
-  below :data:`STEP_RATE` (2.5), g_max = k_c (delta* x engagement + the
-  tallest burr's area): arm5 and arm6 two steps per sample, as written
-  (``process.implicit_damping`` stays off: it moves the loop's limits);
+  lowered, to a whole fraction of T), only with ``process.sample_mean``
+  false (with it, the default, the cutting damping is integrated exactly
+  over the sample at any step): cenic treats the cutting force's damping
+  g a a^T explicitly but for its diagonal, and on a light arm eq. (3)
+  between samples oscillates once g h / m exceeds about 4-5 (arm6:
+  11,700 N s/m at one 2.5 ms step, 20,500 at two; the Panda at two steps
+  and 1.6 kg tripped the tool-force guard on the first burr). The step
+  keeps g_max h / m below :data:`STEP_RATE` (2.5), g_max = k_c (delta* x
+  engagement + the tallest burr's area): arm5 and arm6 two steps per
+  sample (``process.implicit_damping`` stays off: it moves the loop's
+  limits);
 - more than 6 joints: the null-space posture PD keeps 200 N m/rad and
   10 N m s/rad unless its damping d (I - J^T J^T+) alone takes more than
   half the rate's limit, then d to that half and k = 20 d;
@@ -228,7 +231,8 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
         scenario.task.desired_depth * scenario.tool.engagement
         + max([b.height * b.thickness for b in p.burrs], default=0.0))
     max_step = scenario.simulation.max_step
-    if period > 0 and g_max > 0:
+    # With process.sample_mean the damping is exact at any step.
+    if period > 0 and g_max > 0 and not p.sample_mean:
         steps = max(1, math.ceil(g_max * period / (STEP_RATE * mass)
                                  * (1 - 5e-3)))
         max_step = min(max_step, period / steps)

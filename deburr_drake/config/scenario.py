@@ -34,8 +34,8 @@ class SimulationConfig:
     accuracy: float = 1.0e-4  # -, the integrator's error-control accuracy
     # s. cenic treats only the diagonal of the applied forces' d tau / dv
     # implicitly; the cutting force's g a a^T (a = J^T n2) is off-diagonal
-    # on an arm, and process.implicit_damping makes the law's derivative
-    # diagonal, so the paper scenarios take one step per 2.5 ms sample
+    # on an arm, and process.sample_mean holds it over each sample at its
+    # exact mean, so the paper scenarios take one step per 2.5 ms sample
     # (paper_6dof two, for its depth's accuracy; docs/numerics.md).
     max_step: float = 0.01
     # -; false: fixed steps of max_step (accuracy unused). With the 2.5 ms

@@ -89,3 +89,22 @@ def test_slope_bound_designed_from_the_lightest_task_mass():
     s.controller.fuzzy.max_slope = 1234.0
     assert resolve_slope_bound(s) is None
     assert s.controller.fuzzy.max_slope == 1234.0
+
+
+def test_the_step_is_lowered_only_for_eq3_between_samples():
+    """With process.sample_mean (the default) the cutting damping is exact
+    at any step: the design leaves paper's one 2.5 ms step per sample.
+    With eq. (3) between samples it keeps g_max h / m below STEP_RATE:
+    arm5 (g_max = k_c (0.5 mm x 2 mm + 1 mm x 2 mm) = 9900 N s/m, 7.03 kg)
+    two steps per sample."""
+    from deburr_drake.cell.gains import STEP_RATE
+    scenario = load_scenario("paper")
+    assert scenario.simulation.max_step == 0.0025
+    assert design_gains(scenario).max_step == 0.0025
+    eq3 = load_scenario("paper", text="process: {sample_mean: false}")
+    design = design_gains(eq3)
+    assert design.max_step == pytest.approx(0.00125)
+    g_max = design.numbers["cutting_damping_max_Ns_per_m"]
+    mass = design.numbers["lightest_task_mass_kg"]
+    assert g_max * design.max_step / mass < STEP_RATE
+    assert g_max * 0.0025 / mass > STEP_RATE
