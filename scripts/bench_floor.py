@@ -31,6 +31,7 @@ from deburr_drake.cell.plant import add_cell_plant
 from deburr_drake.cell.edge import make_contour
 from deburr_drake.config import load_scenario
 from deburr_drake.control.kinematics import ToolPoint
+from deburr_drake.runs.simulation import set_monitor
 from deburr_drake.cell.process import (HeldMean, force_law_terms,
                                        make_cutting_force_law)
 
@@ -102,6 +103,8 @@ def make_floor_simulator(step=None, sensor=True):
     ApplySimulatorConfig(SimulatorConfig(
         integration_scheme="cenic", max_step_size=step,
         use_error_control=False), simulator)
+    # the plant's cache fresh after each step, as in the cell's simulators
+    set_monitor(simulator, diagram, "cenic")
     simulator.Initialize()
     return simulator, plant
 

@@ -34,6 +34,7 @@ from deburr_drake.analysis.operating_point import (OperatingPoint,
                                                    transfer_state)
 from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import Scenario
+from deburr_drake.runs.simulation import set_monitor
 
 __all__ = ["StateEntry", "period_map", "spectral_radius", "SampledLoop",
            "sampled_loop", "cell_map_entries", "simulator_config",
@@ -104,6 +105,8 @@ def _one_period(diagram, context0, entries, z, period, config):
     if config.use_error_control:
         simulator.get_mutable_integrator().set_target_accuracy(
             config.accuracy)
+    # (with cenic, the plant's cache fresh after each step, as in a run)
+    set_monitor(simulator, diagram, config.integration_scheme)
     simulator.Initialize(InitializeParams(suppress_initialization_events=True))
     simulator.AdvanceTo(context0.get_time() + period)
     return _read(entries, diagram, context)

@@ -68,7 +68,52 @@ class RunLog:
                 for b, v in blocks.items()}
 
 
-def make_simulator(diagram: Diagram, scenario: Scenario) -> Simulator:
+def plant_cache_refresh(diagram: Diagram, integrator: str):
+    """A simulator monitor's first duty with ``cenic`` (None otherwise):
+    mark the plant's continuous state changed after every step.
+
+    Drake 1.51.1's CENIC leaves the plant's position and velocity
+    kinematics cached at the step's start when it writes the step's end
+    state: after AdvanceTo, body poses, contact results, reaction forces
+    and accelerations evaluated on the simulator's context are one step
+    old while the state output is new (runge_kutta3 does not;
+    tests/runs/test_simulation.py pins both). Every sample's reader of
+    the plant's outputs (the force sensor's weld reaction, the cutting
+    process's held mean) would see the state one step before the
+    sample. Taking mutable access to the continuous state invalidates
+    what depends on it; the kinematics are then computed once more per
+    step, for the state they describe."""
+    if integrator != "cenic" or not diagram.HasSubsystemNamed("plant"):
+        return None
+    plant = diagram.GetSubsystemByName("plant")
+
+    def refresh(root_context):
+        plant.GetMyMutableContextFromRoot(
+            root_context).get_mutable_continuous_state_vector()
+    return refresh
+
+
+def set_monitor(simulator: Simulator, diagram: Diagram, integrator: str,
+                monitor: Optional[Callable] = None):
+    """Installs ``monitor(root_context) -> EventStatus`` (or none) after
+    :func:`plant_cache_refresh`'s refresh, which every simulator of the
+    cell needs with ``cenic``."""
+    refresh = plant_cache_refresh(diagram, integrator)
+    if refresh is None and monitor is None:
+        return
+
+    def monitored(root_context):
+        if refresh is not None:
+            refresh(root_context)
+        return (monitor(root_context) if monitor is not None
+                else EventStatus.Succeeded())
+    simulator.set_monitor(monitored)
+
+
+def make_simulator(diagram: Diagram, scenario: Scenario, *,
+                   monitor: Optional[Callable] = None) -> Simulator:
+    """The scenario's integrator on ``diagram``, with :func:`set_monitor`'s
+    cache refresh and ``monitor``."""
     sim = scenario.simulation
     simulator = Simulator(diagram)
     ApplySimulatorConfig(SimulatorConfig(
@@ -77,6 +122,7 @@ def make_simulator(diagram: Diagram, scenario: Scenario) -> Simulator:
         simulator)
     if sim.error_control:
         simulator.get_mutable_integrator().set_target_accuracy(sim.accuracy)
+    set_monitor(simulator, diagram, sim.integrator, monitor)
     return simulator
 
 
@@ -176,16 +222,14 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
     if not (progress_interval > 0 and np.isfinite(progress_interval)):
         raise ValueError(f"progress_interval = {progress_interval!r} is "
                          "invalid: allowed a finite number > 0")
-    simulator = make_simulator(diagram, scenario)
-    context = simulator.get_mutable_context()
     passes = scenario.simulation.stop_after_passes
     generator = diagram.GetSubsystemByName("command_generator")
-    generator_context = generator.GetMyContextFromRoot(context)
     end = generator.start_arc_position + passes * generator.contour.length
 
     def monitor(root_context):
         # Called after every step, always with this simulator's context.
-        if passes > 0 and generator.arc_progress(generator_context) >= end:
+        if passes > 0 and generator.arc_progress(
+                generator.GetMyContextFromRoot(root_context)) >= end:
             return EventStatus.ReachedTermination(
                 generator, "completed the pass")
         if should_stop is not None:
@@ -194,8 +238,11 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
                 return EventStatus.ReachedTermination(diagram, reason)
         return EventStatus.Succeeded()
 
-    if passes > 0 or should_stop is not None:
-        simulator.set_monitor(monitor)
+    simulator = make_simulator(
+        diagram, scenario,
+        monitor=monitor if passes > 0 or should_stop is not None else None)
+    context = simulator.get_mutable_context()
+    generator_context = generator.GetMyContextFromRoot(context)
     diagram.SetRandomContext(
         context, RandomGenerator(scenario.sensor.noise_seed))
     if initial_state is not None:
