@@ -11,6 +11,11 @@ What an 80 s pass costs at best on this host, whatever the controller is
 written in. Prints seconds per simulated second and per 80 s pass.
 
     python scripts/bench_floor.py [--duration 6] [--step 0.0025]
+        [--python-systems N]
+
+--python-systems N adds N idle Python systems, each a periodic discrete
+update at 2.5 ms that reads the plant's state: what the dispatch of the
+cell's Python systems costs before they compute anything.
 """
 
 import argparse
@@ -21,7 +26,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
                                       SimulatorConfig)
 from pydrake.systems.controllers import PidController
-from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import (Adder, ConstantVectorSource,
                                         ZeroOrderHold)
 
@@ -36,9 +41,25 @@ from deburr_drake.cell.process import (HeldMean, force_law_terms,
                                        make_cutting_force_law)
 
 
-def make_floor_simulator(step=None, sensor=True):
+class _IdleSampler(LeafSystem):
+    """A Python system that does nothing but what every one of the cell's
+    does each sample: a periodic discrete update that reads the plant's
+    state port and writes one state (the price of the dispatch alone)."""
+
+    def __init__(self, nx, period):
+        super().__init__()
+        self._state = self.DeclareVectorInputPort("plant_state", nx)
+        self.DeclareDiscreteState(1)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
+
+    def _update(self, context, discrete_state):
+        discrete_state.set_value(0, self._state.Eval(context)[:1])
+
+
+def make_floor_simulator(step=None, sensor=True, python_systems=0):
     """(simulator, plant) of the floor, initialized; ``step`` (s) the fixed
-    cenic step, the control period by default."""
+    cenic step, the control period by default; ``python_systems`` idle
+    Python samplers (:class:`_IdleSampler`) added beside the physics."""
     scenario = load_scenario("paper")
     T = scenario.controller.control_period
     builder = DiagramBuilder()
@@ -94,6 +115,11 @@ def make_floor_simulator(step=None, sensor=True):
         sample = builder.AddSystem(ZeroOrderHold(
             T, AbstractValue.Make(reactions.Allocate().get_value())))
         builder.Connect(reactions, sample.get_input_port())
+    for i in range(python_systems):
+        idle = builder.AddNamedSystem(f"idle_{i}", _IdleSampler(
+            plant.num_multibody_states(), T))
+        builder.Connect(plant.get_state_output_port(),
+                        idle.get_input_port())
     diagram = builder.Build()
 
     step = T if step is None else step
@@ -117,9 +143,13 @@ def main():
                     "period, 2.5 ms)")
     ap.add_argument("--sensor", action=argparse.BooleanOptionalAction,
                     default=True, help="sample the reaction forces")
+    ap.add_argument("--python-systems", type=int, default=0,
+                    help="idle Python systems sampled every 2.5 ms beside "
+                    "the physics (the cost of their dispatch alone)")
     args = ap.parse_args()
     try:
-        simulator, plant = make_floor_simulator(args.step, args.sensor)
+        simulator, plant = make_floor_simulator(args.step, args.sensor,
+                                                args.python_systems)
     except ValueError as e:
         ap.error(str(e))
     step = simulator.get_integrator().get_maximum_step_size()
@@ -136,7 +166,9 @@ def main():
                   for i in range(results.num_hydroelastic_contacts()))
     print(f"contact force at the end: {contact:.2f} N")
     sensor = "with" if args.sensor else "without"
-    print(f"physics only, {1e3 * step:g} ms steps, {sensor} the sampled "
+    extra = (f", {args.python_systems} idle Python systems"
+             if args.python_systems else "")
+    print(f"physics only{extra}, {1e3 * step:g} ms steps, {sensor} the sampled "
           f"reaction forces: {steps / args.duration:.0f} steps per "
           f"simulated second, {1e3 * wall / steps:.3f} ms per step, "
           f"{wall / args.duration:.3f} s per simulated second; an 80 s "
