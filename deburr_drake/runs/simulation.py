@@ -227,9 +227,9 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
     end = generator.start_arc_position + passes * generator.contour.length
 
     def monitor(root_context):
-        # Called after every step, always with this simulator's context.
-        if passes > 0 and generator.arc_progress(
-                generator.GetMyContextFromRoot(root_context)) >= end:
+        # Called after every step, always with this simulator's context
+        # (generator_context is bound below, before the first step).
+        if passes > 0 and generator.arc_progress(generator_context) >= end:
             return EventStatus.ReachedTermination(
                 generator, "completed the pass")
         if should_stop is not None:
