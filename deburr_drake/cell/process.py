@@ -238,6 +238,17 @@ _STATE_BLOCKS = ("delta", "engagement", "g", "f_t", "f_threshold", "v_t",
 assert PROCESS_STATE.blocks == _STATE_BLOCKS
 
 
+def _edge_damper(config: ProcessConfig, on, g, power, u):
+    """(c, F_0): eq. (3)'s force along the edge about the speed u (m/s)
+    as a damper with an offset, F = c u + F_0 (c = -dF/du >= 0, the law's
+    damping there): inside the direction's ramp (|u| < v_s) c = on (g + P
+    / v_s) and F_0 = 0, else c = on g and F_0 = on P sign(u), P the
+    threshold power force plus the plunge term."""
+    if abs(u) < config.smoothing_speed:
+        return on * (g + power / config.smoothing_speed), 0.0
+    return on * g, math.copysign(on * power, u)
+
+
 def _sample(config: ProcessConfig, n1, tangent, delta, arc, J, xdot_p,
             cut_height, burr_area, overlap, removal, v, inertia, nu,
             held=None):
@@ -266,10 +277,7 @@ def _sample(config: ProcessConfig, n1, tangent, delta, arc, J, xdot_p,
     if held is not None:
         # The law holds the exact mean of F over the sample (A, S zero).
         u = float(a @ v)
-        if abs(u) < config.smoothing_speed:
-            c, offset = on * (g + power / config.smoothing_speed), 0.0
-        else:
-            c, offset = on * g, math.copysign(on * power, u)
+        c, offset = _edge_damper(config, on, g, power, u)
         y = held.y
         k0, k1 = held_damper_mean(c, offset, u, float(a @ y),
                                   held.rest + float(y @ b), held.period)
@@ -281,9 +289,7 @@ def _sample(config: ProcessConfig, n1, tangent, delta, arc, J, xdot_p,
     if v is not None:
         # S is symmetric: its column-major and row-major layouts agree.
         S = terms[k + 9:k + 9 + nv * nv].reshape(nv, nv)
-        u = float(a @ v)
-        c = on * g + (on * power / config.smoothing_speed
-                      if abs(u) < config.smoothing_speed else 0.0)
+        c, _ = _edge_damper(config, on, g, power, float(a @ v))
         abs_a = np.abs(a)
         root_m = np.ones(nv) if inertia is None else np.sqrt(inertia)
         np.multiply.outer(c * a, a, out=S)
