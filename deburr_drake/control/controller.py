@@ -134,10 +134,10 @@ def HybridController_(T):
         - ``desired_normal_force`` (1, N): ||f_nd hat|| from the estimator.
         - ``fuzzy_weight`` (1; only with ``fuzzy_weight_input=True``): w
           scales the fuzzy compensator's u_f and its adaptation rates
-          (35); theta is not adapted while w <= 0 (touch probing: the travel between touches is not the
-          cutting the rules learn; after it w ramps in, so weights learned
-          on an earlier part do not push the tool along before the cut is
-          established).
+          (35); theta is not adapted while w <= 0 (touch probing: the
+          travel between touches is not the cutting the rules learn; after
+          it w ramps in, so weights learned on an earlier part do not push
+          the tool along before the cut is established).
         - ``actuation`` (nu, N or N m): actuator efforts.
         - ``diagnostics`` (CONTROLLER_DIAGNOSTICS layout).
         - Continuous state: delta_d (m), then theta_k ((2 Upsilon + 1)^2
