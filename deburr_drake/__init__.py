@@ -48,8 +48,14 @@ import importlib
 
 #: Each module's public names, in the order of the docstring above.
 _MODULES = {
-    "config": ("load_scenario", "Scenario", "ConfigError", "scenario_names",
-               "set_field", "get_field"),
+    "config": (
+        "load_scenario",
+        "Scenario",
+        "ConfigError",
+        "scenario_names",
+        "set_field",
+        "get_field",
+    ),
     "cell.diagram": ("make_deburring_diagram", "LOGGED"),
     "cell.edge": ("make_contour",),
     "runs.simulation": ("simulate", "RunLog", "make_simulator"),
@@ -68,12 +74,16 @@ _MODULES = {
     "cell.sensor": ("ForceSensor",),
     "cell.process": ("CuttingProcess",),
     "math.geometry": ("CircularContour", "StraightContour", "ProfileContour"),
-    "control.layout": ("CHAMFER_STATE", "CONTROLLER_DIAGNOSTICS",
-                       "COMMAND_STATE"),
+    "control.layout": (
+        "CHAMFER_STATE",
+        "CONTROLLER_DIAGNOSTICS",
+        "COMMAND_STATE",
+    ),
 }
 #: Public name -> the module that defines it.
-_EXPORTS = {name: module for module, names in _MODULES.items()
-            for name in names}
+_EXPORTS = {
+    name: module for module, names in _MODULES.items() for name in names
+}
 
 __all__ = list(_EXPORTS)
 
@@ -81,8 +91,7 @@ __all__ = list(_EXPORTS)
 def __getattr__(name):
     module = _EXPORTS.get(name)
     if module is None:
-        raise AttributeError(f"module 'deburr_drake' has no attribute "
-                             f"{name!r}")
+        raise AttributeError(f"module 'deburr_drake' has no attribute {name!r}")
     value = getattr(importlib.import_module(f"deburr_drake.{module}"), name)
     globals()[name] = value
     return value

@@ -9,10 +9,9 @@ the package (autodoc), so a module or a field added later is documented
 without touching the docs.
 """
 
-import importlib
+from pathlib import Path
 import pkgutil
 import sys
-from pathlib import Path
 
 DOCS = Path(__file__).resolve().parent
 sys.path.insert(0, str(DOCS.parent))
@@ -58,8 +57,7 @@ nitpick_ignore_regex = [(r"py:.*", r"(?s).*")]
 def _modules():
     """Every module of the package, by layer (package order)."""
     names = []
-    for info in pkgutil.walk_packages(deburr_drake.__path__,
-                                      "deburr_drake."):
+    for info in pkgutil.walk_packages(deburr_drake.__path__, "deburr_drake."):
         names.append(info.name)
     return sorted(names)
 
@@ -86,20 +84,32 @@ def write_api_pages():
     api.mkdir(exist_ok=True)
     modules = _modules()
     wanted = set()
-    index = ["# API reference", "",
-             "Generated from the docstrings of every module (autodoc). The "
-             "public names are importable from the package itself "
-             "(`import deburr_drake as dd`; [Python API](../python-api.md)); "
-             "the modules are listed by layer, top to bottom as in "
-             "[What is where](../layout.md) read upwards.", ""]
-    top = ["# `deburr_drake`", "", "```{eval-rst}",
-           ".. automodule:: deburr_drake", "   :no-members:", "```", ""]
+    index = [
+        "# API reference",
+        "",
+        "Generated from the docstrings of every module (autodoc). The "
+        "public names are importable from the package itself "
+        "(`import deburr_drake as dd`; [Python API](../python-api.md)); "
+        "the modules are listed by layer, top to bottom as in "
+        "[What is where](../layout.md) read upwards.",
+        "",
+    ]
+    top = [
+        "# `deburr_drake`",
+        "",
+        "```{eval-rst}",
+        ".. automodule:: deburr_drake",
+        "   :no-members:",
+        "```",
+        "",
+    ]
     _write(api / "deburr_drake.md", "\n".join(top))
     wanted.add("deburr_drake.md")
     toc = ["deburr_drake"]
     for title, package in LAYERS:
-        members = [m for m in modules
-                   if m == package or m.startswith(package + ".")]
+        members = [
+            m for m in modules if m == package or m.startswith(package + ".")
+        ]
         if not members:
             continue
         index += [f"## {title}", ""]
@@ -108,9 +118,19 @@ def write_api_pages():
             wanted.add(page)
             toc.append(name)
             index.append(f"- [`{name}`]({page})")
-            _write(api / page, "\n".join([
-                f"# `{name}`", "", "```{eval-rst}",
-                f".. automodule:: {name}", "```", ""]))
+            _write(
+                api / page,
+                "\n".join(
+                    [
+                        f"# `{name}`",
+                        "",
+                        "```{eval-rst}",
+                        f".. automodule:: {name}",
+                        "```",
+                        "",
+                    ]
+                ),
+            )
         index.append("")
     index += ["```{toctree}", ":hidden:", ""] + toc + ["```", ""]
     _write(api / "index.md", "\n".join(index))

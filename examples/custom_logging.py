@@ -13,27 +13,36 @@ loop (``command_generator.feed``) and the arm's joint state
 import argparse
 import os
 
-import numpy as np
 from matplotlib.figure import Figure
+import numpy as np
 
 import deburr_drake as dd
 
-EXTRA_LOGS = {"feed": ("command_generator", "feed"),
-              "joints": ("plant", "state")}
+EXTRA_LOGS = {
+    "feed": ("command_generator", "feed"),
+    "joints": ("plant", "state"),
+}
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenario", default="paper")
-    parser.add_argument("--duration", type=float, default=float(
-        os.environ.get("DEBURR_EXAMPLE_DURATION", 4.0)),
-        help="simulated seconds (default 4)")
-    parser.add_argument("--out", default="out/custom_logging.png",
-                        help="where to write the plot")
+    parser.add_argument(
+        "--duration",
+        type=float,
+        default=float(os.environ.get("DEBURR_EXAMPLE_DURATION", 4.0)),
+        help="simulated seconds (default 4)",
+    )
+    parser.add_argument(
+        "--out",
+        default="out/custom_logging.png",
+        help="where to write the plot",
+    )
     args = parser.parse_args(argv)
     scenario = dd.load_scenario(args.scenario)
-    diagram = dd.make_deburring_diagram(scenario=scenario,
-                                        extra_logs=EXTRA_LOGS)
+    diagram = dd.make_deburring_diagram(
+        scenario=scenario, extra_logs=EXTRA_LOGS
+    )
     log = dd.simulate(diagram, scenario, duration=args.duration)
 
     feed, joints, chamfer = log["feed"], log["joints"], log["chamfer"]
@@ -42,15 +51,21 @@ def main(argv=None):
     speed = np.einsum("ij,ij->i", chamfer["xdot_p"], chamfer["n2"])
     nq = joints["value"].shape[1] // 2
     late = feed["t"] >= 0.5 * args.duration
-    print(f"logged {len(feed['t'])} samples of 'feed' and "
-          f"{joints['value'].shape} of 'joints' (q and v of {nq} joints)")
-    print(f"mean commanded feed over the second half: "
-          f"{np.mean(feed['value'][late, 0]) * 1e3:.3f} mm/s; "
-          f"tool speed along the edge "
-          f"{np.mean(speed[chamfer['t'] >= 0.5 * args.duration]) * 1e3:.3f}"
-          " mm/s")
-    print("joint travel (rad): " + ", ".join(
-        f"{np.ptp(joints['value'][:, i]):.4f}" for i in range(nq)))
+    print(
+        f"logged {len(feed['t'])} samples of 'feed' and "
+        f"{joints['value'].shape} of 'joints' (q and v of {nq} joints)"
+    )
+    print(
+        f"mean commanded feed over the second half: "
+        f"{np.mean(feed['value'][late, 0]) * 1e3:.3f} mm/s; "
+        f"tool speed along the edge "
+        f"{np.mean(speed[chamfer['t'] >= 0.5 * args.duration]) * 1e3:.3f}"
+        " mm/s"
+    )
+    print(
+        "joint travel (rad): "
+        + ", ".join(f"{np.ptp(joints['value'][:, i]):.4f}" for i in range(nq))
+    )
 
     fig = Figure(figsize=(8, 5))
     ax0, ax1 = fig.subplots(2, 1, sharex=True)

@@ -22,8 +22,11 @@ import os
 import numpy as np
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
-from pydrake.multibody.tree import (FixedOffsetFrame, PrismaticJoint,
-                                    SpatialInertia)
+from pydrake.multibody.tree import (
+    FixedOffsetFrame,
+    PrismaticJoint,
+    SpatialInertia,
+)
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import LogVectorOutput
@@ -33,8 +36,9 @@ import deburr_drake as dd
 
 def add_cartesian_tool(plant, mass=2.0):
     """A point-mass tool on x, y, z prismatic joints; returns its body."""
-    tool = plant.AddRigidBody("tool", SpatialInertia.SolidSphereWithMass(
-        mass, 0.02))
+    tool = plant.AddRigidBody(
+        "tool", SpatialInertia.SolidSphereWithMass(mass, 0.02)
+    )
     parent = plant.world_frame()
     for axis, name in zip(np.eye(3), "xyz"):
         if name == "z":
@@ -42,13 +46,16 @@ def add_cartesian_tool(plant, mass=2.0):
         else:
             child = plant.AddRigidBody(
                 f"{name}_carriage",
-                SpatialInertia.SolidSphereWithMass(0.5, 0.02)).body_frame()
-        joint = plant.AddJoint(PrismaticJoint(f"{name}_slide", parent, child,
-                                              axis))
+                SpatialInertia.SolidSphereWithMass(0.5, 0.02),
+            ).body_frame()
+        joint = plant.AddJoint(
+            PrismaticJoint(f"{name}_slide", parent, child, axis)
+        )
         plant.AddJointActuator(f"{name}_drive", joint)
         parent = child
-    plant.AddFrame(FixedOffsetFrame("tool_tip", tool.body_frame(),
-                                    RigidTransform()))
+    plant.AddFrame(
+        FixedOffsetFrame("tool_tip", tool.body_frame(), RigidTransform())
+    )
     return tool
 
 
@@ -59,9 +66,17 @@ class CuttingWall(LeafSystem):
     outputs ``generalized_force`` (3, N) and ``tool_force`` (3, N, world).
     """
 
-    def __init__(self, contour, *, c0=2.0, stiffness=1.0e4, damping=50.0,
-                 threshold=2.0, cutting_damping=1500.0,
-                 smoothing_speed=5e-4):
+    def __init__(
+        self,
+        contour,
+        *,
+        c0=2.0,
+        stiffness=1.0e4,
+        damping=50.0,
+        threshold=2.0,
+        cutting_damping=1500.0,
+        smoothing_speed=5e-4,
+    ):
         super().__init__()
         self._contour = contour
         self._c = (c0, stiffness, damping)
@@ -89,8 +104,7 @@ class CuttingWall(LeafSystem):
 def build(scenario):
     builder = DiagramBuilder()
     # A discrete plant: the wall's forces enter once per 1 ms step.
-    plant, _ = AddMultibodyPlant(MultibodyPlantConfig(time_step=1e-3),
-                                 builder)
+    plant, _ = AddMultibodyPlant(MultibodyPlantConfig(time_step=1e-3), builder)
     add_cartesian_tool(plant)
     plant.Finalize()
 
@@ -99,19 +113,32 @@ def build(scenario):
     wall = builder.AddNamedSystem("wall", CuttingWall(contour))
     state = plant.get_state_output_port()
     builder.Connect(state, wall.GetInputPort("plant_state"))
-    builder.Connect(wall.GetOutputPort("generalized_force"),
-                    plant.get_applied_generalized_force_input_port())
+    builder.Connect(
+        wall.GetOutputPort("generalized_force"),
+        plant.get_applied_generalized_force_input_port(),
+    )
 
     loops = dd.add_deburring_controller(
-        builder, scenario=scenario, plant=plant, contour=contour,
-        plant_state=state, tool_force=wall.GetOutputPort("tool_force"))
+        builder,
+        scenario=scenario,
+        plant=plant,
+        contour=contour,
+        plant_state=state,
+        tool_force=wall.GetOutputPort("tool_force"),
+    )
     builder.Connect(loops.actuation, plant.get_actuation_input_port())
 
     # Log two of the library's named outputs (dd.LOGGED) at 10 ms.
-    loggers = {name: LogVectorOutput(
-        builder.GetSubsystemByName(dd.LOGGED[name][0]).GetOutputPort(
-            dd.LOGGED[name][1]), builder, 0.01)
-        for name in ("chamfer", "command")}
+    loggers = {
+        name: LogVectorOutput(
+            builder.GetSubsystemByName(dd.LOGGED[name][0]).GetOutputPort(
+                dd.LOGGED[name][1]
+            ),
+            builder,
+            0.01,
+        )
+        for name in ("chamfer", "command")
+    }
     diagram = builder.Build()
     # Start with the tool point on the contour's start (q is the position).
     plant.SetDefaultPositions(contour.point_at(0.0))
@@ -120,9 +147,12 @@ def build(scenario):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--duration", type=float, default=float(
-        os.environ.get("DEBURR_EXAMPLE_DURATION", 4.0)),
-        help="simulated seconds (default 4)")
+    parser.add_argument(
+        "--duration",
+        type=float,
+        default=float(os.environ.get("DEBURR_EXAMPLE_DURATION", 4.0)),
+        help="simulated seconds (default 4)",
+    )
     args = parser.parse_args(argv)
     scenario = dd.load_scenario("point_mass")
     diagram, loggers = build(scenario)
@@ -130,19 +160,27 @@ def main(argv=None):
     simulator.AdvanceTo(args.duration)
     context = simulator.get_context()
     chamfer = dd.CHAMFER_STATE.split(
-        loggers["chamfer"].FindLog(context).data().T)
+        loggers["chamfer"].FindLog(context).data().T
+    )
     command = dd.COMMAND_STATE.split(
-        loggers["command"].FindLog(context).data().T)
+        loggers["command"].FindLog(context).data().T
+    )
     t = loggers["chamfer"].FindLog(context).sample_times()
     late = t >= 0.5 * args.duration
     print(f"own plant, {args.duration:g} s, means over the second half:")
-    print(f"  chamfer depth     {np.mean(chamfer['delta'][late]) * 1e3:7.4f}"
-          f" mm  (desired {scenario.task.desired_depth * 1e3:g} mm)")
+    print(
+        f"  chamfer depth     {np.mean(chamfer['delta'][late]) * 1e3:7.4f}"
+        f" mm  (desired {scenario.task.desired_depth * 1e3:g} mm)"
+    )
     print(f"  normal force      {np.mean(chamfer['f_n'][late]):7.3f} N")
-    print(f"  chamfering force  {np.mean(chamfer['f_t'][late]):7.3f} N"
-          f"  (desired {scenario.task.desired_chamfering_force:g} N)")
-    print(f"  commanded feed    {np.mean(command['feed'][late]) * 1e3:7.3f}"
-          " mm/s")
+    print(
+        f"  chamfering force  {np.mean(chamfer['f_t'][late]):7.3f} N"
+        f"  (desired {scenario.task.desired_chamfering_force:g} N)"
+    )
+    print(
+        f"  commanded feed    {np.mean(command['feed'][late]) * 1e3:7.3f} mm/s"
+    )
+
 
 if __name__ == "__main__":
     main()

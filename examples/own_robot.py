@@ -14,9 +14,9 @@ models/arm5.sdf, docs/own-robot.md and docs/python-api.md).
 
 import argparse
 import os
+from pathlib import Path
 import shutil
 import tempfile
-from pathlib import Path
 
 import deburr_drake as dd
 from deburr_drake.cell.models import models_dir
@@ -27,19 +27,25 @@ SHIPPED_ARM = models_dir() / "arm5.sdf"
 def run(model_path, duration):
     # The YAML override, as in a scenario file or --scenario-text.
     scenario = dd.load_scenario(
-        "paper", text=f"robot: {{model: '{Path(model_path).as_posix()}'}}")
+        "paper", text=f"robot: {{model: '{Path(model_path).as_posix()}'}}"
+    )
     log = dd.run(scenario, duration)
     return scenario, log, dd.pass_metrics(log, only_cut=True)
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--model", default=None,
-                        help="your robot's .urdf or .sdf (default: a copy "
-                             "of models/arm5.sdf)")
-    parser.add_argument("--duration", type=float, default=float(
-        os.environ.get("DEBURR_EXAMPLE_DURATION", 3.0)),
-        help="simulated seconds (default 3)")
+    parser.add_argument(
+        "--model",
+        default=None,
+        help="your robot's .urdf or .sdf (default: a copy of models/arm5.sdf)",
+    )
+    parser.add_argument(
+        "--duration",
+        type=float,
+        default=float(os.environ.get("DEBURR_EXAMPLE_DURATION", 3.0)),
+        help="simulated seconds (default 3)",
+    )
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         model = args.model
@@ -47,11 +53,16 @@ def main(argv=None):
             model = shutil.copy(SHIPPED_ARM, Path(tmp) / "my_arm.sdf")
         scenario, log, metrics = run(model, args.duration)
         print(f"robot.model = {scenario.robot.model}")
-        print(f"stop: {log.stop_reason} at {log.stop_time:.2f} s; "
-              f"{len(log['actuation']['value'][0])} actuated joints")
-        for key in ("contact_time_s", "normal_force_rms_error_N",
-                    "chamfering_force_rms_error_N",
-                    "depth_tracking_rms_error_mm"):
+        print(
+            f"stop: {log.stop_reason} at {log.stop_time:.2f} s; "
+            f"{len(log['actuation']['value'][0])} actuated joints"
+        )
+        for key in (
+            "contact_time_s",
+            "normal_force_rms_error_N",
+            "chamfering_force_rms_error_N",
+            "depth_tracking_rms_error_mm",
+        ):
             print(f"  {key:32s} {metrics[key]:10.4f}")
 
 

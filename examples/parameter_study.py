@@ -37,8 +37,11 @@ def study(scenario_name, field, values, duration, scale=1.0):
         metrics = dd.pass_metrics(log, only_cut=True)
         chamfer = log["chamfer"]
         late = chamfer["t"] >= metrics.get("contact_time_s", 0.0) + 2.0
-        depth = float(np.mean(chamfer["delta"][late])) if late.any() \
+        depth = (
+            float(np.mean(chamfer["delta"][late]))
+            if late.any()
             else float("nan")
+        )
         rows[value] = (depth, metrics)
     return rows
 
@@ -46,14 +49,23 @@ def study(scenario_name, field, values, duration, scale=1.0):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenario", default="paper")
-    parser.add_argument("--field", default="task.desired_depth",
-                        help="scenario field by dotted name")
-    parser.add_argument("--values", default="0.4,0.5,0.6",
-                        help="comma-separated values (mm for a depth)")
-    parser.add_argument("--duration", type=float, default=float(
-        os.environ.get("DEBURR_EXAMPLE_DURATION", 4.0)),
+    parser.add_argument(
+        "--field",
+        default="task.desired_depth",
+        help="scenario field by dotted name",
+    )
+    parser.add_argument(
+        "--values",
+        default="0.4,0.5,0.6",
+        help="comma-separated values (mm for a depth)",
+    )
+    parser.add_argument(
+        "--duration",
+        type=float,
+        default=float(os.environ.get("DEBURR_EXAMPLE_DURATION", 4.0)),
         help="simulated seconds per run (default 4; the paper's pass is "
-             "about 80 s)")
+        "about 80 s)",
+    )
     args = parser.parse_args(argv)
     values = [float(v) for v in args.values.split(",")]
     # Depths are given in mm on the command line; the scenario is SI.
@@ -61,13 +73,18 @@ def main(argv=None):
     if args.field.endswith("order"):
         values = [int(v) for v in values]
     rows = study(args.scenario, args.field, values, args.duration, scale)
-    header = f"{args.field:>24s} | {'mean depth (mm)':>15s} | " + \
-        " | ".join(f"{h:>18s}" for h in COLUMNS.values())
+    header = f"{args.field:>24s} | {'mean depth (mm)':>15s} | " + " | ".join(
+        f"{h:>18s}" for h in COLUMNS.values()
+    )
     print(header)
     print("-" * len(header))
     for value, (depth, metrics) in rows.items():
-        print(f"{value:>24g} | {depth * 1e3:15.4f} | " + " | ".join(
-            f"{metrics.get(k, float('nan')):18.4f}" for k in COLUMNS))
+        print(
+            f"{value:>24g} | {depth * 1e3:15.4f} | "
+            + " | ".join(
+                f"{metrics.get(k, float('nan')):18.4f}" for k in COLUMNS
+            )
+        )
 
 
 if __name__ == "__main__":

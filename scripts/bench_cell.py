@@ -36,20 +36,25 @@ from deburr_drake.runs.simulation import make_simulator
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--scenario", default="paper")
-    ap.add_argument("--scenario-text", default=None,
-                    help="YAML overrides of the scenario")
+    ap.add_argument(
+        "--scenario-text", default=None, help="YAML overrides of the scenario"
+    )
     ap.add_argument("--windows", type=int, default=5)
     ap.add_argument("--window", type=float, default=1.5, help="s simulated")
-    ap.add_argument("--split", action="store_true",
-                    help="one more window under cProfile: the C++ side "
-                         "against the Python bodies, per control sample")
+    ap.add_argument(
+        "--split",
+        action="store_true",
+        help="one more window under cProfile: the C++ side "
+        "against the Python bodies, per control sample",
+    )
     args = ap.parse_args()
     scenario = load_scenario(args.scenario, text=args.scenario_text)
     diagram = make_deburring_diagram(scenario=scenario)
     simulator = make_simulator(diagram, scenario)
     context = simulator.get_mutable_context()
-    diagram.SetRandomContext(context,
-                             RandomGenerator(scenario.sensor.noise_seed))
+    diagram.SetRandomContext(
+        context, RandomGenerator(scenario.sensor.noise_seed)
+    )
     simulator.Initialize()
     t = 2.0
     simulator.AdvanceTo(t)
@@ -66,14 +71,21 @@ def main():
         steps_per_s.append(steps / args.window)
     best, median = min(per_step), statistics.median(per_step)
     rate = statistics.median(steps_per_s)
-    label = args.scenario + (f" + {args.scenario_text!r}"
-                             if args.scenario_text else "")
-    print(f"{label}: {rate:.0f} steps per simulated second; "
-          f"{1e3 * best:.3f} ms per step at best, {1e3 * median:.3f} median")
-    print(f"s per simulated second: {min(per_second):.3f} at best, "
-          f"{statistics.median(per_second):.3f} median")
-    print(f"an 80 s pass: {80 * min(per_second):.1f} s at best, "
-          f"{80 * statistics.median(per_second):.1f} s median")
+    label = args.scenario + (
+        f" + {args.scenario_text!r}" if args.scenario_text else ""
+    )
+    print(
+        f"{label}: {rate:.0f} steps per simulated second; "
+        f"{1e3 * best:.3f} ms per step at best, {1e3 * median:.3f} median"
+    )
+    print(
+        f"s per simulated second: {min(per_second):.3f} at best, "
+        f"{statistics.median(per_second):.3f} median"
+    )
+    print(
+        f"an 80 s pass: {80 * min(per_second):.1f} s at best, "
+        f"{80 * statistics.median(per_second):.1f} s median"
+    )
     if args.split:
         samples = args.window / scenario.controller.control_period
         print_split(simulator, t + args.window, samples)
@@ -110,9 +122,11 @@ def print_split(simulator, t_end, samples):
     for key, (_, _, self_time, _, _) in pstats.Stats(profile).stats.items():
         sides[_where(key)] += self_time
     bodies = wall - sides[STEP]
-    print(f"under cProfile: {1e3 * wall / samples:.3f} ms per control "
-          f"sample; {STEP} {1e3 * sides[STEP] / samples:.3f}, the Python "
-          f"systems' bodies {1e3 * bodies / samples:.3f}:")
+    print(
+        f"under cProfile: {1e3 * wall / samples:.3f} ms per control "
+        f"sample; {STEP} {1e3 * sides[STEP] / samples:.3f}, the Python "
+        f"systems' bodies {1e3 * bodies / samples:.3f}:"
+    )
     for side, seconds in sides.most_common():
         if side != STEP and seconds / samples > 2e-6:
             print(f"  {1e3 * seconds / samples:.3f} ms  {side}")

@@ -9,11 +9,11 @@ import time
 
 import numpy as np
 
+from deburr_drake.cell.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.config import ControllerConfig
 from deburr_drake.control.controller import HybridController
-from deburr_drake.math.geometry import CircularContour
-from deburr_drake.cell.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.control.observer import chamfer_quantities
+from deburr_drake.math.geometry import CircularContour
 
 
 def main(n: int = 5000) -> None:
@@ -28,12 +28,15 @@ def main(n: int = 5000) -> None:
     force = -5.0 * n1 - 9.0 * t
     context = controller.CreateDefaultContext()
     for name, value in dict(
-            plant_state=np.concatenate([x_p, v]),
-            chamfer_state=chamfer_quantities(contour, x_p, v, force,
-                                             min_tangential_speed=1e-5),
-            tool_force=force, commanded_position=p + 3e-5 * t,
-            commanded_velocity=2.4e-3 * t,
-            desired_normal_force=[6.0]).items():
+        plant_state=np.concatenate([x_p, v]),
+        chamfer_state=chamfer_quantities(
+            contour, x_p, v, force, min_tangential_speed=1e-5
+        ),
+        tool_force=force,
+        commanded_position=p + 3e-5 * t,
+        commanded_velocity=2.4e-3 * t,
+        desired_normal_force=[6.0],
+    ).items():
         controller.GetInputPort(name).FixValue(context, value)
     rng = np.random.default_rng(0)
     n_x = controller.num_continuous_states()
@@ -46,10 +49,12 @@ def main(n: int = 5000) -> None:
         actuation.Eval(context)
         controller.EvalTimeDerivatives(context)
     elapsed = time.perf_counter() - start
-    print(f"HybridController, m = {config.fuzzy.order}, "
-          f"{2 * (2 * config.fuzzy.upsilon + 1) ** 2} rules, {n_x} states: "
-          f"{elapsed / n * 1e6:.1f} us per actuation + derivative "
-          f"evaluation ({n} evaluations)")
+    print(
+        f"HybridController, m = {config.fuzzy.order}, "
+        f"{2 * (2 * config.fuzzy.upsilon + 1) ** 2} rules, {n_x} states: "
+        f"{elapsed / n * 1e6:.1f} us per actuation + derivative "
+        f"evaluation ({n} evaluations)"
+    )
 
 
 if __name__ == "__main__":

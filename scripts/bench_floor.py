@@ -23,22 +23,31 @@ import time
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
-                                      SimulatorConfig)
+from pydrake.systems.analysis import (
+    ApplySimulatorConfig,
+    Simulator,
+    SimulatorConfig,
+)
 from pydrake.systems.controllers import PidController
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
-from pydrake.systems.primitives import (Adder, ConstantVectorSource,
-                                        ZeroOrderHold)
+from pydrake.systems.primitives import (
+    Adder,
+    ConstantVectorSource,
+    ZeroOrderHold,
+)
 
 from deburr_drake.cell.arm import solve_tool_pose
 from deburr_drake.cell.diagram import TOOL_FRAME
-from deburr_drake.cell.plant import add_cell_plant
 from deburr_drake.cell.edge import make_contour
+from deburr_drake.cell.plant import add_cell_plant
+from deburr_drake.cell.process import (
+    HeldMean,
+    force_law_terms,
+    make_cutting_force_law,
+)
 from deburr_drake.config import load_scenario
 from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.runs.simulation import set_monitor
-from deburr_drake.cell.process import (HeldMean, force_law_terms,
-                                       make_cutting_force_law)
 
 
 class _IdleSampler(LeafSystem):
@@ -72,37 +81,62 @@ def make_floor_simulator(step=None, sensor=True, python_systems=0):
     nq, nv = plant.num_positions(), plant.num_velocities()
 
     _, _, J = ToolPoint(plant, plant.GetFrameByName(TOOL_FRAME)).evaluate(
-        np.concatenate([q0, np.zeros(nv)]))
+        np.concatenate([q0, np.zeros(nv)])
+    )
     n1, tangent, delta, _ = contour.frame(p + 5e-4 * contour.n1(p))
     context = plant.CreateDefaultContext()
     a = J.T @ tangent
     B = plant.MakeActuationMatrix()
-    held = HeldMean(np.linalg.solve(plant.CalcMassMatrix(context), a), 0.0,
-                    B, T)
-    terms = force_law_terms(scenario.process, n1, tangent, delta, J,
-                            np.zeros(3), cut_height=scenario.tool.engagement,
-                            v=np.zeros(nv), nu=B.shape[1], held=held)
-    law = builder.AddSystem(make_cutting_force_law(
-        nq, nv, scenario.process.smoothing_speed, B.shape[1]))
+    held = HeldMean(
+        np.linalg.solve(plant.CalcMassMatrix(context), a), 0.0, B, T
+    )
+    terms = force_law_terms(
+        scenario.process,
+        n1,
+        tangent,
+        delta,
+        J,
+        np.zeros(3),
+        cut_height=scenario.tool.engagement,
+        v=np.zeros(nv),
+        nu=B.shape[1],
+        held=held,
+    )
+    law = builder.AddSystem(
+        make_cutting_force_law(
+            nq, nv, scenario.process.smoothing_speed, B.shape[1]
+        )
+    )
     source = builder.AddSystem(ConstantVectorSource(terms))
-    builder.Connect(source.get_output_port(),
-                    law.GetInputPort("force_law_terms"))
-    builder.Connect(plant.get_state_output_port(),
-                    law.GetInputPort("plant_state"))
-    builder.Connect(law.GetOutputPort("generalized_force"),
-                    plant.get_applied_generalized_force_input_port())
+    builder.Connect(
+        source.get_output_port(), law.GetInputPort("force_law_terms")
+    )
+    builder.Connect(
+        plant.get_state_output_port(), law.GetInputPort("plant_state")
+    )
+    builder.Connect(
+        law.GetOutputPort("generalized_force"),
+        plant.get_applied_generalized_force_input_port(),
+    )
 
-    pid = builder.AddSystem(PidController(
-        kp=np.full(nv, 2000.0), ki=np.zeros(nv), kd=np.full(nv, 100.0)))
-    target = builder.AddSystem(ConstantVectorSource(
-        np.concatenate([q0, np.zeros(nv)])))
-    builder.Connect(target.get_output_port(),
-                    pid.get_input_port_desired_state())
-    builder.Connect(plant.get_state_output_port(),
-                    pid.get_input_port_estimated_state())
+    pid = builder.AddSystem(
+        PidController(
+            kp=np.full(nv, 2000.0), ki=np.zeros(nv), kd=np.full(nv, 100.0)
+        )
+    )
+    target = builder.AddSystem(
+        ConstantVectorSource(np.concatenate([q0, np.zeros(nv)]))
+    )
+    builder.Connect(
+        target.get_output_port(), pid.get_input_port_desired_state()
+    )
+    builder.Connect(
+        plant.get_state_output_port(), pid.get_input_port_estimated_state()
+    )
     # Gravity feedforward at q0 (the arm barely moves).
-    gravity = builder.AddSystem(ConstantVectorSource(
-        -plant.CalcGravityGeneralizedForces(context)))
+    gravity = builder.AddSystem(
+        ConstantVectorSource(-plant.CalcGravityGeneralizedForces(context))
+    )
     total = builder.AddSystem(Adder(2, nv))
     builder.Connect(pid.get_output_port_control(), total.get_input_port(0))
     builder.Connect(gravity.get_output_port(), total.get_input_port(1))
@@ -112,23 +146,31 @@ def make_floor_simulator(step=None, sensor=True, python_systems=0):
     builder.Connect(hold.get_output_port(), law.GetInputPort("actuation"))
     if sensor:
         reactions = plant.get_reaction_forces_output_port()
-        sample = builder.AddSystem(ZeroOrderHold(
-            T, AbstractValue.Make(reactions.Allocate().get_value())))
+        sample = builder.AddSystem(
+            ZeroOrderHold(
+                T, AbstractValue.Make(reactions.Allocate().get_value())
+            )
+        )
         builder.Connect(reactions, sample.get_input_port())
     for i in range(python_systems):
-        idle = builder.AddNamedSystem(f"idle_{i}", _IdleSampler(
-            plant.num_multibody_states(), T))
-        builder.Connect(plant.get_state_output_port(),
-                        idle.get_input_port())
+        idle = builder.AddNamedSystem(
+            f"idle_{i}", _IdleSampler(plant.num_multibody_states(), T)
+        )
+        builder.Connect(plant.get_state_output_port(), idle.get_input_port())
     diagram = builder.Build()
 
     step = T if step is None else step
     if not 0 < step <= T:
         raise ValueError(f"step must be in (0, {T}] s, got {step}")
     simulator = Simulator(diagram)
-    ApplySimulatorConfig(SimulatorConfig(
-        integration_scheme="cenic", max_step_size=step,
-        use_error_control=False), simulator)
+    ApplySimulatorConfig(
+        SimulatorConfig(
+            integration_scheme="cenic",
+            max_step_size=step,
+            use_error_control=False,
+        ),
+        simulator,
+    )
     # the plant's cache fresh after each step, as in the cell's simulators
     set_monitor(simulator, diagram, "cenic")
     simulator.Initialize()
@@ -138,18 +180,30 @@ def make_floor_simulator(step=None, sensor=True, python_systems=0):
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--duration", type=float, default=6.0, help="s")
-    ap.add_argument("--step", type=float, default=None,
-                    help="s, the fixed cenic step (default: the control "
-                    "period, 2.5 ms)")
-    ap.add_argument("--sensor", action=argparse.BooleanOptionalAction,
-                    default=True, help="sample the reaction forces")
-    ap.add_argument("--python-systems", type=int, default=0,
-                    help="idle Python systems sampled every 2.5 ms beside "
-                    "the physics (the cost of their dispatch alone)")
+    ap.add_argument(
+        "--step",
+        type=float,
+        default=None,
+        help="s, the fixed cenic step (default: the control period, 2.5 ms)",
+    )
+    ap.add_argument(
+        "--sensor",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="sample the reaction forces",
+    )
+    ap.add_argument(
+        "--python-systems",
+        type=int,
+        default=0,
+        help="idle Python systems sampled every 2.5 ms beside "
+        "the physics (the cost of their dispatch alone)",
+    )
     args = ap.parse_args()
     try:
-        simulator, plant = make_floor_simulator(args.step, args.sensor,
-                                                args.python_systems)
+        simulator, plant = make_floor_simulator(
+            args.step, args.sensor, args.python_systems
+        )
     except ValueError as e:
         ap.error(str(e))
     step = simulator.get_integrator().get_maximum_step_size()
@@ -160,19 +214,28 @@ def main():
     wall = time.perf_counter() - wall
     steps = simulator.get_num_steps_taken() - steps
     results = plant.get_contact_results_output_port().Eval(
-        plant.GetMyContextFromRoot(simulator.get_context()))
-    contact = sum(np.linalg.norm(results.hydroelastic_contact_info(i)
-                                 .F_Ac_W().translational())
-                  for i in range(results.num_hydroelastic_contacts()))
+        plant.GetMyContextFromRoot(simulator.get_context())
+    )
+    contact = sum(
+        np.linalg.norm(
+            results.hydroelastic_contact_info(i).F_Ac_W().translational()
+        )
+        for i in range(results.num_hydroelastic_contacts())
+    )
     print(f"contact force at the end: {contact:.2f} N")
     sensor = "with" if args.sensor else "without"
-    extra = (f", {args.python_systems} idle Python systems"
-             if args.python_systems else "")
-    print(f"physics only{extra}, {1e3 * step:g} ms steps, {sensor} the sampled "
-          f"reaction forces: {steps / args.duration:.0f} steps per "
-          f"simulated second, {1e3 * wall / steps:.3f} ms per step, "
-          f"{wall / args.duration:.3f} s per simulated second; an 80 s "
-          f"pass: {80 * wall / args.duration:.1f} s")
+    extra = (
+        f", {args.python_systems} idle Python systems"
+        if args.python_systems
+        else ""
+    )
+    print(
+        f"physics only{extra}, {1e3 * step:g} ms steps, {sensor} the sampled "
+        f"reaction forces: {steps / args.duration:.0f} steps per "
+        f"simulated second, {1e3 * wall / steps:.3f} ms per step, "
+        f"{wall / args.duration:.3f} s per simulated second; an 80 s "
+        f"pass: {80 * wall / args.duration:.1f} s"
+    )
 
 
 if __name__ == "__main__":

@@ -32,6 +32,7 @@ def _timed(check):
         finally:
             _inside["time"] += time.process_time() - start
             _inside["calls"] += 1
+
     return timed
 
 
@@ -40,14 +41,16 @@ guards.SafetyGuards._check_torque = _timed(guards.SafetyGuards._check_torque)
 
 
 def run(enabled: bool):
-    text = None if enabled else \
-        "guards: {enabled: false, saturate_effort: false}"
+    text = (
+        None if enabled else "guards: {enabled: false, saturate_effort: false}"
+    )
     scenario = load_scenario("paper", text=text)
     diagram = make_deburring_diagram(scenario=scenario)
     _inside.update(time=0.0, calls=0)
     start = time.process_time()
-    log = simulate(diagram, scenario, duration=DURATION,
-                   progress_interval=DURATION)
+    log = simulate(
+        diagram, scenario, duration=DURATION, progress_interval=DURATION
+    )
     cpu = time.process_time() - start
     return cpu, log
 
@@ -59,18 +62,27 @@ def main():
             cpu, log = run(enabled)
             results[enabled].append(cpu)
             inside = _inside["time"] if enabled else 0.0
-            print(f"guards {'on ' if enabled else 'off'} run {k + 1}: "
-                  f"{cpu:6.2f} s CPU for {log.sim_time:g} s simulated "
-                  f"({log.steps} steps, stop {log.stop_reason})"
-                  + (f"; inside the check {inside:.3f} s over "
-                     f"{_inside['calls']} calls "
-                     f"({inside / cpu * 100:.2f} %, "
-                     f"{inside / max(_inside['calls'], 1) * 1e6:.1f} us "
-                     "each)" if enabled else ""), flush=True)
+            print(
+                f"guards {'on ' if enabled else 'off'} run {k + 1}: "
+                f"{cpu:6.2f} s CPU for {log.sim_time:g} s simulated "
+                f"({log.steps} steps, stop {log.stop_reason})"
+                + (
+                    f"; inside the check {inside:.3f} s over "
+                    f"{_inside['calls']} calls "
+                    f"({inside / cpu * 100:.2f} %, "
+                    f"{inside / max(_inside['calls'], 1) * 1e6:.1f} us "
+                    "each)"
+                    if enabled
+                    else ""
+                ),
+                flush=True,
+            )
     on, off = min(results[True]), min(results[False])
-    print(f"best of {REPEATS}: on {on:.2f} s, off {off:.2f} s CPU: "
-          f"{(on / off - 1) * 100:+.1f} % (the host's other load moves "
-          "single runs by 10-25 %: trust the time inside the checks)")
+    print(
+        f"best of {REPEATS}: on {on:.2f} s, off {off:.2f} s CPU: "
+        f"{(on / off - 1) * 100:+.1f} % (the host's other load moves "
+        "single runs by 10-25 %: trust the time inside the checks)"
+    )
 
 
 if __name__ == "__main__":

@@ -56,36 +56,59 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--scenario", default="paper")
     ap.add_argument("--duration", type=float, default=0.5, help="s simulated")
-    ap.add_argument("--scenario-text", default="",
-                    help="YAML overrides of the scenario")
-    ap.add_argument("--floor", action="store_true",
-                    help="count bench_floor.py's physics-only diagram")
+    ap.add_argument(
+        "--scenario-text", default="", help="YAML overrides of the scenario"
+    )
+    ap.add_argument(
+        "--floor",
+        action="store_true",
+        help="count bench_floor.py's physics-only diagram",
+    )
     args = ap.parse_args()
     if shutil.which("valgrind") is None:
-        sys.exit("bench_instructions: valgrind is not installed "
-                 "(apt-get install valgrind)")
+        sys.exit(
+            "bench_instructions: valgrind is not installed "
+            "(apt-get install valgrind)"
+        )
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "callgrind.out")
         run = subprocess.run(
-            ["valgrind", "--tool=callgrind", "--collect-atstart=no",
-             "--toggle-collect=*Simulator*AdvanceTo*",
-             f"--callgrind-out-file={out}", sys.executable, "-c",
-             _FLOOR_CHILD if args.floor else _CHILD, args.scenario,
-             str(args.duration),
-             os.path.dirname(os.path.abspath(__file__)) if args.floor
-             else args.scenario_text],
-            capture_output=True, text=True)
+            [
+                "valgrind",
+                "--tool=callgrind",
+                "--collect-atstart=no",
+                "--toggle-collect=*Simulator*AdvanceTo*",
+                f"--callgrind-out-file={out}",
+                sys.executable,
+                "-c",
+                _FLOOR_CHILD if args.floor else _CHILD,
+                args.scenario,
+                str(args.duration),
+                os.path.dirname(os.path.abspath(__file__))
+                if args.floor
+                else args.scenario_text,
+            ],
+            capture_output=True,
+            text=True,
+        )
         if run.returncode != 0:
             sys.exit(f"bench_instructions: the run failed:\n{run.stderr}")
     steps = int(re.search(r"^steps (\d+)", run.stdout, re.M).group(1))
     total = int(re.search(r"Collected : (\d+)", run.stderr).group(1))
-    label = "floor (bench_floor.py)" if args.floor else (
-        args.scenario + (f" + {args.scenario_text!r}"
-                         if args.scenario_text else ""))
-    print(f"{label}, first {args.duration:g} s: {steps} steps, "
-          f"{total / 1e6:.1f} M instructions, "
-          f"{total / steps / 1e6:.3f} M per step, "
-          f"{total / args.duration / 1e9:.3f} G per simulated second")
+    label = (
+        "floor (bench_floor.py)"
+        if args.floor
+        else (
+            args.scenario
+            + (f" + {args.scenario_text!r}" if args.scenario_text else "")
+        )
+    )
+    print(
+        f"{label}, first {args.duration:g} s: {steps} steps, "
+        f"{total / 1e6:.1f} M instructions, "
+        f"{total / steps / 1e6:.3f} M per step, "
+        f"{total / args.duration / 1e9:.3f} G per simulated second"
+    )
 
 
 if __name__ == "__main__":

@@ -2,10 +2,10 @@
 being recorded (Meshcat headless, 10 frames/s); prints both and the
 overhead. Usage: python scripts/bench_recording.py [simulated seconds]."""
 
+from pathlib import Path
 import sys
 import tempfile
 import time
-from pathlib import Path
 
 from pydrake.geometry import Meshcat
 
@@ -37,10 +37,12 @@ def main(duration: float = 10.0, repeats: int = 2) -> None:
     for _ in range(repeats):
         plain = min(plain, run(duration, record=False))
         recorded = min(recorded, run(duration, record=True))
-    print(f"paper scenario, {duration:g} s simulated, best of {repeats}: "
-          f"{plain:.2f} s wall "
-          f"without Meshcat, {recorded:.2f} s wall recording the replay "
-          f"(overhead {100 * (recorded / plain - 1):+.1f} %)")
+    print(
+        f"paper scenario, {duration:g} s simulated, best of {repeats}: "
+        f"{plain:.2f} s wall "
+        f"without Meshcat, {recorded:.2f} s wall recording the replay "
+        f"(overhead {100 * (recorded / plain - 1):+.1f} %)"
+    )
 
 
 if __name__ == "__main__":

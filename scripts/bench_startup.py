@@ -17,12 +17,12 @@ import time
 T0 = time.perf_counter()
 from pydrake.common.yaml import yaml_dump_typed  # noqa: E402
 
-from deburr_drake.runs import report
-from deburr_drake.runs.pass_metrics import pass_metrics
-from deburr_drake.cell.reach import check_part_in_reach
-from deburr_drake.cell.diagram import make_deburring_diagram
-from deburr_drake.config import load_scenario  # noqa: E402
-from deburr_drake.runs.simulation import simulate
+from deburr_drake.cell.diagram import make_deburring_diagram  # noqa: E402
+from deburr_drake.cell.reach import check_part_in_reach  # noqa: E402
+from deburr_drake.config import load_scenario  # noqa: E402  # noqa: E402
+from deburr_drake.runs import report  # noqa: E402
+from deburr_drake.runs.pass_metrics import pass_metrics  # noqa: E402
+from deburr_drake.runs.simulation import simulate  # noqa: E402
 from deburr_drake.sweep import scenario_from_text  # noqa: E402
 
 
@@ -35,7 +35,7 @@ def main(argv):
         return time.perf_counter()
 
     # A radius no run has used: its ring mesh is generated and cached.
-    radius = 0.030 + random.randint(1, 10 ** 6) * 1e-12
+    radius = 0.030 + random.randint(1, 10**6) * 1e-12
     base = load_scenario("paper", text=f"tube: {{inner_radius: {radius!r}}}")
     base.simulation.duration = duration
     text = yaml_dump_typed(base)
@@ -48,8 +48,9 @@ def main(argv):
     t = lap("diagram build, new ring mesh", t)
     diagram = make_deburring_diagram(scenario=scenario)
     t = lap("diagram build, mesh cached", t)
-    first = simulate(make_deburring_diagram(scenario=scenario), scenario,
-                     duration=0.0025)
+    first = simulate(
+        make_deburring_diagram(scenario=scenario), scenario, duration=0.0025
+    )
     times["initialize + first 2.5 ms"] = first.wall_time
     t = time.perf_counter()
     log = simulate(diagram, scenario)
@@ -59,8 +60,13 @@ def main(argv):
     with tempfile.TemporaryDirectory() as tmp:
         report.write_run(log, tmp, values)
     lap("logs.npz + metrics.json", t)
-    run = sum(v for k, v in times.items() if not k.startswith(
-        ("imports", "reach", "diagram build, new", "initialize")))
+    run = sum(
+        v
+        for k, v in times.items()
+        if not k.startswith(
+            ("imports", "reach", "diagram build, new", "initialize")
+        )
+    )
     print(f"{'step':48s} {'s':>7s} {'% of a run':>10s}")
     for name, value in times.items():
         print(f"{name:48s} {value:7.3f} {100 * value / run:9.1f} %")

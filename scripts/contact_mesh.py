@@ -32,8 +32,10 @@ def main():
     current = (base.tube.mesh_segments, base.tool.resolution_hint)
     if current not in variants:
         variants.append(current)
-    print(f"{'segments':>8} {'hint mm':>7} | {'F(0.3) N':>8} {'F(0.5) N':>8} "
-          f"{'F(0.7) N':>8} | {'ripple N':>8} | {'us/eval':>7}")
+    print(
+        f"{'segments':>8} {'hint mm':>7} | {'F(0.3) N':>8} {'F(0.5) N':>8} "
+        f"{'F(0.7) N':>8} | {'ripple N':>8} | {'us/eval':>7}"
+    )
     for segments, hint in variants:
         scenario = copy.deepcopy(base)
         scenario.tube.mesh_segments = segments
@@ -41,8 +43,10 @@ def main():
         forces = contact_normal_force(scenario, DEPTHS)
         # One ring segment is 1 / segments of the edge.
         arc = 0.5 + np.linspace(0.0, 1.0, 9) / segments
-        ripple = [contact_normal_force(scenario, [5e-4], arc_fraction=a)[0]
-                  for a in arc]
+        ripple = [
+            contact_normal_force(scenario, [5e-4], arc_fraction=a)[0]
+            for a in arc
+        ]
         # Per evaluation: n evaluations at depths 0.5 mm +- 1 nm (each a
         # new query), less one evaluation's share of the set-up.
         depths = 5e-4 + 1e-9 * np.sin(np.arange(args.evaluations))
@@ -54,10 +58,12 @@ def main():
         many = time.perf_counter() - wall
         cost = (many - one) / (args.evaluations - 1)
         mark = "  (scenario)" if (segments, hint) == current else ""
-        print(f"{segments:8d} {1e3 * hint:7.2f} | "
-              + " ".join(f"{f:8.3f}" for f in forces)
-              + f" | {(max(ripple) - min(ripple)) / 2:8.4f} | "
-              f"{1e6 * cost:7.0f}{mark}")
+        print(
+            f"{segments:8d} {1e3 * hint:7.2f} | "
+            + " ".join(f"{f:8.3f}" for f in forces)
+            + f" | {(max(ripple) - min(ripple)) / 2:8.4f} | "
+            f"{1e6 * cost:7.0f}{mark}"
+        )
 
 
 if __name__ == "__main__":

@@ -9,8 +9,8 @@ with the study's parameters and the counts of runs within BOUND.
 """
 
 import csv
-import sys
 from pathlib import Path
+import sys
 
 import numpy as np
 
@@ -31,9 +31,11 @@ def split(logs) -> dict:
     def rms(x):
         return float(np.sqrt(np.mean(np.square(x)))) * 1e3
 
-    return {"true_depth_rms_error_mm": rms(true - d_star),
-            "believed_depth_rms_error_mm": rms(believed - d_star),
-            "part_error_along_n1_rms_mm": rms(true - believed)}
+    return {
+        "true_depth_rms_error_mm": rms(true - d_star),
+        "believed_depth_rms_error_mm": rms(believed - d_star),
+        "part_error_along_n1_rms_mm": rms(true - believed),
+    }
 
 
 def main(argv):
@@ -41,10 +43,15 @@ def main(argv):
     bound = float(argv[1]) if len(argv) > 1 else 0.05
     with open(out / "results.csv") as f:
         rows = list(csv.DictReader(f))
-    names = ("true_depth_rms_error_mm", "believed_depth_rms_error_mm",
-             "part_error_along_n1_rms_mm")
-    print("key               stop                 finish  " +
-          "  ".join(n.split("_rms")[0][:16] for n in names))
+    names = (
+        "true_depth_rms_error_mm",
+        "believed_depth_rms_error_mm",
+        "part_error_along_n1_rms_mm",
+    )
+    print(
+        "key               stop                 finish  "
+        + "  ".join(n.split("_rms")[0][:16] for n in names)
+    )
     table = []
     for row in rows:
         path = out / "runs" / row["key"] / "logs.npz"
@@ -54,13 +61,17 @@ def main(argv):
                 values = split(dict(logs))
         table.append(values)
         finish = row.get("chamfer_depth_rms_error_mm") or "nan"
-        print(f"{row['key']}  {row['stop_reason'][:20]:20s} "
-              f"{float(finish):7.4f}  " + "  ".join(
-                  f"{values.get(n, np.nan):16.4f}" for n in names))
+        print(
+            f"{row['key']}  {row['stop_reason'][:20]:20s} "
+            f"{float(finish):7.4f}  "
+            + "  ".join(f"{values.get(n, np.nan):16.4f}" for n in names)
+        )
     for n in names:
         v = np.array([t.get(n, np.nan) for t in table])
-        print(f"{n}: {int(np.sum(v <= bound))}/{len(v)} runs <= {bound} mm "
-              f"(median {np.nanmedian(v):.4f} mm)")
+        print(
+            f"{n}: {int(np.sum(v <= bound))}/{len(v)} runs <= {bound} mm "
+            f"(median {np.nanmedian(v):.4f} mm)"
+        )
 
 
 if __name__ == "__main__":

@@ -33,22 +33,28 @@ def main(argv=None) -> int:
     if args.workers < 1:
         p.error("--workers must be >= 1")
     cells = envelope.grid(
-        _floats(args.heights, 1e-3) if args.heights
-        else envelope.GRID_HEIGHTS,
-        _floats(args.lengths, 1e-3) if args.lengths
-        else envelope.GRID_LENGTHS,
-        _floats(args.forces) if args.forces else envelope.GRID_FORCES)
-    print(f"{len(cells)} cells, {args.workers} worker processes, scenario "
-          f"{args.scenario}" + (f" + {args.scenario_text!r}"
-                                if args.scenario_text else ""), flush=True)
-    header = (f"{'burr h x L (mm)':>16s} {'f_d':>4s} | {'max f_t':>8s} "
-              f"{'bound':>6s} | {'max v':>6s} {'bound':>6s} | "
-              f"{'depth rms':>9s} | {'feed on':>7s} {'law':>6s} | {'NaN':>3s}"
-              f" | {'sim':>5s} {'wall':>5s} | pass")
+        _floats(args.heights, 1e-3) if args.heights else envelope.GRID_HEIGHTS,
+        _floats(args.lengths, 1e-3) if args.lengths else envelope.GRID_LENGTHS,
+        _floats(args.forces) if args.forces else envelope.GRID_FORCES,
+    )
+    print(
+        f"{len(cells)} cells, {args.workers} worker processes, scenario "
+        f"{args.scenario}"
+        + (f" + {args.scenario_text!r}" if args.scenario_text else ""),
+        flush=True,
+    )
+    header = (
+        f"{'burr h x L (mm)':>16s} {'f_d':>4s} | {'max f_t':>8s} "
+        f"{'bound':>6s} | {'max v':>6s} {'bound':>6s} | "
+        f"{'depth rms':>9s} | {'feed on':>7s} {'law':>6s} | {'NaN':>3s}"
+        f" | {'sim':>5s} {'wall':>5s} | pass"
+    )
     print(header)
-    print(f"{'':>16s} {'N':>4s} | {'N':>8s} {'N':>6s} | {'mm/s':>6s} "
-          f"{'mm/s':>6s} | {'mm':>9s} | {'mm/s':>7s} {'mm/s':>6s} | "
-          f"{'':>3s} | {'s':>5s} {'s':>5s} |")
+    print(
+        f"{'':>16s} {'N':>4s} | {'N':>8s} {'N':>6s} | {'mm/s':>6s} "
+        f"{'mm/s':>6s} | {'mm':>9s} | {'mm/s':>7s} {'mm/s':>6s} | "
+        f"{'':>3s} | {'s':>5s} {'s':>5s} |"
+    )
     start = time.perf_counter()
 
     def show(cell, row):
@@ -56,26 +62,36 @@ def main(argv=None) -> int:
             print(f"{cell.label}: ERROR {row['error']}", flush=True)
             return
         b = row["bounds"]
-        print(f"{cell.height * 1e3:7.1f} x {cell.length * 1e3:5.0f} "
-              f"{cell.force:4.0f} | "
-              f"{row['max_chamfering_force_N']:8.2f} "
-              f"{b['max_chamfering_force_N']:6.1f} | "
-              f"{row['max_tool_speed_m_s'] * 1e3:6.2f} "
-              f"{b['max_tool_speed_m_s'] * 1e3:6.2f} | "
-              f"{row['depth_rms_error_on_burr_m'] * 1e3:9.4f} | "
-              f"{row['feed_on_burr_m_s'] * 1e3:7.3f} "
-              f"{row['feed_law_on_burr_m_s'] * 1e3:6.3f} | "
-              f"{'yes' if row['nan'] else 'no':>3s} | "
-              f"{row['sim_time_s']:5.1f} {row['wall_time_s']:5.1f} | "
-              f"{'PASS' if row['passed'] else 'FAIL'}", flush=True)
+        print(
+            f"{cell.height * 1e3:7.1f} x {cell.length * 1e3:5.0f} "
+            f"{cell.force:4.0f} | "
+            f"{row['max_chamfering_force_N']:8.2f} "
+            f"{b['max_chamfering_force_N']:6.1f} | "
+            f"{row['max_tool_speed_m_s'] * 1e3:6.2f} "
+            f"{b['max_tool_speed_m_s'] * 1e3:6.2f} | "
+            f"{row['depth_rms_error_on_burr_m'] * 1e3:9.4f} | "
+            f"{row['feed_on_burr_m_s'] * 1e3:7.3f} "
+            f"{row['feed_law_on_burr_m_s'] * 1e3:6.3f} | "
+            f"{'yes' if row['nan'] else 'no':>3s} | "
+            f"{row['sim_time_s']:5.1f} {row['wall_time_s']:5.1f} | "
+            f"{'PASS' if row['passed'] else 'FAIL'}",
+            flush=True,
+        )
 
-    rows = envelope.run_cells(envelope.run_burr_cell, cells, args.scenario,
-                              args.scenario_text, workers=args.workers,
-                              on_row=show)
+    rows = envelope.run_cells(
+        envelope.run_burr_cell,
+        cells,
+        args.scenario,
+        args.scenario_text,
+        workers=args.workers,
+        on_row=show,
+    )
     wall = time.perf_counter() - start
     passed = sum(int(r["passed"]) for r in rows)
-    print(f"\n{passed}/{len(rows)} cells pass; wall time {wall:.0f} s "
-          f"with {args.workers} workers")
+    print(
+        f"\n{passed}/{len(rows)} cells pass; wall time {wall:.0f} s "
+        f"with {args.workers} workers"
+    )
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"rows": rows, "wall_time_s": wall}, f, indent=2)

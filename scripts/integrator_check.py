@@ -12,9 +12,9 @@ import copy
 
 import numpy as np
 
-from deburr_drake.math import metrics
 from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
+from deburr_drake.math import metrics
 from deburr_drake.runs.simulation import simulate
 
 
@@ -28,8 +28,10 @@ def summarize(log, start):
         "depth mean (mm)": 1e3 * np.mean(chamfer["delta"][late]),
         "normal force mean (N)": np.mean(chamfer["f_n"][late]),
         "chamfering force mean (N)": np.mean(process["f_t"][late_p]),
-        "feed mean (mm/s)": 1e3 * metrics.mean_speed(
-            command["t"][late_c], command["arc_position"][late_c]),
+        "feed mean (mm/s)": 1e3
+        * metrics.mean_speed(
+            command["t"][late_c], command["arc_position"][late_c]
+        ),
     }
 
 
@@ -37,8 +39,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--scenario", default="paper")
     ap.add_argument("--duration", type=float, default=12.0, help="s")
-    ap.add_argument("--start", type=float, default=2.0,
-                    help="s, averages from here on")
+    ap.add_argument(
+        "--start", type=float, default=2.0, help="s, averages from here on"
+    )
     ap.add_argument("--accuracy", type=float, default=1e-4)
     args = ap.parse_args()
     base = load_scenario(args.scenario)
@@ -54,11 +57,16 @@ def main():
     variants[f"cenic, error control at {args.accuracy:g}"] = controlled
     results = {}
     for name, scenario in variants.items():
-        log = simulate(make_deburring_diagram(scenario=scenario), scenario,
-                       duration=args.duration)
+        log = simulate(
+            make_deburring_diagram(scenario=scenario),
+            scenario,
+            duration=args.duration,
+        )
         results[name] = summarize(log, args.start)
-        print(f"{name}: {log.sim_time:.1f} s simulated in "
-              f"{log.wall_time:.1f} s wall, {log.steps} steps")
+        print(
+            f"{name}: {log.sim_time:.1f} s simulated in "
+            f"{log.wall_time:.1f} s wall, {log.steps} steps"
+        )
         for key, value in results[name].items():
             print(f"  {key:28s} {value:10.4f}")
     a, b = results.values()

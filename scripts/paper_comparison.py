@@ -5,19 +5,24 @@ then prints comparison.md. Minutes per controller; not a test. Usage:
     python scripts/paper_comparison.py [OUT_DIR] [WORKERS] [DURATION]
 (default out/paper_comparison, 1 worker, the full pass)."""
 
-import sys
 from pathlib import Path
+import sys
 
-from deburr_drake.runs.compare import DEFAULT_CONTROLLERS, compare
 from deburr_drake.config import load_scenario
+from deburr_drake.runs.compare import DEFAULT_CONTROLLERS, compare
 
 
 def main(argv):
     out = Path(argv[0] if argv else "out/paper_comparison")
     workers = int(argv[1]) if len(argv) > 1 else 1
     duration = float(argv[2]) if len(argv) > 2 else None
-    compare(load_scenario("paper"), list(DEFAULT_CONTROLLERS),
-            duration=duration, out_dir=out, workers=workers)
+    compare(
+        load_scenario("paper"),
+        list(DEFAULT_CONTROLLERS),
+        duration=duration,
+        out_dir=out,
+        workers=workers,
+    )
     print((out / "comparison.md").read_text())
 
 

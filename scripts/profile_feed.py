@@ -37,19 +37,28 @@ def main(argv=None) -> int:
     kappa = np.array([contour.curvature(contour.point_at(s)) for s in arc])
     keep = (t >= contact + TRANSIENT) & (burr == 0.0)
     d, r = sc.task.desired_depth, sc.tool.cutter_radius
-    excess = sc.task.desired_chamfering_force \
-        - sc.process.threshold_power_force
-    print(f"{'where':>24s} {'samples':>8s} {'feed mm/s':>10s} "
-          f"{'law mm/s':>9s}")
+    excess = sc.task.desired_chamfering_force - sc.process.threshold_power_force
+    print(f"{'where':>24s} {'samples':>8s} {'feed mm/s':>10s} {'law mm/s':>9s}")
     for k in np.unique(np.round(kappa[keep], 6)):
         on = keep & np.isclose(kappa, k)
-        law = excess / (sc.process.cutting_coefficient * d
-                        * sc.tool.engagement * removal_scale(k, d, r))
-        name = "line" if k == 0 else (
-            f"{'concave' if k > 0 else 'convex'} fillet r {1e3 / abs(k):.0f}"
-            " mm")
-        print(f"{name:>24s} {int(on.sum()):8d} {np.mean(v[on]) * 1e3:10.3f} "
-              f"{max(law, sc.command.default_feed) * 1e3:9.3f}")
+        law = excess / (
+            sc.process.cutting_coefficient
+            * d
+            * sc.tool.engagement
+            * removal_scale(k, d, r)
+        )
+        name = (
+            "line"
+            if k == 0
+            else (
+                f"{'concave' if k > 0 else 'convex'} fillet r {1e3 / abs(k):.0f}"
+                " mm"
+            )
+        )
+        print(
+            f"{name:>24s} {int(on.sum()):8d} {np.mean(v[on]) * 1e3:10.3f} "
+            f"{max(law, sc.command.default_feed) * 1e3:9.3f}"
+        )
     return 0
 
 

@@ -18,20 +18,35 @@ from deburr_drake.runs.probe_study import refit_touches
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("runs", nargs="+", type=Path)
-    p.add_argument("--thresholds", type=float, nargs="+",
-                   default=[4e-5, 5e-5, 8e-5, 1e-4],
-                   help="max_residual values (m)")
+    p.add_argument(
+        "--thresholds",
+        type=float,
+        nargs="+",
+        default=[4e-5, 5e-5, 8e-5, 1e-4],
+        help="max_residual values (m)",
+    )
     a = p.parse_args()
-    print("| run | " + " | ".join(f"{t * 1e6:.0f} um: kept, error (um)"
-                                   for t in a.thresholds) + " |")
+    print(
+        "| run | "
+        + " | ".join(
+            f"{t * 1e6:.0f} um: kept, error (um)" for t in a.thresholds
+        )
+        + " |"
+    )
     print("|---" * (len(a.thresholds) + 1) + "|")
     for run in a.runs:
         scenario = load_scenario(str(run / "scenario.yaml"))
         touches = np.load(run / "logs.npz")["touch_points.value"][-1]
         rows = refit_touches(scenario, touches, a.thresholds)
-        print(f"| {run.name} | " + " | ".join(
-            f"{r['kept']} of {r['touches']}, {r['error'] * 1e6:.0f}"
-            for r in rows) + " |", flush=True)
+        print(
+            f"| {run.name} | "
+            + " | ".join(
+                f"{r['kept']} of {r['touches']}, {r['error'] * 1e6:.0f}"
+                for r in rows
+            )
+            + " |",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

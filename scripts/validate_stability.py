@@ -18,8 +18,12 @@ import json
 import sys
 import time
 
-from deburr_drake.analysis import (VERDICT_SCENARIOS, find_operating_point,
-                                   validate_boundaries, verdict_row)
+from deburr_drake.analysis import (
+    VERDICT_SCENARIOS,
+    find_operating_point,
+    validate_boundaries,
+    verdict_row,
+)
 from deburr_drake.config import ConfigError, load_scenario
 
 
@@ -32,9 +36,12 @@ def _fmt(x):
 def _verdicts(args):
     rows = []
     picked = args.rows if args.rows else range(len(VERDICT_SCENARIOS))
-    print(f"{'#':>2s} {'scenario':40s} {'analyze':>8s} {'simulation':>10s} "
-          f"{'max f_t (N)':>11s} {'rho max':>8s} {'osc (Hz)':>8s} "
-          f"{'guard':>13s} {'agree':>5s}", flush=True)
+    print(
+        f"{'#':>2s} {'scenario':40s} {'analyze':>8s} {'simulation':>10s} "
+        f"{'max f_t (N)':>11s} {'rho max':>8s} {'osc (Hz)':>8s} "
+        f"{'guard':>13s} {'agree':>5s}",
+        flush=True,
+    )
     for i in picked:
         label, base, text = VERDICT_SCENARIOS[i]
         r = verdict_row(label, base, text, duration=args.duration)
@@ -42,20 +49,23 @@ def _verdicts(args):
         rows.append(r)
         sim = r["simulation"]
         ft = sim["max_f_t_N"]
-        guard = (f"{r['guard']}@{r['guard_time_s']:.2f}" if r["guard"]
-                 else "-")
-        print(f"{i:2d} {label:40s} {r['verdict']:>8s} "
-              f"{sim['verdict']:>10s} "
-              f"{'-' if ft is None else f'{ft:.1f}':>11s} "
-              f"{'-' if r['rho_max_along_run'] is None else format(r['rho_max_along_run'], '.5f'):>8s} "
-              f"{'-' if r['oscillation_hz'] is None else format(r['oscillation_hz'], '.1f'):>8s} "
-              f"{guard:>13s} {'yes' if r['agree'] else 'NO':>5s}",
-              flush=True)
+        guard = f"{r['guard']}@{r['guard_time_s']:.2f}" if r["guard"] else "-"
+        print(
+            f"{i:2d} {label:40s} {r['verdict']:>8s} "
+            f"{sim['verdict']:>10s} "
+            f"{'-' if ft is None else f'{ft:.1f}':>11s} "
+            f"{'-' if r['rho_max_along_run'] is None else format(r['rho_max_along_run'], '.5f'):>8s} "
+            f"{'-' if r['oscillation_hz'] is None else format(r['oscillation_hz'], '.1f'):>8s} "
+            f"{guard:>13s} {'yes' if r['agree'] else 'NO':>5s}",
+            flush=True,
+        )
     agree = sum(r["agree"] for r in rows)
-    print(f"\n{agree}/{len(rows)} agree (simulation: {args.duration:g} s, "
-          "guards off; unstable when, after 2 s of contact, the measured "
-          "|f_t| exceeds 2 x the desired force or the depth leaves "
-          "delta* +- 50 %, or the run fails)")
+    print(
+        f"\n{agree}/{len(rows)} agree (simulation: {args.duration:g} s, "
+        "guards off; unstable when, after 2 s of contact, the measured "
+        "|f_t| exceeds 2 x the desired force or the depth leaves "
+        "delta* +- 50 %, or the run fails)"
+    )
     for r in rows:
         print(f"  {r['index']:2d} {r['label']}: {r['verdict_reason']}")
     return rows
@@ -67,21 +77,33 @@ def _boundaries(args):
         start = time.perf_counter()
         op = find_operating_point(load_scenario(name))
         rows = validate_boundaries(
-            op, duration=args.duration, rel_tol=args.tolerance,
-            progress=lambda m: print(f"  [{name}] {m}", flush=True))
+            op,
+            duration=args.duration,
+            rel_tol=args.tolerance,
+            progress=lambda m: print(f"  [{name}] {m}", flush=True),
+        )
         table[name] = rows
-        print(f"\n{name} (operating point t = {op.time:.3f} s, "
-              f"{time.perf_counter() - start:.0f} s wall)")
-        print(f"  {'parameter':52s} {'range':>15s} {'predicted':>13s} "
-              f"{'simulated':>13s} {'apart':>7s}")
+        print(
+            f"\n{name} (operating point t = {op.time:.3f} s, "
+            f"{time.perf_counter() - start:.0f} s wall)"
+        )
+        print(
+            f"  {'parameter':52s} {'range':>15s} {'predicted':>13s} "
+            f"{'simulated':>13s} {'apart':>7s}"
+        )
         for r in rows:
-            apart = (f"{100 * r['error_rel']:.1f} %"
-                     if r["error_rel"] is not None else "-")
+            apart = (
+                f"{100 * r['error_rel']:.1f} %"
+                if r["error_rel"] is not None
+                else "-"
+            )
             rng = f"{r['range'][0]:g}-{r['range'][1]:g}"
-            print(f"  {r['parameter'] + ' (' + r['unit'] + ')':52s} "
-                  f"{rng:>15s} {_fmt(r['predicted']):>13s} "
-                  f"{_fmt(r['simulated']):>13s} {apart:>7s}",
-                  flush=True)
+            print(
+                f"  {r['parameter'] + ' (' + r['unit'] + ')':52s} "
+                f"{rng:>15s} {_fmt(r['predicted']):>13s} "
+                f"{_fmt(r['simulated']):>13s} {apart:>7s}",
+                flush=True,
+            )
     return table
 
 
@@ -89,26 +111,36 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="what", required=True)
     p = sub.add_parser("verdicts")
-    p.add_argument("--rows", type=int, nargs="+", default=None,
-                   help="indices into VERDICT_SCENARIOS (default all)")
+    p.add_argument(
+        "--rows",
+        type=int,
+        nargs="+",
+        default=None,
+        help="indices into VERDICT_SCENARIOS (default all)",
+    )
     p.add_argument("--duration", type=float, default=20.0)
     p.add_argument("--json", default=None)
     p = sub.add_parser("boundaries")
-    p.add_argument("--scenario", nargs="+",
-                   default=["point_mass", "paper"])
-    p.add_argument("--duration", type=float, default=1.0,
-                   help="simulated seconds per stability run")
-    p.add_argument("--tolerance", type=float, default=0.02,
-                   help="relative bisection tolerance")
+    p.add_argument("--scenario", nargs="+", default=["point_mass", "paper"])
+    p.add_argument(
+        "--duration",
+        type=float,
+        default=1.0,
+        help="simulated seconds per stability run",
+    )
+    p.add_argument(
+        "--tolerance",
+        type=float,
+        default=0.02,
+        help="relative bisection tolerance",
+    )
     p.add_argument("--json", default=None)
     argv = list(sys.argv[1:] if argv is None else argv)
-    if not argv or argv[0] not in ("verdicts", "boundaries", "-h",
-                                   "--help"):
+    if not argv or argv[0] not in ("verdicts", "boundaries", "-h", "--help"):
         argv.insert(0, "boundaries")  # the script's earlier usage
     args = parser.parse_args(argv)
     try:
-        out = _verdicts(args) if args.what == "verdicts" else \
-            _boundaries(args)
+        out = _verdicts(args) if args.what == "verdicts" else _boundaries(args)
     except ConfigError as e:
         print(f"validate_stability: error: {e}", file=sys.stderr)
         return 2

@@ -5,16 +5,18 @@ prints one line of metrics each. Usage:
 
 import sys
 
-from deburr_drake.cell.truth import contact_truth
-from deburr_drake.runs.pass_metrics import pass_metrics
 from deburr_drake.cell.diagram import make_deburring_diagram
+from deburr_drake.cell.truth import contact_truth
 from deburr_drake.config import load_scenario
+from deburr_drake.runs.pass_metrics import pass_metrics
 from deburr_drake.runs.simulation import simulate
 
-BURRS_2MM = ("process: {burrs: ["
-             "{center_fraction: 0.125, height: 0.002},"
-             "{center_fraction: 0.4583333, height: 0.002},"
-             "{center_fraction: 0.7916667, height: 0.002}]}")
+BURRS_2MM = (
+    "process: {burrs: ["
+    "{center_fraction: 0.125, height: 0.002},"
+    "{center_fraction: 0.4583333, height: 0.002},"
+    "{center_fraction: 0.7916667, height: 0.002}]}"
+)
 
 #: name -> (YAML overrides of the paper scenario, simulated seconds at most)
 VARIANTS = {
@@ -29,11 +31,18 @@ VARIANTS = {
     "force_15N": ("task: {desired_chamfering_force: 15.0}", 30.0),
 }
 
-KEYS = ("completed_pass", "chamfer_depth_rms_error_mm",
-        "depth_tracking_rms_error_mm", "chamfering_force_rms_error_N",
-        "feed_mean_off_burrs_mm_s", "feed_mean_on_burrs_mm_s",
-        "force_prediction_error_rel", "nan_detected", "sim_time_s",
-        "wall_time_s")
+KEYS = (
+    "completed_pass",
+    "chamfer_depth_rms_error_mm",
+    "depth_tracking_rms_error_mm",
+    "chamfering_force_rms_error_N",
+    "feed_mean_off_burrs_mm_s",
+    "feed_mean_on_burrs_mm_s",
+    "force_prediction_error_rel",
+    "nan_detected",
+    "sim_time_s",
+    "wall_time_s",
+)
 
 
 def run(name: str) -> dict:
@@ -43,8 +52,10 @@ def run(name: str) -> dict:
     log = simulate(make_deburring_diagram(scenario=scenario), scenario)
     truth = contact_truth(scenario)
     values = pass_metrics(
-        log, true_force_at_desired_depth=truth.force_at_desired_depth,
-        only_cut=True)
+        log,
+        true_force_at_desired_depth=truth.force_at_desired_depth,
+        only_cut=True,
+    )
     return values
 
 

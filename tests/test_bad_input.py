@@ -13,101 +13,142 @@ SIM = ["simulate", "--duration", "0.01"]
 CASES = {
     "malformed YAML text": (
         SIM + ["--scenario-text", "task: {desired_depth: [0.1"],
-        ["--scenario-text:1:", "YAML syntax error"]),
+        ["--scenario-text:1:", "YAML syntax error"],
+    ),
     "malformed YAML file": (
         SIM + ["--scenario", "{tmp}/bad.yaml"],
-        ["bad.yaml:4:1: YAML syntax error", "flow sequence at 3:18"]),
+        ["bad.yaml:4:1: YAML syntax error", "flow sequence at 3:18"],
+    ),
     "part out of reach": (
         SIM + ["--scenario-text", "tube: {position: [0.8, 0.0, 0.0]}"],
-        ["tube.position", "out of the arm's reach", "start point",
-         "mm beyond"]),
+        ["tube.position", "out of the arm's reach", "start point", "mm beyond"],
+    ),
     "a directory named x.yaml": (
-        SIM + ["--scenario", "{tmp}/x.yaml"], ["x.yaml is a directory"]),
+        SIM + ["--scenario", "{tmp}/x.yaml"],
+        ["x.yaml is a directory"],
+    ),
     "missing scenario file": (
-        SIM + ["--scenario", "{tmp}/none.yaml"], ["no such file"]),
+        SIM + ["--scenario", "{tmp}/none.yaml"],
+        ["no such file"],
+    ),
     "progress interval 0": (
         SIM + ["--progress-interval", "0"],
-        ["--progress-interval = 0.0", "> 0"]),
+        ["--progress-interval = 0.0", "> 0"],
+    ),
     "simulate duration 0": (
-        ["simulate", "--duration", "0"], ["--duration = 0.0", "> 0"]),
+        ["simulate", "--duration", "0"],
+        ["--duration = 0.0", "> 0"],
+    ),
     "demo duration 0": (
-        ["demo", "--duration", "0"], ["--duration = 0.0", "> 0"]),
+        ["demo", "--duration", "0"],
+        ["--duration = 0.0", "> 0"],
+    ),
     "demo shorter than its settling time": (
-        ["demo", "--duration", "1"], ["--duration = 1.0", "more than its 2 s"]),
+        ["demo", "--duration", "1"],
+        ["--duration = 1.0", "more than its 2 s"],
+    ),
     "outer period shorter than the inner loop": (
         SIM + ["--scenario-text", "command: {period: 0.001}"],
-        ["command.period = 0.001", "controller.control_period (0.0025"]),
+        ["command.period = 0.001", "controller.control_period (0.0025"],
+    ),
     "outer period not a multiple of the inner loop": (
         SIM + ["--scenario-text", "command: {period: 0.026}"],
-        ["command.period = 0.026", "multiple"]),
+        ["command.period = 0.026", "multiple"],
+    ),
     "depth beyond the cutter radius": (
         SIM + ["--scenario-text", "task: {desired_depth: 0.004}"],
-        ["task.desired_depth = 0.004", "< tool.cutter_radius (0.003)"]),
+        ["task.desired_depth = 0.004", "< tool.cutter_radius (0.003)"],
+    ),
     "depth beyond the wall": (
         SIM + ["--scenario-text", "task: {desired_depth: 0.006}"],
-        ["task.desired_depth = 0.006", "tube.wall_thickness"]),
+        ["task.desired_depth = 0.006", "tube.wall_thickness"],
+    ),
     "initial depth beyond the cutter radius": (
         SIM + ["--scenario-text", "simulation: {initial_depth: 0.004}"],
-        ["simulation.initial_depth = 0.004", "tool.cutter_radius"]),
+        ["simulation.initial_depth = 0.004", "tool.cutter_radius"],
+    ),
     "unbounded start angle": (
         SIM + ["--scenario-text", "edge: {start_angle: 1.0e6}"],
-        ["edge.start_angle = 1000000.0", "[-2 pi, 2 pi]"]),
+        ["edge.start_angle = 1000000.0", "[-2 pi, 2 pi]"],
+    ),
     "depth not a number": (
         SIM + ["--scenario-text", "task: {desired_depth: abc}"],
-        ["--scenario-text:1:23:", "task.desired_depth = 'abc'",
-         "a number"]),
+        ["--scenario-text:1:23:", "task.desired_depth = 'abc'", "a number"],
+    ),
     "position not a list": (
         SIM + ["--scenario-text", "tube: {position: 0.4}"],
-        ["tube.position = '0.4'", "a list of numbers"]),
+        ["tube.position = '0.4'", "a list of numbers"],
+    ),
     "integer field given a fraction": (
         SIM + ["--scenario-text", "controller: {fuzzy: {order: 1.5}}"],
-        ["controller.fuzzy.order = '1.5'", "an integer"]),
+        ["controller.fuzzy.order = '1.5'", "an integer"],
+    ),
     "out-of-range nested field names its parents": (
         SIM + ["--scenario-text", "controller: {fuzzy: {order: 7}}"],
-        ["controller.fuzzy.order = 7", "0..3"]),
+        ["controller.fuzzy.order = 7", "0..3"],
+    ),
     "unknown nested key": (
         SIM + ["--scenario-text", "controller: {fuzzy: {ordr: 1}}"],
-        ["controller.fuzzy.ordr is unknown", "upsilon"]),
+        ["controller.fuzzy.ordr is unknown", "upsilon"],
+    ),
     "unknown key in a list item": (
         SIM + ["--scenario-text", "process: {burrs: [{lenght: 0.01}]}"],
-        ["process.burrs[0].lenght is unknown", "length"]),
+        ["process.burrs[0].lenght is unknown", "length"],
+    ),
     "duplicate key": (
-        SIM + ["--scenario-text",
-               "task: {desired_depth: 0.0004, desired_depth: 0.0006}"],
-        ["task.desired_depth is given twice"]),
+        SIM
+        + [
+            "--scenario-text",
+            "task: {desired_depth: 0.0004, desired_depth: 0.0006}",
+        ],
+        ["task.desired_depth is given twice"],
+    ),
     "name escaping out/": (
         SIM + ["--scenario-text", "name: ../../x"],
-        ["name = '../../x'", "no path separators"]),
+        ["name = '../../x'", "no path separators"],
+    ),
     "existing outputs": (
-        SIM + ["--out", "{tmp}/done"], ["done already holds metrics.json",
-                                        "--force"]),
+        SIM + ["--out", "{tmp}/done"],
+        ["done already holds metrics.json", "--force"],
+    ),
     "--out is a file": (
-        SIM + ["--out", "{tmp}/bad.yaml"], ["--out", "not a directory"]),
+        SIM + ["--out", "{tmp}/bad.yaml"],
+        ["--out", "not a directory"],
+    ),
     "--record is a directory": (
         SIM + ["--out", "{tmp}/new", "--record", "{tmp}/x.yaml"],
-        ["--record", "is a directory"]),
+        ["--record", "is a directory"],
+    ),
     "--record exists": (
         SIM + ["--out", "{tmp}/new", "--record", "{tmp}/replay.html"],
-        ["--record", "already exists", "--force"]),
+        ["--record", "already exists", "--force"],
+    ),
     "absurd contact modulus": (
         SIM + ["--scenario-text", "tube: {hydroelastic_modulus: 1.0e300}"],
-        ["tube.hydroelastic_modulus = 1e+300", "(0, 1e12] Pa"]),
+        ["tube.hydroelastic_modulus = 1e+300", "(0, 1e12] Pa"],
+    ),
     "unknown scenario": (
-        SIM + ["--scenario", "no_such"], ["'no_such' is unknown", "paper"]),
+        SIM + ["--scenario", "no_such"],
+        ["'no_such' is unknown", "paper"],
+    ),
 }
 
 
 def _tree(root):
-    return sorted((p.relative_to(root).as_posix(), p.stat().st_size)
-                  for p in root.rglob("*"))
+    return sorted(
+        (p.relative_to(root).as_posix(), p.stat().st_size)
+        for p in root.rglob("*")
+    )
 
 
 @pytest.mark.parametrize("name", list(CASES))
-def test_bad_input_gives_one_line_and_exit_2(name, tmp_path, monkeypatch,
-                                             capsys):
+def test_bad_input_gives_one_line_and_exit_2(
+    name, tmp_path, monkeypatch, capsys
+):
     argv, expected = CASES[name]
     (tmp_path / "bad.yaml").write_text(
-        "name: bad\ntask:\n  desired_depth: [0.1\n")
+        "name: bad\ntask:\n  desired_depth: [0.1\n"
+    )
     (tmp_path / "x.yaml").mkdir()
     (tmp_path / "done").mkdir()
     (tmp_path / "done" / "metrics.json").write_text("{}")
@@ -130,7 +171,7 @@ def test_a_truncated_cached_mesh_is_rebuilt(tmp_path):
     args = (0.03, 0.035, 0.044, 0.05, 32)
     path = ring_mesh_path(*args, cache_dir=tmp_path)
     full = path.read_bytes()
-    path.write_bytes(full[:len(full) // 2])
+    path.write_bytes(full[: len(full) // 2])
     assert ring_mesh_path(*args, cache_dir=tmp_path).read_bytes() == full
     surface = ring_surface_path(*args, cache_dir=tmp_path)
     good = surface.read_bytes()

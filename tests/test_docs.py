@@ -4,10 +4,8 @@ runs (tests/test_examples.py runs them), and the site builds with warnings
 as errors (the build itself is .ci/run's command, not a timed test)."""
 
 import importlib.util
-import re
 from pathlib import Path
-
-import pytest
+import re
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -15,7 +13,8 @@ DOCS = ROOT / "docs"
 
 def _script(name):
     spec = importlib.util.spec_from_file_location(
-        name, ROOT / "scripts" / f"{name}.py")
+        name, ROOT / "scripts" / f"{name}.py"
+    )
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -25,7 +24,8 @@ def test_dataflow_figure_is_the_diagrams_wiring():
     figure = _script("dataflow_figure")
     committed = (DOCS / "figures" / "dataflow.dot").read_text()
     assert committed == figure.paper_dataflow_dot(), (
-        "the diagram's wiring changed: run python scripts/dataflow_figure.py")
+        "the diagram's wiring changed: run python scripts/dataflow_figure.py"
+    )
     assert (DOCS / "figures" / "dataflow.svg").stat().st_size > 10_000
     # The loop is there: the sensor reaches the controller, the controller
     # the plant.

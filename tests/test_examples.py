@@ -6,10 +6,10 @@ without outputs."""
 
 import json
 import os
+from pathlib import Path
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
@@ -23,9 +23,14 @@ pytestmark = pytest.mark.slow
 def _run(args, cwd, timeout=300, env=None):
     """Runs python with ``args`` in ``cwd``; returns stdout, fails with
     stderr's tail."""
-    result = subprocess.run([sys.executable, *map(str, args)], cwd=cwd,
-                            capture_output=True, text=True, timeout=timeout,
-                            env={**os.environ, **(env or {})})
+    result = subprocess.run(
+        [sys.executable, *map(str, args)],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env={**os.environ, **(env or {})},
+    )
     assert result.returncode == 0, result.stderr[-3000:]
     return result.stdout
 
@@ -35,13 +40,24 @@ def _numbers(line):
 
 
 def test_parameter_study_prints_one_row_per_value(tmp_path):
-    out = _run([EXAMPLES / "parameter_study.py", "--duration", "2.6",
-                "--values", "0.4,0.6"], tmp_path)
-    rows = [line for line in out.splitlines()
-            if re.match(r"\s+0\.[46] \|", line)]
+    out = _run(
+        [
+            EXAMPLES / "parameter_study.py",
+            "--duration",
+            "2.6",
+            "--values",
+            "0.4,0.6",
+        ],
+        tmp_path,
+    )
+    rows = [
+        line for line in out.splitlines() if re.match(r"\s+0\.[46] \|", line)
+    ]
     assert len(rows) == 2, out
-    depths = {row.split("|")[0].strip(): _numbers(row.split("|")[1])[0]
-              for row in rows}
+    depths = {
+        row.split("|")[0].strip(): _numbers(row.split("|")[1])[0]
+        for row in rows
+    }
     # The measured depth follows the desired one (mm).
     assert depths["0.4"] == pytest.approx(0.4, abs=0.03)
     assert depths["0.6"] == pytest.approx(0.6, abs=0.03)
@@ -49,8 +65,11 @@ def test_parameter_study_prints_one_row_per_value(tmp_path):
 
 def test_own_plant_tracks_depth_and_force(tmp_path):
     out = _run([EXAMPLES / "own_plant.py", "--duration", "3"], tmp_path)
-    lines = {line.split()[0]: _numbers(line) for line in out.splitlines()
-             if line.startswith("  ")}
+    lines = {
+        line.split()[0]: _numbers(line)
+        for line in out.splitlines()
+        if line.startswith("  ")
+    }
     assert lines["chamfer"][0] == pytest.approx(0.5, abs=0.05)  # mm
     assert lines["chamfering"][0] == pytest.approx(10.0, abs=1.0)  # N
     assert lines["commanded"][0] > 0.0  # mm/s: the tool moves on
@@ -58,8 +77,10 @@ def test_own_plant_tracks_depth_and_force(tmp_path):
 
 def test_custom_logging_logs_and_plots(tmp_path):
     png = tmp_path / "plot.png"
-    out = _run([EXAMPLES / "custom_logging.py", "--duration", "1.5",
-                "--out", png], tmp_path)
+    out = _run(
+        [EXAMPLES / "custom_logging.py", "--duration", "1.5", "--out", png],
+        tmp_path,
+    )
     assert "'joints' (q and v of 5 joints)" in out
     assert png.stat().st_size > 10_000
 
@@ -68,8 +89,9 @@ def test_own_robot_runs_the_cell_on_a_model_file(tmp_path):
     out = _run([EXAMPLES / "own_robot.py", "--duration", "2.5"], tmp_path)
     assert "my_arm.sdf" in out
     assert "stop: duration at 2.50 s; 5 actuated joints" in out
-    normal = [line for line in out.splitlines()
-              if "normal_force_rms_error_N" in line]
+    normal = [
+        line for line in out.splitlines() if "normal_force_rms_error_N" in line
+    ]
     assert _numbers(normal[0])[0] < 0.5
 
 
@@ -80,7 +102,8 @@ def pages_with_python():
     """README.md and every page of the site (not docs/drafts/, not the
     generated scenario reference) that has ```python blocks."""
     pages = [ROOT / "README.md"] + sorted(
-        p for p in DOCS.glob("*.md") if p.name != "scenario-reference.md")
+        p for p in DOCS.glob("*.md") if p.name != "scenario-reference.md"
+    )
     return [p for p in pages if python_blocks(p)]
 
 
@@ -95,8 +118,7 @@ def test_the_pages_with_python_are_found():
     assert len(python_blocks(DOCS / "python-api.md")) >= 4
 
 
-@pytest.mark.parametrize("page", pages_with_python(),
-                         ids=lambda p: p.name)
+@pytest.mark.parametrize("page", pages_with_python(), ids=lambda p: p.name)
 def test_page_python_runs(page, tmp_path):
     """A page's blocks run in order as one script (a later block uses what
     an earlier one made), in a fresh directory."""
@@ -105,8 +127,13 @@ def test_page_python_runs(page, tmp_path):
     _run([script], tmp_path)
     if page.name == "python-api.md":
         out = tmp_path / "out" / "api"
-        for name in ("logs.npz", "metrics.json", "diagram.dot",
-                     "replay.html", "fig08_surface_finish.png"):
+        for name in (
+            "logs.npz",
+            "metrics.json",
+            "diagram.dot",
+            "replay.html",
+            "fig08_surface_finish.png",
+        ):
             assert (out / name).exists(), name
 
 
@@ -126,16 +153,28 @@ def test_notebook_executes_top_to_bottom(tmp_path, monkeypatch):
     # The kernel must run in this interpreter's environment (the venv with
     # deburr_drake): jupyter_client starts the "python3" kernel with
     # sys.executable.
-    notebook.cells.insert(0, nbformat.v4.new_code_cell(
-        "import sys; print(sys.prefix)"))
+    notebook.cells.insert(
+        0, nbformat.v4.new_code_cell("import sys; print(sys.prefix)")
+    )
     nbclient.NotebookClient(
-        notebook, timeout=600, kernel_name="python3",
-        resources={"metadata": {"path": str(tmp_path)}}).execute()
+        notebook,
+        timeout=600,
+        kernel_name="python3",
+        resources={"metadata": {"path": str(tmp_path)}},
+    ).execute()
     assert notebook.cells[0].outputs[0]["text"].strip() == sys.prefix
-    text = "".join(o.get("text", "") for c in notebook.cells
-                   if c.cell_type == "code" for o in c.outputs)
+    text = "".join(
+        o.get("text", "")
+        for c in notebook.cells
+        if c.cell_type == "code"
+        for o in c.outputs
+    )
     assert "duration at 3.00 s" in text
-    images = sum("image/png" in o.get("data", {}) for c in notebook.cells
-                 if c.cell_type == "code" for o in c.outputs)
+    images = sum(
+        "image/png" in o.get("data", {})
+        for c in notebook.cells
+        if c.cell_type == "code"
+        for o in c.outputs
+    )
     assert images >= 5  # Figs. 8-12, the depth plot and the overlays
     assert (tmp_path / "out" / "tutorial" / "replay.html").exists()

@@ -4,22 +4,29 @@ cycle among the modules of any package, deburr_drake.math free of Drake.
 Checked with import-linter's ``lint-imports``, as .ci/run does."""
 
 import os
+from pathlib import Path
 import shutil
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 LINT = shutil.which("lint-imports") or str(
-    Path(sys.executable).with_name("lint-imports"))
+    Path(sys.executable).with_name("lint-imports")
+)
 
 
 def _lint(tree: Path) -> subprocess.CompletedProcess:
     env = dict(os.environ, PYTHONPATH=str(tree))
-    return subprocess.run([LINT, "--no-cache"], cwd=tree, env=env,
-                          capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [LINT, "--no-cache"],
+        cwd=tree,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 def test_the_package_keeps_its_layer_contracts():
@@ -28,21 +35,37 @@ def test_the_package_keeps_its_layer_contracts():
     assert "Contracts: 4 kept, 0 broken." in result.stdout
 
 
-@pytest.mark.parametrize("module, line, contract", [
-    # the paper's controller reaching up into the cell
-    ("control/loop.py", "from deburr_drake.cell import diagram",
-     "cli > analysis | sweep > runs > cell > control > config > math"),
-    # pure math importing Drake
-    ("math/geometry.py", "import pydrake.systems.framework",
-     "deburr_drake.math is pure numpy: no Drake"),
-    # two cell modules importing each other (arm imports robot's names)
-    ("cell/robot.py", "import deburr_drake.cell.reach",
-     "no import cycle among the modules and subpackages of any package"),
-])
-def test_an_import_against_the_contract_is_caught(tmp_path, module, line,
-                                                   contract):
-    shutil.copytree(ROOT / "deburr_drake", tmp_path / "deburr_drake",
-                    ignore=shutil.ignore_patterns("__pycache__"))
+@pytest.mark.parametrize(
+    "module, line, contract",
+    [
+        # the paper's controller reaching up into the cell
+        (
+            "control/loop.py",
+            "from deburr_drake.cell import diagram",
+            "cli > analysis | sweep > runs > cell > control > config > math",
+        ),
+        # pure math importing Drake
+        (
+            "math/geometry.py",
+            "import pydrake.systems.framework",
+            "deburr_drake.math is pure numpy: no Drake",
+        ),
+        # two cell modules importing each other (arm imports robot's names)
+        (
+            "cell/robot.py",
+            "import deburr_drake.cell.reach",
+            "no import cycle among the modules and subpackages of any package",
+        ),
+    ],
+)
+def test_an_import_against_the_contract_is_caught(
+    tmp_path, module, line, contract
+):
+    shutil.copytree(
+        ROOT / "deburr_drake",
+        tmp_path / "deburr_drake",
+        ignore=shutil.ignore_patterns("__pycache__"),
+    )
     shutil.copy(ROOT / "pyproject.toml", tmp_path)
     path = tmp_path / "deburr_drake" / module
     path.write_text(path.read_text() + f"\n{line}  # noqa\n")

@@ -23,8 +23,14 @@ import numpy as np
 
 from deburr_drake.analysis.sampled import SampledLoop
 
-__all__ = ["NormalForceLoop", "normal_force_loop", "loop_from_map",
-           "frequency_response", "margins", "plot_bode_nyquist"]
+__all__ = [
+    "NormalForceLoop",
+    "normal_force_loop",
+    "loop_from_map",
+    "frequency_response",
+    "margins",
+    "plot_bode_nyquist",
+]
 
 
 @dataclass
@@ -45,8 +51,9 @@ def frequency_response(loop, f) -> np.ndarray:
     A, B, C, D = (np.asarray(m) for m in (loop.A, loop.B, loop.C, loop.D))
     I = np.eye(A.shape[0])
     z = np.exp(1j * 2 * np.pi * np.asarray(f, float) * loop.dt)
-    return np.array([(C @ np.linalg.solve(zk * I - A, B) + D)[0, 0]
-                     for zk in z])
+    return np.array(
+        [(C @ np.linalg.solve(zk * I - A, B) + D)[0, 0] for zk in z]
+    )
 
 
 def margins(f, L):
@@ -66,13 +73,14 @@ def margins(f, L):
         a = (level - phase[i]) / (phase[i + 1] - phase[i])
         m = mag[i] + a * (mag[i + 1] - mag[i])
         if -20 * np.log10(m) < gm:
-            gm, f_pc = float(-20 * np.log10(m)), float(
-                f[i] + a * (f[i + 1] - f[i]))
+            gm, f_pc = (
+                float(-20 * np.log10(m)),
+                float(f[i] + a * (f[i + 1] - f[i])),
+            )
     # At the Nyquist frequency a discrete loop is real: on the negative
     # real axis it touches -180 there without crossing.
     wrapped = (phase[-1] + 180.0) % 360.0
-    if min(wrapped, 360.0 - wrapped) < 1e-6 and \
-            -20 * np.log10(mag[-1]) < gm:
+    if min(wrapped, 360.0 - wrapped) < 1e-6 and -20 * np.log10(mag[-1]) < gm:
         gm, f_pc = float(-20 * np.log10(mag[-1])), float(f[-1])
     pm, f_gc = np.inf, np.nan
     above = mag > 1.0
@@ -88,20 +96,27 @@ def margins(f, L):
 def loop_from_map(Phi, b, c, period: float) -> NormalForceLoop:
     """L(z) = -c (zI - (Phi - b c))^-1 b and its margins."""
     import control
+
     b = np.asarray(b, float).reshape(-1, 1)
     c = np.asarray(c, float).reshape(1, -1)
     loop = control.ss(Phi - b @ c, b, -c, np.zeros((1, 1)), dt=period)
     f = np.logspace(-3, np.log10(0.5 / period), 4000)
     gm, pm, f_pc, f_gc = margins(f, frequency_response(loop, f))
-    return NormalForceLoop(loop=loop, gain_margin_dB=gm,
-                           phase_margin_deg=pm, phase_crossover_hz=f_pc,
-                           gain_crossover_hz=f_gc,
-                           open_loop_spectral_radius=float(np.max(np.abs(
-                               np.linalg.eigvals(np.asarray(loop.A))))))
+    return NormalForceLoop(
+        loop=loop,
+        gain_margin_dB=gm,
+        phase_margin_deg=pm,
+        phase_crossover_hz=f_pc,
+        gain_crossover_hz=f_gc,
+        open_loop_spectral_radius=float(
+            np.max(np.abs(np.linalg.eigvals(np.asarray(loop.A))))
+        ),
+    )
 
 
-def normal_force_loop(sampled: SampledLoop, *,
-                      direction=None) -> NormalForceLoop:
+def normal_force_loop(
+    sampled: SampledLoop, *, direction=None
+) -> NormalForceLoop:
     """The normal-force loop of a sampled loop's map (module docstring);
     ``direction`` (unit, world) breaks the loop of another force component
     instead of n1 (e.g. n2: the tangential loop, where the -f of (36)
@@ -121,8 +136,10 @@ def plot_bode_nyquist(result: NormalForceLoop, path, *, title: str = ""):
     """Bode (magnitude, phase) and Nyquist plots of L(e^{jwT}) up to the
     Nyquist frequency, in one PNG."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     f = np.logspace(-2, np.log10(0.5 / result.loop.dt), 600)
     L = frequency_response(result.loop, f)
     fig, axes = plt.subplots(1, 3, figsize=(13, 4))
@@ -139,8 +156,7 @@ def plot_bode_nyquist(result: NormalForceLoop, path, *, title: str = ""):
     # frequencies marked; what lies far from -1 is clipped.
     ax = axes[2]
     th = np.linspace(0, 2 * np.pi, 200)
-    ax.plot(np.cos(th), np.sin(th), ":", color="0.5", lw=0.8,
-            label="|L| = 1")
+    ax.plot(np.cos(th), np.sin(th), ":", color="0.5", lw=0.8, label="|L| = 1")
     ax.plot(L.real, L.imag, color="C0", label="L(e^{j w T}), w > 0")
     ax.plot(L.real, -L.imag, "--", color="C0", lw=0.7, label="w < 0")
     ax.plot([-1], [0], "r+", ms=14, mew=2, label="-1")
@@ -150,21 +166,36 @@ def plot_bode_nyquist(result: NormalForceLoop, path, *, title: str = ""):
             Lk = frequency_response(result.loop, [fk])[0]
             if abs(Lk + 1) < 2.5:
                 ax.plot(Lk.real, Lk.imag, "k.", ms=5)
-                ax.annotate(f"{fk:g} Hz", (Lk.real, Lk.imag), fontsize=7,
-                            xytext=(3, 3), textcoords="offset points")
+                ax.annotate(
+                    f"{fk:g} Hz",
+                    (Lk.real, Lk.imag),
+                    fontsize=7,
+                    xytext=(3, 3),
+                    textcoords="offset points",
+                )
     idx = np.flatnonzero(near[:-1] & near[1:])
     if idx.size:
         i = int(idx[len(idx) // 2])
-        ax.annotate("", xy=(L[i + 1].real, L[i + 1].imag),
-                    xytext=(L[i].real, L[i].imag),
-                    arrowprops=dict(arrowstyle="->", color="C0"))
-    ax.set(xlim=(-3.0, 1.0), ylim=(-2.0, 2.0), aspect="equal",
-           xlabel="Re L (-)", ylabel="Im L (-)",
-           title="Nyquist around -1")
+        ax.annotate(
+            "",
+            xy=(L[i + 1].real, L[i + 1].imag),
+            xytext=(L[i].real, L[i].imag),
+            arrowprops=dict(arrowstyle="->", color="C0"),
+        )
+    ax.set(
+        xlim=(-3.0, 1.0),
+        ylim=(-2.0, 2.0),
+        aspect="equal",
+        xlabel="Re L (-)",
+        ylabel="Im L (-)",
+        title="Nyquist around -1",
+    )
     ax.legend(fontsize=7, loc="upper left")
-    fig.suptitle(f"{title} normal-force loop: GM "
-                 f"{result.gain_margin_dB:.1f} dB, PM "
-                 f"{result.phase_margin_deg:.1f} deg")
+    fig.suptitle(
+        f"{title} normal-force loop: GM "
+        f"{result.gain_margin_dB:.1f} dB, PM "
+        f"{result.phase_margin_deg:.1f} deg"
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

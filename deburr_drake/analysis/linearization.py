@@ -31,19 +31,28 @@ import numpy as np
 from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.systems.framework import Context, Diagram
 
-from deburr_drake.analysis.operating_point import (OperatingPoint,
-                                                   frozen_scenario,
-                                                   transfer_state)
+from deburr_drake.analysis.operating_point import (
+    OperatingPoint,
+    frozen_scenario,
+    transfer_state,
+)
 from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.control.layout import CHAMFER_STATE
 
-__all__ = ["numerical_jacobian", "continuous_state_slices",
-           "ContinuousLinearization", "linearize_closed_loop",
-           "Mode", "classify_modes", "eq8_time_constant"]
+__all__ = [
+    "numerical_jacobian",
+    "continuous_state_slices",
+    "ContinuousLinearization",
+    "linearize_closed_loop",
+    "Mode",
+    "classify_modes",
+    "eq8_time_constant",
+]
 
 
-def numerical_jacobian(f: Callable[[np.ndarray], np.ndarray], z0,
-                       steps) -> np.ndarray:
+def numerical_jacobian(
+    f: Callable[[np.ndarray], np.ndarray], z0, steps
+) -> np.ndarray:
     """df/dz at z0 by central differences, one step per coordinate."""
     z0 = np.asarray(z0, float)
     steps = np.broadcast_to(np.asarray(steps, float), z0.shape)
@@ -51,13 +60,15 @@ def numerical_jacobian(f: Callable[[np.ndarray], np.ndarray], z0,
     for i in range(z0.size):
         dz = np.zeros_like(z0)
         dz[i] = steps[i]
-        columns.append((np.asarray(f(z0 + dz)) - np.asarray(f(z0 - dz)))
-                       / (2 * steps[i]))
+        columns.append(
+            (np.asarray(f(z0 + dz)) - np.asarray(f(z0 - dz))) / (2 * steps[i])
+        )
     return np.array(columns).T
 
 
-def continuous_state_slices(diagram: Diagram,
-                            context: Context) -> Dict[str, slice]:
+def continuous_state_slices(
+    diagram: Diagram, context: Context
+) -> Dict[str, slice]:
     """Subsystem name -> its slice of the diagram's continuous state
     vector (found by marking each subsystem's state)."""
     out = {}
@@ -69,11 +80,11 @@ def continuous_state_slices(diagram: Diagram,
             continue
         saved = sub.get_continuous_state_vector().CopyToVector()
         sub.SetContinuousState(np.full(n, np.nan))
-        changed = np.flatnonzero(np.isnan(
-            probe.get_continuous_state_vector().CopyToVector()))
+        changed = np.flatnonzero(
+            np.isnan(probe.get_continuous_state_vector().CopyToVector())
+        )
         sub.SetContinuousState(saved)
-        out[system.get_name()] = slice(int(changed[0]),
-                                       int(changed[-1]) + 1)
+        out[system.get_name()] = slice(int(changed[0]), int(changed[-1]) + 1)
     return out
 
 
@@ -120,14 +131,25 @@ class ContinuousLinearization:
         return out
 
 
-def eq8_time_constant(depth_gain: float, stiffness: float,
-                      damping: float) -> float:
+def eq8_time_constant(
+    depth_gain: float, stiffness: float, damping: float
+) -> float:
     """Eq. (8): tau = (1 + k_delta c2) / (k_delta c1) (s)."""
     return (1.0 + depth_gain * damping) / (depth_gain * stiffness)
 
 
-def classify_modes(eigenvalues, vectors, *, slices, J_v, J_w, n1, n2,
-                   stiffness: float, reach: float = 0.05) -> List[Mode]:
+def classify_modes(
+    eigenvalues,
+    vectors,
+    *,
+    slices,
+    J_v,
+    J_w,
+    n1,
+    n2,
+    stiffness: float,
+    reach: float = 0.05,
+) -> List[Mode]:
     """Groups each mode by the largest of its displacements, in metres:
     the tool point along n1 (with delta_d and the measured normal force
     divided by the contact ``stiffness``: the depth/force loop), along n2
@@ -140,7 +162,8 @@ def classify_modes(eigenvalues, vectors, *, slices, J_v, J_w, n1, n2,
         dx = J_v @ dq
         dy = w[slices["force"]]
         weights = {
-            "depth/force": abs(n1 @ dx) + abs(w[slices["delta_d"]][0])
+            "depth/force": abs(n1 @ dx)
+            + abs(w[slices["delta_d"]][0])
             + abs(n1 @ dy) / stiffness,
             "tangential": abs(n2 @ dx) + abs(n2 @ dy) / stiffness,
             "vertical": abs(n3 @ dx) + abs(n3 @ dy) / stiffness,
@@ -148,13 +171,13 @@ def classify_modes(eigenvalues, vectors, *, slices, J_v, J_w, n1, n2,
         }
         total = sum(weights.values()) or 1.0
         weights = {k: float(v / total) for k, v in weights.items()}
-        modes.append(Mode(complex(lam), max(weights, key=weights.get),
-                          weights))
+        modes.append(Mode(complex(lam), max(weights, key=weights.get), weights))
     return sorted(modes, key=lambda m: (m.group, -m.eigenvalue.real))
 
 
-def linearize_closed_loop(op: OperatingPoint, *, stiffness: float = None,
-                          **overrides) -> ContinuousLinearization:
+def linearize_closed_loop(
+    op: OperatingPoint, *, stiffness: float | None = None, **overrides
+) -> ContinuousLinearization:
     """The continuous-time linearization of ``op``'s closed loop (see the
     module docstring), with scenario ``overrides`` by dotted name.
     ``stiffness`` (N/m, for grouping modes) defaults to 1e4."""
@@ -167,7 +190,8 @@ def linearize_closed_loop(op: OperatingPoint, *, stiffness: float = None,
     process = diagram.GetSubsystemByName("cutting_process")
     process_context = process.GetMyMutableContextFromRoot(context)
     process_context.SetDiscreteState(
-        process.EvalUniquePeriodicDiscreteUpdate(process_context))
+        process.EvalUniquePeriodicDiscreteUpdate(process_context)
+    )
     plant = diagram.GetSubsystemByName("plant")
     sensor = diagram.GetSubsystemByName("force_sensor")
     sensor_context = sensor.GetMyMutableContextFromRoot(context)
@@ -177,48 +201,83 @@ def linearize_closed_loop(op: OperatingPoint, *, stiffness: float = None,
     delta_index = xc_slices["controller"].start
     omega_c = 2 * np.pi * scenario.sensor.cutoff_frequency
     xc0 = context.get_continuous_state_vector().CopyToVector()
-    z0 = np.concatenate([xc0[plant_slice], [xc0[delta_index]],
-                         sensor_context.get_discrete_state(0).get_value()])
+    z0 = np.concatenate(
+        [
+            xc0[plant_slice],
+            [xc0[delta_index]],
+            sensor_context.get_discrete_state(0).get_value(),
+        ]
+    )
     n = nq + nv
-    slices = {"plant_q": slice(0, nq), "plant_v": slice(nq, n),
-              "delta_d": slice(n, n + 1), "force": slice(n + 1, n + 4)}
+    slices = {
+        "plant_q": slice(0, nq),
+        "plant_v": slice(nq, n),
+        "delta_d": slice(n, n + 1),
+        "force": slice(n + 1, n + 4),
+    }
 
     def f(z):
         xc = xc0.copy()
         xc[plant_slice] = z[:n]
         xc[delta_index] = z[n]
         context.SetContinuousState(xc)
-        sensor_context.SetDiscreteState(0, z[n + 1:])
+        sensor_context.SetDiscreteState(0, z[n + 1 :])
         xdot = diagram.EvalTimeDerivatives(context).CopyToVector()
         raw = sensor.raw_force(sensor_context)
-        return np.concatenate([xdot[plant_slice], [xdot[delta_index]],
-                               omega_c * (raw - z[n + 1:])])
+        return np.concatenate(
+            [
+                xdot[plant_slice],
+                [xdot[delta_index]],
+                omega_c * (raw - z[n + 1 :]),
+            ]
+        )
 
-    steps = np.concatenate([np.full(nq, 1e-7), np.full(nv, 1e-6), [1e-8],
-                            np.full(3, 1e-4)])
+    steps = np.concatenate(
+        [np.full(nq, 1e-7), np.full(nv, 1e-6), [1e-8], np.full(3, 1e-4)]
+    )
     A = numerical_jacobian(f, z0, steps)
     f(z0)  # leave the context at the operating point
 
     plant_context = plant.GetMyContextFromRoot(context)
     frame = plant.GetFrameByName(scenario.robot.tool_frame)
     J = plant.CalcJacobianSpatialVelocity(
-        plant_context, JacobianWrtVariable.kV, frame, np.zeros(3),
-        plant.world_frame(), plant.world_frame())
+        plant_context,
+        JacobianWrtVariable.kV,
+        frame,
+        np.zeros(3),
+        plant.world_frame(),
+        plant.world_frame(),
+    )
     # q' = v for the cell's joints (revolute or prismatic).
     observer = diagram.GetSubsystemByName("chamfer_observer")
     chamfer = observer.GetOutputPort("chamfer_state").Eval(
-        observer.GetMyContextFromRoot(context))
+        observer.GetMyContextFromRoot(context)
+    )
     eigenvalues, vectors = np.linalg.eig(A)
     modes = classify_modes(
-        eigenvalues, vectors, slices=slices, J_v=J[3:], J_w=J[:3],
+        eigenvalues,
+        vectors,
+        slices=slices,
+        J_v=J[3:],
+        J_w=J[:3],
         n1=CHAMFER_STATE.get(chamfer, "n1"),
         n2=CHAMFER_STATE.get(chamfer, "n2"),
-        stiffness=stiffness or 1e4)
-    depth = [m for m in modes if m.group == "depth/force"
-             and m.eigenvalue.real < 0]
+        stiffness=stiffness or 1e4,
+    )
+    depth = [
+        m for m in modes if m.group == "depth/force" and m.eigenvalue.real < 0
+    ]
     tau = max((m.time_constant for m in depth), default=float("nan"))
-    labels = ([f"q[{i}]" for i in range(nq)] + [f"v[{i}]" for i in range(nv)]
-              + ["delta_d", "y[0]", "y[1]", "y[2]"])
-    return ContinuousLinearization(A=A, labels=labels, slices=slices,
-                                   modes=modes, depth_time_constant=tau,
-                                   eigenvalues=eigenvalues)
+    labels = (
+        [f"q[{i}]" for i in range(nq)]
+        + [f"v[{i}]" for i in range(nv)]
+        + ["delta_d", "y[0]", "y[1]", "y[2]"]
+    )
+    return ContinuousLinearization(
+        A=A,
+        labels=labels,
+        slices=slices,
+        modes=modes,
+        depth_time_constant=tau,
+        eigenvalues=eigenvalues,
+    )

@@ -37,15 +37,20 @@ class LyapunovTrace:
     summary: Dict[str, float]
 
 
-def lyapunov_trace(scenario: Scenario, *, duration: float = 5.0,
-                   sample_period: float = 0.01,
-                   settle: float = 0.5) -> LyapunovTrace:
+def lyapunov_trace(
+    scenario: Scenario,
+    *,
+    duration: float = 5.0,
+    sample_period: float = 0.01,
+    settle: float = 0.5,
+) -> LyapunovTrace:
     """Simulates ``scenario`` (as given, adaptation on) for ``duration``
     and evaluates V1 and V every ``sample_period``. The summary holds the
     fraction of samples after ``settle`` s where dV/dt > 0 while some
     fuzzy |s_k| is outside its dead zone (where (35) adapts and the proofs
     make V decrease)."""
     from deburr_drake.cell.truth import contact_truth
+
     truth = contact_truth(scenario)
     c_true = np.array([truth.c0, truth.secant_stiffness, truth.c2])
     r_c = np.asarray(scenario.estimator.gains, float)
@@ -53,8 +58,9 @@ def lyapunov_trace(scenario: Scenario, *, duration: float = 5.0,
     diagram = make_deburring_diagram(scenario=scenario)
     simulator = make_simulator(diagram, scenario)
     context = simulator.get_mutable_context()
-    diagram.SetRandomContext(context,
-                             RandomGenerator(scenario.sensor.noise_seed))
+    diagram.SetRandomContext(
+        context, RandomGenerator(scenario.sensor.noise_seed)
+    )
     plant = diagram.GetSubsystemByName("plant")
     estimator = diagram.GetSubsystemByName("contact_estimator")
     controller = diagram.GetSubsystemByName("controller")
@@ -62,8 +68,9 @@ def lyapunov_trace(scenario: Scenario, *, duration: float = 5.0,
     pc = plant.GetMyContextFromRoot(context)
     ec = estimator.GetMyContextFromRoot(context)
     cc = controller.GetMyContextFromRoot(context)
-    widths = np.array([rb.resolved_dead_zone_half_width
-                       for rb in controller.rule_bases])
+    widths = np.array(
+        [rb.resolved_dead_zone_half_width for rb in controller.rule_bases]
+    )
     axes = list(scenario.controller.fuzzy.axes)
     simulator.Initialize()
     rows, thetas = [], []
@@ -72,48 +79,65 @@ def lyapunov_trace(scenario: Scenario, *, duration: float = 5.0,
         if k:
             simulator.AdvanceTo(k * sample_period)
         c_hat = ec.get_continuous_state_vector().CopyToVector()
-        s = CONTROLLER_DIAGNOSTICS.get(controller.GetOutputPort(
-            "diagnostics").Eval(cc), "s")
+        s = CONTROLLER_DIAGNOSTICS.get(
+            controller.GetOutputPort("diagnostics").Eval(cc), "s"
+        )
         M = plant.CalcMassMatrix(pc)
         J = plant.CalcJacobianTranslationalVelocity(
-            pc, JacobianWrtVariable.kV, frame, np.zeros(3),
-            plant.world_frame(), plant.world_frame())
+            pc,
+            JacobianWrtVariable.kV,
+            frame,
+            np.zeros(3),
+            plant.world_frame(),
+            plant.world_frame(),
+        )
         M_x = np.linalg.inv(J @ np.linalg.solve(M, J.T))
         adapted = r_c > 0
-        V1 = float(np.sum((c_hat - c_true)[adapted] ** 2
-                          / (2 * r_c[adapted])) + 0.5 * s @ M_x @ s)
+        V1 = float(
+            np.sum((c_hat - c_true)[adapted] ** 2 / (2 * r_c[adapted]))
+            + 0.5 * s @ M_x @ s
+        )
         outside = bool(np.any(np.abs(s[axes]) > widths))
         rows.append((context.get_time(), V1, outside))
         thetas.append(controller.theta(cc).copy())
     t, V1, outside = (np.array(x) for x in zip(*rows))
     theta_star = thetas[-1]
-    V = V1 + np.array([np.sum((th - theta_star) ** 2) / (2 * r_f)
-                       for th in thetas])
+    V = V1 + np.array(
+        [np.sum((th - theta_star) ** 2) / (2 * r_f) for th in thetas]
+    )
     late = t[1:] > settle
     mask = late & outside[1:]
     dV = np.diff(V)
     dV1 = np.diff(V1)
     summary = {
         "samples_outside_dead_zone": int(np.sum(mask)),
-        "fraction_dV_positive_outside_dead_zone": float(
-            np.mean(dV[mask] > 0)) if np.any(mask) else float("nan"),
-        "fraction_dV1_positive_outside_dead_zone": float(
-            np.mean(dV1[mask] > 0)) if np.any(mask) else float("nan"),
+        "fraction_dV_positive_outside_dead_zone": float(np.mean(dV[mask] > 0))
+        if np.any(mask)
+        else float("nan"),
+        "fraction_dV1_positive_outside_dead_zone": float(np.mean(dV1[mask] > 0))
+        if np.any(mask)
+        else float("nan"),
         "fraction_dV_positive_all": float(np.mean(dV[late] > 0))
-        if np.any(late) else float("nan"),
+        if np.any(late)
+        else float("nan"),
     }
     return LyapunovTrace(t, V1, V, outside, summary)
 
 
 def plot_lyapunov(trace: LyapunovTrace, path, *, title: str = ""):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, ax = plt.subplots(figsize=(8, 4))
     ax.semilogy(trace.t, trace.V1, label="V1 (Prop. 1)")
     ax.semilogy(trace.t, trace.V, label="V (38), theta* = final theta")
-    ax.set(xlabel="t (s)", ylabel="V (J)",
-           title=f"{title} Lyapunov functions along the run")
+    ax.set(
+        xlabel="t (s)",
+        ylabel="V (J)",
+        title=f"{title} Lyapunov functions along the run",
+    )
     ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=110)

@@ -5,18 +5,28 @@ the rho = 1 contour."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, List, Optional, Sequence, Tuple
+from typing import Callable, List, Optional, Sequence
 
 import numpy as np
 
-from deburr_drake.analysis.operating_point import (OperatingPoint,
-                                                   frozen_scenario,
-                                                   get_field)
+from deburr_drake.analysis.operating_point import (
+    OperatingPoint,
+    frozen_scenario,
+    get_field,
+)
 from deburr_drake.config import ConfigError, Scenario
 
-__all__ = ["MapAxis", "StabilityMap", "parse_map", "parse_settings",
-           "stability_map", "fast_rho", "plot_map", "field_unit",
-           "rho_colour_norm"]
+__all__ = [
+    "MapAxis",
+    "StabilityMap",
+    "parse_map",
+    "parse_settings",
+    "stability_map",
+    "fast_rho",
+    "plot_map",
+    "field_unit",
+    "rho_colour_norm",
+]
 
 
 def field_unit(scenario: Scenario, path: str) -> str:
@@ -26,6 +36,7 @@ def field_unit(scenario: Scenario, path: str) -> str:
     ``split_unit``): "" when there is none or it is ``-``; an element's
     unit for an indexed field whose elements differ (``[N, N/m, N s/m]``)."""
     from deburr_drake.config.reference import field_comments, split_unit
+
     parent_path, _, leaf = path.rpartition(".")
     name, _, index = leaf.partition("[")
     parent = get_field(scenario, parent_path) if parent_path else scenario
@@ -56,8 +67,9 @@ def parse_settings(scenario: Scenario, specs: Sequence[str]):
         try:
             out[field] = float(value)
         except ValueError:
-            raise ConfigError(f"--set {spec!r}: VALUE must be a number") \
-                from None
+            raise ConfigError(
+                f"--set {spec!r}: VALUE must be a number"
+            ) from None
     if out:
         frozen_scenario(scenario, **out)  # ConfigError if out of range
     return out
@@ -75,8 +87,9 @@ def parse_map(scenario: Scenario, specs: Sequence[str]) -> List[MapAxis]:
     an empty range (N < 1, or LO = HI with N > 1) or a value the scenario
     rejects."""
     if not 1 <= len(specs) <= 2:
-        raise ConfigError(f"--map takes one or two FIELD=LO:HI:N, got "
-                          f"{len(specs)}")
+        raise ConfigError(
+            f"--map takes one or two FIELD=LO:HI:N, got {len(specs)}"
+        )
     axes = []
     for spec in specs:
         field, eq, rng = spec.partition("=")
@@ -86,17 +99,26 @@ def parse_map(scenario: Scenario, specs: Sequence[str]) -> List[MapAxis]:
         try:
             lo, hi, n = float(parts[0]), float(parts[1]), int(parts[2])
         except ValueError:
-            raise ConfigError(f"--map {spec!r}: LO, HI must be numbers and "
-                              "N an integer") from None
+            raise ConfigError(
+                f"--map {spec!r}: LO, HI must be numbers and N an integer"
+            ) from None
         current = get_field(scenario, field)
-        if isinstance(current, (list, dict)) or not isinstance(
-                current, (int, float)) or isinstance(current, bool):
-            raise ConfigError(f"--map {field!r} is not a numeric scenario "
-                              "field")
-        if n < 1 or (n > 1 and not hi > lo) or not (np.isfinite(lo)
-                                                  and np.isfinite(hi)):
-            raise ConfigError(f"--map {spec!r}: empty range (need "
-                              "LO < HI and N >= 1)")
+        if (
+            isinstance(current, (list, dict))
+            or not isinstance(current, (int, float))
+            or isinstance(current, bool)
+        ):
+            raise ConfigError(
+                f"--map {field!r} is not a numeric scenario field"
+            )
+        if (
+            n < 1
+            or (n > 1 and not hi > lo)
+            or not (np.isfinite(lo) and np.isfinite(hi))
+        ):
+            raise ConfigError(
+                f"--map {spec!r}: empty range (need LO < HI and N >= 1)"
+            )
         values = np.linspace(lo, hi, n) if n > 1 else np.array([lo])
         for v in (values[0], values[-1]):
             frozen_scenario(scenario, **{field: v})  # ConfigError if bad
@@ -115,10 +137,12 @@ class StabilityMap:
         self.units = self.units or {}
 
     def to_dict(self):
-        return {"fields": [a.field for a in self.axes],
-                "units": [self.units.get(a.field, "") for a in self.axes],
-                "values": [a.values.tolist() for a in self.axes],
-                "rho": self.rho.tolist()}
+        return {
+            "fields": [a.field for a in self.axes],
+            "units": [self.units.get(a.field, "") for a in self.axes],
+            "values": [a.values.tolist() for a in self.axes],
+            "rho": self.rho.tolist(),
+        }
 
 
 def _affine_coordinate(scenario: Scenario, field: str):
@@ -134,8 +158,7 @@ def _affine_coordinate(scenario: Scenario, field: str):
     return None
 
 
-def fast_rho(op: OperatingPoint, fields: Sequence[str], *,
-             delta: float = 1e-9):
+def fast_rho(op: OperatingPoint, fields: Sequence[str], *, delta: float = 1e-9):
     """``rho_of(**overrides)`` for :func:`stability_map` that reuses what
     does not change between grid points, or None when a field is not one
     it knows. The one-period map is split at t_k + delta into the sample
@@ -151,10 +174,14 @@ def fast_rho(op: OperatingPoint, fields: Sequence[str], *,
     within 2e-5 at cutoffs 10-100 Hz and gains 400-6000 N s/m; 1 s after
     contact (less steady) 1.50 against 1.42 at 60 Hz and 5000 N s/m."""
     from deburr_drake.analysis.operating_point import transfer_state
-    from deburr_drake.analysis.sampled import (cell_map_entries,
-                                               period_map, simulator_config,
-                                               spectral_radius)
+    from deburr_drake.analysis.sampled import (
+        cell_map_entries,
+        period_map,
+        simulator_config,
+        spectral_radius,
+    )
     from deburr_drake.cell.diagram import make_deburring_diagram
+
     coords = [_affine_coordinate(op.scenario, f) for f in fields]
     base = frozen_scenario(op.scenario)
     if any(c is None for c in coords) or base.simulation.error_control:
@@ -173,61 +200,87 @@ def fast_rho(op: OperatingPoint, fields: Sequence[str], *,
         return diagram, context, cell_map_entries(diagram)
 
     diagram, context, entries = prepared({})
-    sample0 = period_map(diagram, context, entries, period=delta,
-                         config=config)
+    sample0 = period_map(diagram, context, entries, period=delta, config=config)
     # The state just after the sample, then the rest of the period.
     from deburr_drake.analysis.sampled import _one_period, _read, _write
+
     after = context.Clone()
-    _write(entries, diagram, after, _one_period(
-        diagram, context, entries, _read(entries, diagram, context), delta,
-        config))
+    _write(
+        entries,
+        diagram,
+        after,
+        _one_period(
+            diagram,
+            context,
+            entries,
+            _read(entries, diagram, context),
+            delta,
+            config,
+        ),
+    )
     # _one_period moved only the entries; the rest of the state (FOH,
     # adaptation: frozen or slow) is the operating point's.
     after.SetTime(context.get_time() + delta)
-    integrate = period_map(diagram, after, entries, period=period - delta,
-                           config=config)
+    integrate = period_map(
+        diagram, after, entries, period=period - delta, config=config
+    )
     slopes = []
     for field, coord in zip(fields, coords):
         v0 = float(get_field(op.scenario, field))
         v1 = v0 * 1.5 if v0 else 1.0
         d, c, e = prepared({field: v1})
         sample = period_map(d, c, e, period=delta, config=config)
-        slopes.append((field, coord, coord(v0),
-                       (sample - sample0) / (coord(v1) - coord(v0))))
+        slopes.append(
+            (
+                field,
+                coord,
+                coord(v0),
+                (sample - sample0) / (coord(v1) - coord(v0)),
+            )
+        )
 
     def rho_of(**overrides):
         S = sample0.copy()
         for field, coord, c0, slope in slopes:
             S += (coord(overrides[field]) - c0) * slope
         return spectral_radius(integrate @ S)
+
     return rho_of
 
 
-def stability_map(op: OperatingPoint, axes: Sequence[MapAxis], *,
-                  rho_of: Optional[Callable[..., float]] = None,
-                  progress: Optional[Callable[[str], None]] = None
-                  ) -> StabilityMap:
+def stability_map(
+    op: OperatingPoint,
+    axes: Sequence[MapAxis],
+    *,
+    rho_of: Optional[Callable[..., float]] = None,
+    progress: Optional[Callable[[str], None]] = None,
+) -> StabilityMap:
     """rho at every grid point, all from the one operating point (the
     simulation to steady cutting is done once); with fields
     :func:`fast_rho` knows, the maps are reused between grid points,
     otherwise each point rebuilds the diagram and its map."""
     from deburr_drake.analysis.sampled import sampled_loop
+
     if rho_of is None:
         rho_of = fast_rho(op, [a.field for a in axes])
     if rho_of is None:
+
         def rho_of(**overrides):
             return sampled_loop(op, **overrides).spectral_radius
+
     shape = tuple(len(a.values) for a in axes)
     rho = np.zeros(shape)
     for index in np.ndindex(*shape):
-        overrides = {a.field: float(a.values[i])
-                     for a, i in zip(axes, index)}
+        overrides = {a.field: float(a.values[i]) for a, i in zip(axes, index)}
         rho[index] = rho_of(**overrides)
         if progress:
             progress(f"map {index}: rho = {rho[index]:.4f}")
-    return StabilityMap(list(axes), rho, op.scenario.name,
-                        {a.field: field_unit(op.scenario, a.field)
-                         for a in axes})
+    return StabilityMap(
+        list(axes),
+        rho,
+        op.scenario.name,
+        {a.field: field_unit(op.scenario, a.field) for a in axes},
+    )
 
 
 def rho_colour_norm(rho):
@@ -235,6 +288,7 @@ def rho_colour_norm(rho):
     colour map's middle, yellow in RdYlGn_r), symmetric, wide enough for
     every value: a cell is green only if rho < 1."""
     from matplotlib.colors import TwoSlopeNorm
+
     spread = max(1e-3, float(np.max(np.abs(np.asarray(rho) - 1.0))))
     return TwoSlopeNorm(vcenter=1.0, vmin=1.0 - spread, vmax=1.0 + spread)
 
@@ -245,8 +299,10 @@ def plot_map(m: StabilityMap, path, *, boundaries=None, units=None):
     labelled with the fields' ``units`` (by field; "" none), simulated
     boundary points on top when given."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     units = units or m.units
 
     def label(field):
@@ -261,12 +317,22 @@ def plot_map(m: StabilityMap, path, *, boundaries=None, units=None):
         ax.set(xlabel=label(m.axes[0].field), ylabel=rho_label)
         for b in boundaries or []:
             if b["parameter"] == m.axes[0].field and b.get("simulated"):
-                ax.axvline(b["simulated"], color="k", ls="--",
-                           label="simulated boundary")
+                ax.axvline(
+                    b["simulated"],
+                    color="k",
+                    ls="--",
+                    label="simulated boundary",
+                )
     else:
         x, y = m.axes[0].values, m.axes[1].values
-        mesh = ax.pcolormesh(x, y, m.rho.T, shading="nearest",
-                             cmap="RdYlGn_r", norm=rho_colour_norm(m.rho))
+        mesh = ax.pcolormesh(
+            x,
+            y,
+            m.rho.T,
+            shading="nearest",
+            cmap="RdYlGn_r",
+            norm=rho_colour_norm(m.rho),
+        )
         fig.colorbar(mesh, ax=ax, label=rho_label + ", centred on 1")
         if m.rho.min() < 1 < m.rho.max():
             ax.contour(x, y, m.rho.T, levels=[1.0], colors="k")
@@ -276,8 +342,9 @@ def plot_map(m: StabilityMap, path, *, boundaries=None, units=None):
                 ax.axvline(b["simulated"], color="k", ls="--")
             if b["parameter"] == m.axes[1].field and b.get("simulated"):
                 ax.axhline(b["simulated"], color="k", ls="--")
-    ax.set_title(f"{m.scenario}: stability of the sampled loop "
-                 "(rho < 1 stable)")
+    ax.set_title(
+        f"{m.scenario}: stability of the sampled loop (rho < 1 stable)"
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

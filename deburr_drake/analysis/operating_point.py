@@ -44,15 +44,25 @@ from pydrake.common import RandomGenerator
 from pydrake.systems.framework import Context, Diagram
 
 from deburr_drake.cell.diagram import make_deburring_diagram
-from deburr_drake.config import (ConfigError, Scenario,  # noqa: F401
-                                 get_field, set_field)
-from deburr_drake.control.layout import CHAMFER_STATE
 from deburr_drake.cell.process import PROCESS_STATE
+from deburr_drake.config import (
+    ConfigError,
+    Scenario,
+    get_field,
+    set_field,
+)
+from deburr_drake.control.layout import CHAMFER_STATE
 from deburr_drake.runs.simulation import make_simulator
 
-__all__ = ["OperatingPoint", "find_operating_point", "frozen_scenario",
-           "transfer_state", "get_field", "set_field",
-           "DEFAULT_TIME_AFTER_CONTACT"]
+__all__ = [
+    "OperatingPoint",
+    "find_operating_point",
+    "frozen_scenario",
+    "transfer_state",
+    "get_field",
+    "set_field",
+    "DEFAULT_TIME_AFTER_CONTACT",
+]
 
 #: Default simulated seconds of cutting (after the first contact) before the
 #: operating point is taken.
@@ -82,12 +92,16 @@ class OperatingPoint:
 
     def summary(self) -> Dict[str, float]:
         """time, depth, feed, forces (SI) for reports."""
-        return {"time": self.time, "contact_time": self.contact_time,
-                **self.signals}
+        return {
+            "time": self.time,
+            "contact_time": self.contact_time,
+            **self.signals,
+        }
 
 
-def frozen_scenario(scenario: Scenario, *, continuous: bool = False,
-                    **overrides) -> Scenario:
+def frozen_scenario(
+    scenario: Scenario, *, continuous: bool = False, **overrides
+) -> Scenario:
     """A copy of ``scenario`` with the adaptation frozen, the noise off and
     fixed integration steps of one control period (see the module
     docstring); with ``continuous`` the controller and
@@ -101,8 +115,7 @@ def frozen_scenario(scenario: Scenario, *, continuous: bool = False,
     # linear model: the clamp bounds a limit cycle, a guard stops the run.
     frozen.guards.enabled = False
     frozen.guards.saturate_effort = False
-    if frozen.simulation.error_control and \
-            frozen.controller.control_period > 0:
+    if frozen.simulation.error_control and frozen.controller.control_period > 0:
         frozen.simulation.error_control = False
         frozen.simulation.max_step = frozen.controller.control_period
     if continuous:
@@ -117,8 +130,12 @@ def frozen_scenario(scenario: Scenario, *, continuous: bool = False,
     return frozen.validate()
 
 
-def transfer_state(source: Diagram, source_context: Context,
-                   target: Diagram, target_context: Context):
+def transfer_state(
+    source: Diagram,
+    source_context: Context,
+    target: Diagram,
+    target_context: Context,
+):
     """Copies time and, subsystem by subsystem (matched by name), the
     continuous state and every discrete-state group whose count and sizes
     agree, from one diagram's context to another's (e.g. from the sampled
@@ -133,28 +150,40 @@ def transfer_state(source: Diagram, source_context: Context,
         dst = system.GetMyMutableContextFromRoot(target_context)
         if src.num_continuous_states() == dst.num_continuous_states() > 0:
             dst.SetContinuousState(
-                src.get_continuous_state_vector().CopyToVector())
-        if src.num_discrete_state_groups() == \
-                dst.num_discrete_state_groups() > 0:
-            sizes = [(src.get_discrete_state(i).size(),
-                      dst.get_discrete_state(i).size())
-                     for i in range(src.num_discrete_state_groups())]
+                src.get_continuous_state_vector().CopyToVector()
+            )
+        if (
+            src.num_discrete_state_groups()
+            == dst.num_discrete_state_groups()
+            > 0
+        ):
+            sizes = [
+                (
+                    src.get_discrete_state(i).size(),
+                    dst.get_discrete_state(i).size(),
+                )
+                for i in range(src.num_discrete_state_groups())
+            ]
             if all(a == b for a, b in sizes):
                 for i in range(src.num_discrete_state_groups()):
                     dst.SetDiscreteState(
-                        i, src.get_discrete_state(i).get_value())
+                        i, src.get_discrete_state(i).get_value()
+                    )
 
 
 def _signals(diagram: Diagram, context: Context) -> Dict[str, float]:
     observer = diagram.GetSubsystemByName("chamfer_observer")
     chamfer = observer.GetOutputPort("chamfer_state").Eval(
-        observer.GetMyContextFromRoot(context))
+        observer.GetMyContextFromRoot(context)
+    )
     process = diagram.GetSubsystemByName("cutting_process")
     state = process.GetOutputPort("process_state").Eval(
-        process.GetMyContextFromRoot(context))
+        process.GetMyContextFromRoot(context)
+    )
     generator = diagram.GetSubsystemByName("command_generator")
     feed = generator.GetOutputPort("feed").Eval(
-        generator.GetMyContextFromRoot(context))[0]
+        generator.GetMyContextFromRoot(context)
+    )[0]
     n2 = CHAMFER_STATE.get(chamfer, "n2")
     return {
         "depth": float(CHAMFER_STATE.get(chamfer, "delta")),
@@ -168,8 +197,15 @@ def _signals(diagram: Diagram, context: Context) -> Dict[str, float]:
     }
 
 
-def first_contact(diagram: Diagram, context: Context, advance_to, *,
-                  limit: float, name: str, step: float = 0.01) -> float:
+def first_contact(
+    diagram: Diagram,
+    context: Context,
+    advance_to,
+    *,
+    limit: float,
+    name: str,
+    step: float = 0.01,
+) -> float:
     """Advances the run (``advance_to(t)``) in ``step`` s until the first
     contact (depth > 0, ||f_n|| > CONTACT_FORCE) and returns its time;
     ConfigError when there is none within ``limit`` s."""
@@ -182,7 +218,8 @@ def first_contact(diagram: Diagram, context: Context, advance_to, *,
             raise ConfigError(
                 f"scenario '{name}': the tool never reached contact (depth "
                 f"> 0, ||f_n|| > {CONTACT_FORCE} N) within {limit:g} s: no "
-                "operating point")
+                "operating point"
+            )
         t += step
         advance_to(t)
 
@@ -199,11 +236,14 @@ def _next_analysis_time(t: float, inner: float, outer: float) -> float:
         k += 1
 
 
-def find_operating_point(scenario: Scenario, *,
-                         after_contact: float = DEFAULT_TIME_AFTER_CONTACT,
-                         at: float = None,
-                         max_time_to_contact: float = MAX_TIME_TO_CONTACT,
-                         max_burr_delay: float = 5.0) -> OperatingPoint:
+def find_operating_point(
+    scenario: Scenario,
+    *,
+    after_contact: float = DEFAULT_TIME_AFTER_CONTACT,
+    at: float | None = None,
+    max_time_to_contact: float = MAX_TIME_TO_CONTACT,
+    max_burr_delay: float = 5.0,
+) -> OperatingPoint:
     """Simulates ``scenario`` (as given: adaptation on, noise on) from its
     default context until ``after_contact`` seconds after the first contact
     (or to the absolute time ``at``), moved on to the next inner-loop sample
@@ -211,35 +251,48 @@ def find_operating_point(scenario: Scenario, *,
     burr. Raises ConfigError when the tool never reaches contact within
     ``max_time_to_contact`` or the chosen time is not positive."""
     scenario.validate()
-    period = scenario.controller.control_period or \
-        scenario.sensor.sample_period
+    period = scenario.controller.control_period or scenario.sensor.sample_period
     if at is not None and not (np.isfinite(at) and at > 0):
         raise ConfigError(f"--at = {at!r} is invalid: allowed a time > 0 s")
     if not after_contact >= 0:
-        raise ConfigError(f"after_contact = {after_contact!r} is invalid: "
-                          "allowed >= 0 s")
+        raise ConfigError(
+            f"after_contact = {after_contact!r} is invalid: allowed >= 0 s"
+        )
     diagram = make_deburring_diagram(scenario=scenario)
     simulator = make_simulator(diagram, scenario)
     context = simulator.get_mutable_context()
     diagram.SetRandomContext(
-        context, RandomGenerator(scenario.sensor.noise_seed))
+        context, RandomGenerator(scenario.sensor.noise_seed)
+    )
     simulator.Initialize()
-    contact = first_contact(diagram, context, simulator.AdvanceTo,
-                            limit=max_time_to_contact, name=scenario.name)
+    contact = first_contact(
+        diagram,
+        context,
+        simulator.AdvanceTo,
+        limit=max_time_to_contact,
+        name=scenario.name,
+    )
     target = at if at is not None else contact + after_contact
     target = _next_analysis_time(target, period, scenario.command.period)
     simulator.AdvanceTo(target)
     limit = target + max_burr_delay
     while _signals(diagram, context)["burr_area"] > 0 and target < limit:
-        target = _next_analysis_time(target + 0.1, period,
-                                     scenario.command.period)
+        target = _next_analysis_time(
+            target + 0.1, period, scenario.command.period
+        )
         simulator.AdvanceTo(target)
     signals = _signals(diagram, context)
     if signals["depth"] <= 0 or signals["normal_force"] <= CONTACT_FORCE:
         raise ConfigError(
             f"scenario '{scenario.name}': out of contact at t = "
             f"{target:g} s (depth {signals['depth']:.3g} m, ||f_n|| "
-            f"{signals['normal_force']:.3g} N): no operating point")
-    return OperatingPoint(scenario=scenario, diagram=diagram,
-                          context=context.Clone(), time=target,
-                          contact_time=contact, signals=signals)
+            f"{signals['normal_force']:.3g} N): no operating point"
+        )
+    return OperatingPoint(
+        scenario=scenario,
+        diagram=diagram,
+        context=context.Clone(),
+        time=target,
+        contact_time=contact,
+        signals=signals,
+    )

@@ -37,20 +37,38 @@ from typing import Callable, Dict, List, Optional
 import numpy as np
 
 from deburr_drake.analysis.operating_point import (
-    OperatingPoint, _next_analysis_time, _signals, frozen_scenario,
-    transfer_state)
-from deburr_drake.analysis.sampled import (_one_period, _read, _write,
-                                           cell_map_entries, period_map,
-                                           simulator_config,
-                                           spectral_radius)
+    OperatingPoint,
+    _next_analysis_time,
+    _signals,
+    frozen_scenario,
+    transfer_state,
+)
+from deburr_drake.analysis.sampled import (
+    _one_period,
+    _read,
+    _write,
+    cell_map_entries,
+    period_map,
+    simulator_config,
+    spectral_radius,
+)
 from deburr_drake.cell.diagram import make_deburring_diagram
-from deburr_drake.cell.gains import (GainDesign, apply_gains, design_gains,
-                                     resolve_gains)
+from deburr_drake.cell.gains import (
+    GainDesign,
+    apply_gains,
+    design_gains,
+    resolve_gains,
+)
 from deburr_drake.config import ConfigError, Scenario, get_field
 from deburr_drake.runs.simulation import make_simulator
 
-__all__ = ["Preflight", "preflight", "start_operating_point",
-           "GainMaps", "GAIN_MARGIN"]
+__all__ = [
+    "Preflight",
+    "preflight",
+    "start_operating_point",
+    "GainMaps",
+    "GAIN_MARGIN",
+]
 
 #: The designed K and K_o times this must still give rho < 1.
 GAIN_MARGIN = 2.0
@@ -69,9 +87,14 @@ def predicted_unstable(rho: float) -> bool:
     """rho (the map's spectral radius) beyond the unit circle by more than
     :data:`NEUTRAL_TOLERANCE`, or not finite."""
     return not rho <= 1.0 + NEUTRAL_TOLERANCE
+
+
 #: Gains the pre-flight names, element by element, then as groups.
-GAIN_FIELDS = ("controller.sliding_gain", "controller.orientation_gain",
-               "controller.null_space_damping")
+GAIN_FIELDS = (
+    "controller.sliding_gain",
+    "controller.orientation_gain",
+    "controller.null_space_damping",
+)
 _SPLIT = 1e-9  # s: the sample's end within the period
 
 
@@ -94,9 +117,14 @@ def start_operating_point(scenario: Scenario) -> OperatingPoint:
     t = _next_analysis_time(0.5 * inner, inner, scenario.command.period)
     simulator.AdvanceTo(t)
     context = simulator.get_context()
-    return OperatingPoint(scenario=scenario, diagram=diagram,
-                          context=context.Clone(), time=t, contact_time=0.0,
-                          signals=_signals(diagram, context))
+    return OperatingPoint(
+        scenario=scenario,
+        diagram=diagram,
+        context=context.Clone(),
+        time=t,
+        contact_time=0.0,
+        signals=_signals(diagram, context),
+    )
 
 
 class GainMaps:
@@ -110,18 +138,34 @@ class GainMaps:
         self.config = simulator_config(base)
         self.period = base.controller.control_period
         diagram, context, entries = self._prepared({})
-        self.sample0 = period_map(diagram, context, entries, period=_SPLIT,
-                                  config=self.config)
+        self.sample0 = period_map(
+            diagram, context, entries, period=_SPLIT, config=self.config
+        )
         after = context.Clone()
-        _write(entries, diagram, after, _one_period(
-            diagram, context, entries, _read(entries, diagram, context),
-            _SPLIT, self.config))
+        _write(
+            entries,
+            diagram,
+            after,
+            _one_period(
+                diagram,
+                context,
+                entries,
+                _read(entries, diagram, context),
+                _SPLIT,
+                self.config,
+            ),
+        )
         after.SetTime(context.get_time() + _SPLIT)
-        self.integrate = period_map(diagram, after, entries,
-                                    period=self.period - _SPLIT,
-                                    config=self.config)
-        self.full = period_map(diagram, context, entries, period=self.period,
-                               config=self.config)
+        self.integrate = period_map(
+            diagram,
+            after,
+            entries,
+            period=self.period - _SPLIT,
+            config=self.config,
+        )
+        self.full = period_map(
+            diagram, context, entries, period=self.period, config=self.config
+        )
         self.slopes: Dict[str, np.ndarray] = {}
 
     def _prepared(self, overrides):
@@ -151,8 +195,9 @@ class GainMaps:
         """rho of the whole period's map (not split)."""
         return spectral_radius(self.full)
 
-    def largest_stable(self, name: str, *, iterations: int = 20
-                       ) -> Optional[float]:
+    def largest_stable(
+        self, name: str, *, iterations: int = 20
+    ) -> Optional[float]:
         """The largest coordinate in (0, 1] of path ``name`` with rho < 1
         (the others at 1): down from 1 by factors of 0.7 to the first
         stable one, then bisection; None if none down to 1e-3 is (a gain
@@ -194,15 +239,22 @@ class Preflight:
     lines: List[str] = field(default_factory=list)
 
     def to_dict(self) -> dict:
-        out = {"predicted_rho": self.rho, "time_s": self.time,
-               "seconds": self.seconds}
+        out = {
+            "predicted_rho": self.rho,
+            "time_s": self.time,
+            "seconds": self.seconds,
+        }
         if self.design is not None:
-            out.update({"design": "auto",
-                        "gains": self.design.as_fields(),
-                        "numbers": self.design.numbers,
-                        "gain_margin": GAIN_MARGIN,
-                        "rho_at_gain_margin": self.rho_at_margin,
-                        "margin_scale": self.margin_scale})
+            out.update(
+                {
+                    "design": "auto",
+                    "gains": self.design.as_fields(),
+                    "numbers": self.design.numbers,
+                    "gain_margin": GAIN_MARGIN,
+                    "rho_at_gain_margin": self.rho_at_margin,
+                    "margin_scale": self.margin_scale,
+                }
+            )
         return out
 
 
@@ -226,8 +278,7 @@ def _refusal(scenario: Scenario, maps: GainMaps, rho: float) -> str:
     else all of K and K_o scaled together."""
     candidates = []
     for path in GAIN_FIELDS:
-        if path == "controller.null_space_damping" and \
-                op_joints(maps) <= 6:
+        if path == "controller.null_space_damping" and op_joints(maps) <= 6:
             continue
         value = get_field(scenario, path)
         values = value if isinstance(value, list) else [value]
@@ -241,10 +292,12 @@ def _refusal(scenario: Scenario, maps: GainMaps, rho: float) -> str:
                 candidates.append((c, name, v, c * v))
     if candidates:
         c, name, v, stable = max(candidates)
-        return (f"{name} = {v:g} is predicted unstable: the sampled loop "
-                f"at the start pose has rho = {rho:.4f} (> 1); the largest "
-                f"stable {name} is {_down(stable)} with the other gains as "
-                "written (--no-preflight runs anyway)")
+        return (
+            f"{name} = {v:g} is predicted unstable: the sampled loop "
+            f"at the start pose has rho = {rho:.4f} (> 1); the largest "
+            f"stable {name} is {_down(stable)} with the other gains as "
+            "written (--no-preflight runs anyway)"
+        )
     for path in GAIN_FIELDS[:2]:
         values = list(get_field(scenario, path))
         maps.add_path(path, lambda c, p=path, v=values: _scaled(p, v, c))
@@ -253,55 +306,73 @@ def _refusal(scenario: Scenario, maps: GainMaps, rho: float) -> str:
             candidates.append((c, path, values))
     if candidates:
         c, path, values = max(candidates)
-        return (f"{path} = {values} is predicted unstable: the sampled loop"
-                f" at the start pose has rho = {rho:.4f} (> 1); the largest "
-                f"stable {path}, scaled together, is "
-                f"{[float(f'{c * v:.3g}') for v in values]} with the other "
-                "gains as written (--no-preflight runs anyway)")
+        return (
+            f"{path} = {values} is predicted unstable: the sampled loop"
+            f" at the start pose has rho = {rho:.4f} (> 1); the largest "
+            f"stable {path}, scaled together, is "
+            f"{[float(f'{c * v:.3g}') for v in values]} with the other "
+            "gains as written (--no-preflight runs anyway)"
+        )
     K = list(scenario.controller.sliding_gain)
     K_o = list(scenario.controller.orientation_gain)
-    maps.add_path("both", lambda c: {
-        **_scaled("controller.sliding_gain", K, c),
-        **_scaled("controller.orientation_gain", K_o, c)})
+    maps.add_path(
+        "both",
+        lambda c: {
+            **_scaled("controller.sliding_gain", K, c),
+            **_scaled("controller.orientation_gain", K_o, c),
+        },
+    )
     c = maps.largest_stable("both")
     if c is None:
-        return (f"controller.sliding_gain = {K} and "
-                f"controller.orientation_gain = {K_o} are predicted "
-                f"unstable: the sampled loop at the start pose has rho = "
-                f"{rho:.4f} (> 1), and lowering them does not make it "
-                "stable (--no-preflight runs anyway)")
-    return (f"controller.sliding_gain = {K} and controller.orientation_gain"
-            f" = {K_o} are predicted unstable: the sampled loop at the start "
-            f"pose has rho = {rho:.4f} (> 1), and neither lowered alone makes"
-            f" it stable; the largest stable, both scaled together: "
-            f"{[float(_down(c * v)) for v in K]} and "
-            f"{[float(_down(c * v)) for v in K_o]} (x {_down(c)}; "
-            "controller.design: auto designs them; --no-preflight runs "
-            "anyway)")
+        return (
+            f"controller.sliding_gain = {K} and "
+            f"controller.orientation_gain = {K_o} are predicted "
+            f"unstable: the sampled loop at the start pose has rho = "
+            f"{rho:.4f} (> 1), and lowering them does not make it "
+            "stable (--no-preflight runs anyway)"
+        )
+    return (
+        f"controller.sliding_gain = {K} and controller.orientation_gain"
+        f" = {K_o} are predicted unstable: the sampled loop at the start "
+        f"pose has rho = {rho:.4f} (> 1), and neither lowered alone makes"
+        f" it stable; the largest stable, both scaled together: "
+        f"{[float(_down(c * v)) for v in K]} and "
+        f"{[float(_down(c * v)) for v in K_o]} (x {_down(c)}; "
+        "controller.design: auto designs them; --no-preflight runs "
+        "anyway)"
+    )
 
 
 def _both_paths(maps: GainMaps, scenario: Scenario):
     K = list(scenario.controller.sliding_gain)
     K_o = list(scenario.controller.orientation_gain)
     maps.add_path("K", lambda c: _scaled("controller.sliding_gain", K, c))
-    maps.add_path("K_o", lambda c: _scaled("controller.orientation_gain",
-                                           K_o, c))
+    maps.add_path(
+        "K_o", lambda c: _scaled("controller.orientation_gain", K_o, c)
+    )
 
 
-def preflight(scenario: Scenario, *,
-              say: Callable[[str], None] = lambda line: None) -> Preflight:
+def preflight(
+    scenario: Scenario, *, say: Callable[[str], None] = lambda line: None
+) -> Preflight:
     """Designs the gains if ``controller.design`` is auto (written into
     ``scenario``, in place) and proves them, then checks the sampled loop
     at the start pose; ConfigError (one line: the gain, rho, its largest
     stable value) if it is predicted unstable. Returns what it found."""
     import time
+
     t0 = time.perf_counter()
     c = scenario.controller
     if not c.control_period > 0:
-        return Preflight(rho=float("nan"), time=0.0,
-                         lines=["pre-flight: controller.control_period 0 "
-                                "(a continuous controller): no sampled "
-                                "loop to check"])
+        return Preflight(
+            rho=float("nan"),
+            time=0.0,
+            lines=[
+                "pre-flight: controller.control_period 0 "
+                "(a continuous controller): no sampled "
+                "loop to check"
+            ],
+        )
     design = None
     if c.resolved_design(scenario.robot) == "auto":
         design = design_gains(scenario)
@@ -315,11 +386,14 @@ def preflight(scenario: Scenario, *,
         _both_paths(maps, scenario)
         result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
         scale = 1.0
-        while predicted_unstable(result.rho_at_margin) and \
-                scale > MIN_MARGIN_SCALE:
+        while (
+            predicted_unstable(result.rho_at_margin)
+            and scale > MIN_MARGIN_SCALE
+        ):
             scale *= 0.7
-            result.rho_at_margin = maps.rho(K=GAIN_MARGIN * scale,
-                                            K_o=GAIN_MARGIN * scale)
+            result.rho_at_margin = maps.rho(
+                K=GAIN_MARGIN * scale, K_o=GAIN_MARGIN * scale
+            )
         if predicted_unstable(result.rho_at_margin):
             # Not the gains (twice a quarter of them is not stable either):
             # the design as it is, and the margin it does not hold said.
@@ -336,19 +410,28 @@ def preflight(scenario: Scenario, *,
             result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
     if design is not None:
         n = design.numbers
-        margin = "not computed (unstable at the design)" \
-            if result.rho_at_margin is None else \
-            f"{result.rho_at_margin:.5f}" + (
-                "" if not predicted_unstable(result.rho_at_margin)
-                else " (the margin is NOT held)")
+        margin = (
+            "not computed (unstable at the design)"
+            if result.rho_at_margin is None
+            else f"{result.rho_at_margin:.5f}"
+            + (
+                ""
+                if not predicted_unstable(result.rho_at_margin)
+                else " (the margin is NOT held)"
+            )
+        )
         result.lines += [
             f"gains designed from the model (controller.design: auto; "
             f"lightest task mass {n['lightest_task_mass_kg']:.2f} kg, "
             f"gravity error at the tool "
             f"{np.round(n['gravity_error_force_N'], 1).tolist()} N, "
             f"max eig(M^-1 D) T = {n['sampled_rate']:.2f}"
-            + (f", K and K_o x {scale:.3g} for the gain margin"
-               if scale < 1.0 else "") + "):",
+            + (
+                f", K and K_o x {scale:.3g} for the gain margin"
+                if scale < 1.0
+                else ""
+            )
+            + "):",
             f"  sliding_gain {design.sliding_gain} N s/m, sliding_lambda "
             f"{design.sliding_lambda} 1/s, orientation_gain "
             f"{design.orientation_gain} N m s/rad, orientation_lambda "
@@ -357,7 +440,8 @@ def preflight(scenario: Scenario, *,
             f"{design.sliding_scales[0] * c.fuzzy.width_fraction * 1e3:g} "
             f"mm/s), fuzzy.position_scale {design.position_scale:g} m",
             f"  predicted rho {rho:.5f} at the start pose, {margin} with K "
-            f"and K_o x {GAIN_MARGIN:g}"]
+            f"and K_o x {GAIN_MARGIN:g}",
+        ]
     for line in result.lines:
         say(line)
     if predicted_unstable(rho):
@@ -365,13 +449,15 @@ def preflight(scenario: Scenario, *,
     if rho >= 1.0:
         result.lines.append(
             f"pre-flight: a mode at |z| = {rho:.7f}, on the unit circle within"
-            f" the map's resolution ({NEUTRAL_TOLERANCE:g}): neutral")
+            f" the map's resolution ({NEUTRAL_TOLERANCE:g}): neutral"
+        )
         say(result.lines[-1])
     result.seconds = time.perf_counter() - t0
     result.lines.append(
         f"pre-flight: the sampled loop at the start pose is "
         f"{'stable' if rho < 1.0 else 'not unstable (neutral)'}, "
-        f"rho = {rho:.7f} ({result.seconds:.1f} s)")
+        f"rho = {rho:.7f} ({result.seconds:.1f} s)"
+    )
     say(result.lines[-1])
     return result
 
@@ -381,6 +467,7 @@ def loop_key(scenario: Scenario) -> str:
     without its name, burrs and sensor noise (a sweep checks each distinct
     key once)."""
     from pydrake.common.yaml import yaml_dump_typed
+
     s = copy.deepcopy(scenario)
     s.name = "x"
     s.process.burrs = []

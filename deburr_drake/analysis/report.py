@@ -9,37 +9,62 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import time
 from pathlib import Path
+import time
 from typing import Callable, Dict, Optional
 
 import numpy as np
 
-from deburr_drake.analysis.along import (DEFAULT_SPACING, RhoPoint,
-                                         analysis_run, guard_that_would_stop,
-                                         plot_rho_along_run, rho_of_map)
-from deburr_drake.analysis.frequency import (normal_force_loop,
-                                             plot_bode_nyquist)
-from deburr_drake.analysis.linearization import (eq8_time_constant,
-                                                 linearize_closed_loop)
+from deburr_drake.analysis.along import (
+    DEFAULT_SPACING,
+    RhoPoint,
+    analysis_run,
+    guard_that_would_stop,
+    plot_rho_along_run,
+    rho_of_map,
+)
+from deburr_drake.analysis.frequency import normal_force_loop, plot_bode_nyquist
+from deburr_drake.analysis.linearization import (
+    eq8_time_constant,
+    linearize_closed_loop,
+)
 from deburr_drake.analysis.operating_point import (
-    DEFAULT_TIME_AFTER_CONTACT, frozen_scenario)
+    DEFAULT_TIME_AFTER_CONTACT,
+    frozen_scenario,
+)
 from deburr_drake.analysis.robust import robust_margin
 from deburr_drake.analysis.sampled import sampled_loop
-from deburr_drake.analysis.settled import (SettleTolerances,
-                                           describe_oscillation, scan_run,
-                                           settle_check)
+from deburr_drake.analysis.settled import (
+    SettleTolerances,
+    describe_oscillation,
+    scan_run,
+    settle_check,
+)
 from deburr_drake.config import Scenario
 
-__all__ = ["analyze", "summary_text", "write_analysis", "plot_poles",
-           "SUMMARY_KEYS"]
+__all__ = [
+    "analyze",
+    "summary_text",
+    "write_analysis",
+    "plot_poles",
+    "SUMMARY_KEYS",
+]
 
 #: Keys analysis.json always holds (null where the run gives no value:
 #: no linearization of a run that is not steady).
-SUMMARY_KEYS = ("verdict", "verdict_reason", "rho_along_run", "robust",
-                "eigenvalues", "depth_time_constant_s",
-                "depth_time_constant_eq8_s", "sampled_spectral_radius",
-                "gain_margin_dB", "phase_margin_deg", "operating_point")
+SUMMARY_KEYS = (
+    "verdict",
+    "verdict_reason",
+    "rho_along_run",
+    "robust",
+    "eigenvalues",
+    "depth_time_constant_s",
+    "depth_time_constant_eq8_s",
+    "sampled_spectral_radius",
+    "gain_margin_dB",
+    "phase_margin_deg",
+    "operating_point",
+)
 
 
 def _finite(x):
@@ -65,25 +90,33 @@ def _oscillation_reason(osc: Dict, guard: Optional[Dict]) -> str:
         parts.append(f"|f_t| up to {osc['amplitude_N']:.1f} N (measured)")
     g = osc.get("growth")
     if g:
-        parts.append(f"growing {g['from_N']:.2g} -> {g['to_N']:.3g} N RMS "
-                     f"from {g['t0']:.2f} to {g['t1']:.2f} s "
-                     f"(x {osc['growth_per_s']:.3g} per s)")
+        parts.append(
+            f"growing {g['from_N']:.2g} -> {g['to_N']:.3g} N RMS "
+            f"from {g['t0']:.2f} to {g['t1']:.2f} s "
+            f"(x {osc['growth_per_s']:.3g} per s)"
+        )
     elif osc.get("rms_N") is not None:
-        parts.append(f"sustained, {osc['rms_N']:.3g} N RMS (a limit "
-                     "cycle)")
+        parts.append(f"sustained, {osc['rms_N']:.3g} N RMS (a limit cycle)")
     text = "the run oscillates" + (": " + ", ".join(parts) if parts else "")
     if guard:
-        text += (f"; the guard {guard['guard']} would have stopped it at "
-                 f"t = {guard['time']:.3f} s ({guard['detail']})")
+        text += (
+            f"; the guard {guard['guard']} would have stopped it at "
+            f"t = {guard['time']:.3f} s ({guard['detail']})"
+        )
     return text
 
 
-def analyze(scenario: Scenario, *, at: float = None,
-            after_contact: float = DEFAULT_TIME_AFTER_CONTACT,
-            overrides: Optional[Dict[str, float]] = None,
-            until: Optional[float] = None,
-            spacing: float = DEFAULT_SPACING, robust: bool = True,
-            progress: Optional[Callable[[str], None]] = None) -> Dict:
+def analyze(
+    scenario: Scenario,
+    *,
+    at: float | None = None,
+    after_contact: float = DEFAULT_TIME_AFTER_CONTACT,
+    overrides: Optional[Dict[str, float]] = None,
+    until: Optional[float] = None,
+    spacing: float = DEFAULT_SPACING,
+    robust: bool = True,
+    progress: Optional[Callable[[str], None]] = None,
+) -> Dict:
     """The verdict on the run the user will run, then (only if the run
     settled into steady cutting) the operating point's analysis:
     continuous linearization (modes, eq. (8) check), sampled one-period
@@ -102,13 +135,22 @@ def analyze(scenario: Scenario, *, at: float = None,
     the run's)."""
     overrides = dict(overrides or {})
     from deburr_drake.cell.truth import contact_truth
+
     say = progress or (lambda message: None)
     timings = {}
     tol = SettleTolerances()
-    say("the run: simulating the scenario (guards off), with the 2.5 ms "
-        "map at points along it")
-    run = analysis_run(scenario, at=at, after_contact=after_contact,
-                       until=until, spacing=spacing, progress=say)
+    say(
+        "the run: simulating the scenario (guards off), with the 2.5 ms "
+        "map at points along it"
+    )
+    run = analysis_run(
+        scenario,
+        at=at,
+        after_contact=after_contact,
+        until=until,
+        spacing=spacing,
+        progress=say,
+    )
     timings["run_s"] = run.wall_time_s - run.map_time_s
     timings["maps_along_run_s"] = run.map_time_s
     op = run.op
@@ -116,11 +158,14 @@ def analyze(scenario: Scenario, *, at: float = None,
     result = {
         "scenario": scenario.name,
         "overrides_at_operating_point": overrides,
-        "run": {"contact_time": run.contact_time, "end_time": run.end_time,
-                "stop_reason": run.stop_reason,
-                "stop_detail": run.stop_detail,
-                "guards": "off in the run; the first one that would have "
-                          "tripped is named"},
+        "run": {
+            "contact_time": run.contact_time,
+            "end_time": run.end_time,
+            "stop_reason": run.stop_reason,
+            "stop_detail": run.stop_detail,
+            "guards": "off in the run; the first one that would have "
+            "tripped is named",
+        },
         "settle_tolerances": dataclasses.asdict(tol),
     }
     for key in SUMMARY_KEYS:
@@ -132,11 +177,15 @@ def analyze(scenario: Scenario, *, at: float = None,
     else:
         check = settle_check(sig, run.end_time, tol)
         check.settled = False
-        check.reasons.append(run.op_note or (
-            f"no steady operating point from "
-            f"{at if at is not None else run.contact_time + after_contact:.3f}"
-            f" s to the end of the run ({run.end_time:.3f} s, "
-            f"{run.stop_reason})"))
+        check.reasons.append(
+            run.op_note
+            or (
+                f"no steady operating point from "
+                f"{at if at is not None else run.contact_time + after_contact:.3f}"
+                f" s to the end of the run ({run.end_time:.3f} s, "
+                f"{run.stop_reason})"
+            )
+        )
     result["settle_check"] = check.to_dict()
     guard = guard_that_would_stop(run, scenario)
     result["guard_that_would_stop"] = guard
@@ -147,7 +196,8 @@ def analyze(scenario: Scenario, *, at: float = None,
         if late is not None:
             osc = describe_oscillation(sig, late.start, tol)
             if osc["start_time"] is None or not (
-                    osc.get("sustained") or not final.settled):
+                osc.get("sustained") or not final.settled
+            ):
                 late = None  # a passing transient (a burr's entry)
     if not check.settled:
         osc = describe_oscillation(sig, run.contact_time + 0.5, tol)
@@ -156,24 +206,35 @@ def analyze(scenario: Scenario, *, at: float = None,
             result["verdict"] = "unstable"
             result["verdict_reason"] = (
                 f"the run failed at {run.end_time:.3f} s "
-                f"({run.stop_detail}); " + _oscillation_reason(osc, guard))
+                f"({run.stop_detail}); " + _oscillation_reason(osc, guard)
+            )
         elif transient or (op is None and run.op_note):
             result["verdict"] = "not settled"
             result["verdict_reason"] = (
                 f"not steady over [{check.start:.3f}, {check.end:.3f}] s: "
                 + "; ".join(check.reasons[:3])
-                + (f"; steady at the end of the run ({run.end_time:.2f} s):"
-                   " analyse a later time (--at)" if transient else ""))
+                + (
+                    f"; steady at the end of the run ({run.end_time:.2f} s):"
+                    " analyse a later time (--at)"
+                    if transient
+                    else ""
+                )
+            )
         else:
             result["verdict"] = "unstable"
-            where = (f"not steady over [{check.start:.3f}, "
-                     f"{check.end:.3f}] s and at the end of the run: "
-                     if op is not None else
-                     "never steady from the analysed time to the end of "
-                     f"the run; over its last {tol.window:g} s: ")
+            where = (
+                f"not steady over [{check.start:.3f}, "
+                f"{check.end:.3f}] s and at the end of the run: "
+                if op is not None
+                else "never steady from the analysed time to the end of "
+                f"the run; over its last {tol.window:g} s: "
+            )
             result["verdict_reason"] = (
-                where + "; ".join(check.reasons[:2]) + "; "
-                + _oscillation_reason(osc, guard))
+                where
+                + "; ".join(check.reasons[:2])
+                + "; "
+                + _oscillation_reason(osc, guard)
+            )
         result["oscillation"] = osc
     elif late is not None:
         result["oscillation"] = osc
@@ -181,26 +242,32 @@ def analyze(scenario: Scenario, *, at: float = None,
         result["verdict_reason"] = (
             f"steady at the analysed time {op.time:.3f} s but not over "
             f"[{late.start:.2f}, {late.end:.2f}] s: "
-            + "; ".join(late.reasons[:2]) + "; "
-            + _oscillation_reason(osc, guard))
+            + "; ".join(late.reasons[:2])
+            + "; "
+            + _oscillation_reason(osc, guard)
+        )
     if not check.settled:
         result["operating_point"] = op.summary() if op is not None else None
         result["rho_along_run"] = [p.to_dict() for p in run.points]
         result["robust"] = None
         result["timings_s"] = timings
-        say("not steady at the analysed time: no linearization (a limit "
-            "cycle is not an operating point)")
+        say(
+            "not steady at the analysed time: no linearization (a limit "
+            "cycle is not an operating point)"
+        )
         return result
 
     truth = contact_truth(scenario)
     t1 = time.perf_counter()
     say("continuous-time linearization")
-    lin = linearize_closed_loop(op, stiffness=truth.local_stiffness,
-                                **overrides)
+    lin = linearize_closed_loop(
+        op, stiffness=truth.local_stiffness, **overrides
+    )
     timings["linearization_s"] = time.perf_counter() - t1
     analysed = frozen_scenario(scenario, **overrides)
-    tau_eq8 = eq8_time_constant(analysed.controller.depth_gain,
-                                truth.local_stiffness, truth.c2)
+    tau_eq8 = eq8_time_constant(
+        analysed.controller.depth_gain, truth.local_stiffness, truth.c2
+    )
     t2 = time.perf_counter()
     say("one-period map of the sampled loop at the operating point")
     sampled = sampled_loop(op, **overrides)
@@ -213,59 +280,94 @@ def analyze(scenario: Scenario, *, at: float = None,
     points = list(run.points)
     if not overrides:  # the operating point is a point of the run
         r = rho_of_map(sampled.Phi, sampled.period)
-        points.append(RhoPoint(
-            t=op.time, arc_position=op.signals["arc_position"],
-            kind="operating point", rho=r["rho"],
-            frequency_hz=r["frequency_hz"], decay_rate=r["decay_rate"],
-            rho_oscillatory=r["rho_oscillatory"], burr_area=op.signals["burr_area"], context=op.context))
+        points.append(
+            RhoPoint(
+                t=op.time,
+                arc_position=op.signals["arc_position"],
+                kind="operating point",
+                rho=r["rho"],
+                frequency_hz=r["frequency_hz"],
+                decay_rate=r["decay_rate"],
+                rho_oscillatory=r["rho_oscillatory"],
+                burr_area=op.signals["burr_area"],
+                context=op.context,
+            )
+        )
     points.sort(key=lambda p: p.t)
     steady = [p for p in points if p.rho is not None]
-    result.update({
-        "operating_point": op.summary(),
-        "contact_truth": {"local_stiffness": truth.local_stiffness,
-                          "secant_stiffness": truth.secant_stiffness,
-                          "c0": truth.c0, "c2": truth.c2},
-        "eigenvalues": [[float(e.real), float(e.imag)]
-                        for e in lin.eigenvalues],
-        "modes": [{"group": m.group, "re": m.eigenvalue.real,
-                   "im": m.eigenvalue.imag,
-                   "natural_frequency_rad_s": m.natural_frequency,
-                   "damping_ratio": m.damping_ratio,
-                   "time_constant_s": m.time_constant} for m in lin.modes],
-        "depth_time_constant_s": lin.depth_time_constant,
-        "depth_time_constant_eq8_s": tau_eq8,
-        "depth_time_constant_error_rel": abs(
-            lin.depth_time_constant - tau_eq8) / tau_eq8,
-        "sampled_period_s": sampled.period,
-        "sampled_spectral_radius": sampled.spectral_radius,
-        "sampled_dominant_eigenvalue": [float(worst.real),
-                                        float(worst.imag)],
-        "sampled_dominant_frequency_hz": float(
-            abs(np.angle(worst)) / (2 * np.pi * sampled.period)),
-        "sampled_eigenvalues": [[float(e.real), float(e.imag)]
-                                for e in z_eigs],
-        "gain_margin_dB": loop.gain_margin_dB,
-        "phase_margin_deg": loop.phase_margin_deg,
-        "phase_crossover_hz": loop.phase_crossover_hz,
-        "gain_crossover_hz": loop.gain_crossover_hz,
-        "tangential_gain_margin_dB": tangential.gain_margin_dB,
-        "tangential_phase_margin_deg": tangential.phase_margin_deg,
-        "rho_along_run": [p.to_dict() for p in points],
-        "frozen": ["outer loop (command generator, first-order hold)",
-                   "adaptation (estimator c-hat, fuzzy theta)",
-                   "sensor noise"],
-    })
+    result.update(
+        {
+            "operating_point": op.summary(),
+            "contact_truth": {
+                "local_stiffness": truth.local_stiffness,
+                "secant_stiffness": truth.secant_stiffness,
+                "c0": truth.c0,
+                "c2": truth.c2,
+            },
+            "eigenvalues": [
+                [float(e.real), float(e.imag)] for e in lin.eigenvalues
+            ],
+            "modes": [
+                {
+                    "group": m.group,
+                    "re": m.eigenvalue.real,
+                    "im": m.eigenvalue.imag,
+                    "natural_frequency_rad_s": m.natural_frequency,
+                    "damping_ratio": m.damping_ratio,
+                    "time_constant_s": m.time_constant,
+                }
+                for m in lin.modes
+            ],
+            "depth_time_constant_s": lin.depth_time_constant,
+            "depth_time_constant_eq8_s": tau_eq8,
+            "depth_time_constant_error_rel": abs(
+                lin.depth_time_constant - tau_eq8
+            )
+            / tau_eq8,
+            "sampled_period_s": sampled.period,
+            "sampled_spectral_radius": sampled.spectral_radius,
+            "sampled_dominant_eigenvalue": [
+                float(worst.real),
+                float(worst.imag),
+            ],
+            "sampled_dominant_frequency_hz": float(
+                abs(np.angle(worst)) / (2 * np.pi * sampled.period)
+            ),
+            "sampled_eigenvalues": [
+                [float(e.real), float(e.imag)] for e in z_eigs
+            ],
+            "gain_margin_dB": loop.gain_margin_dB,
+            "phase_margin_deg": loop.phase_margin_deg,
+            "phase_crossover_hz": loop.phase_crossover_hz,
+            "gain_crossover_hz": loop.gain_crossover_hz,
+            "tangential_gain_margin_dB": tangential.gain_margin_dB,
+            "tangential_phase_margin_deg": tangential.phase_margin_deg,
+            "rho_along_run": [p.to_dict() for p in points],
+            "frozen": [
+                "outer loop (command generator, first-order hold)",
+                "adaptation (estimator c-hat, fuzzy theta)",
+                "sensor noise",
+            ],
+        }
+    )
     if steady:
         w = max(steady, key=lambda p: p.rho)
         result["smallest_margin"] = {
-            "rho": w.rho, "margin": 1.0 - w.rho, "t": w.t,
-            "arc_position": w.arc_position, "kind": w.kind,
+            "rho": w.rho,
+            "margin": 1.0 - w.rho,
+            "t": w.t,
+            "arc_position": w.arc_position,
+            "kind": w.kind,
             "frequency_hz": w.frequency_hz,
-            "decay_rate_per_s": w.decay_rate}
+            "decay_rate_per_s": w.decay_rate,
+        }
         o = max(steady, key=lambda p: p.rho_oscillatory)
         result["smallest_oscillatory_margin"] = {
-            "rho_oscillatory": o.rho_oscillatory, "t": o.t,
-            "arc_position": o.arc_position, "kind": o.kind}
+            "rho_oscillatory": o.rho_oscillatory,
+            "t": o.t,
+            "arc_position": o.arc_position,
+            "kind": o.kind,
+        }
     else:
         w = None
         result["smallest_margin"] = None
@@ -276,7 +378,8 @@ def analyze(scenario: Scenario, *, at: float = None,
                 f"the run is steady, but the sampled loop is unstable at "
                 f"t = {w.t:.2f} s ({w.kind}, arc "
                 f"{w.arc_position * 1e3:.1f} mm): rho = {w.rho:.5f}, "
-                f"dominant eigenvalue at {w.frequency_hz:.1f} Hz")
+                f"dominant eigenvalue at {w.frequency_hz:.1f} Hz"
+            )
         else:
             result["verdict"] = "stable"
             result["verdict_reason"] = (
@@ -285,22 +388,34 @@ def analyze(scenario: Scenario, *, at: float = None,
                 f"to the end of the run ({run.end_time:.2f} s, "
                 f"{run.stop_reason}); rho < 1 at all {len(steady)} steady "
                 "points along it"
-                + (f", largest {w.rho:.5f} at t = {w.t:.2f} s ({w.kind})"
-                   if w is not None else ""))
+                + (
+                    f", largest {w.rho:.5f} at t = {w.t:.2f} s ({w.kind})"
+                    if w is not None
+                    else ""
+                )
+            )
     if robust and w is not None:
         t3 = time.perf_counter()
         say("robust margin over the uncertain parameters' ranges")
         result["robust"] = robust_margin(
-            scenario, run.diagram, w.context, on_burr=w.burr_area > 0,
-            progress=say)
-        result["robust"]["point"] = {"t": w.t, "kind": w.kind,
-                                     "arc_position": w.arc_position}
+            scenario,
+            run.diagram,
+            w.context,
+            on_burr=w.burr_area > 0,
+            progress=say,
+        )
+        result["robust"]["point"] = {
+            "t": w.t,
+            "kind": w.kind,
+            "arc_position": w.arc_position,
+        }
         timings["robust_s"] = time.perf_counter() - t3
     else:
         result["robust"] = None
     result["timings_s"] = timings
-    objects.update({"op": op, "linearization": lin, "sampled": sampled,
-                    "loop": loop})
+    objects.update(
+        {"op": op, "linearization": lin, "sampled": sampled, "loop": loop}
+    )
     return result
 
 
@@ -308,21 +423,26 @@ def summary_text(result: Dict) -> str:
     """One screen: the verdict first, then the operating point, the modes
     by group, eq. (8), rho at the operating point and along the run, the
     robust margin, the margins."""
-    lines = [f"verdict: {result['verdict'].upper()}: "
-             f"{result['verdict_reason']}",
-             f"deburr-drake analyze: scenario '{result['scenario']}', run "
-             f"to {result['run']['end_time']:.2f} s "
-             f"({result['run']['stop_reason']}, guards off)"]
+    lines = [
+        f"verdict: {result['verdict'].upper()}: {result['verdict_reason']}",
+        f"deburr-drake analyze: scenario '{result['scenario']}', run "
+        f"to {result['run']['end_time']:.2f} s "
+        f"({result['run']['stop_reason']}, guards off)",
+    ]
     op = result.get("operating_point")
     if result.get("eigenvalues") is None:
         g = result.get("guard_that_would_stop")
         if g:
-            lines.append(f"guard that would have stopped the run: "
-                         f"{g['guard']} at t = {g['time']:.3f} s "
-                         f"({g['detail']})")
-        lines.append("no linearization: the run is not in steady cutting "
-                     "at the analysed time (a limit cycle is not an "
-                     "operating point)")
+            lines.append(
+                f"guard that would have stopped the run: "
+                f"{g['guard']} at t = {g['time']:.3f} s "
+                f"({g['detail']})"
+            )
+        lines.append(
+            "no linearization: the run is not in steady cutting "
+            "at the analysed time (a limit cycle is not an "
+            "operating point)"
+        )
         return "\n".join(lines)
     lines += [
         f"operating point t = {op['time']:.4f} s (contact at "
@@ -330,9 +450,12 @@ def summary_text(result: Dict) -> str:
         f"feed {op['feed'] * 1e3:.3f} mm/s, |f_n| {op['normal_force']:.2f} N,"
         f" |f_t| {op['chamfering_force']:.2f} N",
         "frozen: outer loop, adaptation, noise"
-        + (f"; analysed with {result['overrides_at_operating_point']} (a "
-           "what-if: the verdict is the run's as given)"
-           if result.get("overrides_at_operating_point") else ""),
+        + (
+            f"; analysed with {result['overrides_at_operating_point']} (a "
+            "what-if: the verdict is the run's as given)"
+            if result.get("overrides_at_operating_point")
+            else ""
+        ),
         "",
         "continuous-time modes (controller continuous, sensor low-pass "
         "continuous):",
@@ -345,7 +468,8 @@ def summary_text(result: Dict) -> str:
         lines.append(
             f"  {m['group']:12s} {m['re']:10.3f} {m['im']:11.3f} "
             f"{m['natural_frequency_rad_s']:11.3f} {m['damping_ratio']:7.3f} "
-            f"{m['time_constant_s']:9.4f}")
+            f"{m['time_constant_s']:9.4f}"
+        )
     lines += [
         "",
         f"slowest depth mode tau = {result['depth_time_constant_s']:.4f} s;"
@@ -369,29 +493,34 @@ def summary_text(result: Dict) -> str:
             f"smallest margin 1 - rho = {sm['margin']:.5f} (rho "
             f"{sm['rho']:.5f}, {sm['frequency_hz']:.1f} Hz, decay "
             f"{sm['decay_rate_per_s']:.3g} 1/s) at t = {sm['t']:.2f} s, arc "
-            f"{sm['arc_position'] * 1e3:.1f} mm ({sm['kind']})")
+            f"{sm['arc_position'] * 1e3:.1f} mm ({sm['kind']})"
+        )
     so = result.get("smallest_oscillatory_margin")
     if so:
         lines.append(
             f"  the loop's oscillatory modes (above 1 Hz): largest |z| "
             f"{so['rho_oscillatory']:.5f} at t = {so['t']:.2f} s "
-            f"({so['kind']})")
+            f"({so['kind']})"
+        )
     rb = result.get("robust")
     if rb:
-        for key, label in (("", "rho"), ("_oscillatory",
-                                         "|z| of the modes above 1 Hz")):
-            at = ", ".join(f"{k} {v:.4g}" for k, v in
-                           rb["at" + key].items())
+        for key, label in (
+            ("", "rho"),
+            ("_oscillatory", "|z| of the modes above 1 Hz"),
+        ):
+            at = ", ".join(f"{k} {v:.4g}" for k, v in rb["at" + key].items())
             lines.append(
                 f"robust: worst {label} {rb['rho_worst' + key]:.5f} "
                 f"(nominal {rb['rho_nominal' + key]:.5f}) over "
                 f"{len(rb['maps'])} maps at t = {rb['point']['t']:.2f} s, "
-                f"at {at}")
+                f"at {at}"
+            )
     lines.append(
         f"normal-force loop: gain margin {result['gain_margin_dB']:.1f} dB "
         f"(at {result['phase_crossover_hz']:.2f} Hz), phase margin "
         f"{result['phase_margin_deg']:.1f} deg (at "
-        f"{result['gain_crossover_hz']:.2f} Hz)")
+        f"{result['gain_crossover_hz']:.2f} Hz)"
+    )
     if "lyapunov" in result:
         ly = result["lyapunov"]
         lines.append(
@@ -399,16 +528,23 @@ def summary_text(result: Dict) -> str:
             f"{100 * ly['fraction_dV_positive_outside_dead_zone']:.0f} % of "
             f"{ly['samples_outside_dead_zone']} samples outside the dead "
             f"zone (V1: "
-            f"{100 * ly['fraction_dV1_positive_outside_dead_zone']:.0f} %)")
+            f"{100 * ly['fraction_dV1_positive_outside_dead_zone']:.0f} %)"
+        )
     if "boundaries" in result:
-        lines += ["", f"  {'parameter':52s} {'predicted':>11s} "
-                      f"{'simulated':>11s}"]
+        lines += [
+            "",
+            f"  {'parameter':52s} {'predicted':>11s} {'simulated':>11s}",
+        ]
+
         def fmt(x):
             return "none" if x is None else f"{x:.4g}"
+
         for b in result["boundaries"]:
-            lines.append(f"  {b['parameter'][:52]:52s} "
-                         f"{fmt(b['predicted']):>11s} "
-                         f"{fmt(b['simulated']):>11s}")
+            lines.append(
+                f"  {b['parameter'][:52]:52s} "
+                f"{fmt(b['predicted']):>11s} "
+                f"{fmt(b['simulated']):>11s}"
+            )
     return "\n".join(lines)
 
 
@@ -416,8 +552,10 @@ def plot_poles(result: Dict, path, *, title: str = ""):
     """Continuous eigenvalues (s-plane, by group) and the sampled map's
     (z-plane with the unit circle)."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.5))
     groups = {}
     for m in result["modes"]:
@@ -427,16 +565,20 @@ def plot_poles(result: Dict, path, *, title: str = ""):
         a.plot(pts[:, 0], pts[:, 1], "x", label=g)
     a.axvline(0, color="k", lw=0.5)
     a.set_xscale("symlog", linthresh=10)
-    a.set(xlabel="Re (1/s)", ylabel="Im (rad/s)",
-          title="continuous linearization")
+    a.set(
+        xlabel="Re (1/s)", ylabel="Im (rad/s)", title="continuous linearization"
+    )
     a.legend(fontsize=8)
     z = np.array(result["sampled_eigenvalues"])
     th = np.linspace(0, 2 * np.pi, 400)
     b.plot(np.cos(th), np.sin(th), "k", lw=0.5)
     b.plot(z[:, 0], z[:, 1], "o", mfc="none")
-    b.set(aspect="equal", xlabel="Re z", ylabel="Im z",
-          title=f"one-period map, rho = "
-                f"{result['sampled_spectral_radius']:.4f}")
+    b.set(
+        aspect="equal",
+        xlabel="Re z",
+        ylabel="Im z",
+        title=f"one-period map, rho = {result['sampled_spectral_radius']:.4f}",
+    )
     fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -454,19 +596,26 @@ def write_analysis(result: Dict, out) -> Dict[str, Path]:
     files["json"].write_text(json.dumps(_finite(data), indent=2))
     objects = result.get("_objects", {})
     if result.get("eigenvalues") is not None:
-        files["poles"] = plot_poles(result, out / "poles.png",
-                                    title=result["scenario"])
+        files["poles"] = plot_poles(
+            result, out / "poles.png", title=result["scenario"]
+        )
     if result.get("rho_along_run"):
         files["rho_along_run"] = plot_rho_along_run(
-            result["rho_along_run"], out / "rho_along_run.png",
-            title=result["scenario"])
+            result["rho_along_run"],
+            out / "rho_along_run.png",
+            title=result["scenario"],
+        )
     if "loop" in objects:
         files["bode_nyquist"] = plot_bode_nyquist(
-            objects["loop"], out / "bode_nyquist.png",
-            title=result["scenario"])
+            objects["loop"], out / "bode_nyquist.png", title=result["scenario"]
+        )
     if "map" in objects:
         from deburr_drake.analysis.maps import plot_map
-        files["map"] = plot_map(objects["map"], out / "stability_map.png",
-                                boundaries=result.get("boundaries"),
-                                units=objects["map"].units)
+
+        files["map"] = plot_map(
+            objects["map"],
+            out / "stability_map.png",
+            boundaries=result.get("boundaries"),
+            units=objects["map"].units,
+        )
     return files

@@ -25,7 +25,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, Dict, List, Optional, Tuple
 
-
 from deburr_drake.analysis.sampled import FrozenMap
 from deburr_drake.config import Scenario, get_field
 
@@ -57,16 +56,36 @@ class UncertainParameter:
 
 #: The default ranges (module docstring).
 UNCERTAIN_PARAMETERS = (
-    UncertainParameter("contact stiffness (hydroelastic modulus)",
-                       "tube.hydroelastic_modulus", 0.5, 1.5, "Pa"),
-    UncertainParameter("c0 (contact threshold force)",
-                       "process.contact_threshold_force", 0.5, 1.5, "N"),
-    UncertainParameter("cutting coefficient k_c",
-                       "process.cutting_coefficient", 0.7, 1.3, "N s/m^3"),
-    UncertainParameter("burr height (x the scenario's)", None, 0.0, 2.0,
-                       "-"),
-    UncertainParameter("model mass scale", "controller.model_mass_scale",
-                       -0.2, 0.2, "-", additive=True),
+    UncertainParameter(
+        "contact stiffness (hydroelastic modulus)",
+        "tube.hydroelastic_modulus",
+        0.5,
+        1.5,
+        "Pa",
+    ),
+    UncertainParameter(
+        "c0 (contact threshold force)",
+        "process.contact_threshold_force",
+        0.5,
+        1.5,
+        "N",
+    ),
+    UncertainParameter(
+        "cutting coefficient k_c",
+        "process.cutting_coefficient",
+        0.7,
+        1.3,
+        "N s/m^3",
+    ),
+    UncertainParameter("burr height (x the scenario's)", None, 0.0, 2.0, "-"),
+    UncertainParameter(
+        "model mass scale",
+        "controller.model_mass_scale",
+        -0.2,
+        0.2,
+        "-",
+        additive=True,
+    ),
 )
 
 
@@ -75,16 +94,22 @@ def _scale_burr(factor: float) -> Callable:
         process = diagram.GetSubsystemByName("cutting_process")
         pc = process.GetMyMutableContextFromRoot(context)
         index = process._burr_index
-        pc.SetDiscreteState(index, factor * pc.get_discrete_state(
-            index).get_value())
+        pc.SetDiscreteState(
+            index, factor * pc.get_discrete_state(index).get_value()
+        )
+
     return modify
 
 
-def robust_margin(scenario: Scenario, diagram, context, *,
-                  on_burr: bool,
-                  parameters=UNCERTAIN_PARAMETERS,
-                  progress: Optional[Callable[[str], None]] = None
-                  ) -> Dict:
+def robust_margin(
+    scenario: Scenario,
+    diagram,
+    context,
+    *,
+    on_burr: bool,
+    parameters=UNCERTAIN_PARAMETERS,
+    progress: Optional[Callable[[str], None]] = None,
+) -> Dict:
     """{rho_nominal, rho_worst, at {name: value}, the same for the
     oscillatory modes (``_oscillatory``: the modes above 1 Hz, see
     :func:`deburr_drake.analysis.rho_of_map`, with its own corner when it
@@ -97,19 +122,29 @@ def robust_margin(scenario: Scenario, diagram, context, *,
     maps: List[Dict] = []
 
     def rho_at(values: Dict[str, float]) -> float:
-        overrides = {p.field: values[p.name] for p in active
-                     if p.field is not None
-                     and values[p.name] != nominal[p.name]}
+        overrides = {
+            p.field: values[p.name]
+            for p in active
+            if p.field is not None and values[p.name] != nominal[p.name]
+        }
         burr = [values[p.name] for p in active if p.field is None]
         modify = _scale_burr(burr[0]) if burr and burr[0] != 1.0 else None
         from deburr_drake.analysis.along import rho_of_map
+
         frozen = FrozenMap(scenario, **overrides)
         r = rho_of_map(frozen.at(diagram, context, modify), frozen.period)
         rho = r["rho"]
-        maps.append({"values": dict(values), "rho": rho,
-                     "rho_oscillatory": r["rho_oscillatory"]})
-        say(f"robust: {overrides or ''}{' burr x' + str(burr[0]) if modify else ''}"
-            f" rho = {rho:.5f}")
+        maps.append(
+            {
+                "values": dict(values),
+                "rho": rho,
+                "rho_oscillatory": r["rho_oscillatory"],
+            }
+        )
+        say(
+            f"robust: {overrides or ''}{' burr x' + str(burr[0]) if modify else ''}"
+            f" rho = {rho:.5f}"
+        )
         return rho
 
     rho0 = rho_at(nominal)
@@ -137,10 +172,16 @@ def robust_margin(scenario: Scenario, diagram, context, *,
         "rho_worst_oscillatory": fast["rho_oscillatory"],
         "at_oscillatory": fast["values"],
         "maps": maps,
-        "parameters": [{"name": p.name, "field": p.field, "unit": p.unit,
-                        "range": list(p.values(scenario)[1:])}
-                       for p in active],
+        "parameters": [
+            {
+                "name": p.name,
+                "field": p.field,
+                "unit": p.unit,
+                "range": list(p.values(scenario)[1:]),
+            }
+            for p in active
+        ],
         "left_out": [p.name for p in parameters if p not in active],
         "method": "each parameter alone at both ends, then the corner of "
-                  "the worse ends (vertex search)",
+        "the worse ends (vertex search)",
     }

@@ -25,20 +25,33 @@ from dataclasses import dataclass
 from typing import List, Sequence
 
 import numpy as np
-from pydrake.systems.analysis import (ApplySimulatorConfig, InitializeParams,
-                                      Simulator, SimulatorConfig)
+from pydrake.systems.analysis import (
+    ApplySimulatorConfig,
+    InitializeParams,
+    Simulator,
+    SimulatorConfig,
+)
 from pydrake.systems.framework import Context, Diagram
 
-from deburr_drake.analysis.operating_point import (OperatingPoint,
-                                                   frozen_scenario,
-                                                   transfer_state)
+from deburr_drake.analysis.operating_point import (
+    OperatingPoint,
+    frozen_scenario,
+    transfer_state,
+)
 from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import Scenario
 from deburr_drake.runs.simulation import set_monitor
 
-__all__ = ["StateEntry", "period_map", "spectral_radius", "SampledLoop",
-           "sampled_loop", "cell_map_entries", "simulator_config",
-           "FrozenMap"]
+__all__ = [
+    "StateEntry",
+    "period_map",
+    "spectral_radius",
+    "SampledLoop",
+    "sampled_loop",
+    "cell_map_entries",
+    "simulator_config",
+    "FrozenMap",
+]
 
 
 @dataclass(frozen=True)
@@ -55,8 +68,9 @@ class StateEntry:
     label: str = ""
 
     def _vector(self, diagram: Diagram, context: Context):
-        sub = diagram.GetSubsystemByName(self.system).GetMyMutableContextFromRoot(
-            context)
+        sub = diagram.GetSubsystemByName(
+            self.system
+        ).GetMyMutableContextFromRoot(context)
         if self.kind == "continuous":
             return sub.get_mutable_continuous_state_vector()
         return sub.get_mutable_discrete_state(self.group)
@@ -78,8 +92,11 @@ class StateEntry:
 def simulator_config(scenario: Scenario) -> SimulatorConfig:
     sim = scenario.simulation
     return SimulatorConfig(
-        integration_scheme=sim.integrator, max_step_size=sim.max_step,
-        accuracy=sim.accuracy, use_error_control=sim.error_control)
+        integration_scheme=sim.integrator,
+        max_step_size=sim.max_step,
+        accuracy=sim.accuracy,
+        use_error_control=sim.error_control,
+    )
 
 
 def _read(entries, diagram, context):
@@ -90,7 +107,7 @@ def _write(entries, diagram, context, z):
     k = 0
     for e in entries:
         n = e.get(diagram, context).size
-        e.set(diagram, context, z[k:k + n])
+        e.set(diagram, context, z[k : k + n])
         k += n
 
 
@@ -103,8 +120,7 @@ def _one_period(diagram, context0, entries, z, period, config):
     config.start_time = context0.get_time()
     ApplySimulatorConfig(config, simulator)
     if config.use_error_control:
-        simulator.get_mutable_integrator().set_target_accuracy(
-            config.accuracy)
+        simulator.get_mutable_integrator().set_target_accuracy(config.accuracy)
     # (with cenic, the plant's cache fresh after each step, as in a run)
     set_monitor(simulator, diagram, config.integration_scheme)
     simulator.Initialize(InitializeParams(suppress_initialization_events=True))
@@ -112,29 +128,35 @@ def _one_period(diagram, context0, entries, z, period, config):
     return _read(entries, diagram, context)
 
 
-def period_map(diagram: Diagram, context: Context,
-               entries: Sequence[StateEntry], *, period: float,
-               config: SimulatorConfig) -> np.ndarray:
+def period_map(
+    diagram: Diagram,
+    context: Context,
+    entries: Sequence[StateEntry],
+    *,
+    period: float,
+    config: SimulatorConfig,
+) -> np.ndarray:
     """d z(t + period) / d z(t) by central differences, z the
     concatenated ``entries``, each column two simulations of one period
     from a clone of ``context`` (initialization events suppressed: the
     periodic events due at the context's time are handled first)."""
     z0 = _read(entries, diagram, context)
-    steps = np.concatenate([
-        np.full(e.get(diagram, context).size, e.step) for e in entries])
+    steps = np.concatenate(
+        [np.full(e.get(diagram, context).size, e.step) for e in entries]
+    )
     columns = []
     for i in range(z0.size):
         dz = np.zeros_like(z0)
         dz[i] = steps[i]
         plus = _one_period(diagram, context, entries, z0 + dz, period, config)
-        minus = _one_period(diagram, context, entries, z0 - dz, period,
-                            config)
+        minus = _one_period(diagram, context, entries, z0 - dz, period, config)
         columns.append((plus - minus) / (2 * steps[i]))
     return np.array(columns).T
 
 
-def spectral_radius(M: np.ndarray, *, neutral: int = 0,
-                    tolerance: float = 1e-3) -> float:
+def spectral_radius(
+    M: np.ndarray, *, neutral: int = 0, tolerance: float = 1e-3
+) -> float:
     """max |eig(M)|, leaving out up to ``neutral`` eigenvalues within
     ``tolerance`` of 1 (a known neutral mode, such as a shift along the
     edge)."""
@@ -154,27 +176,51 @@ def cell_map_entries(diagram: Diagram) -> List[StateEntry]:
     process = diagram.GetSubsystemByName("cutting_process")
     nq, nv = plant.num_positions(), plant.num_velocities()
     return [
-        StateEntry("plant", "continuous", indices=tuple(range(nq)),
-                   step=1e-7, label="q"),
-        StateEntry("plant", "continuous", indices=tuple(range(nq, nq + nv)),
-                   step=1e-5, label="v"),
-        StateEntry("controller", "continuous", indices=(0,), step=1e-8,
-                   label="delta_d"),
+        StateEntry(
+            "plant",
+            "continuous",
+            indices=tuple(range(nq)),
+            step=1e-7,
+            label="q",
+        ),
+        StateEntry(
+            "plant",
+            "continuous",
+            indices=tuple(range(nq, nq + nv)),
+            step=1e-5,
+            label="v",
+        ),
+        StateEntry(
+            "controller", "continuous", indices=(0,), step=1e-8, label="delta_d"
+        ),
         StateEntry("force_sensor", "discrete", 0, step=1e-3, label="y"),
         # The controller's held actuation and the process's held force-law
         # terms (their discrete-state groups, see the classes).
-        StateEntry("controller", "discrete",
-                   int(controller._held["actuation"]), step=1e-3,
-                   label="u_held"),
+        StateEntry(
+            "controller",
+            "discrete",
+            int(controller._held["actuation"]),
+            step=1e-3,
+            label="u_held",
+        ),
         # delta_d's held rate: overwritten at each sample (a zero column
         # of the one-period map), but carried across a split of the
         # period (maps.fast_rho).
-        StateEntry("controller", "discrete",
-                   int(controller._held["derivatives"]), indices=(0,),
-                   step=1e-8, label="delta_d_rate"),
-        StateEntry("cutting_process", "discrete",
-                   int(process._terms_index), step=1e-4,
-                   label="force_law_terms"),
+        StateEntry(
+            "controller",
+            "discrete",
+            int(controller._held["derivatives"]),
+            indices=(0,),
+            step=1e-8,
+            label="delta_d_rate",
+        ),
+        StateEntry(
+            "cutting_process",
+            "discrete",
+            int(process._terms_index),
+            step=1e-4,
+            label="force_law_terms",
+        ),
     ]
 
 
@@ -206,25 +252,29 @@ class FrozenMap:
 
     def __init__(self, scenario: Scenario, **overrides):
         from deburr_drake.config import ConfigError
+
         self.scenario = frozen_scenario(scenario, **overrides)
         period = self.scenario.controller.control_period
-        if not (period > 0 and abs(self.scenario.sensor.sample_period
-                                   - period) < 1e-12
-                and abs(self.scenario.process.sample_period - period)
-                < 1e-12):
+        if not (
+            period > 0
+            and abs(self.scenario.sensor.sample_period - period) < 1e-12
+            and abs(self.scenario.process.sample_period - period) < 1e-12
+        ):
             raise ConfigError(
                 "the sampled-loop analysis needs controller.control_period "
                 "> 0 equal to sensor.sample_period and "
                 f"process.sample_period, got {period}, "
                 f"{self.scenario.sensor.sample_period}, "
-                f"{self.scenario.process.sample_period}")
+                f"{self.scenario.process.sample_period}"
+            )
         self.period = period
         self.config = simulator_config(self.scenario)
         self.diagram = make_deburring_diagram(scenario=self.scenario)
         self.entries = cell_map_entries(self.diagram)
 
-    def context_from(self, source: Diagram, source_context: Context,
-                     modify=None) -> Context:
+    def context_from(
+        self, source: Diagram, source_context: Context, modify=None
+    ) -> Context:
         """A context of the frozen diagram holding ``source_context``'s
         state (subsystems matched by name), changed by ``modify(diagram,
         context)`` if given."""
@@ -234,17 +284,24 @@ class FrozenMap:
             modify(self.diagram, context)
         return context
 
-    def at(self, source: Diagram, source_context: Context,
-           modify=None) -> np.ndarray:
+    def at(
+        self, source: Diagram, source_context: Context, modify=None
+    ) -> np.ndarray:
         """The one-period map at ``source_context`` (just before a
         sample)."""
         context = self.context_from(source, source_context, modify)
-        return period_map(self.diagram, context, self.entries,
-                          period=self.period, config=self.config)
+        return period_map(
+            self.diagram,
+            context,
+            self.entries,
+            period=self.period,
+            config=self.config,
+        )
 
 
-def sampled_loop(op: OperatingPoint, *, modify=None,
-                 **overrides) -> SampledLoop:
+def sampled_loop(
+    op: OperatingPoint, *, modify=None, **overrides
+) -> SampledLoop:
     """The one-period map of ``op``'s sampled loop, with scenario
     ``overrides`` by dotted name (e.g. ``sensor.cutoff_frequency``);
     ``modify(diagram, context)`` may change the operating point's state
@@ -254,12 +311,13 @@ def sampled_loop(op: OperatingPoint, *, modify=None,
     paper arm it said rho = 1.008 for a gain whose run is stable and 0.988
     for one whose run oscillates at 150 N; see docs/drafts/stability.md.)"""
     from deburr_drake.control.layout import CHAMFER_STATE
+
     frozen = FrozenMap(op.scenario, **overrides)
-    scenario, diagram, entries = frozen.scenario, frozen.diagram, \
-        frozen.entries
+    scenario, diagram, entries = frozen.scenario, frozen.diagram, frozen.entries
     context = frozen.context_from(op.diagram, op.context, modify)
-    Phi = period_map(diagram, context, entries, period=frozen.period,
-                     config=frozen.config)
+    Phi = period_map(
+        diagram, context, entries, period=frozen.period, config=frozen.config
+    )
     labels, start, rows = [], 0, None
     for e in entries:
         n = e.get(diagram, context).size
@@ -269,12 +327,25 @@ def sampled_loop(op: OperatingPoint, *, modify=None,
         start += n
     observer = diagram.GetSubsystemByName("chamfer_observer")
     chamfer = observer.GetOutputPort("chamfer_state").Eval(
-        observer.GetMyContextFromRoot(context))
+        observer.GetMyContextFromRoot(context)
+    )
     n1 = CHAMFER_STATE.get(chamfer, "n1")
     n2 = CHAMFER_STATE.get(chamfer, "n2")
-    alpha = 1.0 - np.exp(-2 * np.pi * scenario.sensor.cutoff_frequency
-                         * scenario.sensor.sample_period)
-    return SampledLoop(Phi=Phi, labels=labels, period=frozen.period,
-                       spectral_radius=spectral_radius(Phi),
-                       sensor_alpha=alpha, sensor_rows=rows, n1=n1.copy(),
-                       n2=n2.copy(), diagram=diagram, context=context)
+    alpha = 1.0 - np.exp(
+        -2
+        * np.pi
+        * scenario.sensor.cutoff_frequency
+        * scenario.sensor.sample_period
+    )
+    return SampledLoop(
+        Phi=Phi,
+        labels=labels,
+        period=frozen.period,
+        spectral_radius=spectral_radius(Phi),
+        sensor_alpha=alpha,
+        sensor_rows=rows,
+        n1=n1.copy(),
+        n2=n2.copy(),
+        diagram=diagram,
+        context=context,
+    )

@@ -35,9 +35,16 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-__all__ = ["SettleTolerances", "RunSignals", "SettleCheck", "settle_check",
-           "describe_oscillation", "first_guard_trip", "scan_run",
-           "fast_part"]
+__all__ = [
+    "SettleTolerances",
+    "RunSignals",
+    "SettleCheck",
+    "settle_check",
+    "describe_oscillation",
+    "first_guard_trip",
+    "scan_run",
+    "fast_part",
+]
 
 
 @dataclass
@@ -85,37 +92,48 @@ class RunSignals:
             depth=np.asarray(ch["delta"][:n], float),
             normal_force=np.asarray(ch["f_n"][:n], float),
             chamfering_force=np.asarray(ch["f_t"][:n], float),
-            speed=np.sum(np.asarray(ch["n2"][:n]) * np.asarray(
-                ch["xdot_p"][:n]), axis=1),
+            speed=np.sum(
+                np.asarray(ch["n2"][:n]) * np.asarray(ch["xdot_p"][:n]), axis=1
+            ),
             s=np.asarray(co["s"][:n], float)[:, axes],
             arc_position=np.asarray(ch["arc_position"][:n], float),
             desired_depth=scenario.task.desired_depth,
             desired_force=scenario.task.desired_chamfering_force,
             default_feed=scenario.command.default_feed,
-            sliding_lambda=lam)
+            sliding_lambda=lam,
+        )
 
     def tolerances(self, tol: SettleTolerances) -> Dict[str, float]:
         """Per signal, the RMS the fast part may have (SI)."""
-        out = {"depth": tol.depth * self.desired_depth,
-               "normal_force": tol.force * self.desired_force,
-               "chamfering_force": tol.force * self.desired_force,
-               "speed": tol.speed * self.default_feed}
+        out = {
+            "depth": tol.depth * self.desired_depth,
+            "normal_force": tol.force * self.desired_force,
+            "chamfering_force": tol.force * self.desired_force,
+            "speed": tol.speed * self.default_feed,
+        }
         for k, lam in enumerate(self.sliding_lambda):
             out[f"s[{k}]"] = lam * tol.depth * self.desired_depth
         return out
 
     def series(self) -> Dict[str, np.ndarray]:
-        out = {"depth": self.depth, "normal_force": self.normal_force,
-               "chamfering_force": self.chamfering_force,
-               "speed": self.speed}
+        out = {
+            "depth": self.depth,
+            "normal_force": self.normal_force,
+            "chamfering_force": self.chamfering_force,
+            "speed": self.speed,
+        }
         for k in range(self.s.shape[1]):
             out[f"s[{k}]"] = self.s[:, k]
         return out
 
 
 #: Units of the signals in messages (value scale, unit).
-_UNITS = {"depth": (1e3, "mm"), "normal_force": (1.0, "N"),
-          "chamfering_force": (1.0, "N"), "speed": (1e3, "mm/s")}
+_UNITS = {
+    "depth": (1e3, "mm"),
+    "normal_force": (1.0, "N"),
+    "chamfering_force": (1.0, "N"),
+    "speed": (1e3, "mm/s"),
+}
 
 
 def _fmt(name, value):
@@ -150,18 +168,27 @@ class SettleCheck:
     growth: Dict[str, float] = field(default_factory=dict)
 
     def to_dict(self):
-        return {"settled": self.settled, "window": [self.start, self.end],
-                "reasons": self.reasons, "fast_rms": self.fast_rms,
-                "tolerance": self.tolerance, "growth": self.growth}
+        return {
+            "settled": self.settled,
+            "window": [self.start, self.end],
+            "reasons": self.reasons,
+            "fast_rms": self.fast_rms,
+            "tolerance": self.tolerance,
+            "growth": self.growth,
+        }
 
 
 def _rms(x):
     return float(np.sqrt(np.mean(np.square(x)))) if len(x) else 0.0
 
 
-def settle_check(sig: RunSignals, end: float,
-                 tol: SettleTolerances = SettleTolerances(), *,
-                 window: Optional[float] = None) -> SettleCheck:
+def settle_check(
+    sig: RunSignals,
+    end: float,
+    tol: SettleTolerances = SettleTolerances(),
+    *,
+    window: Optional[float] = None,
+) -> SettleCheck:
     """Steady cutting over [end - window, end] (module docstring)."""
     window = tol.window if window is None else window
     start = end - window
@@ -173,8 +200,9 @@ def settle_check(sig: RunSignals, end: float,
     check = SettleCheck(True, start, end, tolerance=sig.tolerances(tol))
     if inside.sum() < 8:
         check.settled = False
-        check.reasons.append(f"the run has too few samples in "
-                             f"[{start:.3f}, {end:.3f}] s")
+        check.reasons.append(
+            f"the run has too few samples in [{start:.3f}, {end:.3f}] s"
+        )
         return check
     t = sig.t[around]
     depth = sig.depth[around][inside]
@@ -188,7 +216,8 @@ def settle_check(sig: RunSignals, end: float,
         check.settled = False
         check.reasons.append(
             f"out of contact in {100 * lost.mean():.1f} % of the window "
-            f"(depth <= 0 or ||f_n|| <= {tol.contact_force:g} N)")
+            f"(depth <= 0 or ||f_n|| <= {tol.contact_force:g} N)"
+        )
     growing = []
     for name, x in sig.series().items():
         r = fast_part(t, x[around], tol.average)[inside]
@@ -196,28 +225,38 @@ def settle_check(sig: RunSignals, end: float,
         limit = check.tolerance[name]
         check.fast_rms[name] = rms
         quarters = [_rms(q) for q in np.array_split(r, 4)]
-        g = quarters[-1] / quarters[0] if quarters[0] > 0 else (
-            np.inf if quarters[-1] > 0 else 1.0)
+        g = (
+            quarters[-1] / quarters[0]
+            if quarters[0] > 0
+            else (np.inf if quarters[-1] > 0 else 1.0)
+        )
         check.growth[name] = float(g)
         rising = all(b > a for a, b in zip(quarters, quarters[1:]))
         if not rms <= limit:
             check.settled = False
             check.reasons.append(
                 f"{name} oscillates: fast part RMS {_fmt(name, rms)} > "
-                f"{_fmt(name, limit)}")
+                f"{_fmt(name, limit)}"
+            )
         elif rising and g > tol.growth and quarters[-1] > 0.5 * limit:
             growing.append(
                 f"{name} oscillation grows {g:.2f} x over "
-                f"{0.75 * window:g} s (RMS {_fmt(name, quarters[-1])})")
+                f"{0.75 * window:g} s (RMS {_fmt(name, quarters[-1])})"
+            )
     if len(growing) >= 2:
         check.settled = False
         check.reasons += growing
     return check
 
 
-def scan_run(sig: RunSignals, start: float, end: float,
-             tol: SettleTolerances = SettleTolerances(), *,
-             step: float = 0.5) -> Optional[SettleCheck]:
+def scan_run(
+    sig: RunSignals,
+    start: float,
+    end: float,
+    tol: SettleTolerances = SettleTolerances(),
+    *,
+    step: float = 0.5,
+) -> Optional[SettleCheck]:
     """The first window of length ``tol.window`` ending in (start, end]
     (every ``step`` s) that is not steady, or None."""
     t = start + tol.window
@@ -229,9 +268,13 @@ def scan_run(sig: RunSignals, start: float, end: float,
     return None
 
 
-def describe_oscillation(sig: RunSignals, after: float,
-                         tol: SettleTolerances = SettleTolerances(),
-                         *, block: float = 0.1) -> Dict:
+def describe_oscillation(
+    sig: RunSignals,
+    after: float,
+    tol: SettleTolerances = SettleTolerances(),
+    *,
+    block: float = 0.1,
+) -> Dict:
     """What the run shows after ``after`` (s, e.g. the first contact):
     the chamfering force's fast part in blocks of ``block`` s; the start
     is the first block whose RMS exceeds the force tolerance (None if
@@ -242,8 +285,14 @@ def describe_oscillation(sig: RunSignals, after: float,
     keep = sig.t >= after
     t = sig.t[keep]
     f = sig.chamfering_force[keep]
-    out = {"start_time": None, "frequency_hz": None, "amplitude_N": None,
-           "growth_per_s": None, "rms_N": None, "sustained": False}
+    out = {
+        "start_time": None,
+        "frequency_hz": None,
+        "amplitude_N": None,
+        "growth_per_s": None,
+        "rms_N": None,
+        "sustained": False,
+    }
     if len(t) < 8:
         return out
     r = fast_part(t, f, tol.average)
@@ -256,8 +305,11 @@ def describe_oscillation(sig: RunSignals, after: float,
     rms = np.array(rms)
     over = rms > limit
     hold = max(1, int(round(0.5 / block)))  # sustained for 0.5 s
-    sustained = [k for k in range(len(rms))
-                 if over[k:k + hold].all() and k + hold <= len(rms)]
+    sustained = [
+        k
+        for k in range(len(rms))
+        if over[k : k + hold].all() and k + hold <= len(rms)
+    ]
     out["sustained"] = bool(sustained)
     if sustained:
         k0 = int(sustained[0])
@@ -283,19 +335,34 @@ def describe_oscillation(sig: RunSignals, after: float,
     if k1 > k0 and rms[k0] > 0:
         span = (k1 - k0) * block
         out["growth_per_s"] = float((rms[k1] / rms[k0]) ** (1.0 / span))
-        out["growth"] = {"from_N": float(rms[k0]), "to_N": float(rms[k1]),
-                         "t0": t0, "t1": float(edges[k1])}
+        out["growth"] = {
+            "from_N": float(rms[k0]),
+            "to_N": float(rms[k1]),
+            "t0": t0,
+            "t1": float(edges[k1]),
+        }
     return out
 
 
-def first_guard_trip(t, *, actuation=None, effort_limits=None,
-                     torque_fraction: float = 1.0, tool_force=None,
-                     tool_force_limit: float = np.inf, depth=None,
-                     true_depth=None, depth_limit: float = np.inf,
-                     x_p=None, workspace_low=None, workspace_high=None,
-                     normal_force=None, contact_force: float = 1.0,
-                     contact_lost_time: float = np.inf,
-                     names=None) -> Optional[Dict]:
+def first_guard_trip(
+    t,
+    *,
+    actuation=None,
+    effort_limits=None,
+    torque_fraction: float = 1.0,
+    tool_force=None,
+    tool_force_limit: float = np.inf,
+    depth=None,
+    true_depth=None,
+    depth_limit: float = np.inf,
+    x_p=None,
+    workspace_low=None,
+    workspace_high=None,
+    normal_force=None,
+    contact_force: float = 1.0,
+    contact_lost_time: float = np.inf,
+    names=None,
+) -> Optional[Dict]:
     """The first logged sample at which a runtime guard
     (:mod:`deburr_drake.cell.guards`) would have tripped, from logs of a
     run without guards: {guard, time, value, limit, detail}, or None. The
@@ -314,20 +381,31 @@ def first_guard_trip(t, *, actuation=None, effort_limits=None,
             i = int(bad[0])
             j = int(np.argmax(ratio[i]))
             name = names[j] if names is not None else f"joint {j}"
-            trips.append((t[i], "joint_torque", float(tau[i, j]),
-                          float(torque_fraction * lim[j]),
-                          f"{name} |tau| = {tau[i, j]:.4g} N m > "
-                          f"{torque_fraction:g} x effort limit "
-                          f"{lim[j]:.4g} N m"))
+            trips.append(
+                (
+                    t[i],
+                    "joint_torque",
+                    float(tau[i, j]),
+                    float(torque_fraction * lim[j]),
+                    f"{name} |tau| = {tau[i, j]:.4g} N m > "
+                    f"{torque_fraction:g} x effort limit "
+                    f"{lim[j]:.4g} N m",
+                )
+            )
     if tool_force is not None:
         mag = np.linalg.norm(np.asarray(tool_force, float), axis=1)
         bad = np.flatnonzero(mag > tool_force_limit)
         if bad.size:
             i = int(bad[0])
-            trips.append((t[i], "tool_force", float(mag[i]),
-                          float(tool_force_limit),
-                          f"|f| = {mag[i]:.4g} N > {tool_force_limit:.4g}"
-                          " N"))
+            trips.append(
+                (
+                    t[i],
+                    "tool_force",
+                    float(mag[i]),
+                    float(tool_force_limit),
+                    f"|f| = {mag[i]:.4g} N > {tool_force_limit:.4g} N",
+                )
+            )
     if depth is not None:
         d = np.asarray(depth, float)
         if true_depth is not None:
@@ -335,18 +413,31 @@ def first_guard_trip(t, *, actuation=None, effort_limits=None,
         bad = np.flatnonzero(d > depth_limit)
         if bad.size:
             i = int(bad[0])
-            trips.append((t[i], "depth", float(d[i]), float(depth_limit),
-                          f"delta = {d[i] * 1e3:.4g} mm > "
-                          f"{depth_limit * 1e3:.4g} mm"))
+            trips.append(
+                (
+                    t[i],
+                    "depth",
+                    float(d[i]),
+                    float(depth_limit),
+                    f"delta = {d[i] * 1e3:.4g} mm > {depth_limit * 1e3:.4g} mm",
+                )
+            )
     if x_p is not None and workspace_low is not None:
         x = np.asarray(x_p, float)
         out = np.any((x < workspace_low) | (x > workspace_high), axis=1)
         bad = np.flatnonzero(out)
         if bad.size:
             i = int(bad[0])
-            trips.append((t[i], "workspace", None, None,
-                          f"tool tip {np.round(x[i], 4).tolist()} m outside"
-                          " the workspace box"))
+            trips.append(
+                (
+                    t[i],
+                    "workspace",
+                    None,
+                    None,
+                    f"tool tip {np.round(x[i], 4).tolist()} m outside"
+                    " the workspace box",
+                )
+            )
     if normal_force is not None and np.isfinite(contact_lost_time):
         fn = np.asarray(normal_force, float)
         on = fn > contact_force
@@ -359,14 +450,25 @@ def first_guard_trip(t, *, actuation=None, effort_limits=None,
                 elif lost_since is None:
                     lost_since = t[i]
                 elif t[i] - lost_since > contact_lost_time:
-                    trips.append((t[i], "contact_lost", float(fn[i]),
-                                  float(contact_force),
-                                  f"||f_n|| <= {contact_force:g} N for more"
-                                  f" than {contact_lost_time:g} s (since "
-                                  f"{lost_since:.3f} s)"))
+                    trips.append(
+                        (
+                            t[i],
+                            "contact_lost",
+                            float(fn[i]),
+                            float(contact_force),
+                            f"||f_n|| <= {contact_force:g} N for more"
+                            f" than {contact_lost_time:g} s (since "
+                            f"{lost_since:.3f} s)",
+                        )
+                    )
                     break
     if not trips:
         return None
     time, guard, value, limit, detail = min(trips, key=lambda x: x[0])
-    return {"guard": guard, "time": float(time), "value": value,
-            "limit": limit, "detail": detail}
+    return {
+        "guard": guard,
+        "time": float(time),
+        "value": value,
+        "limit": limit,
+        "detail": detail,
+    }

@@ -24,8 +24,18 @@ from pydrake.solvers import SnoptSolver, Solve, SolverOptions
 
 from deburr_drake.cell.part import add_tool_robot
 
-__all__ = ["ARM_URL", "ARM_MODEL_NAME", "ARM_JOINTS", "DEFAULT_PART_POSITION", "Q_READY",
-           "add_arm", "solve_tool_pose", "default_q_guess", "closest_tool_position", "check_reach"]
+__all__ = [
+    "ARM_URL",
+    "ARM_MODEL_NAME",
+    "ARM_JOINTS",
+    "DEFAULT_PART_POSITION",
+    "Q_READY",
+    "add_arm",
+    "solve_tool_pose",
+    "default_q_guess",
+    "closest_tool_position",
+    "check_reach",
+]
 
 ARM_URL = "package://deburr_drake_models/arm5.sdf"
 ARM_MODEL_NAME = "arm5"
@@ -41,7 +51,9 @@ DEFAULT_PART_POSITION = [0.40, 0.0, 0.0]
 # Elbow-up pose with the tool vertical, tip at (0.40, 0, 0.048) m (rad, order ARM_JOINTS).
 Q_READY = np.array([0.0, 0.8393, 0.1015, -0.9408, 0.0])
 
-_AXIS_POINT = 0.10        # m, second point on the tool axis used for the verticality constraint
+_AXIS_POINT = (
+    0.10  # m, second point on the tool axis used for the verticality constraint
+)
 
 
 def add_arm(plant, **cutter):
@@ -67,7 +79,9 @@ def _arm_instance(plant, instance):
     if instance is not None:
         return instance
     if not plant.HasModelInstanceNamed(ARM_MODEL_NAME):
-        raise ValueError(f"plant has no model instance named {ARM_MODEL_NAME!r}: pass instance=")
+        raise ValueError(
+            f"plant has no model instance named {ARM_MODEL_NAME!r}: pass instance="
+        )
     return plant.GetModelInstanceByName(ARM_MODEL_NAME)
 
 
@@ -76,7 +90,12 @@ def _arm_positions(plant, instance):
     starts = []
     for index in plant.GetJointIndices(instance):
         joint = plant.get_joint(index)
-        starts.extend(range(joint.position_start(), joint.position_start() + joint.num_positions()))
+        starts.extend(
+            range(
+                joint.position_start(),
+                joint.position_start() + joint.num_positions(),
+            )
+        )
     return np.array(sorted(starts), dtype=int)
 
 
@@ -86,8 +105,15 @@ def _default_guess(plant, instance, arm_idx, p):
     return plant.GetDefaultPositions()[arm_idx]
 
 
-def solve_tool_pose(plant, p_W_tip, *, q_guess=None, instance=None, tolerance=1e-7,
-                    tool_frame="tool_tip"):
+def solve_tool_pose(
+    plant,
+    p_W_tip,
+    *,
+    q_guess=None,
+    instance=None,
+    tolerance=1e-7,
+    tool_frame="tool_tip",
+):
     """Arm joint angles q (n,) (rad, the instance's joints in position order; arm5: ARM_JOINTS)
     with the tool tip at p_W_tip (m, world) and the tool axis vertical (tool +z = world +z),
     within the joint limits.
@@ -105,7 +131,9 @@ def solve_tool_pose(plant, p_W_tip, *, q_guess=None, instance=None, tolerance=1e
         raise ValueError("plant must be finalized")
     p = np.asarray(p_W_tip, dtype=float).reshape(-1)
     if p.shape != (3,) or not np.all(np.isfinite(p)):
-        raise ValueError(f"p_W_tip must be 3 finite numbers (m), got {p_W_tip!r}")
+        raise ValueError(
+            f"p_W_tip must be 3 finite numbers (m), got {p_W_tip!r}"
+        )
     instance = _arm_instance(plant, instance)
     arm_idx = _arm_positions(plant, instance)
     n = len(arm_idx)
@@ -113,7 +141,9 @@ def solve_tool_pose(plant, p_W_tip, *, q_guess=None, instance=None, tolerance=1e
         q_guess = _default_guess(plant, instance, arm_idx, p)
     q_guess = np.asarray(q_guess, dtype=float).reshape(-1)
     if q_guess.shape != (n,) or not np.all(np.isfinite(q_guess)):
-        raise ValueError(f"q_guess must be {n} finite joint angles (rad), got {q_guess!r}")
+        raise ValueError(
+            f"q_guess must be {n} finite joint angles (rad), got {q_guess!r}"
+        )
 
     tip = plant.GetFrameByName(tool_frame, instance)
     world = plant.world_frame()
@@ -123,8 +153,13 @@ def solve_tool_pose(plant, p_W_tip, *, q_guess=None, instance=None, tolerance=1e
     ik.AddPositionConstraint(tip, np.zeros(3), world, p, p)
     up = np.array([0.0, 0.0, _AXIS_POINT])
     inf = np.inf
-    ik.AddPositionConstraint(tip, up, world, np.array([p[0], p[1], p[2] + 0.5 * _AXIS_POINT]),
-                             np.array([p[0], p[1], inf]))
+    ik.AddPositionConstraint(
+        tip,
+        up,
+        world,
+        np.array([p[0], p[1], p[2] + 0.5 * _AXIS_POINT]),
+        np.array([p[0], p[1], inf]),
+    )
 
     q0 = plant.GetDefaultPositions()
     q_full_guess = q0.copy()
@@ -143,21 +178,32 @@ def solve_tool_pose(plant, p_W_tip, *, q_guess=None, instance=None, tolerance=1e
     result = Solve(prog, q_full_guess, options)
     q_sol = result.GetSolution(q)
     if not result.is_success():
-        raise RuntimeError(f"tool pose IK failed for tool tip target p_W_tip={p.tolist()} m "
-                           f"({result.get_solution_result()})")
+        raise RuntimeError(
+            f"tool pose IK failed for tool tip target p_W_tip={p.tolist()} m "
+            f"({result.get_solution_result()})"
+        )
     context = plant.CreateDefaultContext()
     plant.SetPositions(context, q_sol)
     X_WT = tip.CalcPoseInWorld(context)
     pos_err = np.linalg.norm(X_WT.translation() - p)
     axis_err = _AXIS_POINT * np.linalg.norm(X_WT.rotation().matrix()[:2, 2])
     if pos_err > tolerance or axis_err > tolerance:
-        raise RuntimeError(f"tool pose IK missed tool tip target p_W_tip={p.tolist()} m: "
-                           f"position error {pos_err:.3g} m, axis error {axis_err / _AXIS_POINT:.3g} rad")
+        raise RuntimeError(
+            f"tool pose IK missed tool tip target p_W_tip={p.tolist()} m: "
+            f"position error {pos_err:.3g} m, axis error {axis_err / _AXIS_POINT:.3g} rad"
+        )
     return q_sol[arm_idx]
 
 
-def closest_tool_position(plant, p_W_tip, *, instance=None, q_guess=None, tool_frame="tool_tip",
-                          return_positions=False):
+def closest_tool_position(
+    plant,
+    p_W_tip,
+    *,
+    instance=None,
+    q_guess=None,
+    tool_frame="tool_tip",
+    return_positions=False,
+):
     """The tool tip position (m, world) nearest to p_W_tip that the arm reaches with the tool
     axis vertical within its joint limits: how far out of reach a target is. With
     ``return_positions`` also the arm's joint angles there (rad)."""
@@ -169,12 +215,21 @@ def closest_tool_position(plant, p_W_tip, *, instance=None, q_guess=None, tool_f
     q = ik.q()
     ik.AddPositionCost(world, p, tip, np.zeros(3), np.eye(3))
     # The tool axis vertical, as solve_tool_pose keeps it.
-    ik.AddAngleBetweenVectorsConstraint(tip, np.array([0.0, 0.0, 1.0]), world,
-                                        np.array([0.0, 0.0, 1.0]), 0.0, 1e-6)
+    ik.AddAngleBetweenVectorsConstraint(
+        tip,
+        np.array([0.0, 0.0, 1.0]),
+        world,
+        np.array([0.0, 0.0, 1.0]),
+        0.0,
+        1e-6,
+    )
     arm_idx = _arm_positions(plant, instance)
     q_full_guess = plant.GetDefaultPositions().copy()
-    q_full_guess[arm_idx] = (_default_guess(plant, instance, arm_idx, p) if q_guess is None
-                             else q_guess)
+    q_full_guess[arm_idx] = (
+        _default_guess(plant, instance, arm_idx, p)
+        if q_guess is None
+        else q_guess
+    )
     result = Solve(ik.get_mutable_prog(), q_full_guess)
     context = plant.CreateDefaultContext()
     q_sol = result.GetSolution(q)
@@ -194,11 +249,18 @@ def _closest_of_many(plant, p, instance, guess, tool_frame, starts=8):
     upper = np.minimum(plant.GetPositionUpperLimits()[arm_idx], np.pi)
     rng = np.random.default_rng(0)
     guesses = [guess, plant.GetDefaultPositions()[arm_idx]] + [
-        rng.uniform(lower, upper) for _ in range(starts)]
+        rng.uniform(lower, upper) for _ in range(starts)
+    ]
     best = None
     for g in guesses:
-        reached, q = closest_tool_position(plant, p, instance=instance, q_guess=g,
-                                           tool_frame=tool_frame, return_positions=True)
+        reached, q = closest_tool_position(
+            plant,
+            p,
+            instance=instance,
+            q_guess=g,
+            tool_frame=tool_frame,
+            return_positions=True,
+        )
         d = np.linalg.norm(reached - p)
         if best is None or d < best[0]:
             best = (d, reached, q)
@@ -209,7 +271,9 @@ def _closest_of_many(plant, p, instance, guess, tool_frame, starts=8):
 REACHED = 1e-5
 
 
-def check_reach(plant, points, *, instance=None, q_guess=None, tool_frame="tool_tip"):
+def check_reach(
+    plant, points, *, instance=None, q_guess=None, tool_frame="tool_tip"
+):
     """None if the tool reaches every point (m, world, rows) vertically; otherwise
     (index, point, distance (m) to the nearest reachable tool position, joint angles) of the
     first one it does not reach. `q_guess` (a function of the point, or None) seeds each
@@ -223,18 +287,30 @@ def check_reach(plant, points, *, instance=None, q_guess=None, tool_frame="tool_
         guesses = [guess] + ([previous] if previous is not None else [])
         for g in guesses:
             try:
-                previous = solve_tool_pose(plant, p, instance=instance, q_guess=g,
-                                           tool_frame=tool_frame)
+                previous = solve_tool_pose(
+                    plant,
+                    p,
+                    instance=instance,
+                    q_guess=g,
+                    tool_frame=tool_frame,
+                )
                 break
             except RuntimeError:
                 continue
         else:
-            reached, q_near = _closest_of_many(plant, p, instance, guess, tool_frame)
+            reached, q_near = _closest_of_many(
+                plant, p, instance, guess, tool_frame
+            )
             distance = float(np.linalg.norm(reached - p))
             if distance < REACHED:
                 try:
-                    q_other = solve_tool_pose(plant, p, instance=instance, q_guess=q_near,
-                                              tool_frame=tool_frame)
+                    q_other = solve_tool_pose(
+                        plant,
+                        p,
+                        instance=instance,
+                        q_guess=q_near,
+                        tool_frame=tool_frame,
+                    )
                     return k, p, 0.0, q_other
                 except RuntimeError:
                     pass

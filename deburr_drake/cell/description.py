@@ -36,19 +36,25 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+from pathlib import Path
 import re
 import sys
-import xml.etree.ElementTree as ET
-from pathlib import Path
 from typing import Dict, List, Tuple
+import xml.etree.ElementTree as ET
 
 import numpy as np
 
 from deburr_drake.config import ConfigError, RobotConfig
 from deburr_drake.config.cell import package_folder
 
-__all__ = ["add_packages", "prepared_model", "convert_mesh",
-           "DRAKE_MESH_SUFFIXES", "model_path", "notice"]
+__all__ = [
+    "add_packages",
+    "prepared_model",
+    "convert_mesh",
+    "DRAKE_MESH_SUFFIXES",
+    "model_path",
+    "notice",
+]
 
 #: Visual mesh files Drake reads as they are (case-sensitive, as Drake).
 DRAKE_MESH_SUFFIXES = (".obj", ".gltf", ".vtk")
@@ -72,13 +78,17 @@ def _package_xmls(model_file: Path):
             yield xml
 
 
-def add_packages(package_map, config: RobotConfig, model_file: Path = None):
+def add_packages(
+    package_map, config: RobotConfig, model_file: Path | None = None
+):
     """Adds to a Drake PackageMap the packages of the robot: see the module
     docstring. ``model_file`` (the resolved model) adds the package.xml
     files above it."""
+
     def add(name, folder):
         if not package_map.Contains(name):
             package_map.Add(name, str(folder))
+
     for name, entry in config.packages.items():
         add(name, package_folder(entry).resolve())
     for entry in config.package_paths:
@@ -96,19 +106,22 @@ def add_packages(package_map, config: RobotConfig, model_file: Path = None):
 
 
 def _where_looked(config: RobotConfig) -> str:
-    return (f"robot.packages {sorted(config.packages)}, the sub-folders of "
-            f"robot.package_paths {list(config.package_paths)}, the "
-            "package.xml files above the model, ROS_PACKAGE_PATH")
+    return (
+        f"robot.packages {sorted(config.packages)}, the sub-folders of "
+        f"robot.package_paths {list(config.package_paths)}, the "
+        "package.xml files above the model, ROS_PACKAGE_PATH"
+    )
 
 
 def _package_path(package_map, config, url: str, field: str) -> Path:
     """The file a ``package://NAME/rest`` URL names; ConfigError naming the
     package and where it was looked for."""
-    name, _, rest = url[len("package://"):].partition("/")
+    name, _, rest = url[len("package://") :].partition("/")
     if not package_map.Contains(name):
         raise ConfigError(
             f"{field} = {url!r} is invalid: package {name!r} is unknown: "
-            f"looked in {_where_looked(config)}")
+            f"looked in {_where_looked(config)}"
+        )
     return Path(package_map.GetPath(name)) / rest
 
 
@@ -116,41 +129,45 @@ def model_path(package_map, config: RobotConfig) -> Path:
     """The model file ``robot.model`` names (a path or a package:// URL
     resolved through the package folders)."""
     if config.is_package_url():
-        path = _package_path(package_map, config, config.model,
-                             "robot.model")
+        path = _package_path(package_map, config, config.model, "robot.model")
         if not path.is_file():
             raise ConfigError(
                 f"robot.model = {config.model!r} is invalid: no such file "
-                f"{path}")
+                f"{path}"
+            )
         return path.resolve()
     return Path(config.model).resolve()
 
 
 def _cache_dir() -> Path:
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(
-        os.path.expanduser("~"), ".cache")
+        os.path.expanduser("~"), ".cache"
+    )
     return Path(base) / "deburr_drake" / "meshes" / "robot"
 
 
-def convert_mesh(source: Path, cache_dir: Path = None) -> Path:
+def convert_mesh(source: Path, cache_dir: Path | None = None) -> Path:
     """The ``.obj`` (with its ``.mtl`` colours) of a mesh file trimesh
     reads (``.stl``, ``.dae`` through pycollada, ``.ply``, ...), made once
     in the cache and named by a hash of the source's bytes; raises
     ValueError if it cannot be read or holds no triangles."""
     data = Path(source).read_bytes()
-    digest = hashlib.sha256(
-        data + _CONVERTER_VERSION.encode()).hexdigest()[:20]
+    digest = hashlib.sha256(data + _CONVERTER_VERSION.encode()).hexdigest()[:20]
     folder = Path(cache_dir or _cache_dir()) / digest
     target = folder / "mesh.obj"
     if target.is_file():
         return target
     import trimesh
+
     try:
         scene = trimesh.load(str(source), force="scene")
     except Exception as e:  # trimesh raises many kinds
         raise ValueError(f"{type(e).__name__}: {e}") from None
-    if not scene.geometry or sum(
-            len(getattr(g, "faces", ())) for g in scene.geometry.values()) == 0:
+    if (
+        not scene.geometry
+        or sum(len(getattr(g, "faces", ())) for g in scene.geometry.values())
+        == 0
+    ):
         raise ValueError("no triangles in it")
     folder.mkdir(parents=True, exist_ok=True)
     tmp = folder.with_name(folder.name + f".tmp{os.getpid()}")
@@ -166,7 +183,7 @@ def _mesh_file(uri: str, package_map, config, model_dir: Path):
     if uri.startswith("package://"):
         return _package_path(package_map, config, uri, "robot.model mesh")
     if uri.startswith("file://"):
-        return Path(uri[len("file://"):])
+        return Path(uri[len("file://") :])
     if "://" in uri:
         return None  # model:// and the like: left to Drake
     return model_dir / uri
@@ -201,8 +218,11 @@ def _convert_visuals(root, urdf, package_map, config, model_dir, notes):
             path, reason = None, str(e)
         else:
             reason = "not found"
-        if path is None and "://" in uri and not uri.startswith(
-                ("package://", "file://")):
+        if (
+            path is None
+            and "://" in uri
+            and not uri.startswith(("package://", "file://"))
+        ):
             continue
         target = None
         if path is not None and path.is_file():
@@ -216,8 +236,10 @@ def _convert_visuals(root, urdf, package_map, config, model_dir, notes):
                     reason = f"cannot be converted ({e})"
         if target is None:
             parents[visual].remove(visual)
-            notice(f"warning: robot.model {config.model!r}: visual mesh "
-                   f"{uri} {reason}: dropped")
+            notice(
+                f"warning: robot.model {config.model!r}: visual mesh "
+                f"{uri} {reason}: dropped"
+            )
             continue
         # A parsed string takes absolute file:// URIs only.
         if urdf:
@@ -225,8 +247,10 @@ def _convert_visuals(root, urdf, package_map, config, model_dir, notes):
         else:
             element.text = f"file://{target}"
     if converted:
-        notes.append(f"{converted} visual mesh(es) Drake cannot read "
-                     f"shown through .obj copies in {_cache_dir()}")
+        notes.append(
+            f"{converted} visual mesh(es) Drake cannot read "
+            f"shown through .obj copies in {_cache_dir()}"
+        )
 
 
 def _strip_collisions(root) -> int:
@@ -239,12 +263,21 @@ def _strip_collisions(root) -> int:
 
 def _rpy_matrix(rpy):
     r, p, y = rpy
-    cr, sr, cp, sp, cy, sy = (math.cos(r), math.sin(r), math.cos(p),
-                              math.sin(p), math.cos(y), math.sin(y))
-    return np.array([
-        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-        [-sp, cp * sr, cp * cr]])
+    cr, sr, cp, sp, cy, sy = (
+        math.cos(r),
+        math.sin(r),
+        math.cos(p),
+        math.sin(p),
+        math.cos(y),
+        math.sin(y),
+    )
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
 
 
 def _matrix_rpy(R):
@@ -278,8 +311,9 @@ def _weld_urdf_joint(joint):
         xyz = np.array(_numbers(origin.get("xyz"), [0, 0, 0]))
         R = _rpy_matrix(_numbers(origin.get("rpy"), [0, 0, 0]))
         axis_el = joint.find("axis")
-        axis = _numbers(axis_el.get("xyz") if axis_el is not None else "",
-                        [1, 0, 0])
+        axis = _numbers(
+            axis_el.get("xyz") if axis_el is not None else "", [1, 0, 0]
+        )
         if joint.get("type") == "prismatic":
             xyz = xyz + R @ (q0 * np.asarray(axis) / np.linalg.norm(axis))
         else:
@@ -287,8 +321,14 @@ def _weld_urdf_joint(joint):
         origin.set("xyz", " ".join(f"{v:.12g}" for v in xyz))
         origin.set("rpy", " ".join(f"{v:.12g}" for v in _matrix_rpy(R)))
     joint.set("type", "fixed")
-    for tag in ("mimic", "limit", "axis", "dynamics", "safety_controller",
-                "calibration"):
+    for tag in (
+        "mimic",
+        "limit",
+        "axis",
+        "dynamics",
+        "safety_controller",
+        "calibration",
+    ):
         for child in joint.findall(tag):
             joint.remove(child)
 
@@ -318,9 +358,11 @@ def _flange_link(root, name: str):
 
 
 def _urdf_joints(root):
-    return [(j, j.find("parent").get("link"), j.find("child").get("link"))
-            for j in root.findall("joint")
-            if j.find("parent") is not None and j.find("child") is not None]
+    return [
+        (j, j.find("parent").get("link"), j.find("child").get("link"))
+        for j in root.findall("joint")
+        if j.find("parent") is not None and j.find("child") is not None
+    ]
 
 
 def _sdf_joints(root):
@@ -328,16 +370,18 @@ def _sdf_joints(root):
     for j in root.iter("joint"):
         parent, child = j.find("parent"), j.find("child")
         if parent is not None and child is not None:
-            out.append((j, (parent.text or "").strip(),
-                        (child.text or "").strip()))
+            out.append(
+                (j, (parent.text or "").strip(), (child.text or "").strip())
+            )
     return out
 
 
 def _weld_past_flange(root, urdf, config, notes):
     """Every joint that moves off the chain from the base to the flange
     (fingers) welded at its default position; the joint names."""
-    flange = _flange_link(root, config.flange_frame) \
-        if config.flange_frame else None
+    flange = (
+        _flange_link(root, config.flange_frame) if config.flange_frame else None
+    )
     if flange is None:
         return set()
     joints = _urdf_joints(root) if urdf else _sdf_joints(root)
@@ -353,9 +397,11 @@ def _weld_past_flange(root, urdf, config, notes):
                     if child.tag not in ("parent", "child", "pose"):
                         joint.remove(child)
     if welded:
-        notes.append(f"joints off the chain to robot.flange_frame "
-                     f"{config.flange_frame!r} (past it or beside it) welded "
-                     f"at their default position: {welded}")
+        notes.append(
+            f"joints off the chain to robot.flange_frame "
+            f"{config.flange_frame!r} (past it or beside it) welded "
+            f"at their default position: {welded}"
+        )
     return set(welded)
 
 
@@ -372,20 +418,27 @@ def _add_drives(root, welded, notes):
     driven = []
     for joint in root.findall("joint"):
         name, limit = joint.get("name"), joint.find("limit")
-        if joint.get("type") not in _MOVING or name in transmitted or \
-                limit is None or float(limit.get("effort", 0.0)) <= 0.0:
+        if (
+            joint.get("type") not in _MOVING
+            or name in transmitted
+            or limit is None
+            or float(limit.get("effort", 0.0)) <= 0.0
+        ):
             continue
         t = ET.SubElement(root, "transmission", name=f"{name}_drive")
-        ET.SubElement(t, "type").text = \
-            "transmission_interface/SimpleTransmission"
+        ET.SubElement(
+            t, "type"
+        ).text = "transmission_interface/SimpleTransmission"
         j = ET.SubElement(t, "joint", name=name)
         ET.SubElement(j, "hardwareInterface").text = "EffortJointInterface"
         a = ET.SubElement(t, "actuator", name=f"{name}_motor")
         ET.SubElement(a, "mechanicalReduction").text = "1"
         driven.append(name)
     if driven:
-        notes.append(f"{len(driven)} joint(s) without a <transmission> get a "
-                     f"drive at their URDF effort limit: {driven}")
+        notes.append(
+            f"{len(driven)} joint(s) without a <transmission> get a "
+            f"drive at their URDF effort limit: {driven}"
+        )
 
 
 def _declare_drake_namespace(text: str) -> str:
@@ -396,9 +449,12 @@ def _declare_drake_namespace(text: str) -> str:
     uri = match.group(1) if match else "http://drake.mit.edu"
     ET.register_namespace("drake", uri)
     if match is None and "drake:" in text:
-        text = re.sub(r"<(robot|sdf)(\s|>)",
-                      lambda m: f'<{m.group(1)} xmlns:drake="{uri}"'
-                      f'{m.group(2)}', text, count=1)
+        text = re.sub(
+            r"<(robot|sdf)(\s|>)",
+            lambda m: f'<{m.group(1)} xmlns:drake="{uri}"{m.group(2)}',
+            text,
+            count=1,
+        )
     return text
 
 
@@ -411,17 +467,22 @@ def prepared_model(package_map, config: RobotConfig):
     package:// URIs resolvable through ``package_map`` (filled by
     :func:`add_packages`). Cached per process."""
     path = model_path(package_map, config)
-    key = (str(path), path.stat().st_mtime_ns, config.flange_frame,
-           tuple(sorted(config.packages.items())),
-           tuple(config.package_paths))
+    key = (
+        str(path),
+        path.stat().st_mtime_ns,
+        config.flange_frame,
+        tuple(sorted(config.packages.items())),
+        tuple(config.package_paths),
+    )
     if key in _PREPARED:
         return _PREPARED[key]
     text = _declare_drake_namespace(path.read_text())
     try:
         root = ET.fromstring(text)
     except ET.ParseError as e:
-        raise ConfigError(f"robot.model = {config.model!r} is invalid: "
-                          f"bad XML ({e})") from None
+        raise ConfigError(
+            f"robot.model = {config.model!r} is invalid: bad XML ({e})"
+        ) from None
     urdf = root.tag == "robot"
     notes = []
     # Unknown packages anywhere in the file: one line each.
@@ -446,25 +507,37 @@ def prepared_model(package_map, config: RobotConfig):
     reductions = 0
     for actuator in root.iter("actuator"):
         for child in actuator.findall("mechanicalReduction"):
-            reductions += child.text is not None and \
-                child.text.strip() not in ("1", "1.0")
+            reductions += child.text is not None and child.text.strip() not in (
+                "1",
+                "1.0",
+            )
             actuator.remove(child)
     if reductions:
-        notes.append(f"{reductions} <mechanicalReduction>s are not modelled "
-                     "(no rotor inertia with them): give the drives' "
-                     "reflected inertia in robot.reflected_inertia")
+        notes.append(
+            f"{reductions} <mechanicalReduction>s are not modelled "
+            "(no rotor inertia with them): give the drives' "
+            "reflected inertia in robot.reflected_inertia"
+        )
     if friction:
-        notes.append(f"its joint friction {friction} (N m) is not modelled: "
-                     "give it in robot.joint_coulomb_friction")
+        notes.append(
+            f"its joint friction {friction} (N m) is not modelled: "
+            "give it in robot.joint_coulomb_friction"
+        )
     collisions = _strip_collisions(root)
     if collisions:
-        notes.append(f"its {collisions} collision geometries are not loaded "
-                     "(only the cutter touches the part)")
+        notes.append(
+            f"its {collisions} collision geometries are not loaded "
+            "(only the cutter touches the part)"
+        )
     _convert_visuals(root, urdf, package_map, config, path.parent, notes)
     welded = _weld_past_flange(root, urdf, config, notes)
     if urdf:
         _add_drives(root, welded, notes)
-    result = (ET.tostring(root, encoding="unicode"),
-              "urdf" if urdf else "sdf", path, notes)
+    result = (
+        ET.tostring(root, encoding="unicode"),
+        "urdf" if urdf else "sdf",
+        path,
+        notes,
+    )
     _PREPARED[key] = result
     return result

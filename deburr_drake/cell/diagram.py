@@ -21,9 +21,13 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, RandomSource
 
 from deburr_drake.cell.arm import solve_tool_pose
-from deburr_drake.cell.edge import (believed_contour, believed_contour_step,
-                                    edge_points, make_contour,
-                                    start_position)
+from deburr_drake.cell.edge import (
+    believed_contour,
+    believed_contour_step,
+    edge_points,
+    make_contour,
+    start_position,
+)
 from deburr_drake.cell.faults import add_noise_scale, add_sensor_faults
 from deburr_drake.cell.gains import resolve_gains, resolve_slope_bound
 from deburr_drake.cell.guards import add_effort_saturation, add_guards
@@ -36,8 +40,15 @@ from deburr_drake.config import RobotConfig, Scenario
 from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.control.loop import add_deburring_controller
 
-__all__ = ["make_deburring_diagram", "MakeDeburringDiagram", "TOOL_FRAME",
-           "SENSOR_JOINT", "LOGGED", "LOCALISATION_LOGGED", "SYSTEM_NAMES"]
+__all__ = [
+    "make_deburring_diagram",
+    "MakeDeburringDiagram",
+    "TOOL_FRAME",
+    "SENSOR_JOINT",
+    "LOGGED",
+    "LOCALISATION_LOGGED",
+    "SYSTEM_NAMES",
+]
 
 #: The default names of the tool frame and the sensor joint
 #: (``robot.tool_frame``, ``robot.sensor_joint`` name them per robot).
@@ -65,10 +76,19 @@ LOCALISATION_LOGGED = {
 }
 
 #: Every system the builder adds (besides the loggers ``log_<name>``).
-SYSTEM_NAMES = ("plant", "scene_graph", "cutting_process", "cutting_force",
-                "force_sensor", "sensor_noise", "chamfer_observer",
-                "command_generator", "first_order_hold", "contact_estimator",
-                "controller")
+SYSTEM_NAMES = (
+    "plant",
+    "scene_graph",
+    "cutting_process",
+    "cutting_force",
+    "force_sensor",
+    "sensor_noise",
+    "chamfer_observer",
+    "command_generator",
+    "first_order_hold",
+    "contact_estimator",
+    "controller",
+)
 
 
 def _initial_positions(plant, scenario: Scenario, x0) -> np.ndarray:
@@ -77,13 +97,18 @@ def _initial_positions(plant, scenario: Scenario, x0) -> np.ndarray:
         # World-aligned prismatic joints, tip at the origin for q = 0.
         return np.asarray(x0, float)
     frame = plant.GetFrameByName(robot.tool_frame)
-    return solve_tool_pose(plant, x0, instance=frame.model_instance(),
-                           q_guess=ik_seed(robot, x0),
-                           tool_frame=robot.tool_frame)
+    return solve_tool_pose(
+        plant,
+        x0,
+        instance=frame.model_instance(),
+        q_guess=ik_seed(robot, x0),
+        tool_frame=robot.tool_frame,
+    )
 
 
-def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
-                           extra_logs=None) -> Diagram:
+def make_deburring_diagram(
+    *, scenario: Scenario, meshcat=None, extra_logs=None
+) -> Diagram:
     """The closed loop as a named Diagram.
 
     Systems (see :data:`SYSTEM_NAMES`): ``plant``, ``scene_graph``,
@@ -125,8 +150,9 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
     probing = c.localisation.probe.enabled
     x0 = start_position(c, belief)
     if probing:  # off the part, the probe's standoff before the start
-        x0 = x0 - (c.simulation.initial_depth + c.localisation.probe.standoff
-                   ) * belief.n1(x0)
+        x0 = x0 - (
+            c.simulation.initial_depth + c.localisation.probe.standoff
+        ) * belief.n1(x0)
     q0 = _initial_positions(plant, c, x0)
     plant.SetDefaultPositions(q0)
 
@@ -136,47 +162,88 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
     model.SetPositions(model_context, q0)
     # The tool's orientation at the start is held (the tool axis vertical;
     # on a 6-DOF arm also its rotation about that axis).
-    desired_rotation = model.GetFrameByName(tool_frame).CalcPoseInWorld(
-        model_context).rotation().matrix()
+    desired_rotation = (
+        model.GetFrameByName(tool_frame)
+        .CalcPoseInWorld(model_context)
+        .rotation()
+        .matrix()
+    )
 
     # The process (truth), the sensor, the observer (measurement) and the
     # controller read the same joint state through the same kinematics: one
     # memo serves all.
     tool_point = ToolPoint(model, model.GetFrameByName(tool_frame))
-    process = builder.AddNamedSystem("cutting_process", CuttingProcess(
-        plant, tool_frame, contour, c.process, cut_height=c.tool.engagement,
-        cutter_radius=c.tool.cutter_radius, tool_point=tool_point,
-        spindle_input=probing))
-    sensor = builder.AddNamedSystem("force_sensor", ForceSensor(
-        plant, c.robot.sensor_joint, c.sensor, tool_point=tool_point))
-    noise = builder.AddNamedSystem("sensor_noise", RandomSource(
-        RandomDistribution.kGaussian, 3, c.sensor.sample_period))
+    process = builder.AddNamedSystem(
+        "cutting_process",
+        CuttingProcess(
+            plant,
+            tool_frame,
+            contour,
+            c.process,
+            cut_height=c.tool.engagement,
+            cutter_radius=c.tool.cutter_radius,
+            tool_point=tool_point,
+            spindle_input=probing,
+        ),
+    )
+    sensor = builder.AddNamedSystem(
+        "force_sensor",
+        ForceSensor(
+            plant, c.robot.sensor_joint, c.sensor, tool_point=tool_point
+        ),
+    )
+    noise = builder.AddNamedSystem(
+        "sensor_noise",
+        RandomSource(RandomDistribution.kGaussian, 3, c.sensor.sample_period),
+    )
     state = plant.get_state_output_port()
     for system in (process, sensor):
         builder.Connect(state, system.GetInputPort("plant_state"))
     force_law = builder.AddSystem(process.force_law())
-    builder.Connect(process.GetOutputPort("force_law_terms"),
-                    force_law.GetInputPort("force_law_terms"))
-    builder.Connect(force_law.GetOutputPort("tool_force"),
-                    sensor.GetInputPort("applied_force"))
+    builder.Connect(
+        process.GetOutputPort("force_law_terms"),
+        force_law.GetInputPort("force_law_terms"),
+    )
+    builder.Connect(
+        force_law.GetOutputPort("tool_force"),
+        sensor.GetInputPort("applied_force"),
+    )
     builder.Connect(state, force_law.GetInputPort("plant_state"))
-    builder.Connect(force_law.GetOutputPort("generalized_force"),
-                    plant.get_applied_generalized_force_input_port())
-    builder.Connect(plant.get_reaction_forces_output_port(),
-                    sensor.GetInputPort("reaction_forces"))
+    builder.Connect(
+        force_law.GetOutputPort("generalized_force"),
+        plant.get_applied_generalized_force_input_port(),
+    )
+    builder.Connect(
+        plant.get_reaction_forces_output_port(),
+        sensor.GetInputPort("reaction_forces"),
+    )
     builder.Connect(
         add_noise_scale(builder, c.faults, noise.get_output_port()),
-        sensor.GetInputPort("noise"))
+        sensor.GetInputPort("noise"),
+    )
     # What the observer and the controller read (faults: bias, dropouts).
-    force = add_sensor_faults(builder, c.faults,
-                              sensor.GetOutputPort("tool_force"),
-                              sample_period=c.sensor.sample_period)
+    force = add_sensor_faults(
+        builder,
+        c.faults,
+        sensor.GetOutputPort("tool_force"),
+        sample_period=c.sensor.sample_period,
+    )
     # The paper's loops around the plant (deburr_drake.control.loop).
     loops = add_deburring_controller(
-        builder, scenario=c, plant=model, contour=belief,
-        plant_state=state, tool_force=force, tool_frame=tool_frame,
-        start=x0, desired_rotation=desired_rotation, tool_point=tool_point,
-        contour_step=belief_step, true_plant=plant, posture=q0)
+        builder,
+        scenario=c,
+        plant=model,
+        contour=belief,
+        plant_state=state,
+        tool_force=force,
+        tool_frame=tool_frame,
+        start=x0,
+        desired_rotation=desired_rotation,
+        tool_point=tool_point,
+        contour_step=belief_step,
+        true_plant=plant,
+        posture=q0,
+    )
     if probing:
         builder.Connect(loops.spindle, process.GetInputPort("spindle"))
     actuation = add_effort_saturation(builder, c, plant, loops.actuation)
@@ -185,36 +252,53 @@ def make_deburring_diagram(*, scenario: Scenario, meshcat=None,
     builder.Connect(actuation, force_law.GetInputPort("actuation"))
     if c.process.sample_mean:
         for port, source in (
-                ("generalized_acceleration",
-                 plant.get_generalized_acceleration_output_port()),
-                ("applied_generalized_force",
-                 force_law.GetOutputPort("generalized_force")),
-                ("actuation", actuation)):
+            (
+                "generalized_acceleration",
+                plant.get_generalized_acceleration_output_port(),
+            ),
+            (
+                "applied_generalized_force",
+                force_law.GetOutputPort("generalized_force"),
+            ),
+            ("actuation", actuation),
+        ):
             builder.Connect(source, process.GetInputPort(port))
 
     if meshcat is not None:
         from deburr_drake.cell.meshcat import add_meshcat
-        scene_graph = builder.GetSubsystemByName("scene_graph")
-        add_meshcat(builder, meshcat, plant=plant, scene_graph=scene_graph,
-                    process=process,
-                    edge_points=edge_points(c, process.bins.centers))
 
-    logged = {name: builder.GetSubsystemByName(system).GetOutputPort(port)
-              for name, (system, port) in LOGGED.items()}
+        scene_graph = builder.GetSubsystemByName("scene_graph")
+        add_meshcat(
+            builder,
+            meshcat,
+            plant=plant,
+            scene_graph=scene_graph,
+            process=process,
+            edge_points=edge_points(c, process.bins.centers),
+        )
+
+    logged = {
+        name: builder.GetSubsystemByName(system).GetOutputPort(port)
+        for name, (system, port) in LOGGED.items()
+    }
     if probing:
         # The guards and the metrics see the pass: no contact while probing.
         logged["chamfer"] = loops.chamfer
         logged["desired_normal_force"] = loops.gate.GetOutputPort(
-            "desired_normal_force")
+            "desired_normal_force"
+        )
     for name, (system, port) in LOCALISATION_LOGGED.items():
         if builder.HasSubsystemNamed(system):
             logged[name] = builder.GetSubsystemByName(system).GetOutputPort(
-                port)
+                port
+            )
     add_guards(builder, c, plant, contour, logged)
     for name, (system, port) in (extra_logs or {}).items():
         if name in logged:
-            raise ValueError(f"extra_logs: {name!r} is logged already: "
-                             f"allowed a name not in {sorted(logged)}")
+            raise ValueError(
+                f"extra_logs: {name!r} is logged already: "
+                f"allowed a name not in {sorted(logged)}"
+            )
         logged_port = builder.GetSubsystemByName(system).GetOutputPort(port)
         # After add_guards: the guards read the standard signals only.
         logged = {**logged, name: logged_port}

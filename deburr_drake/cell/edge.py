@@ -10,12 +10,18 @@ import copy
 import numpy as np
 
 from deburr_drake.config import Scenario
-from deburr_drake.math.geometry import (CircularContour, Contour,
-                                        StraightContour)
+from deburr_drake.math.geometry import CircularContour, Contour, StraightContour
 
-__all__ = ["make_contour", "straight_frame", "profile_center", "believed_scenario",
-           "believed_contour", "believed_contour_step", "start_position",
-           "edge_points"]
+__all__ = [
+    "make_contour",
+    "straight_frame",
+    "profile_center",
+    "believed_scenario",
+    "believed_contour",
+    "believed_contour_step",
+    "start_position",
+    "edge_points",
+]
 
 
 def straight_frame(scenario: Scenario):
@@ -44,19 +50,22 @@ def make_contour(scenario: Scenario, *, grow: float = 0.0) -> Contour:
     a profile grown outward by it (the believed part's radius error)."""
     tube, tool, edge = scenario.tube, scenario.tool, scenario.edge
     if edge.kind == "profile":
-        return edge.profile_path(profile_center(scenario), tool.cutter_radius,
-                                 grow=grow)
+        return edge.profile_path(
+            profile_center(scenario), tool.cutter_radius, grow=grow
+        )
     if edge.kind == "straight":
         mid, tangent, normal = straight_frame(scenario)
-        start = (mid - tool.cutter_radius * normal
-                 - 0.5 * edge.length * tangent)
+        start = mid - tool.cutter_radius * normal - 0.5 * edge.length * tangent
         start[2] -= tool.engagement
         return StraightContour(start, tangent, normal, length=edge.length)
     center = np.array(tube.position, float)
     center[2] += tube.height - tool.engagement
-    return CircularContour(center, tube.inner_radius - tool.cutter_radius,
-                           start_angle=edge.start_angle,
-                           direction=edge.direction)
+    return CircularContour(
+        center,
+        tube.inner_radius - tool.cutter_radius,
+        start_angle=edge.start_angle,
+        direction=edge.direction,
+    )
 
 
 def believed_scenario(scenario: Scenario) -> Scenario:
@@ -67,8 +76,9 @@ def believed_scenario(scenario: Scenario) -> Scenario:
     if not any(e.offset) and e.yaw == 0.0 and e.radius == 0.0:
         return scenario
     believed = copy.deepcopy(scenario)
-    believed.tube.position = [p + d for p, d in zip(scenario.tube.position,
-                                                    e.offset)]
+    believed.tube.position = [
+        p + d for p, d in zip(scenario.tube.position, e.offset)
+    ]
     believed.tube.inner_radius += e.radius
     if scenario.edge.kind == "straight":
         believed.edge.heading += e.yaw
@@ -76,16 +86,18 @@ def believed_scenario(scenario: Scenario) -> Scenario:
         believed.edge.start_angle += e.yaw
     if scenario.edge.kind == "profile":  # turned about tube.position
         c, s = np.cos(e.yaw), np.sin(e.yaw)
-        believed.edge.vertices = [[c * x - s * y, s * x + c * y]
-                                  for x, y in scenario.edge.vertices]
+        believed.edge.vertices = [
+            [c * x - s * y, s * x + c * y] for x, y in scenario.edge.vertices
+        ]
     return believed
 
 
 def believed_contour(scenario: Scenario) -> Contour:
     """The zero-depth path on the part the controller believes in (a
     profile: moved, turned and grown by ``part_error``)."""
-    grow = scenario.part_error.radius if scenario.edge.kind == "profile" \
-        else 0.0
+    grow = (
+        scenario.part_error.radius if scenario.edge.kind == "profile" else 0.0
+    )
     return make_contour(believed_scenario(scenario), grow=grow)
 
 
@@ -97,8 +109,9 @@ def believed_contour_step(scenario: Scenario):
     if not step.active():
         return None
     after = copy.deepcopy(scenario)
-    after.part_error.offset = [e - d for e, d in zip(
-        scenario.part_error.offset, step.offset)]
+    after.part_error.offset = [
+        e - d for e, d in zip(scenario.part_error.offset, step.offset)
+    ]
     return step.time, believed_contour(after)
 
 

@@ -33,16 +33,22 @@ class SensorFaults(LeafSystem):
         super().__init__()
         config.validate()
         self._bias = np.array(config.sensor_bias, float)
-        self._windows = [(d.start, d.start + d.duration, d.mode)
-                         for d in config.dropouts]
+        self._windows = [
+            (d.start, d.start + d.duration, d.mode) for d in config.dropouts
+        ]
         self._input = self.DeclareVectorInputPort("tool_force", 3)
         self._last = self.DeclareDiscreteState(BasicVector(np.zeros(3)))
         self.DeclareVectorOutputPort(
-            "tool_force", 3, self._output,
-            prerequisites_of_calc={self._input.ticket(), self.time_ticket(),
-                                   self.xd_ticket()})
-        self.DeclarePeriodicDiscreteUpdateEvent(sample_period, 0.0,
-                                                self._store)
+            "tool_force",
+            3,
+            self._output,
+            prerequisites_of_calc={
+                self._input.ticket(),
+                self.time_ticket(),
+                self.xd_ticket(),
+            },
+        )
+        self.DeclarePeriodicDiscreteUpdateEvent(sample_period, 0.0, self._store)
 
     def window(self, t: float):
         """The dropout mode at time t (s), or None outside every window."""
@@ -54,7 +60,8 @@ class SensorFaults(LeafSystem):
     def _store(self, context, discrete_state):
         if self.window(context.get_time()) is None:
             discrete_state.set_value(
-                self._last, self._input.Eval(context) + self._bias)
+                self._last, self._input.Eval(context) + self._bias
+            )
 
     def _output(self, context, output):
         mode = self.window(context.get_time())
@@ -63,19 +70,20 @@ class SensorFaults(LeafSystem):
         elif mode == "zero":
             output.SetFromVector(np.zeros(3))
         else:
-            output.SetFromVector(
-                context.get_discrete_state(self._last).value())
+            output.SetFromVector(context.get_discrete_state(self._last).value())
 
 
-def add_sensor_faults(builder, faults: FaultsConfig, tool_force, *,
-                      sample_period: float):
+def add_sensor_faults(
+    builder, faults: FaultsConfig, tool_force, *, sample_period: float
+):
     """The port that carries the force reading to the observer and the
     controller: ``tool_force`` through :class:`SensorFaults` named
     ``sensor_faults``, or ``tool_force`` itself without sensor faults."""
     if not faults.sensor_faults():
         return tool_force
-    system = builder.AddNamedSystem("sensor_faults",
-                                    SensorFaults(faults, sample_period))
+    system = builder.AddNamedSystem(
+        "sensor_faults", SensorFaults(faults, sample_period)
+    )
     builder.Connect(tool_force, system.get_input_port())
     return system.get_output_port()
 
@@ -86,7 +94,8 @@ def add_noise_scale(builder, faults: FaultsConfig, noise):
     scale 1)."""
     if faults.noise_scale == 1.0:
         return noise
-    gain = builder.AddNamedSystem("sensor_noise_scale",
-                                  Gain(faults.noise_scale, noise.size()))
+    gain = builder.AddNamedSystem(
+        "sensor_noise_scale", Gain(faults.noise_scale, noise.size())
+    )
     builder.Connect(noise, gain.get_input_port())
     return gain.get_output_port()

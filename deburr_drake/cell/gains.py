@@ -48,17 +48,26 @@ with the one-period map (deburr_drake.analysis.preflight).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
+import math
 from typing import Dict
 
 import numpy as np
 
 from deburr_drake.config import Scenario
 
-__all__ = ["GainDesign", "design_gains", "resolve_gains", "apply_gains",
-           "resolve_slope_bound", "SLOPE_LIMIT_FRACTION", "MIN_SLOPE_BOUND",
-           "VERTICAL_ERROR", "SAMPLED_RATE", "SLOPE_RATE"]
+__all__ = [
+    "GainDesign",
+    "design_gains",
+    "resolve_gains",
+    "apply_gains",
+    "resolve_slope_bound",
+    "SLOPE_LIMIT_FRACTION",
+    "MIN_SLOPE_BOUND",
+    "VERTICAL_ERROR",
+    "SAMPLED_RATE",
+    "SLOPE_RATE",
+]
 
 #: m: the vertical error x3's PD may leave under the gravity error.
 VERTICAL_ERROR = 2.0e-4
@@ -74,13 +83,17 @@ MIN_DELTA_K = 0.004  # m/s, paper.yaml's
 STEP_RATE = 2.5
 
 #: The fields the design sets (dotted names).
-DESIGNED_FIELDS = ("controller.sliding_gain", "controller.sliding_lambda",
-                   "controller.orientation_gain",
-                   "controller.orientation_lambda",
-                   "controller.fuzzy.sliding_scales",
-                   "controller.fuzzy.position_scale",
-                   "simulation.max_step", "controller.null_space_stiffness",
-                   "controller.null_space_damping")
+DESIGNED_FIELDS = (
+    "controller.sliding_gain",
+    "controller.sliding_lambda",
+    "controller.orientation_gain",
+    "controller.orientation_lambda",
+    "controller.fuzzy.sliding_scales",
+    "controller.fuzzy.position_scale",
+    "simulation.max_step",
+    "controller.null_space_stiffness",
+    "controller.null_space_damping",
+)
 
 
 @dataclass
@@ -100,28 +113,35 @@ class GainDesign:
 
     def as_fields(self) -> Dict[str, object]:
         """{dotted field: value} of the designed gains."""
-        return {"controller.sliding_gain": list(self.sliding_gain),
-                "controller.sliding_lambda": list(self.sliding_lambda),
-                "controller.orientation_gain": list(self.orientation_gain),
-                "controller.orientation_lambda":
-                    list(self.orientation_lambda),
-                "controller.fuzzy.sliding_scales": list(self.sliding_scales),
-                "controller.fuzzy.position_scale": self.position_scale,
-                "simulation.max_step": self.max_step,
-                # eq. (3) as is at that step: the law's implicit-damping
-                # term moves the sampled loop's limits
-                "process.implicit_damping": False,
-                "controller.null_space_stiffness": self.null_space_stiffness,
-                "controller.null_space_damping": self.null_space_damping}
+        return {
+            "controller.sliding_gain": list(self.sliding_gain),
+            "controller.sliding_lambda": list(self.sliding_lambda),
+            "controller.orientation_gain": list(self.orientation_gain),
+            "controller.orientation_lambda": list(self.orientation_lambda),
+            "controller.fuzzy.sliding_scales": list(self.sliding_scales),
+            "controller.fuzzy.position_scale": self.position_scale,
+            "simulation.max_step": self.max_step,
+            # eq. (3) as is at that step: the law's implicit-damping
+            # term moves the sampled loop's limits
+            "process.implicit_damping": False,
+            "controller.null_space_stiffness": self.null_space_stiffness,
+            "controller.null_space_damping": self.null_space_damping,
+        }
 
     def scaled(self, factor: float) -> "GainDesign":
         """The design with K and K_o times ``factor`` (the rest as is)."""
         return GainDesign(
-            [k * factor for k in self.sliding_gain], list(self.sliding_lambda),
+            [k * factor for k in self.sliding_gain],
+            list(self.sliding_lambda),
             [k * factor for k in self.orientation_gain],
-            list(self.orientation_lambda), list(self.sliding_scales),
-            self.position_scale, self.max_step, self.null_space_stiffness,
-            self.null_space_damping, dict(self.numbers))
+            list(self.orientation_lambda),
+            list(self.sliding_scales),
+            self.position_scale,
+            self.max_step,
+            self.null_space_stiffness,
+            self.null_space_damping,
+            dict(self.numbers),
+        )
 
 
 def _ceil_to(x: float, step: float) -> float:
@@ -141,21 +161,32 @@ def _rates(plant, q, frame_name, K, K_o, period, d_n=0.0):
     """The sampled rate of D_v alone, D_w alone and of both (with the
     null-space damping d_n (I - J^T J^T+) on more than 6 joints)."""
     from pydrake.multibody.tree import JacobianWrtVariable
+
     context = plant.CreateDefaultContext()
     plant.SetPositions(context, q)
     frame = plant.GetFrameByName(frame_name)
     J = plant.CalcJacobianSpatialVelocity(
-        context, JacobianWrtVariable.kV, frame, np.zeros(3),
-        plant.world_frame(), plant.world_frame())
+        context,
+        JacobianWrtVariable.kV,
+        frame,
+        np.zeros(3),
+        plant.world_frame(),
+        plant.world_frame(),
+    )
     M = plant.CalcMassMatrix(context)
 
     def rate(D):
-        return float(np.max(np.linalg.eigvals(
-            np.linalg.solve(M, D)).real) * period)
+        return float(
+            np.max(np.linalg.eigvals(np.linalg.solve(M, D)).real) * period
+        )
+
     D_v = J[3:].T @ np.diag(K) @ J[3:]
     D_w = J[:3].T @ np.diag(K_o) @ J[:3]
-    D_n = d_n * (np.eye(J.shape[1]) - J.T @ np.linalg.pinv(J.T)) \
-        if J.shape[1] > 6 else 0.0
+    D_n = (
+        d_n * (np.eye(J.shape[1]) - J.T @ np.linalg.pinv(J.T))
+        if J.shape[1] > 6
+        else 0.0
+    )
     return rate(D_v), rate(D_w), rate(D_v + D_w + D_n)
 
 
@@ -163,8 +194,12 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
     """The gains the rules of the module docstring give for ``scenario``'s
     robot at joint angles ``q`` (default: the start pose)."""
     from deburr_drake.cell.edge import believed_contour, start_position
-    from deburr_drake.cell.robot import (loop_numbers, make_robot_model,
-                                         start_pose)
+    from deburr_drake.cell.robot import (
+        loop_numbers,
+        make_robot_model,
+        start_pose,
+    )
+
     c = scenario.controller
     period = c.control_period
     if q is None:
@@ -178,9 +213,11 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
     K_o = [20.0, 20.0, 20.0]
     lam_o = [20.0, 20.0, 20.0]
     plant = make_robot_model(scenario.robot)
-    rate_v, rate_w, rate = _rates(
-        plant, q, scenario.robot.tool_frame, K, K_o, period) \
-        if period > 0 else (0.0, 0.0, 0.0)
+    rate_v, rate_w, rate = (
+        _rates(plant, q, scenario.robot.tool_frame, K, K_o, period)
+        if period > 0
+        else (0.0, 0.0, 0.0)
+    )
     if rate > SAMPLED_RATE:
         # Each part to its share of the limit, as the rate is linear in
         # the gains (lambda max of a sum of PSD pencils <= the sum).
@@ -196,30 +233,40 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
         # Both parts act on different joints mostly: the sum's rate is
         # below the parts' sum; scale both up to the limit again (never
         # above the rule's gains).
-        both = _rates(plant, q, scenario.robot.tool_frame, K_v, K_w,
-                      period)[2]
+        both = _rates(plant, q, scenario.robot.tool_frame, K_v, K_w, period)[2]
         up = SAMPLED_RATE / both
         K = [_nice(min(k, kv * up)) for k, kv in zip(K, K_v)]
         K_o = [_nice(min(k, kw * up)) for k, kw in zip(K_o, K_w)]
-        rate_v, rate_w, rate = _rates(plant, q, scenario.robot.tool_frame,
-                                      K, K_o, period)
+        rate_v, rate_w, rate = _rates(
+            plant, q, scenario.robot.tool_frame, K, K_o, period
+        )
     # More than 6 joints: the null-space posture PD (stiffness / damping
     # 20 1/s as written, 200 / 10) within what the rate leaves.
     d_n, k_n = c.null_space_damping, c.null_space_stiffness
     n_joints = len(q)
     if n_joints > 6 and period > 0:
         d_n, k_n = 10.0, 200.0
-        with_null = _rates(plant, q, scenario.robot.tool_frame, K, K_o,
-                           period, d_n)[2]
+        with_null = _rates(
+            plant, q, scenario.robot.tool_frame, K, K_o, period, d_n
+        )[2]
         if with_null > SAMPLED_RATE * 1.2:
-            alone = _rates(plant, q, scenario.robot.tool_frame, [0.0] * 3,
-                           [0.0] * 3, period, 1.0)[2]  # per unit of d_n
+            alone = _rates(
+                plant,
+                q,
+                scenario.robot.tool_frame,
+                [0.0] * 3,
+                [0.0] * 3,
+                period,
+                1.0,
+            )[2]  # per unit of d_n
             d_n = _nice(min(10.0, 0.5 * SAMPLED_RATE / alone))
             k_n = _nice(20.0 * d_n)
-        rate = _rates(plant, q, scenario.robot.tool_frame, K, K_o, period,
-                      d_n)[2]
-    slope = min(SLOPE_MAX, SLOPE_RATE * mass / period) if period > 0 \
-        else SLOPE_MAX
+        rate = _rates(plant, q, scenario.robot.tool_frame, K, K_o, period, d_n)[
+            2
+        ]
+    slope = (
+        min(SLOPE_MAX, SLOPE_RATE * mass / period) if period > 0 else SLOPE_MAX
+    )
     learned = max(abs(f[a]) for a in c.fuzzy.axes) if c.fuzzy.axes else 0.0
     delta_k = max(MIN_DELTA_K, learned / slope)
     delta_k = _ceil_to(delta_k, 0.001 if delta_k < 0.01 else 0.005)
@@ -229,18 +276,21 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
     p = scenario.process
     g_max = p.cutting_coefficient * (
         scenario.task.desired_depth * scenario.tool.engagement
-        + max([b.height * b.thickness for b in p.burrs], default=0.0))
+        + max([b.height * b.thickness for b in p.burrs], default=0.0)
+    )
     max_step = scenario.simulation.max_step
     # With process.sample_mean the damping is exact at any step.
     if period > 0 and g_max > 0 and not p.sample_mean:
-        steps = max(1, math.ceil(g_max * period / (STEP_RATE * mass)
-                                 * (1 - 5e-3)))
+        steps = max(
+            1, math.ceil(g_max * period / (STEP_RATE * mass) * (1 - 5e-3))
+        )
         max_step = min(max_step, period / steps)
     numbers = {
         "cutting_damping_max_Ns_per_m": float(g_max),
         "gravity_error_force_N": [float(v) for v in f],
-        "gravity_error_moment_Nm": [float(v) for v in
-                                    numbers["gravity_error_moment"]],
+        "gravity_error_moment_Nm": [
+            float(v) for v in numbers["gravity_error_moment"]
+        ],
         "lightest_task_mass_kg": float(mass),
         "sampled_rate": rate,
         "sampled_rate_translation": rate_v,
@@ -250,16 +300,25 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
         "fuzzy_slope_Ns_per_m": float(learned / delta_k),
         "tool_distance_m": x_p,
     }
-    return GainDesign(K, lam, K_o, lam_o,
-                      [round(delta_k / c.fuzzy.width_fraction, 12)]
-                      * len(c.fuzzy.axes),
-                      x_max, max_step, k_n, d_n, numbers)
+    return GainDesign(
+        K,
+        lam,
+        K_o,
+        lam_o,
+        [round(delta_k / c.fuzzy.width_fraction, 12)] * len(c.fuzzy.axes),
+        x_max,
+        max_step,
+        k_n,
+        d_n,
+        numbers,
+    )
 
 
 def apply_gains(scenario: Scenario, design: GainDesign) -> Scenario:
     """Writes ``design``'s gains into ``scenario`` (in place) and marks
     them written (``controller.design: written``)."""
     from deburr_drake.config import set_field
+
     for path, value in design.as_fields().items():
         set_field(scenario, path, value)
     scenario.controller.design = "written"
@@ -304,8 +363,10 @@ def resolve_slope_bound(scenario: Scenario):
     if f.max_slope != 0 or c.kind != "fuzzy" or not c.control_period > 0:
         return None  # (a continuous law, T = 0, has no sampled limit)
     from deburr_drake.cell.robot import loop_numbers
+
     m = loop_numbers(scenario)["lightest_task_mass"]
     K = max(c.sliding_gain[a] for a in f.axes)
-    f.max_slope = max(SLOPE_LIMIT_FRACTION * 2.0 * m / c.control_period - K,
-                      MIN_SLOPE_BOUND)
+    f.max_slope = max(
+        SLOPE_LIMIT_FRACTION * 2.0 * m / c.control_period - K, MIN_SLOPE_BOUND
+    )
     return f.max_slope

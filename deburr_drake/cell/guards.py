@@ -33,18 +33,31 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 from pydrake.systems.primitives import Saturation
 
+from deburr_drake.cell.process import PROCESS_STATE
 from deburr_drake.config import GuardsConfig, Scenario
 from deburr_drake.control.layout import CHAMFER_STATE
-from deburr_drake.cell.process import PROCESS_STATE
 
-__all__ = ["GUARDS_SYSTEM", "GUARD_NAMES", "GuardLimits", "SafetyGuards",
-           "guard_limits", "add_guards", "effort_limits",
-           "add_effort_saturation"]
+__all__ = [
+    "GUARDS_SYSTEM",
+    "GUARD_NAMES",
+    "GuardLimits",
+    "SafetyGuards",
+    "guard_limits",
+    "add_guards",
+    "effort_limits",
+    "add_effort_saturation",
+]
 
 #: The guard system's name in the diagram.
 GUARDS_SYSTEM = "guards"
-GUARD_NAMES = ("nan", "joint_torque", "tool_force", "depth", "workspace",
-               "contact_lost")
+GUARD_NAMES = (
+    "nan",
+    "joint_torque",
+    "tool_force",
+    "depth",
+    "workspace",
+    "contact_lost",
+)
 
 
 @dataclass
@@ -86,8 +99,9 @@ def add_effort_saturation(builder, scenario: Scenario, plant, actuation):
     if not scenario.guards.saturate_effort or not np.any(np.isfinite(limits)):
         return actuation
     big = np.where(np.isfinite(limits), limits, 1e300)
-    saturation = builder.AddNamedSystem("drive_saturation",
-                                        Saturation(-big, big))
+    saturation = builder.AddNamedSystem(
+        "drive_saturation", Saturation(-big, big)
+    )
     builder.Connect(actuation, saturation.get_input_port())
     return saturation.get_output_port()
 
@@ -99,26 +113,31 @@ def guard_limits(scenario: Scenario, plant, contour) -> GuardLimits:
     from the contour."""
     g: GuardsConfig = scenario.guards
     names, limits = effort_limits(plant)
-    samples = np.array([contour.point_at(s) for s in np.linspace(
-        0.0, contour.length, 97)])
+    samples = np.array(
+        [contour.point_at(s) for s in np.linspace(0.0, contour.length, 97)]
+    )
     return GuardLimits(
-        joint_names=names, effort_limits=limits,
+        joint_names=names,
+        effort_limits=limits,
         joint_torque_fraction=g.joint_torque_fraction,
-        tool_force=g.tool_force or
-        10.0 * scenario.task.desired_chamfering_force,
-        depth=g.depth or min(4.0 * scenario.task.desired_depth,
-                             scenario.tool.cutter_radius),
+        tool_force=g.tool_force
+        or 10.0 * scenario.task.desired_chamfering_force,
+        depth=g.depth
+        or min(4.0 * scenario.task.desired_depth, scenario.tool.cutter_radius),
         workspace_low=samples.min(axis=0) - g.workspace_margin,
         workspace_high=samples.max(axis=0) + g.workspace_margin,
         contact_lost_time=g.contact_lost_time,
-        contact_force=g.contact_force, nan=g.nan,
+        contact_force=g.contact_force,
+        nan=g.nan,
         check_period=g.check_period,
-        torque_period=scenario.controller.control_period)
+        torque_period=scenario.controller.control_period,
+    )
 
 
 def _fmt(v) -> str:
-    return np.array2string(np.asarray(v, float), precision=4,
-                           separator=", ", suppress_small=False)
+    return np.array2string(
+        np.asarray(v, float), precision=4, separator=", ", suppress_small=False
+    )
 
 
 class SafetyGuards(LeafSystem):
@@ -141,8 +160,10 @@ class SafetyGuards(LeafSystem):
     def __init__(self, limits: GuardLimits, signal_sizes: Dict[str, int]):
         super().__init__()
         self.limits = limits
-        self._inputs = {name: self.DeclareVectorInputPort(name, size)
-                        for name, size in signal_sizes.items()}
+        self._inputs = {
+            name: self.DeclareVectorInputPort(name, size)
+            for name, size in signal_sizes.items()
+        }
         for name in ("actuation", "tool_force", "chamfer"):
             if name not in self._inputs:
                 raise ValueError(f"SafetyGuards needs the {name!r} signal")
@@ -156,43 +177,53 @@ class SafetyGuards(LeafSystem):
         if not limits.nan:
             low[:], high[:] = -np.inf, np.inf
         act = self._slices["actuation"]
-        bound = np.where(np.isfinite(limits.effort_limits),
-                         limits.joint_torque_fraction * limits.effort_limits,
-                         high[act])
+        bound = np.where(
+            np.isfinite(limits.effort_limits),
+            limits.joint_torque_fraction * limits.effort_limits,
+            high[act],
+        )
         low[act], high[act] = -bound, bound
         chamfer = self._slices["chamfer"]
         base = chamfer.start
         high[base + CHAMFER_STATE.slice("delta").start] = limits.depth
         if "process" in self._slices:  # the true depth (part_error)
-            high[self._slices["process"].start
-                 + PROCESS_STATE.slice("delta").start] = limits.depth
+            high[
+                self._slices["process"].start
+                + PROCESS_STATE.slice("delta").start
+            ] = limits.depth
         x_p = CHAMFER_STATE.slice("x_p")
-        low[base + x_p.start:base + x_p.stop] = limits.workspace_low
-        high[base + x_p.start:base + x_p.stop] = limits.workspace_high
+        low[base + x_p.start : base + x_p.stop] = limits.workspace_low
+        high[base + x_p.start : base + x_p.stop] = limits.workspace_high
         self._low, self._high = low, high
         self._force = self._slices["tool_force"]
         self._f_n = base + CHAMFER_STATE.slice("f_n").start
-        self._tool_force_squared = limits.tool_force ** 2
+        self._tool_force_squared = limits.tool_force**2
         self._contact = self.DeclareDiscreteState(BasicVector([0.0, -1.0]))
         self.DeclarePeriodicDiscreteUpdateEvent(
-            limits.check_period, 0.0, self._check)
+            limits.check_period, 0.0, self._check
+        )
         self._actuation = self._inputs["actuation"]
         self._torque_bound = high[act]
-        if 0 < limits.torque_period < limits.check_period \
-                and np.any(np.isfinite(limits.effort_limits)):
+        if 0 < limits.torque_period < limits.check_period and np.any(
+            np.isfinite(limits.effort_limits)
+        ):
             # The torque at every inner-loop sample: one port, one compare.
             self.DeclarePeriodicDiscreteUpdateEvent(
-                limits.torque_period, 0.0, self._check_torque)
+                limits.torque_period, 0.0, self._check_torque
+            )
 
     def _trip(self, t, name, values):
         return EventStatus.ReachedTermination(
-            self, f"{name}: {values} at t = {t:.4f} s")
+            self, f"{name}: {values} at t = {t:.4f} s"
+        )
 
     def _check_torque(self, context, discrete_state):
         tau = self._actuation.Eval(context)
         if (np.abs(tau) > self._torque_bound).any():
-            return self._diagnose(context.get_time(), np.concatenate(
-                [port.Eval(context) for port in self._ports]))
+            return self._diagnose(
+                context.get_time(),
+                np.concatenate([port.Eval(context) for port in self._ports]),
+            )
         return EventStatus.Succeeded()
 
     def _check(self, context, discrete_state):
@@ -206,21 +237,25 @@ class SafetyGuards(LeafSystem):
         in_contact = x[self._f_n] > self.limits.contact_force
         if in_contact:
             if not made or lost_since >= 0:
-                discrete_state.get_mutable_vector(
-                    self._contact).SetFromVector([1.0, -1.0])
+                discrete_state.get_mutable_vector(self._contact).SetFromVector(
+                    [1.0, -1.0]
+                )
         elif made:
             t = context.get_time()
             if lost_since < 0:
-                discrete_state.get_mutable_vector(
-                    self._contact).SetFromVector([1.0, t])
+                discrete_state.get_mutable_vector(self._contact).SetFromVector(
+                    [1.0, t]
+                )
             elif t - lost_since > self.limits.contact_lost_time:
                 return self._trip(
-                    t, "contact_lost",
+                    t,
+                    "contact_lost",
                     f"||f_n|| = {x[self._f_n]:.4g} N <= "
                     f"{self.limits.contact_force:g} N for "
                     f"{t - lost_since:.4g} s > "
                     f"{self.limits.contact_lost_time:g} s (since "
-                    f"{lost_since:.4f} s)")
+                    f"{lost_since:.4f} s)",
+                )
         return EventStatus.Succeeded()
 
     def _diagnose(self, t, x):
@@ -230,36 +265,54 @@ class SafetyGuards(LeafSystem):
             for name, s in self._slices.items():
                 bad = np.flatnonzero(~np.isfinite(x[s]))
                 if bad.size:
-                    return self._trip(t, "nan", f"signal {name} has "
-                                      f"non-finite elements {bad.tolist()}")
+                    return self._trip(
+                        t,
+                        "nan",
+                        f"signal {name} has non-finite elements {bad.tolist()}",
+                    )
         tau = x[self._slices["actuation"]]
         ratio = np.abs(tau) / lim.effort_limits
         k = int(np.argmax(ratio))
         if ratio[k] > lim.joint_torque_fraction:
             return self._trip(
-                t, "joint_torque",
+                t,
+                "joint_torque",
                 f"{lim.joint_names[k]} |tau| = {abs(tau[k]):.4g} > "
                 f"{lim.joint_torque_fraction:g} x effort limit "
-                f"{lim.effort_limits[k]:.4g} (all tau {_fmt(tau)})")
+                f"{lim.effort_limits[k]:.4g} (all tau {_fmt(tau)})",
+            )
         force = x[self._force]
         magnitude = float(np.linalg.norm(force))
         if magnitude > lim.tool_force:
             return self._trip(
-                t, "tool_force", f"|f| = {magnitude:.4g} N > "
-                f"{lim.tool_force:.4g} N (f = {_fmt(force)} N)")
+                t,
+                "tool_force",
+                f"|f| = {magnitude:.4g} N > "
+                f"{lim.tool_force:.4g} N (f = {_fmt(force)} N)",
+            )
         chamfer = x[self._slices["chamfer"]]
         delta = float(CHAMFER_STATE.get(chamfer, "delta"))
-        true = float(PROCESS_STATE.get(x[self._slices["process"]], "delta")) \
-            if "process" in self._slices else delta
+        true = (
+            float(PROCESS_STATE.get(x[self._slices["process"]], "delta"))
+            if "process" in self._slices
+            else delta
+        )
         if max(delta, true) > lim.depth:
-            return self._trip(t, "depth", f"delta = {delta * 1e3:.4g} mm "
-                              f"measured, {true * 1e3:.4g} mm true > "
-                              f"{lim.depth * 1e3:.4g} mm")
+            return self._trip(
+                t,
+                "depth",
+                f"delta = {delta * 1e3:.4g} mm "
+                f"measured, {true * 1e3:.4g} mm true > "
+                f"{lim.depth * 1e3:.4g} mm",
+            )
         x_p = CHAMFER_STATE.get(chamfer, "x_p")
         if np.any(x_p < lim.workspace_low) or np.any(x_p > lim.workspace_high):
             return self._trip(
-                t, "workspace", f"tool tip {_fmt(x_p)} m outside the box "
-                f"{_fmt(lim.workspace_low)}..{_fmt(lim.workspace_high)} m")
+                t,
+                "workspace",
+                f"tool tip {_fmt(x_p)} m outside the box "
+                f"{_fmt(lim.workspace_low)}..{_fmt(lim.workspace_high)} m",
+            )
         bad = np.flatnonzero(~((x >= self._low) & (x <= self._high)))
         return self._trip(t, "nan", f"elements {bad.tolist()} beyond 1e300")
 
@@ -270,9 +323,13 @@ def add_guards(builder, scenario: Scenario, plant, contour, logged):
     unless ``scenario.guards.enabled`` is false. Returns it (or None)."""
     if not scenario.guards.enabled:
         return None
-    guards = builder.AddNamedSystem(GUARDS_SYSTEM, SafetyGuards(
-        guard_limits(scenario, plant, contour),
-        {name: port.size() for name, port in logged.items()}))
+    guards = builder.AddNamedSystem(
+        GUARDS_SYSTEM,
+        SafetyGuards(
+            guard_limits(scenario, plant, contour),
+            {name: port.size() for name, port in logged.items()},
+        ),
+    )
     for name, port in logged.items():
         builder.Connect(port, guards.GetInputPort(name))
     return guards

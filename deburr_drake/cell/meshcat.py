@@ -11,17 +11,21 @@ from __future__ import annotations
 from typing import Dict
 
 import numpy as np
-from pydrake.geometry import (Box, Meshcat, MeshcatVisualizer,
-                              MeshcatVisualizerParams, Rgba, Role)
+from pydrake.geometry import (
+    Box,
+    Meshcat,
+    MeshcatVisualizer,
+    MeshcatVisualizerParams,
+    Rgba,
+    Role,
+)
 from pydrake.math import RigidTransform, RotationMatrix
-from pydrake.multibody.meshcat import (ContactVisualizer,
-                                       ContactVisualizerParams)
+from pydrake.multibody.meshcat import ContactVisualizer, ContactVisualizerParams
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 
 from deburr_drake.cell.process import CuttingProcess
 
-__all__ = ["EdgeVisualizer", "add_meshcat", "UNCUT",
-           "CUT", "BURR"]
+__all__ = ["EdgeVisualizer", "add_meshcat", "UNCUT", "CUT", "BURR"]
 
 UNCUT = Rgba(0.55, 0.55, 0.6, 1.0)
 CUT = Rgba(0.1, 0.8, 0.2, 1.0)
@@ -46,19 +50,27 @@ class EdgeVisualizer(LeafSystem):
     Meshcat (a cache of the browser's scene, not simulation state).
     """
 
-    def __init__(self, meshcat: Meshcat, process: CuttingProcess, *,
-                 edge_points, burr_initial, segments: int = 120,
-                 publish_period: float = 0.1, prefix: str = "deburring"):
+    def __init__(
+        self,
+        meshcat: Meshcat,
+        process: CuttingProcess,
+        *,
+        edge_points,
+        burr_initial,
+        segments: int = 120,
+        publish_period: float = 0.1,
+        prefix: str = "deburring",
+    ):
         super().__init__()
         self.set_name("edge_visualizer")
         self._meshcat = meshcat
         self._prefix = prefix
         n_bins = process.bins.count
         edges = np.linspace(0, n_bins, segments + 1).astype(int)
-        self._groups = [slice(a, b) for a, b in zip(edges[:-1], edges[1:])
-                        if b > a]
-        self._finish_port = self.DeclareVectorInputPort("finish_depth",
-                                                        n_bins)
+        self._groups = [
+            slice(a, b) for a, b in zip(edges[:-1], edges[1:]) if b > a
+        ]
+        self._finish_port = self.DeclareVectorInputPort("finish_depth", n_bins)
         self._burr_port = self.DeclareVectorInputPort("burr_height", n_bins)
         self.DeclarePeriodicPublishEvent(publish_period, 0.0, self._publish)
         self.DeclareForcedPublishEvent(self._publish)
@@ -79,10 +91,12 @@ class EdgeVisualizer(LeafSystem):
             if height > 0:
                 path = f"{prefix}/burrs/{k}"
                 meshcat.SetObject(path, Box(length, 0.001, height), BURR)
-                meshcat.SetTransform(path, X @ RigidTransform(
-                    [0.0, 0.0, height / 2]))
-        self._burr_groups = [k for k, g in enumerate(self._groups)
-                             if burr_initial[g].max() > 0]
+                meshcat.SetTransform(
+                    path, X @ RigidTransform([0.0, 0.0, height / 2])
+                )
+        self._burr_groups = [
+            k for k, g in enumerate(self._groups) if burr_initial[g].max() > 0
+        ]
 
     def _set(self, path, visible, time):
         if self._shown.get(path) is not visible:
@@ -99,8 +113,9 @@ class EdgeVisualizer(LeafSystem):
             self._set(f"{p}/edge/cut/{k}", cut, t)
             self._set(f"{p}/edge/uncut/{k}", not cut, t)
         for k in self._burr_groups:
-            self._set(f"{p}/burrs/{k}", bool(np.any(
-                burr[self._groups[k]] > 0.0)), t)
+            self._set(
+                f"{p}/burrs/{k}", bool(np.any(burr[self._groups[k]] > 0.0)), t
+            )
 
 
 def _segment_pose(mid, along) -> RigidTransform:
@@ -111,9 +126,16 @@ def _segment_pose(mid, along) -> RigidTransform:
     return RigidTransform(RotationMatrix(np.column_stack([x, y, z])), mid)
 
 
-def add_meshcat(builder: DiagramBuilder, meshcat: Meshcat, *, plant,
-                scene_graph, process: CuttingProcess, edge_points,
-                publish_period: float = 0.1) -> None:
+def add_meshcat(
+    builder: DiagramBuilder,
+    meshcat: Meshcat,
+    *,
+    plant,
+    scene_graph,
+    process: CuttingProcess,
+    edge_points,
+    publish_period: float = 0.1,
+) -> None:
     """Adds the illustration, contact-force arrows and the edge to
     ``meshcat`` (named systems ``meshcat_visualizer``,
     ``contact_visualizer``, ``edge_visualizer``), and points the camera at
@@ -121,21 +143,36 @@ def add_meshcat(builder: DiagramBuilder, meshcat: Meshcat, *, plant,
     edge_points = np.asarray(edge_points, float)
     center = edge_points.mean(axis=0)
     meshcat.SetCameraPose(center + np.array([0.10, -0.16, 0.12]), center)
-    params = MeshcatVisualizerParams(role=Role.kIllustration,
-                                     publish_period=publish_period)
-    visualizer = MeshcatVisualizer.AddToBuilder(builder, scene_graph,
-                                                meshcat, params)
+    params = MeshcatVisualizerParams(
+        role=Role.kIllustration, publish_period=publish_period
+    )
+    visualizer = MeshcatVisualizer.AddToBuilder(
+        builder, scene_graph, meshcat, params
+    )
     visualizer.set_name("meshcat_visualizer")
     contact = ContactVisualizer.AddToBuilder(
-        builder, plant, meshcat, ContactVisualizerParams(
-            publish_period=publish_period, newtons_per_meter=200.0,
-            radius=0.0015))
+        builder,
+        plant,
+        meshcat,
+        ContactVisualizerParams(
+            publish_period=publish_period,
+            newtons_per_meter=200.0,
+            radius=0.0015,
+        ),
+    )
     contact.set_name("contact_visualizer")
-    edge = builder.AddSystem(EdgeVisualizer(
-        meshcat, process, edge_points=edge_points,
-        burr_initial=process.initial_burr_height(),
-        publish_period=publish_period))
-    builder.Connect(process.GetOutputPort("finish_depth"),
-                    edge.GetInputPort("finish_depth"))
-    builder.Connect(process.GetOutputPort("burr_height"),
-                    edge.GetInputPort("burr_height"))
+    edge = builder.AddSystem(
+        EdgeVisualizer(
+            meshcat,
+            process,
+            edge_points=edge_points,
+            burr_initial=process.initial_burr_height(),
+            publish_period=publish_period,
+        )
+    )
+    builder.Connect(
+        process.GetOutputPort("finish_depth"), edge.GetInputPort("finish_depth")
+    )
+    builder.Connect(
+        process.GetOutputPort("burr_height"), edge.GetInputPort("burr_height")
+    )

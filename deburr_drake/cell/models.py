@@ -10,8 +10,12 @@ from pathlib import Path
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
 
-__all__ = ["models_dir", "make_parser", "POINT_MASS_URL",
-           "make_kinematic_model"]
+__all__ = [
+    "models_dir",
+    "make_parser",
+    "POINT_MASS_URL",
+    "make_kinematic_model",
+]
 
 POINT_MASS_URL = "package://deburr_drake_models/cartesian_tool.sdf"
 
@@ -25,7 +29,8 @@ def models_dir() -> Path:
         raise FileNotFoundError(
             f"deburr_drake models not found at {path} (no package.xml): "
             "install from a source checkout (pip install -e .) or set "
-            "DEBURR_DRAKE_MODELS to the repository's models/ directory")
+            "DEBURR_DRAKE_MODELS to the repository's models/ directory"
+        )
     return path
 
 

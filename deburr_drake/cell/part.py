@@ -12,38 +12,83 @@ import math
 
 import numpy as np
 from pydrake.geometry import (
-    AddCompliantHydroelasticProperties, AddContactMaterial, AddRigidHydroelasticProperties, Box, Cylinder,
-    GeometryInstance, MakePhongIllustrationProperties, Mesh, ProximityProperties)
+    AddCompliantHydroelasticProperties,
+    AddContactMaterial,
+    AddRigidHydroelasticProperties,
+    Box,
+    Cylinder,
+    GeometryInstance,
+    MakePhongIllustrationProperties,
+    Mesh,
+    ProximityProperties,
+)
 from pydrake.math import RigidTransform, RotationMatrix
-from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, ContactModel, CoulombFriction
+from pydrake.multibody.plant import (
+    AddMultibodyPlantSceneGraph,
+    ContactModel,
+    CoulombFriction,
+)
 from pydrake.systems.framework import DiagramBuilder
 
 from deburr_drake.cell.models import POINT_MASS_URL, make_parser
-from deburr_drake.cell.tube_mesh import (profile_mesh_paths, ring_mesh_path,
-                                         ring_surface_path)
+from deburr_drake.cell.tube_mesh import (
+    profile_mesh_paths,
+    ring_mesh_path,
+    ring_surface_path,
+)
 
 __all__ = [
-    "CALIBRATED_HYDROELASTIC_MODULUS", "CALIBRATED_FORCE_AT_HALF_MM",
-    "contact_force_on_body", "register_compliant_ring", "register_compliant_wall", "register_compliant_profile", "register_tube_visual", "register_cutter", "add_tool_robot", "add_cartesian_tool", "RingContactProbe", "measure_normal_force",
-    "local_stiffness", "power_law_exponent", "calibrate_hydroelastic_modulus", "force_ripple"]
+    "CALIBRATED_HYDROELASTIC_MODULUS",
+    "CALIBRATED_FORCE_AT_HALF_MM",
+    "contact_force_on_body",
+    "register_compliant_ring",
+    "register_compliant_wall",
+    "register_compliant_profile",
+    "register_tube_visual",
+    "register_cutter",
+    "add_tool_robot",
+    "add_cartesian_tool",
+    "RingContactProbe",
+    "measure_normal_force",
+    "local_stiffness",
+    "power_law_exponent",
+    "calibrate_hydroelastic_modulus",
+    "force_ripple",
+]
 
 # Calibration by scripts/contact_stiffness.py (n_theta = 240, n_radial = n_z = 2, the
 # default geometry of measure_normal_force): with this modulus the local stiffness
 # dF/d(delta) at delta = 0.5 mm is about 10 N/mm; the force there is as stated. The
 # scenarios' coarser default (120 segments, 0.6 mm cutter mesh) gives the same force
 # within 0.3 % (TubeConfig.mesh_segments, scripts/contact_mesh.py).
-CALIBRATED_HYDROELASTIC_MODULUS = 4.5e6   # Pa
-CALIBRATED_FORCE_AT_HALF_MM = 3.72         # N
+CALIBRATED_HYDROELASTIC_MODULUS = 4.5e6  # Pa
+CALIBRATED_FORCE_AT_HALF_MM = 3.72  # N
 
 
 def _check_positive(name, value):
-    if not (isinstance(value, (int, float, np.floating, np.integer)) and math.isfinite(value) and value > 0):
+    if not (
+        isinstance(value, (int, float, np.floating, np.integer))
+        and math.isfinite(value)
+        and value > 0
+    ):
         raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
 
 
-def register_compliant_ring(plant, *, inner_radius, outer_radius, z_bottom, z_top, hydroelastic_modulus,
-                            hunt_crossley_dissipation, center_xy=(0.0, 0.0), n_theta=240, n_radial=2, n_z=2,
-                            name="tube_edge"):
+def register_compliant_ring(
+    plant,
+    *,
+    inner_radius,
+    outer_radius,
+    z_bottom,
+    z_top,
+    hydroelastic_modulus,
+    hunt_crossley_dissipation,
+    center_xy=(0.0, 0.0),
+    n_theta=240,
+    n_radial=2,
+    n_z=2,
+    name="tube_edge",
+):
     """Register the ring inner_radius <= r <= outer_radius, z_bottom <= z <= z_top (m) about the
     vertical axis through center_xy (m, world) on the world body.
 
@@ -55,33 +100,67 @@ def register_compliant_ring(plant, *, inner_radius, outer_radius, z_bottom, z_to
     illustration role only. Call before plant.Finalize(). Returns the collision GeometryId.
     """
     if plant.is_finalized():
-        raise ValueError("plant must not be finalized yet (register the ring before Finalize())")
+        raise ValueError(
+            "plant must not be finalized yet (register the ring before Finalize())"
+        )
     _check_positive("hydroelastic_modulus", hydroelastic_modulus)
-    if not (isinstance(hunt_crossley_dissipation, (int, float, np.floating, np.integer))
-            and math.isfinite(hunt_crossley_dissipation) and hunt_crossley_dissipation >= 0):
-        raise ValueError(f"hunt_crossley_dissipation must be a finite number >= 0, got {hunt_crossley_dissipation!r}")
-    path = ring_mesh_path(inner_radius, outer_radius, z_bottom, z_top, n_theta, n_radial, n_z)
+    if not (
+        isinstance(
+            hunt_crossley_dissipation, (int, float, np.floating, np.integer)
+        )
+        and math.isfinite(hunt_crossley_dissipation)
+        and hunt_crossley_dissipation >= 0
+    ):
+        raise ValueError(
+            f"hunt_crossley_dissipation must be a finite number >= 0, got {hunt_crossley_dissipation!r}"
+        )
+    path = ring_mesh_path(
+        inner_radius, outer_radius, z_bottom, z_top, n_theta, n_radial, n_z
+    )
     mesh = Mesh(str(path))
     props = ProximityProperties()
     # The resolution hint is ignored for a Mesh (its tetrahedra are used as they are).
     AddCompliantHydroelasticProperties(
-        resolution_hint=outer_radius - inner_radius, hydroelastic_modulus=hydroelastic_modulus,
-        properties=props)
-    AddContactMaterial(dissipation=hunt_crossley_dissipation, friction=CoulombFriction(0.0, 0.0),
-                       properties=props)
+        resolution_hint=outer_radius - inner_radius,
+        hydroelastic_modulus=hydroelastic_modulus,
+        properties=props,
+    )
+    AddContactMaterial(
+        dissipation=hunt_crossley_dissipation,
+        friction=CoulombFriction(0.0, 0.0),
+        properties=props,
+    )
     world = plant.world_body()
     X_WG = RigidTransform([float(center_xy[0]), float(center_xy[1]), 0.0])
-    geometry_id = plant.RegisterCollisionGeometry(world, X_WG, mesh, name, props)
-    surface = ring_surface_path(inner_radius, outer_radius, z_bottom, z_top, n_theta)
+    geometry_id = plant.RegisterCollisionGeometry(
+        world, X_WG, mesh, name, props
+    )
+    surface = ring_surface_path(
+        inner_radius, outer_radius, z_bottom, z_top, n_theta
+    )
     visual = GeometryInstance(X_WG, Mesh(str(surface)), name + "_visual")
-    visual.set_illustration_properties(MakePhongIllustrationProperties(np.array([0.7, 0.6, 0.4, 1.0])))
+    visual.set_illustration_properties(
+        MakePhongIllustrationProperties(np.array([0.7, 0.6, 0.4, 1.0]))
+    )
     plant.RegisterVisualGeometry(world, visual)
     return geometry_id
 
 
-def register_compliant_wall(plant, *, mid, tangent, normal, length, thickness, height, layer_height,
-                            hydroelastic_modulus, hunt_crossley_dissipation, margin=0.01,
-                            name="wall_edge"):
+def register_compliant_wall(
+    plant,
+    *,
+    mid,
+    tangent,
+    normal,
+    length,
+    thickness,
+    height,
+    layer_height,
+    hydroelastic_modulus,
+    hunt_crossley_dissipation,
+    margin=0.01,
+    name="wall_edge",
+):
     """A straight wall whose top edge runs through `mid` (m, world, on the wall face at the top)
     along `tangent`, the material on the side of `normal` (unit, horizontal): its top
     `layer_height` as a compliant hydroelastic Box (Drake meshes it; pressure zero on the
@@ -89,32 +168,67 @@ def register_compliant_wall(plant, *, mid, tangent, normal, length, thickness, h
     frictionless; the rest of the wall as illustration. Call before Finalize. Returns the
     collision GeometryId."""
     _check_positive("hydroelastic_modulus", hydroelastic_modulus)
-    for label, value in (("length", length), ("thickness", thickness), ("height", height),
-                         ("layer_height", layer_height)):
+    for label, value in (
+        ("length", length),
+        ("thickness", thickness),
+        ("height", height),
+        ("layer_height", layer_height),
+    ):
         _check_positive(label, value)
     tangent, normal = np.asarray(tangent, float), np.asarray(normal, float)
-    R = RotationMatrix(np.column_stack([tangent, normal, np.cross(tangent, normal)]))
+    R = RotationMatrix(
+        np.column_stack([tangent, normal, np.cross(tangent, normal)])
+    )
     top = np.asarray(mid, float) + 0.5 * thickness * normal
     X_layer = RigidTransform(R, top - [0.0, 0.0, 0.5 * layer_height])
     props = ProximityProperties()
-    AddCompliantHydroelasticProperties(resolution_hint=thickness, hydroelastic_modulus=hydroelastic_modulus,
-                                       properties=props)
-    AddContactMaterial(dissipation=hunt_crossley_dissipation, friction=CoulombFriction(0.0, 0.0),
-                       properties=props)
+    AddCompliantHydroelasticProperties(
+        resolution_hint=thickness,
+        hydroelastic_modulus=hydroelastic_modulus,
+        properties=props,
+    )
+    AddContactMaterial(
+        dissipation=hunt_crossley_dissipation,
+        friction=CoulombFriction(0.0, 0.0),
+        properties=props,
+    )
     shape = Box(length + 2 * margin, thickness, layer_height)
     world = plant.world_body()
-    geometry_id = plant.RegisterCollisionGeometry(world, X_layer, shape, name, props)
-    plant.RegisterVisualGeometry(world, X_layer, shape, name + "_visual", np.array([0.7, 0.6, 0.4, 1.0]))
+    geometry_id = plant.RegisterCollisionGeometry(
+        world, X_layer, shape, name, props
+    )
+    plant.RegisterVisualGeometry(
+        world, X_layer, shape, name + "_visual", np.array([0.7, 0.6, 0.4, 1.0])
+    )
     body_height = height - layer_height
-    X_body = RigidTransform(R, top - [0.0, 0.0, layer_height + 0.5 * body_height])
-    plant.RegisterVisualGeometry(world, X_body, Box(length + 2 * margin, thickness, body_height),
-                                 name + "_body", np.array([0.6, 0.6, 0.65, 1.0]))
+    X_body = RigidTransform(
+        R, top - [0.0, 0.0, layer_height + 0.5 * body_height]
+    )
+    plant.RegisterVisualGeometry(
+        world,
+        X_body,
+        Box(length + 2 * margin, thickness, body_height),
+        name + "_body",
+        np.array([0.6, 0.6, 0.65, 1.0]),
+    )
     return geometry_id
 
 
-def register_compliant_profile(plant, edge, *, wall_thickness, z_bottom, z_top, hydroelastic_modulus,
-                               hunt_crossley_dissipation, segments_per_turn=120, n_radial=2, n_z=2,
-                               visual_z_bottom=None, name="profile_edge"):
+def register_compliant_profile(
+    plant,
+    edge,
+    *,
+    wall_thickness,
+    z_bottom,
+    z_top,
+    hydroelastic_modulus,
+    hunt_crossley_dissipation,
+    segments_per_turn=120,
+    n_radial=2,
+    n_z=2,
+    visual_z_bottom=None,
+    name="profile_edge",
+):
     """The material along a closed profile's edge (`edge`: a
     math.geometry.ProfileContour with offset 0, its centre's x, y in the
     world): `wall_thickness` deep into the material (a pocket's plate
@@ -128,39 +242,83 @@ def register_compliant_profile(plant, edge, *, wall_thickness, z_bottom, z_top, 
     `visual_z_bottom`. Call before Finalize. Returns the collision GeometryId."""
     _check_positive("hydroelastic_modulus", hydroelastic_modulus)
     points, normals, depths = edge.material_band(
-        wall_thickness, segments_per_turn=segments_per_turn, max_step=wall_thickness)
-    volume, surface, body = profile_mesh_paths(points, normals, depths, z_bottom, z_top, n_radial, n_z,
-                                               visual_z_bottom=visual_z_bottom)
+        wall_thickness,
+        segments_per_turn=segments_per_turn,
+        max_step=wall_thickness,
+    )
+    volume, surface, body = profile_mesh_paths(
+        points,
+        normals,
+        depths,
+        z_bottom,
+        z_top,
+        n_radial,
+        n_z,
+        visual_z_bottom=visual_z_bottom,
+    )
     props = ProximityProperties()
-    AddCompliantHydroelasticProperties(resolution_hint=wall_thickness, hydroelastic_modulus=hydroelastic_modulus,
-                                       properties=props)
-    AddContactMaterial(dissipation=hunt_crossley_dissipation, friction=CoulombFriction(0.0, 0.0),
-                       properties=props)
+    AddCompliantHydroelasticProperties(
+        resolution_hint=wall_thickness,
+        hydroelastic_modulus=hydroelastic_modulus,
+        properties=props,
+    )
+    AddContactMaterial(
+        dissipation=hunt_crossley_dissipation,
+        friction=CoulombFriction(0.0, 0.0),
+        properties=props,
+    )
     world = plant.world_body()
     center = edge.center
     X_WG = RigidTransform([float(center[0]), float(center[1]), 0.0])
-    geometry_id = plant.RegisterCollisionGeometry(world, X_WG, Mesh(str(volume)), name, props)
-    for path, label, rgba in ((surface, "_visual", [0.7, 0.6, 0.4, 1.0]), (body, "_body", [0.6, 0.6, 0.65, 1.0])):
+    geometry_id = plant.RegisterCollisionGeometry(
+        world, X_WG, Mesh(str(volume)), name, props
+    )
+    for path, label, rgba in (
+        (surface, "_visual", [0.7, 0.6, 0.4, 1.0]),
+        (body, "_body", [0.6, 0.6, 0.65, 1.0]),
+    ):
         if path is not None:
             visual = GeometryInstance(X_WG, Mesh(str(path)), name + label)
-            visual.set_illustration_properties(MakePhongIllustrationProperties(np.array(rgba)))
+            visual.set_illustration_properties(
+                MakePhongIllustrationProperties(np.array(rgba))
+            )
             plant.RegisterVisualGeometry(world, visual)
     return geometry_id
 
 
-def register_tube_visual(plant, *, inner_radius, outer_radius, z_bottom, z_top, center_xy=(0.0, 0.0),
-                         n_theta=240, name="tube_body"):
+def register_tube_visual(
+    plant,
+    *,
+    inner_radius,
+    outer_radius,
+    z_bottom,
+    z_top,
+    center_xy=(0.0, 0.0),
+    n_theta=240,
+    name="tube_body",
+):
     """The rest of the tube below the compliant edge ring, for illustration only (it never
     touches the tool). Call before Finalize."""
-    surface = ring_surface_path(inner_radius, outer_radius, z_bottom, z_top, n_theta)
+    surface = ring_surface_path(
+        inner_radius, outer_radius, z_bottom, z_top, n_theta
+    )
     X_WG = RigidTransform([float(center_xy[0]), float(center_xy[1]), 0.0])
     visual = GeometryInstance(X_WG, Mesh(str(surface)), name)
-    visual.set_illustration_properties(MakePhongIllustrationProperties(np.array([0.6, 0.6, 0.65, 1.0])))
+    visual.set_illustration_properties(
+        MakePhongIllustrationProperties(np.array([0.6, 0.6, 0.65, 1.0]))
+    )
     plant.RegisterVisualGeometry(plant.world_body(), visual)
 
 
-def register_cutter(plant, body, *, cutter_radius=0.003, cutter_length=0.020, resolution_hint=4e-4,
-                    X_BT=None):
+def register_cutter(
+    plant,
+    body,
+    *,
+    cutter_radius=0.003,
+    cutter_length=0.020,
+    resolution_hint=4e-4,
+    X_BT=None,
+):
     """The cylindrical cutter on `body`, tip at the tool frame T (pose X_BT in the body; default the
     body origin), axis T's +z (m): rigid hydroelastic, frictionless (the tangential force is the
     cutting process's, DESIGN.md §8), with a visual. The default resolution hint gives
@@ -175,17 +333,33 @@ def register_cutter(plant, body, *, cutter_radius=0.003, cutter_length=0.020, re
     props = ProximityProperties()
     AddRigidHydroelasticProperties(resolution_hint, props)
     AddContactMaterial(friction=CoulombFriction(0.0, 0.0), properties=props)
-    geometry_id = plant.RegisterCollisionGeometry(body, X_BG, shape, "cutter", props)
-    plant.RegisterVisualGeometry(body, X_BG, shape, "cutter_visual", np.array([0.8, 0.8, 0.85, 1.0]))
+    geometry_id = plant.RegisterCollisionGeometry(
+        body, X_BG, shape, "cutter", props
+    )
+    plant.RegisterVisualGeometry(
+        body, X_BG, shape, "cutter_visual", np.array([0.8, 0.8, 0.85, 1.0])
+    )
     return geometry_id
 
 
-def add_tool_robot(plant, url, *, cutter_radius=0.003, cutter_length=0.020, resolution_hint=4e-4):
+def add_tool_robot(
+    plant,
+    url,
+    *,
+    cutter_radius=0.003,
+    cutter_length=0.020,
+    resolution_hint=4e-4,
+):
     """Add the robot model at `url` (its body `tool` has its origin at the tool tip, weld
     `ft_sensor` holds it) and register the cutter on `tool`. Returns the model instance."""
     (instance,) = make_parser(plant).AddModels(url=url)
-    register_cutter(plant, plant.GetBodyByName("tool", instance), cutter_radius=cutter_radius,
-                    cutter_length=cutter_length, resolution_hint=resolution_hint)
+    register_cutter(
+        plant,
+        plant.GetBodyByName("tool", instance),
+        cutter_radius=cutter_radius,
+        cutter_length=cutter_length,
+        resolution_hint=resolution_hint,
+    )
     return instance
 
 
@@ -218,38 +392,69 @@ class RingContactProbe:
     inner_radius <= r <= inner_radius + wall, z_top - layer_height <= z <= z_top.
     """
 
-    def __init__(self, *, inner_radius=0.030, wall=0.005, layer_height=0.006, z_top=0.050,
-                 hydroelastic_modulus, hunt_crossley_dissipation=0.0, n_theta=240, n_radial=2, n_z=2):
-        for name, value in (("inner_radius", inner_radius), ("wall", wall), ("layer_height", layer_height)):
+    def __init__(
+        self,
+        *,
+        inner_radius=0.030,
+        wall=0.005,
+        layer_height=0.006,
+        z_top=0.050,
+        hydroelastic_modulus,
+        hunt_crossley_dissipation=0.0,
+        n_theta=240,
+        n_radial=2,
+        n_z=2,
+    ):
+        for name, value in (
+            ("inner_radius", inner_radius),
+            ("wall", wall),
+            ("layer_height", layer_height),
+        ):
             _check_positive(name, value)
         builder = DiagramBuilder()
         plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
         plant.set_contact_model(ContactModel.kHydroelasticWithFallback)
         self._instance = add_cartesian_tool(plant)
         self.ring_id = register_compliant_ring(
-            plant, inner_radius=inner_radius, outer_radius=inner_radius + wall, z_bottom=z_top - layer_height,
-            z_top=z_top, hydroelastic_modulus=hydroelastic_modulus,
-            hunt_crossley_dissipation=hunt_crossley_dissipation, n_theta=n_theta, n_radial=n_radial, n_z=n_z)
+            plant,
+            inner_radius=inner_radius,
+            outer_radius=inner_radius + wall,
+            z_bottom=z_top - layer_height,
+            z_top=z_top,
+            hydroelastic_modulus=hydroelastic_modulus,
+            hunt_crossley_dissipation=hunt_crossley_dissipation,
+            n_theta=n_theta,
+            n_radial=n_radial,
+            n_z=n_z,
+        )
         plant.Finalize()
         self.plant = plant
         self.diagram = builder.Build()
         self.context = self.diagram.CreateDefaultContext()
         self.plant_context = plant.GetMyMutableContextFromRoot(self.context)
         self.inner_radius, self.z_top = inner_radius, z_top
-        self.cutter_id = plant.GetCollisionGeometriesForBody(plant.GetBodyByName("tool", self._instance))[0]
+        self.cutter_id = plant.GetCollisionGeometriesForBody(
+            plant.GetBodyByName("tool", self._instance)
+        )[0]
 
     def set_tip_position(self, p_WT):
         """Place the tool tip at p_WT (m, world frame); joints x, y, z are the tip's coordinates."""
-        self.plant.SetPositions(self.plant_context, self._instance, np.asarray(p_WT, dtype=float))
+        self.plant.SetPositions(
+            self.plant_context, self._instance, np.asarray(p_WT, dtype=float)
+        )
 
     def contact_force_on_tool(self, p_WT):
         """Sum of the hydroelastic (and fallback point) contact forces ON the tool (N, world frame)."""
         self.set_tip_position(p_WT)
-        results = self.plant.get_contact_results_output_port().Eval(self.plant_context)
+        results = self.plant.get_contact_results_output_port().Eval(
+            self.plant_context
+        )
         tool = self.plant.GetBodyByName("tool", self._instance).index()
         return contact_force_on_body(results, self.cutter_id, tool)
 
-    def radial_force(self, depth, angle=0.0, *, cutter_radius=0.003, engagement=0.002):
+    def radial_force(
+        self, depth, angle=0.0, *, cutter_radius=0.003, engagement=0.002
+    ):
         """Radial component magnitude (N) of the contact force on the tool.
 
         The cutter axis is at rho = inner_radius - cutter_radius + depth, azimuth `angle`
@@ -258,12 +463,24 @@ class RingContactProbe:
         """
         rho = self.inner_radius - cutter_radius + depth
         e_r = np.array([math.cos(angle), math.sin(angle), 0.0])
-        f = self.contact_force_on_tool(rho * e_r + np.array([0.0, 0.0, self.z_top - engagement]))
+        f = self.contact_force_on_tool(
+            rho * e_r + np.array([0.0, 0.0, self.z_top - engagement])
+        )
         return abs(float(f @ e_r))
 
 
-def measure_normal_force(depths, *, inner_radius=0.030, wall=0.005, layer_height=0.006, engagement=0.002,
-                         hydroelastic_modulus, cutter_radius=0.003, angle=0.0, n_theta=240):
+def measure_normal_force(
+    depths,
+    *,
+    inner_radius=0.030,
+    wall=0.005,
+    layer_height=0.006,
+    engagement=0.002,
+    hydroelastic_modulus,
+    cutter_radius=0.003,
+    angle=0.0,
+    n_theta=240,
+):
     """Normal (radial) contact force (N) on the cartesian tool's cutter for each radial depth (m).
 
     Static evaluation of Drake's hydroelastic contact (continuous plant, contact model
@@ -276,10 +493,21 @@ def measure_normal_force(depths, *, inner_radius=0.030, wall=0.005, layer_height
     depths = np.atleast_1d(np.asarray(depths, dtype=float))
     if not np.all(np.isfinite(depths)):
         raise ValueError("depths must be finite")
-    probe = RingContactProbe(inner_radius=inner_radius, wall=wall, layer_height=layer_height,
-                             hydroelastic_modulus=hydroelastic_modulus, n_theta=n_theta)
-    return np.array([probe.radial_force(d, angle, cutter_radius=cutter_radius, engagement=engagement)
-                     for d in depths])
+    probe = RingContactProbe(
+        inner_radius=inner_radius,
+        wall=wall,
+        layer_height=layer_height,
+        hydroelastic_modulus=hydroelastic_modulus,
+        n_theta=n_theta,
+    )
+    return np.array(
+        [
+            probe.radial_force(
+                d, angle, cutter_radius=cutter_radius, engagement=engagement
+            )
+            for d in depths
+        ]
+    )
 
 
 def local_stiffness(depths, *, step=2e-5, **kwargs):
@@ -289,20 +517,33 @@ def local_stiffness(depths, *, step=2e-5, **kwargs):
     """
     _check_positive("step", step)
     depths = np.atleast_1d(np.asarray(depths, dtype=float))
-    f = measure_normal_force(np.concatenate([depths + step, depths - step]), **kwargs)
-    return (f[:len(depths)] - f[len(depths):]) / (2.0 * step)
+    f = measure_normal_force(
+        np.concatenate([depths + step, depths - step]), **kwargs
+    )
+    return (f[: len(depths)] - f[len(depths) :]) / (2.0 * step)
 
 
 def power_law_exponent(depths, forces):
     """Least-squares exponent n of F = a * delta**n over the given samples (all must be > 0)."""
-    depths, forces = np.asarray(depths, dtype=float), np.asarray(forces, dtype=float)
+    depths, forces = (
+        np.asarray(depths, dtype=float),
+        np.asarray(forces, dtype=float),
+    )
     if np.any(depths <= 0) or np.any(forces <= 0):
-        raise ValueError("depths and forces must all be > 0 for a power-law fit")
+        raise ValueError(
+            "depths and forces must all be > 0 for a power-law fit"
+        )
     return float(np.polyfit(np.log(depths), np.log(forces), 1)[0])
 
 
-def calibrate_hydroelastic_modulus(*, target_stiffness=1.0e4, depth=5.0e-4, reference_modulus=1.0e7,
-                                   significant_digits=2, **kwargs):
+def calibrate_hydroelastic_modulus(
+    *,
+    target_stiffness=1.0e4,
+    depth=5.0e-4,
+    reference_modulus=1.0e7,
+    significant_digits=2,
+    **kwargs,
+):
     """Hydroelastic modulus E (Pa) giving dF/d(delta) = target_stiffness (N/m) at `depth` (m).
 
     Soft-rigid hydroelastic force is linear in E (pressure p = E * e, geometry fixed),
@@ -311,9 +552,15 @@ def calibrate_hydroelastic_modulus(*, target_stiffness=1.0e4, depth=5.0e-4, refe
     """
     _check_positive("target_stiffness", target_stiffness)
     _check_positive("depth", depth)
-    k_ref = float(local_stiffness([depth], hydroelastic_modulus=reference_modulus, **kwargs)[0])
+    k_ref = float(
+        local_stiffness(
+            [depth], hydroelastic_modulus=reference_modulus, **kwargs
+        )[0]
+    )
     if not k_ref > 0:
-        raise ValueError(f"no contact stiffness at depth={depth!r} m: the tool does not touch the ring there")
+        raise ValueError(
+            f"no contact stiffness at depth={depth!r} m: the tool does not touch the ring there"
+        )
     E = reference_modulus * target_stiffness / k_ref
     return float(f"{E:.{significant_digits - 1}e}")
 
@@ -324,9 +571,17 @@ def force_ripple(depth, *, n_samples=25, n_theta=240, **kwargs):
     Also returns the forces (N) at the n_samples angles in [0, 2 pi / n_theta]. kwargs
     (hydroelastic_modulus required; inner_radius, wall, ...) go to RingContactProbe.
     """
-    if isinstance(n_samples, bool) or not isinstance(n_samples, (int, np.integer)) or n_samples < 2:
-        raise ValueError(f"n_samples must be an integer >= 2, got {n_samples!r}")
-    cutter = {k: kwargs.pop(k) for k in ("cutter_radius", "engagement") if k in kwargs}
+    if (
+        isinstance(n_samples, bool)
+        or not isinstance(n_samples, (int, np.integer))
+        or n_samples < 2
+    ):
+        raise ValueError(
+            f"n_samples must be an integer >= 2, got {n_samples!r}"
+        )
+    cutter = {
+        k: kwargs.pop(k) for k in ("cutter_radius", "engagement") if k in kwargs
+    }
     probe = RingContactProbe(n_theta=n_theta, **kwargs)
     angles = np.linspace(0.0, 2.0 * math.pi / n_theta, n_samples)
     f = np.array([probe.radial_force(depth, a, **cutter) for a in angles])

@@ -3,20 +3,22 @@ friction, and the compliant hydroelastic part its edge belongs to."""
 
 from __future__ import annotations
 
-
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.systems.framework import DiagramBuilder
 
 from deburr_drake.cell.edge import make_contour, straight_frame
 from deburr_drake.cell.friction import add_joint_friction
-from deburr_drake.cell.part import (register_compliant_profile,
-                                    register_compliant_ring,
-                                    register_compliant_wall,
-                                    register_tube_visual)
+from deburr_drake.cell.part import (
+    register_compliant_profile,
+    register_compliant_ring,
+    register_compliant_wall,
+    register_tube_visual,
+)
 from deburr_drake.cell.robot import add_robot, finalize
 from deburr_drake.config import Scenario
 
 __all__ = ["add_cell_plant"]
+
 
 def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
     """(plant, scene_graph), finalized: the robot (``robot``), its
@@ -24,20 +26,30 @@ def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
     sim = scenario.simulation
     config = MultibodyPlantConfig(
         time_step=sim.plant_time_step,
-        contact_model="hydroelastic_with_fallback")
+        contact_model="hydroelastic_with_fallback",
+    )
     if sim.plant_time_step > 0:
         config.discrete_contact_approximation = sim.contact_approximation
     plant, scene_graph = AddMultibodyPlant(config, builder)
-    add_robot(plant, scenario.robot, cutter=dict(
-        cutter_radius=scenario.tool.cutter_radius,
-        cutter_length=scenario.tool.cutter_length,
-        resolution_hint=scenario.tool.resolution_hint))
+    add_robot(
+        plant,
+        scenario.robot,
+        cutter=dict(
+            cutter_radius=scenario.tool.cutter_radius,
+            cutter_length=scenario.tool.cutter_length,
+            resolution_hint=scenario.tool.resolution_hint,
+        ),
+    )
     add_joint_friction(plant, scenario.robot)
     if scenario.edge.kind == "straight":
         mid, tangent, normal = straight_frame(scenario)
         register_compliant_wall(
-            plant, mid=mid, tangent=tangent, normal=normal,
-            length=scenario.edge.length, thickness=scenario.tube.wall_thickness,
+            plant,
+            mid=mid,
+            tangent=tangent,
+            normal=normal,
+            length=scenario.edge.length,
+            thickness=scenario.tube.wall_thickness,
             height=scenario.tube.height,
             layer_height=scenario.tube.compliant_layer_height,
             hydroelastic_modulus=scenario.tube.hydroelastic_modulus,
@@ -45,37 +57,49 @@ def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
             # The wall is the edge: the process cuts only where it is
             # (process.material_overlap), and off its ends there is no
             # contact either.
-            margin=0.0)
+            margin=0.0,
+        )
         finalize(plant)
         return plant, scene_graph
     tube = scenario.tube
     z_top = tube.position[2] + tube.height
     if scenario.edge.kind == "profile":
         register_compliant_profile(
-            plant, make_contour(scenario).with_offset(0.0),
+            plant,
+            make_contour(scenario).with_offset(0.0),
             wall_thickness=tube.wall_thickness,
-            z_bottom=z_top - tube.compliant_layer_height, z_top=z_top,
+            z_bottom=z_top - tube.compliant_layer_height,
+            z_top=z_top,
             hydroelastic_modulus=tube.hydroelastic_modulus,
             hunt_crossley_dissipation=tube.hunt_crossley_dissipation,
             segments_per_turn=tube.mesh_segments,
-            n_radial=tube.mesh_radial_cells, n_z=tube.mesh_height_cells,
-            visual_z_bottom=tube.position[2])
+            n_radial=tube.mesh_radial_cells,
+            n_z=tube.mesh_height_cells,
+            visual_z_bottom=tube.position[2],
+        )
         plant.Finalize()
         return plant, scene_graph
     register_compliant_ring(
         plant,
         inner_radius=tube.inner_radius,
         outer_radius=tube.inner_radius + tube.wall_thickness,
-        z_bottom=z_top - tube.compliant_layer_height, z_top=z_top,
+        z_bottom=z_top - tube.compliant_layer_height,
+        z_top=z_top,
         center_xy=tube.position[:2],
         hydroelastic_modulus=tube.hydroelastic_modulus,
         hunt_crossley_dissipation=tube.hunt_crossley_dissipation,
-        n_theta=tube.mesh_segments, n_radial=tube.mesh_radial_cells,
-        n_z=tube.mesh_height_cells)
+        n_theta=tube.mesh_segments,
+        n_radial=tube.mesh_radial_cells,
+        n_z=tube.mesh_height_cells,
+    )
     register_tube_visual(
-        plant, inner_radius=tube.inner_radius,
+        plant,
+        inner_radius=tube.inner_radius,
         outer_radius=tube.inner_radius + tube.wall_thickness,
-        z_bottom=tube.position[2], z_top=z_top - tube.compliant_layer_height,
-        center_xy=tube.position[:2], n_theta=tube.mesh_segments)
+        z_bottom=tube.position[2],
+        z_top=z_top - tube.compliant_layer_height,
+        center_xy=tube.position[:2],
+        n_theta=tube.mesh_segments,
+    )
     finalize(plant)
     return plant, scene_graph

@@ -11,33 +11,48 @@ import numpy as np
 from pydrake.common import RandomDistribution
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import Diagram, DiagramBuilder, LeafSystem
-from pydrake.systems.primitives import (Demultiplexer, Gain,
-                                        LinearTransformDensity, Multiplexer,
-                                        Saturation)
+from pydrake.systems.primitives import (
+    Demultiplexer,
+    Gain,
+    LinearTransformDensity,
+    Multiplexer,
+    Saturation,
+)
 
 from deburr_drake.config import BurrConfig, ProcessConfig
-from deburr_drake.math.damping import held_damper_mean
-from deburr_drake.math.geometry import Contour, removal_scale
 from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.control.layout import VectorLayout
+from deburr_drake.math.damping import held_damper_mean
+from deburr_drake.math.geometry import Contour, removal_scale
 from deburr_drake.math.metrics import arc_distance
 
-__all__ = ["CuttingProcess", "PROCESS_STATE", "cutting_force",
-           "force_law_terms", "force_law_terms_size", "HeldMean",
-           "generalized_cutting_force", "make_cutting_force_law",
-           "burr_profile",
-           "FinishBins", "material_overlap"]
+__all__ = [
+    "CuttingProcess",
+    "PROCESS_STATE",
+    "cutting_force",
+    "force_law_terms",
+    "force_law_terms_size",
+    "HeldMean",
+    "generalized_cutting_force",
+    "make_cutting_force_law",
+    "burr_profile",
+    "FinishBins",
+    "material_overlap",
+]
 
-PROCESS_STATE = VectorLayout("process_state", [
-    ("delta", 1),            # m, true chamfer depth at the tool
-    ("engagement", 1),       # 0..1, smooth contact onset
-    ("g", 1),                # N s/m, g of (3)
-    ("f_t", 1),              # N, true ||f_t||
-    ("f_threshold", 1),      # N, the c0 part of the normal force
-    ("v_t", 1),              # m/s, tangential speed
-    ("burr_area", 1),        # m^2, burr cross-section at the tool
-    ("arc_position", 1),     # m, of the tool on the edge
-])
+PROCESS_STATE = VectorLayout(
+    "process_state",
+    [
+        ("delta", 1),  # m, true chamfer depth at the tool
+        ("engagement", 1),  # 0..1, smooth contact onset
+        ("g", 1),  # N s/m, g of (3)
+        ("f_t", 1),  # N, true ||f_t||
+        ("f_threshold", 1),  # N, the c0 part of the normal force
+        ("v_t", 1),  # m/s, tangential speed
+        ("burr_area", 1),  # m^2, burr cross-section at the tool
+        ("arc_position", 1),  # m, of the tool on the edge
+    ],
+)
 
 
 def _smoothstep(x):
@@ -45,16 +60,18 @@ def _smoothstep(x):
     return x * x * (3.0 - 2.0 * x)
 
 
-def burr_profile(arc, burrs: Sequence[BurrConfig], edge_length: float,
-                 closed: bool):
+def burr_profile(
+    arc, burrs: Sequence[BurrConfig], edge_length: float, closed: bool
+):
     """Burr height (m) at arc positions ``arc`` (m): raised-cosine bumps
     h (1 + cos(2 pi (s - c) / L)) / 2 for |s - c| < L / 2, the centre c a
     fraction of the edge length; on a closed edge the distance wraps."""
     arc = np.asarray(arc, float)
     height = np.zeros_like(arc)
     for burr in burrs:
-        d = arc_distance(arc, burr.center_fraction * edge_length,
-                         edge_length, closed)
+        d = arc_distance(
+            arc, burr.center_fraction * edge_length, edge_length, closed
+        )
         inside = np.abs(d) < burr.length / 2
         bump = burr.height * 0.5 * (1 + np.cos(2 * np.pi * d / burr.length))
         height = np.maximum(height, np.where(inside, bump, 0.0))
@@ -66,8 +83,10 @@ class FinishBins:
 
     def __init__(self, length: float, bin_length: float):
         if not math.isfinite(length):
-            raise ValueError("the surface-finish record needs a finite edge "
-                             f"length, got {length}")
+            raise ValueError(
+                "the surface-finish record needs a finite edge "
+                f"length, got {length}"
+            )
         self.count = max(1, math.ceil(length / bin_length - 1e-9))
         self.width = length / self.count
         self.centers = (np.arange(self.count) + 0.5) * self.width
@@ -88,9 +107,17 @@ class FinishBins:
         return window[(window >= 0) & (window < self.count)]
 
 
-def cutting_force(config: ProcessConfig, contour: Contour, x_p, xdot_p, *,
-                  cut_height: float, burr_area: float = 0.0,
-                  overlap: float = 1.0, cutter_radius: float = None):
+def cutting_force(
+    config: ProcessConfig,
+    contour: Contour,
+    x_p,
+    xdot_p,
+    *,
+    cut_height: float,
+    burr_area: float = 0.0,
+    overlap: float = 1.0,
+    cutter_radius: float | None = None,
+):
     """(force on the tool (3, N, world), PROCESS_STATE vector).
 
     ||f_t|| = g |v_t| + h |v_n| + P'_th (3), g = k_c s (chamfer area + burr
@@ -105,19 +132,32 @@ def cutting_force(config: ProcessConfig, contour: Contour, x_p, xdot_p, *,
     ``threshold_depth`` of depth; ``overlap`` (material_overlap) scales
     both where the cutter runs off an open edge's end."""
     n1, tangent, delta, arc = contour.frame(x_p)
-    removal = 1.0 if cutter_radius is None else removal_scale(
-        contour.curvature(x_p), delta, cutter_radius)
-    return _force(config, n1, tangent, delta, arc,
-                  np.asarray(xdot_p, float), cut_height, burr_area, overlap,
-                  removal)
+    removal = (
+        1.0
+        if cutter_radius is None
+        else removal_scale(contour.curvature(x_p), delta, cutter_radius)
+    )
+    return _force(
+        config,
+        n1,
+        tangent,
+        delta,
+        arc,
+        np.asarray(xdot_p, float),
+        cut_height,
+        burr_area,
+        overlap,
+        removal,
+    )
 
 
 def _sat(x):
     return min(max(x, -1.0), 1.0)
 
 
-def material_overlap(contour: Contour, arc: float, delta: float,
-                     cutter_radius: float) -> float:
+def material_overlap(
+    contour: Contour, arc: float, delta: float, cutter_radius: float
+) -> float:
     """Fraction (0..1) of the cutter's contact chord that lies on material:
     1 on a closed edge; on an open edge of length L the chord of half-width
     sqrt(2 r delta) about the tool's arc position, clipped to [0, L]. Off
@@ -129,29 +169,56 @@ def material_overlap(contour: Contour, arc: float, delta: float,
     return min(max(covered / (2.0 * c), 0.0), 1.0)
 
 
-def _engagement(config: ProcessConfig, delta, cut_height, burr_area,
-                overlap=1.0, removal=1.0):
+def _engagement(
+    config: ProcessConfig,
+    delta,
+    cut_height,
+    burr_area,
+    overlap=1.0,
+    removal=1.0,
+):
     """(engagement 0..1, g of (3) in N s/m)."""
     on = _smoothstep(delta / config.threshold_depth) * overlap
-    g = config.cutting_coefficient * removal * (max(delta, 0.0) * cut_height
-                                                + burr_area)
+    g = (
+        config.cutting_coefficient
+        * removal
+        * (max(delta, 0.0) * cut_height + burr_area)
+    )
     return on, g
 
 
-def _force(config: ProcessConfig, n1, tangent, delta, arc, xdot_p,
-           cut_height, burr_area, overlap=1.0, removal=1.0):
+def _force(
+    config: ProcessConfig,
+    n1,
+    tangent,
+    delta,
+    arc,
+    xdot_p,
+    cut_height,
+    burr_area,
+    overlap=1.0,
+    removal=1.0,
+):
     v_n = float(n1 @ xdot_p)
     v_along = float(tangent @ xdot_p)
-    on, g = _engagement(config, delta, cut_height, burr_area, overlap,
-                        removal)
-    along = on * (g * v_along + (config.threshold_power_force
-                                 + config.plunge_coefficient * abs(v_n))
-                  * _sat(v_along / config.smoothing_speed))
+    on, g = _engagement(config, delta, cut_height, burr_area, overlap, removal)
+    along = on * (
+        g * v_along
+        + (config.threshold_power_force + config.plunge_coefficient * abs(v_n))
+        * _sat(v_along / config.smoothing_speed)
+    )
     f_c0 = on * config.contact_threshold_force
     force = -along * tangent - f_c0 * n1
     return force, PROCESS_STATE.pack(
-        delta=delta, engagement=on, g=g, f_t=abs(along), f_threshold=f_c0,
-        v_t=abs(v_along), burr_area=burr_area, arc_position=arc)
+        delta=delta,
+        engagement=on,
+        g=g,
+        f_t=abs(along),
+        f_threshold=f_c0,
+        v_t=abs(v_along),
+        burr_area=burr_area,
+        arc_position=arc,
+    )
 
 
 class HeldMean(NamedTuple):
@@ -174,12 +241,23 @@ def force_law_terms_size(nv: int, nu: int) -> int:
     return nv * nv + 4 * nv + 9 + nu + 1
 
 
-def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, xdot_p,
-                    *, cut_height: float,
-                    burr_area: float = 0.0,
-                    overlap: float = 1.0, removal: float = 1.0,
-                    v=None, inertia=None, nu: int = None,
-                    held: HeldMean = None) -> np.ndarray:
+def force_law_terms(
+    config: ProcessConfig,
+    n1,
+    tangent,
+    delta,
+    J,
+    xdot_p,
+    *,
+    cut_height: float,
+    burr_area: float = 0.0,
+    overlap: float = 1.0,
+    removal: float = 1.0,
+    v=None,
+    inertia=None,
+    nu: int | None = None,
+    held: HeldMean = None,
+) -> np.ndarray:
     """The terms of :func:`make_cutting_force_law` that make it give
     :func:`cutting_force` (J: the tool point's translational Jacobian, 3 x
     nv; xdot_p: the tool point's velocity, m/s). With u = a.v (v the joint
@@ -221,20 +299,38 @@ def force_law_terms(config: ProcessConfig, n1, tangent, delta, J, xdot_p,
     velocities (so the force there is exactly eq. (3)) and makes d tau /
     dv = -D, diagonal (``process.implicit_damping``)."""
     J = np.asarray(J, float)
-    _, terms = _sample(config, n1, tangent, delta, 0.0, J,
-                       np.asarray(xdot_p, float), cut_height, burr_area,
-                       overlap, removal,
-                       None if v is None else np.asarray(v, float),
-                       None if inertia is None else np.asarray(inertia,
-                                                               float),
-                       J.shape[1] if nu is None else nu, held)
+    _, terms = _sample(
+        config,
+        n1,
+        tangent,
+        delta,
+        0.0,
+        J,
+        np.asarray(xdot_p, float),
+        cut_height,
+        burr_area,
+        overlap,
+        removal,
+        None if v is None else np.asarray(v, float),
+        None if inertia is None else np.asarray(inertia, float),
+        J.shape[1] if nu is None else nu,
+        held,
+    )
     return terms
 
 
 #: PROCESS_STATE's blocks in order (all scalars): _sample fills it by
 #: position.
-_STATE_BLOCKS = ("delta", "engagement", "g", "f_t", "f_threshold", "v_t",
-                 "burr_area", "arc_position")
+_STATE_BLOCKS = (
+    "delta",
+    "engagement",
+    "g",
+    "f_t",
+    "f_threshold",
+    "v_t",
+    "burr_area",
+    "arc_position",
+)
 assert PROCESS_STATE.blocks == _STATE_BLOCKS
 
 
@@ -249,52 +345,67 @@ def _edge_damper(config: ProcessConfig, on, g, power, u):
     return on * g, math.copysign(on * power, u)
 
 
-def _sample(config: ProcessConfig, n1, tangent, delta, arc, J, xdot_p,
-            cut_height, burr_area, overlap, removal, v, inertia, nu,
-            held=None):
+def _sample(
+    config: ProcessConfig,
+    n1,
+    tangent,
+    delta,
+    arc,
+    J,
+    xdot_p,
+    cut_height,
+    burr_area,
+    overlap,
+    removal,
+    v,
+    inertia,
+    nu,
+    held=None,
+):
     """(PROCESS_STATE vector, :func:`force_law_terms`) at one sample: one
     pass over the engagement, speeds and directions (float arrays in)."""
-    on, g = _engagement(config, delta, cut_height, burr_area, overlap,
-                        removal)
+    on, g = _engagement(config, delta, cut_height, burr_area, overlap, removal)
     v_n = float(n1 @ xdot_p)
     v_along = float(tangent @ xdot_p)
     power = config.threshold_power_force + config.plunge_coefficient * abs(v_n)
     threshold = on * config.contact_threshold_force
-    along = on * (g * v_along + power * _sat(v_along
-                                             / config.smoothing_speed))
-    state = np.array([delta, on, g, abs(along), threshold, abs(v_along),
-                      burr_area, arc])
+    along = on * (g * v_along + power * _sat(v_along / config.smoothing_speed))
+    state = np.array(
+        [delta, on, g, abs(along), threshold, abs(v_along), burr_area, arc]
+    )
     a = tangent @ J
     nv = a.size
     terms = np.zeros(force_law_terms_size(nv, nu))
     terms[:nv] = a
-    b = terms[3 * nv:4 * nv]
+    b = terms[3 * nv : 4 * nv]
     np.multiply(n1 @ J, -threshold, out=b)
     k = 4 * nv
-    terms[k:k + 3] = (-on * g) * tangent
-    terms[k + 3:k + 6] = (-on * power) * tangent
-    terms[k + 6:k + 9] = (-threshold) * n1
+    terms[k : k + 3] = (-on * g) * tangent
+    terms[k + 3 : k + 6] = (-on * power) * tangent
+    terms[k + 6 : k + 9] = (-threshold) * n1
     if held is not None:
         # The law holds the exact mean of F over the sample (A, S zero).
         u = float(a @ v)
         c, offset = _edge_damper(config, on, g, power, u)
         y = held.y
-        k0, k1 = held_damper_mean(c, offset, u, float(a @ y),
-                                  held.rest + float(y @ b), held.period)
-        terms[-nu - 1:-1] = (-k1 * y) @ held.actuation_matrix
+        k0, k1 = held_damper_mean(
+            c, offset, u, float(a @ y), held.rest + float(y @ b), held.period
+        )
+        terms[-nu - 1 : -1] = (-k1 * y) @ held.actuation_matrix
         terms[-1] = -k0
         return state, terms
-    np.multiply(a, -on * g, out=terms[nv:2 * nv])
-    np.multiply(a, -on * power, out=terms[2 * nv:3 * nv])
+    np.multiply(a, -on * g, out=terms[nv : 2 * nv])
+    np.multiply(a, -on * power, out=terms[2 * nv : 3 * nv])
     if v is not None:
         # S is symmetric: its column-major and row-major layouts agree.
-        S = terms[k + 9:k + 9 + nv * nv].reshape(nv, nv)
+        S = terms[k + 9 : k + 9 + nv * nv].reshape(nv, nv)
         c, _ = _edge_damper(config, on, g, power, float(a @ v))
         abs_a = np.abs(a)
         root_m = np.ones(nv) if inertia is None else np.sqrt(inertia)
         np.multiply.outer(c * a, a, out=S)
-        S.flat[::nv + 1] -= (c * float((abs_a / root_m).sum())) \
-            * abs_a * root_m
+        S.flat[:: nv + 1] -= (
+            (c * float((abs_a / root_m).sum())) * abs_a * root_m
+        )
         b -= S @ v
     return state, terms
 
@@ -304,30 +415,35 @@ def _split_terms(terms, nv: int, nu: int):
     arrays."""
     terms = np.asarray(terms, float)
     if terms.size != force_law_terms_size(nv, nu):
-        raise ValueError(f"force_law_terms: {terms.size} values for nv = "
-                         f"{nv}, nu = {nu}: expected "
-                         f"{force_law_terms_size(nv, nu)}")
+        raise ValueError(
+            f"force_law_terms: {terms.size} values for nv = "
+            f"{nv}, nu = {nu}: expected "
+            f"{force_law_terms_size(nv, nu)}"
+        )
     return np.split(terms, np.cumsum([nv, 2 * nv, nv, 6, 3, nv * nv, nu]))
 
 
-def generalized_cutting_force(terms, v, smoothing_speed: float,
-                              actuation=None):
+def generalized_cutting_force(terms, v, smoothing_speed: float, actuation=None):
     """(tau, f) of :func:`make_cutting_force_law` in numpy (for tests);
     ``actuation`` (nu) defaults to nv zeros."""
     v = np.asarray(v, float)
     nv = v.size
-    actuation = np.zeros(nv) if actuation is None else np.asarray(
-        actuation, float)
+    actuation = (
+        np.zeros(nv) if actuation is None else np.asarray(actuation, float)
+    )
     a, A, b, B, f0, S, k, k0 = _split_terms(terms, nv, actuation.size)
     u = float(a @ v)
     w = np.array([u, _sat(u / smoothing_speed)])
     held = float(k @ actuation + k0[0])
-    return (A.reshape(2, nv).T @ w + b + S.reshape(nv, nv).T @ v
-            + held * a, B.reshape(2, 3).T @ w + f0)
+    return (
+        A.reshape(2, nv).T @ w + b + S.reshape(nv, nv).T @ v + held * a,
+        B.reshape(2, 3).T @ w + f0,
+    )
 
 
-def make_cutting_force_law(nq: int, nv: int, smoothing_speed: float,
-                           nu: int = None) -> Diagram:
+def make_cutting_force_law(
+    nq: int, nv: int, smoothing_speed: float, nu: int | None = None
+) -> Diagram:
     """``cutting_force``: the law of :func:`force_law_terms`, from
     ``plant_state`` (nq + nv; the velocities are read), ``actuation`` (nu,
     default nv: what drives the plant's actuation input; only
@@ -352,12 +468,13 @@ def make_cutting_force_law(nq: int, nv: int, smoothing_speed: float,
         return builder.AddNamedSystem(name, system)
 
     def affine(name, n_in, n_out):
-        return add(name, LinearTransformDensity(
-            RandomDistribution.kGaussian, n_in, n_out))
+        return add(
+            name,
+            LinearTransformDensity(RandomDistribution.kGaussian, n_in, n_out),
+        )
 
     state = add("state", Demultiplexer([nq, nv]))
-    terms = add("terms", Demultiplexer([nv, 2 * nv, nv, 6, 3, nv * nv,
-                                        nu, 1]))
+    terms = add("terms", Demultiplexer([nv, 2 * nv, nv, 6, 3, nv * nv, nu, 1]))
     speed = affine("speed_along_edge", nv, 1)
     scale = add("per_smoothing_speed", Gain(1.0 / smoothing_speed, 1))
     sign = add("direction", Saturation([-1.0], [1.0]))
@@ -392,8 +509,7 @@ def make_cutting_force_law(nq: int, nv: int, smoothing_speed: float,
     builder.ExportInput(state.get_input_port(), "plant_state")
     builder.ExportInput(mean.GetInputPort("w_in"), "actuation")
     builder.ExportInput(terms.get_input_port(), "force_law_terms")
-    builder.ExportOutput(along_edge.GetOutputPort("w_out"),
-                         "generalized_force")
+    builder.ExportOutput(along_edge.GetOutputPort("w_out"), "generalized_force")
     builder.ExportOutput(tool_force.GetOutputPort("w_out"), "tool_force")
     diagram = builder.Build()
     diagram.set_name("cutting_force")
@@ -451,15 +567,24 @@ class CuttingProcess(LeafSystem):
       same kinematics).
     """
 
-    def __init__(self, plant: MultibodyPlant, tool_frame_name: str,
-                 contour: Contour, config: ProcessConfig, *,
-                 cut_height: float, cutter_radius: float,
-                 tool_point: ToolPoint = None, spindle_input: bool = False):
+    def __init__(
+        self,
+        plant: MultibodyPlant,
+        tool_frame_name: str,
+        contour: Contour,
+        config: ProcessConfig,
+        *,
+        cut_height: float,
+        cutter_radius: float,
+        tool_point: ToolPoint = None,
+        spindle_input: bool = False,
+    ):
         super().__init__()
         config.validate()
         self.set_name("cutting_process")
         self._tool_point = tool_point or ToolPoint(
-            plant, plant.GetFrameByName(tool_frame_name))
+            plant, plant.GetFrameByName(tool_frame_name)
+        )
         self._nq = plant.num_positions()
         self._nv = plant.num_velocities()
         self._actuation_matrix = plant.MakeActuationMatrix()
@@ -469,25 +594,31 @@ class CuttingProcess(LeafSystem):
         self._cut_height = cut_height
         self._cutter_radius = cutter_radius
         self._bins = FinishBins(contour.length, config.finish_bin_length)
-        self._thickness = np.array([self._burr_thickness(s)
-                                    for s in self._bins.centers])
-        self._burr_index = self.DeclareDiscreteState(
-            self.initial_burr_height())
+        self._thickness = np.array(
+            [self._burr_thickness(s) for s in self._bins.centers]
+        )
+        self._burr_index = self.DeclareDiscreteState(self.initial_burr_height())
         self._finish_index = self.DeclareDiscreteState(self._bins.count)
         self._terms_index = self.DeclareDiscreteState(
-            force_law_terms_size(self._nv, self._nu))
+            force_law_terms_size(self._nv, self._nu)
+        )
         self._state_port = self.DeclareVectorInputPort(
-            "plant_state", plant.num_multibody_states())
+            "plant_state", plant.num_multibody_states()
+        )
         self._held_ports = None
         if config.sample_mean:
             self._held_ports = (
-                self.DeclareVectorInputPort("generalized_acceleration",
-                                            self._nv),
-                self.DeclareVectorInputPort("applied_generalized_force",
-                                            self._nv),
-                self.DeclareVectorInputPort("actuation", self._nu))
-        self._spindle_port = (self.DeclareVectorInputPort("spindle", 1)
-                              if spindle_input else None)
+                self.DeclareVectorInputPort(
+                    "generalized_acceleration", self._nv
+                ),
+                self.DeclareVectorInputPort(
+                    "applied_generalized_force", self._nv
+                ),
+                self.DeclareVectorInputPort("actuation", self._nu),
+            )
+        self._spindle_port = (
+            self.DeclareVectorInputPort("spindle", 1) if spindle_input else None
+        )
         self._state_index = self.DeclareDiscreteState(PROCESS_STATE.size)
         self.DeclareStateOutputPort("force_law_terms", self._terms_index)
         self.DeclareStateOutputPort("process_state", self._state_index)
@@ -495,7 +626,8 @@ class CuttingProcess(LeafSystem):
         self.DeclareStateOutputPort("finish_depth", self._finish_index)
         self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
         self.DeclarePeriodicDiscreteUpdateEvent(
-            config.sample_period, 0.0, self._update)
+            config.sample_period, 0.0, self._update
+        )
 
     @property
     def bins(self) -> FinishBins:
@@ -503,14 +635,18 @@ class CuttingProcess(LeafSystem):
 
     def force_law(self) -> Diagram:
         """The ``cutting_force`` law for this process's plant and config."""
-        return make_cutting_force_law(self._nq, self._nv,
-                                      self._config.smoothing_speed,
-                                      self._nu)
+        return make_cutting_force_law(
+            self._nq, self._nv, self._config.smoothing_speed, self._nu
+        )
 
     def initial_burr_height(self) -> np.ndarray:
         """Burr height (m) per bin before the pass."""
-        return burr_profile(self._bins.centers, self._config.burrs,
-                            self._contour.length, self._contour.closed)
+        return burr_profile(
+            self._bins.centers,
+            self._config.burrs,
+            self._contour.length,
+            self._contour.closed,
+        )
 
     def _leading_edge(self, s):
         """Arc position of the cutter's front (the traversal direction is
@@ -530,42 +666,60 @@ class CuttingProcess(LeafSystem):
         return thickness
 
     def _spindle_off(self, context) -> bool:
-        return (self._spindle_port is not None
-                and self._spindle_port.Eval(context)[0] < 0.5)
+        return (
+            self._spindle_port is not None
+            and self._spindle_port.Eval(context)[0] < 0.5
+        )
 
     def _update_probing(self, context, discrete_state):
         """The spindle is off: only a burr the tool reaches into acts, as
         a spring along -n1 (what a touch probe on a burr feels)."""
         burr = discrete_state.get_value(self._burr_index)
         x_p, xdot_p, J = self._tool_point.evaluate(
-            self._state_port.Eval(context))
+            self._state_port.Eval(context)
+        )
         n1, tangent, delta, arc = self._contour.frame(x_p)
         k = self._bins.index(arc)
-        push = self._config.burr_contact_stiffness * max(
-            0.0, delta + burr[k]) if burr[k] > 0.0 else 0.0
+        push = (
+            self._config.burr_contact_stiffness * max(0.0, delta + burr[k])
+            if burr[k] > 0.0
+            else 0.0
+        )
         nv = self._nv
         # no chamfering force: no implicit-damping term (S = 0), no mean
         terms = np.zeros(force_law_terms_size(nv, self._nu))
         terms[:nv] = J.T @ tangent
-        terms[3 * nv:4 * nv] = -push * (J.T @ n1)
-        terms[4 * nv + 6:4 * nv + 9] = -push * n1
+        terms[3 * nv : 4 * nv] = -push * (J.T @ n1)
+        terms[4 * nv + 6 : 4 * nv + 9] = -push * n1
         discrete_state.set_value(self._terms_index, terms)
-        discrete_state.set_value(self._state_index, PROCESS_STATE.pack(
-            delta=delta, engagement=0.0, g=0.0, f_t=0.0, f_threshold=push,
-            v_t=abs(float(tangent @ xdot_p)), burr_area=0.0,
-            arc_position=arc))
+        discrete_state.set_value(
+            self._state_index,
+            PROCESS_STATE.pack(
+                delta=delta,
+                engagement=0.0,
+                g=0.0,
+                f_t=0.0,
+                f_threshold=push,
+                v_t=abs(float(tangent @ xdot_p)),
+                burr_area=0.0,
+                arc_position=arc,
+            ),
+        )
 
     def _held_mean(self, context, state, a) -> HeldMean:
         """a^T M^-1 of every generalized force but the cutting law's and
         the actuation, from the plant's accelerations at the sample: a^T
         vdot - y^T (tau_law + B u_act), y = M^-1 a."""
-        accelerations, law, actuation = (port.Eval(context)
-                                          for port in self._held_ports)
+        accelerations, law, actuation = (
+            port.Eval(context) for port in self._held_ports
+        )
         y = np.linalg.solve(self._tool_point.mass_matrix(state), a)
         rest = float(a @ accelerations) - float(
-            y @ (law + self._actuation_matrix @ actuation))
-        return HeldMean(y, rest, self._actuation_matrix,
-                        self._config.sample_period)
+            y @ (law + self._actuation_matrix @ actuation)
+        )
+        return HeldMean(
+            y, rest, self._actuation_matrix, self._config.sample_period
+        )
 
     def _initialize(self, context, discrete_state):
         # Before initialization the actuation is not yet held (the
@@ -582,10 +736,12 @@ class CuttingProcess(LeafSystem):
         x_p, xdot_p, J = self._tool_point.evaluate(state)
         n1, tangent, delta, arc = self._contour.frame(x_p)
         # math.geometry.removal_scale on the edge's curvature.
-        removal = removal_scale(self._contour.curvature(x_p), delta,
-                                self._cutter_radius)
-        overlap = material_overlap(self._contour, arc, delta,
-                                   self._cutter_radius)
+        removal = removal_scale(
+            self._contour.curvature(x_p), delta, self._cutter_radius
+        )
+        overlap = material_overlap(
+            self._contour, arc, delta, self._cutter_radius
+        )
         if delta > 0.0 and overlap > 0.0:
             finish = discrete_state.get_mutable_value(self._finish_index)
             k = self._bins.index(arc)
@@ -595,21 +751,35 @@ class CuttingProcess(LeafSystem):
             r, w = self._cutter_radius, self._bins.width
             closed = self._contour.closed
             near = self._bins.near(arc, r, closed)
-            d = arc_distance(self._bins.centers[near], arc,
-                             self._contour.length, closed)
+            d = arc_distance(
+                self._bins.centers[near], arc, self._contour.length, closed
+            )
             burr[near[(d >= -r) & (d < r - w)]] = 0.0
         k = self._bins.index(self._leading_edge(arc))
         area = burr[k] * self._thickness[k]
         v = inertia = held = None
         if self._config.implicit_damping:
-            v = state[self._nq:]
+            v = state[self._nq :]
             inertia = np.diag(self._tool_point.mass_matrix(state))
         elif self._held_ports is not None and held_mean:
-            v = state[self._nq:]
+            v = state[self._nq :]
             held = self._held_mean(context, state, tangent @ J)
         process_state, terms = _sample(
-            self._config, n1, tangent, delta, arc, J, xdot_p,
-            self._cut_height, area, overlap, removal, v, inertia, self._nu,
-            held)
+            self._config,
+            n1,
+            tangent,
+            delta,
+            arc,
+            J,
+            xdot_p,
+            self._cut_height,
+            area,
+            overlap,
+            removal,
+            v,
+            inertia,
+            self._nu,
+            held,
+        )
         discrete_state.set_value(self._state_index, process_state)
         discrete_state.set_value(self._terms_index, terms)

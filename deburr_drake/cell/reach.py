@@ -23,6 +23,7 @@ def _mtime(robot):
     """The model file's modification time (a file rewritten is checked
     again)."""
     import os
+
     try:
         return os.stat(robot.model).st_mtime_ns
     except (OSError, TypeError, ValueError):
@@ -41,31 +42,52 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
     ``samples`` points along the edge) the arm cannot reach with the tool
     vertical, and how far out of reach it is."""
     robot = scenario.robot
-    key = repr((robot, _mtime(robot), scenario.tube, scenario.edge,
-                scenario.part_error, scenario.tool, samples)) \
-        if contour is None else None
+    key = (
+        repr(
+            (
+                robot,
+                _mtime(robot),
+                scenario.tube,
+                scenario.edge,
+                scenario.part_error,
+                scenario.tool,
+                samples,
+            )
+        )
+        if contour is None
+        else None
+    )
     if key is not None and key in _REACHED:
         return
     model = check_robot(robot)
     if robot.model == "cartesian_tool":
         return  # the Cartesian tool reaches everywhere
     contour = contour or believed_contour(scenario)
-    arcs = np.linspace(0.0, contour.length, samples,
-                       endpoint=not contour.closed)
+    arcs = np.linspace(
+        0.0, contour.length, samples, endpoint=not contour.closed
+    )
     points = [start_position(scenario, contour)] + [
-        contour.point_at(s) for s in arcs]
+        contour.point_at(s) for s in arcs
+    ]
     instance = model.GetFrameByName(robot.tool_frame).model_instance()
-    miss = check_reach(model, points, instance=instance,
-                       q_guess=lambda p: ik_seed(robot, p),
-                       tool_frame=robot.tool_frame)
+    miss = check_reach(
+        model,
+        points,
+        instance=instance,
+        q_guess=lambda p: ik_seed(robot, p),
+        tool_frame=robot.tool_frame,
+    )
     if miss is None:
         if key is not None:
             _REACHED.add(key)
         return
     if miss is not None:
         k, p, distance, q_other = miss
-        where = "the start point" if k == 0 else \
-            f"the edge point at arc {arcs[k - 1] * 1e3:.1f} mm"
+        where = (
+            "the start point"
+            if k == 0
+            else f"the edge point at arc {arcs[k - 1] * 1e3:.1f} mm"
+        )
         if q_other is not None:
             raise ConfigError(
                 f"robot.ik_seed = {list(robot.ik_seed)} is invalid: {where},"
@@ -73,11 +95,13 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
                 "the inverse kinematics (tool vertical, joint limits) does "
                 "not find it from the seed nor along the edge; it does from "
                 f"{np.round(q_other, 3).tolist()} rad: allowed a seed "
-                "near that posture")
+                "near that posture"
+            )
         raise ConfigError(
             f"tube.position = {list(scenario.tube.position)} is out of the "
             f"arm's reach: {where}, tool tip at {np.round(p, 4).tolist()} m, "
             f"is {_mm(distance)} mm beyond the nearest reachable tool "
             "position (tool vertical, joint limits): allowed a part whose "
             f"edge the arm reaches (arm5: [0.40, 0.0, 0.0]; {robot.model!r}"
-            ": see its robot.ik_seed and the model's joint limits)")
+            ": see its robot.ik_seed and the model's joint limits)"
+        )

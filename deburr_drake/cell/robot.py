@@ -50,28 +50,53 @@ import numpy as np
 from pydrake.geometry import Cylinder
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
+from pydrake.multibody.tree import (
+    FixedOffsetFrame,
+    FrameIndex,
+    JacobianWrtVariable,
+    JointActuatorIndex,
+    JointIndex,
+    SpatialInertia,
+    UnitInertia,
+    WeldJoint,
+)
 from pydrake.systems.framework import DiagramBuilder
-from pydrake.multibody.tree import (FixedOffsetFrame, FrameIndex,
-                                    JacobianWrtVariable, JointActuatorIndex,
-                                    JointIndex,
-                                    SpatialInertia, UnitInertia, WeldJoint)
 
 from deburr_drake.cell.arm import ARM_URL, default_q_guess
-from deburr_drake.config import ConfigError, RobotConfig
-from deburr_drake.cell.description import (add_packages, model_path, notice,
-                                           prepared_model)
+from deburr_drake.cell.description import (
+    add_packages,
+    model_path,
+    notice,
+    prepared_model,
+)
 from deburr_drake.cell.models import POINT_MASS_URL, make_parser
+from deburr_drake.config import ConfigError, RobotConfig
 
-__all__ = ["ARM6_URL", "SHIPPED_ROBOTS", "MIN_JOINTS",
-           "add_robot", "make_robot_model", "check_robot", "robot_joints",
-           "ik_seed", "tool_frame_of", "finalize", "LIMITS_NOTE", "spindle_inertia", "start_pose",
-           "loop_numbers"]
+__all__ = [
+    "ARM6_URL",
+    "SHIPPED_ROBOTS",
+    "MIN_JOINTS",
+    "add_robot",
+    "make_robot_model",
+    "check_robot",
+    "robot_joints",
+    "ik_seed",
+    "tool_frame_of",
+    "finalize",
+    "LIMITS_NOTE",
+    "spindle_inertia",
+    "start_pose",
+    "loop_numbers",
+]
 
 ARM6_URL = "package://deburr_drake_models/arm6.sdf"
 
 #: Shipped model name -> its URL in models/.
-SHIPPED_ROBOTS = {"cartesian_tool": POINT_MASS_URL, "arm5": ARM_URL,
-                  "arm6": ARM6_URL}
+SHIPPED_ROBOTS = {
+    "cartesian_tool": POINT_MASS_URL,
+    "arm5": ARM_URL,
+    "arm6": ARM6_URL,
+}
 assert tuple(SHIPPED_ROBOTS) == RobotConfig.SHIPPED  # one list of names
 
 #: Actuated joints an arm needs: 3 for the position, 2 to hold the tool
@@ -106,8 +131,10 @@ def _add_models(plant: MultibodyPlant, config: RobotConfig):
         return parser.AddModelsFromString(text, kind)
     except RuntimeError as e:
         first = str(e).strip().splitlines()[0] if str(e).strip() else ""
-        raise ConfigError(f"robot.model = {config.model!r} is invalid: "
-                          f"Drake cannot parse it ({first})") from None
+        raise ConfigError(
+            f"robot.model = {config.model!r} is invalid: "
+            f"Drake cannot parse it ({first})"
+        ) from None
 
 
 def _set_reflected_inertia(plant, instance, config: RobotConfig):
@@ -122,10 +149,15 @@ def _set_reflected_inertia(plant, instance, config: RobotConfig):
         raise ConfigError(
             f"robot.reflected_inertia = {config.reflected_inertia} is "
             f"invalid: allowed a list of {len(joints)} numbers >= 0 (kg m^2,"
-            f" one per joint: {[j.name() for j in joints]}) or an empty list")
+            f" one per joint: {[j.name() for j in joints]}) or an empty list"
+        )
     # (GetJointActuatorIndices(instance) is empty before Finalize.)
-    by_joint = {plant.get_joint_actuator(JointActuatorIndex(i)).joint().index():
-                JointActuatorIndex(i) for i in range(plant.num_actuators())}
+    by_joint = {
+        plant.get_joint_actuator(JointActuatorIndex(i))
+        .joint()
+        .index(): JointActuatorIndex(i)
+        for i in range(plant.num_actuators())
+    }
     for joint, inertia in zip(joints, config.reflected_inertia):
         if joint.index() in by_joint:
             actuator = plant.get_mutable_joint_actuator(by_joint[joint.index()])
@@ -139,14 +171,18 @@ def _frame_names(plant, instance):
     joint_frames = set()
     for index in plant.GetJointIndices(instance):
         joint = plant.get_joint(index)
-        joint_frames |= {joint.frame_on_parent().index(),
-                         joint.frame_on_child().index()}
+        joint_frames |= {
+            joint.frame_on_parent().index(),
+            joint.frame_on_child().index(),
+        }
     names = []
     for i in range(plant.num_frames()):
         frame = plant.get_frame(FrameIndex(i))
-        if frame.model_instance() == instance and \
-                frame.index() not in joint_frames and \
-                frame.name() != "__model__":
+        if (
+            frame.model_instance() == instance
+            and frame.index() not in joint_frames
+            and frame.name() != "__model__"
+        ):
             names.append(frame.name())
     return sorted(set(names))
 
@@ -160,55 +196,69 @@ def _attach_spindle(plant, instance, config: RobotConfig):
         raise ConfigError(
             f"robot.flange_frame = {config.flange_frame!r} is invalid: "
             f"allowed a frame of {config.model!r}: "
-            f"{_frame_names(plant, instance)}")
-    for kind, exists in (("tool_frame", plant.HasFrameNamed),
-                         ("sensor_joint", plant.HasJointNamed)):
+            f"{_frame_names(plant, instance)}"
+        )
+    for kind, exists in (
+        ("tool_frame", plant.HasFrameNamed),
+        ("sensor_joint", plant.HasJointNamed),
+    ):
         name = getattr(config, kind)
         if exists(name, instance):
             raise ConfigError(
                 f"robot.{kind} = {name!r} is invalid: {config.model!r} "
                 f"already has it, and robot.flange_frame = "
                 f"{config.flange_frame!r} asks the cell to add it: allowed "
-                "another name, or flange_frame: '' to use the model's")
+                "another name, or flange_frame: '' to use the model's"
+            )
     flange = plant.GetFrameByName(config.flange_frame, instance)
-    tool = plant.AddRigidBody("tool", instance, spindle_inertia(
-        config.tool_mass, config.tool_length))
+    tool = plant.AddRigidBody(
+        "tool", instance, spindle_inertia(config.tool_mass, config.tool_length)
+    )
     # Tip tool_length out along the flange's +z; tool +z back to the flange.
-    X_FT = RigidTransform(RotationMatrix.MakeXRotation(math.pi),
-                          [0.0, 0.0, config.tool_length])
-    plant.AddJoint(WeldJoint(config.sensor_joint, flange, tool.body_frame(),
-                             X_FT))
-    plant.AddFrame(FixedOffsetFrame(config.tool_frame, tool.body_frame(),
-                                    RigidTransform()))
+    X_FT = RigidTransform(
+        RotationMatrix.MakeXRotation(math.pi), [0.0, 0.0, config.tool_length]
+    )
+    plant.AddJoint(
+        WeldJoint(config.sensor_joint, flange, tool.body_frame(), X_FT)
+    )
+    plant.AddFrame(
+        FixedOffsetFrame(config.tool_frame, tool.body_frame(), RigidTransform())
+    )
     if plant.geometry_source_is_registered():
         shape_pose = RigidTransform([0.0, 0.0, 0.6 * config.tool_length])
         plant.RegisterVisualGeometry(
-            tool, shape_pose,
-            Cylinder(_SPINDLE_RADIUS, 0.8 * config.tool_length), "spindle",
-            np.array([0.3, 0.3, 0.35, 1.0]))
+            tool,
+            shape_pose,
+            Cylinder(_SPINDLE_RADIUS, 0.8 * config.tool_length),
+            "spindle",
+            np.array([0.3, 0.3, 0.35, 1.0]),
+        )
 
 
 def _weld_free_base(plant, instance):
     """A model whose base link has no joint to the world (many URDFs) stands
     welded at the world origin, as arm5 and arm6 do."""
-    children = {plant.get_joint(i).child_body().index()
-                for i in plant.GetJointIndices(instance)}
+    children = {
+        plant.get_joint(i).child_body().index()
+        for i in plant.GetJointIndices(instance)
+    }
     roots = [i for i in plant.GetBodyIndices(instance) if i not in children]
     if len(roots) == 1:
-        plant.WeldFrames(plant.world_frame(),
-                         plant.get_body(roots[0]).body_frame())
+        plant.WeldFrames(
+            plant.world_frame(), plant.get_body(roots[0]).body_frame()
+        )
 
 
 def _robot_instance(plant, instances, config: RobotConfig):
     if len(instances) != 1:
         raise ConfigError(
             f"robot.model = {config.model!r} is invalid: allowed a file with "
-            f"one robot model, it has {len(instances)}")
+            f"one robot model, it has {len(instances)}"
+        )
     return instances[0]
 
 
-def add_robot(plant: MultibodyPlant, config: RobotConfig, *,
-              cutter=None):
+def add_robot(plant: MultibodyPlant, config: RobotConfig, *, cutter=None):
     """Add ``config.model`` to ``plant`` (before Finalize), with the
     spindle at ``config.flange_frame`` if one is named, and the cutter
     (``part.register_cutter``'s keyword arguments, e.g. cutter_radius) on
@@ -223,18 +273,22 @@ def add_robot(plant: MultibodyPlant, config: RobotConfig, *,
     frame = tool_frame_of(plant, instance, config)
     if cutter is not None:
         from deburr_drake.cell.part import register_cutter
-        register_cutter(plant, frame.body(),
-                        X_BT=frame.GetFixedPoseInBodyFrame(), **cutter)
+
+        register_cutter(
+            plant, frame.body(), X_BT=frame.GetFixedPoseInBodyFrame(), **cutter
+        )
     return instance
 
 
 #: Drake's warning at Finalize of a continuous plant whose joints have
 #: limits (three lines a user cannot act on), and what replaces it.
 _LIMITS_WARNING = "Currently MultibodyPlant does not handle joint limits"
-LIMITS_NOTE = ("joint limits: the start pose is solved within them; the "
-               "continuous plant does not enforce them during the run (the "
-               "guards stop a run whose torque, force, depth or tool "
-               "position leaves its bounds)")
+LIMITS_NOTE = (
+    "joint limits: the start pose is solved within them; the "
+    "continuous plant does not enforce them during the run (the "
+    "guards stop a run whose torque, force, depth or tool "
+    "position leaves its bounds)"
+)
 
 
 class _JointLimitsNote(logging.Filter):
@@ -259,24 +313,30 @@ def finalize(plant):
     plant.Finalize()
 
 
-def _require_named(config: RobotConfig, field: str, exists, what: str,
-                   names, added: str):
+def _require_named(
+    config: RobotConfig, field: str, exists, what: str, names, added: str
+):
     """ConfigError listing ``names()`` unless ``exists(robot.<field>)``."""
     name = getattr(config, field)
     if not exists(name):
         raise ConfigError(
             f"robot.{field} = {name!r} is invalid: allowed {what} of "
             f"{config.model!r}: {names()} (or name the mounting face in "
-            f"robot.flange_frame and the cell adds the {added})")
+            f"robot.flange_frame and the cell adds the {added})"
+        )
 
 
 def tool_frame_of(plant, instance, config: RobotConfig):
     """The tool frame of the robot; ConfigError listing the model's frames
     if it has none of that name."""
-    _require_named(config, "tool_frame",
-                   lambda name: plant.HasFrameNamed(name, instance),
-                   "a frame at the tool tip",
-                   lambda: _frame_names(plant, instance), "tool")
+    _require_named(
+        config,
+        "tool_frame",
+        lambda name: plant.HasFrameNamed(name, instance),
+        "a frame at the tool tip",
+        lambda: _frame_names(plant, instance),
+        "tool",
+    )
     return plant.GetFrameByName(config.tool_frame, instance)
 
 
@@ -303,11 +363,16 @@ def _robot_model(config: RobotConfig):
 
 def robot_joints(plant, instance=None):
     """The joints of the robot (those with a position), in position order."""
-    indices = (plant.GetJointIndices(instance) if instance is not None
-               else [JointIndex(i) for i in range(plant.num_joints())])
+    indices = (
+        plant.GetJointIndices(instance)
+        if instance is not None
+        else [JointIndex(i) for i in range(plant.num_joints())]
+    )
     joints = [plant.get_joint(i) for i in indices]
-    return sorted((j for j in joints if j.num_positions() > 0),
-                  key=lambda j: j.position_start())
+    return sorted(
+        (j for j in joints if j.num_positions() > 0),
+        key=lambda j: j.position_start(),
+    )
 
 
 def check_robot(config: RobotConfig) -> MultibodyPlant:
@@ -321,51 +386,65 @@ def check_robot(config: RobotConfig) -> MultibodyPlant:
     _parse_with_geometry(config)  # every URI in the file resolves
     plant, instance = _robot_model(config)
     tool = tool_frame_of(plant, instance, config)
-    _require_named(config, "sensor_joint",
-                   lambda name: plant.HasJointNamed(name, instance),
-                   "the weld joint holding the tool",
-                   lambda: _joint_names(plant, instance), "sensor")
+    _require_named(
+        config,
+        "sensor_joint",
+        lambda name: plant.HasJointNamed(name, instance),
+        "the weld joint holding the tool",
+        lambda: _joint_names(plant, instance),
+        "sensor",
+    )
     sensor = plant.GetJointByName(config.sensor_joint, instance)
-    if sensor.num_velocities() != 0 or \
-            sensor.child_body().index() != tool.body().index():
+    if (
+        sensor.num_velocities() != 0
+        or sensor.child_body().index() != tool.body().index()
+    ):
         raise ConfigError(
             f"robot.sensor_joint = {config.sensor_joint!r} is invalid: "
             "allowed a weld joint whose child body holds robot.tool_frame "
             f"{config.tool_frame!r} (it is a {sensor.type_name()} joint to "
-            f"{sensor.child_body().name()!r})")
+            f"{sensor.child_body().name()!r})"
+        )
     joints = robot_joints(plant)
     n = len(joints)
-    actuated = {plant.get_joint_actuator(i).joint().index()
-                for i in plant.GetJointActuatorIndices()}
+    actuated = {
+        plant.get_joint_actuator(i).joint().index()
+        for i in plant.GetJointActuatorIndices()
+    }
     loose = [j.name() for j in joints if j.index() not in actuated]
     if loose:
         raise ConfigError(
             f"robot.model = {config.model!r} is invalid: joints {loose} "
             "have no actuator: allowed a fully actuated arm (SDF: an "
             "<effort> limit on each joint; URDF: a <transmission> or an "
-            "effort limit above 0 on each joint)")
+            "effort limit above 0 on each joint)"
+        )
     if plant.num_positions() != plant.num_velocities():
         raise ConfigError(
             f"robot.model = {config.model!r} is invalid: allowed revolute "
             "or prismatic joints, welded to the world (a floating or ball "
-            "joint has no single actuator)")
+            "joint has no single actuator)"
+        )
     if config.model != "cartesian_tool" and n < MIN_JOINTS:
         raise ConfigError(
             f"robot.model = {config.model!r} is invalid: it has {n} "
             f"actuated joints ({[j.name() for j in joints]}), allowed "
             f"at least {MIN_JOINTS} (3 for the tool's position, 2 to hold "
-            "its axis vertical)")
+            "its axis vertical)"
+        )
     friction = config.joint_coulomb_friction
     if friction and len(friction) != n:
         raise ConfigError(
             f"robot.joint_coulomb_friction = {friction} is invalid: allowed "
             f"a list of {n} numbers >= 0 (one per joint: "
-            f"{[j.name() for j in joints]}) or an empty list")
+            f"{[j.name() for j in joints]}) or an empty list"
+        )
     if config.ik_seed and len(config.ik_seed) != n:
         raise ConfigError(
             f"robot.ik_seed = {config.ik_seed} is invalid: allowed a list of "
             f"{n} angles (rad, one per joint: {[j.name() for j in joints]}) "
-            "or an empty list")
+            "or an empty list"
+        )
     return plant
 
 
@@ -386,15 +465,20 @@ def start_pose(scenario):
     (what the cell sets as the plant's default positions)."""
     from deburr_drake.cell.arm import solve_tool_pose
     from deburr_drake.cell.edge import believed_contour, start_position
+
     robot = scenario.robot
     plant = make_robot_model(robot)
     x0 = start_position(scenario, believed_contour(scenario))
     if robot.model == "cartesian_tool":
         return x0
     frame = plant.GetFrameByName(robot.tool_frame)
-    return solve_tool_pose(plant, x0, instance=frame.model_instance(),
-                           q_guess=ik_seed(robot, x0),
-                           tool_frame=robot.tool_frame)
+    return solve_tool_pose(
+        plant,
+        x0,
+        instance=frame.model_instance(),
+        q_guess=ik_seed(robot, x0),
+        tool_frame=robot.tool_frame,
+    )
 
 
 def loop_numbers(scenario, q=None) -> dict:
@@ -423,24 +507,36 @@ def loop_numbers(scenario, q=None) -> dict:
     plant.SetPositions(context, q)
     frame = plant.GetFrameByName(scenario.robot.tool_frame)
     J = plant.CalcJacobianSpatialVelocity(
-        context, JacobianWrtVariable.kV, frame, np.zeros(3),
-        plant.world_frame(), plant.world_frame())
+        context,
+        JacobianWrtVariable.kV,
+        frame,
+        np.zeros(3),
+        plant.world_frame(),
+        plant.world_frame(),
+    )
     M = plant.CalcMassMatrix(context)
-    error = (c.model_mass_scale - 1.0) * \
-        plant.CalcGravityGeneralizedForces(context)
+    error = (c.model_mass_scale - 1.0) * plant.CalcGravityGeneralizedForces(
+        context
+    )
     wrench = np.linalg.lstsq(J.T, error, rcond=None)[0]
     K = np.asarray(c.sliding_gain, float)
     lam = np.asarray(c.sliding_lambda, float)
-    D = J[3:].T @ np.diag(K) @ J[3:] + \
-        J[:3].T @ np.diag(np.asarray(c.orientation_gain, float)) @ J[:3]
+    D = (
+        J[3:].T @ np.diag(K) @ J[3:]
+        + J[:3].T @ np.diag(np.asarray(c.orientation_gain, float)) @ J[:3]
+    )
     Jv_Minv = J[3:] @ np.linalg.inv(M)
     period = c.control_period
     return {
         "gravity_error_moment": wrench[:3],
         "gravity_error_force": wrench[3:],
         "static_error": wrench[3:] / (K * lam),
-        "lightest_task_mass": float(np.min(np.linalg.eigvalsh(
-            np.linalg.inv(Jv_Minv @ J[3:].T)))),
-        "sampled_rate": float(np.max(np.linalg.eigvals(
-            np.linalg.solve(M, D)).real) * period) if period > 0 else 0.0,
+        "lightest_task_mass": float(
+            np.min(np.linalg.eigvalsh(np.linalg.inv(Jv_Minv @ J[3:].T)))
+        ),
+        "sampled_rate": float(
+            np.max(np.linalg.eigvals(np.linalg.solve(M, D)).real) * period
+        )
+        if period > 0
+        else 0.0,
     }

@@ -61,8 +61,14 @@ class ForceSensor(LeafSystem):
     rotation into world; without one the sensor computes it itself.
     """
 
-    def __init__(self, plant: MultibodyPlant, joint_name: str,
-                 config: SensorConfig, *, tool_point: ToolPoint = None):
+    def __init__(
+        self,
+        plant: MultibodyPlant,
+        joint_name: str,
+        config: SensorConfig,
+        *,
+        tool_point: ToolPoint = None,
+    ):
         super().__init__()
         config.validate()
         self.set_name("force_sensor")
@@ -79,26 +85,33 @@ class ForceSensor(LeafSystem):
             if frame.body().index() != tool.index():
                 raise ValueError(
                     f"tool_point's frame {frame.name()!r} is not on the "
-                    f"sensor's child body {tool.name()!r}")
+                    f"sensor's child body {tool.name()!r}"
+                )
             context = plant.CreateDefaultContext()
-            self._R_FJ = (frame.CalcPoseInWorld(context).rotation().inverse()
-                          @ self._child_frame.CalcPoseInWorld(context)
-                          .rotation()).matrix()
+            self._R_FJ = (
+                frame.CalcPoseInWorld(context).rotation().inverse()
+                @ self._child_frame.CalcPoseInWorld(context).rotation()
+            ).matrix()
         self._weight = tool.default_mass() * np.asarray(
-            plant.gravity_field().gravity_vector())
+            plant.gravity_field().gravity_vector()
+        )
         self._noise_std = config.noise_std
         self._alpha = 1.0 - np.exp(
-            -2.0 * np.pi * config.cutoff_frequency * config.sample_period)
+            -2.0 * np.pi * config.cutoff_frequency * config.sample_period
+        )
         self._state_index = self.DeclareDiscreteState(3)
         self._reaction_port = self.DeclareAbstractInputPort(
             "reaction_forces",
-            plant.get_reaction_forces_output_port().Allocate())
+            plant.get_reaction_forces_output_port().Allocate(),
+        )
         self._state_port = self.DeclareVectorInputPort(
-            "plant_state", plant.num_multibody_states())
+            "plant_state", plant.num_multibody_states()
+        )
         self._applied_port = self.DeclareVectorInputPort("applied_force", 3)
         self._noise_port = self.DeclareVectorInputPort("noise", 3)
         self.DeclarePeriodicDiscreteUpdateEvent(
-            config.sample_period, 0.0, self._update)
+            config.sample_period, 0.0, self._update
+        )
         self.DeclareStateOutputPort("tool_force", self._state_index)
 
     def raw_force(self, context) -> np.ndarray:
@@ -110,8 +123,11 @@ class ForceSensor(LeafSystem):
             R_WJ = self._tool_point.rotation(state) @ self._R_FJ
         else:
             self._plant.SetPositionsAndVelocities(self._plant_context, state)
-            R_WJ = self._child_frame.CalcPoseInWorld(
-                self._plant_context).rotation().matrix()
+            R_WJ = (
+                self._child_frame.CalcPoseInWorld(self._plant_context)
+                .rotation()
+                .matrix()
+            )
         raw = -(R_WJ @ F.translational()) - self._weight
         if self._applied_port.HasValue(context):
             raw = raw + self._applied_port.Eval(context)
@@ -119,7 +135,7 @@ class ForceSensor(LeafSystem):
 
     def _update(self, context, discrete_state):
         y = context.get_discrete_state(self._state_index).get_value()
-        raw = self.raw_force(context) \
-            + self._noise_std * self._noise_port.Eval(context)
-        discrete_state.set_value(self._state_index,
-                                 y + self._alpha * (raw - y))
+        raw = self.raw_force(context) + self._noise_std * self._noise_port.Eval(
+            context
+        )
+        discrete_state.set_value(self._state_index, y + self._alpha * (raw - y))

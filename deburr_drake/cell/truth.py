@@ -17,12 +17,17 @@ from deburr_drake.cell.part import contact_force_on_body
 from deburr_drake.cell.plant import add_cell_plant
 from deburr_drake.config import RobotConfig, Scenario
 
-__all__ = ["contact_normal_force", "ContactTruth", "contact_truth",
-           "truth_stations"]
+__all__ = [
+    "contact_normal_force",
+    "ContactTruth",
+    "contact_truth",
+    "truth_stations",
+]
 
 
-def contact_normal_force(scenario: Scenario, depths, *,
-                         arc_fraction=0.5) -> np.ndarray:
+def contact_normal_force(
+    scenario: Scenario, depths, *, arc_fraction=0.5
+) -> np.ndarray:
     """The hydroelastic normal force (N) on the scenario's cutter at each
     depth (m) into its part, the tool vertical at ``arc_fraction`` of the
     edge, at rest: the contact part of (4), measured on the same geometry
@@ -95,14 +100,19 @@ def contact_truth(scenario: Scenario, *, step: float = 2e-5) -> ContactTruth:
     differences of :func:`contact_normal_force` over +-``step`` (m), at
     the first of :func:`truth_stations` (``force_range`` over all)."""
     tube, d = scenario.tube, scenario.task.desired_depth
-    rows = contact_normal_force(scenario, [d - step, d, d + step],
-                                arc_fraction=truth_stations(scenario))
+    rows = contact_normal_force(
+        scenario, [d - step, d, d + step], arc_fraction=truth_stations(scenario)
+    )
     forces = rows[0]
     c0 = scenario.process.contact_threshold_force
     return ContactTruth(
-        force_at_desired_depth=float(forces[1] + c0), c0=c0,
+        force_at_desired_depth=float(forces[1] + c0),
+        c0=c0,
         secant_stiffness=float(forces[1] / d),
         local_stiffness=float((forces[2] - forces[0]) / (2 * step)),
         c2=float(tube.hunt_crossley_dissipation * forces[1]),
-        force_range=(float(rows[:, 1].min() + c0),
-                     float(rows[:, 1].max() + c0)))
+        force_range=(
+            float(rows[:, 1].min() + c0),
+            float(rows[:, 1].max() + c0),
+        ),
+    )

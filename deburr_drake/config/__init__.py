@@ -13,27 +13,78 @@ system exists. The modules: ``checks`` (:class:`ConfigError`), ``control``
 whole, its files and dotted field names). Import the names from here.
 """
 
-from deburr_drake.config.checks import ConfigError
 from deburr_drake.config.cell import (
-    BurrConfig, DropoutConfig, EdgeConfig, FaultsConfig, GuardsConfig,
-    PartErrorConfig, PartStepConfig, ProcessConfig, RobotConfig, SensorConfig,
-    ToolConfig, TubeConfig)
+    BurrConfig,
+    DropoutConfig,
+    EdgeConfig,
+    FaultsConfig,
+    GuardsConfig,
+    PartErrorConfig,
+    PartStepConfig,
+    ProcessConfig,
+    RobotConfig,
+    SensorConfig,
+    ToolConfig,
+    TubeConfig,
+)
+from deburr_drake.config.checks import ConfigError
 from deburr_drake.config.control import (
-    CommandConfig, ControllerConfig, EstimatorConfig, FuzzyConfig,
-    ImpedanceConfig, PositionConfig, RobustConfig, TaskConfig)
+    CommandConfig,
+    ControllerConfig,
+    EstimatorConfig,
+    FuzzyConfig,
+    ImpedanceConfig,
+    PositionConfig,
+    RobustConfig,
+    TaskConfig,
+)
 from deburr_drake.config.localisation import (
-    LocalisationConfig, OnlineRegistrationConfig, ProbeConfig)
+    LocalisationConfig,
+    OnlineRegistrationConfig,
+    ProbeConfig,
+)
 from deburr_drake.config.scenario import (
-    Scenario, SimulationConfig, field_type, get_field, load_scenario,
-    scenario_names, scenario_path, set_field)
+    Scenario,
+    SimulationConfig,
+    field_type,
+    get_field,
+    load_scenario,
+    scenario_names,
+    scenario_path,
+    set_field,
+)
 
 __all__ = [
-    "ConfigError", "TubeConfig", "ToolConfig", "EdgeConfig", "TaskConfig",
-    "CommandConfig", "EstimatorConfig", "FuzzyConfig", "RobustConfig",
-    "ImpedanceConfig", "PositionConfig", "ControllerConfig", "SensorConfig",
-    "ProcessConfig", "BurrConfig", "RobotConfig", "SimulationConfig",
-    "GuardsConfig", "PartErrorConfig", "DropoutConfig", "PartStepConfig",
-    "FaultsConfig", "LocalisationConfig", "ProbeConfig",
-    "OnlineRegistrationConfig", "Scenario", "load_scenario", "scenario_names",
-    "scenario_path", "get_field", "set_field", "field_type",
+    "ConfigError",
+    "TubeConfig",
+    "ToolConfig",
+    "EdgeConfig",
+    "TaskConfig",
+    "CommandConfig",
+    "EstimatorConfig",
+    "FuzzyConfig",
+    "RobustConfig",
+    "ImpedanceConfig",
+    "PositionConfig",
+    "ControllerConfig",
+    "SensorConfig",
+    "ProcessConfig",
+    "BurrConfig",
+    "RobotConfig",
+    "SimulationConfig",
+    "GuardsConfig",
+    "PartErrorConfig",
+    "DropoutConfig",
+    "PartStepConfig",
+    "FaultsConfig",
+    "LocalisationConfig",
+    "ProbeConfig",
+    "OnlineRegistrationConfig",
+    "Scenario",
+    "load_scenario",
+    "scenario_names",
+    "scenario_path",
+    "get_field",
+    "set_field",
+    "field_type",
 ]

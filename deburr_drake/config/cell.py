@@ -3,19 +3,37 @@
 the sensor, faults and guards. SI units; each field's comment gives its
 unit."""
 
-import math
 from dataclasses import dataclass, field
+import math
 from pathlib import Path
 from typing import Dict, List
 
-from deburr_drake.config.checks import (ConfigError, _finite,
-                                        _non_negative, _positive, _require,
-                                        _vector)
+from deburr_drake.config.checks import (
+    ConfigError,
+    _finite,
+    _non_negative,
+    _positive,
+    _require,
+    _vector,
+)
 from deburr_drake.math.geometry import ProfileContour
 
-__all__ = ["package_folder", "PIP_PREFIX", "TubeConfig", "ToolConfig", "EdgeConfig", "SensorConfig",
-           "BurrConfig", "ProcessConfig", "RobotConfig", "PartErrorConfig",
-           "DropoutConfig", "PartStepConfig", "FaultsConfig", "GuardsConfig"]
+__all__ = [
+    "package_folder",
+    "PIP_PREFIX",
+    "TubeConfig",
+    "ToolConfig",
+    "EdgeConfig",
+    "SensorConfig",
+    "BurrConfig",
+    "ProcessConfig",
+    "RobotConfig",
+    "PartErrorConfig",
+    "DropoutConfig",
+    "PartStepConfig",
+    "FaultsConfig",
+    "GuardsConfig",
+]
 
 
 @dataclass
@@ -28,10 +46,13 @@ class TubeConfig:
     wall_thickness: float = 0.005  # m, radial thickness of the modelled wall
     height: float = 0.050  # m, part spans 0 <= z <= height in its frame
     position: List[float] = field(
-        default_factory=lambda: [0.0, 0.0, 0.0])  # m, world, bottom centre
+        default_factory=lambda: [0.0, 0.0, 0.0]
+    )  # m, world, bottom centre
     compliant_layer_height: float = 0.006  # m, top part of the wall modelled
     hydroelastic_modulus: float = 4.5e6  # Pa, 10 N/mm at 0.5 mm
-    hunt_crossley_dissipation: float = 5.0  # s/m, the contact's Hunt-Crossley dissipation
+    hunt_crossley_dissipation: float = (
+        5.0  # s/m, the contact's Hunt-Crossley dissipation
+    )
     # -, segments around the circumference. 120 (chord sag 10 um at 30 mm) with the
     # cutter's 0.6 mm mesh gives within 0.3 % the normal force of 240 with
     # a 0.4 mm cutter mesh (1.835/1.830, 3.695/3.700, 5.711/5.728 N at 0.3,
@@ -44,28 +65,46 @@ class TubeConfig:
 
     def validate(self):
         o = "tube"
-        for name in ("inner_radius", "wall_thickness", "height",
-                     "compliant_layer_height", "hydroelastic_modulus"):
+        for name in (
+            "inner_radius",
+            "wall_thickness",
+            "height",
+            "compliant_layer_height",
+            "hydroelastic_modulus",
+        ):
             _positive(o, name, getattr(self, name))
-        _non_negative(o, "hunt_crossley_dissipation",
-                      self.hunt_crossley_dissipation)
+        _non_negative(
+            o, "hunt_crossley_dissipation", self.hunt_crossley_dissipation
+        )
         _vector(o, "position", self.position, 3, _finite)
         # 1e300 Pa stopped the process inside Drake's contact solver (a
         # C++ failure Python cannot catch, so nothing was written).
-        _require(self.hydroelastic_modulus <= 1e12,
-                 "tube.hydroelastic_modulus", self.hydroelastic_modulus,
-                 "a number in (0, 1e12] Pa (steel's Young's modulus is "
-                 "2e11)")
-        _require(self.compliant_layer_height <= self.height,
-                 "tube.compliant_layer_height", self.compliant_layer_height,
-                 f"<= tube.height ({self.height})")
-        _require(isinstance(self.mesh_segments, int)
-                 and self.mesh_segments >= 16,
-                 "tube.mesh_segments", self.mesh_segments, "an integer >= 16")
+        _require(
+            self.hydroelastic_modulus <= 1e12,
+            "tube.hydroelastic_modulus",
+            self.hydroelastic_modulus,
+            "a number in (0, 1e12] Pa (steel's Young's modulus is 2e11)",
+        )
+        _require(
+            self.compliant_layer_height <= self.height,
+            "tube.compliant_layer_height",
+            self.compliant_layer_height,
+            f"<= tube.height ({self.height})",
+        )
+        _require(
+            isinstance(self.mesh_segments, int) and self.mesh_segments >= 16,
+            "tube.mesh_segments",
+            self.mesh_segments,
+            "an integer >= 16",
+        )
         for name in ("mesh_radial_cells", "mesh_height_cells"):
             v = getattr(self, name)
-            _require(isinstance(v, int) and v >= 2, f"tube.{name}", v,
-                     "an integer >= 2 (the mesh needs interior vertices)")
+            _require(
+                isinstance(v, int) and v >= 2,
+                f"tube.{name}",
+                v,
+                "an integer >= 2 (the mesh needs interior vertices)",
+            )
 
 
 @dataclass
@@ -78,12 +117,19 @@ class ToolConfig:
     resolution_hint: float = 6.0e-4  # m, the cutter's mesh (TubeConfig)
 
     def validate(self):
-        for name in ("cutter_radius", "cutter_length", "engagement",
-                     "resolution_hint"):
+        for name in (
+            "cutter_radius",
+            "cutter_length",
+            "engagement",
+            "resolution_hint",
+        ):
             _positive("tool", name, getattr(self, name))
-        _require(self.engagement < self.cutter_length, "tool.engagement",
-                 self.engagement,
-                 f"< tool.cutter_length ({self.cutter_length})")
+        _require(
+            self.engagement < self.cutter_length,
+            "tool.engagement",
+            self.engagement,
+            f"< tool.cutter_length ({self.cutter_length})",
+        )
 
 
 @dataclass
@@ -125,11 +171,14 @@ class EdgeConfig:
         height). ValueError says what is wrong with the profile."""
         pocket = self.side == "inner"
         return ProfileContour(
-            self.vertices, self.fillet_radius,
+            self.vertices,
+            self.fillet_radius,
             material="outside" if pocket else "inside",
             offset=offset - grow if pocket else offset + grow,
-            center=center, start_angle=self.start_angle,
-            direction=self.direction)
+            center=center,
+            start_angle=self.start_angle,
+            direction=self.direction,
+        )
 
     def check_profile(self, tube, tool, part_error):
         """One ConfigError naming the field if the profile, the cutter's
@@ -141,42 +190,72 @@ class EdgeConfig:
             path = self.profile_path(center, tool.cutter_radius)
             field, value = "tube.wall_thickness", tube.wall_thickness
             path.with_offset(0.0).material_band(
-                tube.wall_thickness, segments_per_turn=tube.mesh_segments,
-                max_step=tube.wall_thickness)
+                tube.wall_thickness,
+                segments_per_turn=tube.mesh_segments,
+                max_step=tube.wall_thickness,
+            )
             field, value = "part_error.radius", part_error.radius
-            self.profile_path(center, tool.cutter_radius,
-                              grow=part_error.radius)
+            self.profile_path(
+                center, tool.cutter_radius, grow=part_error.radius
+            )
         except ValueError as e:
             message = str(e)
             if "larger than the cutter" in message:
-                field, value = ("edge.fillet_radius", self.fillet_radius) \
-                    if field == "edge.vertices" else (field, value)
-                message = (f"a fillet whose centre is on the free side must "
-                           f"be larger than tool.cutter_radius "
-                           f"({tool.cutter_radius}): {message}")
+                field, value = (
+                    ("edge.fillet_radius", self.fillet_radius)
+                    if field == "edge.vertices"
+                    else (field, value)
+                )
+                message = (
+                    f"a fillet whose centre is on the free side must "
+                    f"be larger than tool.cutter_radius "
+                    f"({tool.cutter_radius}): {message}"
+                )
             elif "start_angle" in message:
                 field, value = "edge.start_angle", self.start_angle
-            raise ConfigError(f"{field} = {value!r} is invalid: "
-                              f"{message}") from None
+            raise ConfigError(
+                f"{field} = {value!r} is invalid: {message}"
+            ) from None
 
     def validate(self):
-        _require(self.kind in self.KINDS, "edge.kind", self.kind,
-                 f"one of {self.KINDS}")
+        _require(
+            self.kind in self.KINDS,
+            "edge.kind",
+            self.kind,
+            f"one of {self.KINDS}",
+        )
         for name in ("start_angle", "heading"):
             v = getattr(self, name)
-            _require(isinstance(v, (int, float)) and math.isfinite(v)
-                     and abs(v) <= 2 * math.pi, f"edge.{name}", v,
-                     "a number in [-2 pi, 2 pi] rad")
-        _require(self.direction in (1, -1), "edge.direction", self.direction,
-                 "1 or -1")
+            _require(
+                isinstance(v, (int, float))
+                and math.isfinite(v)
+                and abs(v) <= 2 * math.pi,
+                f"edge.{name}",
+                v,
+                "a number in [-2 pi, 2 pi] rad",
+            )
+        _require(
+            self.direction in (1, -1),
+            "edge.direction",
+            self.direction,
+            "1 or -1",
+        )
         _positive("edge", "length", self.length)
         _positive("edge", "fillet_radius", self.fillet_radius)
-        _require(self.side in self.SIDES, "edge.side", self.side,
-                 f"one of {self.SIDES}")
+        _require(
+            self.side in self.SIDES,
+            "edge.side",
+            self.side,
+            f"one of {self.SIDES}",
+        )
         if self.kind != "profile":
             return
-        _require(len(self.vertices) >= 3, "edge.vertices", self.vertices,
-                 "at least 3 points [x, y] (m) for a profile edge")
+        _require(
+            len(self.vertices) >= 3,
+            "edge.vertices",
+            self.vertices,
+            "at least 3 points [x, y] (m) for a profile edge",
+        )
         for i, v in enumerate(self.vertices):
             _vector("edge", f"vertices[{i}]", v, 2, _finite)
 
@@ -198,11 +277,18 @@ class SensorConfig:
         _positive("sensor", "sample_period", self.sample_period)
         _positive("sensor", "cutoff_frequency", self.cutoff_frequency)
         _non_negative("sensor", "noise_std", self.noise_std)
-        _require(self.cutoff_frequency < 0.5 / self.sample_period,
-                 "sensor.cutoff_frequency", self.cutoff_frequency,
-                 f"< the Nyquist frequency {0.5 / self.sample_period:g} Hz")
-        _require(isinstance(self.noise_seed, int) and self.noise_seed >= 0,
-                 "sensor.noise_seed", self.noise_seed, "an integer >= 0")
+        _require(
+            self.cutoff_frequency < 0.5 / self.sample_period,
+            "sensor.cutoff_frequency",
+            self.cutoff_frequency,
+            f"< the Nyquist frequency {0.5 / self.sample_period:g} Hz",
+        )
+        _require(
+            isinstance(self.noise_seed, int) and self.noise_seed >= 0,
+            "sensor.noise_seed",
+            self.noise_seed,
+            "an integer >= 0",
+        )
 
 
 @dataclass
@@ -210,16 +296,21 @@ class BurrConfig:
     """One burr on the edge: a raised-cosine bump of material the cutter
     removes (its cross-section area adds to g of (3))."""
 
-    center_fraction: float = 0.125  # -, fraction of the edge length from the start
+    center_fraction: float = (
+        0.125  # -, fraction of the edge length from the start
+    )
     length: float = 0.008  # m, of arc
     height: float = 0.001  # m, above the edge
     thickness: float = 0.002  # m; cross-section area = height * thickness
 
     def validate(self, owner="process.burrs[]"):
-        _require(isinstance(self.center_fraction, (int, float))
-                 and 0.0 <= self.center_fraction < 1.0,
-                 f"{owner}.center_fraction", self.center_fraction,
-                 "a number in [0, 1)")
+        _require(
+            isinstance(self.center_fraction, (int, float))
+            and 0.0 <= self.center_fraction < 1.0,
+            f"{owner}.center_fraction",
+            self.center_fraction,
+            "a number in [0, 1)",
+        )
         for name in ("length", "height", "thickness"):
             _non_negative(owner, name, getattr(self, name))
         _positive(owner, "length", self.length)
@@ -280,23 +371,37 @@ class ProcessConfig:
     def validate(self):
         o = "process"
         for name in ("sample_mean", "implicit_damping"):
-            _require(isinstance(getattr(self, name), bool), f"{o}.{name}",
-                     getattr(self, name), "true or false")
-        _require(not (self.sample_mean and self.implicit_damping),
-                 f"{o}.implicit_damping", self.implicit_damping,
-                 "false while process.sample_mean is true (two treatments "
-                 "of the same damping)")
-        for name in ("cutting_coefficient", "plunge_coefficient",
-                     "threshold_power_force", "contact_threshold_force",
-                     "burr_contact_stiffness"):
+            _require(
+                isinstance(getattr(self, name), bool),
+                f"{o}.{name}",
+                getattr(self, name),
+                "true or false",
+            )
+        _require(
+            not (self.sample_mean and self.implicit_damping),
+            f"{o}.implicit_damping",
+            self.implicit_damping,
+            "false while process.sample_mean is true (two treatments "
+            "of the same damping)",
+        )
+        for name in (
+            "cutting_coefficient",
+            "plunge_coefficient",
+            "threshold_power_force",
+            "contact_threshold_force",
+            "burr_contact_stiffness",
+        ):
             _non_negative(o, name, getattr(self, name))
         _positive(o, "threshold_depth", self.threshold_depth)
         _positive(o, "smoothing_speed", self.smoothing_speed)
         _positive(o, "sample_period", self.sample_period)
-        _require(isinstance(self.finish_bin_length, (int, float))
-                 and 0 < self.finish_bin_length <= 2.0e-4,
-                 f"{o}.finish_bin_length", self.finish_bin_length,
-                 "a number in (0, 0.0002] m")
+        _require(
+            isinstance(self.finish_bin_length, (int, float))
+            and 0 < self.finish_bin_length <= 2.0e-4,
+            f"{o}.finish_bin_length",
+            self.finish_bin_length,
+            "a number in (0, 0.0002] m",
+        )
         for k, burr in enumerate(self.burrs):
             burr.validate(f"{o}.burrs[{k}]")
 
@@ -323,8 +428,11 @@ class RobotConfig:
 
     model: str = "cartesian_tool"  # -, shipped name, or a .urdf / .sdf path
     joint_coulomb_friction: List[float] = field(
-        default_factory=list)  # N or N m, per joint; empty: none
-    friction_smoothing_speed: float = 1.0e-3  # m/s or rad/s, v_s of F_c tanh(v / v_s)
+        default_factory=list
+    )  # N or N m, per joint; empty: none
+    friction_smoothing_speed: float = (
+        1.0e-3  # m/s or rad/s, v_s of F_c tanh(v / v_s)
+    )
     tool_frame: str = "tool_tip"  # -, frame at the tool tip
     sensor_joint: str = "ft_sensor"  # -, weld joint: the force/torque sensor
     flange_frame: str = ""  # -, frame the spindle is mounted on; "": none
@@ -340,12 +448,15 @@ class RobotConfig:
     # "pip:DIST/sub/folder" is a folder inside the installed Python
     # distribution DIST (e.g. "pip:example-robot-data/cmeel.prefix/share").
     package_paths: List[str] = field(
-        default_factory=list)  # -, folders whose sub-folders are packages by name
+        default_factory=list
+    )  # -, folders whose sub-folders are packages by name
     packages: Dict[str, str] = field(
-        default_factory=dict)  # -, {package name: its folder}
+        default_factory=dict
+    )  # -, {package name: its folder}
     # Where the model file gives none (drake:rotor_inertia); empty: the file's.
     reflected_inertia: List[float] = field(
-        default_factory=list)  # kg m^2, per joint: the drives' reflected inertia
+        default_factory=list
+    )  # kg m^2, per joint: the drives' reflected inertia
 
     #: Models shipped in models/ (deburr_drake.cell.robot.SHIPPED_ROBOTS).
     SHIPPED = ("cartesian_tool", "arm5", "arm6")
@@ -358,44 +469,72 @@ class RobotConfig:
     def is_package_url(self) -> bool:
         """Whether ``model`` is a ``package://NAME/...`` URL (resolved
         through the package folders)."""
-        return isinstance(self.model, str) and \
-            self.model.startswith("package://")
+        return isinstance(self.model, str) and self.model.startswith(
+            "package://"
+        )
 
     def validate(self):
         o = "robot"
-        _require(isinstance(self.model, str) and (
-            self.model in self.SHIPPED
-            or Path(self.model).suffix.lower() in self.FILE_SUFFIXES),
-            f"{o}.model", self.model,
+        _require(
+            isinstance(self.model, str)
+            and (
+                self.model in self.SHIPPED
+                or Path(self.model).suffix.lower() in self.FILE_SUFFIXES
+            ),
+            f"{o}.model",
+            self.model,
             f"one of {self.SHIPPED} or a path (or package:// URL) to a .urdf "
-            "or .sdf file")
+            "or .sdf file",
+        )
         if self.is_file() and not self.is_package_url():
-            _require(Path(self.model).is_file(), f"{o}.model", self.model,
-                     "an existing .urdf or .sdf file (no such file)")
+            _require(
+                Path(self.model).is_file(),
+                f"{o}.model",
+                self.model,
+                "an existing .urdf or .sdf file (no such file)",
+            )
         for i, f in enumerate(self.joint_coulomb_friction):
             _non_negative(o, f"joint_coulomb_friction[{i}]", f)
-        _positive(o, "friction_smoothing_speed",
-                  self.friction_smoothing_speed)
+        _positive(o, "friction_smoothing_speed", self.friction_smoothing_speed)
         for name in ("tool_frame", "sensor_joint"):
-            _require(isinstance(getattr(self, name), str)
-                     and getattr(self, name) != "", f"{o}.{name}",
-                     getattr(self, name), "a frame or joint name")
+            _require(
+                isinstance(getattr(self, name), str)
+                and getattr(self, name) != "",
+                f"{o}.{name}",
+                getattr(self, name),
+                "a frame or joint name",
+            )
         _positive(o, "tool_length", self.tool_length)
         _positive(o, "tool_mass", self.tool_mass)
         for i, q in enumerate(self.ik_seed):
-            _require(isinstance(q, (int, float)) and math.isfinite(q),
-                     f"{o}.ik_seed[{i}]", q, "a finite angle (rad)")
+            _require(
+                isinstance(q, (int, float)) and math.isfinite(q),
+                f"{o}.ik_seed[{i}]",
+                q,
+                "a finite angle (rad)",
+            )
         for i, inertia in enumerate(self.reflected_inertia):
             _non_negative(o, f"reflected_inertia[{i}]", inertia)
         for i, entry in enumerate(self.package_paths):
-            _require(package_folder(entry).is_dir(),
-                     f"{o}.package_paths[{i}]", entry,
-                     "an existing folder" + _dist_hint(entry))
+            _require(
+                package_folder(entry).is_dir(),
+                f"{o}.package_paths[{i}]",
+                entry,
+                "an existing folder" + _dist_hint(entry),
+            )
         for name, entry in self.packages.items():
-            _require(name != "" and "/" not in name, f"{o}.packages",
-                     name, "package names without '/'")
-            _require(package_folder(entry).is_dir(), f"{o}.packages.{name}",
-                     entry, "an existing folder" + _dist_hint(entry))
+            _require(
+                name != "" and "/" not in name,
+                f"{o}.packages",
+                name,
+                "package names without '/'",
+            )
+            _require(
+                package_folder(entry).is_dir(),
+                f"{o}.packages.{name}",
+                entry,
+                "an existing folder" + _dist_hint(entry),
+            )
 
 
 #: A package folder inside an installed Python distribution:
@@ -414,7 +553,8 @@ def package_folder(entry: str) -> Path:
     if not entry.startswith(PIP_PREFIX):
         return Path(entry)
     from importlib import metadata
-    dist, _, rest = entry[len(PIP_PREFIX):].partition("/")
+
+    dist, _, rest = entry[len(PIP_PREFIX) :].partition("/")
     try:
         root = Path(str(metadata.distribution(dist).locate_file("")))
     except metadata.PackageNotFoundError:
@@ -424,13 +564,16 @@ def package_folder(entry: str) -> Path:
 
 def _dist_hint(entry) -> str:
     if isinstance(entry, str) and entry.startswith(PIP_PREFIX):
-        dist = entry[len(PIP_PREFIX):].partition("/")[0]
+        dist = entry[len(PIP_PREFIX) :].partition("/")[0]
         from importlib import metadata
+
         try:
             metadata.distribution(dist)
         except metadata.PackageNotFoundError:
-            return (f" (no installed Python distribution {dist!r}: "
-                    f"pip install {dist})")
+            return (
+                f" (no installed Python distribution {dist!r}: "
+                f"pip install {dist})"
+            )
     return " (relative to the scenario file, or pip:DIST/sub/folder)"
 
 
@@ -447,16 +590,22 @@ class PartErrorConfig:
     grown outward by ``radius``, a pocket's or a boss's)."""
 
     offset: List[float] = field(
-        default_factory=lambda: [0.0, 0.0, 0.0])  # m, believed - real
+        default_factory=lambda: [0.0, 0.0, 0.0]
+    )  # m, believed - real
     yaw: float = 0.0  # rad, believed - real, about the vertical
     radius: float = 0.0  # m, believed - real inner radius; profile: growth
 
     def validate(self):
         o = "part_error"
         _vector(o, "offset", self.offset, 3, _finite)
-        _require(isinstance(self.yaw, (int, float)) and math.isfinite(
-            self.yaw) and abs(self.yaw) <= math.pi, f"{o}.yaw", self.yaw,
-            "a number in [-pi, pi] rad")
+        _require(
+            isinstance(self.yaw, (int, float))
+            and math.isfinite(self.yaw)
+            and abs(self.yaw) <= math.pi,
+            f"{o}.yaw",
+            self.yaw,
+            "a number in [-pi, pi] rad",
+        )
         _finite(o, "radius", self.radius)
 
 
@@ -473,8 +622,12 @@ class DropoutConfig:
     def validate(self, owner="faults.dropouts[]"):
         _non_negative(owner, "start", self.start)
         _positive(owner, "duration", self.duration)
-        _require(self.mode in self.MODES, f"{owner}.mode", self.mode,
-                 f"one of {self.MODES}")
+        _require(
+            self.mode in self.MODES,
+            f"{owner}.mode",
+            self.mode,
+            f"one of {self.MODES}",
+        )
 
 
 @dataclass
@@ -488,13 +641,18 @@ class PartStepConfig:
 
     time: float = 0.0  # s; 0: no step
     offset: List[float] = field(
-        default_factory=lambda: [0.0, 0.0, 0.0])  # m, world, real part's move
+        default_factory=lambda: [0.0, 0.0, 0.0]
+    )  # m, world, real part's move
 
     def validate(self, owner="faults.part_step"):
         _non_negative(owner, "time", self.time)
         _vector(owner, "offset", self.offset, 3, _finite)
-        _require(self.time == 0.0 or any(self.offset), f"{owner}.offset",
-                 self.offset, f"not all zero when {owner}.time > 0")
+        _require(
+            self.time == 0.0 or any(self.offset),
+            f"{owner}.offset",
+            self.offset,
+            f"not all zero when {owner}.time > 0",
+        )
 
     def active(self) -> bool:
         return self.time > 0.0
@@ -557,9 +715,16 @@ class GuardsConfig:
         _positive(o, "joint_torque_fraction", self.joint_torque_fraction)
         for name in ("tool_force", "depth"):
             _non_negative(o, name, getattr(self, name))
-        for name in ("workspace_margin", "contact_lost_time",
-                     "contact_force", "check_period"):
+        for name in (
+            "workspace_margin",
+            "contact_lost_time",
+            "contact_force",
+            "check_period",
+        ):
             _positive(o, name, getattr(self, name))
-        _require(self.contact_lost_time > self.check_period,
-                 "guards.contact_lost_time", self.contact_lost_time,
-                 f"> guards.check_period ({self.check_period})")
+        _require(
+            self.contact_lost_time > self.check_period,
+            "guards.contact_lost_time",
+            self.contact_lost_time,
+            f"> guards.check_period ({self.check_period})",
+        )

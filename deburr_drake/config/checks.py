@@ -19,23 +19,36 @@ def _require(ok: bool, name: str, value, allowed: str):
 def _positive(owner: str, name: str, value: float):
     _require(
         isinstance(value, (int, float)) and math.isfinite(value) and value > 0,
-        f"{owner}.{name}", value, "a finite number > 0")
+        f"{owner}.{name}",
+        value,
+        "a finite number > 0",
+    )
 
 
 def _non_negative(owner: str, name: str, value: float):
     _require(
-        isinstance(value, (int, float)) and math.isfinite(value)
-        and value >= 0,
-        f"{owner}.{name}", value, "a finite number >= 0")
+        isinstance(value, (int, float)) and math.isfinite(value) and value >= 0,
+        f"{owner}.{name}",
+        value,
+        "a finite number >= 0",
+    )
 
 
 def _vector(owner: str, name: str, value, size: int, check):
-    _require(len(value) == size, f"{owner}.{name}", value,
-             f"a list of {size} numbers")
+    _require(
+        len(value) == size,
+        f"{owner}.{name}",
+        value,
+        f"a list of {size} numbers",
+    )
     for i, v in enumerate(value):
         check(owner, f"{name}[{i}]", v)
 
 
 def _finite(owner, name, value):
-    _require(isinstance(value, (int, float)) and math.isfinite(value),
-             f"{owner}.{name}", value, "a finite number")
+    _require(
+        isinstance(value, (int, float)) and math.isfinite(value),
+        f"{owner}.{name}",
+        value,
+        "a finite number",
+    )

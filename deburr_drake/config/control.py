@@ -6,12 +6,23 @@ units; each field's comment gives its unit."""
 from dataclasses import dataclass, field
 from typing import List
 
-from deburr_drake.config.checks import (_non_negative, _positive, _require,
-                                        _vector)
+from deburr_drake.config.checks import (
+    _non_negative,
+    _positive,
+    _require,
+    _vector,
+)
 
-__all__ = ["TaskConfig", "CommandConfig", "EstimatorConfig", "FuzzyConfig",
-           "RobustConfig", "ImpedanceConfig", "PositionConfig",
-           "ControllerConfig"]
+__all__ = [
+    "TaskConfig",
+    "CommandConfig",
+    "EstimatorConfig",
+    "FuzzyConfig",
+    "RobustConfig",
+    "ImpedanceConfig",
+    "PositionConfig",
+    "ControllerConfig",
+]
 
 
 @dataclass
@@ -23,8 +34,9 @@ class TaskConfig:
 
     def validate(self):
         _positive("task", "desired_depth", self.desired_depth)
-        _positive("task", "desired_chamfering_force",
-                  self.desired_chamfering_force)
+        _positive(
+            "task", "desired_chamfering_force", self.desired_chamfering_force
+        )
 
 
 @dataclass
@@ -49,14 +61,24 @@ class CommandConfig:
     max_feed: float = 0.02
 
     def validate(self):
-        for name in ("period", "default_feed", "force_offset",
-                     "min_tangential_speed", "constant_feed", "max_feed"):
+        for name in (
+            "period",
+            "default_feed",
+            "force_offset",
+            "min_tangential_speed",
+            "constant_feed",
+            "max_feed",
+        ):
             _positive("command", name, getattr(self, name))
-        _require(self.max_feed >= self.default_feed, "command.max_feed",
-                 self.max_feed, f">= command.default_feed "
-                 f"({self.default_feed})")
-        _non_negative("command", "threshold_power_force",
-                      self.threshold_power_force)
+        _require(
+            self.max_feed >= self.default_feed,
+            "command.max_feed",
+            self.max_feed,
+            f">= command.default_feed ({self.default_feed})",
+        )
+        _non_negative(
+            "command", "threshold_power_force", self.threshold_power_force
+        )
 
 
 @dataclass
@@ -64,11 +86,14 @@ class EstimatorConfig:
     """Contact-parameter estimator (13)-(18) with R3."""
 
     initial_estimates: List[float] = field(
-        default_factory=lambda: [3.0, 4000.0, 20.0])  # [N, N/m, N s/m], c0, c1, c2 at the start
+        default_factory=lambda: [3.0, 4000.0, 20.0]
+    )  # [N, N/m, N s/m], c0, c1, c2 at the start
     gains: List[float] = field(
-        default_factory=lambda: [20.0, 2.0e7, 0.0])  # -, r_i per parameter (R3)
+        default_factory=lambda: [20.0, 2.0e7, 0.0]
+    )  # -, r_i per parameter (R3)
     lower_bounds: List[float] = field(
-        default_factory=lambda: [0.1, 100.0, 0.0])  # [N, N/m, N s/m], eps_i (R3)
+        default_factory=lambda: [0.1, 100.0, 0.0]
+    )  # [N, N/m, N s/m], eps_i (R3)
     contact_force_threshold: float = 0.2  # N, adapt only above it
     adapt: bool = True  # -, false: the estimates stay at their start
 
@@ -78,12 +103,15 @@ class EstimatorConfig:
         _vector(o, "gains", self.gains, 3, _non_negative)
         _vector(o, "lower_bounds", self.lower_bounds, 3, _non_negative)
         for i in range(3):
-            _require(self.initial_estimates[i] >= self.lower_bounds[i],
-                     f"{o}.initial_estimates[{i}]",
-                     self.initial_estimates[i],
-                     f">= {o}.lower_bounds[{i}] ({self.lower_bounds[i]})")
-        _non_negative(o, "contact_force_threshold",
-                      self.contact_force_threshold)
+            _require(
+                self.initial_estimates[i] >= self.lower_bounds[i],
+                f"{o}.initial_estimates[{i}]",
+                self.initial_estimates[i],
+                f">= {o}.lower_bounds[{i}] ({self.lower_bounds[i]})",
+            )
+        _non_negative(
+            o, "contact_force_threshold", self.contact_force_threshold
+        )
 
 
 @dataclass
@@ -94,7 +122,8 @@ class FuzzyConfig:
     upsilon: int = 5  # -, Upsilon: rules per input 2*upsilon + 1
     position_scale: float = 0.1  # m, x_max normalizing ||x|| (R8)
     sliding_scales: List[float] = field(
-        default_factory=lambda: [0.005, 0.005])  # m/s, s_k,max per axis
+        default_factory=lambda: [0.005, 0.005]
+    )  # m/s, s_k,max per axis
     width_fraction: float = 0.2  # -, Delta = width_fraction * scale
     # m/s, per axis; empty: (m+1)/2 * Delta_k (R4).
     dead_zone_half_widths: List[float] = field(default_factory=list)
@@ -110,41 +139,70 @@ class FuzzyConfig:
     # loop cycled at 200 Hz. 0: designed, 1.5 m / T - K_k at the start
     # pose (the total then at most 3/4 of the limit,
     # deburr_drake.cell.gains.resolve_slope_bound); inf: no bound.
-    max_slope: float = 0.0  # N s/m, bound on the learned surface's slope in s_k (0: designed)
-    max_slope_rate: float = 80.0  # 1/s, how fast a slope beyond max_slope is pulled back
+    max_slope: float = (
+        0.0  # N s/m, bound on the learned surface's slope in s_k (0: designed)
+    )
+    max_slope_rate: float = (
+        80.0  # 1/s, how fast a slope beyond max_slope is pulled back
+    )
 
     def deltas(self):
         """(Delta_0, [Delta_k]) in m and m/s."""
-        return (self.width_fraction * self.position_scale,
-                [self.width_fraction * s for s in self.sliding_scales])
+        return (
+            self.width_fraction * self.position_scale,
+            [self.width_fraction * s for s in self.sliding_scales],
+        )
 
     def validate(self, o="controller.fuzzy"):
-        _require(isinstance(self.order, int) and 0 <= self.order <= 3,
-                 f"{o}.order", self.order, "an integer in 0..3")
-        _require(isinstance(self.upsilon, int) and self.upsilon >= 1,
-                 f"{o}.upsilon", self.upsilon, "an integer >= 1")
+        _require(
+            isinstance(self.order, int) and 0 <= self.order <= 3,
+            f"{o}.order",
+            self.order,
+            "an integer in 0..3",
+        )
+        _require(
+            isinstance(self.upsilon, int) and self.upsilon >= 1,
+            f"{o}.upsilon",
+            self.upsilon,
+            "an integer >= 1",
+        )
         _positive(o, "position_scale", self.position_scale)
         _positive(o, "width_fraction", self.width_fraction)
         _positive(o, "adaptation_gain", self.adaptation_gain)
-        _require(isinstance(self.max_slope, (int, float))
-                 and self.max_slope >= 0.0, f"{o}.max_slope",
-                 self.max_slope, "a number >= 0 (0: designed; .inf: none)")
+        _require(
+            isinstance(self.max_slope, (int, float)) and self.max_slope >= 0.0,
+            f"{o}.max_slope",
+            self.max_slope,
+            "a number >= 0 (0: designed; .inf: none)",
+        )
         _positive(o, "max_slope_rate", self.max_slope_rate)
-        _require(len(set(self.axes)) == len(self.axes)
-                 and all(a in (0, 1, 2) for a in self.axes),
-                 f"{o}.axes", self.axes, "distinct task axes from {0, 1, 2}")
-        _vector(o, "sliding_scales", self.sliding_scales, len(self.axes),
-                _positive)
+        _require(
+            len(set(self.axes)) == len(self.axes)
+            and all(a in (0, 1, 2) for a in self.axes),
+            f"{o}.axes",
+            self.axes,
+            "distinct task axes from {0, 1, 2}",
+        )
+        _vector(
+            o, "sliding_scales", self.sliding_scales, len(self.axes), _positive
+        )
         _, deltas = self.deltas()
         if self.dead_zone_half_widths:
-            _vector(o, "dead_zone_half_widths", self.dead_zone_half_widths,
-                    len(self.axes), _non_negative)
-            for k, (w, d) in enumerate(zip(self.dead_zone_half_widths,
-                                           deltas)):
-                _require(w <= self.upsilon * d,
-                         f"{o}.dead_zone_half_widths[{k}]", w,
-                         f"<= upsilon * Delta_k = {self.upsilon * d:g} m/s "
-                         "(the dead zone must lie inside Omega_k)")
+            _vector(
+                o,
+                "dead_zone_half_widths",
+                self.dead_zone_half_widths,
+                len(self.axes),
+                _non_negative,
+            )
+            for k, (w, d) in enumerate(zip(self.dead_zone_half_widths, deltas)):
+                _require(
+                    w <= self.upsilon * d,
+                    f"{o}.dead_zone_half_widths[{k}]",
+                    w,
+                    f"<= upsilon * Delta_k = {self.upsilon * d:g} m/s "
+                    "(the dead zone must lie inside Omega_k)",
+                )
 
 
 @dataclass
@@ -160,7 +218,8 @@ class RobustConfig:
 
     # [N, N/m, N/m^2, N s/m, N s/m^2], b1..b5 of (22)
     gains: List[float] = field(
-        default_factory=lambda: [5.0, 0.0, 0.0, 0.0, 0.0])
+        default_factory=lambda: [5.0, 0.0, 0.0, 0.0, 0.0]
+    )
 
     def validate(self, o="controller.robust"):
         _vector(o, "gains", self.gains, 5, _non_negative)
@@ -189,7 +248,8 @@ class PositionConfig:
     2800 N s/m) keeps it stable."""
 
     sliding_gain: List[float] = field(
-        default_factory=lambda: [1500.0, 1500.0, 1500.0])  # N s/m, K_p
+        default_factory=lambda: [1500.0, 1500.0, 1500.0]
+    )  # N s/m, K_p
 
     def validate(self, o="controller.position"):
         _vector(o, "sliding_gain", self.sliding_gain, 3, _positive)
@@ -215,14 +275,18 @@ class ControllerConfig:
     # (deburr_drake.analysis.preflight), or as written here.
     design: str = ""  # -, auto, written, or "": auto for a robot from a file
     sliding_lambda: List[float] = field(
-        default_factory=lambda: [40.0, 40.0, 80.0])  # 1/s, lambda
+        default_factory=lambda: [40.0, 40.0, 80.0]
+    )  # 1/s, lambda
     sliding_gain: List[float] = field(
-        default_factory=lambda: [400.0, 400.0, 800.0])  # N s/m, K
+        default_factory=lambda: [400.0, 400.0, 800.0]
+    )  # N s/m, K
     depth_gain: float = 4.0e-4  # m/(N s), k_delta of (7)
     robust_gain: List[float] = field(
-        default_factory=lambda: [2.0, 2.0])  # N, h_bar_k (R10), fuzzy axes
+        default_factory=lambda: [2.0, 2.0]
+    )  # N, h_bar_k (R10), fuzzy axes
     robust_boundary_layer: List[float] = field(
-        default_factory=lambda: [0.005, 0.005])  # m/s, phi_k (R10)
+        default_factory=lambda: [0.005, 0.005]
+    )  # m/s, phi_k (R10)
     # s; the paper's 2.5 ms inner loop holds f_tau (zero-order hold);
     # 0: continuous (then use an integrator that is accurate for the
     # controller, e.g. runge_kutta3: cenic treats non-plant systems lagged).
@@ -230,9 +294,11 @@ class ControllerConfig:
     # Tool orientation (R9: a PD on the sliding variable s_o = -omega +
     # lambda_o e_o, e_o the rotation vector of R_d R^T, world frame).
     orientation_lambda: List[float] = field(
-        default_factory=lambda: [20.0, 20.0, 20.0])  # 1/s
+        default_factory=lambda: [20.0, 20.0, 20.0]
+    )  # 1/s
     orientation_gain: List[float] = field(
-        default_factory=lambda: [0.0, 0.0, 0.0])  # N m s/rad, K_o
+        default_factory=lambda: [0.0, 0.0, 0.0]
+    )  # N m s/rad, K_o
     # A robot of more than 6 joints: a joint-space PD towards the start
     # posture, projected into the null space of the tool frame's Jacobian
     # (tau_n = (I - J^T J^T+) (k (q_0 - q) - d v)), so the redundancy does
@@ -259,25 +325,32 @@ class ControllerConfig:
 
     def validate(self):
         o = "controller"
-        _require(self.design in self.DESIGNS, f"{o}.design", self.design,
-                 "auto, written or '' (auto for a robot from a file)")
-        _require(self.kind in self.KINDS, f"{o}.kind", self.kind,
-                 "one of " + ", ".join(self.KINDS))
+        _require(
+            self.design in self.DESIGNS,
+            f"{o}.design",
+            self.design,
+            "auto, written or '' (auto for a robot from a file)",
+        )
+        _require(
+            self.kind in self.KINDS,
+            f"{o}.kind",
+            self.kind,
+            "one of " + ", ".join(self.KINDS),
+        )
         _vector(o, "sliding_lambda", self.sliding_lambda, 3, _positive)
         _vector(o, "sliding_gain", self.sliding_gain, 3, _positive)
         _positive(o, "depth_gain", self.depth_gain)
         _non_negative(o, "control_period", self.control_period)
-        _vector(o, "orientation_lambda", self.orientation_lambda, 3,
-                _positive)
-        _vector(o, "orientation_gain", self.orientation_gain, 3,
-                _non_negative)
+        _vector(o, "orientation_lambda", self.orientation_lambda, 3, _positive)
+        _vector(o, "orientation_gain", self.orientation_gain, 3, _non_negative)
         _positive(o, "model_mass_scale", self.model_mass_scale)
         _non_negative(o, "null_space_stiffness", self.null_space_stiffness)
         _non_negative(o, "null_space_damping", self.null_space_damping)
         n = len(self.fuzzy.axes)
         _vector(o, "robust_gain", self.robust_gain, n, _non_negative)
-        _vector(o, "robust_boundary_layer", self.robust_boundary_layer, n,
-                _positive)
+        _vector(
+            o, "robust_boundary_layer", self.robust_boundary_layer, n, _positive
+        )
         self.fuzzy.validate()
         self.robust.validate()
         self.impedance.validate()

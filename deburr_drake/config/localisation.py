@@ -5,7 +5,7 @@ scenario turns both on. SI units; each field's comment gives its unit."""
 
 from dataclasses import dataclass, field
 
-from deburr_drake.config.checks import (_non_negative, _positive, _require)
+from deburr_drake.config.checks import _non_negative, _positive, _require
 
 __all__ = ["ProbeConfig", "OnlineRegistrationConfig", "LocalisationConfig"]
 
@@ -30,17 +30,25 @@ class ProbeConfig:
     approach_speed: float = 0.002  # m/s, the guarded move along n1
     travel_speed: float = 0.02  # m/s, between touches at the standoff
     force_threshold: float = 1.0  # N, contact when -f . n1 exceeds it
-    standoff: float = 0.002  # m, the guarded move starts this far before the believed edge
-    search_distance: float = 0.004  # m, the guarded move gives up after this (a miss)
+    standoff: float = (
+        0.002  # m, the guarded move starts this far before the believed edge
+    )
+    search_distance: float = (
+        0.004  # m, the guarded move gives up after this (a miss)
+    )
     retract: float = 0.002  # m, back from the touch before travelling
-    settle_time: float = 0.15  # s, held at the standoff before each guarded move
+    settle_time: float = (
+        0.15  # s, held at the standoff before each guarded move
+    )
     # N/m, the contact stiffness the detection bias is modelled with
     # (threshold / stiffness of penetration at the threshold).
     contact_stiffness: float = 5.0e3
     fit_radius: bool = False  # -, circle: fit the radius too (else the drawing's); only a circle
     # m, a touch off the circle, line or profile most touches agree on by
     # more is dropped: a burr under it (math.fits.fit_consensus)
-    max_residual: float = 5.0e-5  # m, a touch off the consensus fit by more is dropped
+    max_residual: float = (
+        5.0e-5  # m, a touch off the consensus fit by more is dropped
+    )
     # s, after probing the controller's fuzzy compensator (off while
     # probing) ramps back in over this time, so weights learned on an
     # earlier part (a batch) do not push the tool along before the cut is
@@ -53,24 +61,46 @@ class ProbeConfig:
 
     def validate(self):
         o = "localisation.probe"
-        _require(isinstance(self.enabled, bool), f"{o}.enabled",
-                 self.enabled, "true or false")
-        _require(isinstance(self.points, int) and self.points >= 3,
-                 f"{o}.points", self.points, "an integer >= 3")
+        _require(
+            isinstance(self.enabled, bool),
+            f"{o}.enabled",
+            self.enabled,
+            "true or false",
+        )
+        _require(
+            isinstance(self.points, int) and self.points >= 3,
+            f"{o}.points",
+            self.points,
+            "an integer >= 3",
+        )
         _non_negative(o, "spacing", self.spacing)
         _non_negative(o, "first_arc", self.first_arc)
-        for name in ("approach_speed", "travel_speed", "force_threshold",
-                     "standoff", "search_distance", "retract",
-                     "contact_stiffness", "max_residual"):
+        for name in (
+            "approach_speed",
+            "travel_speed",
+            "force_threshold",
+            "standoff",
+            "search_distance",
+            "retract",
+            "contact_stiffness",
+            "max_residual",
+        ):
             _positive(o, name, getattr(self, name))
         _non_negative(o, "settle_time", self.settle_time)
         _non_negative(o, "fuzzy_ramp_time", self.fuzzy_ramp_time)
         _non_negative(o, "entry_dwell", self.entry_dwell)
-        _require(self.search_distance > self.standoff,
-                 f"{o}.search_distance", self.search_distance,
-                 f"> {o}.standoff ({self.standoff})")
-        _require(isinstance(self.fit_radius, bool), f"{o}.fit_radius",
-                 self.fit_radius, "true or false")
+        _require(
+            self.search_distance > self.standoff,
+            f"{o}.search_distance",
+            self.search_distance,
+            f"> {o}.standoff ({self.standoff})",
+        )
+        _require(
+            isinstance(self.fit_radius, bool),
+            f"{o}.fit_radius",
+            self.fit_radius,
+            "true or false",
+        )
 
 
 @dataclass
@@ -94,7 +124,9 @@ class OnlineRegistrationConfig:
     force_noise: float = 1.0
     # The believed part moves towards the estimate with this time constant
     # (s), no faster than ``max_rate`` (m/s): no step in the command.
-    time_constant: float = 1.0  # s, the believed part's approach to the estimate
+    time_constant: float = (
+        1.0  # s, the believed part's approach to the estimate
+    )
     max_rate: float = 0.0005  # m/s, the believed part's fastest move
     # The estimate is used only after the tool has cut this much arc
     # (m): a short arc does not separate the offset from c0.
@@ -102,11 +134,21 @@ class OnlineRegistrationConfig:
 
     def validate(self):
         o = "localisation.online"
-        _require(isinstance(self.enabled, bool), f"{o}.enabled",
-                 self.enabled, "true or false")
-        for name in ("sample_period", "forgetting_time", "offset_prior",
-                     "probed_offset_prior", "force_noise", "time_constant",
-                     "max_rate"):
+        _require(
+            isinstance(self.enabled, bool),
+            f"{o}.enabled",
+            self.enabled,
+            "true or false",
+        )
+        for name in (
+            "sample_period",
+            "forgetting_time",
+            "offset_prior",
+            "probed_offset_prior",
+            "force_noise",
+            "time_constant",
+            "max_rate",
+        ):
             _positive(o, name, getattr(self, name))
         _non_negative(o, "min_arc", self.min_arc)
 
@@ -115,7 +157,8 @@ class OnlineRegistrationConfig:
 class LocalisationConfig:
     probe: ProbeConfig = field(default_factory=ProbeConfig)
     online: OnlineRegistrationConfig = field(
-        default_factory=OnlineRegistrationConfig)
+        default_factory=OnlineRegistrationConfig
+    )
 
     @property
     def enabled(self) -> bool:
@@ -124,4 +167,3 @@ class LocalisationConfig:
     def validate(self):
         self.probe.validate()
         self.online.validate()
-

@@ -33,6 +33,8 @@ line of meaning. Nothing here is written by hand:
 import ast
 import copy
 import dataclasses
+from dataclasses import dataclass
+from functools import lru_cache
 import inspect
 import io
 import math
@@ -40,16 +42,21 @@ import re
 import textwrap
 import tokenize
 import typing
-from dataclasses import dataclass
-from functools import lru_cache
 from typing import Dict, List, Optional, Tuple
 
 from deburr_drake.config.checks import ConfigError
 from deburr_drake.config.scenario import Scenario, load_scenario
 
-__all__ = ["FieldDoc", "field_comments", "split_unit", "is_unit",
-           "scenario_fields", "convention_problems",
-           "scenario_reference_markdown", "write_scenario_reference"]
+__all__ = [
+    "FieldDoc",
+    "field_comments",
+    "split_unit",
+    "is_unit",
+    "scenario_fields",
+    "convention_problems",
+    "scenario_reference_markdown",
+    "write_scenario_reference",
+]
 
 _ATOM = r"(?:m|s|N|rad|kg|Pa|Hz|J|W)(?:\^-?\d)?"
 _PRODUCT = rf"{_ATOM}(?: {_ATOM})*"
@@ -73,7 +80,7 @@ def split_unit(comment: str) -> Tuple[str, str]:
         head += sep
     else:
         m = re.match(r"(.*?)(?:[,;:.](?:\s|$)|$)", comment)
-        head, rest = m.group(1), comment[m.end():]
+        head, rest = m.group(1), comment[m.end() :]
     head = head.strip()
     if not is_unit(head):
         return "", comment
@@ -98,25 +105,35 @@ def field_comments(cls) -> Dict[str, _Comment]:
     for tok in tokenize.generate_tokens(io.StringIO(source).readline):
         if tok.type == tokenize.COMMENT:
             comments[tok.start[0]] = tok.string.lstrip("#").strip()
-        elif tok.type not in (tokenize.NL, tokenize.NEWLINE, tokenize.INDENT,
-                              tokenize.DEDENT, tokenize.ENDMARKER):
+        elif tok.type not in (
+            tokenize.NL,
+            tokenize.NEWLINE,
+            tokenize.INDENT,
+            tokenize.DEDENT,
+            tokenize.ENDMARKER,
+        ):
             code_lines.update(range(tok.start[0], tok.end[0] + 1))
     (node,) = ast.parse(source).body
     found = {}
     for stmt in node.body:
-        if not (isinstance(stmt, ast.AnnAssign)
-                and isinstance(stmt.target, ast.Name)):
+        if not (
+            isinstance(stmt, ast.AnnAssign)
+            and isinstance(stmt.target, ast.Name)
+        ):
             continue
-        trailing = " ".join(comments[n] for n in
-                            range(stmt.lineno, stmt.end_lineno + 1)
-                            if n in comments)
+        trailing = " ".join(
+            comments[n]
+            for n in range(stmt.lineno, stmt.end_lineno + 1)
+            if n in comments
+        )
         block = []
         n = stmt.lineno - 1
         while n in comments and n not in code_lines:
             block.insert(0, comments[n])
             n -= 1
-        found[stmt.target.id] = _Comment(trailing, " ".join(block),
-                                         first + stmt.lineno - 1)
+        found[stmt.target.id] = _Comment(
+            trailing, " ".join(block), first + stmt.lineno - 1
+        )
     return found
 
 
@@ -138,8 +155,7 @@ class FieldDoc:
 def _first(text: str):
     """(first sentence, "", the rest) of ``text``."""
     parts = re.split(r"(?<=[a-z0-9)]\.)\s+(?=[A-Z0-9(])", text, maxsplit=1)
-    return parts[0].strip(), "", (parts[1].strip() if len(parts) > 1
-                                  else "")
+    return parts[0].strip(), "", (parts[1].strip() if len(parts) > 1 else "")
 
 
 def _type_name(hint) -> str:
@@ -150,8 +166,9 @@ def _type_name(hint) -> str:
     return getattr(hint, "__name__", str(hint))
 
 
-_MESSAGE = re.compile(r"^(?P<name>\S+) = .* is invalid: allowed (?P<a>.*)$",
-                      re.S)
+_MESSAGE = re.compile(
+    r"^(?P<name>\S+) = .* is invalid: allowed (?P<a>.*)$", re.S
+)
 
 
 def _probes(hint, value):
@@ -203,8 +220,11 @@ def _allowed(scenario, path: str, hint, owner, name: str) -> str:
             trial.validate()
         except ConfigError as e:
             m = _MESSAGE.match(str(e))
-            if m and re.sub(r"\[\d+\]", "[]", m["name"]) in (
-                    path, path + "[]") and m["a"] not in found:
+            if (
+                m
+                and re.sub(r"\[\d+\]", "[]", m["name"]) in (path, path + "[]")
+                and m["a"] not in found
+            ):
                 found.append(m["a"])
         except (TypeError, ValueError, AttributeError, IndexError):
             pass
@@ -222,13 +242,18 @@ def _walk(cls, prefix: str, default, paper, scenario, owner):
         hint = hints[f.name]
         if dataclasses.is_dataclass(hint):
             yield from _walk(
-                hint, path + ".", getattr(default, f.name),
-                getattr(paper, f.name), scenario,
-                lambda obj, o=owner, n=f.name: getattr(o(obj), n))
+                hint,
+                path + ".",
+                getattr(default, f.name),
+                getattr(paper, f.name),
+                scenario,
+                lambda obj, o=owner, n=f.name: getattr(o(obj), n),
+            )
             continue
         args = typing.get_args(hint)
-        if (typing.get_origin(hint) in (list, List)
-                and dataclasses.is_dataclass(args[0])):
+        if typing.get_origin(hint) in (list, List) and dataclasses.is_dataclass(
+            args[0]
+        ):
             # A list of dataclasses: one row per field of its element,
             # probed on a list of one default element.
             def element(obj, o=owner, n=f.name, item=args[0]):
@@ -238,10 +263,12 @@ def _walk(cls, prefix: str, default, paper, scenario, owner):
                 return items[0]
 
             papers = getattr(paper, f.name)
-            for doc in _walk(args[0], path + "[].", args[0](), args[0](),
-                             scenario, element):
-                doc.paper = [getattr(p, doc.path.rsplit(".", 1)[1])
-                             for p in papers]
+            for doc in _walk(
+                args[0], path + "[].", args[0](), args[0](), scenario, element
+            ):
+                doc.paper = [
+                    getattr(p, doc.path.rsplit(".", 1)[1]) for p in papers
+                ]
                 yield doc
             continue
         c = comments.get(f.name, _Comment("", "", 0))
@@ -252,32 +279,42 @@ def _walk(cls, prefix: str, default, paper, scenario, owner):
         meaning, _, rest = _first(text)
         detail = rest
         yield FieldDoc(
-            path=path, type=_type_name(hint), unit=unit, meaning=meaning,
-            detail=detail, default=getattr(default, f.name),
+            path=path,
+            type=_type_name(hint),
+            unit=unit,
+            meaning=meaning,
+            detail=detail,
+            default=getattr(default, f.name),
             paper=getattr(paper, f.name),
             allowed=_allowed(scenario, path, hint, owner, f.name),
-            source=f"{module}:{c.line}")
+            source=f"{module}:{c.line}",
+        )
 
 
 def scenario_fields(paper: Optional[Scenario] = None) -> List[FieldDoc]:
     """Every leaf field of :class:`Scenario`, in declaration order."""
     if paper is None:
         paper = load_scenario("paper")
-    return list(_walk(Scenario, "", Scenario(), paper, Scenario(),
-                      lambda obj: obj))
+    return list(
+        _walk(Scenario, "", Scenario(), paper, Scenario(), lambda obj: obj)
+    )
 
 
 def convention_problems(fields: Optional[List[FieldDoc]] = None) -> List[str]:
     """One line per field whose comment breaks the convention."""
     problems = []
     for doc in fields if fields is not None else scenario_fields():
-        missing = [what for what, text in (("a unit", doc.unit),
-                                           ("a meaning", doc.meaning))
-                   if not text]
+        missing = [
+            what
+            for what, text in (("a unit", doc.unit), ("a meaning", doc.meaning))
+            if not text
+        ]
         if missing:
-            problems.append(f"{doc.path} ({doc.source}) has no "
-                            f"{' and no '.join(missing)}: write "
-                            "'name: type = default  # UNIT, meaning'")
+            problems.append(
+                f"{doc.path} ({doc.source}) has no "
+                f"{' and no '.join(missing)}: write "
+                "'name: type = default  # UNIT, meaning'"
+            )
     return problems
 
 
@@ -304,8 +341,9 @@ def scenario_reference_markdown() -> str:
     fields = scenario_fields()
     sections: Dict[str, List[FieldDoc]] = {}
     for doc in fields:
-        sections.setdefault(doc.path.split(".")[0].split("[")[0],
-                            []).append(doc)
+        sections.setdefault(doc.path.split(".")[0].split("[")[0], []).append(
+            doc
+        )
     out = [
         "# Scenario reference",
         "",
@@ -316,7 +354,7 @@ def scenario_reference_markdown() -> str:
         "(`process.burrs[].height`: each element of a list; index it as "
         "`process.burrs[0].height`). *default* is the package's "
         "(`Scenario()`, the `point_mass` cell), followed by the `paper` "
-        "scenario's (`load_scenario(\"paper\")`) where that differs. "
+        'scenario\'s (`load_scenario("paper")`) where that differs. '
         "*Allowed* is what `validate()` accepts (a bad value is one "
         "`ConfigError` line naming the field); none given: any value of "
         "the type. SI units throughout (`-`: no unit).",
@@ -340,10 +378,20 @@ def scenario_reference_markdown() -> str:
             if _shown(d.paper) != _shown(d.default):
                 default += f"; paper `{_shown(d.paper)}`"
             allowed = f" *Allowed:* {d.allowed}." if d.allowed else ""
-            out.append("| " + " | ".join(_cell(x) for x in (
-                f"`{d.path}` ({d.type})", d.unit, default,
-                (d.meaning.rstrip(".") + "." if allowed else d.meaning)
-                + allowed)) + " |")
+            out.append(
+                "| "
+                + " | ".join(
+                    _cell(x)
+                    for x in (
+                        f"`{d.path}` ({d.type})",
+                        d.unit,
+                        default,
+                        (d.meaning.rstrip(".") + "." if allowed else d.meaning)
+                        + allowed,
+                    )
+                )
+                + " |"
+            )
         out.append("")
         notes = [d for d in docs if d.detail]
         if notes:
@@ -384,6 +432,7 @@ def write_scenario_reference(path) -> str:
     """Writes :func:`scenario_reference_markdown` to ``path`` (only when
     it changed, so the docs build does not re-read it); returns it."""
     from pathlib import Path
+
     text = scenario_reference_markdown()
     path = Path(path)
     if not path.exists() or path.read_text() != text:

@@ -4,25 +4,49 @@ whole; loaded from a shipped name or a YAML file (plus YAML overrides) with
 dotted path; fields read and set by dotted name."""
 
 import dataclasses
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
+import re
 from typing import List, Optional
 
 from pydrake.common.yaml import yaml_load_typed
 
-from deburr_drake.config.cell import (PIP_PREFIX, EdgeConfig, FaultsConfig, GuardsConfig,
-                                      PartErrorConfig, ProcessConfig,
-                                      RobotConfig, SensorConfig, ToolConfig,
-                                      TubeConfig)
-from deburr_drake.config.checks import (ConfigError, _non_negative,
-                                        _positive, _require)
-from deburr_drake.config.control import (CommandConfig, ControllerConfig,
-                                         EstimatorConfig, TaskConfig)
+from deburr_drake.config.cell import (
+    PIP_PREFIX,
+    EdgeConfig,
+    FaultsConfig,
+    GuardsConfig,
+    PartErrorConfig,
+    ProcessConfig,
+    RobotConfig,
+    SensorConfig,
+    ToolConfig,
+    TubeConfig,
+)
+from deburr_drake.config.checks import (
+    ConfigError,
+    _non_negative,
+    _positive,
+    _require,
+)
+from deburr_drake.config.control import (
+    CommandConfig,
+    ControllerConfig,
+    EstimatorConfig,
+    TaskConfig,
+)
 from deburr_drake.config.localisation import LocalisationConfig
 
-__all__ = ["SimulationConfig", "Scenario", "get_field", "set_field",
-           "field_type", "scenario_names", "scenario_path", "load_scenario"]
+__all__ = [
+    "SimulationConfig",
+    "Scenario",
+    "get_field",
+    "set_field",
+    "field_type",
+    "scenario_names",
+    "scenario_path",
+    "load_scenario",
+]
 
 
 @dataclass
@@ -53,20 +77,32 @@ class SimulationConfig:
     # whole duration). 1.0 is one full pass of a closed edge.
     stop_after_passes: float = 0.0
 
-    INTEGRATORS = ("cenic", "runge_kutta2", "runge_kutta3", "runge_kutta5",
-                   "explicit_euler", "implicit_euler", "radau3")
+    INTEGRATORS = (
+        "cenic",
+        "runge_kutta2",
+        "runge_kutta3",
+        "runge_kutta5",
+        "explicit_euler",
+        "implicit_euler",
+        "radau3",
+    )
 
     def validate(self):
         o = "simulation"
         _positive(o, "duration", self.duration)
         _non_negative(o, "plant_time_step", self.plant_time_step)
-        _require(self.contact_approximation in ("lagged", "similar", "sap",
-                                                "tamsi"),
-                 f"{o}.contact_approximation", self.contact_approximation,
-                 "one of lagged, similar, sap, tamsi")
-        _require(self.integrator in self.INTEGRATORS,
-                 f"{o}.integrator", self.integrator,
-                 f"one of {', '.join(self.INTEGRATORS)}")
+        _require(
+            self.contact_approximation in ("lagged", "similar", "sap", "tamsi"),
+            f"{o}.contact_approximation",
+            self.contact_approximation,
+            "one of lagged, similar, sap, tamsi",
+        )
+        _require(
+            self.integrator in self.INTEGRATORS,
+            f"{o}.integrator",
+            self.integrator,
+            f"one of {', '.join(self.INTEGRATORS)}",
+        )
         for name in ("accuracy", "max_step", "log_period"):
             _positive(o, name, getattr(self, name))
         _non_negative(o, "initial_depth", self.initial_depth)
@@ -95,66 +131,96 @@ class Scenario:
     guards: GuardsConfig = field(default_factory=GuardsConfig)
     part_error: PartErrorConfig = field(default_factory=PartErrorConfig)
     faults: FaultsConfig = field(default_factory=FaultsConfig)
-    localisation: LocalisationConfig = field(
-        default_factory=LocalisationConfig)
+    localisation: LocalisationConfig = field(default_factory=LocalisationConfig)
 
     def validate(self):
         # The default output directory is out/<name>: a plain file name.
-        _require(isinstance(self.name, str)
-                 and re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.+-]*", self.name)
-                 is not None, "name", self.name,
-                 "a plain file name of letters, digits and _ . + - "
-                 "(no path separators, no leading dot)")
+        _require(
+            isinstance(self.name, str)
+            and re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.+-]*", self.name)
+            is not None,
+            "name",
+            self.name,
+            "a plain file name of letters, digits and _ . + - "
+            "(no path separators, no leading dot)",
+        )
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
             if hasattr(value, "validate"):
                 value.validate()
-        _require(self.task.desired_depth < self.tube.wall_thickness,
-                 "task.desired_depth", self.task.desired_depth,
-                 f"< tube.wall_thickness ({self.tube.wall_thickness})")
-        _require(self.tool.engagement < self.tube.compliant_layer_height,
-                 "tool.engagement", self.tool.engagement,
-                 "< tube.compliant_layer_height "
-                 f"({self.tube.compliant_layer_height})")
-        _require(self.tool.cutter_radius < self.tube.inner_radius,
-                 "tool.cutter_radius", self.tool.cutter_radius,
-                 f"< tube.inner_radius ({self.tube.inner_radius})")
-        _require(self.task.desired_depth < self.tool.cutter_radius,
-                 "task.desired_depth", self.task.desired_depth,
-                 f"< tool.cutter_radius ({self.tool.cutter_radius})")
-        _require(self.simulation.initial_depth
-                 < min(self.tool.cutter_radius, self.tube.wall_thickness),
-                 "simulation.initial_depth", self.simulation.initial_depth,
-                 "< tool.cutter_radius and tube.wall_thickness "
-                 f"({min(self.tool.cutter_radius, self.tube.wall_thickness)})")
+        _require(
+            self.task.desired_depth < self.tube.wall_thickness,
+            "task.desired_depth",
+            self.task.desired_depth,
+            f"< tube.wall_thickness ({self.tube.wall_thickness})",
+        )
+        _require(
+            self.tool.engagement < self.tube.compliant_layer_height,
+            "tool.engagement",
+            self.tool.engagement,
+            "< tube.compliant_layer_height "
+            f"({self.tube.compliant_layer_height})",
+        )
+        _require(
+            self.tool.cutter_radius < self.tube.inner_radius,
+            "tool.cutter_radius",
+            self.tool.cutter_radius,
+            f"< tube.inner_radius ({self.tube.inner_radius})",
+        )
+        _require(
+            self.task.desired_depth < self.tool.cutter_radius,
+            "task.desired_depth",
+            self.task.desired_depth,
+            f"< tool.cutter_radius ({self.tool.cutter_radius})",
+        )
+        _require(
+            self.simulation.initial_depth
+            < min(self.tool.cutter_radius, self.tube.wall_thickness),
+            "simulation.initial_depth",
+            self.simulation.initial_depth,
+            "< tool.cutter_radius and tube.wall_thickness "
+            f"({min(self.tool.cutter_radius, self.tube.wall_thickness)})",
+        )
         if self.edge.kind == "profile":
             self.edge.check_profile(self.tube, self.tool, self.part_error)
         probe = self.localisation.probe
-        _require(not (probe.enabled and probe.fit_radius)
-                 or self.edge.kind == "circle",
-                 "localisation.probe.fit_radius", probe.fit_radius,
-                 f"false on a {self.edge.kind} edge (only a circle's radius "
-                 "is fitted)")
+        _require(
+            not (probe.enabled and probe.fit_radius)
+            or self.edge.kind == "circle",
+            "localisation.probe.fit_radius",
+            probe.fit_radius,
+            f"false on a {self.edge.kind} edge (only a circle's radius "
+            "is fitted)",
+        )
         believed = self.tube.inner_radius + self.part_error.radius
-        _require(self.tool.cutter_radius < believed
-                 and abs(self.part_error.radius) < self.tube.wall_thickness,
-                 "part_error.radius", self.part_error.radius,
-                 "|radius| < tube.wall_thickness "
-                 f"({self.tube.wall_thickness}) with the believed inner "
-                 f"radius > tool.cutter_radius ({self.tool.cutter_radius})")
+        _require(
+            self.tool.cutter_radius < believed
+            and abs(self.part_error.radius) < self.tube.wall_thickness,
+            "part_error.radius",
+            self.part_error.radius,
+            "|radius| < tube.wall_thickness "
+            f"({self.tube.wall_thickness}) with the believed inner "
+            f"radius > tool.cutter_radius ({self.tool.cutter_radius})",
+        )
         inner = self.controller.control_period
         if inner > 0:
             period = self.command.period
             ratio = period / inner
-            _require(ratio >= 1 - 1e-9 and abs(ratio - round(ratio)) < 1e-6,
-                     "command.period", period,
-                     "a whole multiple >= 1 of controller.control_period "
-                     f"({inner:g} s): the outer loop samples the inner one")
+            _require(
+                ratio >= 1 - 1e-9 and abs(ratio - round(ratio)) < 1e-6,
+                "command.period",
+                period,
+                "a whole multiple >= 1 of controller.control_period "
+                f"({inner:g} s): the outer loop samples the inner one",
+            )
             ratio = self.guards.check_period / inner
-            _require(ratio >= 1 - 1e-9 and abs(ratio - round(ratio)) < 1e-6,
-                     "guards.check_period", self.guards.check_period,
-                     "a whole multiple >= 1 of controller.control_period "
-                     f"({inner:g} s): other times add integrator steps")
+            _require(
+                ratio >= 1 - 1e-9 and abs(ratio - round(ratio)) < 1e-6,
+                "guards.check_period",
+                self.guards.check_period,
+                "a whole multiple >= 1 of controller.control_period "
+                f"({inner:g} s): other times add integrator steps",
+            )
         return self
 
 
@@ -177,10 +243,13 @@ def _parse_path(path: str):
 def get_field(scenario, path: str):
     obj = scenario
     for name, index in _parse_path(path):
-        if not hasattr(obj, "__dataclass_fields__") or \
-                name not in obj.__dataclass_fields__:
-            raise ConfigError(f"{path!r} is not a scenario field "
-                              f"({name!r} unknown)")
+        if (
+            not hasattr(obj, "__dataclass_fields__")
+            or name not in obj.__dataclass_fields__
+        ):
+            raise ConfigError(
+                f"{path!r} is not a scenario field ({name!r} unknown)"
+            )
         obj = getattr(obj, name)
         if index is not None:
             if not isinstance(obj, list) or not -len(obj) <= index < len(obj):
@@ -202,8 +271,13 @@ def set_field(scenario, path: str, value):
     name, index = parts[-1]
     if index is None:
         current = getattr(obj, name)
-        setattr(obj, name, type(current)(value)
-                if isinstance(current, (int, float)) else value)
+        setattr(
+            obj,
+            name,
+            type(current)(value)
+            if isinstance(current, (int, float))
+            else value,
+        )
     else:
         getattr(obj, name)[index] = float(value)
 
@@ -212,6 +286,7 @@ def field_type(scenario, path: str):
     """The declared type of a scenario field by dotted name: ``float``,
     ``int``, ``bool``, ``str``, a ``List[...]`` or a dataclass."""
     import typing
+
     get_field(scenario, path)  # validates the path
     obj = scenario
     for name, index in _parse_path(path):
@@ -236,7 +311,8 @@ def scenario_path(name: str) -> Path:
     if not path.exists():
         raise ConfigError(
             f"scenario {name!r} is unknown: allowed {scenario_names()} "
-            "or a path to a YAML file")
+            "or a path to a YAML file"
+        )
     return path
 
 
@@ -255,74 +331,116 @@ def _check_node(where: str, node, schema, path: str):
     import typing
 
     import yaml
+
     origin = typing.get_origin(schema)
     if dataclasses.is_dataclass(schema):
         known = {f.name for f in dataclasses.fields(schema)}
         if not isinstance(node, yaml.MappingNode):
-            _schema_error(where, node, f"{path or 'the scenario'} must be a "
-                          f"mapping of {sorted(known)}")
+            _schema_error(
+                where,
+                node,
+                f"{path or 'the scenario'} must be a "
+                f"mapping of {sorted(known)}",
+            )
         hints = typing.get_type_hints(schema)
         seen = {}
         for key_node, value_node in node.value:
             key = key_node.value
             name = f"{path}.{key}" if path else key
             if key in seen:
-                _schema_error(where, key_node,
-                              f"{name} is given twice (first at line "
-                              f"{seen[key].start_mark.line + 1})")
+                _schema_error(
+                    where,
+                    key_node,
+                    f"{name} is given twice (first at line "
+                    f"{seen[key].start_mark.line + 1})",
+                )
             seen[key] = key_node
             if key not in known:
-                _schema_error(where, key_node,
-                              f"{name} is unknown: allowed fields of "
-                              f"{path or 'the scenario'}: {sorted(known)}")
+                _schema_error(
+                    where,
+                    key_node,
+                    f"{name} is unknown: allowed fields of "
+                    f"{path or 'the scenario'}: {sorted(known)}",
+                )
             _check_node(where, value_node, hints[key], name)
         return
     if origin is dict:
         key_type, item = typing.get_args(schema)
         if not isinstance(node, yaml.MappingNode):
-            _schema_error(where, node, f"{path} = {_shown(node)} is invalid: "
-                          "allowed a mapping")
+            _schema_error(
+                where,
+                node,
+                f"{path} = {_shown(node)} is invalid: allowed a mapping",
+            )
         seen = {}
         for key_node, value_node in node.value:
             name = f"{path}.{key_node.value}"
             if key_node.value in seen:
-                _schema_error(where, key_node,
-                              f"{name} is given twice (first at line "
-                              f"{seen[key_node.value].start_mark.line + 1})")
+                _schema_error(
+                    where,
+                    key_node,
+                    f"{name} is given twice (first at line "
+                    f"{seen[key_node.value].start_mark.line + 1})",
+                )
             seen[key_node.value] = key_node
             _check_node(where, value_node, item, name)
         return
     if origin in (list, List):
         (item,) = typing.get_args(schema)
         if not isinstance(node, yaml.SequenceNode):
-            kind = {float: "numbers", int: "integers", bool: "booleans",
-                    str: "strings"}.get(item, "mappings")
-            _schema_error(where, node, f"{path} = {_shown(node)} is invalid: "
-                          f"allowed a list of {kind}")
+            kind = {
+                float: "numbers",
+                int: "integers",
+                bool: "booleans",
+                str: "strings",
+            }.get(item, "mappings")
+            _schema_error(
+                where,
+                node,
+                f"{path} = {_shown(node)} is invalid: allowed a list of {kind}",
+            )
         for k, child in enumerate(node.value):
             _check_node(where, child, item, f"{path}[{k}]")
         return
-    tags = {float: ("float", "int"), int: ("int",), bool: ("bool",),
-            str: ("str",)}.get(schema)
+    tags = {
+        float: ("float", "int"),
+        int: ("int",),
+        bool: ("bool",),
+        str: ("str",),
+    }.get(schema)
     if tags is None:
         return
-    kinds = {float: "a number", int: "an integer", bool: "true or false",
-             str: "a string"}
-    if schema is float and isinstance(node, yaml.ScalarNode) \
-            and node.tag == _TAG + "str" and node.style is None:
+    kinds = {
+        float: "a number",
+        int: "an integer",
+        bool: "true or false",
+        str: "a string",
+    }
+    if (
+        schema is float
+        and isinstance(node, yaml.ScalarNode)
+        and node.tag == _TAG + "str"
+        and node.style is None
+    ):
         try:  # YAML 1.1 reads 4.5e6 as a string; the loader takes it
             float(node.value)
             return
         except ValueError:
             pass
-    if not (isinstance(node, yaml.ScalarNode)
-            and node.tag in [_TAG + t for t in tags]):
-        _schema_error(where, node, f"{path} = {_shown(node)} is invalid: "
-                      f"allowed {kinds[schema]}")
+    if not (
+        isinstance(node, yaml.ScalarNode)
+        and node.tag in [_TAG + t for t in tags]
+    ):
+        _schema_error(
+            where,
+            node,
+            f"{path} = {_shown(node)} is invalid: allowed {kinds[schema]}",
+        )
 
 
 def _shown(node) -> str:
     import yaml
+
     if isinstance(node, yaml.ScalarNode):
         return repr(node.value)
     return "a list" if isinstance(node, yaml.SequenceNode) else "a mapping"
@@ -333,6 +451,7 @@ def _check_yaml(text: str, where: str, schema=None, path: str = ""):
     the YAML ``text`` against ``schema`` (:class:`Scenario` by default;
     fields named under ``path``), before it is loaded."""
     import yaml
+
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
     except yaml.MarkedYAMLError as e:
@@ -341,13 +460,16 @@ def _check_yaml(text: str, where: str, schema=None, path: str = ""):
         if e.context:
             c = e.context_mark
             problem += f" ({e.context}" + (
-                f" at {c.line + 1}:{c.column + 1})" if c else ")")
+                f" at {c.line + 1}:{c.column + 1})" if c else ")"
+            )
         at = f":{mark.line + 1}:{mark.column + 1}" if mark else ""
-        raise ConfigError(f"{where}{at}: YAML syntax error: {problem}") \
-            from None
+        raise ConfigError(
+            f"{where}{at}: YAML syntax error: {problem}"
+        ) from None
     except yaml.YAMLError as e:
-        raise ConfigError(f"{where}: YAML error: "
-                          f"{' '.join(str(e).split())}") from None
+        raise ConfigError(
+            f"{where}: YAML error: {' '.join(str(e).split())}"
+        ) from None
     if root is None:
         return
     _check_node(where, root, schema or Scenario, path)
@@ -359,30 +481,41 @@ def _scenario_file(name_or_path: str) -> Path:
     if not looks_like_path:
         return scenario_path(str(name_or_path))
     if path.is_dir():
-        raise ConfigError(f"--scenario {name_or_path} is a directory: "
-                          "allowed a YAML file or one of "
-                          f"{scenario_names()}")
+        raise ConfigError(
+            f"--scenario {name_or_path} is a directory: "
+            "allowed a YAML file or one of "
+            f"{scenario_names()}"
+        )
     if not path.is_file():
-        raise ConfigError(f"--scenario {name_or_path}: no such file: "
-                          f"allowed a YAML file or one of {scenario_names()}")
+        raise ConfigError(
+            f"--scenario {name_or_path}: no such file: "
+            f"allowed a YAML file or one of {scenario_names()}"
+        )
     return path
 
 
 def _resolve_robot_model(robot: RobotConfig, directory: Path):
     """A relative model file, package folder or package in a scenario file
     is relative to that file (``pip:`` entries stay as they are)."""
-    if robot.is_file() and not robot.is_package_url() and \
-            not Path(robot.model).is_absolute():
+    if (
+        robot.is_file()
+        and not robot.is_package_url()
+        and not Path(robot.model).is_absolute()
+    ):
         candidate = directory / robot.model
         if candidate.is_file():
             robot.model = str(candidate.resolve())
 
     def resolved(entry):
-        if not isinstance(entry, str) or entry.startswith(PIP_PREFIX) or \
-                Path(entry).is_absolute():
+        if (
+            not isinstance(entry, str)
+            or entry.startswith(PIP_PREFIX)
+            or Path(entry).is_absolute()
+        ):
             return entry
         candidate = directory / entry
         return str(candidate.resolve()) if candidate.is_dir() else entry
+
     robot.package_paths = [resolved(e) for e in robot.package_paths]
     robot.packages = {k: resolved(v) for k, v in robot.packages.items()}
 
@@ -392,27 +525,34 @@ def _base_of(source: str, path: Path, depth: int = 0) -> Scenario:
     (a shipped name or a file relative to it) with the robot section reset,
     or the dataclasses' defaults."""
     import yaml
+
     data = yaml.safe_load(source)
     base = data.get("base", "") if isinstance(data, dict) else ""
     if not base:
         return Scenario()
-    _require(isinstance(base, str) and depth < 8, "base", base,
-             "a shipped scenario name or a YAML file (no cycle)")
-    if not (base in scenario_names()):
+    _require(
+        isinstance(base, str) and depth < 8,
+        "base",
+        base,
+        "a shipped scenario name or a YAML file (no cycle)",
+    )
+    if base not in scenario_names():
         candidate = path.parent / base
         base = str(candidate) if candidate.is_file() else base
     base_path = _scenario_file(base)
     text = base_path.read_text()
     _check_yaml(text, str(base_path))
-    scenario = yaml_load_typed(filename=str(base_path),
-                               defaults=_base_of(text, base_path, depth + 1))
+    scenario = yaml_load_typed(
+        filename=str(base_path), defaults=_base_of(text, base_path, depth + 1)
+    )
     scenario.robot = RobotConfig()
     scenario.base = ""
     return scenario
 
 
-def load_scenario(name_or_path: Optional[str] = None, *,
-                  text: Optional[str] = None) -> Scenario:
+def load_scenario(
+    name_or_path: Optional[str] = None, *, text: Optional[str] = None
+) -> Scenario:
     """Loads a scenario by package name or file path, then applies ``text``
     (YAML overrides) on top, and validates it.
 
@@ -425,8 +565,9 @@ def load_scenario(name_or_path: Optional[str] = None, *,
             try:
                 source = path.read_text()
             except (OSError, UnicodeDecodeError) as e:
-                raise ConfigError(f"--scenario {path}: cannot read: {e}") \
-                    from None
+                raise ConfigError(
+                    f"--scenario {path}: cannot read: {e}"
+                ) from None
             _check_yaml(source, str(path))
             scenario = _base_of(source, path)
             scenario = yaml_load_typed(filename=str(path), defaults=scenario)

@@ -12,18 +12,24 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from deburr_drake.config import CommandConfig, ConfigError, TaskConfig
-from deburr_drake.math.geometry import Contour, contour_at
 from deburr_drake.control.layout import CHAMFER_STATE, COMMAND_STATE
 from deburr_drake.control.observer import RegisteredContour
+from deburr_drake.math.geometry import Contour, contour_at
 from deburr_drake.math.registration import REGISTRATION_SIZE
 
 __all__ = ["CommandGenerator", "FirstOrderHold", "feedrate"]
 
 
-def feedrate(tangential_speed: float, chamfering_force: float, *,
-             desired_force: float, threshold_force: float,
-             force_offset: float, default_feed: float,
-             max_feed: float = float("inf")) -> float:
+def feedrate(
+    tangential_speed: float,
+    chamfering_force: float,
+    *,
+    desired_force: float,
+    threshold_force: float,
+    force_offset: float,
+    default_feed: float,
+    max_feed: float = float("inf"),
+) -> float:
     """The feed speed v (m/s) of the outer-loop law before eq. (5):
 
     v = |n2^T xdot_p| (||f_td|| - P'_th) / (||f_t|| - P'_th)
@@ -33,8 +39,10 @@ def feedrate(tangential_speed: float, chamfering_force: float, *,
     """
     excess = chamfering_force - threshold_force
     if excess > force_offset:
-        return min(abs(tangential_speed) * (desired_force - threshold_force)
-                   / excess, max_feed)
+        return min(
+            abs(tangential_speed) * (desired_force - threshold_force) / excess,
+            max_feed,
+        )
     return default_feed
 
 
@@ -75,10 +83,17 @@ class CommandGenerator(LeafSystem):
     ``controller.kind`` impedance and position run).
     """
 
-    def __init__(self, config: CommandConfig, task: TaskConfig,
-                 contour: Contour, initial_position, *,
-                 constant_feed=None, contour_step=None,
-                 registered: bool = False):
+    def __init__(
+        self,
+        config: CommandConfig,
+        task: TaskConfig,
+        contour: Contour,
+        initial_position,
+        *,
+        constant_feed=None,
+        contour_step=None,
+        registered: bool = False,
+    ):
         super().__init__()
         config.validate()
         task.validate()
@@ -87,7 +102,8 @@ class CommandGenerator(LeafSystem):
                 "task.desired_chamfering_force = "
                 f"{task.desired_chamfering_force!r} is invalid: allowed > "
                 f"command.threshold_power_force "
-                f"({config.threshold_power_force})")
+                f"({config.threshold_power_force})"
+            )
         self.set_name("command_generator")
         self._config = config
         self._task = task
@@ -96,31 +112,49 @@ class CommandGenerator(LeafSystem):
         self._contour_step = contour_step
         self._period = config.period
         if constant_feed is not None and not constant_feed > 0:
-            raise ConfigError(f"command.constant_feed = {constant_feed!r} "
-                              "is invalid: allowed a finite number > 0")
+            raise ConfigError(
+                f"command.constant_feed = {constant_feed!r} "
+                "is invalid: allowed a finite number > 0"
+            )
         self._constant_feed = constant_feed
         start = contour.project(np.asarray(initial_position, float))
         s0 = contour.arc_position(start)
-        self._state_index = self.DeclareDiscreteState(COMMAND_STATE.pack(
-            x_c=start, feed=(config.default_feed if constant_feed is None
-                             else constant_feed), arc_position=s0))
+        self._state_index = self.DeclareDiscreteState(
+            COMMAND_STATE.pack(
+                x_c=start,
+                feed=(
+                    config.default_feed
+                    if constant_feed is None
+                    else constant_feed
+                ),
+                arc_position=s0,
+            )
+        )
         self._chamfer_port = self.DeclareVectorInputPort(
-            "chamfer_state", CHAMFER_STATE.size)
+            "chamfer_state", CHAMFER_STATE.size
+        )
         self._registration = RegisteredContour(
             self.DeclareVectorInputPort("registration", REGISTRATION_SIZE)
-            if registered else None)
-        self._hold = (self.DeclareVectorInputPort("hold", 1) if registered
-                      else None)
+            if registered
+            else None
+        )
+        self._hold = (
+            self.DeclareVectorInputPort("hold", 1) if registered else None
+        )
         self._start_arc = s0
         self.DeclarePeriodicDiscreteUpdateEvent(
-            config.period, 0.0, self._update)
+            config.period, 0.0, self._update
+        )
         self.DeclareStateOutputPort("command_state", self._state_index)
         self.DeclareVectorOutputPort(
-            "command", 3, self._calc_command,
-            prerequisites_of_calc={self.xd_ticket()})
+            "command",
+            3,
+            self._calc_command,
+            prerequisites_of_calc={self.xd_ticket()},
+        )
         self.DeclareVectorOutputPort(
-            "feed", 1, self._calc_feed,
-            prerequisites_of_calc={self.xd_ticket()})
+            "feed", 1, self._calc_feed, prerequisites_of_calc={self.xd_ticket()}
+        )
 
     @property
     def period(self) -> float:
@@ -133,15 +167,23 @@ class CommandGenerator(LeafSystem):
     @property
     def start_arc_position(self) -> float:
         """Arc position (m) of x_c(0)."""
-        return float(COMMAND_STATE.get(
-            self.CreateDefaultContext().get_discrete_state(
-                self._state_index).get_value(), "arc_position"))
+        return float(
+            COMMAND_STATE.get(
+                self.CreateDefaultContext()
+                .get_discrete_state(self._state_index)
+                .get_value(),
+                "arc_position",
+            )
+        )
 
     def arc_progress(self, context) -> float:
         """Unwrapped arc position (m) of the current command."""
-        return float(COMMAND_STATE.get(
-            context.get_discrete_state(self._state_index).get_value(),
-            "arc_position"))
+        return float(
+            COMMAND_STATE.get(
+                context.get_discrete_state(self._state_index).get_value(),
+                "arc_position",
+            )
+        )
 
     def _update(self, context, discrete_state):
         if self._hold is not None and self._hold.Eval(context)[0] > 0.5:
@@ -156,44 +198,66 @@ class CommandGenerator(LeafSystem):
         xdot_p = CHAMFER_STATE.get(chamfer, "xdot_p")
         n2 = CHAMFER_STATE.get(chamfer, "n2")
         v = feedrate(
-            float(n2 @ xdot_p), CHAMFER_STATE.get(chamfer, "f_t"),
+            float(n2 @ xdot_p),
+            CHAMFER_STATE.get(chamfer, "f_t"),
             desired_force=self._task.desired_chamfering_force,
             threshold_force=c.threshold_power_force,
-            force_offset=c.force_offset, default_feed=c.default_feed,
-            max_feed=c.max_feed)
+            force_offset=c.force_offset,
+            default_feed=c.default_feed,
+            max_feed=c.max_feed,
+        )
         ds = v * self._period
         contour = self._contour_now(context)
         x_c = contour.advance(x_p, ds)
         s_previous = COMMAND_STATE.get(
             context.get_discrete_state(self._state_index).get_value(),
-            "arc_position")
+            "arc_position",
+        )
         s_p = contour.unwrapped_arc_position(x_p, s_previous)
-        discrete_state.set_value(self._state_index, COMMAND_STATE.pack(
-            x_c=x_c, feed=v, arc_position=s_p + ds))
+        discrete_state.set_value(
+            self._state_index,
+            COMMAND_STATE.pack(x_c=x_c, feed=v, arc_position=s_p + ds),
+        )
 
     def _advance_timed(self, context, discrete_state):
         xd = context.get_discrete_state(self._state_index).get_value()
         v = self._constant_feed
         ds = v * self._period
         x_c = self._contour_now(context).advance(
-            COMMAND_STATE.get(xd, "x_c"), ds)
-        discrete_state.set_value(self._state_index, COMMAND_STATE.pack(
-            x_c=x_c, feed=v,
-            arc_position=COMMAND_STATE.get(xd, "arc_position") + ds))
+            COMMAND_STATE.get(xd, "x_c"), ds
+        )
+        discrete_state.set_value(
+            self._state_index,
+            COMMAND_STATE.pack(
+                x_c=x_c,
+                feed=v,
+                arc_position=COMMAND_STATE.get(xd, "arc_position") + ds,
+            ),
+        )
 
     def _held(self, context, discrete_state):
         x_p = CHAMFER_STATE.get(self._chamfer_port.Eval(context), "x_p")
         contour = self._contour_now(context)
-        discrete_state.set_value(self._state_index, COMMAND_STATE.pack(
-            x_c=contour.project(x_p), feed=(
-                self._config.default_feed if self._constant_feed is None
-                else self._constant_feed),
-            arc_position=contour.unwrapped_arc_position(
-                x_p, self._start_arc)))
+        discrete_state.set_value(
+            self._state_index,
+            COMMAND_STATE.pack(
+                x_c=contour.project(x_p),
+                feed=(
+                    self._config.default_feed
+                    if self._constant_feed is None
+                    else self._constant_feed
+                ),
+                arc_position=contour.unwrapped_arc_position(
+                    x_p, self._start_arc
+                ),
+            ),
+        )
 
     def _contour_now(self, context) -> Contour:
-        return self._registration(context, contour_at(
-            self._contour, self._contour_step, context.get_time()))[0]
+        return self._registration(
+            context,
+            contour_at(self._contour, self._contour_step, context.get_time()),
+        )[0]
 
     def _calc_command(self, context, output):
         xd = context.get_discrete_state(self._state_index).get_value()
@@ -245,15 +309,19 @@ class FirstOrderHold(LeafSystem):
 
     VARIANTS = ("delayed_ramp", "paper_eq5")
 
-    def __init__(self, period: float, initial_value, *,
-                 variant: str = "delayed_ramp"):
+    def __init__(
+        self, period: float, initial_value, *, variant: str = "delayed_ramp"
+    ):
         super().__init__()
         if not (np.isfinite(period) and period > 0):
-            raise ConfigError(f"period = {period!r} is invalid: allowed a "
-                              "finite number > 0")
+            raise ConfigError(
+                f"period = {period!r} is invalid: allowed a finite number > 0"
+            )
         if variant not in self.VARIANTS:
-            raise ConfigError(f"variant = {variant!r} is invalid: allowed "
-                              f"one of {self.VARIANTS}")
+            raise ConfigError(
+                f"variant = {variant!r} is invalid: allowed "
+                f"one of {self.VARIANTS}"
+            )
         self.set_name("first_order_hold")
         x0 = np.asarray(initial_value, float).ravel()
         n = x0.size
@@ -266,13 +334,16 @@ class FirstOrderHold(LeafSystem):
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
         self.DeclareStateOutputPort("position", xc)
         self.DeclareVectorOutputPort(
-            "velocity", n, self._calc_velocity,
-            prerequisites_of_calc={self.xd_ticket(), self._input.ticket()})
+            "velocity",
+            n,
+            self._calc_velocity,
+            prerequisites_of_calc={self.xd_ticket(), self._input.ticket()},
+        )
 
     def _knots(self, context):
         """(origin of the current slope, x* at the last knot)."""
         xd = context.get_discrete_state(self._knots_index).get_value()
-        return xd[:self._n], xd[self._n:]
+        return xd[: self._n], xd[self._n :]
 
     def _slope(self, context):
         origin, _ = self._knots(context)
@@ -283,10 +354,9 @@ class FirstOrderHold(LeafSystem):
         _, last_knot = self._knots(context)
         # R2 ramps from x*(kT); (5) as printed from x*(kT - T).
         origin = last_knot if self._paper else x
-        discrete_state.set_value(self._knots_index,
-                                 np.concatenate([origin, x]))
+        discrete_state.set_value(self._knots_index, np.concatenate([origin, x]))
 
-    def DoCalcTimeDerivatives(self, context, derivatives):  # noqa: N802
+    def DoCalcTimeDerivatives(self, context, derivatives):
         derivatives.get_mutable_vector().SetFromVector(self._slope(context))
 
     def _calc_velocity(self, context, output):

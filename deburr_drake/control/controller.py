@@ -13,18 +13,25 @@ import math
 import numpy as np
 from pydrake.autodiffutils import AutoDiffXd
 from pydrake.common.value import AbstractValue
-from pydrake.multibody.tree import (BodyIndex, JacobianWrtVariable,
-                                    MultibodyForces_)
+from pydrake.multibody.tree import (
+    BodyIndex,
+    JacobianWrtVariable,
+    MultibodyForces_,
+)
 from pydrake.systems.framework import BasicVector_, LeafSystem_, ValueProducer
 from pydrake.systems.scalar_conversion import TemplateSystem
 
-from deburr_drake.control.laws import impedance_force, robust_term
 from deburr_drake.config import ControllerConfig
-from deburr_drake.math.fuzzy import RuleBase
+from deburr_drake.control.laws import impedance_force, robust_term
 from deburr_drake.control.layout import CHAMFER_STATE, CONTROLLER_DIAGNOSTICS
+from deburr_drake.math.fuzzy import RuleBase
 
-__all__ = ["HybridController", "HybridController_", "make_rule_bases",
-           "saturation"]
+__all__ = [
+    "HybridController",
+    "HybridController_",
+    "make_rule_bases",
+    "saturation",
+]
 
 
 #: What HybridController's law returns, in order.
@@ -56,9 +63,16 @@ def make_rule_bases(config: ControllerConfig):
     f = config.fuzzy
     delta0, deltas = f.deltas()
     widths = f.dead_zone_half_widths or [None] * len(f.axes)
-    return [RuleBase(m=f.order, upsilon=f.upsilon, delta0=delta0,
-                     deltak=dk, dead_zone_half_width=w)
-            for dk, w in zip(deltas, widths)]
+    return [
+        RuleBase(
+            m=f.order,
+            upsilon=f.upsilon,
+            delta0=delta0,
+            deltak=dk,
+            dead_zone_half_width=w,
+        )
+        for dk, w in zip(deltas, widths)
+    ]
 
 
 @TemplateSystem.define("HybridController_", T_list=[float, AutoDiffXd])
@@ -155,46 +169,67 @@ def HybridController_(T):
           the same state); the AutoDiffXd system computes its own.
         """
 
-        def _construct(self, plant, tool_frame_name, config,
-                       desired_rotation=None, converter=None, *,
-                       tool_point=None, nominal_depth=None,
-                       true_plant=None, posture=None,
-                       fuzzy_weight_input=False):
+        def _construct(
+            self,
+            plant,
+            tool_frame_name,
+            config,
+            desired_rotation=None,
+            converter=None,
+            *,
+            tool_point=None,
+            nominal_depth=None,
+            true_plant=None,
+            posture=None,
+            fuzzy_weight_input=False,
+        ):
             LeafSystem_[T].__init__(self, converter)
             self._fuzzy_weight_input = fuzzy_weight_input
             config.validate()
-            if (config.kind in config.CONSTANT_FEED_KINDS
-                    and nominal_depth is None):
-                raise ValueError(f"controller.kind = {config.kind!r} needs "
-                                 "nominal_depth (the desired depth, m)")
+            if (
+                config.kind in config.CONSTANT_FEED_KINDS
+                and nominal_depth is None
+            ):
+                raise ValueError(
+                    f"controller.kind = {config.kind!r} needs "
+                    "nominal_depth (the desired depth, m)"
+                )
             if config.kind == "ideal" and true_plant is None:
-                raise ValueError("controller.kind = 'ideal' needs "
-                                 "true_plant (the plant's own model)")
+                raise ValueError(
+                    "controller.kind = 'ideal' needs "
+                    "true_plant (the plant's own model)"
+                )
             self._nominal_depth = nominal_depth
             self._float_true_plant = true_plant
             if true_plant is not None:
-                self._true_plant = (true_plant if T == float
-                                    else true_plant.ToAutoDiffXd())
+                self._true_plant = (
+                    true_plant if T is float else true_plant.ToAutoDiffXd()
+                )
                 self._true_context = self._true_plant.CreateDefaultContext()
                 self._true_frame = self._true_plant.GetFrameByName(
-                    tool_frame_name)
+                    tool_frame_name
+                )
                 self._true_forces = MultibodyForces_[T](self._true_plant)
             self.set_name("controller")
             if tool_point is not None and (
-                    tool_point.frame.name() != tool_frame_name
-                    or tool_point.frame.GetParentPlant() is not plant):
+                tool_point.frame.name() != tool_frame_name
+                or tool_point.frame.GetParentPlant() is not plant
+            ):
                 raise ValueError(
                     f"tool_point must be of {tool_frame_name!r} on the "
-                    "controller's plant")
+                    "controller's plant"
+                )
             # Shared kinematics serve the float law; AutoDiffXd has its own.
-            self._tool_point = tool_point if T == float else None
+            self._tool_point = tool_point if T is float else None
             self._float_plant = plant
-            self._plant = plant if T == float else plant.ToAutoDiffXd()
+            self._plant = plant if T is float else plant.ToAutoDiffXd()
             self._plant_context = self._plant.CreateDefaultContext()
             for i in range(1, self._plant.num_bodies()):
                 body = self._plant.get_body(BodyIndex(i))
-                body.SetMass(self._plant_context,
-                             config.model_mass_scale * body.default_mass())
+                body.SetMass(
+                    self._plant_context,
+                    config.model_mass_scale * body.default_mass(),
+                )
             self._tool_frame_name = tool_frame_name
             self._frame = self._plant.GetFrameByName(tool_frame_name)
             self._world = self._plant.world_frame()
@@ -204,26 +239,32 @@ def HybridController_(T):
             # the design, deburr_drake.cell.gains.resolve_slope_bound); a
             # controller built from a configuration nobody designed bounds
             # nothing.
-            self._max_slope = (float(config.fuzzy.max_slope)
-                               if config.fuzzy.max_slope > 0 else math.inf)
+            self._max_slope = (
+                float(config.fuzzy.max_slope)
+                if config.fuzzy.max_slope > 0
+                else math.inf
+            )
             self._axes = list(config.fuzzy.axes)
             self._n_rules = self._rule_bases[0].n_rules
             self._nq = plant.num_positions()
             self._B_T = plant.MakeActuationMatrix().T  # nu x nv
             self._lambda = np.asarray(config.sliding_lambda, float)
             self._K = np.asarray(config.sliding_gain, float)
-            self._K_position = np.asarray(config.position.sliding_gain,
-                                         float)
-            self._desired_rotation = (np.eye(3) if desired_rotation is None
-                                      else np.asarray(desired_rotation,
-                                                      float))
+            self._K_position = np.asarray(config.position.sliding_gain, float)
+            self._desired_rotation = (
+                np.eye(3)
+                if desired_rotation is None
+                else np.asarray(desired_rotation, float)
+            )
             self._lambda_o = np.asarray(config.orientation_lambda, float)
             self._K_o = np.asarray(config.orientation_gain, float)
             self._orientation_control = bool(np.any(self._K_o > 0))
             # Redundant arms only: nothing else holds J's null space.
-            self._posture = (None if posture is None
-                             or plant.num_velocities() <= 6
-                             else np.asarray(posture, float))
+            self._posture = (
+                None
+                if posture is None or plant.num_velocities() <= 6
+                else np.asarray(posture, float)
+            )
             n_theta = len(self._axes) * self._n_rules
             self.DeclareContinuousState(1 + n_theta)
             nx = plant.num_multibody_states()
@@ -235,43 +276,65 @@ def HybridController_(T):
                     ("tool_force", 3),
                     ("commanded_position", 3),
                     ("commanded_velocity", 3),
-                    ("desired_normal_force", 1)]
-                + ([("fuzzy_weight", 1)] if fuzzy_weight_input else [])}
+                    ("desired_normal_force", 1),
+                ]
+                + ([("fuzzy_weight", 1)] if fuzzy_weight_input else [])
+            }
             self._cache = self.DeclareCacheEntry(
                 "control_terms",
-                ValueProducer(allocate=AbstractValue.Make(dict()).Clone,
-                              calc=self._calc_terms),
-                prerequisites_of_calc={self.all_sources_ticket()})
+                ValueProducer(
+                    allocate=AbstractValue.Make(dict()).Clone,
+                    calc=self._calc_terms,
+                ),
+                prerequisites_of_calc={self.all_sources_ticket()},
+            )
             nu = plant.num_actuators()
-            sizes = dict(zip(_LAW_OUTPUTS, (
-                nu, 1 + n_theta, CONTROLLER_DIAGNOSTICS.size)))
+            sizes = dict(
+                zip(
+                    _LAW_OUTPUTS, (nu, 1 + n_theta, CONTROLLER_DIAGNOSTICS.size)
+                )
+            )
             # name -> discrete state group holding it (sampled mode only)
             self._held = {}
             if config.control_period > 0:
-                self._held = {name: self.DeclareDiscreteState(
-                    BasicVector_[T](size)) for name, size in sizes.items()}
+                self._held = {
+                    name: self.DeclareDiscreteState(BasicVector_[T](size))
+                    for name, size in sizes.items()
+                }
                 self.DeclareInitializationDiscreteUpdateEvent(self._sample)
                 self.DeclarePeriodicDiscreteUpdateEvent(
-                    config.control_period, 0.0, self._sample)
+                    config.control_period, 0.0, self._sample
+                )
                 for name in ("actuation", "diagnostics"):
                     self.DeclareStateOutputPort(name, self._held[name])
             else:
                 deps = {self._cache.ticket()}
                 self.DeclareVectorOutputPort(
-                    "actuation", BasicVector_[T](nu),
-                    self._calc_actuation, prerequisites_of_calc=deps)
+                    "actuation",
+                    BasicVector_[T](nu),
+                    self._calc_actuation,
+                    prerequisites_of_calc=deps,
+                )
                 self.DeclareVectorOutputPort(
-                    "diagnostics", BasicVector_[T](sizes["diagnostics"]),
-                    self._calc_diagnostics, prerequisites_of_calc=deps)
+                    "diagnostics",
+                    BasicVector_[T](sizes["diagnostics"]),
+                    self._calc_diagnostics,
+                    prerequisites_of_calc=deps,
+                )
 
         def _construct_copy(self, other, converter=None):
-            Impl._construct(self, other._float_plant,
-                            other._tool_frame_name, other._config,
-                            other._desired_rotation, converter=converter,
-                            nominal_depth=other._nominal_depth,
-                            true_plant=other._float_true_plant,
-                            posture=other._posture,
-                            fuzzy_weight_input=other._fuzzy_weight_input)
+            Impl._construct(
+                self,
+                other._float_plant,
+                other._tool_frame_name,
+                other._config,
+                other._desired_rotation,
+                converter=converter,
+                nominal_depth=other._nominal_depth,
+                true_plant=other._float_true_plant,
+                posture=other._posture,
+                fuzzy_weight_input=other._fuzzy_weight_input,
+            )
 
         @property
         def rule_bases(self):
@@ -321,8 +384,11 @@ def HybridController_(T):
             # without delta_d n1' the reference velocity runs delta/rho
             # slower than the reference on a circle (a steady edot).
             x_pd = p["commanded_position"] + delta_d * n1
-            xdot_pd = (p["commanded_velocity"] + delta_d_dot * n1
-                       + delta_d * CHAMFER_STATE.get(chamfer, "n1_rate"))
+            xdot_pd = (
+                p["commanded_velocity"]
+                + delta_d_dot * n1
+                + delta_d * CHAMFER_STATE.get(chamfer, "n1_rate")
+            )
             e = x_pd - x_p
             edot = xdot_pd - xdot_p
             s = edot + self._lambda * e
@@ -331,9 +397,15 @@ def HybridController_(T):
             zeta = np.zeros(3)
             if c.kind == "impedance":
                 im = c.impedance
-                f_tau = impedance_force(e, edot, n1, s,
-                                        stiffness=im.stiffness,
-                                        damping=im.damping, gain=self._K)
+                f_tau = impedance_force(
+                    e,
+                    edot,
+                    n1,
+                    s,
+                    stiffness=im.stiffness,
+                    damping=im.damping,
+                    gain=self._K,
+                )
             elif c.kind == "position":
                 f_tau = self._K_position * s
             else:
@@ -342,38 +414,58 @@ def HybridController_(T):
                 if c.kind == "fuzzy":
                     self._fuzzy(theta, y0, s, u_fuzzy, zeta, derivatives)
                     if "fuzzy_weight" in p:
-                        self._weigh_fuzzy(_value(p["fuzzy_weight"][0]),
-                                          u_fuzzy, zeta, derivatives)
+                        self._weigh_fuzzy(
+                            _value(p["fuzzy_weight"][0]),
+                            u_fuzzy,
+                            zeta,
+                            derivatives,
+                        )
                 elif c.kind == "robust":
                     for axis in self._axes:
-                        u_fuzzy[axis] = robust_term(s[axis], y0,
-                                                    c.robust.gains)
+                        u_fuzzy[axis] = robust_term(s[axis], y0, c.robust.gains)
                 f_tau = f_tau + u_fuzzy
 
             state = p["plant_state"]
             J, R, tau_g = self._kinematics(state)
             tau = J[3:].T @ f_tau
-            omega = J[:3] @ state[self._nq:]
+            omega = J[:3] @ state[self._nq :]
             if self._orientation_control:
                 E = self._desired_rotation @ R.T
                 # Rotation vector of R_d R^T to first order (exact axis).
-                e_o = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0],
-                                      E[1, 0] - E[0, 1]])
-                tau = tau + J[:3].T @ (self._K_o * (self._lambda_o * e_o
-                                                    - omega))
+                e_o = 0.5 * np.array(
+                    [E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]]
+                )
+                tau = tau + J[:3].T @ (
+                    self._K_o * (self._lambda_o * e_o - omega)
+                )
             if self._posture is not None:
                 tau = tau + self._null_space_posture(state, J)
             if c.kind == "ideal":
                 tau = tau + self._true_model_forces(
-                    state, J, self._lambda * edot,
-                    -self._lambda_o * omega if self._orientation_control
-                    else 0.0 * omega)
+                    state,
+                    J,
+                    self._lambda * edot,
+                    -self._lambda_o * omega
+                    if self._orientation_control
+                    else 0.0 * omega,
+                )
             elif c.gravity_compensation:
                 tau = tau - tau_g
-            return (self._B_T @ tau, derivatives,
-                    CONTROLLER_DIAGNOSTICS.pack(
-                        dtype=x.dtype, x_pd=x_pd, e=e, s=s, delta_d=delta_d,
-                        e_f=e_f, f_tau=f_tau, u_fuzzy=u_fuzzy, zeta=zeta))
+            return (
+                self._B_T @ tau,
+                derivatives,
+                CONTROLLER_DIAGNOSTICS.pack(
+                    dtype=x.dtype,
+                    x_pd=x_pd,
+                    e=e,
+                    s=s,
+                    delta_d=delta_d,
+                    e_f=e_f,
+                    f_tau=f_tau,
+                    u_fuzzy=u_fuzzy,
+                    zeta=zeta,
+                ),
+            )
 
         def _fuzzy(self, theta, y0, s, u_fuzzy, zeta, derivatives):
             """(36), (37) on the fuzzy axes: fills u_fuzzy, zeta and the
@@ -390,10 +482,12 @@ def HybridController_(T):
                         derivatives[1 + k * n + idx] = rate
                 else:
                     u = c.robust_gain[k] * saturation(
-                        s_k / c.robust_boundary_layer[k])
+                        s_k / c.robust_boundary_layer[k]
+                    )
                 if c.fuzzy.adapt and self._max_slope < math.inf:
-                    derivatives[1 + k * n:1 + (k + 1) * n] += rb.slope_rate(
-                        theta[k], self._max_slope, c.fuzzy.max_slope_rate)
+                    derivatives[1 + k * n : 1 + (k + 1) * n] += rb.slope_rate(
+                        theta[k], self._max_slope, c.fuzzy.max_slope_rate
+                    )
                 u_fuzzy[axis] = u
 
         def _weigh_fuzzy(self, w, u_fuzzy, zeta, derivatives):
@@ -416,12 +510,15 @@ def HybridController_(T):
             that changes no force or moment at the tool frame (the
             projector from float values)."""
             c = self._config
-            q, v = state[:self._nq], state[self._nq:]
+            q, v = state[: self._nq], state[self._nq :]
             J_value = _float_values(J)
             projector = np.eye(J.shape[1]) - J_value.T @ np.linalg.pinv(
-                J_value.T)
-            return projector @ (c.null_space_stiffness * (self._posture - q)
-                                - c.null_space_damping * v)
+                J_value.T
+            )
+            return projector @ (
+                c.null_space_stiffness * (self._posture - q)
+                - c.null_space_damping * v
+            )
 
         def _true_model_forces(self, state, J, a_r, alpha_r):
             """M vdot_r + C v - tau_g - tau_friction of the true plant (its
@@ -431,10 +528,16 @@ def HybridController_(T):
             plant, ctx = self._true_plant, self._true_context
             plant.SetPositionsAndVelocities(ctx, state)
             bias = plant.CalcBiasSpatialAcceleration(
-                ctx, JacobianWrtVariable.kV, self._true_frame, np.zeros(3),
-                plant.world_frame(), plant.world_frame())
-            target = np.concatenate([alpha_r - bias.rotational(),
-                                     a_r - bias.translational()])
+                ctx,
+                JacobianWrtVariable.kV,
+                self._true_frame,
+                np.zeros(3),
+                plant.world_frame(),
+                plant.world_frame(),
+            )
+            target = np.concatenate(
+                [alpha_r - bias.rotational(), a_r - bias.translational()]
+            )
             J_value = _float_values(J)
             vdot_r = np.linalg.pinv(J_value) @ target
             plant.CalcForceElementsContribution(ctx, self._true_forces)
@@ -452,8 +555,13 @@ def HybridController_(T):
             plant, ctx = self._plant, self._plant_context
             plant.SetPositionsAndVelocities(ctx, state)
             J = plant.CalcJacobianSpatialVelocity(
-                ctx, JacobianWrtVariable.kV, self._frame, np.zeros(3),
-                self._world, self._world)
+                ctx,
+                JacobianWrtVariable.kV,
+                self._frame,
+                np.zeros(3),
+                self._world,
+                self._world,
+            )
             R = self._frame.CalcPoseInWorld(ctx).rotation().matrix()
             return J, R, plant.CalcGravityGeneralizedForces(ctx)
 
@@ -462,10 +570,11 @@ def HybridController_(T):
             for name, value in zip(_LAW_OUTPUTS, self._law(context)):
                 discrete_state.set_value(self._held[name], value)
 
-        def DoCalcTimeDerivatives(self, context, derivatives):  # noqa: N802
+        def DoCalcTimeDerivatives(self, context, derivatives):
             if self._held:
                 rates = context.get_discrete_state(
-                    self._held["derivatives"]).get_value()
+                    self._held["derivatives"]
+                ).get_value()
             else:
                 rates = self._cache.Eval(context)["derivatives"]
             derivatives.get_mutable_vector().SetFromVector(rates)

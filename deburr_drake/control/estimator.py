@@ -15,8 +15,17 @@ from deburr_drake.control.layout import CHAMFER_STATE
 __all__ = ["ContactParameterEstimator", "estimator_rate"]
 
 
-def estimator_rate(c_hat, delta, delta_dot, f_n, *, gains, lower_bounds,
-                   contact_force_threshold, adapt=True):
+def estimator_rate(
+    c_hat,
+    delta,
+    delta_dot,
+    f_n,
+    *,
+    gains,
+    lower_bounds,
+    contact_force_threshold,
+    adapt=True,
+):
     """d(c_hat)/dt of (16)-(18) with the regressor of R3.
 
     e_n = ||f_n|| - (c0 + c1 delta + c2 delta_dot) (15); each parameter moves
@@ -33,12 +42,17 @@ def estimator_rate(c_hat, delta, delta_dot, f_n, *, gains, lower_bounds,
     regressor = (1.0, float(delta), float(delta_dot))
     e_n = float(f_n) - sum(c * y for c, y in zip(c_hat, regressor))
     rate = [float(r) * e_n * y for r, y in zip(gains, regressor)]
-    return np.array([0.0 if (c <= eps and r < 0.0) else r
-                     for c, eps, r in zip(c_hat, lower_bounds, rate)])
+    return np.array(
+        [
+            0.0 if (c <= eps and r < 0.0) else r
+            for c, eps, r in zip(c_hat, lower_bounds, rate)
+        ]
+    )
 
 
-_DELTA, _DELTA_DOT, _F_N = (CHAMFER_STATE.slice(name).start
-                            for name in ("delta", "delta_dot", "f_n"))
+_DELTA, _DELTA_DOT, _F_N = (
+    CHAMFER_STATE.slice(name).start for name in ("delta", "delta_dot", "f_n")
+)
 
 
 class ContactParameterEstimator(LeafSystem):
@@ -64,34 +78,48 @@ class ContactParameterEstimator(LeafSystem):
       discrete state), as in the digital inner loop; T = 0: continuous.
     """
 
-    def __init__(self, config: EstimatorConfig, task: TaskConfig, *,
-                 sample_period: float = 0.0):
+    def __init__(
+        self,
+        config: EstimatorConfig,
+        task: TaskConfig,
+        *,
+        sample_period: float = 0.0,
+    ):
         super().__init__()
         config.validate()
         task.validate()
         if not sample_period >= 0.0:
-            raise ValueError(f"sample_period must be >= 0 s, got "
-                             f"{sample_period}")
+            raise ValueError(
+                f"sample_period must be >= 0 s, got {sample_period}"
+            )
         self.set_name("contact_estimator")
-        self._law = dict(gains=tuple(map(float, config.gains)),
-                         lower_bounds=tuple(map(float, config.lower_bounds)),
-                         contact_force_threshold=config.contact_force_threshold,
-                         adapt=config.adapt)
+        self._law = dict(
+            gains=tuple(map(float, config.gains)),
+            lower_bounds=tuple(map(float, config.lower_bounds)),
+            contact_force_threshold=config.contact_force_threshold,
+            adapt=config.adapt,
+        )
         self._desired_depth = task.desired_depth
         xc = self.DeclareContinuousState(
-            BasicVector(np.asarray(config.initial_estimates, float)))
+            BasicVector(np.asarray(config.initial_estimates, float))
+        )
         self._chamfer_port = self.DeclareVectorInputPort(
-            "chamfer_state", CHAMFER_STATE.size)
+            "chamfer_state", CHAMFER_STATE.size
+        )
         self._rate_index = None
         if sample_period > 0:
             self._rate_index = self.DeclareDiscreteState(3)
             self.DeclareInitializationDiscreteUpdateEvent(self._sample)
             self.DeclarePeriodicDiscreteUpdateEvent(
-                sample_period, 0.0, self._sample)
+                sample_period, 0.0, self._sample
+            )
         self.DeclareStateOutputPort("estimates", xc)
         self.DeclareVectorOutputPort(
-            "desired_normal_force", 1, self._calc_desired_force,
-            prerequisites_of_calc={self.xc_ticket()})
+            "desired_normal_force",
+            1,
+            self._calc_desired_force,
+            prerequisites_of_calc={self.xc_ticket()},
+        )
 
     def set_estimates(self, context, c_hat):
         context.SetContinuousState(np.asarray(c_hat, float))
@@ -102,15 +130,22 @@ class ContactParameterEstimator(LeafSystem):
     def _rate(self, context):
         chamfer = self._chamfer_port.Eval(context)
         return estimator_rate(
-            self._estimates(context), chamfer[_DELTA], chamfer[_DELTA_DOT],
-            chamfer[_F_N], **self._law)
+            self._estimates(context),
+            chamfer[_DELTA],
+            chamfer[_DELTA_DOT],
+            chamfer[_F_N],
+            **self._law,
+        )
 
     def _sample(self, context, discrete_state):
         discrete_state.set_value(self._rate_index, self._rate(context))
 
-    def DoCalcTimeDerivatives(self, context, derivatives):  # noqa: N802
-        rate = (self._rate(context) if self._rate_index is None else
-                context.get_discrete_state(self._rate_index).get_value())
+    def DoCalcTimeDerivatives(self, context, derivatives):
+        rate = (
+            self._rate(context)
+            if self._rate_index is None
+            else context.get_discrete_state(self._rate_index).get_value()
+        )
         derivatives.get_mutable_vector().SetFromVector(rate)
 
     def _calc_desired_force(self, context, output):

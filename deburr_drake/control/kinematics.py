@@ -46,18 +46,25 @@ class ToolPoint:
     only the exact q.
     """
 
-    def __init__(self, plant: MultibodyPlant, frame: Frame, *,
-                 reuse_tolerance: float = 1e-9):
+    def __init__(
+        self,
+        plant: MultibodyPlant,
+        frame: Frame,
+        *,
+        reuse_tolerance: float = 1e-9,
+    ):
         if not reuse_tolerance >= 0.0:
-            raise ValueError("reuse_tolerance must be >= 0, got "
-                             f"{reuse_tolerance}")
+            raise ValueError(
+                f"reuse_tolerance must be >= 0, got {reuse_tolerance}"
+            )
         self._plant = plant
         self._context = plant.CreateDefaultContext()
         self._frame = frame
         self._world = plant.world_frame()
         self._nq = plant.num_positions()
-        self._tolerance = (reuse_tolerance
-                           if self._nq == plant.num_velocities() else -1.0)
+        self._tolerance = (
+            reuse_tolerance if self._nq == plant.num_velocities() else -1.0
+        )
         # The last few anchors: a step evaluates at the states before and
         # after it in turn.
         self._anchors = []
@@ -77,11 +84,14 @@ class ToolPoint:
     def evaluate(self, state) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(x_p, xdot_p, J) with J = dx_p/dv (3 x nv, read-only)."""
         state = np.asarray(state, float)
-        q, v = state[:self._nq], state[self._nq:]
+        q, v = state[: self._nq], state[self._nq :]
         anchor, dq = self._anchor(q)
         Jv = anchor.J[3:]
-        return (anchor.x.copy() if dq is None else anchor.x + Jv @ dq,
-                Jv @ v, Jv)
+        return (
+            anchor.x.copy() if dq is None else anchor.x + Jv @ dq,
+            Jv @ v,
+            Jv,
+        )
 
     def rotation(self, state) -> np.ndarray:
         """R_WF, the frame's orientation in world (3 x 3, read-only): that of
@@ -98,7 +108,8 @@ class ToolPoint:
         if anchor.gravity is None:
             self._set_positions(anchor)
             anchor.gravity = self._plant.CalcGravityGeneralizedForces(
-                self._context)
+                self._context
+            )
             anchor.gravity.flags.writeable = False
         return anchor.J, anchor.R, anchor.gravity
 
@@ -119,7 +130,7 @@ class ToolPoint:
             self._context_anchor = anchor
 
     def _anchor_of(self, state) -> _Anchor:
-        return self._anchor(np.asarray(state, float)[:self._nq])[0]
+        return self._anchor(np.asarray(state, float)[: self._nq])[0]
 
     def _anchor(self, q):
         """(the anchor for q, q - its q or None when q is exactly its q)."""
@@ -134,12 +145,18 @@ class ToolPoint:
         plant.SetPositions(ctx, q)
         X_WF = self._frame.CalcPoseInWorld(ctx)
         J = plant.CalcJacobianSpatialVelocity(
-            ctx, JacobianWrtVariable.kV, self._frame, np.zeros(3),
-            self._world, self._world)
-        anchor = _Anchor(q, key, X_WF.translation(), J,
-                         X_WF.rotation().matrix())
+            ctx,
+            JacobianWrtVariable.kV,
+            self._frame,
+            np.zeros(3),
+            self._world,
+            self._world,
+        )
+        anchor = _Anchor(
+            q, key, X_WF.translation(), J, X_WF.rotation().matrix()
+        )
         self._context_anchor = anchor
         self._anchors.insert(0, anchor)
-        del self._anchors[self._MAX_ANCHORS:]
+        del self._anchors[self._MAX_ANCHORS :]
         self.full_evaluations += 1
         return anchor, None

@@ -5,8 +5,6 @@ in place of the fuzzy compensator; everything else is shared."""
 
 from __future__ import annotations
 
-import numpy as np
-
 __all__ = ["robust_term", "appendix_gains", "impedance_force", "sign"]
 
 
@@ -24,8 +22,9 @@ def robust_term(s_k, x_norm, gains):
     """H(||x||, s_k) of (22) on one task axis:
     (b1 + b2 ||x|| + b3 ||x||^2) sgn(s_k) + (b4 + b5 ||x||) s_k (N)."""
     b1, b2, b3, b4, b5 = gains
-    return ((b1 + b2 * x_norm + b3 * x_norm ** 2) * sign(s_k)
-            + (b4 + b5 * x_norm) * s_k)
+    return (b1 + b2 * x_norm + b3 * x_norm**2) * sign(s_k) + (
+        b4 + b5 * x_norm
+    ) * s_k
 
 
 def appendix_gains(*, m_bar, h0, h1, h2, h3, d0, d1, d2, lambda_bar):
@@ -41,11 +40,20 @@ def appendix_gains(*, m_bar, h0, h1, h2, h3, d0, d1, d2, lambda_bar):
     the paper's Section III.B. ``RobustConfig`` therefore defaults to
     b1 = 5 N (h2 + m_bar d2, rounded up) and b2..b5 = 0."""
     lb = lambda_bar
-    b1 = (m_bar * d2 + h2 + d1 * h0 + d1 * h3 + d1 ** 2 * h1
-          + lb ** 2 * m_bar * d0 + lb * d0 * h0 + lb * d0 * h3
-          + lb ** 2 * d0 ** 2 * h1 + 2 * lb * d0 * d1 * h1)
+    b1 = (
+        m_bar * d2
+        + h2
+        + d1 * h0
+        + d1 * h3
+        + d1**2 * h1
+        + lb**2 * m_bar * d0
+        + lb * d0 * h0
+        + lb * d0 * h3
+        + lb**2 * d0**2 * h1
+        + 2 * lb * d0 * d1 * h1
+    )
     b2 = lb * (h0 + h3 + m_bar + 2 * h1 * d1 + 2 * lb * d0 * h1)
-    b3 = lb ** 2 * h1
+    b3 = lb**2 * h1
     b4 = h3 + m_bar * lb + lb * d0 * h1 + d1 * h1
     b5 = lb * h1
     return [b1, b2, b3, b4, b5]

@@ -11,8 +11,12 @@ from typing import Dict, Sequence, Tuple
 
 import numpy as np
 
-__all__ = ["VectorLayout", "CHAMFER_STATE", "CONTROLLER_DIAGNOSTICS",
-           "COMMAND_STATE"]
+__all__ = [
+    "VectorLayout",
+    "CHAMFER_STATE",
+    "CONTROLLER_DIAGNOSTICS",
+    "COMMAND_STATE",
+]
 
 
 class VectorLayout:
@@ -49,12 +53,15 @@ class VectorLayout:
         if values.keys() != self._slices.keys():
             missing = set(self._slices) - set(values)
             extra = set(values) - set(self._slices)
-            raise ValueError(f"{self.name}.pack: missing {sorted(missing)}, "
-                             f"unknown {sorted(extra)}")
+            raise ValueError(
+                f"{self.name}.pack: missing {sorted(missing)}, "
+                f"unknown {sorted(extra)}"
+            )
         if self._scalars:
             try:
-                return np.array([values[block] for block in self._slices],
-                                dtype=dtype)
+                return np.array(
+                    [values[block] for block in self._slices], dtype=dtype
+                )
             except ValueError:  # a block given as a length-1 array
                 pass
         out = np.empty(self.size, dtype=dtype)
@@ -76,34 +83,46 @@ class VectorLayout:
 
 
 #: What ChamferObserver measures (world frame, SI units).
-CHAMFER_STATE = VectorLayout("chamfer_state", [
-    ("x_p", 3),           # m, tool reference point (tip on the cutter axis)
-    ("xdot_p", 3),        # m/s
-    ("n1", 3),            # unit, into the material (eq. 2)
-    ("n2", 3),            # unit, direction of motion (eq. 2, R5)
-    ("delta", 1),         # m, chamfer depth (phi < 0 in the material)
-    ("delta_dot", 1),     # m/s
-    ("f_n", 1),           # N, ||f_n|| = -f . n1
-    ("f_t", 1),           # N, ||f_t|| = -f . n2
-    ("arc_position", 1),  # m, of the projection on the contour, [0, L)
-    ("n1_rate", 3),       # 1/s, dn1/dt = (dn1/dx_p) xdot_p (the edge's curvature)
-])
+CHAMFER_STATE = VectorLayout(
+    "chamfer_state",
+    [
+        ("x_p", 3),  # m, tool reference point (tip on the cutter axis)
+        ("xdot_p", 3),  # m/s
+        ("n1", 3),  # unit, into the material (eq. 2)
+        ("n2", 3),  # unit, direction of motion (eq. 2, R5)
+        ("delta", 1),  # m, chamfer depth (phi < 0 in the material)
+        ("delta_dot", 1),  # m/s
+        ("f_n", 1),  # N, ||f_n|| = -f . n1
+        ("f_t", 1),  # N, ||f_t|| = -f . n2
+        ("arc_position", 1),  # m, of the projection on the contour, [0, L)
+        (
+            "n1_rate",
+            3,
+        ),  # 1/s, dn1/dt = (dn1/dx_p) xdot_p (the edge's curvature)
+    ],
+)
 
 #: The outer loop's discrete state.
-COMMAND_STATE = VectorLayout("command_state", [
-    ("x_c", 3),           # m, x_c(kT) on the zero-depth contour (R6)
-    ("feed", 1),          # m/s, commanded feed speed v of the feedrate law
-    ("arc_position", 1),  # m, unwrapped arc position of x_c
-])
+COMMAND_STATE = VectorLayout(
+    "command_state",
+    [
+        ("x_c", 3),  # m, x_c(kT) on the zero-depth contour (R6)
+        ("feed", 1),  # m/s, commanded feed speed v of the feedrate law
+        ("arc_position", 1),  # m, unwrapped arc position of x_c
+    ],
+)
 
 #: What HybridController reports besides its actuation.
-CONTROLLER_DIAGNOSTICS = VectorLayout("controller_diagnostics", [
-    ("x_pd", 3),          # m, (9)
-    ("e", 3),             # m, x_pd - x_p
-    ("s", 3),             # m/s, edot + lambda e
-    ("delta_d", 1),       # m, (7)
-    ("e_f", 1),           # N, ||f_nd hat|| - ||f_n||
-    ("f_tau", 3),         # N, task-space command (36)
-    ("u_fuzzy", 3),       # N, zeta u_f + (1 - zeta) H_bar per task axis
-    ("zeta", 3),          # 1 where the fuzzy law is active (37)
-])
+CONTROLLER_DIAGNOSTICS = VectorLayout(
+    "controller_diagnostics",
+    [
+        ("x_pd", 3),  # m, (9)
+        ("e", 3),  # m, x_pd - x_p
+        ("s", 3),  # m/s, edot + lambda e
+        ("delta_d", 1),  # m, (7)
+        ("e_f", 1),  # N, ||f_nd hat|| - ||f_n||
+        ("f_tau", 3),  # N, task-space command (36)
+        ("u_fuzzy", 3),  # N, zeta u_f + (1 - zeta) H_bar per task axis
+        ("zeta", 3),  # 1 where the fuzzy law is active (37)
+    ],
+)

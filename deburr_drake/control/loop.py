@@ -35,15 +35,14 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import DiagramBuilder, OutputPort
 from pydrake.systems.primitives import ConstantVectorSource
 
-from deburr_drake.control.command import CommandGenerator, FirstOrderHold
 from deburr_drake.config import Scenario
+from deburr_drake.control.command import CommandGenerator, FirstOrderHold
 from deburr_drake.control.controller import HybridController
 from deburr_drake.control.estimator import ContactParameterEstimator
-from deburr_drake.math.geometry import Contour
 from deburr_drake.control.observer import ChamferObserver
-from deburr_drake.control.probe import (ProbeGate, ProbingSequence,
-                                        sensor_timing)
 from deburr_drake.control.online import OnlineRegistration
+from deburr_drake.control.probe import ProbeGate, ProbingSequence, sensor_timing
+from deburr_drake.math.geometry import Contour
 from deburr_drake.math.registration import REGISTRATION_SIZE
 
 __all__ = ["DeburringController", "add_deburring_controller"]
@@ -74,8 +73,9 @@ class DeburringController:
     def spindle(self) -> Optional[OutputPort]:
         """1 while the spindle turns, 0 while probing (None: no
         probing, the spindle always turns)."""
-        return (None if self.probe is None
-                else self.probe.GetOutputPort("spindle"))
+        return (
+            None if self.probe is None else self.probe.GetOutputPort("spindle")
+        )
 
     @property
     def chamfer(self) -> OutputPort:
@@ -91,9 +91,20 @@ def _connect(builder: DiagramBuilder, pairs):
         builder.Connect(output, input_port)
 
 
-def _add_localisation(builder, c: Scenario, *, contour, x0, observer,
-                      generator, controller, chamfer, command, desired,
-                      tool_force):
+def _add_localisation(
+    builder,
+    c: Scenario,
+    *,
+    contour,
+    x0,
+    observer,
+    generator,
+    controller,
+    chamfer,
+    command,
+    desired,
+    tool_force,
+):
     """The localisation systems (issue 21) between the loops: with
     ``localisation.probe`` the probing sequence and its gate (which then
     stand between the observer, the generator and the estimator and the
@@ -104,50 +115,80 @@ def _add_localisation(builder, c: Scenario, *, contour, x0, observer,
     timing = sensor_timing(c.sensor.sample_period, c.sensor.cutoff_frequency)
 
     def constant(name, value):
-        return builder.AddNamedSystem(name, ConstantVectorSource(
-            np.asarray(value, float))).get_output_port()
+        return builder.AddNamedSystem(
+            name, ConstantVectorSource(np.asarray(value, float))
+        ).get_output_port()
 
     probe = gate = online = None
     if c.localisation.probe.enabled:
-        probe = builder.AddNamedSystem("probing_sequence", ProbingSequence(
-            contour, c.localisation.probe,
-            sample_period=c.sensor.sample_period, timing=timing,
-            initial_position=x0, start_depth=c.simulation.initial_depth,
-            desired_depth=c.task.desired_depth))
+        probe = builder.AddNamedSystem(
+            "probing_sequence",
+            ProbingSequence(
+                contour,
+                c.localisation.probe,
+                sample_period=c.sensor.sample_period,
+                timing=timing,
+                initial_position=x0,
+                start_depth=c.simulation.initial_depth,
+                desired_depth=c.task.desired_depth,
+            ),
+        )
         gate = builder.AddNamedSystem("probe_gate", ProbeGate())
         probing = probe.GetOutputPort("probing")
         spindle = probe.GetOutputPort("spindle")
         registration = probe.GetOutputPort("registration")
-        _connect(builder, [
-            (chamfer, probe.GetInputPort("chamfer_state")),
-            (tool_force, probe.GetInputPort("tool_force")),
-            (command, probe.GetInputPort("command_in")),
-            (probing, gate.GetInputPort("probing")),
-            (chamfer, gate.GetInputPort("chamfer_state")),
-            (desired, gate.GetInputPort("desired_normal_force")),
-            (probe.GetOutputPort("hold"), generator.GetInputPort("hold")),
-            (probe.GetOutputPort("fuzzy_weight"),
-             controller.GetInputPort("fuzzy_weight"))])
+        _connect(
+            builder,
+            [
+                (chamfer, probe.GetInputPort("chamfer_state")),
+                (tool_force, probe.GetInputPort("tool_force")),
+                (command, probe.GetInputPort("command_in")),
+                (probing, gate.GetInputPort("probing")),
+                (chamfer, gate.GetInputPort("chamfer_state")),
+                (desired, gate.GetInputPort("desired_normal_force")),
+                (probe.GetOutputPort("hold"), generator.GetInputPort("hold")),
+                (
+                    probe.GetOutputPort("fuzzy_weight"),
+                    controller.GetInputPort("fuzzy_weight"),
+                ),
+            ],
+        )
         chamfer = gate.GetOutputPort("chamfer_state")
         command = probe.GetOutputPort("command")
         desired = gate.GetOutputPort("desired_normal_force")
     else:
-        builder.Connect(constant("no_probing", [0.0]),
-                        generator.GetInputPort("hold"))
+        builder.Connect(
+            constant("no_probing", [0.0]), generator.GetInputPort("hold")
+        )
         spindle = None
-        registration = constant("no_probe_registration",
-                                np.zeros(REGISTRATION_SIZE))
+        registration = constant(
+            "no_probe_registration", np.zeros(REGISTRATION_SIZE)
+        )
     if c.localisation.online.enabled:
         online = builder.AddNamedSystem(
-            "online_registration", OnlineRegistration(
-                contour, c.localisation.online, c.estimator,
-                latency=timing.latency, probed=probe is not None))
-        _connect(builder, [
-            (observer.GetOutputPort("chamfer_state"),
-             online.GetInputPort("chamfer_state")),
-            (registration, online.GetInputPort("base_registration")),
-            (spindle or constant("spindle_on", [1.0]),
-             online.GetInputPort("active"))])
+            "online_registration",
+            OnlineRegistration(
+                contour,
+                c.localisation.online,
+                c.estimator,
+                latency=timing.latency,
+                probed=probe is not None,
+            ),
+        )
+        _connect(
+            builder,
+            [
+                (
+                    observer.GetOutputPort("chamfer_state"),
+                    online.GetInputPort("chamfer_state"),
+                ),
+                (registration, online.GetInputPort("base_registration")),
+                (
+                    spindle or constant("spindle_on", [1.0]),
+                    online.GetInputPort("active"),
+                ),
+            ],
+        )
         registration = online.GetOutputPort("registration")
     for system in (observer, generator):
         builder.Connect(registration, system.GetInputPort("registration"))
@@ -155,11 +196,21 @@ def _add_localisation(builder, c: Scenario, *, contour, x0, observer,
 
 
 def add_deburring_controller(
-        builder: DiagramBuilder, *, scenario: Scenario,
-        plant: MultibodyPlant, contour: Contour, plant_state: OutputPort,
-        tool_force: OutputPort, tool_frame: str = "tool_tip", start=None,
-        desired_rotation=None, tool_point=None, contour_step=None,
-        true_plant=None, posture=None) -> DeburringController:
+    builder: DiagramBuilder,
+    *,
+    scenario: Scenario,
+    plant: MultibodyPlant,
+    contour: Contour,
+    plant_state: OutputPort,
+    tool_force: OutputPort,
+    tool_frame: str = "tool_tip",
+    start=None,
+    desired_rotation=None,
+    tool_point=None,
+    contour_step=None,
+    true_plant=None,
+    posture=None,
+) -> DeburringController:
     """Adds the command generator, first-order hold, chamfer observer,
     contact estimator and hybrid controller to ``builder``, configured by
     ``scenario`` (its ``command``, ``task``, ``estimator`` and ``controller``
@@ -188,34 +239,68 @@ def add_deburring_controller(
     Returns the systems; connect ``.actuation`` to the plant's actuation
     input (directly, or through your own saturation or fault systems)."""
     c = scenario
-    x0 = (contour.point_at(0.0) if start is None
-          else np.asarray(start, float))
+    x0 = contour.point_at(0.0) if start is None else np.asarray(start, float)
     localised = c.localisation.enabled
     probing = c.localisation.probe.enabled
     # The constant-feed baselines (controller.kind) run a timed path.
-    constant_feed = (c.command.constant_feed if c.controller.kind
-                     in c.controller.CONSTANT_FEED_KINDS else None)
-    observer = builder.AddNamedSystem("chamfer_observer", ChamferObserver(
-        plant, tool_frame, contour,
-        min_tangential_speed=c.command.min_tangential_speed,
-        tool_point=tool_point, contour_step=contour_step,
-        registered=localised))
-    generator = builder.AddNamedSystem("command_generator", CommandGenerator(
-        c.command, c.task, contour, x0, constant_feed=constant_feed,
-        contour_step=contour_step, registered=localised))
+    constant_feed = (
+        c.command.constant_feed
+        if c.controller.kind in c.controller.CONSTANT_FEED_KINDS
+        else None
+    )
+    observer = builder.AddNamedSystem(
+        "chamfer_observer",
+        ChamferObserver(
+            plant,
+            tool_frame,
+            contour,
+            min_tangential_speed=c.command.min_tangential_speed,
+            tool_point=tool_point,
+            contour_step=contour_step,
+            registered=localised,
+        ),
+    )
+    generator = builder.AddNamedSystem(
+        "command_generator",
+        CommandGenerator(
+            c.command,
+            c.task,
+            contour,
+            x0,
+            constant_feed=constant_feed,
+            contour_step=contour_step,
+            registered=localised,
+        ),
+    )
     # Probing starts off the part, at x0 (the probe's standoff).
-    foh = builder.AddNamedSystem("first_order_hold", FirstOrderHold(
-        c.command.period, x0 if probing else contour.project(x0)))
+    foh = builder.AddNamedSystem(
+        "first_order_hold",
+        FirstOrderHold(
+            c.command.period, x0 if probing else contour.project(x0)
+        ),
+    )
     estimator = builder.AddNamedSystem(
-        "contact_estimator", ContactParameterEstimator(
-            c.estimator, c.task, sample_period=c.controller.control_period))
+        "contact_estimator",
+        ContactParameterEstimator(
+            c.estimator, c.task, sample_period=c.controller.control_period
+        ),
+    )
     # The law (controller.kind) is the only thing that differs: the ideal
     # law reads the true plant's model, the constant-feed ones the depth.
-    controller = builder.AddNamedSystem("controller", HybridController(
-        plant, tool_frame, c.controller, desired_rotation,
-        tool_point=tool_point, nominal_depth=c.task.desired_depth,
-        true_plant=true_plant if c.controller.kind == "ideal" else None,
-        posture=posture, fuzzy_weight_input=probing))
+    controller = builder.AddNamedSystem(
+        "controller",
+        HybridController(
+            plant,
+            tool_frame,
+            c.controller,
+            desired_rotation,
+            tool_point=tool_point,
+            nominal_depth=c.task.desired_depth,
+            true_plant=true_plant if c.controller.kind == "ideal" else None,
+            posture=posture,
+            fuzzy_weight_input=probing,
+        ),
+    )
 
     for system in (observer, controller):
         builder.Connect(plant_state, system.GetInputPort("plant_state"))
@@ -226,18 +311,37 @@ def add_deburring_controller(
     probe = gate = online = None
     if localised:
         chamfer, command, desired, probe, gate, online = _add_localisation(
-            builder, c, contour=contour, x0=x0, observer=observer,
-            generator=generator, controller=controller, chamfer=chamfer,
-            command=command, desired=desired, tool_force=tool_force)
+            builder,
+            c,
+            contour=contour,
+            x0=x0,
+            observer=observer,
+            generator=generator,
+            controller=controller,
+            chamfer=chamfer,
+            command=command,
+            desired=desired,
+            tool_force=tool_force,
+        )
     for system in (generator, estimator, controller):
         builder.Connect(chamfer, system.GetInputPort("chamfer_state"))
     builder.Connect(command, foh.GetInputPort("sampled"))
-    builder.Connect(foh.GetOutputPort("position"),
-                    controller.GetInputPort("commanded_position"))
-    builder.Connect(foh.GetOutputPort("velocity"),
-                    controller.GetInputPort("commanded_velocity"))
+    builder.Connect(
+        foh.GetOutputPort("position"),
+        controller.GetInputPort("commanded_position"),
+    )
+    builder.Connect(
+        foh.GetOutputPort("velocity"),
+        controller.GetInputPort("commanded_velocity"),
+    )
     builder.Connect(desired, controller.GetInputPort("desired_normal_force"))
-    return DeburringController(observer=observer, command_generator=generator,
-                               first_order_hold=foh, estimator=estimator,
-                               controller=controller, probe=probe, gate=gate,
-                               online=online)
+    return DeburringController(
+        observer=observer,
+        command_generator=generator,
+        first_order_hold=foh,
+        estimator=estimator,
+        controller=controller,
+        probe=probe,
+        gate=gate,
+        online=online,
+    )

@@ -12,13 +12,17 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
-from deburr_drake.math.geometry import Contour, contour_at, direction_of_motion
-from deburr_drake.math.registration import REGISTRATION_SIZE, moved_contour
 from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.control.layout import CHAMFER_STATE
+from deburr_drake.math.geometry import Contour, contour_at, direction_of_motion
+from deburr_drake.math.registration import REGISTRATION_SIZE, moved_contour
 
-__all__ = ["ChamferObserver", "RegisteredContour", "chamfer_quantities",
-           "chamfer_kinematics"]
+__all__ = [
+    "ChamferObserver",
+    "RegisteredContour",
+    "chamfer_quantities",
+    "chamfer_kinematics",
+]
 
 
 class RegisteredContour:
@@ -43,27 +47,38 @@ class RegisteredContour:
         return self._last[2], key[1]
 
 
-def chamfer_quantities(contour: Contour, x_p, xdot_p, force, *,
-                       min_tangential_speed: float) -> np.ndarray:
+def chamfer_quantities(
+    contour: Contour, x_p, xdot_p, force, *, min_tangential_speed: float
+) -> np.ndarray:
     """The CHAMFER_STATE vector for tool point x_p (m), its velocity (m/s)
     and the measured force on the tool ``force`` (N, world):
     n1 and delta from the contour (eq. 2 with the n1 approximation at x_p),
     n2 the direction of motion (R5), ||f_n|| = -f.n1, ||f_t|| = -f.n2."""
-    out = chamfer_kinematics(contour, x_p, xdot_p,
-                             min_tangential_speed=min_tangential_speed)
+    out = chamfer_kinematics(
+        contour, x_p, xdot_p, min_tangential_speed=min_tangential_speed
+    )
     _set_force(out, force)
     return out
 
 
-def chamfer_kinematics(contour: Contour, x_p, xdot_p, *,
-                       min_tangential_speed: float) -> np.ndarray:
+def chamfer_kinematics(
+    contour: Contour, x_p, xdot_p, *, min_tangential_speed: float
+) -> np.ndarray:
     """:func:`chamfer_quantities` without the force (f_n = f_t = 0)."""
     n1, tangent, delta, arc = contour.frame(x_p)
     n2 = direction_of_motion(tangent, xdot_p, min_tangential_speed)
     return CHAMFER_STATE.pack(
-        x_p=x_p, xdot_p=xdot_p, n1=n1, n2=n2, delta=delta,
-        delta_dot=float(n1 @ xdot_p), f_n=0.0, f_t=0.0, arc_position=arc,
-        n1_rate=contour.n1_rate(x_p, xdot_p))
+        x_p=x_p,
+        xdot_p=xdot_p,
+        n1=n1,
+        n2=n2,
+        delta=delta,
+        delta_dot=float(n1 @ xdot_p),
+        f_n=0.0,
+        f_t=0.0,
+        arc_position=arc,
+        n1_rate=contour.n1_rate(x_p, xdot_p),
+    )
 
 
 _N1 = CHAMFER_STATE.slice("n1")
@@ -107,14 +122,22 @@ class ChamferObserver(LeafSystem):
     its fixture, as the controller then sees it).
     """
 
-    def __init__(self, plant: MultibodyPlant, tool_frame_name: str,
-                 contour: Contour, *, min_tangential_speed: float,
-                 tool_point: ToolPoint = None, contour_step=None,
-                 registered: bool = False):
+    def __init__(
+        self,
+        plant: MultibodyPlant,
+        tool_frame_name: str,
+        contour: Contour,
+        *,
+        min_tangential_speed: float,
+        tool_point: ToolPoint = None,
+        contour_step=None,
+        registered: bool = False,
+    ):
         super().__init__()
         self.set_name("chamfer_observer")
         self._tool_point = tool_point or ToolPoint(
-            plant, plant.GetFrameByName(tool_frame_name))
+            plant, plant.GetFrameByName(tool_frame_name)
+        )
         self._contour = contour
         self._contour_step = contour_step
         self._min_speed = min_tangential_speed
@@ -123,7 +146,9 @@ class ChamferObserver(LeafSystem):
         self._force_port = self.DeclareVectorInputPort("tool_force", 3)
         self._registration = RegisteredContour(
             self.DeclareVectorInputPort("registration", REGISTRATION_SIZE)
-            if registered else None)
+            if registered
+            else None
+        )
         # The kinematic part changes with the plant state only, not with
         # each new force sample; Drake invalidates the output whenever any
         # discrete state changes (every sample) or the integrator perturbs
@@ -134,9 +159,12 @@ class ChamferObserver(LeafSystem):
         prerequisites = {self._state_port.ticket(), self._force_port.ticket()}
         if contour_step is not None:
             prerequisites.add(self.time_ticket())
-        self.DeclareVectorOutputPort("chamfer_state", CHAMFER_STATE.size,
-                                     self._calc,
-                                     prerequisites_of_calc=prerequisites)
+        self.DeclareVectorOutputPort(
+            "chamfer_state",
+            CHAMFER_STATE.size,
+            self._calc,
+            prerequisites_of_calc=prerequisites,
+        )
 
     def tool_point(self, plant_state):
         """(x_p, xdot_p) in world for a plant state vector."""
@@ -145,14 +173,18 @@ class ChamferObserver(LeafSystem):
     def _calc(self, context, output):
         state = self._state_port.Eval(context)
         contour, reg = self._registration(
-            context, contour_at(self._contour, self._contour_step,
-                                context.get_time()))
+            context,
+            contour_at(self._contour, self._contour_step, context.get_time()),
+        )
         key = (state.tobytes(), id(contour), reg)
         if self._last is None or key != self._last[0]:
             x_p, xdot_p = self.tool_point(state)
-            self._last = (key, chamfer_kinematics(
-                contour, x_p, xdot_p,
-                min_tangential_speed=self._min_speed))
+            self._last = (
+                key,
+                chamfer_kinematics(
+                    contour, x_p, xdot_p, min_tangential_speed=self._min_speed
+                ),
+            )
         chamfer = self._last[1].copy()
         _set_force(chamfer, self._force_port.Eval(context))
         output.SetFromVector(chamfer)

@@ -33,25 +33,31 @@ from deburr_drake.config import EstimatorConfig, OnlineRegistrationConfig
 from deburr_drake.control.layout import CHAMFER_STATE, VectorLayout
 from deburr_drake.control.observer import RegisteredContour
 from deburr_drake.math.geometry import Contour
-from deburr_drake.math.registration import (ONLINE_PARAMETERS,
-                                            REGISTRATION_SIZE,
-                                            contact_regressor,
-                                            learning_curvature,
-                                            onset_regressor,
-                                            registration_of, rls_update)
+from deburr_drake.math.registration import (
+    ONLINE_PARAMETERS,
+    REGISTRATION_SIZE,
+    contact_regressor,
+    learning_curvature,
+    onset_regressor,
+    registration_of,
+    rls_update,
+)
 
 __all__ = ["OnlineRegistration", "ONLINE_STATE"]
 
 _N = len(ONLINE_PARAMETERS)
 
-ONLINE_STATE = VectorLayout("online_registration", [
-    ("theta", _N),             # c0 (N), c1 (N/m), c1 w (N), c1 psi (N/m)
-    ("covariance", _N * _N),   # P, row-major
-    ("correction", REGISTRATION_SIZE),  # applied on top of the base
-    ("onset", 1),              # 1 once the contact onset was used
-    ("arc", 1),                # m of edge cut since the onset
-    ("last_arc", 1),           # m, the arc position at the last sample
-])
+ONLINE_STATE = VectorLayout(
+    "online_registration",
+    [
+        ("theta", _N),  # c0 (N), c1 (N/m), c1 w (N), c1 psi (N/m)
+        ("covariance", _N * _N),  # P, row-major
+        ("correction", REGISTRATION_SIZE),  # applied on top of the base
+        ("onset", 1),  # 1 once the contact onset was used
+        ("arc", 1),  # m of edge cut since the onset
+        ("last_arc", 1),  # m, the arc position at the last sample
+    ],
+)
 
 
 class OnlineRegistration(LeafSystem):
@@ -84,9 +90,15 @@ class OnlineRegistration(LeafSystem):
     ``offset_prior`` (the fixture's).
     """
 
-    def __init__(self, contour: Contour, config: OnlineRegistrationConfig,
-                 estimator: EstimatorConfig, *, latency: float,
-                 probed: bool = False):
+    def __init__(
+        self,
+        contour: Contour,
+        config: OnlineRegistrationConfig,
+        estimator: EstimatorConfig,
+        *,
+        latency: float,
+        probed: bool = False,
+    ):
         super().__init__()
         config.validate()
         self.set_name("online_registration")
@@ -100,31 +112,48 @@ class OnlineRegistration(LeafSystem):
         T = config.sample_period
         self._forgetting = math.exp(-T / config.forgetting_time)
         self._lag = 1.0 - math.exp(-T / config.time_constant)
-        half = (0.5 * contour.length if math.isfinite(contour.length)
-                else 0.05)
-        self._max_step = config.max_rate * T * np.array(
-            [1.0, 1.0, 1.0 / half, 1.0])
-        prior = (config.probed_offset_prior if probed
-                 else config.offset_prior)
+        half = 0.5 * contour.length if math.isfinite(contour.length) else 0.05
+        self._max_step = (
+            config.max_rate * T * np.array([1.0, 1.0, 1.0 / half, 1.0])
+        )
+        prior = config.probed_offset_prior if probed else config.offset_prior
         c0, c1, _ = estimator.initial_estimates
         # Priors: c0 and c1 within their own size, c1 w within c1 x prior.
-        P0 = np.diag([c0 ** 2, c1 ** 2, (c1 * prior) ** 2,
-                      (c1 * prior) ** 2, (c1 * prior / half) ** 2])
+        P0 = np.diag(
+            [
+                c0**2,
+                c1**2,
+                (c1 * prior) ** 2,
+                (c1 * prior) ** 2,
+                (c1 * prior / half) ** 2,
+            ]
+        )
         theta0 = np.array([c0, c1, 0.0, 0.0, 0.0])
-        self._state = self.DeclareDiscreteState(ONLINE_STATE.pack(
-            theta=theta0, covariance=P0.ravel(),
-            correction=np.zeros(REGISTRATION_SIZE), onset=0.0, arc=0.0,
-            last_arc=0.0))
-        self._chamfer = self.DeclareVectorInputPort("chamfer_state",
-                                                    CHAMFER_STATE.size)
-        self._reference = RegisteredContour(self.DeclareVectorInputPort(
-            "base_registration", REGISTRATION_SIZE))
+        self._state = self.DeclareDiscreteState(
+            ONLINE_STATE.pack(
+                theta=theta0,
+                covariance=P0.ravel(),
+                correction=np.zeros(REGISTRATION_SIZE),
+                onset=0.0,
+                arc=0.0,
+                last_arc=0.0,
+            )
+        )
+        self._chamfer = self.DeclareVectorInputPort(
+            "chamfer_state", CHAMFER_STATE.size
+        )
+        self._reference = RegisteredContour(
+            self.DeclareVectorInputPort("base_registration", REGISTRATION_SIZE)
+        )
         self._base = self._reference.port
         self._active = self.DeclareVectorInputPort("active", 1)
         self.DeclarePeriodicDiscreteUpdateEvent(T, 0.0, self._update)
         self.DeclareVectorOutputPort(
-            "registration", REGISTRATION_SIZE, self._calc_registration,
-            prerequisites_of_calc={self.xd_ticket(), self._base.ticket()})
+            "registration",
+            REGISTRATION_SIZE,
+            self._calc_registration,
+            prerequisites_of_calc={self.xd_ticket(), self._base.ticket()},
+        )
         self.DeclareStateOutputPort("registration_state", self._state)
 
     def _update(self, context, discrete_state):
@@ -140,26 +169,34 @@ class OnlineRegistration(LeafSystem):
         x_p = CHAMFER_STATE.get(chamfer, "x_p")
         theta = ONLINE_STATE.get(x, "theta")
         P = ONLINE_STATE.get(x, "covariance").reshape(_N, _N)
-        noise = c.force_noise ** 2
+        noise = c.force_noise**2
         arc = float(reference.arc_position(x_p))
         if ONLINE_STATE.get(x, "onset") < 0.5:
             # The entry: the real depth is how far the tool moved in before
             # the sensor showed the contact.
-            speed = float(CHAMFER_STATE.get(chamfer, "xdot_p")
-                          @ reference.n1(x_p))
-            phi = onset_regressor(reference, x_p,
-                                  max(speed, 0.0) * self._latency)
-            theta, P = rls_update(theta, P, phi, 0.0, noise_var=noise,
-                                  forgetting=1.0)
+            speed = float(
+                CHAMFER_STATE.get(chamfer, "xdot_p") @ reference.n1(x_p)
+            )
+            phi = onset_regressor(
+                reference, x_p, max(speed, 0.0) * self._latency
+            )
+            theta, P = rls_update(
+                theta, P, phi, 0.0, noise_var=noise, forgetting=1.0
+            )
             x[ONLINE_STATE.slice("onset")] = 1.0
         else:
-            if abs(float(reference.curvature(x_p)) - self._curvature) <= \
-                    1e-6 * (1.0 + abs(self._curvature)):
+            if abs(
+                float(reference.curvature(x_p)) - self._curvature
+            ) <= 1e-6 * (1.0 + abs(self._curvature)):
                 # Not in a fillet (another contact law: learning_curvature).
-                theta, P = rls_update(theta, P,
-                                      contact_regressor(reference, x_p),
-                                      f_n, noise_var=noise,
-                                      forgetting=self._forgetting)
+                theta, P = rls_update(
+                    theta,
+                    P,
+                    contact_regressor(reference, x_p),
+                    f_n,
+                    noise_var=noise,
+                    forgetting=self._forgetting,
+                )
             step = abs(arc - float(ONLINE_STATE.get(x, "last_arc")))
             if reference.closed:
                 step = min(step, reference.length - step)
@@ -171,11 +208,14 @@ class OnlineRegistration(LeafSystem):
             correction = ONLINE_STATE.get(x, "correction")
             target = registration_of(reference, theta)
             x[ONLINE_STATE.slice("correction")] = correction + np.clip(
-                self._lag * (target - correction), -self._max_step,
-                self._max_step)
+                self._lag * (target - correction),
+                -self._max_step,
+                self._max_step,
+            )
         discrete_state.set_value(self._state, x)
 
     def _calc_registration(self, context, output):
         x = context.get_discrete_state(self._state).get_value()
-        output.SetFromVector(self._base.Eval(context)
-                             + ONLINE_STATE.get(x, "correction"))
+        output.SetFromVector(
+            self._base.Eval(context) + ONLINE_STATE.get(x, "correction")
+        )

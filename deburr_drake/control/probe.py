@@ -26,22 +26,31 @@ from pydrake.systems.framework import LeafSystem
 
 from deburr_drake.config import ConfigError, ProbeConfig
 from deburr_drake.control.layout import CHAMFER_STATE, VectorLayout
-from deburr_drake.math.geometry import (CircularContour, Contour,
-                                        StraightContour)
-from deburr_drake.math.registration import (MAX_AMPLIFICATION,
-                                            REGISTRATION_SIZE,
-                                            moved_contour,
-                                            registration_from_points,
-                                            rigid_fit_amplification)
+from deburr_drake.math.geometry import CircularContour, Contour, StraightContour
+from deburr_drake.math.registration import (
+    MAX_AMPLIFICATION,
+    REGISTRATION_SIZE,
+    moved_contour,
+    registration_from_points,
+    rigid_fit_amplification,
+)
 
-__all__ = ["ProbingSequence", "ProbeGate", "PROBE_STATE", "PHASES",
-           "CUT_ESTABLISHED", "probe_arcs", "check_probe_layout",
-           "detection_depth", "filter_latency",
-           "sensor_timing", "SensorTiming"]
+__all__ = [
+    "ProbingSequence",
+    "ProbeGate",
+    "PROBE_STATE",
+    "PHASES",
+    "CUT_ESTABLISHED",
+    "probe_arcs",
+    "check_probe_layout",
+    "detection_depth",
+    "filter_latency",
+    "sensor_timing",
+    "SensorTiming",
+]
 
 #: The phases of the sequence, in order.
-PHASES = ("travel", "settle", "approach", "retract", "return", "enter",
-          "done")
+PHASES = ("travel", "settle", "approach", "retract", "return", "enter", "done")
 _P = {name: float(k) for k, name in enumerate(PHASES)}
 
 #: The entry's cut counts as established (the command generator starts to
@@ -49,28 +58,31 @@ _P = {name: float(k) for k, name in enumerate(PHASES)}
 #: the desired depth (or ``entry_dwell`` has passed).
 CUT_ESTABLISHED = 0.9
 
-PROBE_STATE = VectorLayout("probe_state", [
-    ("phase", 1),           # index into PHASES
-    ("index", 1),           # the touch under way
-    ("phase_start", 1),     # s
-    ("segment_start", 3),   # m, world: the command moves from here ...
-    ("segment_end", 3),     # m, ... to here
-    ("segment_duration", 1),  # s
-    ("linear", 1),          # 1: constant speed (guarded), 0: smooth
-    # A travel along the edge at the standoff (1), from arc to arc (m;
-    # the registered contour's on the way back), else a straight move.
-    ("along_edge", 1),
-    ("arc_from", 1),
-    ("arc_to", 1),
-    ("command", 3),         # m, the commanded tool point
-    ("tare", 3),            # N, the force reading before the guarded move
-    ("registration", REGISTRATION_SIZE),  # dx, dy, dyaw, dradius
-    ("done_time", 1),       # s, -1 while probing
-    ("cut_time", 1),        # s, the entry's cut established; -1 before
-    ("touches", 1),         # touches made (contact detected)
-    ("kept", 1),            # touches the fit used
-    ("fit_rms", 1),         # m, the fit's residual RMS
-])
+PROBE_STATE = VectorLayout(
+    "probe_state",
+    [
+        ("phase", 1),  # index into PHASES
+        ("index", 1),  # the touch under way
+        ("phase_start", 1),  # s
+        ("segment_start", 3),  # m, world: the command moves from here ...
+        ("segment_end", 3),  # m, ... to here
+        ("segment_duration", 1),  # s
+        ("linear", 1),  # 1: constant speed (guarded), 0: smooth
+        # A travel along the edge at the standoff (1), from arc to arc (m;
+        # the registered contour's on the way back), else a straight move.
+        ("along_edge", 1),
+        ("arc_from", 1),
+        ("arc_to", 1),
+        ("command", 3),  # m, the commanded tool point
+        ("tare", 3),  # N, the force reading before the guarded move
+        ("registration", REGISTRATION_SIZE),  # dx, dy, dyaw, dradius
+        ("done_time", 1),  # s, -1 while probing
+        ("cut_time", 1),  # s, the entry's cut established; -1 before
+        ("touches", 1),  # touches made (contact detected)
+        ("kept", 1),  # touches the fit used
+        ("fit_rms", 1),  # m, the fit's residual RMS
+    ],
+)
 
 
 class SensorTiming(NamedTuple):
@@ -90,12 +102,14 @@ class SensorTiming(NamedTuple):
         return self.lag + self.delay
 
 
-def sensor_timing(sample_period: float, cutoff_frequency: float
-                  ) -> SensorTiming:
+def sensor_timing(
+    sample_period: float, cutoff_frequency: float
+) -> SensorTiming:
     """The :class:`SensorTiming` of the sensor's filter and sampling."""
     a = 1.0 - math.exp(-2.0 * math.pi * cutoff_frequency * sample_period)
-    return SensorTiming(lag=sample_period * (1.0 - a) / a,
-                        delay=1.5 * sample_period)
+    return SensorTiming(
+        lag=sample_period * (1.0 - a) / a, delay=1.5 * sample_period
+    )
 
 
 def filter_latency(sample_period: float, cutoff_frequency: float) -> float:
@@ -103,8 +117,9 @@ def filter_latency(sample_period: float, cutoff_frequency: float) -> float:
     return sensor_timing(sample_period, cutoff_frequency).latency
 
 
-def detection_depth(speed: float, threshold: float, stiffness: float,
-                    timing: SensorTiming) -> float:
+def detection_depth(
+    speed: float, threshold: float, stiffness: float, timing: SensorTiming
+) -> float:
     """m: how deep past the zero-depth path the tool is when a guarded move
     at ``speed`` (m/s) detects contact on a contact of linear
     ``stiffness`` (N/m): the filtered force of the ramp k v t,
@@ -149,22 +164,34 @@ def probe_arcs(contour: Contour, config: ProbeConfig) -> np.ndarray:
         arcs = (config.first_arc + step * np.arange(n)) % L
         if config.spacing or isinstance(contour, CircularContour):
             return arcs
-        gains = [rigid_fit_amplification(contour, np.array(
-            [contour.point_at(s) for s in arcs + k * step / _LAYOUT_SHIFTS]))
-            for k in range(_LAYOUT_SHIFTS)]
+        gains = [
+            rigid_fit_amplification(
+                contour,
+                np.array(
+                    [
+                        contour.point_at(s)
+                        for s in arcs + k * step / _LAYOUT_SHIFTS
+                    ]
+                ),
+            )
+            for k in range(_LAYOUT_SHIFTS)
+        ]
         best = int(np.argmin(gains))
         return (arcs + best * step / _LAYOUT_SHIFTS) % L
     if not math.isfinite(L) and not config.spacing:
-        raise ValueError("localisation.probe.spacing = 0 needs an edge of "
-                         "finite length: allowed > 0 on an endless edge")
+        raise ValueError(
+            "localisation.probe.spacing = 0 needs an edge of "
+            "finite length: allowed > 0 on an endless edge"
+        )
     step = config.spacing or L / n
     span = step * (n - 1)
     first = config.first_arc if config.spacing else 0.5 * (L - span)
     return first + step * np.arange(n)
 
 
-def check_probe_layout(contour: Contour, config: ProbeConfig,
-                       arcs=None) -> None:
+def check_probe_layout(
+    contour: Contour, config: ProbeConfig, arcs=None
+) -> None:
     """One ConfigError naming ``localisation.probe.points`` (or
     ``spacing``) when touches at ``arcs`` (default :func:`probe_arcs`) on
     the believed ``contour`` cannot fix its registration: a profile needs
@@ -185,7 +212,8 @@ def check_probe_layout(contour: Contour, config: ProbeConfig,
             f"{np.round(np.asarray(arcs) * 1e3, 1).tolist()} mm do not fix "
             f"the {type(contour).__name__}'s position and turn (noise "
             f"amplification {gain:.3g} > {MAX_AMPLIFICATION:g}): spread "
-            "them over sides that are not parallel")
+            "them over sides that are not parallel"
+        )
 
 
 class ProbingSequence(LeafSystem):
@@ -242,11 +270,17 @@ class ProbingSequence(LeafSystem):
     pass starts from); the command generator takes over from there.
     """
 
-    def __init__(self, contour: Contour, config: ProbeConfig, *,
-                 sample_period: float, timing: SensorTiming,
-                 initial_position,
-                 start_depth: float = 0.0,
-                 desired_depth: float = 0.0):
+    def __init__(
+        self,
+        contour: Contour,
+        config: ProbeConfig,
+        *,
+        sample_period: float,
+        timing: SensorTiming,
+        initial_position,
+        start_depth: float = 0.0,
+        desired_depth: float = 0.0,
+    ):
         super().__init__()
         config.validate()
         self.set_name("probing_sequence")
@@ -260,39 +294,64 @@ class ProbingSequence(LeafSystem):
         check_probe_layout(contour, config, self._arcs)
         x0 = np.asarray(initial_position, float)
         initial = PROBE_STATE.pack(
-            phase=_P["travel"], index=0, phase_start=0.0, segment_start=x0,
-            segment_end=x0, segment_duration=1.0, linear=0.0,
-            along_edge=0.0, arc_from=0.0, arc_to=0.0, command=x0,
-            tare=np.zeros(3), registration=np.zeros(REGISTRATION_SIZE),
-            done_time=-1.0, cut_time=-1.0, touches=0.0, kept=0.0,
-            fit_rms=0.0)
-        self._edge_segment(initial, 0.0, "travel", x0, contour,
-                           self._arcs[0])
+            phase=_P["travel"],
+            index=0,
+            phase_start=0.0,
+            segment_start=x0,
+            segment_end=x0,
+            segment_duration=1.0,
+            linear=0.0,
+            along_edge=0.0,
+            arc_from=0.0,
+            arc_to=0.0,
+            command=x0,
+            tare=np.zeros(3),
+            registration=np.zeros(REGISTRATION_SIZE),
+            done_time=-1.0,
+            cut_time=-1.0,
+            touches=0.0,
+            kept=0.0,
+            fit_rms=0.0,
+        )
+        self._edge_segment(initial, 0.0, "travel", x0, contour, self._arcs[0])
         self._state = self.DeclareDiscreteState(initial)
         self._touch_state = self.DeclareDiscreteState(np.zeros(4 * self._n))
         self._chamfer_port = self.DeclareVectorInputPort(
-            "chamfer_state", CHAMFER_STATE.size)
+            "chamfer_state", CHAMFER_STATE.size
+        )
         self._force_port = self.DeclareVectorInputPort("tool_force", 3)
         self._command_in = self.DeclareVectorInputPort("command_in", 3)
-        self.DeclarePeriodicDiscreteUpdateEvent(sample_period, 0.0,
-                                                self._update)
+        self.DeclarePeriodicDiscreteUpdateEvent(
+            sample_period, 0.0, self._update
+        )
         state = {self.xd_ticket()}
         self.DeclareVectorOutputPort(
-            "command", 3, self._calc_command,
-            prerequisites_of_calc={self.xd_ticket(),
-                                   self._command_in.ticket()})
-        self.DeclareVectorOutputPort("probing", 1, self._calc_probing,
-                                     prerequisites_of_calc=state)
-        self.DeclareVectorOutputPort("hold", 1, self._calc_hold,
-                                     prerequisites_of_calc=state)
-        self.DeclareVectorOutputPort("spindle", 1, self._calc_spindle,
-                                     prerequisites_of_calc=state)
+            "command",
+            3,
+            self._calc_command,
+            prerequisites_of_calc={self.xd_ticket(), self._command_in.ticket()},
+        )
         self.DeclareVectorOutputPort(
-            "fuzzy_weight", 1, self._calc_fuzzy_weight,
-            prerequisites_of_calc={self.xd_ticket(), self.time_ticket()})
+            "probing", 1, self._calc_probing, prerequisites_of_calc=state
+        )
         self.DeclareVectorOutputPort(
-            "registration", REGISTRATION_SIZE, self._calc_registration,
-            prerequisites_of_calc=state)
+            "hold", 1, self._calc_hold, prerequisites_of_calc=state
+        )
+        self.DeclareVectorOutputPort(
+            "spindle", 1, self._calc_spindle, prerequisites_of_calc=state
+        )
+        self.DeclareVectorOutputPort(
+            "fuzzy_weight",
+            1,
+            self._calc_fuzzy_weight,
+            prerequisites_of_calc={self.xd_ticket(), self.time_ticket()},
+        )
+        self.DeclareVectorOutputPort(
+            "registration",
+            REGISTRATION_SIZE,
+            self._calc_registration,
+            prerequisites_of_calc=state,
+        )
         self.DeclareStateOutputPort("probe_state", self._state)
         self.DeclareStateOutputPort("touch_points", self._touch_state)
 
@@ -307,8 +366,11 @@ class ProbingSequence(LeafSystem):
 
     def _travel_time(self, a, b) -> float:
         # A smooth (3u^2 - 2u^3) move peaks at 1.5 x the mean speed.
-        return max(float(np.linalg.norm(np.asarray(b) - a))
-                   / self._config.travel_speed, 0.05)
+        return max(
+            float(np.linalg.norm(np.asarray(b) - a))
+            / self._config.travel_speed,
+            0.05,
+        )
 
     def _segment(self, x, t, phase, start, end, duration, linear):
         x[PROBE_STATE.slice("phase")] = _P[phase]
@@ -326,9 +388,11 @@ class ProbingSequence(LeafSystem):
         s0 = float(PROBE_STATE.get(x, "arc_from"))
         s1 = float(PROBE_STATE.get(x, "arc_to"))
         off = PROBE_STATE.get(x, "segment_start") - self.standoff_point(
-            contour, s0)
-        return self.standoff_point(contour, s0 + w * (s1 - s0)) + \
-            (1.0 - w) * off
+            contour, s0
+        )
+        return (
+            self.standoff_point(contour, s0 + w * (s1 - s0)) + (1.0 - w) * off
+        )
 
     def _edge_segment(self, x, t, phase, start, contour, s_to):
         """A smooth travel from ``start`` to the standoff point at arc
@@ -344,22 +408,25 @@ class ProbingSequence(LeafSystem):
         x[PROBE_STATE.slice("along_edge")] = 1.0
         x[PROBE_STATE.slice("arc_from")] = s_from
         x[PROBE_STATE.slice("arc_to")] = s_to
-        path = np.array([self._edge_point(contour, x, w)
-                         for w in np.linspace(0.0, 1.0, 17)])
-        length = float(np.sum(np.linalg.norm(np.diff(path, axis=0),
-                                             axis=1)))
+        path = np.array(
+            [self._edge_point(contour, x, w) for w in np.linspace(0.0, 1.0, 17)]
+        )
+        length = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1)))
         x[PROBE_STATE.slice("segment_duration")] = max(
-            length / self._config.travel_speed, 0.05)
+            length / self._config.travel_speed, 0.05
+        )
 
     def _along(self, x, t):
         u = (t - PROBE_STATE.get(x, "phase_start")) / PROBE_STATE.get(
-            x, "segment_duration")
+            x, "segment_duration"
+        )
         u = min(max(u, 0.0), 1.0)
         w = u if PROBE_STATE.get(x, "linear") > 0.5 else u * u * (3 - 2 * u)
         if PROBE_STATE.get(x, "along_edge") > 0.5:
             phase = PHASES[int(round(float(PROBE_STATE.get(x, "phase"))))]
-            contour = self._registered(x) if phase == "return" else \
-                self._contour
+            contour = (
+                self._registered(x) if phase == "return" else self._contour
+            )
             return self._edge_point(contour, x, w), u >= 1.0
         a = PROBE_STATE.get(x, "segment_start")
         b = PROBE_STATE.get(x, "segment_end")
@@ -372,10 +439,11 @@ class ProbingSequence(LeafSystem):
         t = context.get_time()
         if phase == "done":  # every sample of the pass: copy only to write
             if PROBE_STATE.get(x, "cut_time") < 0 and (
-                    CHAMFER_STATE.get(self._chamfer_port.Eval(context),
-                                      "delta") >= self._established_depth
-                    or t - PROBE_STATE.get(x, "done_time")
-                    >= self._config.entry_dwell):
+                CHAMFER_STATE.get(self._chamfer_port.Eval(context), "delta")
+                >= self._established_depth
+                or t - PROBE_STATE.get(x, "done_time")
+                >= self._config.entry_dwell
+            ):
                 x = x.copy()
                 x[PROBE_STATE.slice("cut_time")] = t
                 discrete_state.set_value(self._state, x)
@@ -385,17 +453,25 @@ class ProbingSequence(LeafSystem):
         command, finished = self._along(x, t)
         x[PROBE_STATE.slice("command")] = command
         i = int(round(float(PROBE_STATE.get(x, "index"))))
-        touches = context.get_discrete_state(
-            self._touch_state).get_value().copy()
+        touches = (
+            context.get_discrete_state(self._touch_state).get_value().copy()
+        )
         if phase == "travel" and finished:
-            self._segment(x, t, "settle", command, command, c.settle_time,
-                          False)
+            self._segment(
+                x, t, "settle", command, command, c.settle_time, False
+            )
         elif phase == "settle" and finished:
             x[PROBE_STATE.slice("tare")] = self._force_port.Eval(context)
             n = self._contour.n1(self._contour.point_at(self._arcs[i]))
-            self._segment(x, t, "approach", command,
-                          command + c.search_distance * n,
-                          c.search_distance / c.approach_speed, True)
+            self._segment(
+                x,
+                t,
+                "approach",
+                command,
+                command + c.search_distance * n,
+                c.search_distance / c.approach_speed,
+                True,
+            )
         elif phase == "approach":
             a = PROBE_STATE.get(x, "segment_start")
             n = PROBE_STATE.get(x, "segment_end") - a
@@ -406,33 +482,55 @@ class ProbingSequence(LeafSystem):
                 x_p = CHAMFER_STATE.get(chamfer, "x_p")
                 speed = float(CHAMFER_STATE.get(chamfer, "xdot_p") @ n)
                 touch = x_p - n * detection_depth(
-                    speed, c.force_threshold, c.contact_stiffness,
-                    self._timing)
-                touches[4 * i:4 * i + 4] = [*touch, 1.0]
+                    speed, c.force_threshold, c.contact_stiffness, self._timing
+                )
+                touches[4 * i : 4 * i + 4] = [*touch, 1.0]
                 x[PROBE_STATE.slice("touches")] += 1.0
                 back = x_p - c.retract * n
-                self._segment(x, t, "retract", command, back,
-                              self._travel_time(command, back), False)
+                self._segment(
+                    x,
+                    t,
+                    "retract",
+                    command,
+                    back,
+                    self._travel_time(command, back),
+                    False,
+                )
             elif finished:  # a miss: nothing within the search distance
-                self._segment(x, t, "retract", command, a,
-                              self._travel_time(command, a), False)
+                self._segment(
+                    x,
+                    t,
+                    "retract",
+                    command,
+                    a,
+                    self._travel_time(command, a),
+                    False,
+                )
         elif phase == "retract" and finished:
             i += 1
             x[PROBE_STATE.slice("index")] = i
             if i < self._n:
-                self._edge_segment(x, t, "travel", command, self._contour,
-                                   self._arcs[i])
+                self._edge_segment(
+                    x, t, "travel", command, self._contour, self._arcs[i]
+                )
             else:
                 self._fit(x, touches)
-                self._edge_segment(x, t, "return", command,
-                                   self._registered(x), 0.0)
+                self._edge_segment(
+                    x, t, "return", command, self._registered(x), 0.0
+                )
         elif phase == "return" and finished:
             contour = self._registered(x)
             p = contour.point_at(0.0)
             start = p + self._start_depth * contour.n1(p)
-            self._segment(x, t, "enter", command, start,
-                          float(np.linalg.norm(start - command))
-                          / c.approach_speed, True)
+            self._segment(
+                x,
+                t,
+                "enter",
+                command,
+                start,
+                float(np.linalg.norm(start - command)) / c.approach_speed,
+                True,
+            )
         elif phase == "enter" and finished:
             x[PROBE_STATE.slice("phase")] = _P["done"]
             x[PROBE_STATE.slice("done_time")] = t
@@ -440,8 +538,7 @@ class ProbingSequence(LeafSystem):
         discrete_state.set_value(self._touch_state, touches)
 
     def _registered(self, x) -> Contour:
-        return moved_contour(self._contour,
-                             PROBE_STATE.get(x, "registration"))
+        return moved_contour(self._contour, PROBE_STATE.get(x, "registration"))
 
     def _fit(self, x, touches):
         t = touches.reshape(self._n, 4)
@@ -451,9 +548,11 @@ class ProbingSequence(LeafSystem):
             return  # too few touches: the believed part stays as it is
         try:
             fit = registration_from_points(
-                self._contour, t[hit, :3],
+                self._contour,
+                t[hit, :3],
                 max_residual=self._config.max_residual,
-                fit_radius=self._config.fit_radius)
+                fit_radius=self._config.fit_radius,
+            )
         except ValueError:
             # The touches made (some missed) do not fix the part: the
             # believed part stays as it is (probe_state: kept 0).
@@ -492,17 +591,25 @@ class ProbingSequence(LeafSystem):
     def _calc_fuzzy_weight(self, context, output):
         done = float(PROBE_STATE.get(self._x(context), "done_time"))
         ramp = self._config.fuzzy_ramp_time
-        w = 0.0 if done < 0 else (1.0 if ramp <= 0 else min(
-            1.0, (context.get_time() - done) / ramp))
+        w = (
+            0.0
+            if done < 0
+            else (
+                1.0
+                if ramp <= 0
+                else min(1.0, (context.get_time() - done) / ramp)
+            )
+        )
         output.SetAtIndex(0, w)
 
     def _calc_registration(self, context, output):
-        output.SetFromVector(PROBE_STATE.get(self._x(context),
-                                             "registration"))
+        output.SetFromVector(PROBE_STATE.get(self._x(context), "registration"))
 
 
-_GATED = [CHAMFER_STATE.slice(name).start
-          for name in ("f_n", "f_t", "delta", "delta_dot")]
+_GATED = [
+    CHAMFER_STATE.slice(name).start
+    for name in ("f_n", "f_t", "delta", "delta_dot")
+]
 
 
 class ProbeGate(LeafSystem):
@@ -527,14 +634,16 @@ class ProbeGate(LeafSystem):
         super().__init__()
         self.set_name("probe_gate")
         self._probing = self.DeclareVectorInputPort("probing", 1)
-        self._chamfer = self.DeclareVectorInputPort("chamfer_state",
-                                                    CHAMFER_STATE.size)
-        self._desired = self.DeclareVectorInputPort("desired_normal_force",
-                                                    1)
-        self.DeclareVectorOutputPort("chamfer_state", CHAMFER_STATE.size,
-                                     self._calc_chamfer)
-        self.DeclareVectorOutputPort("desired_normal_force", 1,
-                                     self._calc_desired)
+        self._chamfer = self.DeclareVectorInputPort(
+            "chamfer_state", CHAMFER_STATE.size
+        )
+        self._desired = self.DeclareVectorInputPort("desired_normal_force", 1)
+        self.DeclareVectorOutputPort(
+            "chamfer_state", CHAMFER_STATE.size, self._calc_chamfer
+        )
+        self.DeclareVectorOutputPort(
+            "desired_normal_force", 1, self._calc_desired
+        )
 
     def _on(self, context) -> bool:
         return self._probing.Eval(context)[0] > 0.5
@@ -546,5 +655,6 @@ class ProbeGate(LeafSystem):
         output.SetFromVector(chamfer)
 
     def _calc_desired(self, context, output):
-        output.SetAtIndex(0, 0.0 if self._on(context)
-                          else self._desired.Eval(context)[0])
+        output.SetAtIndex(
+            0, 0.0 if self._on(context) else self._desired.Eval(context)[0]
+        )

@@ -36,14 +36,15 @@ def _fractions(x: float) -> Tuple[float, float]:
     """(phi, 1 - phi), phi = (1 - exp(-x)) / x: the mean of exp(-x s)
     over s in [0, 1]."""
     if x < _SERIES_BELOW:
-        rest = x / 2.0 - x * x / 6.0 + x ** 3 / 24.0
+        rest = x / 2.0 - x * x / 6.0 + x**3 / 24.0
         return 1.0 - rest, rest
     decayed = -math.expm1(-x)
     return decayed / x, (x - decayed) / x
 
 
-def held_damper_mean(c: float, offset: float, u0: float, beta: float,
-                     b: float, h: float) -> Tuple[float, float]:
+def held_damper_mean(
+    c: float, offset: float, u0: float, beta: float, b: float, h: float
+) -> Tuple[float, float]:
     """(k0, k1): the mean over [0, h] of F(u) = c u + ``offset`` along the
     solution of du/dt = b + p - beta F(u) from u(0) = ``u0`` is k0 + k1 p.
 
@@ -54,8 +55,10 @@ def held_damper_mean(c: float, offset: float, u0: float, beta: float,
     rest; as it vanishes, to F(u0) +
     c h (b + p - beta F(u0)) / 2, the trapezoidal mean."""
     if c < 0.0 or beta < 0.0 or h <= 0.0:
-        raise ValueError(f"held_damper_mean: c = {c}, beta = {beta} and "
-                         f"h = {h} must be c >= 0, beta >= 0, h > 0")
+        raise ValueError(
+            f"held_damper_mean: c = {c}, beta = {beta} and "
+            f"h = {h} must be c >= 0, beta >= 0, h > 0"
+        )
     x = beta * c * h
     if x == 0.0:
         return c * u0 + offset, 0.0
@@ -64,8 +67,9 @@ def held_damper_mean(c: float, offset: float, u0: float, beta: float,
     return c * phi * u0 + phi * offset + k1 * b, k1
 
 
-def held_damper_end_speed(c: float, offset: float, u0: float, beta: float,
-                          b: float, h: float) -> float:
+def held_damper_end_speed(
+    c: float, offset: float, u0: float, beta: float, b: float, h: float
+) -> float:
     """u(h) of the equation of :func:`held_damper_mean` (p = 0), in closed
     form: what a constant force at that mean gives after h."""
     x = beta * c * h

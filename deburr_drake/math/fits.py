@@ -27,30 +27,39 @@ from typing import Callable, Optional
 
 import numpy as np
 
-__all__ = ["CircleFit", "LineFit", "fit_circle", "fit_circle_taubin",
-           "fit_line", "fit_rejecting", "fit_consensus"]
+__all__ = [
+    "CircleFit",
+    "LineFit",
+    "fit_circle",
+    "fit_circle_taubin",
+    "fit_line",
+    "fit_rejecting",
+    "fit_consensus",
+]
 
 
 @dataclass
 class CircleFit:
-    center: np.ndarray   # (2,) m
-    radius: float        # m
+    center: np.ndarray  # (2,) m
+    radius: float  # m
     residuals: np.ndarray  # (N,) m, |p - c| - R: > 0 outside the circle
     iterations: int = 0
 
     @property
     def rms(self) -> float:
-        return float(np.sqrt(np.mean(self.residuals ** 2)))
+        return float(np.sqrt(np.mean(self.residuals**2)))
 
     def residuals_of(self, points) -> np.ndarray:
         """|p - c| - R of any (N, 2) points (m)."""
-        return np.linalg.norm(np.asarray(points, float) - self.center,
-                              axis=1) - self.radius
+        return (
+            np.linalg.norm(np.asarray(points, float) - self.center, axis=1)
+            - self.radius
+        )
 
 
 @dataclass
 class LineFit:
-    point: np.ndarray      # (2,) m, the centroid of the points
+    point: np.ndarray  # (2,) m, the centroid of the points
     direction: np.ndarray  # (2,) unit, the sense of the points' order
     residuals: np.ndarray  # (N,) m, signed distance, left of direction > 0
 
@@ -61,7 +70,7 @@ class LineFit:
 
     @property
     def rms(self) -> float:
-        return float(np.sqrt(np.mean(self.residuals ** 2)))
+        return float(np.sqrt(np.mean(self.residuals**2)))
 
     def residuals_of(self, points) -> np.ndarray:
         """Signed distances of any (N, 2) points (m), left > 0."""
@@ -72,8 +81,9 @@ class LineFit:
 def _points(points, minimum: int) -> np.ndarray:
     p = np.asarray(points, float)
     if p.ndim != 2 or p.shape[1] != 2 or not np.all(np.isfinite(p)):
-        raise ValueError(f"points must be a finite (N, 2) array, got shape "
-                         f"{p.shape}")
+        raise ValueError(
+            f"points must be a finite (N, 2) array, got shape {p.shape}"
+        )
     if len(p) < minimum:
         raise ValueError(f"need at least {minimum} points, got {len(p)}")
     return p
@@ -90,22 +100,27 @@ def fit_circle_taubin(points) -> CircleFit:
     z0 = (z - zm) / (2.0 * np.sqrt(zm))
     # SVD of [z0, x, y]: the smallest singular vector of the centred,
     # normalized system (Taubin's constraint), as in Chernov (2010).
-    _, _, vt = np.linalg.svd(np.column_stack([z0, x, y]),
-                             full_matrices=False)
+    _, _, vt = np.linalg.svd(np.column_stack([z0, x, y]), full_matrices=False)
     a = vt[-1]
     a0 = a[0] / (2.0 * np.sqrt(zm))
     a3 = -zm * a0
     # A (x^2 + y^2) + B x + C y + D = 0.
     center = -np.array([a[1], a[2]]) / (2.0 * a0) + mean
-    radius = float(np.sqrt(a[1] ** 2 + a[2] ** 2 - 4 * a0 * a3)
-                   / (2.0 * abs(a0)))
+    radius = float(
+        np.sqrt(a[1] ** 2 + a[2] ** 2 - 4 * a0 * a3) / (2.0 * abs(a0))
+    )
     residuals = np.linalg.norm(p - center, axis=1) - radius
     return CircleFit(center=center, radius=radius, residuals=residuals)
 
 
-def fit_circle(points, *, radius: Optional[float] = None,
-               seed: Optional[np.ndarray] = None, iterations: int = 50,
-               tolerance: float = 1e-12) -> CircleFit:
+def fit_circle(
+    points,
+    *,
+    radius: Optional[float] = None,
+    seed: Optional[np.ndarray] = None,
+    iterations: int = 50,
+    tolerance: float = 1e-12,
+) -> CircleFit:
     """Geometric circle fit: min sum (|p_i - c| - R)^2 by Gauss-Newton,
     seeded by :func:`fit_circle_taubin` (or ``seed``, a centre). With
     ``radius`` given the radius is held and only the centre is fitted
@@ -113,8 +128,11 @@ def fit_circle(points, *, radius: Optional[float] = None,
     p = _points(points, 3 if radius is None else 2)
     if seed is not None:
         c = np.asarray(seed, float).copy()
-        r = (float(np.mean(np.linalg.norm(p - c, axis=1)))
-             if radius is None else float(radius))
+        r = (
+            float(np.mean(np.linalg.norm(p - c, axis=1)))
+            if radius is None
+            else float(radius)
+        )
     elif len(p) >= 3:
         start = fit_circle_taubin(p)
         c, r = start.center.copy(), start.radius
@@ -132,8 +150,11 @@ def fit_circle(points, *, radius: Optional[float] = None,
         u = d / rho[:, None]
         res = rho - r
         # d res / d c = -u; d res / d R = -1.
-        J = -u if radius is not None else np.column_stack([-u, -np.ones(
-            len(p))])
+        J = (
+            -u
+            if radius is not None
+            else np.column_stack([-u, -np.ones(len(p))])
+        )
         step, *_ = np.linalg.lstsq(J, -res, rcond=None)
         c = c + step[:2]
         if radius is None:
@@ -141,8 +162,9 @@ def fit_circle(points, *, radius: Optional[float] = None,
         if np.linalg.norm(step) < tolerance:
             break
     residuals = np.linalg.norm(p - c, axis=1) - r
-    return CircleFit(center=c, radius=float(r), residuals=residuals,
-                     iterations=k)
+    return CircleFit(
+        center=c, radius=float(r), residuals=residuals, iterations=k
+    )
 
 
 def fit_line(points, *, heading: Optional[float] = None) -> LineFit:
@@ -163,8 +185,9 @@ def fit_line(points, *, heading: Optional[float] = None) -> LineFit:
     return LineFit(point=mean, direction=direction, residuals=residuals)
 
 
-def fit_rejecting(fit: Callable, points, *, max_residual: float,
-                  minimum: int, **kwargs):
+def fit_rejecting(
+    fit: Callable, points, *, max_residual: float, minimum: int, **kwargs
+):
     """(fit, kept) of ``fit(points[kept], **kwargs)`` after dropping, one
     at a time, the point of largest |residual| while it exceeds
     ``max_residual`` (m) and more than ``minimum`` points remain. ``kept``
@@ -186,9 +209,15 @@ def fit_rejecting(fit: Callable, points, *, max_residual: float,
 CONSENSUS_SUBSETS = 2000
 
 
-def fit_consensus(fit: Callable, points, *, minimal: int,
-                  max_residual: float, minimum: Optional[int] = None,
-                  **kwargs):
+def fit_consensus(
+    fit: Callable,
+    points,
+    *,
+    minimal: int,
+    max_residual: float,
+    minimum: Optional[int] = None,
+    **kwargs,
+):
     """(fit, kept): the fit of the largest set of points that agree with
     one another within ``max_residual`` (m), found from the exact fits of
     every ``minimal``-point subset (random sample consensus, exhaustive
@@ -208,8 +237,10 @@ def fit_consensus(fit: Callable, points, *, minimal: int,
         subsets = combinations(range(len(p)), minimal)
     else:
         rng = np.random.default_rng(0)
-        subsets = (rng.choice(len(p), minimal, replace=False)
-                   for _ in range(CONSENSUS_SUBSETS))
+        subsets = (
+            rng.choice(len(p), minimal, replace=False)
+            for _ in range(CONSENSUS_SUBSETS)
+        )
     best, best_key = None, None
     for subset in subsets:
         try:
@@ -220,13 +251,18 @@ def fit_consensus(fit: Callable, points, *, minimal: int,
         if not np.all(np.isfinite(res)):
             continue
         inliers = res <= max_residual
-        key = (int(inliers.sum()), -float(np.sqrt(np.mean(
-            res[inliers] ** 2))) if inliers.any() else 0.0)
+        key = (
+            int(inliers.sum()),
+            -float(np.sqrt(np.mean(res[inliers] ** 2)))
+            if inliers.any()
+            else 0.0,
+        )
         if best_key is None or key > best_key:
             best, best_key = inliers, key
     if best is None or best.sum() < minimum:
-        return fit_rejecting(fit, p, max_residual=max_residual,
-                             minimum=minimum, **kwargs)
+        return fit_rejecting(
+            fit, p, max_residual=max_residual, minimum=minimum, **kwargs
+        )
     kept = best
     result = fit(p[kept], **kwargs)
     for _ in range(10):

@@ -22,8 +22,8 @@ selected by the plain value and evaluated with + - * on y, so derivatives flow.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+import math
 
 import numpy as np
 
@@ -43,7 +43,11 @@ def _value(y):
 
 
 def _check_m(m, name="m"):
-    if isinstance(m, bool) or not isinstance(m, (int, np.integer)) or not 0 <= m <= 3:
+    if (
+        isinstance(m, bool)
+        or not isinstance(m, (int, np.integer))
+        or not 0 <= m <= 3
+    ):
         raise ValueError(f"{name} must be an int in 0..3, got {m!r}")
     return int(m)
 
@@ -52,19 +56,24 @@ def _check_positive(x, name):
     try:
         xf = float(x)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a finite float > 0, got {x!r}") from None
+        raise ValueError(
+            f"{name} must be a finite float > 0, got {x!r}"
+        ) from None
     if not (math.isfinite(xf) and xf > 0.0):
         raise ValueError(f"{name} must be a finite float > 0, got {x!r}")
     return xf
 
 
 def _is_object(y):
-    return (isinstance(y, np.ndarray) and y.dtype == object) or hasattr(y, "value")
+    return (isinstance(y, np.ndarray) and y.dtype == object) or hasattr(
+        y, "value"
+    )
 
 
 # ---------------------------------------------------------------------------
 # Uniform B-spline pieces (unit spacing), segment k of [0, m+1), local u in [0,1).
 # Written with + - * only so they accept AutoDiffXd.
+
 
 def _piece(m, k, u):
     if m == 0:
@@ -133,16 +142,22 @@ def _membership_float(y, m, delta, deriv=False):
     y = np.asarray(y, dtype=float)
     t = y / delta + 0.5 * (m + 1)
     k = np.floor(t)
-    with np.errstate(invalid="ignore"):  # inf - inf at y = +-inf: outside, gives 0
+    with np.errstate(
+        invalid="ignore"
+    ):  # inf - inf at y = +-inf: outside, gives 0
         u = t - k
     out = np.zeros_like(t)
     for seg in range(m + 1):
         mask = k == seg
         if mask.any():
             uu = u[mask]
-            out[mask] = _dpiece(m, seg, uu) / delta if deriv else _piece(m, seg, uu)
+            out[mask] = (
+                _dpiece(m, seg, uu) / delta if deriv else _piece(m, seg, uu)
+            )
     if not deriv:
-        out[np.isnan(t)] = np.nan  # propagate NaN instead of silently returning 0
+        out[np.isnan(t)] = (
+            np.nan
+        )  # propagate NaN instead of silently returning 0
     return out[()] if out.ndim == 0 else out
 
 
@@ -259,7 +274,8 @@ class RuleBase:
             if hw > hw_max:
                 raise ValueError(
                     f"dead_zone_half_width default (m+1)/2*deltak = {hw} must lie in "
-                    f"[0, upsilon*deltak] = [0, {hw_max}]; pass it explicitly or raise upsilon")
+                    f"[0, upsilon*deltak] = [0, {hw_max}]; pass it explicitly or raise upsilon"
+                )
         else:
             try:
                 hw = float(self.dead_zone_half_width)
@@ -268,7 +284,8 @@ class RuleBase:
             if not (math.isfinite(hw) and 0.0 <= hw <= hw_max):
                 raise ValueError(
                     f"dead_zone_half_width must lie in [0, upsilon*deltak] = [0, {hw_max}], "
-                    f"got {self.dead_zone_half_width!r}")
+                    f"got {self.dead_zone_half_width!r}"
+                )
         m = int(self.m)
         n = 2 * int(U) + 1
         p = np.arange(m + 1)
@@ -280,7 +297,9 @@ class RuleBase:
         object.__setattr__(self, "_dk", dk)
         object.__setattr__(self, "_hw", hw)
         object.__setattr__(self, "_half", 0.5 * (m + 1))
-        object.__setattr__(self, "_offsets", (p[:, None] * n + p[None, :]).ravel())
+        object.__setattr__(
+            self, "_offsets", (p[:, None] * n + p[None, :]).ravel()
+        )
 
     # -- layout ------------------------------------------------------------
     @property
@@ -328,7 +347,7 @@ class RuleBase:
         hi = min(last, U)
         if lo > hi:
             return None, ()
-        return lo, w[lo - first: hi - first + 1]
+        return lo, w[lo - first : hi - first + 1]
 
     def active_rules(self, y0, yk):
         """(idx, nu): flat indices of the active rules inside -U..U and their weights.
@@ -349,7 +368,9 @@ class RuleBase:
         if n0 == nk == self._m + 1:
             idx = self._offsets + base
         else:
-            idx = (np.arange(n0)[:, None] * self._n + np.arange(nk)[None, :]).ravel() + base
+            idx = (
+                np.arange(n0)[:, None] * self._n + np.arange(nk)[None, :]
+            ).ravel() + base
         if plain:
             nu = np.array([a * b for a in w0 for b in wk])
         else:
@@ -393,8 +414,9 @@ class RuleBase:
         (d - c sgn d). Zero while every slope is within the bound (and for
         ``max_slope`` inf). T-generic (the excess is chosen on values)."""
         theta = np.asarray(theta)
-        out = np.zeros(theta.shape,
-                       dtype=object if theta.dtype == object else float)
+        out = np.zeros(
+            theta.shape, dtype=object if theta.dtype == object else float
+        )
         if not math.isfinite(max_slope):
             return out
         c = max_slope * self._dk

@@ -34,12 +34,21 @@ import math
 
 import numpy as np
 
-__all__ = ["Contour", "CircularContour", "StraightContour", "ProfileContour",
-           "contour_at", "direction_of_motion", "removal_scale",
-           "polyline_self_intersection"]
+__all__ = [
+    "Contour",
+    "CircularContour",
+    "StraightContour",
+    "ProfileContour",
+    "contour_at",
+    "direction_of_motion",
+    "removal_scale",
+    "polyline_self_intersection",
+]
 
-_TOL = 1e-9          # validation tolerance (unit-ness, orthogonality, horizontality)
-_MIN_RHO = 1e-9      # CircularContour: n1 undefined closer than this to the centre axis
+_TOL = 1e-9  # validation tolerance (unit-ness, orthogonality, horizontality)
+_MIN_RHO = (
+    1e-9  # CircularContour: n1 undefined closer than this to the centre axis
+)
 
 
 def _value(y):
@@ -59,8 +68,12 @@ def _vec3(p, name):
 
 def _vec3_float(p, name):
     """Shape-(3,) finite float array; AutoDiffXd entries are reduced to values."""
-    if (type(p) is np.ndarray and p.dtype == np.float64
-            and p.shape == (3,) and math.isfinite(p[0] + p[1] + p[2])):
+    if (
+        type(p) is np.ndarray
+        and p.dtype == np.float64
+        and p.shape == (3,)
+        and math.isfinite(p[0] + p[1] + p[2])
+    ):
         return p  # the common case, on every controller and process step
     a = np.asarray(p)
     if a.shape != (3,):
@@ -197,8 +210,12 @@ class Contour(abc.ABC):
         call: what the observer and the cutting process need per
         evaluation. Subclasses may compute it faster; the values equal the
         separate methods'."""
-        return (self.n1(p), self.tangent(p), float(self.depth(p)),
-                self.arc_position(p))
+        return (
+            self.n1(p),
+            self.tangent(p),
+            float(self.depth(p)),
+            self.arc_position(p),
+        )
 
     def edge_speed(self, p, v):
         """Signed speed along the edge, tangent(p) . v (m/s). T-generic."""
@@ -220,7 +237,9 @@ class Contour(abc.ABC):
         ds >= 0; returns point_at(arc_position(p) + ds)."""
         ds = _finite_scalar(ds, "ds")
         if ds < 0.0:
-            raise ValueError(f"ds must be >= 0 (arc length along the traversal direction), got {ds}")
+            raise ValueError(
+                f"ds must be >= 0 (arc length along the traversal direction), got {ds}"
+            )
         return self.point_at(self.arc_position(p) + ds)
 
     # ----- helpers for subclasses -------------------------------------------
@@ -242,7 +261,9 @@ class _ClosedAboutCenter(Contour):
         self._center = _vec3_float(center, "center")
         self._start_angle = _finite_scalar(start_angle, "start_angle")
         if direction not in (1, -1):
-            raise ValueError(f"direction must be +1 (counter-clockwise) or -1 (clockwise), got {direction}")
+            raise ValueError(
+                f"direction must be +1 (counter-clockwise) or -1 (clockwise), got {direction}"
+            )
         self._direction = int(direction)
 
     @property
@@ -299,7 +320,8 @@ class CircularContour(_ClosedAboutCenter):
         rho2 = dx * dx + dy * dy
         if _value(rho2) < _MIN_RHO * _MIN_RHO:
             raise ValueError(
-                f"p must be at least {_MIN_RHO} m from the circle's centre axis (n1 undefined)")
+                f"p must be at least {_MIN_RHO} m from the circle's centre axis (n1 undefined)"
+            )
         return dx, dy, np.sqrt(rho2)
 
     def phi(self, p):
@@ -324,8 +346,9 @@ class CircularContour(_ClosedAboutCenter):
         n1 = np.array([dx / rho, dy / rho, 0.0])
         d = self._direction
         tangent = np.array([-d * dy / rho, d * dx / rho, 0.0])
-        arc = self._wrap(d * (math.atan2(dy, dx) - self._start_angle)
-                         * self._radius)
+        arc = self._wrap(
+            d * (math.atan2(dy, dx) - self._start_angle) * self._radius
+        )
         return n1, tangent, rho - self._radius, arc
 
     def curvature(self, p):
@@ -350,19 +373,31 @@ class CircularContour(_ClosedAboutCenter):
     def project(self, p):
         th = self._angle(p)
         c = self._center
-        return np.array([c[0] + self._radius * math.cos(th),
-                         c[1] + self._radius * math.sin(th), c[2]])
+        return np.array(
+            [
+                c[0] + self._radius * math.cos(th),
+                c[1] + self._radius * math.sin(th),
+                c[2],
+            ]
+        )
 
     def arc_position(self, p):
         th = self._angle(p)
-        return self._wrap(self._direction * (th - self._start_angle) * self._radius)
+        return self._wrap(
+            self._direction * (th - self._start_angle) * self._radius
+        )
 
     def point_at(self, s):
         s = self._wrap(_finite_scalar(s, "s"))
         th = self._start_angle + self._direction * s / self._radius
         c = self._center
-        return np.array([c[0] + self._radius * math.cos(th),
-                         c[1] + self._radius * math.sin(th), c[2]])
+        return np.array(
+            [
+                c[0] + self._radius * math.cos(th),
+                c[1] + self._radius * math.sin(th),
+                c[2],
+            ]
+        )
 
 
 class StraightContour(Contour):
@@ -383,14 +418,22 @@ class StraightContour(Contour):
         n = _vec3_float(material_normal, "material_normal")
         for name, u in (("tangent", t), ("material_normal", n)):
             if abs(np.linalg.norm(u) - 1.0) > _TOL:
-                raise ValueError(f"{name} must be a unit vector (|norm - 1| <= {_TOL}), got norm {np.linalg.norm(u)}")
+                raise ValueError(
+                    f"{name} must be a unit vector (|norm - 1| <= {_TOL}), got norm {np.linalg.norm(u)}"
+                )
             if abs(u[2]) > _TOL:
-                raise ValueError(f"{name} must be horizontal (|z| <= {_TOL}), got z = {u[2]}")
+                raise ValueError(
+                    f"{name} must be horizontal (|z| <= {_TOL}), got z = {u[2]}"
+                )
         if abs(float(np.dot(t, n))) > _TOL:
-            raise ValueError(f"material_normal must be orthogonal to tangent (|dot| <= {_TOL}), got {np.dot(t, n)}")
+            raise ValueError(
+                f"material_normal must be orthogonal to tangent (|dot| <= {_TOL}), got {np.dot(t, n)}"
+            )
         length = float(length)
         if math.isnan(length) or length <= 0.0:
-            raise ValueError(f"length must be > 0 (math.inf allowed), got {length}")
+            raise ValueError(
+                f"length must be > 0 (math.inf allowed), got {length}"
+            )
         self._t = t
         self._n = n
         self._length = length
@@ -417,7 +460,10 @@ class StraightContour(Contour):
 
     def phi(self, p):
         p = _vec3(p, "p")
-        return -((p[0] - self._start[0]) * self._n[0] + (p[1] - self._start[1]) * self._n[1])
+        return -(
+            (p[0] - self._start[0]) * self._n[0]
+            + (p[1] - self._start[1]) * self._n[1]
+        )
 
     def grad_phi(self, p):
         p = _vec3(p, "p")
@@ -442,12 +488,20 @@ class StraightContour(Contour):
 
     def arc_position(self, p):
         p = _vec3_float(p, "p")
-        return float((p[0] - self._start[0]) * self._t[0] + (p[1] - self._start[1]) * self._t[1])
+        return float(
+            (p[0] - self._start[0]) * self._t[0]
+            + (p[1] - self._start[1]) * self._t[1]
+        )
 
     def point_at(self, s):
         s = _finite_scalar(s, "s")
-        return np.array([self._start[0] + s * self._t[0],
-                         self._start[1] + s * self._t[1], self._start[2]])
+        return np.array(
+            [
+                self._start[0] + s * self._t[0],
+                self._start[1] + s * self._t[1],
+                self._start[2],
+            ]
+        )
 
     def project(self, p):
         return self.point_at(self.arc_position(p))
@@ -473,9 +527,12 @@ def removal_scale(curvature, delta, cutter_radius):
 def _segments_cross(a, b, c, d, eps):
     """Boolean (len(a), len(c)) matrix: segment a_i b_i properly crosses
     or touches segment c_j d_j (2-D), beyond ``eps`` of their ends."""
+
     def orient(p, q, r):
-        return ((q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1])
-                - (q[..., 1] - p[..., 1]) * (r[..., 0] - p[..., 0]))
+        return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (
+            q[..., 1] - p[..., 1]
+        ) * (r[..., 0] - p[..., 0])
+
     A, B = a[:, None, :], b[:, None, :]
     C, D = c[None, :, :], d[None, :, :]
     o1, o2 = orient(A, B, C), orient(A, B, D)
@@ -534,52 +591,75 @@ class ProfileContour(_ClosedAboutCenter):
 
     MATERIALS = ("outside", "inside")
 
-    def __init__(self, vertices, fillet_radius, *, material="outside",
-                 offset=0.0, center=(0.0, 0.0, 0.0), start_angle=0.0,
-                 direction=1):
+    def __init__(
+        self,
+        vertices,
+        fillet_radius,
+        *,
+        material="outside",
+        offset=0.0,
+        center=(0.0, 0.0, 0.0),
+        start_angle=0.0,
+        direction=1,
+    ):
         V = np.asarray(vertices, float)
         if V.ndim != 2 or V.shape[1] != 2 or len(V) < 3:
-            raise ValueError("vertices must be at least 3 points [x, y], got "
-                             f"shape {V.shape}")
+            raise ValueError(
+                "vertices must be at least 3 points [x, y], got "
+                f"shape {V.shape}"
+            )
         if not np.all(np.isfinite(V)):
             raise ValueError("vertices must be finite")
         R = _finite_scalar(fillet_radius, "fillet_radius")
         if R <= 0.0:
             raise ValueError(f"fillet_radius must be > 0, got {R}")
         if material not in self.MATERIALS:
-            raise ValueError(f"material must be one of {self.MATERIALS}, "
-                             f"got {material!r}")
+            raise ValueError(
+                f"material must be one of {self.MATERIALS}, got {material!r}"
+            )
         self._set_frame(center, start_angle, direction)
         offset = _finite_scalar(offset, "offset")
         self._vertices, self._fillet, self._material = V.copy(), R, material
         self._offset = offset
         n = len(V)
-        E = np.roll(V, -1, axis=0) - V            # side k: V[k] -> V[k+1]
+        E = np.roll(V, -1, axis=0) - V  # side k: V[k] -> V[k+1]
         side = np.hypot(E[:, 0], E[:, 1])
         scale = float(np.max(side))
         for k in range(n):
             if side[k] <= 1e-9 * max(scale, 1e-300):
-                raise ValueError(f"degenerate profile: vertices {k} and "
-                                 f"{(k + 1) % n} coincide")
+                raise ValueError(
+                    f"degenerate profile: vertices {k} and "
+                    f"{(k + 1) % n} coincide"
+                )
         D = E / side[:, None]
-        area = 0.5 * float(np.sum(V[:, 0] * np.roll(V[:, 1], -1)
-                                  - np.roll(V[:, 0], -1) * V[:, 1]))
+        area = 0.5 * float(
+            np.sum(
+                V[:, 0] * np.roll(V[:, 1], -1) - np.roll(V[:, 0], -1) * V[:, 1]
+            )
+        )
         if area <= 0.0:
-            raise ValueError("vertices must run counter-clockwise (signed "
-                             f"area {area:.3g} m^2 <= 0)")
+            raise ValueError(
+                "vertices must run counter-clockwise (signed "
+                f"area {area:.3g} m^2 <= 0)"
+            )
         hit = polyline_self_intersection(V)
         if hit is not None:
-            raise ValueError(f"the profile intersects itself (sides {hit[0]} "
-                             f"and {hit[1]})")
-        Din = np.roll(D, 1, axis=0)                # side into vertex k
-        turn = np.arctan2(Din[:, 0] * D[:, 1] - Din[:, 1] * D[:, 0],
-                          np.einsum("ij,ij->i", Din, D))
+            raise ValueError(
+                f"the profile intersects itself (sides {hit[0]} and {hit[1]})"
+            )
+        Din = np.roll(D, 1, axis=0)  # side into vertex k
+        turn = np.arctan2(
+            Din[:, 0] * D[:, 1] - Din[:, 1] * D[:, 0],
+            np.einsum("ij,ij->i", Din, D),
+        )
         for k in range(n):
             if abs(abs(turn[k]) - math.pi) < 1e-9:
-                raise ValueError(f"degenerate profile: the sides turn back on "
-                                 f"themselves at vertex {k}")
+                raise ValueError(
+                    f"degenerate profile: the sides turn back on "
+                    f"themselves at vertex {k}"
+                )
         tan_len = R * np.tan(0.5 * np.abs(turn))
-        free = 1.0 if material == "outside" else -1.0   # free side: +left
+        free = 1.0 if material == "outside" else -1.0  # free side: +left
         left = np.stack([-D[:, 1], D[:, 0]], axis=1)
         line_len = side - tan_len - np.roll(tan_len, -1)
         for k in range(n):
@@ -587,7 +667,8 @@ class ProfileContour(_ClosedAboutCenter):
                 raise ValueError(
                     f"the fillets of radius {R} do not fit on side {k} "
                     f"(vertices {k} -> {(k + 1) % n}, {side[k]:.6g} m long, "
-                    f"the fillets take {side[k] - line_len[k]:.6g} m)")
+                    f"the fillets take {side[k] - line_len[k]:.6g} m)"
+                )
         line_len = np.maximum(line_len, 0.0)
         # Segments in counter-clockwise order: side k, then the arc at
         # vertex k + 1.
@@ -608,10 +689,11 @@ class ProfileContour(_ClosedAboutCenter):
                     f"the arc at vertex {v} has radius {R} - {abs(offset)} "
                     f"<= 0 after the offset {offset} (the fillet must be "
                     "larger than the cutter radius where the cutter runs "
-                    "inside it)")
+                    "inside it)"
+                )
             start = a + line_len[k] * D[k] - c
             th0 = math.atan2(start[1], start[0])
-            sigma = -free * sgn                  # phi = sigma (|p - c| - rho)
+            sigma = -free * sgn  # phi = sigma (|p - c| - rho)
             arcs.append((c, rho, th0, turn[v], sigma))
             kinds.append((1, len(arcs) - 1, rho * abs(turn[v])))
         self._kinds = np.array([k for k, _, _ in kinds])
@@ -624,7 +706,7 @@ class ProfileContour(_ClosedAboutCenter):
         ak = np.flatnonzero(self._kinds == 1)
         self._lA = np.array([l[0] for l in lines])
         self._lD = np.array([l[1] for l in lines])
-        self._lN = np.array([l[2] for l in lines])   # free-side normal
+        self._lN = np.array([l[2] for l in lines])  # free-side normal
         self._lL = np.array([l[3] for l in lines])
         self._lU = self._U[lk]
         na = len(arcs)
@@ -641,24 +723,29 @@ class ProfileContour(_ClosedAboutCenter):
             raise ValueError(
                 f"the path offset by {offset} m overlaps itself (near "
                 f"{u[0] * 1e3:.1f} and {u[1] * 1e3:.1f} mm along it): the "
-                "profile is too narrow for the cutter there")
+                "profile is too narrow for the cutter there"
+            )
         self._u_start = self._start_parameter(path)
 
     # ----- construction helpers ------------------------------------------
     def _point_u(self, u):
         """Planar point (2,) at counter-clockwise parameter u in [0, L]."""
-        k = min(int(np.searchsorted(self._U, u, side="right")) - 1,
-                len(self._kinds) - 1)
+        k = min(
+            int(np.searchsorted(self._U, u, side="right")) - 1,
+            len(self._kinds) - 1,
+        )
         k = max(k, 0)
         local = u - self._U[k]
         i = self._index[k]
         if self._kinds[k] == 0:
             return self._lA[i] + min(max(local, 0.0), self._lL[i]) * self._lD[i]
         sw = self._aSw[i]
-        th = self._aT0[i] + math.copysign(min(max(local, 0.0) / self._aR[i],
-                                              abs(sw)), sw)
-        return self._aC[i] + self._aR[i] * np.array([math.cos(th),
-                                                     math.sin(th)])
+        th = self._aT0[i] + math.copysign(
+            min(max(local, 0.0) / self._aR[i], abs(sw)), sw
+        )
+        return self._aC[i] + self._aR[i] * np.array(
+            [math.cos(th), math.sin(th)]
+        )
 
     def sample_path(self, count):
         """(count, 2) planar points (about ``center``) evenly spaced in the
@@ -677,7 +764,8 @@ class ProfileContour(_ClosedAboutCenter):
         if len(ks) == 0:
             raise ValueError(
                 f"the ray at start_angle {a} rad from the profile's origin "
-                "meets no point of the path (is the origin outside it?)")
+                "meets no point of the path (is the origin outside it?)"
+            )
         du = self._length / len(path)
         radii = np.hypot(path[ks, 0], path[ks, 1])
         k = int(ks[np.argmin(radii)])
@@ -685,8 +773,10 @@ class ProfileContour(_ClosedAboutCenter):
 
         def f(u):
             q = self._point_u(u)
-            return (math.atan2(q[1], q[0]) - a + math.pi) % (2 * math.pi) \
-                - math.pi
+            return (math.atan2(q[1], q[0]) - a + math.pi) % (
+                2 * math.pi
+            ) - math.pi
+
         flo = f(lo)
         if flo == 0.0:
             return lo
@@ -706,11 +796,15 @@ class ProfileContour(_ClosedAboutCenter):
     def with_offset(self, offset):
         """The same profile offset by ``offset`` (m) towards the free side
         instead."""
-        return ProfileContour(self._vertices, self._fillet,
-                              material=self._material, offset=offset,
-                              center=self._center,
-                              start_angle=self._start_angle,
-                              direction=self._direction)
+        return ProfileContour(
+            self._vertices,
+            self._fillet,
+            material=self._material,
+            offset=offset,
+            center=self._center,
+            start_angle=self._start_angle,
+            direction=self._direction,
+        )
 
     @property
     def vertices(self) -> np.ndarray:
@@ -739,8 +833,9 @@ class ProfileContour(_ClosedAboutCenter):
         pivot = np.asarray(pivot, float)[:2]
         out = copy.copy(self)
         center = self._center.copy()
-        center[:2] = pivot + R @ (center[:2] - pivot) + np.asarray(
-            shift, float)[:2]
+        center[:2] = (
+            pivot + R @ (center[:2] - pivot) + np.asarray(shift, float)[:2]
+        )
         out._center = center
         out._start_angle = self._start_angle + float(yaw)
         # Everything below is about ``center``: it turns, nothing shifts.
@@ -759,9 +854,15 @@ class ProfileContour(_ClosedAboutCenter):
         out = []
         for k in np.flatnonzero(self._kinds == 1):
             i = self._index[k]
-            out.append((self._aC[i].copy(), float(self._aR[i]),
-                        float(-self._aSig[i] / self._aR[i]),
-                        float(self._U[k]), float(self._seg_len[k])))
+            out.append(
+                (
+                    self._aC[i].copy(),
+                    float(self._aR[i]),
+                    float(-self._aSig[i] / self._aR[i]),
+                    float(self._U[k]),
+                    float(self._seg_len[k]),
+                )
+            )
         return out
 
     def _segment_point(self, k, local):
@@ -802,8 +903,10 @@ class ProfileContour(_ClosedAboutCenter):
                 n = max(1, math.ceil(L / max_step - 1e-9))
             else:
                 sweep = abs(self._aSw[self._index[k]])
-                n = max(1, math.ceil(sweep * segments_per_turn / (2 * math.pi)
-                                     - 1e-9))
+                n = max(
+                    1,
+                    math.ceil(sweep * segments_per_turn / (2 * math.pi) - 1e-9),
+                )
             for j in range(n):
                 q, m = self._segment_point(k, L * j / n)
                 us.append(self._U[k] + L * j / n)
@@ -815,7 +918,7 @@ class ProfileContour(_ClosedAboutCenter):
         for k in np.flatnonzero(self._kinds == 1):
             i = self._index[k]
             if self._aSig[i] < 0:
-                continue   # the centre on the free side: no fold
+                continue  # the centre on the free side: no fold
             cap = min(width, 0.9 * self._aR[i])
             a, b = self._U[k], self._U[k] + self._seg_len[k]
             before = (a - us) % Ltot
@@ -829,22 +932,25 @@ class ProfileContour(_ClosedAboutCenter):
         if hit is None:
             near_end = np.roll(points, -1, axis=0)
             far_end = np.roll(far, -1, axis=0)
-            hits = _segments_cross(far, far_end, points, near_end,
-                                   (1e-12 * Ltot) ** 2)
+            hits = _segments_cross(
+                far, far_end, points, near_end, (1e-12 * Ltot) ** 2
+            )
             hit = tuple(np.argwhere(hits)[0]) if hits.any() else None
         if hit is not None:
             raise ValueError(
                 f"the material {width} m deep along the profile overlaps "
                 f"itself (near {us[hit[0]] * 1e3:.1f} and "
                 f"{us[hit[1]] * 1e3:.1f} mm along it): walls closer than "
-                "that")
+                "that"
+            )
         return points, normals, depth
 
     def parameter_to_arc(self, u):
         """Arc position (traversal from the start) of counter-clockwise
         parameter(s) u."""
-        return (self._direction * (np.asarray(u, float) - self._u_start)) \
-            % self._length
+        return (
+            self._direction * (np.asarray(u, float) - self._u_start)
+        ) % self._length
 
     # ----- locating a point ----------------------------------------------
     def _locate(self, x, y):
@@ -854,8 +960,9 @@ class ProfileContour(_ClosedAboutCenter):
         if len(self._lL):
             wx = x - self._lA[:, 0]
             wy = y - self._lA[:, 1]
-            t = np.clip(wx * self._lD[:, 0] + wy * self._lD[:, 1], 0.0,
-                        self._lL)
+            t = np.clip(
+                wx * self._lD[:, 0] + wy * self._lD[:, 1], 0.0, self._lL
+            )
             dx = wx - t * self._lD[:, 0]
             dy = wy - t * self._lD[:, 1]
             d2 = dx * dx + dy * dy
@@ -876,7 +983,8 @@ class ProfileContour(_ClosedAboutCenter):
                 if r[i] < _MIN_RHO:
                     raise ValueError(
                         f"p must be at least {_MIN_RHO} m from the centre of "
-                        "the fillet it is nearest to (n1 undefined)")
+                        "the fillet it is nearest to (n1 undefined)"
+                    )
                 found = (1, i, float(self._aU[i] + self._aR[i] * rel[i]))
         if found is None:
             raise ValueError("p has no nearest point on the profile")
@@ -978,8 +1086,9 @@ class ProfileContour(_ClosedAboutCenter):
     def project(self, p):
         kind, i, u = self._local(p)
         q = self._point_u(u)
-        return np.array([q[0] + self._center[0], q[1] + self._center[1],
-                         self._center[2]])
+        return np.array(
+            [q[0] + self._center[0], q[1] + self._center[1], self._center[2]]
+        )
 
     def arc_position(self, p):
         _, _, u = self._local(p)
@@ -989,5 +1098,6 @@ class ProfileContour(_ClosedAboutCenter):
         s = self._wrap(_finite_scalar(s, "s"))
         u = (self._u_start + self._direction * s) % self._length
         q = self._point_u(u)
-        return np.array([q[0] + self._center[0], q[1] + self._center[1],
-                         self._center[2]])
+        return np.array(
+            [q[0] + self._center[0], q[1] + self._center[1], self._center[2]]
+        )

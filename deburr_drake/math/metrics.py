@@ -8,9 +8,18 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["window", "exponential_time_constant", "rms", "dead_zone_fraction",
-           "mean_speed", "any_nan", "secant_slope", "high_frequency_power",
-           "cell_crossings", "surface_roughness"]
+__all__ = [
+    "window",
+    "exponential_time_constant",
+    "rms",
+    "dead_zone_fraction",
+    "mean_speed",
+    "any_nan",
+    "secant_slope",
+    "high_frequency_power",
+    "cell_crossings",
+    "surface_roughness",
+]
 
 
 def window(t, start=-np.inf, stop=np.inf):
@@ -34,7 +43,8 @@ def exponential_time_constant(t, y, final, *, lower, upper) -> float:
     if use.sum() < 3:
         raise ValueError(
             f"only {int(use.sum())} samples with {lower} <= |final - y| <= "
-            f"{upper}: cannot fit a time constant")
+            f"{upper}: cannot fit a time constant"
+        )
     slope = np.polyfit(t[use], np.log(gap[use]), 1)[0]
     if slope >= 0:
         raise ValueError("the signal does not approach its final value")
@@ -81,8 +91,7 @@ def arc_distance(a, b, length: float, closed: bool):
     return (d + length / 2) % length - length / 2 if closed else d
 
 
-def arc_span_mask(arc, start: float, stop: float, length: float,
-                  closed: bool):
+def arc_span_mask(arc, start: float, stop: float, length: float, closed: bool):
     """Bins whose arc lies in the span travelled from ``start`` to ``stop``
     (m, unwrapped; stop >= start). On a closed edge spans of a full length
     or more cover everything."""
@@ -136,8 +145,9 @@ def cell_crossings(s, delta: float) -> int:
     return int(np.count_nonzero(np.diff(cells, axis=0)))
 
 
-def surface_roughness(u, y0_range, s_range, *, n_y0: int = 8,
-                      n_s: int = 128) -> float:
+def surface_roughness(
+    u, y0_range, s_range, *, n_y0: int = 8, n_s: int = 128
+) -> float:
     """How far a control surface u(y0, s) (a callable, N) departs from a
     plane over the region y0_range x s_range: the RMS residual (N) of its
     least-squares fit a + b y0 + c s on an n_y0 x n_s grid. A plane scores
@@ -146,8 +156,11 @@ def surface_roughness(u, y0_range, s_range, *, n_y0: int = 8,
     from the plane. Unlike a finite-difference curvature it does not grow
     as the grid is refined when u has jumps. nan on an empty region."""
     (y_lo, y_hi), (s_lo, s_hi) = y0_range, s_range
-    if not (np.isfinite([y_lo, y_hi, s_lo, s_hi]).all()
-            and y_hi >= y_lo and s_hi > s_lo):
+    if not (
+        np.isfinite([y_lo, y_hi, s_lo, s_hi]).all()
+        and y_hi >= y_lo
+        and s_hi > s_lo
+    ):
         return float("nan")
     y0 = np.linspace(y_lo, y_hi, n_y0 if y_hi > y_lo else 1)
     s = np.linspace(s_lo, s_hi, n_s)

@@ -26,20 +26,34 @@ onto the real one, the contour it gives, and ``r`` from probed points.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+import math
 
 import numpy as np
 
 from deburr_drake.math.fits import fit_circle, fit_consensus, fit_line
-from deburr_drake.math.geometry import (CircularContour, Contour,
-                                        ProfileContour, StraightContour)
+from deburr_drake.math.geometry import (
+    CircularContour,
+    Contour,
+    ProfileContour,
+    StraightContour,
+)
 
-__all__ = ["REGISTRATION_SIZE", "pivot_of", "moved_contour", "ProbeFit",
-           "registration_from_points", "rigid_fit_amplification",
-           "MAX_AMPLIFICATION",
-           "ONLINE_PARAMETERS", "contact_regressor", "onset_regressor",
-           "learning_curvature", "registration_of", "rls_update"]
+__all__ = [
+    "REGISTRATION_SIZE",
+    "pivot_of",
+    "moved_contour",
+    "ProbeFit",
+    "registration_from_points",
+    "rigid_fit_amplification",
+    "MAX_AMPLIFICATION",
+    "ONLINE_PARAMETERS",
+    "contact_regressor",
+    "onset_regressor",
+    "learning_curvature",
+    "registration_of",
+    "rls_update",
+]
 
 #: (dx, dy, dyaw, dradius).
 REGISTRATION_SIZE = 4
@@ -69,8 +83,10 @@ def pivot_of(contour: Contour) -> np.ndarray:
         return contour.point_at(half)
     if isinstance(contour, ProfileContour):
         return contour.vertex_centroid
-    raise TypeError(f"registration of a {type(contour).__name__} is not "
-                    "supported: a circle, a straight edge or a profile")
+    raise TypeError(
+        f"registration of a {type(contour).__name__} is not "
+        "supported: a circle, a straight edge or a profile"
+    )
 
 
 def moved_contour(contour: Contour, registration) -> Contour:
@@ -83,14 +99,20 @@ def moved_contour(contour: Contour, registration) -> Contour:
         return contour
     if isinstance(contour, CircularContour):
         center = contour.center + np.array([dx, dy, 0.0])
-        return CircularContour(center, contour.radius + dradius,
-                               start_angle=contour.start_angle + dyaw,
-                               direction=contour.direction)
-    if dradius != 0.0 and isinstance(contour, (StraightContour,
-                                               ProfileContour)):
-        raise ValueError(f"dradius = {dradius!r} m on a "
-                         f"{type(contour).__name__}: only a circle's radius "
-                         "is registered")
+        return CircularContour(
+            center,
+            contour.radius + dradius,
+            start_angle=contour.start_angle + dyaw,
+            direction=contour.direction,
+        )
+    if dradius != 0.0 and isinstance(
+        contour, (StraightContour, ProfileContour)
+    ):
+        raise ValueError(
+            f"dradius = {dradius!r} m on a "
+            f"{type(contour).__name__}: only a circle's radius "
+            "is registered"
+        )
     pivot = pivot_of(contour)
     if isinstance(contour, StraightContour):
         R = _rot(dyaw)
@@ -103,8 +125,10 @@ def moved_contour(contour: Contour, registration) -> Contour:
         return StraightContour(start, t, n, length=contour.length)
     if isinstance(contour, ProfileContour):
         return contour.moved((dx, dy), dyaw, pivot[:2])
-    raise TypeError(f"registration of a {type(contour).__name__} is not "
-                    "supported: a circle, a straight edge or a profile")
+    raise TypeError(
+        f"registration of a {type(contour).__name__} is not "
+        "supported: a circle, a straight edge or a profile"
+    )
 
 
 def _turn_terms(contour: Contour, p, pivot) -> np.ndarray:
@@ -115,8 +139,11 @@ def _turn_terms(contour: Contour, p, pivot) -> np.ndarray:
     z = contour.height
     for i, (x, y) in enumerate(p):
         n1 = contour.n1(np.array([x, y, z]))
-        out[i] = (n1[0], n1[1],
-                  -(y - pivot[1]) * n1[0] + (x - pivot[0]) * n1[1])
+        out[i] = (
+            n1[0],
+            n1[1],
+            -(y - pivot[1]) * n1[0] + (x - pivot[0]) * n1[1],
+        )
     return out
 
 
@@ -142,8 +169,14 @@ def rigid_fit_amplification(contour: Contour, points) -> float:
     return math.inf if smallest <= 1e-9 else float(1.0 / smallest)
 
 
-def _rigid_fit(contour: Contour, p, *, level: bool = False,
-               iterations: int = 50, tolerance: float = 1e-12):
+def _rigid_fit(
+    contour: Contour,
+    p,
+    *,
+    level: bool = False,
+    iterations: int = 50,
+    tolerance: float = 1e-12,
+):
     """((dx, dy, dyaw), b) minimising sum (phi_moved(p_i) - b)^2 by
     Gauss-Newton from zero, b (m) a level common to every touch when
     ``level`` (else 0): moving the contour by a small (u, beta) about its
@@ -156,8 +189,7 @@ def _rigid_fit(contour: Contour, p, *, level: bool = False,
         J = _turn_terms(moved, p, pivot + reg[:2])
         if level:
             J = np.column_stack([J, -np.ones(len(p))])
-        step, *_ = np.linalg.lstsq(J, b * level - _phi(moved, p),
-                                   rcond=None)
+        step, *_ = np.linalg.lstsq(J, b * level - _phi(moved, p), rcond=None)
         reg += step[:3]
         if level:
             b += step[3]
@@ -169,9 +201,11 @@ def _rigid_fit(contour: Contour, p, *, level: bool = False,
 @dataclass
 class ProbeFit:
     registration: np.ndarray  # (4,) dx, dy, dyaw, dradius
-    kept: np.ndarray          # (N,) bool, the points the fit used
-    residuals: np.ndarray     # (N,) m, phi of every point on the fit - level: > 0 early
-    rms: float                # m, of the kept points' residuals
+    kept: np.ndarray  # (N,) bool, the points the fit used
+    residuals: (
+        np.ndarray
+    )  # (N,) m, phi of every point on the fit - level: > 0 early
+    rms: float  # m, of the kept points' residuals
     # m, a profile's level common to the kept touches (> 0: early on
     # average: the contact stiffer than modelled or the edge further out
     # than drawn); 0 on a circle or a straight edge
@@ -181,8 +215,7 @@ class ProbeFit:
 def _spread_around(points, center) -> float:
     """rad, the smallest arc of directions from ``center`` holding every
     point (2 pi minus the largest gap between neighbouring directions)."""
-    a = np.sort(np.arctan2(points[:, 1] - center[1],
-                           points[:, 0] - center[0]))
+    a = np.sort(np.arctan2(points[:, 1] - center[1], points[:, 0] - center[0]))
     if len(a) < 2:
         return 0.0
     gaps = np.diff(np.concatenate([a, [a[0] + 2 * math.pi]]))
@@ -200,36 +233,44 @@ class _RigidFit:
     """A rigid fit of a contour (fit_consensus's interface): the move
     (dx, dy, dyaw), the level common to the touches (m), the residuals
     phi - level of its points."""
+
     contour: Contour
     move: np.ndarray
     level: float
     residuals: np.ndarray
 
     def residuals_of(self, points) -> np.ndarray:
-        return _level_residuals(self.contour, self.move, self.level,
-                                np.asarray(points, float)[:, :2])
+        return _level_residuals(
+            self.contour,
+            self.move,
+            self.level,
+            np.asarray(points, float)[:, :2],
+        )
 
     @property
     def rms(self) -> float:
-        return float(np.sqrt(np.mean(self.residuals ** 2)))
+        return float(np.sqrt(np.mean(self.residuals**2)))
 
 
 def _rigid(contour: Contour, *, level: bool):
     """fit(points) -> _RigidFit: Gauss-Newton from zero, the level free
     when ``level``; ValueError when the points do not fix the move."""
+
     def fit(points):
         q = np.asarray(points, float)[:, :2]
         if rigid_fit_amplification(contour, q) > MAX_AMPLIFICATION:
             raise ValueError("the points do not fix the move")
         move, b = _rigid_fit(contour, q, level=level)
-        return _RigidFit(contour, move, b,
-                         _level_residuals(contour, move, b, q))
+        return _RigidFit(
+            contour, move, b, _level_residuals(contour, move, b, q)
+        )
+
     return fit
 
 
-def registration_from_points(contour: Contour, points, *,
-                             max_residual: float,
-                             fit_radius: bool = False) -> ProbeFit:
+def registration_from_points(
+    contour: Contour, points, *, max_residual: float, fit_radius: bool = False
+) -> ProbeFit:
     """The registration of ``contour`` (the believed zero-depth path) that
     best puts it through ``points`` ((N, 2 or 3), m, world; the touch
     points already compensated to the zero-depth path). The touches kept
@@ -265,36 +306,51 @@ def registration_from_points(contour: Contour, points, *,
     p = np.asarray(points, float)[:, :2]
     level = 0.0  # a profile's common level (below)
     if fit_radius and not isinstance(contour, CircularContour):
-        raise ValueError(f"fit_radius on a {type(contour).__name__}: only "
-                         "a circle's radius is fitted")
+        raise ValueError(
+            f"fit_radius on a {type(contour).__name__}: only "
+            "a circle's radius is fitted"
+        )
     if isinstance(contour, CircularContour):
         if len(p) < 3:
-            raise ValueError(f"a circle's fit needs at least 3 touches, "
-                             f"got {len(p)}")
+            raise ValueError(
+                f"a circle's fit needs at least 3 touches, got {len(p)}"
+            )
         if len(p) >= 4:
-            _, kept = fit_consensus(fit_circle, p, minimal=3,
-                                    max_residual=max_residual, minimum=3)
+            _, kept = fit_consensus(
+                fit_circle, p, minimal=3, max_residual=max_residual, minimum=3
+            )
         else:
             kept = np.ones(len(p), bool)
         spread = _spread_around(p[kept], contour.center[:2])
         free = fit_radius or spread > math.pi
-        fit = fit_circle(p[kept], radius=None if free else contour.radius,
-                         seed=None if free else contour.center[:2])
+        fit = fit_circle(
+            p[kept],
+            radius=None if free else contour.radius,
+            seed=None if free else contour.center[:2],
+        )
         d = fit.center - contour.center[:2]
-        reg = np.array([d[0], d[1], 0.0,
-                        fit.radius - contour.radius if fit_radius else 0.0])
+        reg = np.array(
+            [
+                d[0],
+                d[1],
+                0.0,
+                fit.radius - contour.radius if fit_radius else 0.0,
+            ]
+        )
         level = 0.0 if fit_radius else -(fit.radius - contour.radius)
     elif isinstance(contour, StraightContour):
         if len(p) < 2:
-            raise ValueError(f"a straight edge's fit needs at least 2 "
-                             f"touches, got {len(p)}")
-        fit, kept = fit_consensus(fit_line, p, minimal=2,
-                                  max_residual=max_residual, minimum=2)
+            raise ValueError(
+                f"a straight edge's fit needs at least 2 touches, got {len(p)}"
+            )
+        fit, kept = fit_consensus(
+            fit_line, p, minimal=2, max_residual=max_residual, minimum=2
+        )
         t = contour.tangent(contour.point_at(0.0))[:2]
-        direction = fit.direction if fit.direction @ t >= 0 else \
-            -fit.direction
-        dyaw = math.atan2(t[0] * direction[1] - t[1] * direction[0],
-                          t @ direction)
+        direction = fit.direction if fit.direction @ t >= 0 else -fit.direction
+        dyaw = math.atan2(
+            t[0] * direction[1] - t[1] * direction[0], t @ direction
+        )
         # Turn about the pivot, then shift along the turned normal so the
         # line passes through the fitted point.
         turned = moved_contour(contour, [0.0, 0.0, dyaw, 0.0])
@@ -310,18 +366,24 @@ def registration_from_points(contour: Contour, points, *,
                 f"the {len(p)} touches do not fix the part's position and "
                 f"turn (noise amplification {gain:.3g} > "
                 f"{MAX_AMPLIFICATION:g}): at least 3, spread over sides "
-                "that are not parallel")
+                "that are not parallel"
+            )
         free = len(p) >= 5
         fit = _rigid(contour, level=free)
         if len(p) >= 4:
-            _, kept = fit_consensus(fit, p, minimal=4 if free else 3,
-                                    max_residual=max_residual,
-                                    minimum=4 if free else 3)
+            _, kept = fit_consensus(
+                fit,
+                p,
+                minimal=4 if free else 3,
+                max_residual=max_residual,
+                minimum=4 if free else 3,
+            )
         else:
             kept = np.ones(len(p), bool)
         if rigid_fit_amplification(contour, p[kept]) > MAX_AMPLIFICATION:
-            raise ValueError("the touches kept do not fix the part's "
-                             "position and turn")
+            raise ValueError(
+                "the touches kept do not fix the part's position and turn"
+            )
         found = _rigid(contour, level=free and kept.sum() >= 5)(p[kept])
         reg, level = np.array([*found.move, 0.0]), found.level
     # Residuals: phi of every touch on the fitted contour less the level
@@ -353,8 +415,9 @@ def _offset_terms(contour: Contour, x_p) -> np.ndarray:
 def contact_regressor(contour: Contour, x_p) -> np.ndarray:
     """phi with ||f_n|| = phi . theta (ONLINE_PARAMETERS) at the tool point
     ``x_p`` (m) on the reference ``contour``."""
-    return np.concatenate([[1.0, float(contour.depth(x_p))],
-                           -_offset_terms(contour, x_p)])
+    return np.concatenate(
+        [[1.0, float(contour.depth(x_p))], -_offset_terms(contour, x_p)]
+    )
 
 
 def onset_regressor(contour: Contour, x_p, depth_at_detection=0.0):
@@ -376,8 +439,12 @@ def learning_curvature(contour: Contour, samples: int = 720) -> float:
     corner stiffer, a boss's convex one softer, which the model would take
     for an offset towards or away from the corner)."""
     L = contour.length if math.isfinite(contour.length) else 0.0
-    values = np.array([contour.curvature(contour.point_at(s)) for s in
-                       np.linspace(0.0, L, samples, endpoint=False)])
+    values = np.array(
+        [
+            contour.curvature(contour.point_at(s))
+            for s in np.linspace(0.0, L, samples, endpoint=False)
+        ]
+    )
     kinds, counts = np.unique(np.round(values, 9), return_counts=True)
     return float(kinds[np.argmax(counts)])
 

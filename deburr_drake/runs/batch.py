@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import copy
 import csv
+from dataclasses import dataclass, field
 import json
 import math
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Dict, List, Optional
 
@@ -36,8 +36,16 @@ from deburr_drake.config import ConfigError, Scenario
 from deburr_drake.runs.pass_metrics import first_edge_error, pass_metrics
 from deburr_drake.runs.simulation import RunLog, simulate
 
-__all__ = ["BatchPart", "CarriedState", "draw_part_errors", "run_batch",
-           "write_batch", "batch_table", "BATCH_COLUMNS", "CARRY"]
+__all__ = [
+    "BatchPart",
+    "CarriedState",
+    "draw_part_errors",
+    "run_batch",
+    "write_batch",
+    "batch_table",
+    "BATCH_COLUMNS",
+    "CARRY",
+]
 
 #: The table's columns: (key, header).
 BATCH_COLUMNS = (
@@ -68,8 +76,10 @@ class CarriedState:
         theta = log.signals.get("theta")
         if est is None or theta is None or not len(est["t"]):
             return None
-        return cls(np.asarray(est["value"][-1], float),
-                   np.asarray(theta["final"], float))
+        return cls(
+            np.asarray(est["value"][-1], float),
+            np.asarray(theta["final"], float),
+        )
 
     def apply(self, scenario: Scenario) -> Scenario:
         """The next part's scenario starting from these estimates (each at
@@ -77,7 +87,8 @@ class CarriedState:
         s = copy.deepcopy(scenario)
         bounds = s.estimator.lower_bounds
         s.estimator.initial_estimates = [
-            max(float(v), float(b)) for v, b in zip(self.estimates, bounds)]
+            max(float(v), float(b)) for v, b in zip(self.estimates, bounds)
+        ]
         return s
 
     def set_theta(self, diagram, context):
@@ -109,18 +120,21 @@ class BatchPart:
         }
 
 
-def draw_part_errors(count: int, *, seed: int, max_offset: float,
-                     max_yaw: float = 0.0) -> List[tuple]:
+def draw_part_errors(
+    count: int, *, seed: int, max_offset: float, max_yaw: float = 0.0
+) -> List[tuple]:
     """``count`` (offset (3, m), yaw (rad)) drawn with ``seed``: the offset
     uniform over the horizontal disc of radius ``max_offset``, the yaw
     uniform in [-max_yaw, max_yaw]."""
     if not (isinstance(count, int) and count >= 1):
-        raise ConfigError(f"count = {count!r} is invalid: allowed an "
-                          "integer >= 1")
+        raise ConfigError(
+            f"count = {count!r} is invalid: allowed an integer >= 1"
+        )
     for name, v in (("max_offset", max_offset), ("max_yaw", max_yaw)):
         if not (math.isfinite(v) and v >= 0):
-            raise ConfigError(f"{name} = {v!r} is invalid: allowed a "
-                              "finite number >= 0")
+            raise ConfigError(
+                f"{name} = {v!r} is invalid: allowed a finite number >= 0"
+            )
     rng = np.random.default_rng(seed)
     out = []
     for _ in range(count):
@@ -135,12 +149,18 @@ def draw_part_errors(count: int, *, seed: int, max_offset: float,
 CARRY = ("all", "estimates", "weights")
 
 
-def run_batch(scenario: Scenario, *, count: int, seed: int,
-              max_offset: float, max_yaw: float = 0.0, fresh: bool = False,
-              carry: str = "all",
-              duration: Optional[float] = None,
-              on_part: Optional[Callable[[BatchPart, RunLog], None]] = None
-              ) -> List[BatchPart]:
+def run_batch(
+    scenario: Scenario,
+    *,
+    count: int,
+    seed: int,
+    max_offset: float,
+    max_yaw: float = 0.0,
+    fresh: bool = False,
+    carry: str = "all",
+    duration: Optional[float] = None,
+    on_part: Optional[Callable[[BatchPart, RunLog], None]] = None,
+) -> List[BatchPart]:
     """Runs ``count`` parts of ``scenario`` in sequence (see the module);
     ``duration`` (s) caps each part's run (the scenario's by default).
     ``carry``: ``all`` (c hat and theta), ``estimates`` (c hat only) or
@@ -148,11 +168,13 @@ def run_batch(scenario: Scenario, *, count: int, seed: int,
     ``fresh``). ``on_part(part, log)`` is called after each part (progress,
     files)."""
     if carry not in CARRY:
-        raise ConfigError(f"carry = {carry!r} is invalid: allowed one of "
-                          f"{CARRY}")
+        raise ConfigError(
+            f"carry = {carry!r} is invalid: allowed one of {CARRY}"
+        )
     scenario.validate()
-    errors = draw_part_errors(count, seed=seed, max_offset=max_offset,
-                              max_yaw=max_yaw)
+    errors = draw_part_errors(
+        count, seed=seed, max_offset=max_offset, max_yaw=max_yaw
+    )
     carried: Optional[CarriedState] = None
     parts = []
     for k, (offset, yaw) in enumerate(errors, start=1):
@@ -165,24 +187,39 @@ def run_batch(scenario: Scenario, *, count: int, seed: int,
             s = carried.apply(s)
         s.validate()
         diagram = make_deburring_diagram(scenario=s)
-        log = simulate(diagram, s, duration=duration,
-                       initial_state=(carried.set_theta if use and carry in (
-                           "all", "weights") else None))
+        log = simulate(
+            diagram,
+            s,
+            duration=duration,
+            initial_state=(
+                carried.set_theta
+                if use and carry in ("all", "weights")
+                else None
+            ),
+        )
         try:
             truth = contact_truth(s).force_at_desired_depth
         except Exception:  # the metrics then leave it out
             truth = None
-        values = pass_metrics(log, true_force_at_desired_depth=truth,
-                              only_cut=not log.completed_pass)
+        values = pass_metrics(
+            log,
+            true_force_at_desired_depth=truth,
+            only_cut=not log.completed_pass,
+        )
         metrics = {k2: float(v) for k2, v in values.items()}
         metrics["first_10pct_depth_rms_error_mm"] = first_edge_error(log)
         est = log.signals.get("estimates")
         if est is not None and len(est["t"]):
             metrics["c0_hat_N"] = float(est["value"][-1][0])
             metrics["c1_hat_N_per_mm"] = float(est["value"][-1][1]) / 1e3
-        part = BatchPart(part=k, offset=list(offset), yaw=yaw,
-                         metrics=metrics, stop_reason=log.stop_reason,
-                         values=values)
+        part = BatchPart(
+            part=k,
+            offset=list(offset),
+            yaw=yaw,
+            metrics=metrics,
+            stop_reason=log.stop_reason,
+            values=values,
+        )
         parts.append(part)
         if on_part is not None:
             on_part(part, log)
@@ -203,12 +240,15 @@ def _fmt(v) -> str:
 
 def batch_table(parts: List[BatchPart]) -> str:
     """The per-part table as Markdown."""
-    lines = ["| " + " | ".join(h for _, h in BATCH_COLUMNS) + " |",
-             "|" + "---|" * len(BATCH_COLUMNS)]
+    lines = [
+        "| " + " | ".join(h for _, h in BATCH_COLUMNS) + " |",
+        "|" + "---|" * len(BATCH_COLUMNS),
+    ]
     for p in parts:
         row = p.row()
-        lines.append("| " + " | ".join(_fmt(row[k]) for k, _ in BATCH_COLUMNS)
-                     + " |")
+        lines.append(
+            "| " + " | ".join(_fmt(row[k]) for k, _ in BATCH_COLUMNS) + " |"
+        )
     return "\n".join(lines)
 
 
@@ -218,8 +258,12 @@ def write_batch(parts: List[BatchPart], out, *, label: str = "") -> Dict:
     per part) in ``out``; returns their paths."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    paths = {"csv": out / "batch.csv", "json": out / "batch.json",
-             "md": out / "batch.md", "png": out / "batch.png"}
+    paths = {
+        "csv": out / "batch.csv",
+        "json": out / "batch.json",
+        "md": out / "batch.md",
+        "png": out / "batch.png",
+    }
     with open(paths["csv"], "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=[k for k, _ in BATCH_COLUMNS])
         w.writeheader()
@@ -229,22 +273,37 @@ def write_batch(parts: List[BatchPart], out, *, label: str = "") -> Dict:
     def clean(v):
         return v if not isinstance(v, float) or math.isfinite(v) else None
 
-    paths["json"].write_text(json.dumps([{
-        "part": p.part, "offset_m": p.offset, "yaw_rad": p.yaw,
-        "stop_reason": p.stop_reason,
-        "metrics": {k: clean(v) for k, v in p.metrics.items()}}
-        for p in parts], indent=1, allow_nan=False))
+    paths["json"].write_text(
+        json.dumps(
+            [
+                {
+                    "part": p.part,
+                    "offset_m": p.offset,
+                    "yaw_rad": p.yaw,
+                    "stop_reason": p.stop_reason,
+                    "metrics": {k: clean(v) for k, v in p.metrics.items()},
+                }
+                for p in parts
+            ],
+            indent=1,
+            allow_nan=False,
+        )
+    )
     paths["md"].write_text(batch_table(parts) + "\n")
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     k = [p.part for p in parts]
     fig, ax = plt.subplots(figsize=(6, 3.5))
-    for key, name in (("first_10pct_depth_rms_error_mm",
-                       "first 10 % of the edge"),
-                      ("chamfer_depth_rms_error_mm", "whole pass")):
-        ax.plot(k, [p.metrics.get(key, np.nan) for p in parts], "o-",
-                label=name)
+    for key, name in (
+        ("first_10pct_depth_rms_error_mm", "first 10 % of the edge"),
+        ("chamfer_depth_rms_error_mm", "whole pass"),
+    ):
+        ax.plot(
+            k, [p.metrics.get(key, np.nan) for p in parts], "o-", label=name
+        )
     ax.axhline(0.05, color="k", lw=0.8, ls="--", label="0.05 mm rule")
     ax.set_xlabel("part")
     ax.set_ylabel("depth RMS error (mm)")

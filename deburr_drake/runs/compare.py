@@ -6,15 +6,21 @@ figures. Each controller's run also writes its own ``logs.npz`` and
 
 from __future__ import annotations
 
-import json
 from concurrent.futures import ProcessPoolExecutor
+import json
 from pathlib import Path
 from typing import Dict, List, Optional
 
 import numpy as np
 
-__all__ = ["CONTROLLERS", "HIGH_FREQUENCY", "configure", "run_controller",
-           "compare", "write_comparison"]
+__all__ = [
+    "CONTROLLERS",
+    "HIGH_FREQUENCY",
+    "configure",
+    "run_controller",
+    "compare",
+    "write_comparison",
+]
 
 #: Controller names ``compare`` knows: (controller.kind, fuzzy order or None
 #: for the scenario's).
@@ -27,8 +33,14 @@ CONTROLLERS = {
     "impedance": ("impedance", None),
     "position": ("position", None),
 }
-DEFAULT_CONTROLLERS = ("fuzzy", "fuzzy_m0", "impedance", "robust", "ideal",
-                       "position")
+DEFAULT_CONTROLLERS = (
+    "fuzzy",
+    "fuzzy_m0",
+    "impedance",
+    "robust",
+    "ideal",
+    "position",
+)
 #: Hz: the torque's power above it is the chattering measure.
 HIGH_FREQUENCY = 50.0
 
@@ -55,10 +67,14 @@ def configure(scenario, controller: str):
     """A copy of ``scenario`` running ``controller`` (a CONTROLLERS name);
     its name gets the controller appended."""
     import copy
+
     from deburr_drake.config import ConfigError
+
     if controller not in CONTROLLERS:
-        raise ConfigError(f"--controllers: {controller!r} is unknown: "
-                          f"allowed {', '.join(CONTROLLERS)}")
+        raise ConfigError(
+            f"--controllers: {controller!r} is unknown: "
+            f"allowed {', '.join(CONTROLLERS)}"
+        )
     kind, order = CONTROLLERS[controller]
     sc = copy.deepcopy(scenario)
     sc.controller.kind = kind
@@ -73,44 +89,57 @@ def smoothness(log, t0: float) -> Dict[str, float]:
     and RMS above HIGH_FREQUENCY Hz after ``t0`` s (the chattering of a
     sampled sign law shows there) and the m = 0 cell crossings of s."""
     from deburr_drake.math import metrics
+
     act = log["actuation"]
     mask = metrics.window(act["t"], t0)
-    power = (metrics.high_frequency_power(act["t"][mask],
-                                          act["value"][mask],
-                                          HIGH_FREQUENCY)
-             if np.count_nonzero(mask) >= 8 else float("nan"))
+    power = (
+        metrics.high_frequency_power(
+            act["t"][mask], act["value"][mask], HIGH_FREQUENCY
+        )
+        if np.count_nonzero(mask) >= 8
+        else float("nan")
+    )
     ctl = log["controller"]
     late = metrics.window(ctl["t"], t0)
     f = log.scenario.controller.fuzzy
     _, deltas = f.deltas()
-    crossings = sum(metrics.cell_crossings(ctl["s"][late][:, axis], d)
-                    for axis, d in zip(f.axes, deltas))
-    return {"torque_power_above_50Hz": power,
-            "torque_rms_above_50Hz": float(np.sqrt(power)),
-            # How often s_k left its m = 0 cell (width Delta_k) on the
-            # fuzzy axes: 0 means m = 0 and m = 2 cannot differ in
-            # smoothness through the memberships.
-            "fuzzy_cell_crossings": float(crossings)}
+    crossings = sum(
+        metrics.cell_crossings(ctl["s"][late][:, axis], d)
+        for axis, d in zip(f.axes, deltas)
+    )
+    return {
+        "torque_power_above_50Hz": power,
+        "torque_rms_above_50Hz": float(np.sqrt(power)),
+        # How often s_k left its m = 0 cell (width Delta_k) on the
+        # fuzzy axes: 0 means m = 0 and m = 2 cannot differ in
+        # smoothness through the memberships.
+        "fuzzy_cell_crossings": float(crossings),
+    }
 
 
-def run_controller(scenario, controller: str, duration: Optional[float],
-                   out_dir) -> dict:
+def run_controller(
+    scenario, controller: str, duration: Optional[float], out_dir
+) -> dict:
     """Runs ``controller`` on ``scenario`` for ``duration`` s (the
     scenario's if None) and writes ``out_dir``/logs.npz, metrics.json;
     returns the metrics.json content plus the smoothness metrics and the
     normal force against the plant's true force at delta*."""
+    from deburr_drake.cell.diagram import make_deburring_diagram
     from deburr_drake.math import metrics
     from deburr_drake.runs import report
     from deburr_drake.runs.pass_metrics import (
-        TRANSIENT, force_at_desired_depth, pass_metrics)
-    from deburr_drake.cell.diagram import make_deburring_diagram
+        TRANSIENT,
+        force_at_desired_depth,
+        pass_metrics,
+    )
     from deburr_drake.runs.simulation import simulate
+
     sc = configure(scenario, controller)
-    log = simulate(make_deburring_diagram(scenario=sc), sc,
-                   duration=duration)
+    log = simulate(make_deburring_diagram(scenario=sc), sc, duration=duration)
     truth = force_at_desired_depth(sc)
-    values = pass_metrics(log, true_force_at_desired_depth=truth,
-                                 only_cut=not log.completed_pass)
+    values = pass_metrics(
+        log, true_force_at_desired_depth=truth, only_cut=not log.completed_pass
+    )
     t0 = values.get("contact_time_s", np.nan) + TRANSIENT
     for key, value in smoothness(log, t0).items():
         values[key] = value
@@ -120,11 +149,13 @@ def run_controller(scenario, controller: str, duration: Optional[float],
         # The estimator's f_nd hat is not a common yardstick (impedance and
         # position do not use it): the plant's force at delta* is.
         values["normal_force_vs_truth_rms_error_N"] = metrics.rms(
-            ch["f_n"][late] - truth)
+            ch["f_n"][late] - truth
+        )
     else:
-        values.unavailable("normal_force_vs_truth_rms_error_N",
-                           "no contact truth or no sample after the "
-                           "transient")
+        values.unavailable(
+            "normal_force_vs_truth_rms_error_N",
+            "no contact truth or no sample after the transient",
+        )
     report.write_run(log, out_dir, values)
     row = report.run_summary(log, values)
     row["controller"] = controller
@@ -138,8 +169,14 @@ def _run(job):
     return run_controller(scenario, controller, duration, out_dir)
 
 
-def compare(scenario, controllers: List[str], *, duration=None, out_dir,
-            workers: int = 1) -> List[dict]:
+def compare(
+    scenario,
+    controllers: List[str],
+    *,
+    duration=None,
+    out_dir,
+    workers: int = 1,
+) -> List[dict]:
     """Runs every controller (``workers`` processes at a time; 1: in this
     process, one after the other) and writes the comparison into
     ``out_dir``. Returns the rows."""
@@ -165,30 +202,44 @@ def _cell(value):
     return f"{value:.4g}"
 
 
-def write_comparison(rows: List[dict], out_dir, *, scenario: str,
-                     duration) -> Dict[str, Path]:
+def write_comparison(
+    rows: List[dict], out_dir, *, scenario: str, duration
+) -> Dict[str, Path]:
     """comparison.json (every row in full), comparison.md (the table) and
     the overlay figures (from each row's logs.npz)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "comparison.json", "w") as f:
-        json.dump({"scenario": scenario, "duration_s": duration,
-                   "rows": rows}, f, indent=2, sort_keys=True,
-                  allow_nan=False)
-    lines = [f"# Controller comparison: scenario `{scenario}`"
-             + (f", {duration:g} s" if duration else ", full run"), "",
-             "| controller | " + " | ".join(h for _, h in _TABLE) + " |",
-             "|---" * (len(_TABLE) + 1) + "|"]
+        json.dump(
+            {"scenario": scenario, "duration_s": duration, "rows": rows},
+            f,
+            indent=2,
+            sort_keys=True,
+            allow_nan=False,
+        )
+    lines = [
+        f"# Controller comparison: scenario `{scenario}`"
+        + (f", {duration:g} s" if duration else ", full run"),
+        "",
+        "| controller | " + " | ".join(h for _, h in _TABLE) + " |",
+        "|---" * (len(_TABLE) + 1) + "|",
+    ]
     for row in rows:
-        lines.append(f"| {row['controller']} | " + " | ".join(
-            _cell(row.get(k)) for k, _ in _TABLE) + " |")
-    lines += ["", "f_t: chamfering force against the desired one; e_f: "
-              "the controller's normal-force error (against its own "
-              "estimate f_nd hat; impedance and position ignore it); "
-              "f_n - f_n(d*): the normal force against the plant's true "
-              "force at the desired depth; depth: the chamfer on the real "
-              "part. All after the contact transient. Torque power above "
-              f"{HIGH_FREQUENCY:g} Hz: the chattering measure."]
+        lines.append(
+            f"| {row['controller']} | "
+            + " | ".join(_cell(row.get(k)) for k, _ in _TABLE)
+            + " |"
+        )
+    lines += [
+        "",
+        "f_t: chamfering force against the desired one; e_f: "
+        "the controller's normal-force error (against its own "
+        "estimate f_nd hat; impedance and position ignore it); "
+        "f_n - f_n(d*): the normal force against the plant's true "
+        "force at the desired depth; depth: the chamfer on the real "
+        "part. All after the contact transient. Torque power above "
+        f"{HIGH_FREQUENCY:g} Hz: the chattering measure.",
+    ]
     (out / "comparison.md").write_text("\n".join(lines) + "\n")
     files = {"json": out / "comparison.json", "md": out / "comparison.md"}
     try:
@@ -203,8 +254,10 @@ def overlay_figures(rows: List[dict], out: Path) -> List[Path]:
     error, depth along the edge on the real part, torque norm, and the
     torque's spectrum."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     logs = {}
     for row in rows:
         with np.load(out / row["controller"] / "logs.npz") as z:
@@ -213,26 +266,38 @@ def overlay_figures(rows: List[dict], out: Path) -> List[Path]:
     spec_fig, spec_ax = plt.subplots(figsize=(8, 4))
     for name, z in logs.items():
         f_td = float(z["meta.desired_force"])
-        axes[0].plot(z["process.t"], z["process.f_t"] - f_td, label=name,
-                     lw=0.8)
-        axes[1].plot(z["controller.t"], z["controller.e_f"], label=name,
-                     lw=0.8)
+        axes[0].plot(
+            z["process.t"], z["process.f_t"] - f_td, label=name, lw=0.8
+        )
+        axes[1].plot(z["controller.t"], z["controller.e_f"], label=name, lw=0.8)
         cut = z["finish.depth"] > 0
-        axes[2].plot(z["finish.arc"][cut] * 1e3,
-                     z["finish.depth"][cut] * 1e3, ".", ms=2, label=name)
+        axes[2].plot(
+            z["finish.arc"][cut] * 1e3,
+            z["finish.depth"][cut] * 1e3,
+            ".",
+            ms=2,
+            label=name,
+        )
         tau = z["actuation.value"]
-        axes[3].plot(z["actuation.t"], np.linalg.norm(tau, axis=1),
-                     label=name, lw=0.6)
+        axes[3].plot(
+            z["actuation.t"], np.linalg.norm(tau, axis=1), label=name, lw=0.6
+        )
         if len(tau) >= 8:
             dt = float(np.median(np.diff(z["actuation.t"])))
             freq = np.fft.rfftfreq(len(tau), dt)
-            amp = np.linalg.norm(np.abs(np.fft.rfft(
-                tau - tau.mean(axis=0), axis=0)), axis=1) / len(tau)
+            amp = np.linalg.norm(
+                np.abs(np.fft.rfft(tau - tau.mean(axis=0), axis=0)), axis=1
+            ) / len(tau)
             spec_ax.semilogy(freq[1:], amp[1:], lw=0.7, label=name)
-    for ax, label in zip(axes, ("chamfering force error (N)",
-                                "normal force error e_f (N)",
-                                "chamfer depth on the part (mm)",
-                                "||joint torque|| (N m)")):
+    for ax, label in zip(
+        axes,
+        (
+            "chamfering force error (N)",
+            "normal force error e_f (N)",
+            "chamfer depth on the part (mm)",
+            "||joint torque|| (N m)",
+        ),
+    ):
         ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=7, ncol=3)

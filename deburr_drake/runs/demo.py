@@ -32,7 +32,10 @@ def frozen_adaptation(scenario: Scenario, truth: ContactTruth) -> Scenario:
     frozen = copy.deepcopy(scenario)
     frozen.estimator.adapt = False
     frozen.estimator.initial_estimates = [
-        truth.c0, truth.secant_stiffness, truth.c2]
+        truth.c0,
+        truth.secant_stiffness,
+        truth.c2,
+    ]
     frozen.controller.fuzzy.adapt = False
     return frozen
 
@@ -40,12 +43,17 @@ def frozen_adaptation(scenario: Scenario, truth: ContactTruth) -> Scenario:
 def run(scenario: Scenario, duration: float, **kwargs) -> RunLog:
     """Builds the scenario's cell (:func:`make_deburring_diagram`) and
     simulates it for ``duration`` s; ``kwargs`` go to :func:`simulate`."""
-    return simulate(make_deburring_diagram(scenario=scenario), scenario,
-                    duration=duration, **kwargs)
+    return simulate(
+        make_deburring_diagram(scenario=scenario),
+        scenario,
+        duration=duration,
+        **kwargs,
+    )
 
 
-def summarize(log: RunLog, truth: ContactTruth,
-              frozen: RunLog = None) -> Dict[str, float]:
+def summarize(
+    log: RunLog, truth: ContactTruth, frozen: RunLog = None
+) -> Dict[str, float]:
     """The numbers of the foundation issue, SI units."""
     sc = log.scenario
     d_star = sc.task.desired_depth
@@ -59,8 +67,10 @@ def summarize(log: RunLog, truth: ContactTruth,
     predicted = float(c_hat[0] + c_hat[1] * d_star)
     out["predicted_force_at_desired_depth"] = predicted
     out["true_force_at_desired_depth"] = truth.force_at_desired_depth
-    out["force_prediction_error_rel"] = abs(
-        predicted - truth.force_at_desired_depth) / truth.force_at_desired_depth
+    out["force_prediction_error_rel"] = (
+        abs(predicted - truth.force_at_desired_depth)
+        / truth.force_at_desired_depth
+    )
 
     # Feed: the command's arc speed against the feedrate law evaluated on
     # the logged tangential speed and chamfering force.
@@ -68,15 +78,19 @@ def summarize(log: RunLog, truth: ContactTruth,
     c = sc.command
     cmd_late = metrics.window(cmd["t"], SETTLE_TIME)
     out["command_speed"] = metrics.mean_speed(
-        cmd["t"][cmd_late], cmd["arc_position"][cmd_late])
+        cmd["t"][cmd_late], cmd["arc_position"][cmd_late]
+    )
     out["commanded_feed_mean"] = float(np.mean(cmd["feed"][cmd_late]))
     v_t = np.einsum("ij,ij->i", ch["n2"], ch["xdot_p"])[late]
     f_t = ch["f_t"][late]
     excess = f_t - c.threshold_power_force
-    law = np.where(excess > c.force_offset,
-                   np.abs(v_t) * (sc.task.desired_chamfering_force
-                                  - c.threshold_power_force) / excess,
-                   c.default_feed)
+    law = np.where(
+        excess > c.force_offset,
+        np.abs(v_t)
+        * (sc.task.desired_chamfering_force - c.threshold_power_force)
+        / excess,
+        c.default_feed,
+    )
     out["feedrate_law_mean"] = float(np.mean(law))
     out["chamfering_force_mean"] = float(np.mean(f_t))
 
@@ -84,23 +98,35 @@ def summarize(log: RunLog, truth: ContactTruth,
     fractions = []
     for k, axis in enumerate(sc.controller.fuzzy.axes):
         hw = rule_bases[k].resolved_dead_zone_half_width
-        fractions.append(metrics.dead_zone_fraction(
-            ctl["s"][metrics.window(ctl["t"], SETTLE_TIME), axis], hw))
+        fractions.append(
+            metrics.dead_zone_fraction(
+                ctl["s"][metrics.window(ctl["t"], SETTLE_TIME), axis], hw
+            )
+        )
     out["dead_zone_fraction_after_settle"] = float(min(fractions))
-    out["nan_detected"] = float(metrics.any_nan(
-        *[v for blocks in log.signals.values() for v in blocks.values()]))
+    out["nan_detected"] = float(
+        metrics.any_nan(
+            *[v for blocks in log.signals.values() for v in blocks.values()]
+        )
+    )
     out["wall_time_s"] = log.wall_time
     out["sim_time_s"] = log.sim_time
 
     if frozen is not None:
         fc = frozen["controller"]
         k_delta = frozen.scenario.controller.depth_gain
-        final = float(np.mean(fc["delta_d"][metrics.window(
-            fc["t"], fc["t"][-1] - 0.2)]))
+        final = float(
+            np.mean(fc["delta_d"][metrics.window(fc["t"], fc["t"][-1] - 0.2)])
+        )
         out["depth_final_frozen"] = final
         out["depth_time_constant"] = metrics.exponential_time_constant(
-            fc["t"], fc["delta_d"], final, lower=0.02 * d_star,
-            upper=0.3 * d_star)
+            fc["t"],
+            fc["delta_d"],
+            final,
+            lower=0.02 * d_star,
+            upper=0.3 * d_star,
+        )
         out["depth_time_constant_eq8"] = (1 + k_delta * truth.c2) / (
-            k_delta * truth.local_stiffness)
+            k_delta * truth.local_stiffness
+        )
     return out

@@ -33,8 +33,8 @@ transient the same with or without a burr.
 from __future__ import annotations
 
 import copy
-import math
 from dataclasses import asdict, dataclass
+import math
 from typing import Callable, Dict, Iterable, List, Optional
 
 import numpy as np
@@ -42,10 +42,22 @@ import numpy as np
 from deburr_drake.math import metrics
 from deburr_drake.runs.pass_metrics import TRANSIENT
 
-__all__ = ["BurrCell", "burr_bounds", "burr_metrics", "burr_scenario",
-           "run_burr_cell", "GRID_HEIGHTS", "GRID_LENGTHS", "GRID_FORCES",
-           "grid", "off_burr_feed", "DEPTH_RMS_LIMIT", "SPEED_FACTOR",
-           "LEAD_TIME", "run_cells"]
+__all__ = [
+    "BurrCell",
+    "burr_bounds",
+    "burr_metrics",
+    "burr_scenario",
+    "run_burr_cell",
+    "GRID_HEIGHTS",
+    "GRID_LENGTHS",
+    "GRID_FORCES",
+    "grid",
+    "off_burr_feed",
+    "DEPTH_RMS_LIMIT",
+    "SPEED_FACTOR",
+    "LEAD_TIME",
+    "run_cells",
+]
 
 #: The grid of the issue: burr height (m), burr length (m of arc), desired
 #: chamfering force (N).
@@ -73,15 +85,23 @@ class BurrCell:
 
     @property
     def label(self) -> str:
-        return (f"h {self.height * 1e3:.1f} mm, L {self.length * 1e3:.0f} "
-                f"mm, f_d {self.force:.0f} N")
+        return (
+            f"h {self.height * 1e3:.1f} mm, L {self.length * 1e3:.0f} "
+            f"mm, f_d {self.force:.0f} N"
+        )
 
 
-def grid(heights: Iterable[float] = GRID_HEIGHTS,
-         lengths: Iterable[float] = GRID_LENGTHS,
-         forces: Iterable[float] = GRID_FORCES) -> List[BurrCell]:
-    return [BurrCell(h, length, f) for f in forces for h in heights
-            for length in lengths]
+def grid(
+    heights: Iterable[float] = GRID_HEIGHTS,
+    lengths: Iterable[float] = GRID_LENGTHS,
+    forces: Iterable[float] = GRID_FORCES,
+) -> List[BurrCell]:
+    return [
+        BurrCell(h, length, f)
+        for f in forces
+        for h in heights
+        for length in lengths
+    ]
 
 
 def _cutting_coefficient(scenario) -> float:
@@ -89,20 +109,25 @@ def _cutting_coefficient(scenario) -> float:
     g per area of cross-section there (1.1 k_c on the paper's bore)."""
     from deburr_drake.cell.edge import make_contour
     from deburr_drake.math.geometry import removal_scale
+
     contour = make_contour(scenario)
     return scenario.process.cutting_coefficient * removal_scale(
         contour.curvature(contour.point_at(0.0)),
-        scenario.task.desired_depth, scenario.tool.cutter_radius)
+        scenario.task.desired_depth,
+        scenario.tool.cutter_radius,
+    )
 
 
 def off_burr_feed(scenario) -> float:
     """v_off (m/s): the feed law's steady feed off the burrs at the edge's
     start, or v0."""
     p, c = scenario.process, scenario.command
-    g = _cutting_coefficient(scenario) * scenario.task.desired_depth \
+    g = (
+        _cutting_coefficient(scenario)
+        * scenario.task.desired_depth
         * scenario.tool.engagement
-    excess = scenario.task.desired_chamfering_force \
-        - p.threshold_power_force
+    )
+    excess = scenario.task.desired_chamfering_force - p.threshold_power_force
     return max(c.default_feed, excess / g if g > 0 else math.inf)
 
 
@@ -118,14 +143,20 @@ def burr_bounds(scenario, cell: BurrCell) -> Dict[str, float]:
     }
 
 
-def burr_scenario(base, cell: BurrCell, *, lead_time: float = LEAD_TIME,
-                  max_duration: float = 40.0):
+def burr_scenario(
+    base,
+    cell: BurrCell,
+    *,
+    lead_time: float = LEAD_TIME,
+    max_duration: float = 40.0,
+):
     """``base`` (a Scenario) with one burr of ``cell`` placed so that the
     cutter's front reaches it ``lead_time`` s of off-burr feed after the
     contact transient, the desired force of ``cell``, and a stop once the
     command is 1 mm past the burr (or at ``max_duration`` s)."""
     from deburr_drake.cell.edge import make_contour
     from deburr_drake.config import BurrConfig
+
     sc = copy.deepcopy(base)
     sc.task.desired_chamfering_force = cell.force
     length = make_contour(sc).length
@@ -133,21 +164,30 @@ def burr_scenario(base, cell: BurrCell, *, lead_time: float = LEAD_TIME,
     start = (TRANSIENT + lead_time) * v_off + sc.tool.cutter_radius
     center = start + cell.length / 2
     if center + cell.length / 2 >= length:
-        raise ValueError(f"{cell.label}: the burr does not fit on the edge "
-                         f"({length * 1e3:.1f} mm)")
-    sc.process.burrs = [BurrConfig(center_fraction=center / length,
-                                   length=cell.length, height=cell.height,
-                                   thickness=cell.thickness)]
-    sc.simulation.stop_after_passes = (center + cell.length / 2 + 1e-3) \
-        / length
+        raise ValueError(
+            f"{cell.label}: the burr does not fit on the edge "
+            f"({length * 1e3:.1f} mm)"
+        )
+    sc.process.burrs = [
+        BurrConfig(
+            center_fraction=center / length,
+            length=cell.length,
+            height=cell.height,
+            thickness=cell.thickness,
+        )
+    ]
+    sc.simulation.stop_after_passes = (center + cell.length / 2 + 1e-3) / length
     sc.simulation.duration = max_duration
-    sc.name = (f"{base.name}_burr_{cell.height * 1e3:g}mm_"
-               f"{cell.length * 1e3:g}mm_{cell.force:g}N")
+    sc.name = (
+        f"{base.name}_burr_{cell.height * 1e3:g}mm_"
+        f"{cell.length * 1e3:g}mm_{cell.force:g}N"
+    )
     return sc.validate()
 
 
-def burr_metrics(signals: Dict[str, Dict[str, np.ndarray]], scenario,
-                 cell: BurrCell) -> Dict[str, float]:
+def burr_metrics(
+    signals: Dict[str, Dict[str, np.ndarray]], scenario, cell: BurrCell
+) -> Dict[str, float]:
     """The envelope's numbers of one run from its logged ``process`` and
     ``chamfer`` signals (RunLog.signals), SI units:
 
@@ -168,59 +208,83 @@ def burr_metrics(signals: Dict[str, Dict[str, np.ndarray]], scenario,
     t_contact = metrics.first_time(ch["t"], ch["f_n"] > 1.0)
     after = metrics.window(proc["t"], t_contact + TRANSIENT)
     on = metrics.window(proc["t"], t_contact) & (proc["burr_area"] > 0.0)
-    p, c = scenario.process, scenario.command
+    c = scenario.command
     law = np.where(
         proc["g"] > 0.0,
-        (cell.force - c.threshold_power_force) / np.maximum(proc["g"],
-                                                            1e-12),
-        c.default_feed)
-    nan = metrics.any_nan(*[v for blocks in signals.values()
-                            for v in blocks.values()])
+        (cell.force - c.threshold_power_force) / np.maximum(proc["g"], 1e-12),
+        c.default_feed,
+    )
+    nan = metrics.any_nan(
+        *[v for blocks in signals.values() for v in blocks.values()]
+    )
     out = {
         "max_chamfering_force_N": float(np.max(proc["f_t"][after]))
-        if np.any(after) else math.nan,
+        if np.any(after)
+        else math.nan,
         "max_tool_speed_m_s": float(np.max(proc["v_t"][after]))
-        if np.any(after) else math.nan,
+        if np.any(after)
+        else math.nan,
         "depth_rms_error_on_burr_m": metrics.rms(
-            proc["delta"][on] - scenario.task.desired_depth),
+            proc["delta"][on] - scenario.task.desired_depth
+        ),
         "feed_on_burr_m_s": float(np.mean(proc["v_t"][on]))
-        if np.any(on) else math.nan,
+        if np.any(on)
+        else math.nan,
         "feed_law_on_burr_m_s": float(np.mean(law[on]))
-        if np.any(on) else math.nan,
+        if np.any(on)
+        else math.nan,
         "burr_reached": float(np.any(on)),
         "nan": float(nan),
     }
     bounds = burr_bounds(scenario, cell)
-    ok = (not nan) and bool(np.any(on)) and all(
-        np.isfinite(out[k]) and out[k] <= limit
-        for k, limit in bounds.items())
+    ok = (
+        (not nan)
+        and bool(np.any(on))
+        and all(
+            np.isfinite(out[k]) and out[k] <= limit
+            for k, limit in bounds.items()
+        )
+    )
     out["passed"] = float(ok)
     return out
 
 
-def run_burr_cell(cell: BurrCell, base_name: str = "paper",
-                  base_text: Optional[str] = None) -> Dict[str, object]:
+def run_burr_cell(
+    cell: BurrCell, base_name: str = "paper", base_text: Optional[str] = None
+) -> Dict[str, object]:
     """Simulates one cell (in this process) and returns its numbers, the
     bounds and the run's simulated and wall time."""
     from deburr_drake.cell.diagram import make_deburring_diagram
     from deburr_drake.config import load_scenario
     from deburr_drake.runs.simulation import simulate
+
     base = load_scenario(base_name, text=base_text)
     sc = burr_scenario(base, cell)
-    log = simulate(make_deburring_diagram(scenario=sc), sc,
-                   loggers=("process", "chamfer"))
-    return {"cell": asdict(cell), "bounds": burr_bounds(sc, cell),
-            "sim_time_s": log.sim_time, "wall_time_s": log.wall_time,
-            **burr_metrics(log.signals, sc, cell)}
+    log = simulate(
+        make_deburring_diagram(scenario=sc), sc, loggers=("process", "chamfer")
+    )
+    return {
+        "cell": asdict(cell),
+        "bounds": burr_bounds(sc, cell),
+        "sim_time_s": log.sim_time,
+        "wall_time_s": log.wall_time,
+        **burr_metrics(log.signals, sc, cell),
+    }
 
 
-def run_cells(run: Callable, cells: list, *args, workers: int = 2,
-              on_row: Optional[Callable] = None) -> List[dict]:
+def run_cells(
+    run: Callable,
+    cells: list,
+    *args,
+    workers: int = 2,
+    on_row: Optional[Callable] = None,
+) -> List[dict]:
     """``run(cell, *args)`` for every cell in ``workers`` spawned
     processes; the rows in the cells' order, a crashed run as {"cell",
     "error", "passed": 0.0}; ``on_row(cell, row)`` as each is ready."""
-    import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
+    import multiprocessing
+
     rows = []
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(workers, mp_context=context) as pool:

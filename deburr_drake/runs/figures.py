@@ -24,13 +24,13 @@ out_dir)`` straight from a RunLog; ``compare_figures({"m = 0": logs0,
 from __future__ import annotations
 
 import pathlib
-import warnings
 from typing import Mapping
+import warnings
 
 import matplotlib
-import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+import numpy as np
 
 from deburr_drake.math.fuzzy import RuleBase
 
@@ -74,11 +74,15 @@ def _vec(logs, key, length=None, like=None):
     if a.ndim != 1:
         raise ValueError(f"{key} must be 1-D, got shape {a.shape}")
     if length is not None and a.shape[0] != length:
-        raise ValueError(f"{key} has shape {a.shape}, expected ({length},) to match {like}")
+        raise ValueError(
+            f"{key} has shape {a.shape}, expected ({length},) to match {like}"
+        )
     try:
         return a.astype(float)
     except (TypeError, ValueError):
-        raise ValueError(f"{key} must be numeric, got dtype {a.dtype}") from None
+        raise ValueError(
+            f"{key} must be numeric, got dtype {a.dtype}"
+        ) from None
 
 
 def _scalar(logs, key):
@@ -106,7 +110,9 @@ def _title(base, label):
 
 
 def _save(fig, path):
-    FigureCanvasAgg(fig)  # Agg canvas explicitly; global backend / pyplot untouched
+    FigureCanvasAgg(
+        fig
+    )  # Agg canvas explicitly; global backend / pyplot untouched
     fig.savefig(path, dpi=DPI)
     return pathlib.Path(path)
 
@@ -139,7 +145,9 @@ def _fig09_data(logs):
     delta (chamfer.t) is linearly interpolated onto controller.t, restricted to
     the overlap of the two time ranges (no extrapolation).
     """
-    tc, (delta_d, e_f) = _series(logs, "controller.t", ["controller.delta_d", "controller.e_f"])
+    tc, (delta_d, e_f) = _series(
+        logs, "controller.t", ["controller.delta_d", "controller.e_f"]
+    )
     tp, (delta,) = _series(logs, "chamfer.t", ["chamfer.delta"])
     if len(tp) == 0 or len(tc) == 0:
         return tc[:0], tc[:0], (tc, e_f)
@@ -171,7 +179,13 @@ def _plot_fig08(logs, out_dir, label):
     ax0.grid(alpha=0.3)
     ax1.plot(arc * MM, depth * MM, color="C2", label="chamfer depth δ")
     if d_des is not None:
-        ax1.axhline(d_des * MM, color="k", ls="--", lw=1, label=f"desired δ_d = {d_des * MM:g} mm")
+        ax1.axhline(
+            d_des * MM,
+            color="k",
+            ls="--",
+            lw=1,
+            label=f"desired δ_d = {d_des * MM:g} mm",
+        )
     ax1.set_ylabel("chamfer depth (mm)")
     ax1.set_xlabel("arc position along the edge (mm)")
     ax1.legend(loc="upper right", fontsize=8)
@@ -200,7 +214,9 @@ def _plot_fig09(logs, out_dir, label):
     ax1.plot(tc, e_f, color="C1", lw=0.8)
     for ax in (ax0, ax1):
         _mark_contact(ax, logs)
-    fig.suptitle(_title("Fig. 9  Depth and normal-force tracking errors", label))
+    fig.suptitle(
+        _title("Fig. 9  Depth and normal-force tracking errors", label)
+    )
     fig.tight_layout()
     return _save(fig, out_dir / FIGURE_NAMES["fig09"])
 
@@ -233,26 +249,39 @@ def _fuzzy_setup(logs):
     delta0 = float(_scalar(logs, "meta.delta0"))
     deltak = np.atleast_1d(_require(logs, "meta.deltak")).astype(float)
     if deltak.ndim != 1:
-        raise ValueError(f"meta.deltak must be 1-D (A,), got shape {deltak.shape}")
+        raise ValueError(
+            f"meta.deltak must be 1-D (A,), got shape {deltak.shape}"
+        )
     try:
         m, U = int(m), int(U)
     except (TypeError, ValueError):
-        raise ValueError(f"meta.fuzzy_order / meta.upsilon must be ints, got {m!r}, {U!r}") from None
+        raise ValueError(
+            f"meta.fuzzy_order / meta.upsilon must be ints, got {m!r}, {U!r}"
+        ) from None
     R = (2 * U + 1) ** 2
     if theta.ndim != 2 or theta.shape[1] != R:
-        raise ValueError(f"theta.final must have shape (A, (2U+1)**2) = (A, {R}), got {theta.shape}")
+        raise ValueError(
+            f"theta.final must have shape (A, (2U+1)**2) = (A, {R}), got {theta.shape}"
+        )
     A = theta.shape[0]
     if len(deltak) != A:
-        raise ValueError(f"meta.deltak has shape {deltak.shape}, expected ({A},) to match theta.final")
+        raise ValueError(
+            f"meta.deltak has shape {deltak.shape}, expected ({A},) to match theta.final"
+        )
     if "meta.fuzzy_axes" in logs:
         axes = np.atleast_1d(np.asarray(logs["meta.fuzzy_axes"]))
         if axes.shape != (A,):
-            raise ValueError(f"meta.fuzzy_axes has shape {axes.shape}, expected ({A},) to match theta.final")
+            raise ValueError(
+                f"meta.fuzzy_axes has shape {axes.shape}, expected ({A},) to match theta.final"
+            )
         axes = [int(a) for a in axes]
     else:
         axes = list(range(A))
     # Only plotting: dead-zone width is irrelevant, pass it so small U never fails R4's default.
-    bases = [RuleBase(m, U, delta0, float(dk), dead_zone_half_width=0.0) for dk in deltak]
+    bases = [
+        RuleBase(m, U, delta0, float(dk), dead_zone_half_width=0.0)
+        for dk in deltak
+    ]
     return theta.astype(float), bases, axes, m, U
 
 
@@ -282,7 +311,9 @@ def _plot_fuzzy_axis(theta_k, rb, k, task_axis, m, U, out_dir, label):
     ax0.bar3d(x, y, np.zeros_like(dz), 0.8, 0.8, dz, color=colors, shade=True)
     lo, hi = min(0.0, float(dz.min())), max(0.0, float(dz.max()))
     pad = 0.05 * ((hi - lo) or 1.0)
-    ax0.set_zlim(lo - pad, hi + pad)  # bar3d does not autoscale to negative heights
+    ax0.set_zlim(
+        lo - pad, hi + pad
+    )  # bar3d does not autoscale to negative heights
     ax0.set_xlabel("rule i  (y0 = i·Δ0)")
     ax0.set_ylabel(f"rule j  (s_{task_axis} = j·Δs)")
     ax0.set_zlabel("θ_ij (N)")
@@ -290,25 +321,39 @@ def _plot_fuzzy_axis(theta_k, rb, k, task_axis, m, U, out_dir, label):
 
     Y0, SK, u = _control_surface(rb, theta_k)
     ax1 = fig.add_subplot(1, 2, 2, projection="3d")
-    ax1.plot_surface(Y0 * MM, SK * MM, u, cmap="viridis", rstride=1, cstride=1,
-                     linewidth=0, antialiased=False)
+    ax1.plot_surface(
+        Y0 * MM,
+        SK * MM,
+        u,
+        cmap="viridis",
+        rstride=1,
+        cstride=1,
+        linewidth=0,
+        antialiased=False,
+    )
     ax1.set_xlabel("y0 = ‖x‖ (mm)")
     ax1.set_ylabel(f"s_{task_axis} (mm/s)")
     ax1.set_zlabel("u_f (N)")
     ax1.set_title(f"Control surface u_f(y0, s_{task_axis}), eq. (30)")
     for ax in (ax0, ax1):
         ax.set_box_aspect(None, zoom=0.88)  # keep axis labels inside the canvas
-    fig.suptitle(_title(f"Figs. 11/12  Fuzzy axis {k} (task axis {task_axis}): order m = {m}, "
-                        f"Υ = {U}, Δ0 = {rb.delta0 * MM:g} mm, Δs = {rb.deltak * MM:g} mm/s",
-                        label))
+    fig.suptitle(
+        _title(
+            f"Figs. 11/12  Fuzzy axis {k} (task axis {task_axis}): order m = {m}, "
+            f"Υ = {U}, Δ0 = {rb.delta0 * MM:g} mm, Δs = {rb.deltak * MM:g} mm/s",
+            label,
+        )
+    )
     fig.subplots_adjust(left=0.0, right=0.97, top=0.9, bottom=0.02, wspace=0.05)
     return _save(fig, out_dir / FIGURE_NAMES["fig11_12"].format(k=k))
 
 
 def _plot_fig11_12(logs, out_dir, label):
     theta, bases, axes, m, U = _fuzzy_setup(logs)
-    return [_plot_fuzzy_axis(theta[k], bases[k], k, axes[k], m, U, out_dir, label)
-            for k in range(len(bases))]
+    return [
+        _plot_fuzzy_axis(theta[k], bases[k], k, axes[k], m, U, out_dir, label)
+        for k in range(len(bases))
+    ]
 
 
 def _run(name, fn, *args):
@@ -316,12 +361,16 @@ def _run(name, fn, *args):
     try:
         out = fn(*args)
     except _Missing as e:
-        warnings.warn(f"figures: skipping {name}, missing key {e.args[0]!r}", stacklevel=3)
+        warnings.warn(
+            f"figures: skipping {name}, missing key {e.args[0]!r}", stacklevel=3
+        )
         return []
     return out if isinstance(out, list) else [out]
 
 
-def make_figures(logs: Mapping[str, np.ndarray], out_dir, *, label: str = "") -> list[pathlib.Path]:
+def make_figures(
+    logs: Mapping[str, np.ndarray], out_dir, *, label: str = ""
+) -> list[pathlib.Path]:
     """Write Figs. 8-12 of one run as PNGs into out_dir; return the written paths.
 
     logs: dict (or NpzFile) of the run's arrays, SI units.  label goes into titles,
@@ -348,12 +397,16 @@ def _collect(runs, name, fn):
         try:
             data[run] = fn(logs)
         except _Missing as e:
-            warnings.warn(f"figures: {name} without run {run!r}, missing key {e.args[0]!r}",
-                          stacklevel=3)
+            warnings.warn(
+                f"figures: {name} without run {run!r}, missing key {e.args[0]!r}",
+                stacklevel=3,
+            )
     return data
 
 
-def compare_figures(runs: Mapping[str, Mapping[str, np.ndarray]], out_dir) -> list[pathlib.Path]:
+def compare_figures(
+    runs: Mapping[str, Mapping[str, np.ndarray]], out_dir
+) -> list[pathlib.Path]:
     """Overlay Figs. 8 (chamfer depth), 9 and 10 of several runs, legend by run name.
 
     runs: {name: logs}, e.g. {"m = 0": logs0, "m = 2": logs2}.  A run lacking the
@@ -375,7 +428,13 @@ def compare_figures(runs: Mapping[str, Mapping[str, np.ndarray]], out_dir) -> li
             ax.plot(arc * MM, depth * MM, color=f"C{c}", lw=1, label=str(run))
             d_des = dd if dd is not None else d_des
         if d_des is not None:
-            ax.axhline(d_des * MM, color="k", ls="--", lw=1, label=f"desired {d_des * MM:g} mm")
+            ax.axhline(
+                d_des * MM,
+                color="k",
+                ls="--",
+                lw=1,
+                label=f"desired {d_des * MM:g} mm",
+            )
         ax.set_xlabel("arc position along the edge (mm)")
         ax.set_ylabel("chamfer depth (mm)")
         ax.grid(alpha=0.3)
@@ -389,11 +448,15 @@ def compare_figures(runs: Mapping[str, Mapping[str, np.ndarray]], out_dir) -> li
         fig = Figure(figsize=(8, 5.5))
         ax0, ax1 = _plot_fig09_axes(fig)
         for c, (run, (t, dz, (tc, e_f))) in enumerate(d9.items()):
-            ax0.plot(t, dz * MM, color=f"C{c}", lw=0.8, alpha=0.75, label=str(run))
+            ax0.plot(
+                t, dz * MM, color=f"C{c}", lw=0.8, alpha=0.75, label=str(run)
+            )
             ax1.plot(tc, e_f, color=f"C{c}", lw=0.8, alpha=0.75, label=str(run))
         ax0.legend(fontsize=8)
         ax1.legend(fontsize=8)
-        fig.suptitle(_title("Fig. 9  Depth and normal-force tracking errors", title))
+        fig.suptitle(
+            _title("Fig. 9  Depth and normal-force tracking errors", title)
+        )
         fig.tight_layout()
         paths.append(_save(fig, out_dir / COMPARE_NAMES["fig09"]))
 

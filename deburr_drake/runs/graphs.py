@@ -6,9 +6,9 @@ text itself."""
 
 from __future__ import annotations
 
+from pathlib import Path
 import shutil
 import subprocess
-from pathlib import Path
 from typing import List, Optional, Tuple
 
 from pydrake.systems.framework import Diagram
@@ -16,14 +16,20 @@ from pydrake.systems.framework import Diagram
 __all__ = ["write_graphs", "FORMATS", "GRAPHVIZ_HINT"]
 
 FORMATS = ("dot", "svg", "png")
-GRAPHVIZ_HINT = ("GraphViz's `dot` was not found: install it (Debian/Ubuntu: "
-                 "sudo apt-get install graphviz; macOS: brew install "
-                 "graphviz) to render svg/png; the .dot files are written")
+GRAPHVIZ_HINT = (
+    "GraphViz's `dot` was not found: install it (Debian/Ubuntu: "
+    "sudo apt-get install graphviz; macOS: brew install "
+    "graphviz) to render svg/png; the .dot files are written"
+)
 
 
-def write_graphs(diagram: Diagram, out: Path, *, fmt: str = "dot",
-                 max_depth: Optional[int] = None
-                 ) -> Tuple[List[Path], Optional[str]]:
+def write_graphs(
+    diagram: Diagram,
+    out: Path,
+    *,
+    fmt: str = "dot",
+    max_depth: Optional[int] = None,
+) -> Tuple[List[Path], Optional[str]]:
     """Writes ``<out>.dot`` (the whole diagram, to ``max_depth`` levels of
     nesting) and ``<out>_controller.dot`` (the controller alone), and
     renders both as ``fmt`` when it is svg or png. Returns the paths written
@@ -37,11 +43,11 @@ def write_graphs(diagram: Diagram, out: Path, *, fmt: str = "dot",
     out.parent.mkdir(parents=True, exist_ok=True)
     controller = diagram.GetSubsystemByName("controller")
     sources = {
-        out.with_suffix(".dot"): diagram.GetGraphvizString(
-            max_depth=max_depth) if max_depth is not None
+        out.with_suffix(".dot"): diagram.GetGraphvizString(max_depth=max_depth)
+        if max_depth is not None
         else diagram.GetGraphvizString(),
-        out.parent / f"{out.name}_controller.dot":
-            controller.GetGraphvizString(),
+        out.parent
+        / f"{out.name}_controller.dot": controller.GetGraphvizString(),
     }
     written = []
     for path, text in sources.items():
@@ -54,7 +60,8 @@ def write_graphs(diagram: Diagram, out: Path, *, fmt: str = "dot",
         return written, GRAPHVIZ_HINT
     for path in list(written):
         target = path.with_suffix(f".{fmt}")
-        subprocess.run([dot, f"-T{fmt}", str(path), "-o", str(target)],
-                       check=True)
+        subprocess.run(
+            [dot, f"-T{fmt}", str(path), "-o", str(target)], check=True
+        )
         written.append(target)
     return written, None

@@ -32,25 +32,41 @@ import numpy as np
 from deburr_drake.cell.edge import believed_contour, make_contour
 from deburr_drake.cell.truth import contact_truth
 from deburr_drake.control.controller import make_rule_bases
-from deburr_drake.control.probe import PROBE_STATE
 from deburr_drake.control.online import ONLINE_STATE
+from deburr_drake.control.probe import PROBE_STATE
 from deburr_drake.math import metrics
 from deburr_drake.math.registration import moved_contour
 from deburr_drake.runs.simulation import RunLog
 
-__all__ = ["pass_metrics", "PassMetrics", "PassWindow", "pass_window",
-           "finish_metrics", "force_metrics", "feed_metrics",
-           "estimate_metrics", "smoothness_metrics", "status_metrics",
-           "localisation_metrics", "registration_error", "first_edge_error",
-           "force_at_desired_depth", "TRANSIENT", "CONTACT_FORCE"]
+__all__ = [
+    "pass_metrics",
+    "PassMetrics",
+    "PassWindow",
+    "pass_window",
+    "finish_metrics",
+    "force_metrics",
+    "feed_metrics",
+    "estimate_metrics",
+    "smoothness_metrics",
+    "status_metrics",
+    "localisation_metrics",
+    "registration_error",
+    "first_edge_error",
+    "force_at_desired_depth",
+    "TRANSIENT",
+    "CONTACT_FORCE",
+]
 
 #: Excluded after contact is established (s), as the issue asks.
 TRANSIENT = 2.0
 #: Contact is established when ||f_n|| exceeds this (N).
 CONTACT_FORCE = 1.0
 
-_FINISH = ("chamfer_depth_mean_error_mm", "chamfer_depth_rms_error_mm",
-           "chamfer_depth_max_error_mm")
+_FINISH = (
+    "chamfer_depth_mean_error_mm",
+    "chamfer_depth_rms_error_mm",
+    "chamfer_depth_max_error_mm",
+)
 
 
 class PassMetrics(dict):
@@ -100,17 +116,19 @@ def pass_window(log: RunLog) -> PassWindow:
     ch = log["chamfer"]
     contact = metrics.first_time(ch["t"], ch["f_n"] > CONTACT_FORCE)
     if np.isfinite(contact):
-        reason = (f"no sample after the transient (contact at "
-                  f"{contact:.3f} s + {TRANSIENT:g} s; the run "
-                  f"stopped at {log.sim_time:.3f} s)")
+        reason = (
+            f"no sample after the transient (contact at "
+            f"{contact:.3f} s + {TRANSIENT:g} s; the run "
+            f"stopped at {log.sim_time:.3f} s)"
+        )
     else:
         reason = f"no contact (||f_n|| never above {CONTACT_FORCE:g} N)"
-    return PassWindow(contact=contact, start=contact + TRANSIENT,
-                      reason=reason)
+    return PassWindow(contact=contact, start=contact + TRANSIENT, reason=reason)
 
 
-def finish_metrics(log: RunLog, window: PassWindow, *,
-                   only_cut: bool = False) -> PassMetrics:
+def finish_metrics(
+    log: RunLog, window: PassWindow, *, only_cut: bool = False
+) -> PassMetrics:
     """The surface finish (Fig. 8): the depth error of the edge bins cut
     after the transient (mean, RMS, max, mm), ``edge_coverage`` (the
     fraction of bins cut) and ``burr_remaining_max_mm``. With ``only_cut``
@@ -121,8 +139,11 @@ def finish_metrics(log: RunLog, window: PassWindow, *,
     finish = log.signals.get("finish")
     if finish is None:
         for name in _FINISH + ("edge_coverage", "burr_remaining_max_mm"):
-            out.unavailable(name, "the process's final state could not be "
-                                  "read (" + log.stop_detail + ")")
+            out.unavailable(
+                name,
+                "the process's final state could not be "
+                "read (" + log.stop_detail + ")",
+            )
         return out
     contour = make_contour(sc)
     L, closed = contour.length, contour.closed
@@ -130,11 +151,19 @@ def finish_metrics(log: RunLog, window: PassWindow, *,
     arc, depth = finish["arc"], finish["depth"]
     transient = metrics.window(proc["t"], window.contact, window.start)
     if np.any(transient):
-        s_span = np.unwrap(proc["arc_position"][transient] / L * 2 * np.pi) \
-            * L / (2 * np.pi)
+        s_span = (
+            np.unwrap(proc["arc_position"][transient] / L * 2 * np.pi)
+            * L
+            / (2 * np.pi)
+        )
         start = s_span[0]
-        skip = metrics.arc_span_mask(arc, start - sc.tool.cutter_radius,
-                                     max(s_span.max(), start), L, closed)
+        skip = metrics.arc_span_mask(
+            arc,
+            start - sc.tool.cutter_radius,
+            max(s_span.max(), start),
+            L,
+            closed,
+        )
     else:
         skip = np.zeros(arc.shape, bool)
     if only_cut:
@@ -144,17 +173,21 @@ def finish_metrics(log: RunLog, window: PassWindow, *,
     if error.size and after:
         out["chamfer_depth_mean_error_mm"] = float(np.mean(error)) * 1e3
         out["chamfer_depth_rms_error_mm"] = metrics.rms(error) * 1e3
-        out["chamfer_depth_max_error_mm"] = \
-            float(np.max(np.abs(error))) * 1e3
+        out["chamfer_depth_max_error_mm"] = float(np.max(np.abs(error))) * 1e3
     else:
-        reason = window.reason if not after else \
-            "no edge bin was cut after the transient"
+        reason = (
+            window.reason
+            if not after
+            else "no edge bin was cut after the transient"
+        )
         for name in _FINISH:
             out.unavailable(name, reason)
     out["edge_coverage"] = float(np.mean(depth > 0.0))
-    out["burr_remaining_max_mm"] = \
-        float(np.max(finish["burr_remaining"])) * 1e3 \
-        if finish["burr_remaining"].size else 0.0
+    out["burr_remaining_max_mm"] = (
+        float(np.max(finish["burr_remaining"])) * 1e3
+        if finish["burr_remaining"].size
+        else 0.0
+    )
     return out
 
 
@@ -165,20 +198,37 @@ def force_metrics(log: RunLog, window: PassWindow) -> PassMetrics:
     out = PassMetrics()
     ch, ctl, proc = log["chamfer"], log["controller"], log["process"]
     f_td = log.scenario.task.desired_chamfering_force
-    window.late(out, "chamfering_force_rms_error_N", proc["t"],
-                lambda m: metrics.rms(proc["f_t"][m] - f_td))
-    window.late(out, "normal_force_rms_error_N", ctl["t"],
-                lambda m: metrics.rms(ctl["e_f"][m]))
-    window.late(out, "depth_tracking_rms_error_mm", ctl["t"],
-                lambda m: metrics.rms(
-                    np.interp(ctl["t"][m], ch["t"], ch["delta"])
-                    - ctl["delta_d"][m]) * 1e3)
+    window.late(
+        out,
+        "chamfering_force_rms_error_N",
+        proc["t"],
+        lambda m: metrics.rms(proc["f_t"][m] - f_td),
+    )
+    window.late(
+        out,
+        "normal_force_rms_error_N",
+        ctl["t"],
+        lambda m: metrics.rms(ctl["e_f"][m]),
+    )
+    window.late(
+        out,
+        "depth_tracking_rms_error_mm",
+        ctl["t"],
+        lambda m: (
+            metrics.rms(
+                np.interp(ctl["t"][m], ch["t"], ch["delta"]) - ctl["delta_d"][m]
+            )
+            * 1e3
+        ),
+    )
     return out
 
 
 def _burr_spans(scenario, length):
-    return [(b.center_fraction * length, b.length / 2)
-            for b in scenario.process.burrs]
+    return [
+        (b.center_fraction * length, b.length / 2)
+        for b in scenario.process.burrs
+    ]
 
 
 def feed_metrics(log: RunLog, window: PassWindow) -> PassMetrics:
@@ -198,18 +248,24 @@ def feed_metrics(log: RunLog, window: PassWindow) -> PassMetrics:
     on = np.zeros(lead.shape, bool)
     for center, half in _burr_spans(sc, L):
         on |= np.abs(metrics.arc_distance(lead, center, L, closed)) < half
-    for name, mask, where in (("feed_mean_on_burrs_mm_s", on, "on"),
-                              ("feed_mean_off_burrs_mm_s", ~on, "off")):
+    for name, mask, where in (
+        ("feed_mean_on_burrs_mm_s", on, "on"),
+        ("feed_mean_off_burrs_mm_s", ~on, "off"),
+    ):
         if np.any(mask):
             out[name] = float(np.mean(speed[mask])) * 1e3
         else:
-            out.unavailable(name, window.reason if not np.any(late) else
-                            f"the tool was never {where} a burr after the "
-                            "transient")
+            out.unavailable(
+                name,
+                window.reason
+                if not np.any(late)
+                else f"the tool was never {where} a burr after the transient",
+            )
     feed = log["command"]["feed"]
     if len(feed):
         out["feed_at_max_fraction"] = float(
-            np.mean(feed >= sc.command.max_feed * (1.0 - 1e-9)))
+            np.mean(feed >= sc.command.max_feed * (1.0 - 1e-9))
+        )
     else:
         out.unavailable("feed_at_max_fraction", "no command sample")
     return out
@@ -242,8 +298,9 @@ def _last_estimate_on_the_part(log: RunLog) -> int:
     return max(int(np.searchsorted(times, full[-1], side="right")) - 1, 0)
 
 
-def estimate_metrics(log: RunLog, true_force_at_desired_depth:
-                     Optional[float] = None) -> PassMetrics:
+def estimate_metrics(
+    log: RunLog, true_force_at_desired_depth: Optional[float] = None
+) -> PassMetrics:
     """The estimator's c0 + c1 delta* (``predicted_...``, N) at the end of
     the pass on the part (:func:`_last_estimate_on_the_part`) against
     ``true_force_at_desired_depth`` (the plant's normal force at delta*,
@@ -252,21 +309,26 @@ def estimate_metrics(log: RunLog, true_force_at_desired_depth:
     out = PassMetrics()
     estimates = log["estimates"]["value"]
     if not len(estimates):
-        for name in ("predicted_force_at_desired_depth_N",
-                     "force_prediction_error_rel"):
+        for name in (
+            "predicted_force_at_desired_depth_N",
+            "force_prediction_error_rel",
+        ):
             out.unavailable(name, "no estimate was logged")
         return out
     c_hat = estimates[_last_estimate_on_the_part(log)]
     predicted = float(c_hat[0] + c_hat[1] * log.scenario.task.desired_depth)
     out["predicted_force_at_desired_depth_N"] = predicted
     if true_force_at_desired_depth is None:
-        out.unavailable("force_prediction_error_rel",
-                        "the true force at delta* was not given")
+        out.unavailable(
+            "force_prediction_error_rel",
+            "the true force at delta* was not given",
+        )
     else:
         out["true_force_at_desired_depth_N"] = true_force_at_desired_depth
-        out["force_prediction_error_rel"] = abs(
-            predicted - true_force_at_desired_depth) \
+        out["force_prediction_error_rel"] = (
+            abs(predicted - true_force_at_desired_depth)
             / true_force_at_desired_depth
+        )
     return out
 
 
@@ -279,28 +341,47 @@ def smoothness_metrics(log: RunLog, window: PassWindow) -> PassMetrics:
     out = PassMetrics()
     sc = log.scenario
     ch, ctl, act = log["chamfer"], log["controller"], log["actuation"]
-    window.late(out, "torque_total_variation", act["t"],
-                lambda m: metrics.total_variation(act["value"][m]))
+    window.late(
+        out,
+        "torque_total_variation",
+        act["t"],
+        lambda m: metrics.total_variation(act["value"][m]),
+    )
     axes = list(sc.controller.fuzzy.axes)
-    window.late(out, "fuzzy_term_total_variation", ctl["t"],
-                lambda m: metrics.total_variation(ctl["u_fuzzy"][m][:, axes]))
+    window.late(
+        out,
+        "fuzzy_term_total_variation",
+        ctl["t"],
+        lambda m: metrics.total_variation(ctl["u_fuzzy"][m][:, axes]),
+    )
     # The roughness over y0 = ||x_p|| and s_k from their least to their
     # largest value after the transient: the rare excursions into the next
     # cells are where an m = 0 surface steps; the largest over the axes.
     theta = log.signals.get("theta", {}).get("final")
     if theta is not None:
-        window.late(out, "control_surface_roughness_N", ctl["t"],
-                    lambda m: _surface_roughness(
-                        make_rule_bases(sc.controller), theta,
-                        np.linalg.norm(ch["x_p"], axis=1)[
-                            window.mask(ch["t"])],
-                        ctl["s"][m][:, axes]))
-    window.late(out, "sliding_variable_p01_mm_s", ctl["t"],
-                lambda m: float(np.percentile(ctl["s"][m][:, axes], 1))
-                * 1e3)
-    window.late(out, "sliding_variable_p99_mm_s", ctl["t"],
-                lambda m: float(np.percentile(ctl["s"][m][:, axes], 99))
-                * 1e3)
+        window.late(
+            out,
+            "control_surface_roughness_N",
+            ctl["t"],
+            lambda m: _surface_roughness(
+                make_rule_bases(sc.controller),
+                theta,
+                np.linalg.norm(ch["x_p"], axis=1)[window.mask(ch["t"])],
+                ctl["s"][m][:, axes],
+            ),
+        )
+    window.late(
+        out,
+        "sliding_variable_p01_mm_s",
+        ctl["t"],
+        lambda m: float(np.percentile(ctl["s"][m][:, axes], 1)) * 1e3,
+    )
+    window.late(
+        out,
+        "sliding_variable_p99_mm_s",
+        ctl["t"],
+        lambda m: float(np.percentile(ctl["s"][m][:, axes], 99)) * 1e3,
+    )
     return out
 
 
@@ -311,10 +392,14 @@ def _surface_roughness(rule_bases, theta, y0, s) -> float:
     if not len(y0):
         return float("nan")
     y0_range = (float(np.min(y0)), float(np.max(y0)))
-    values = [metrics.surface_roughness(
-        lambda a, b, rb=rb, w=theta[k]: rb.evaluate(w, a, b), y0_range,
-        (float(np.min(s[:, k])), float(np.max(s[:, k]))))
-        for k, rb in enumerate(rule_bases)]
+    values = [
+        metrics.surface_roughness(
+            lambda a, b, rb=rb, w=theta[k]: rb.evaluate(w, a, b),
+            y0_range,
+            (float(np.min(s[:, k])), float(np.max(s[:, k]))),
+        )
+        for k, rb in enumerate(rule_bases)
+    ]
     finite = [v for v in values if np.isfinite(v)]
     return max(finite) if finite else float("nan")
 
@@ -326,13 +411,16 @@ def status_metrics(log: RunLog) -> PassMetrics:
     out["sim_time_s"] = log.sim_time
     out["wall_time_s"] = log.wall_time
     out["completed_pass"] = float(log.completed_pass)
-    out["nan_detected"] = float(log.stop_reason == "nan" or metrics.any_nan(
-        *[v for blocks in log.signals.values() for v in blocks.values()]))
+    out["nan_detected"] = float(
+        log.stop_reason == "nan"
+        or metrics.any_nan(
+            *[v for blocks in log.signals.values() for v in blocks.values()]
+        )
+    )
     return out
 
 
-def registration_error(scenario, registration, samples: int = 400
-                       ) -> float:
+def registration_error(scenario, registration, samples: int = 400) -> float:
     """m: the largest distance, along the real edge's normal, between the
     believed part's zero-depth path moved by ``registration`` (dx, dy,
     dyaw, dradius) and the real one, over ``samples`` points evenly along
@@ -340,9 +428,12 @@ def registration_error(scenario, registration, samples: int = 400
     moved = moved_contour(believed_contour(scenario), registration)
     real = make_contour(scenario)
     L = moved.length if np.isfinite(moved.length) else 1.0
-    return float(max(abs(real.phi(moved.point_at(s)))
-                     for s in np.linspace(0.0, L, samples,
-                                          endpoint=not moved.closed)))
+    return float(
+        max(
+            abs(real.phi(moved.point_at(s)))
+            for s in np.linspace(0.0, L, samples, endpoint=not moved.closed)
+        )
+    )
 
 
 def localisation_metrics(log: RunLog) -> PassMetrics:
@@ -364,18 +455,21 @@ def localisation_metrics(log: RunLog) -> PassMetrics:
             out["probing_time_s"] = done
             out["pass_time_s"] = log.stop_time - done
         else:
-            out.unavailable("probing_time_s", "probing did not finish "
-                            f"(the run stopped at {log.stop_time:.3f} s)")
+            out.unavailable(
+                "probing_time_s",
+                "probing did not finish "
+                f"(the run stopped at {log.stop_time:.3f} s)",
+            )
             out.unavailable("pass_time_s", "probing did not finish")
         if log.completed_pass:
             out["cycle_time_s"] = log.stop_time
         else:
-            out.unavailable("cycle_time_s", "the pass did not complete "
-                            f"({log.stop_reason})")
+            out.unavailable(
+                "cycle_time_s", f"the pass did not complete ({log.stop_reason})"
+            )
         out["probe_touches"] = float(PROBE_STATE.get(last, "touches"))
         out["probe_touches_kept"] = float(PROBE_STATE.get(last, "kept"))
-        out["probe_fit_rms_mm"] = float(PROBE_STATE.get(last, "fit_rms")) \
-            * 1e3
+        out["probe_fit_rms_mm"] = float(PROBE_STATE.get(last, "fit_rms")) * 1e3
         reg = PROBE_STATE.get(last, "registration")
         out["probe_offset_x_mm"] = float(reg[0]) * 1e3
         out["probe_offset_y_mm"] = float(reg[1]) * 1e3
@@ -383,16 +477,19 @@ def localisation_metrics(log: RunLog) -> PassMetrics:
         out["probe_radius_mm"] = float(reg[3]) * 1e3
         if done >= 0.0:
             base = np.array(reg, float)
-            out["probe_registration_error_mm"] = registration_error(
-                log.scenario, base) * 1e3
+            out["probe_registration_error_mm"] = (
+                registration_error(log.scenario, base) * 1e3
+            )
     online = log.signals.get("registration")
     if online is not None and len(online["t"]):
         corr = ONLINE_STATE.get(online["value"][-1], "correction")
         out["online_offset_x_mm"] = float(corr[0]) * 1e3
         out["online_offset_y_mm"] = float(corr[1]) * 1e3
         out["online_yaw_rad"] = float(corr[2])
-        out["online_registration_error_mm"] = registration_error(
-            log.scenario, base + np.asarray(corr, float)) * 1e3
+        out["online_registration_error_mm"] = (
+            registration_error(log.scenario, base + np.asarray(corr, float))
+            * 1e3
+        )
     return out
 
 
@@ -411,17 +508,21 @@ def first_edge_error(log: RunLog, fraction: float = 0.1) -> float:
     proc = log["process"]
     k = int(np.searchsorted(proc["t"], window.contact))
     start = float(proc["arc_position"][min(k, len(proc["t"]) - 1)])
-    span = metrics.arc_span_mask(finish["arc"], start, start + fraction * L,
-                                 L, closed)
+    span = metrics.arc_span_mask(
+        finish["arc"], start, start + fraction * L, L, closed
+    )
     if not np.any(span):
         return float("nan")
     error = finish["depth"][span] - sc.task.desired_depth
     return metrics.rms(error) * 1e3
 
 
-def pass_metrics(log: RunLog, *,
-                 true_force_at_desired_depth: Optional[float] = None,
-                 only_cut: bool = False) -> PassMetrics:
+def pass_metrics(
+    log: RunLog,
+    *,
+    true_force_at_desired_depth: Optional[float] = None,
+    only_cut: bool = False,
+) -> PassMetrics:
     """Every metric of the pass, SI units unless the name says mm: the
     families above over :func:`pass_window`, and ``contact_time_s``.
 
@@ -435,10 +536,14 @@ def pass_metrics(log: RunLog, *,
         out["contact_time_s"] = window.contact
     else:
         out.unavailable("contact_time_s", window.reason)
-    for family in (finish_metrics(log, window, only_cut=only_cut),
-                   force_metrics(log, window), feed_metrics(log, window),
-                   estimate_metrics(log, true_force_at_desired_depth),
-                   smoothness_metrics(log, window), status_metrics(log),
-                   localisation_metrics(log)):
+    for family in (
+        finish_metrics(log, window, only_cut=only_cut),
+        force_metrics(log, window),
+        feed_metrics(log, window),
+        estimate_metrics(log, true_force_at_desired_depth),
+        smoothness_metrics(log, window),
+        status_metrics(log),
+        localisation_metrics(log),
+    ):
         out.merge(family)
     return out

@@ -16,8 +16,8 @@ not cut: the run stops once the sequence is done):
 from __future__ import annotations
 
 import copy
-import math
 from dataclasses import dataclass
+import math
 from typing import Dict, List, Sequence
 
 import numpy as np
@@ -28,21 +28,27 @@ from deburr_drake.config import Scenario
 from deburr_drake.control.probe import PROBE_STATE
 from deburr_drake.runs.simulation import simulate
 
-__all__ = ["ProbeResult", "probe_once", "probe_accuracy",
-           "probe_qualification", "probing_duration", "summarize",
-           "refit_touches"]
+__all__ = [
+    "ProbeResult",
+    "probe_once",
+    "probe_accuracy",
+    "probe_qualification",
+    "probing_duration",
+    "summarize",
+    "refit_touches",
+]
 
 
 @dataclass
 class ProbeResult:
     points: int
-    noise_std: float        # N
-    offset: np.ndarray      # m, part_error.offset (believed - real)
+    noise_std: float  # N
+    offset: np.ndarray  # m, part_error.offset (believed - real)
     registration: np.ndarray  # dx, dy, dyaw, dradius found
     touches: int
     kept: int
-    fit_rms: float          # m
-    probing_time: float     # s, nan when it did not finish
+    fit_rms: float  # m
+    probing_time: float  # s, nan when it did not finish
 
     @property
     def centre_error(self) -> np.ndarray:
@@ -64,12 +70,21 @@ def probing_duration(scenario: Scenario) -> float:
     p = scenario.localisation.probe
     contour = make_contour(scenario)
     spacing = p.spacing or contour.length / p.points
-    per = (spacing / p.travel_speed * 1.5 + 0.1 + p.settle_time
-           + p.search_distance / p.approach_speed
-           + p.retract / p.travel_speed * 1.5 + 0.1)
+    per = (
+        spacing / p.travel_speed * 1.5
+        + 0.1
+        + p.settle_time
+        + p.search_distance / p.approach_speed
+        + p.retract / p.travel_speed * 1.5
+        + 0.1
+    )
     back = spacing if contour.closed else spacing * p.points
-    return p.points * per + back / p.travel_speed * 1.5 + \
-        p.standoff / p.approach_speed + 1.0
+    return (
+        p.points * per
+        + back / p.travel_speed * 1.5
+        + p.standoff / p.approach_speed
+        + 1.0
+    )
 
 
 def probe_once(scenario: Scenario) -> ProbeResult:
@@ -90,27 +105,43 @@ def probe_once(scenario: Scenario) -> ProbeResult:
         x = seen["context"].get_discrete_state(0).get_value()
         return "probed" if PROBE_STATE.get(x, "done_time") >= 0 else None
 
-    log = simulate(make_deburring_diagram(scenario=s), s,
-                   duration=probing_duration(s), loggers=["probe"],
-                   initial_state=capture, should_stop=probed)
+    log = simulate(
+        make_deburring_diagram(scenario=s),
+        s,
+        duration=probing_duration(s),
+        loggers=["probe"],
+        initial_state=capture,
+        should_stop=probed,
+    )
     # The sequence's state where the run stopped (the log's last sample
     # may be one before the update that finished it).
-    last = (seen["context"].get_discrete_state(0).get_value()
-            if "context" in seen else log["probe"]["value"][-1])
+    last = (
+        seen["context"].get_discrete_state(0).get_value()
+        if "context" in seen
+        else log["probe"]["value"][-1]
+    )
     done = float(PROBE_STATE.get(last, "done_time"))
     return ProbeResult(
-        points=s.localisation.probe.points, noise_std=s.sensor.noise_std,
+        points=s.localisation.probe.points,
+        noise_std=s.sensor.noise_std,
         offset=np.array(s.part_error.offset, float),
         registration=np.array(PROBE_STATE.get(last, "registration")),
         touches=int(PROBE_STATE.get(last, "touches")),
         kept=int(PROBE_STATE.get(last, "kept")),
         fit_rms=float(PROBE_STATE.get(last, "fit_rms")),
-        probing_time=done if done >= 0 else float("nan"))
+        probing_time=done if done >= 0 else float("nan"),
+    )
 
 
-def probe_accuracy(scenario: Scenario, *, points: Sequence[int],
-                   noise: Sequence[float], repeats: int, max_offset: float,
-                   seed: int = 0) -> List[ProbeResult]:
+def probe_accuracy(
+    scenario: Scenario,
+    *,
+    points: Sequence[int],
+    noise: Sequence[float],
+    repeats: int,
+    max_offset: float,
+    seed: int = 0,
+) -> List[ProbeResult]:
     """Every (N, noise) ``repeats`` times, each repeat with its own part
     offset (uniform over a disc of ``max_offset``) and noise seed; the same
     offsets for every (N, noise)."""
@@ -119,8 +150,12 @@ def probe_accuracy(scenario: Scenario, *, points: Sequence[int],
     for k in range(repeats):
         r = max_offset * math.sqrt(rng.uniform())
         a = rng.uniform(0, 2 * math.pi)
-        draws.append(([r * math.cos(a), r * math.sin(a), 0.0],
-                      int(rng.integers(1, 1_000_000))))
+        draws.append(
+            (
+                [r * math.cos(a), r * math.sin(a), 0.0],
+                int(rng.integers(1, 1_000_000)),
+            )
+        )
     out = []
     for n in points:
         for sigma in noise:
@@ -134,8 +169,9 @@ def probe_accuracy(scenario: Scenario, *, points: Sequence[int],
     return out
 
 
-def probe_qualification(scenario: Scenario, *, repeats: int = 25,
-                        seed: int = 0) -> List[ProbeResult]:
+def probe_qualification(
+    scenario: Scenario, *, repeats: int = 25, seed: int = 0
+) -> List[ProbeResult]:
     """The reference ring (no part error) probed ``repeats`` times with
     the radius fitted, each with its own noise seed."""
     rng = np.random.default_rng(seed)
@@ -160,19 +196,21 @@ def summarize(results: List[ProbeResult]) -> Dict[str, float]:
         "runs": len(results),
         "centre_std_x_mm": float(np.std(e[:, 0])),
         "centre_std_y_mm": float(np.std(e[:, 1])),
-        "centre_error_rms_mm": float(np.sqrt(np.mean(norm ** 2))),
+        "centre_error_rms_mm": float(np.sqrt(np.mean(norm**2))),
         "centre_error_max_mm": float(np.max(norm)),
         "radius_error_mean_mm": float(np.mean(rad)),
         "radius_error_std_mm": float(np.std(rad)),
         "fit_rms_mean_um": float(np.mean([r.fit_rms for r in results]) * 1e6),
         "kept_mean": float(np.mean([r.kept for r in results])),
-        "probing_time_mean_s": float(np.nanmean(
-            [r.probing_time for r in results])),
+        "probing_time_mean_s": float(
+            np.nanmean([r.probing_time for r in results])
+        ),
     }
 
 
-def refit_touches(scenario: Scenario, touch_points,
-                  thresholds: Sequence[float]) -> List[Dict[str, float]]:
+def refit_touches(
+    scenario: Scenario, touch_points, thresholds: Sequence[float]
+) -> List[Dict[str, float]]:
     """The probe's fit redone on a run's recorded touches (its
     ``touch_points`` log's last row, N x 4: x, y, z, made) with each
     ``max_residual`` of ``thresholds`` (m): the touches kept and the
@@ -181,17 +219,25 @@ def refit_touches(scenario: Scenario, touch_points,
     done, without running the cell again."""
     from deburr_drake.math.registration import registration_from_points
     from deburr_drake.runs.pass_metrics import registration_error
+
     t = np.asarray(touch_points, float).reshape(-1, 4)
     points = t[t[:, 3] > 0.5, :3]
     believed = believed_contour(scenario)
     out = []
     for threshold in thresholds:
         fit = registration_from_points(
-            believed, points, max_residual=float(threshold),
-            fit_radius=scenario.localisation.probe.fit_radius)
-        out.append({"max_residual": float(threshold),
-                    "touches": int(len(points)),
-                    "kept": int(fit.kept.sum()),
-                    "error": registration_error(scenario, fit.registration),
-                    "fit_rms": fit.rms})
+            believed,
+            points,
+            max_residual=float(threshold),
+            fit_radius=scenario.localisation.probe.fit_radius,
+        )
+        out.append(
+            {
+                "max_residual": float(threshold),
+                "touches": int(len(points)),
+                "kept": int(fit.kept.sum()),
+                "error": registration_error(scenario, fit.registration),
+                "fit_rms": fit.rms,
+            }
+        )
     return out

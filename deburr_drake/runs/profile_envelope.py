@@ -24,8 +24,8 @@ law slows in a pocket's corners (s > 1) and speeds up round a boss's
 from __future__ import annotations
 
 import copy
-import math
 from dataclasses import asdict, dataclass
+import math
 from typing import Dict, Iterable, List, Optional
 
 import numpy as np
@@ -33,9 +33,22 @@ import numpy as np
 from deburr_drake.math.geometry import removal_scale
 from deburr_drake.runs.pass_metrics import TRANSIENT, pass_metrics
 
-__all__ = ["FilletCell", "GRID_FILLETS", "GRID_SIDES", "GRID_FORCES",
-           "HALF_SIDE", "LEAD", "TAIL", "LIMITS", "grid", "fillet_scenario",
-           "first_fillet", "fillet_metrics", "run_fillet_cell", "law_feeds"]
+__all__ = [
+    "FilletCell",
+    "GRID_FILLETS",
+    "GRID_SIDES",
+    "GRID_FORCES",
+    "HALF_SIDE",
+    "LEAD",
+    "TAIL",
+    "LIMITS",
+    "grid",
+    "fillet_scenario",
+    "first_fillet",
+    "fillet_metrics",
+    "run_fillet_cell",
+    "law_feeds",
+]
 
 #: m: cutter radius + 1 mm to 30 mm (the 60 mm square's circle) on the
 #: paper's 3 mm cutter.
@@ -50,8 +63,11 @@ LEAD = 0.012
 #: m of path past the fillet's end before the run stops.
 TAIL = 0.006
 #: The pass bounds (m, N).
-LIMITS = {"chamfer_depth_rms_error_mm": 0.05, "chamfer_depth_max_error_mm":
-          0.1, "chamfering_force_rms_error_N": 1.5}
+LIMITS = {
+    "chamfer_depth_rms_error_mm": 0.05,
+    "chamfer_depth_max_error_mm": 0.1,
+    "chamfering_force_rms_error_N": 1.5,
+}
 
 
 @dataclass
@@ -65,14 +81,15 @@ class FilletCell:
     @property
     def label(self) -> str:
         kind = "pocket" if self.side == "inner" else "boss"
-        return (f"{kind} R {self.fillet * 1e3:g} mm, f_d {self.force:g} N")
+        return f"{kind} R {self.fillet * 1e3:g} mm, f_d {self.force:g} N"
 
 
-def grid(fillets: Iterable[float] = GRID_FILLETS,
-         sides: Iterable[str] = GRID_SIDES,
-         forces: Iterable[float] = GRID_FORCES) -> List[FilletCell]:
-    return [FilletCell(r, s, f) for s in sides for r in fillets
-            for f in forces]
+def grid(
+    fillets: Iterable[float] = GRID_FILLETS,
+    sides: Iterable[str] = GRID_SIDES,
+    forces: Iterable[float] = GRID_FORCES,
+) -> List[FilletCell]:
+    return [FilletCell(r, s, f) for s in sides for r in fillets for f in forces]
 
 
 def first_fillet(contour):
@@ -82,7 +99,7 @@ def first_fillet(contour):
     best = None
     for _, _, _, u, length in contour.arcs():
         a = float(contour.parameter_to_arc(u))
-        if a > L - length + 1e-9:   # the start lies inside it
+        if a > L - length + 1e-9:  # the start lies inside it
             a -= L
         if best is None or a < best[0]:
             best = (a, a + length)
@@ -94,6 +111,7 @@ def fillet_scenario(base, cell: FilletCell, *, max_duration: float = 90.0):
     cell's desired force, from ``LEAD`` before the first fillet to
     ``TAIL`` past it."""
     from deburr_drake.cell.edge import make_contour
+
     sc = copy.deepcopy(base)
     h, r = HALF_SIDE, cell.fillet
     sc.edge.kind = "profile"
@@ -102,8 +120,11 @@ def fillet_scenario(base, cell: FilletCell, *, max_duration: float = 90.0):
     sc.edge.side = cell.side
     sc.edge.direction = 1
     # the right side's path runs at x = h -+ cutter radius up to y = h - r
-    x = h - sc.tool.cutter_radius if cell.side == "inner" \
+    x = (
+        h - sc.tool.cutter_radius
+        if cell.side == "inner"
         else h + sc.tool.cutter_radius
+    )
     sc.edge.start_angle = math.atan2(max(0.0, h - r - LEAD), x)
     sc.task.desired_chamfering_force = cell.force
     sc.process.burrs = []
@@ -111,7 +132,7 @@ def fillet_scenario(base, cell: FilletCell, *, max_duration: float = 90.0):
     _, end = first_fillet(contour)
     sc.simulation.stop_after_passes = (end + TAIL) / contour.length
     sc.simulation.duration = max_duration
-    sc.name = (f"{base.name}_{cell.side}_R{r * 1e3:g}mm_{cell.force:g}N")
+    sc.name = f"{base.name}_{cell.side}_R{r * 1e3:g}mm_{cell.force:g}N"
     return sc.validate()
 
 
@@ -120,10 +141,13 @@ def _law_feed(scenario, scale: float) -> float:
     line's: (f_d - P'_th) / g (control.command.feedrate's fixed point), v0
     when f_d - P'_th is within v_eps."""
     p, c = scenario.process, scenario.command
-    g = p.cutting_coefficient * scale * scenario.task.desired_depth \
+    g = (
+        p.cutting_coefficient
+        * scale
+        * scenario.task.desired_depth
         * scenario.tool.engagement
-    excess = scenario.task.desired_chamfering_force \
-        - p.threshold_power_force
+    )
+    excess = scenario.task.desired_chamfering_force - p.threshold_power_force
     return excess / g if excess > c.force_offset else c.default_feed
 
 
@@ -131,8 +155,10 @@ def law_feeds(scenario, curvature: float):
     """(line, fillet) steady feeds (m/s) of the feed law, the fillet's of
     ``curvature`` (1/m)."""
     d, r = scenario.task.desired_depth, scenario.tool.cutter_radius
-    return (_law_feed(scenario, 1.0),
-            _law_feed(scenario, removal_scale(curvature, d, r)))
+    return (
+        _law_feed(scenario, 1.0),
+        _law_feed(scenario, removal_scale(curvature, d, r)),
+    )
 
 
 def fillet_metrics(log, scenario) -> Dict[str, float]:
@@ -140,14 +166,18 @@ def fillet_metrics(log, scenario) -> Dict[str, float]:
     feeds on the line before the fillet and in it, the law's values
     there) and ``passed``."""
     from deburr_drake.cell.edge import make_contour
+
     values = pass_metrics(log, only_cut=True)
     contour = make_contour(scenario)
     start, end = first_fillet(contour)
     proc = log["process"]
     t, arc, v = proc["t"], proc["arc_position"], proc["v_t"]
     L = contour.length
-    s = np.where(arc > L - 1e-3 + min(start, 0.0), arc - L, arc) \
-        if start < 0 else arc
+    s = (
+        np.where(arc > L - 1e-3 + min(start, 0.0), arc - L, arc)
+        if start < 0
+        else arc
+    )
     contact = values.get("contact_time_s", math.nan)
     after = t >= (contact if np.isfinite(contact) else 0.0) + TRANSIENT
     on_line = after & (s < start)
@@ -155,33 +185,43 @@ def fillet_metrics(log, scenario) -> Dict[str, float]:
     kappa = contour.curvature(contour.point_at(0.5 * (start + end) % L))
     law_line, law_fillet = law_feeds(scenario, kappa)
     out = {k: float(values[k]) for k in LIMITS}
-    out.update({
-        "edge_coverage": float(values["edge_coverage"]),
-        "completed_pass": float(log.completed_pass),
-        "stop_reason": log.stop_reason,
-        "fillet_curvature_1_m": float(kappa),
-        "feed_line_mm_s": float(np.mean(v[on_line]) * 1e3)
-        if np.any(on_line) else math.nan,
-        "feed_fillet_mm_s": float(np.mean(v[in_fillet]) * 1e3)
-        if np.any(in_fillet) else math.nan,
-        "law_line_mm_s": law_line * 1e3,
-        "law_fillet_mm_s": law_fillet * 1e3,
-    })
+    out.update(
+        {
+            "edge_coverage": float(values["edge_coverage"]),
+            "completed_pass": float(log.completed_pass),
+            "stop_reason": log.stop_reason,
+            "fillet_curvature_1_m": float(kappa),
+            "feed_line_mm_s": float(np.mean(v[on_line]) * 1e3)
+            if np.any(on_line)
+            else math.nan,
+            "feed_fillet_mm_s": float(np.mean(v[in_fillet]) * 1e3)
+            if np.any(in_fillet)
+            else math.nan,
+            "law_line_mm_s": law_line * 1e3,
+            "law_fillet_mm_s": law_fillet * 1e3,
+        }
+    )
     ok = log.completed_pass and all(
-        np.isfinite(out[k]) and out[k] <= limit
-        for k, limit in LIMITS.items())
+        np.isfinite(out[k]) and out[k] <= limit for k, limit in LIMITS.items()
+    )
     out["passed"] = float(ok)
     return out
 
 
-def run_fillet_cell(cell: FilletCell, base_name: str = "paper",
-                    base_text: Optional[str] = None) -> Dict[str, object]:
+def run_fillet_cell(
+    cell: FilletCell, base_name: str = "paper", base_text: Optional[str] = None
+) -> Dict[str, object]:
     """Simulates one cell (in this process) and returns its numbers and
     the run's simulated and wall time."""
     from deburr_drake.cell.diagram import make_deburring_diagram
     from deburr_drake.config import load_scenario
     from deburr_drake.runs.simulation import simulate
+
     sc = fillet_scenario(load_scenario(base_name, text=base_text), cell)
     log = simulate(make_deburring_diagram(scenario=sc), sc)
-    return {"cell": asdict(cell), "sim_time_s": log.sim_time,
-            "wall_time_s": log.wall_time, **fillet_metrics(log, sc)}
+    return {
+        "cell": asdict(cell),
+        "sim_time_s": log.sim_time,
+        "wall_time_s": log.wall_time,
+        **fillet_metrics(log, sc),
+    }

@@ -40,19 +40,22 @@ def run_summary(log: RunLog, metrics_: Dict[str, float]) -> dict:
         values[key] = _json_value(value)
         if values[key] is None and key not in reasons:
             reasons[key] = "not finite (the run diverged)"
-    values.update({
-        "scenario": log.scenario.name,
-        "completed_pass": bool(log.completed_pass),
-        "stop_reason": log.stop_reason,
-        "stop_time_s": float(log.stop_time),
-        "stop_detail": log.stop_detail,
-        "unavailable": reasons,
-    })
+    values.update(
+        {
+            "scenario": log.scenario.name,
+            "completed_pass": bool(log.completed_pass),
+            "stop_reason": log.stop_reason,
+            "stop_time_s": float(log.stop_time),
+            "stop_detail": log.stop_detail,
+            "unavailable": reasons,
+        }
+    )
     return values
 
 
-def log_arrays(log: RunLog, metrics_: Dict[str, float]) -> Dict[
-        str, np.ndarray]:
+def log_arrays(
+    log: RunLog, metrics_: Dict[str, float]
+) -> Dict[str, np.ndarray]:
     """Every array of the run as ``"<logger>.<block>"`` plus the
     ``meta.*`` entries the figures read (desired depth and force, contact
     start, stop time and reason): what logs.npz holds, and what
@@ -60,8 +63,7 @@ def log_arrays(log: RunLog, metrics_: Dict[str, float]) -> Dict[
     arrays = log.flat()
     sc = log.scenario
     arrays["meta.desired_depth"] = np.array(sc.task.desired_depth)
-    arrays["meta.desired_force"] = np.array(
-        sc.task.desired_chamfering_force)
+    arrays["meta.desired_force"] = np.array(sc.task.desired_chamfering_force)
     if np.isfinite(metrics_.get("contact_time_s", np.nan)):
         arrays["meta.contact_start"] = np.array(metrics_["contact_time_s"])
     arrays["meta.stop_time"] = np.array(log.stop_time)
@@ -69,14 +71,20 @@ def log_arrays(log: RunLog, metrics_: Dict[str, float]) -> Dict[
     return arrays
 
 
-def write_run(log: RunLog, out_dir, metrics_: Dict[str, float]) -> Dict[
-        str, Path]:
+def write_run(
+    log: RunLog, out_dir, metrics_: Dict[str, float]
+) -> Dict[str, Path]:
     """logs.npz (:func:`log_arrays`: named arrays, SI units) and
     metrics.json (strict JSON, see :func:`run_summary`) in ``out_dir``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(out / "logs.npz", **log_arrays(log, metrics_))
     with open(out / "metrics.json", "w") as f:
-        json.dump(run_summary(log, metrics_), f, indent=2, sort_keys=True,
-                  allow_nan=False)
+        json.dump(
+            run_summary(log, metrics_),
+            f,
+            indent=2,
+            sort_keys=True,
+            allow_nan=False,
+        )
     return {"logs": out / "logs.npz", "metrics": out / "metrics.json"}

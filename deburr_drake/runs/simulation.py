@@ -11,30 +11,47 @@ diagram of your own."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 import re
 import time
-from dataclasses import dataclass, field
 from typing import Callable, Dict, Optional
 
 import numpy as np
 from pydrake.common import RandomGenerator
-from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
-                                      SimulatorConfig)
+from pydrake.systems.analysis import (
+    ApplySimulatorConfig,
+    Simulator,
+    SimulatorConfig,
+)
 from pydrake.systems.framework import Diagram, EventStatus
 from pydrake.systems.primitives import VectorLogSink
 
-from deburr_drake.config import Scenario
-from deburr_drake.control.layout import (CHAMFER_STATE, COMMAND_STATE,
-                                         CONTROLLER_DIAGNOSTICS)
 from deburr_drake.cell.process import PROCESS_STATE
+from deburr_drake.config import Scenario
+from deburr_drake.control.layout import (
+    CHAMFER_STATE,
+    COMMAND_STATE,
+    CONTROLLER_DIAGNOSTICS,
+)
 
-__all__ = ["RunLog", "simulate", "make_simulator", "logger_names",
-           "STOP_REASONS"]
+__all__ = [
+    "RunLog",
+    "simulate",
+    "make_simulator",
+    "logger_names",
+    "STOP_REASONS",
+]
 
 #: Why a run ended (``RunLog.stop_reason``). ``guard:<name>`` names the
 #: guard that tripped (deburr_drake.cell.guards).
-STOP_REASONS = ("pass_complete", "duration", "interrupted", "guard:<name>",
-                "nan", "error")
+STOP_REASONS = (
+    "pass_complete",
+    "duration",
+    "interrupted",
+    "guard:<name>",
+    "nan",
+    "error",
+)
 
 _LAYOUTS = {
     "chamfer": CHAMFER_STATE,
@@ -64,8 +81,11 @@ class RunLog:
 
     def flat(self) -> Dict[str, np.ndarray]:
         """Every array as ``"<logger>.<block>"`` (for np.savez)."""
-        return {f"{k}.{b}": v for k, blocks in self.signals.items()
-                for b, v in blocks.items()}
+        return {
+            f"{k}.{b}": v
+            for k, blocks in self.signals.items()
+            for b, v in blocks.items()
+        }
 
 
 def plant_cache_refresh(diagram: Diagram, integrator: str):
@@ -89,12 +109,18 @@ def plant_cache_refresh(diagram: Diagram, integrator: str):
 
     def refresh(root_context):
         plant.GetMyMutableContextFromRoot(
-            root_context).get_mutable_continuous_state_vector()
+            root_context
+        ).get_mutable_continuous_state_vector()
+
     return refresh
 
 
-def set_monitor(simulator: Simulator, diagram: Diagram, integrator: str,
-                monitor: Optional[Callable] = None):
+def set_monitor(
+    simulator: Simulator,
+    diagram: Diagram,
+    integrator: str,
+    monitor: Optional[Callable] = None,
+):
     """Installs ``monitor(root_context) -> EventStatus`` (or none) after
     :func:`plant_cache_refresh`'s refresh, which every simulator of the
     cell needs with ``cenic``."""
@@ -105,21 +131,31 @@ def set_monitor(simulator: Simulator, diagram: Diagram, integrator: str,
     def monitored(root_context):
         if refresh is not None:
             refresh(root_context)
-        return (monitor(root_context) if monitor is not None
-                else EventStatus.Succeeded())
+        return (
+            monitor(root_context)
+            if monitor is not None
+            else EventStatus.Succeeded()
+        )
+
     simulator.set_monitor(monitored)
 
 
-def make_simulator(diagram: Diagram, scenario: Scenario, *,
-                   monitor: Optional[Callable] = None) -> Simulator:
+def make_simulator(
+    diagram: Diagram, scenario: Scenario, *, monitor: Optional[Callable] = None
+) -> Simulator:
     """The scenario's integrator on ``diagram``, with :func:`set_monitor`'s
     cache refresh and ``monitor``."""
     sim = scenario.simulation
     simulator = Simulator(diagram)
-    ApplySimulatorConfig(SimulatorConfig(
-        integration_scheme=sim.integrator, max_step_size=sim.max_step,
-        accuracy=sim.accuracy, use_error_control=sim.error_control),
-        simulator)
+    ApplySimulatorConfig(
+        SimulatorConfig(
+            integration_scheme=sim.integrator,
+            max_step_size=sim.max_step,
+            accuracy=sim.accuracy,
+            use_error_control=sim.error_control,
+        ),
+        simulator,
+    )
     if sim.error_control:
         simulator.get_mutable_integrator().set_target_accuracy(sim.accuracy)
     set_monitor(simulator, diagram, sim.integrator, monitor)
@@ -140,8 +176,9 @@ def _final_state(diagram, context) -> Dict[str, Dict[str, np.ndarray]]:
             "arc": process.bins.centers.copy(),
             "depth": process.GetOutputPort("finish_depth").Eval(pc).copy(),
             "burr_initial": process.initial_burr_height(),
-            "burr_remaining": process.GetOutputPort("burr_height").Eval(
-                pc).copy(),
+            "burr_remaining": process.GetOutputPort("burr_height")
+            .Eval(pc)
+            .copy(),
         },
         "theta": {"final": controller.theta(cc).copy()},
         "meta": {
@@ -149,8 +186,12 @@ def _final_state(diagram, context) -> Dict[str, Dict[str, np.ndarray]]:
             "upsilon": np.array(f.upsilon),
             "delta0": np.array(delta0),
             "deltak": np.array(deltak),
-            "dead_zone": np.array([rb.resolved_dead_zone_half_width
-                                   for rb in controller.rule_bases]),
+            "dead_zone": np.array(
+                [
+                    rb.resolved_dead_zone_half_width
+                    for rb in controller.rule_bases
+                ]
+            ),
             "fuzzy_axes": np.array(f.axes),
         },
     }
@@ -159,9 +200,11 @@ def _final_state(diagram, context) -> Dict[str, Dict[str, np.ndarray]]:
 def logger_names(diagram: Diagram):
     """The names ``<name>`` of the diagram's loggers ``log_<name>``: those of
     ``deburr_drake.cell.diagram.LOGGED`` and any ``extra_logs``."""
-    return [s.get_name()[len("log_"):] for s in diagram.GetSystems()
-            if s.get_name().startswith("log_")
-            and isinstance(s, VectorLogSink)]
+    return [
+        s.get_name()[len("log_") :]
+        for s in diagram.GetSystems()
+        if s.get_name().startswith("log_") and isinstance(s, VectorLogSink)
+    ]
 
 
 def _collect(diagram, context, loggers) -> Dict[str, Dict[str, np.ndarray]]:
@@ -180,6 +223,7 @@ def _stop_of(status, diagram) -> tuple:
     """(stop_reason, detail) of a simulator status that reached a
     termination condition requested by a system's event or the monitor."""
     from deburr_drake.cell.guards import GUARDS_SYSTEM
+
     system = status.system()
     name = system.get_name() if system is not None else ""
     message = status.message()
@@ -194,12 +238,17 @@ def _is_nan_error(error: BaseException) -> bool:
     return re.search(r"\bNaN\b", str(error)) is not None
 
 
-def simulate(diagram: Diagram, scenario: Scenario, *,
-             duration: Optional[float] = None,
-             progress: Optional[Callable[[float, float, float], None]] = None,
-             progress_interval: float = 1.0, loggers=None,
-             should_stop: Optional[Callable[[], Optional[str]]] = None,
-             initial_state: Optional[Callable] = None) -> RunLog:
+def simulate(
+    diagram: Diagram,
+    scenario: Scenario,
+    *,
+    duration: Optional[float] = None,
+    progress: Optional[Callable[[float, float, float], None]] = None,
+    progress_interval: float = 1.0,
+    loggers=None,
+    should_stop: Optional[Callable[[], Optional[str]]] = None,
+    initial_state: Optional[Callable] = None,
+) -> RunLog:
     """Simulates from the diagram's default context for ``duration`` (the
     scenario's by default, or until ``stop_after_passes`` edge lengths are
     done) and returns the logs. ``progress(t, wall, feed)`` (s, s, m/s of
@@ -220,8 +269,10 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
     learned fuzzy weights a batch carries from the part before)."""
     duration = scenario.simulation.duration if duration is None else duration
     if not (progress_interval > 0 and np.isfinite(progress_interval)):
-        raise ValueError(f"progress_interval = {progress_interval!r} is "
-                         "invalid: allowed a finite number > 0")
+        raise ValueError(
+            f"progress_interval = {progress_interval!r} is "
+            "invalid: allowed a finite number > 0"
+        )
     passes = scenario.simulation.stop_after_passes
     generator = diagram.GetSubsystemByName("command_generator")
     end = generator.start_arc_position + passes * generator.contour.length
@@ -231,7 +282,8 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
         # (generator_context is bound below, before the first step).
         if passes > 0 and generator.arc_progress(generator_context) >= end:
             return EventStatus.ReachedTermination(
-                generator, "completed the pass")
+                generator, "completed the pass"
+            )
         if should_stop is not None:
             reason = should_stop()
             if reason:
@@ -239,12 +291,15 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
         return EventStatus.Succeeded()
 
     simulator = make_simulator(
-        diagram, scenario,
-        monitor=monitor if passes > 0 or should_stop is not None else None)
+        diagram,
+        scenario,
+        monitor=monitor if passes > 0 or should_stop is not None else None,
+    )
     context = simulator.get_mutable_context()
     generator_context = generator.GetMyContextFromRoot(context)
     diagram.SetRandomContext(
-        context, RandomGenerator(scenario.sensor.noise_seed))
+        context, RandomGenerator(scenario.sensor.noise_seed)
+    )
     if initial_state is not None:
         initial_state(diagram, context)
     wall_start = time.perf_counter()
@@ -255,13 +310,16 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
         while t < duration - 1e-12:
             status = simulator.AdvanceTo(min(duration, t + progress_interval))
             t = context.get_time()
-            if status.reason() == \
-                    status.ReturnReason.kReachedTerminationCondition:
+            if (
+                status.reason()
+                == status.ReturnReason.kReachedTerminationCondition
+            ):
                 reason, detail = _stop_of(status, diagram)
                 break
             if progress is not None:
-                feed = generator.GetOutputPort("feed").Eval(
-                    generator_context)[0]
+                feed = generator.GetOutputPort("feed").Eval(generator_context)[
+                    0
+                ]
                 progress(t, time.perf_counter() - wall_start, feed)
     except KeyboardInterrupt:
         reason, detail = "interrupted", "KeyboardInterrupt"
@@ -275,7 +333,14 @@ def simulate(diagram: Diagram, scenario: Scenario, *,
         signals.update(_final_state(diagram, context))
     except Exception as e:  # e.g. a NaN state; the logs are still there
         detail += f" (final state unavailable: {type(e).__name__}: {e})"
-    return RunLog(scenario=scenario, signals=signals, wall_time=wall,
-                  sim_time=t, steps=simulator.get_num_steps_taken(),
-                  completed_pass=reason == "pass_complete",
-                  stop_reason=reason, stop_time=t, stop_detail=detail)
+    return RunLog(
+        scenario=scenario,
+        signals=signals,
+        wall_time=wall,
+        sim_time=t,
+        steps=simulator.get_num_steps_taken(),
+        completed_pass=reason == "pass_complete",
+        stop_reason=reason,
+        stop_time=t,
+        stop_detail=detail,
+    )

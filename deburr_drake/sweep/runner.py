@@ -8,26 +8,31 @@ and a killed sweep loses only the runs that were still going."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 import json
 import math
 import os
+from pathlib import Path
 import socket
 import sys
 import time
-from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Callable, Dict, List, Optional
 
 from deburr_drake.sweep.study import RunSpec, Study, metrics_of
 
-__all__ = ["run_scenario", "run_sweep", "result_path", "read_result",
-           "SweepOutcome", "NORMAL_STOPS"]
+__all__ = [
+    "run_scenario",
+    "run_sweep",
+    "result_path",
+    "read_result",
+    "SweepOutcome",
+    "NORMAL_STOPS",
+]
 
 #: Stop reasons of a run that ended as planned.
 NORMAL_STOPS = ("duration", "pass_complete")
 #: Metrics that need the plant's force at delta* (cell.truth.contact_truth).
-_TRUTH_METRICS = ("true_force_at_desired_depth_N",
-                  "force_prediction_error_rel")
+_TRUTH_METRICS = ("true_force_at_desired_depth_N", "force_prediction_error_rel")
 
 
 def result_path(out_dir, key: str) -> Path:
@@ -63,31 +68,47 @@ def _sweep_fields(result: dict) -> dict:
 
 def failed_result(key: str, reason: str, detail: str) -> dict:
     """What a run that gave no metrics leaves: every metric null."""
-    return _sweep_fields({"key": key, "stop_reason": reason,
-                          "stop_detail": detail, "stop_time_s": None,
-                          "completed_pass": False, "unavailable": {
-                              "*": f"the run ended with {reason}"}})
+    return _sweep_fields(
+        {
+            "key": key,
+            "stop_reason": reason,
+            "stop_detail": detail,
+            "stop_time_s": None,
+            "completed_pass": False,
+            "unavailable": {"*": f"the run ended with {reason}"},
+        }
+    )
 
 
-def run_scenario(scenario_text: str, run_dir: str, key: str, *,
-                 keep_logs: bool = True, metrics=()) -> dict:
+def run_scenario(
+    scenario_text: str,
+    run_dir: str,
+    key: str,
+    *,
+    keep_logs: bool = True,
+    metrics=(),
+) -> dict:
     """One run, in the worker's process: builds the diagram from the
     scenario's YAML, simulates, writes ``logs.npz`` (if ``keep_logs``),
     ``metrics.json`` and, last and atomically, ``result.json`` into
     ``run_dir``, and returns the result. Never raises for a run that goes
     wrong: an exception anywhere is the result's ``stop_reason: error``."""
     import traceback
+
     out = Path(run_dir)
     out.mkdir(parents=True, exist_ok=True)
     t_start, cpu_start = time.perf_counter(), time.process_time()
     timing = {}
     try:
+        from deburr_drake.cell.diagram import make_deburring_diagram
         from deburr_drake.runs import report
         from deburr_drake.runs.pass_metrics import (
-            force_at_desired_depth, pass_metrics)
-        from deburr_drake.cell.diagram import make_deburring_diagram
+            force_at_desired_depth,
+            pass_metrics,
+        )
         from deburr_drake.runs.simulation import simulate
         from deburr_drake.sweep.study import scenario_from_text
+
         scenario = scenario_from_text(scenario_text)
         (out / "scenario.yaml").write_text(scenario_text)
         t = time.perf_counter()
@@ -95,10 +116,16 @@ def run_scenario(scenario_text: str, run_dir: str, key: str, *,
         timing["build_s"] = time.perf_counter() - t
         log = simulate(diagram, scenario)
         timing["simulate_s"] = log.wall_time
-        truth = force_at_desired_depth(scenario) if any(
-            m in _TRUTH_METRICS for m in metrics) else None
-        values = pass_metrics(log, true_force_at_desired_depth=truth,
-                                     only_cut=not log.completed_pass)
+        truth = (
+            force_at_desired_depth(scenario)
+            if any(m in _TRUTH_METRICS for m in metrics)
+            else None
+        )
+        values = pass_metrics(
+            log,
+            true_force_at_desired_depth=truth,
+            only_cut=not log.completed_pass,
+        )
         if keep_logs:
             report.write_run(log, out, values)
         result = report.run_summary(log, values)
@@ -106,13 +133,21 @@ def run_scenario(scenario_text: str, run_dir: str, key: str, *,
             _write_atomically(out / "metrics.json", result)
         result = dict(result)
     except Exception as e:
-        result = failed_result(key, "error", f"{type(e).__name__}: {e}\n"
-                               + traceback.format_exc(limit=5))
+        result = failed_result(
+            key,
+            "error",
+            f"{type(e).__name__}: {e}\n" + traceback.format_exc(limit=5),
+        )
     result = _sweep_fields(result)
-    result.update(key=key, run_dir=str(out), host=socket.gethostname(),
-                  pid=os.getpid(),
-                  run_wall_time_s=time.perf_counter() - t_start,
-                  run_cpu_time_s=time.process_time() - cpu_start, **timing)
+    result.update(
+        key=key,
+        run_dir=str(out),
+        host=socket.gethostname(),
+        pid=os.getpid(),
+        run_wall_time_s=time.perf_counter() - t_start,
+        run_cpu_time_s=time.process_time() - cpu_start,
+        **timing,
+    )
     _write_atomically(out / "result.json", result)
     return result
 
@@ -155,39 +190,59 @@ class _Progress:
         left = elapsed / self.done * (self.total - self.done)
         width = 30
         filled = int(width * self.done / max(self.total, 1))
-        line = (f"[{'#' * filled}{'.' * (width - filled)}] "
-                f"{self.done}/{self.total} done, {self.failed} failed, "
-                f"{_clock(elapsed)} elapsed, ~{_clock(left)} left")
+        line = (
+            f"[{'#' * filled}{'.' * (width - filled)}] "
+            f"{self.done}/{self.total} done, {self.failed} failed, "
+            f"{_clock(elapsed)} elapsed, ~{_clock(left)} left"
+        )
         if self.tty:
             end = "\n" if self.done == self.total else ""
             print("\r" + line, end=end, file=self.stream, flush=True)
         else:
-            print(line + f"  ({result.get('key')}: "
-                  f"{result.get('stop_reason')})", file=self.stream,
-                  flush=True)
+            print(
+                line + f"  ({result.get('key')}: {result.get('stop_reason')})",
+                file=self.stream,
+                flush=True,
+            )
 
 
 def _client(workers: int, scheduler: Optional[str]):
     import dask
     from distributed import Client, LocalCluster
+
     if scheduler:
         return Client(scheduler, timeout="20s"), None
     # One task per worker process; a worker that dies (a crash inside
     # Drake) fails its run at once instead of retrying it on another, and
     # only that run: no task waits assigned to a worker (saturation 1.0;
     # Dask's 1.1 queued a second one there, and it failed too).
-    dask.config.set({"distributed.scheduler.allowed-failures": 0,
-                     "distributed.scheduler.worker-saturation": 1.0})
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
-                           processes=True, dashboard_address=":0",
-                           silence_logs=40)
+    dask.config.set(
+        {
+            "distributed.scheduler.allowed-failures": 0,
+            "distributed.scheduler.worker-saturation": 1.0,
+        }
+    )
+    cluster = LocalCluster(
+        n_workers=workers,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=":0",
+        silence_logs=40,
+    )
     return Client(cluster), cluster
 
 
-def run_sweep(study: Study, runs: List[RunSpec], out_dir, *,
-              workers: int = 2, scheduler: Optional[str] = None,
-              on_result: Optional[Callable[[dict], None]] = None,
-              stream=None, priority: int = 0) -> SweepOutcome:
+def run_sweep(
+    study: Study,
+    runs: List[RunSpec],
+    out_dir,
+    *,
+    workers: int = 2,
+    scheduler: Optional[str] = None,
+    on_result: Optional[Callable[[dict], None]] = None,
+    stream=None,
+    priority: int = 0,
+) -> SweepOutcome:
     """Runs every run of ``runs`` that has no result in ``out_dir`` yet, as
     Dask tasks, and returns all their results. A task that fails without
     a result (its worker died) is recorded with ``stop_reason: crash``.
@@ -195,6 +250,7 @@ def run_sweep(study: Study, runs: List[RunSpec], out_dir, *,
     finished (``interrupted``). ``priority``: Dask's task priority (higher
     first), for studies that share a cluster."""
     from distributed import KilledWorker, as_completed
+
     stream = stream or sys.stdout
     out = Path(out_dir).resolve()
     outcome = SweepOutcome(runs=runs)
@@ -212,20 +268,33 @@ def run_sweep(study: Study, runs: List[RunSpec], out_dir, *,
         return outcome
     client, cluster = _client(workers, scheduler)
     n_workers = len(client.scheduler_info().get("workers", {})) or workers
-    print(f"sweep {study.name}: {len(todo)} run(s) to do, "
-          f"{outcome.skipped} already done; "
-          + (f"scheduler {scheduler} ({n_workers} workers)" if scheduler
-             else f"{n_workers} local worker process(es)"),
-          file=stream, flush=True)
+    print(
+        f"sweep {study.name}: {len(todo)} run(s) to do, "
+        f"{outcome.skipped} already done; "
+        + (
+            f"scheduler {scheduler} ({n_workers} workers)"
+            if scheduler
+            else f"{n_workers} local worker process(es)"
+        ),
+        file=stream,
+        flush=True,
+    )
     metrics = metrics_of(study)
     futures = {}
     try:
         for run in todo:
             run_dir = out / "runs" / run.key
             future = client.submit(
-                run_scenario, run.scenario_text, str(run_dir), run.key,
-                keep_logs=study.keep_logs, metrics=metrics,
-                key=f"deburr-run-{run.key}", pure=False, priority=priority)
+                run_scenario,
+                run.scenario_text,
+                str(run_dir),
+                run.key,
+                keep_logs=study.keep_logs,
+                metrics=metrics,
+                key=f"deburr-run-{run.key}",
+                pure=False,
+                priority=priority,
+            )
             futures[future] = run
         progress = _Progress(len(todo), n_workers, stream)
         for future in as_completed(list(futures)):
@@ -240,15 +309,19 @@ def run_sweep(study: Study, runs: List[RunSpec], out_dir, *,
                     # there): nothing is recorded, a rerun tries again.
                     message = f"{type(error).__name__}: {error}"
                     if message not in outcome.errors:
-                        print(f"deburr-drake sweep: run {run.key} could not "
-                              f"run: {' '.join(message.split())}",
-                              file=sys.stderr, flush=True)
+                        print(
+                            f"deburr-drake sweep: run {run.key} could not "
+                            f"run: {' '.join(message.split())}",
+                            file=sys.stderr,
+                            flush=True,
+                        )
                     outcome.errors.append(message)
                     continue
                 # The worker process died running it (a crash inside
                 # Drake, out of memory): recorded, never retried.
                 result = failed_result(
-                    run.key, "crash", f"{type(error).__name__}: {error}")
+                    run.key, "crash", f"{type(error).__name__}: {error}"
+                )
                 run_dir = out / "runs" / run.key
                 run_dir.mkdir(parents=True, exist_ok=True)
                 result["run_dir"] = str(run_dir)

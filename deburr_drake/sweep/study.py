@@ -7,27 +7,44 @@ study field by its full dotted path (``study.sample.fields.tube.position``).
 """
 
 import copy
+from dataclasses import dataclass, field
 import hashlib
 import itertools
 import math
 import operator
-import re
-from dataclasses import dataclass, field
 from pathlib import Path
+import re
 from typing import Dict, List
 
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
 
-from deburr_drake.config import (ConfigError, Scenario, field_type,
-                                 load_scenario, set_field)
+from deburr_drake.config import (
+    ConfigError,
+    Scenario,
+    field_type,
+    load_scenario,
+    set_field,
+)
 from deburr_drake.config.scenario import _check_yaml
 from deburr_drake.sweep.results import METRICS
 
-__all__ = ["Distribution", "SampleConfig", "Study", "Rule", "RunSpec",
-           "load_study", "expand_runs", "parse_rule", "METRICS",
-           "scenario_from_text", "KEY_VERSION", "check_reach", "rules_of",
-           "metrics_of"]
+__all__ = [
+    "Distribution",
+    "SampleConfig",
+    "Study",
+    "Rule",
+    "RunSpec",
+    "load_study",
+    "expand_runs",
+    "parse_rule",
+    "METRICS",
+    "scenario_from_text",
+    "KEY_VERSION",
+    "check_reach",
+    "rules_of",
+    "metrics_of",
+]
 
 #: Part of every run's key: raise it when a change of the code makes old
 #: results wrong (the key is otherwise the resolved scenario and duration).
@@ -72,15 +89,25 @@ class Study:
     grid: Dict[str, list[float]] = field(default_factory=dict)
     sample: SampleConfig = field(default_factory=SampleConfig)
     # What the results table holds (every rule's metric is added).
-    metrics: List[str] = field(default_factory=lambda: [
-        "chamfer_depth_rms_error_mm", "chamfering_force_rms_error_N"])
+    metrics: List[str] = field(
+        default_factory=lambda: [
+            "chamfer_depth_rms_error_mm",
+            "chamfering_force_rms_error_N",
+        ]
+    )
     # "METRIC OP NUMBER", OP one of <= < >= > == !=; a null metric fails.
     rules: List[str] = field(default_factory=list)
     keep_logs: bool = True  # each run's logs.npz next to its metrics.json
 
 
-_OPS = {"<=": operator.le, "<": operator.lt, ">=": operator.ge,
-        ">": operator.gt, "==": operator.eq, "!=": operator.ne}
+_OPS = {
+    "<=": operator.le,
+    "<": operator.lt,
+    ">=": operator.ge,
+    ">": operator.gt,
+    "==": operator.eq,
+    "!=": operator.ne,
+}
 
 
 @dataclass(frozen=True)
@@ -98,20 +125,28 @@ class Rule:
 
 
 def parse_rule(text: str, where: str) -> Rule:
-    m = re.fullmatch(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*(<=|>=|==|!=|<|>)\s*"
-                     r"(\S+)\s*", text)
+    m = re.fullmatch(
+        r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*(<=|>=|==|!=|<|>)\s*"
+        r"(\S+)\s*",
+        text,
+    )
     if m is None:
-        raise ConfigError(f"{where} = {text!r} is invalid: allowed "
-                          "'METRIC OP NUMBER', OP one of <= < >= > == !=")
+        raise ConfigError(
+            f"{where} = {text!r} is invalid: allowed "
+            "'METRIC OP NUMBER', OP one of <= < >= > == !="
+        )
     metric, op, value = m.groups()
     if metric not in METRICS:
-        raise ConfigError(f"{where}: metric {metric!r} is unknown: allowed "
-                          f"{', '.join(METRICS)}")
+        raise ConfigError(
+            f"{where}: metric {metric!r} is unknown: allowed "
+            f"{', '.join(METRICS)}"
+        )
     try:
         number = float(value)
     except ValueError:
-        raise ConfigError(f"{where} = {text!r}: {value!r} is not a "
-                          "number") from None
+        raise ConfigError(
+            f"{where} = {text!r}: {value!r} is not a number"
+        ) from None
     if not math.isfinite(number):
         raise ConfigError(f"{where} = {text!r}: the bound must be finite")
     return Rule(text.strip(), metric, op, number)
@@ -130,15 +165,17 @@ class RunSpec:
 
     @property
     def key(self) -> str:
-        h = hashlib.sha256(f"v{KEY_VERSION}\n{self.duration!r}\n"
-                           f"{self.scenario_text}".encode())
+        h = hashlib.sha256(
+            f"v{KEY_VERSION}\n{self.duration!r}\n{self.scenario_text}".encode()
+        )
         return h.hexdigest()[:16]
 
 
 def scenario_from_text(text: str) -> Scenario:
     """The scenario a :class:`RunSpec` carries (what a worker rebuilds)."""
-    return yaml_load_typed(schema=Scenario, data=text,
-                           defaults=Scenario()).validate()
+    return yaml_load_typed(
+        schema=Scenario, data=text, defaults=Scenario()
+    ).validate()
 
 
 def _study_error(e: Exception, where: str) -> ConfigError:
@@ -192,9 +229,11 @@ def _check_field(scenario: Scenario, name: str, where: str):
         raise ConfigError(f"{where}: {e}") from None
     if kind not in (float, int):
         shown = getattr(kind, "__name__", str(kind))
-        raise ConfigError(f"{where}: the field is of type {shown}: allowed "
-                          "a number field (a list's element by index, "
-                          "e.g. tube.position[0])")
+        raise ConfigError(
+            f"{where}: the field is of type {shown}: allowed "
+            "a number field (a list's element by index, "
+            "e.g. tube.position[0])"
+        )
     return kind
 
 
@@ -203,11 +242,15 @@ def _check_distribution(d: Distribution, kind, where: str):
         raise ConfigError(f"{where}: {message}")
 
     if d.distribution not in DISTRIBUTIONS:
-        bad(f"distribution = {d.distribution!r} is invalid: allowed one of "
-            f"{', '.join(DISTRIBUTIONS)}")
+        bad(
+            f"distribution = {d.distribution!r} is invalid: allowed one of "
+            f"{', '.join(DISTRIBUTIONS)}"
+        )
     if kind is int and d.distribution != "uniform":
-        bad(f"an integer field cannot take a {d.distribution} distribution: "
-            "allowed uniform (integers low..high)")
+        bad(
+            f"an integer field cannot take a {d.distribution} distribution: "
+            "allowed uniform (integers low..high)"
+        )
     lo, hi = d.low, d.high
     if d.distribution in ("uniform", "log_uniform"):
         if not (math.isfinite(lo) and math.isfinite(hi)):
@@ -219,8 +262,7 @@ def _check_distribution(d: Distribution, kind, where: str):
         if kind is int and (lo != int(lo) or hi != int(hi)):
             bad("an integer field needs integer low and high")
     else:
-        if not (math.isfinite(d.mean) and math.isfinite(d.std)
-                and d.std > 0):
+        if not (math.isfinite(d.mean) and math.isfinite(d.std) and d.std > 0):
             bad("normal needs a finite mean and std > 0")
         if math.isfinite(lo) and math.isfinite(hi) and not lo < hi:
             bad(f"empty range: low = {lo!r} must be < high = {hi!r}")
@@ -245,8 +287,10 @@ def _points(study: Study, base: Scenario) -> List[Dict[str, float]]:
     if grid and sample.fields:
         raise ConfigError("study.grid: give either grid or sample, not both")
     if not grid and not sample.fields:
-        raise ConfigError("study: give grid (values by field) or sample "
-                          "(a distribution by field)")
+        raise ConfigError(
+            "study: give grid (values by field) or sample "
+            "(a distribution by field)"
+        )
     if grid:
         kinds = {}
         for name, values in grid.items():
@@ -255,18 +299,27 @@ def _points(study: Study, base: Scenario) -> List[Dict[str, float]]:
             if not values:
                 raise ConfigError(f"{where}: empty list of values")
             if kinds[name] is int and any(v != int(v) for v in values):
-                raise ConfigError(f"{where} = {values}: an integer field "
-                                  "needs integer values")
-        return [{name: (int(v) if kinds[name] is int else float(v))
-                 for name, v in zip(grid, combo)}
-                for combo in itertools.product(*grid.values())]
+                raise ConfigError(
+                    f"{where} = {values}: an integer field needs integer values"
+                )
+        return [
+            {
+                name: (int(v) if kinds[name] is int else float(v))
+                for name, v in zip(grid, combo)
+            }
+            for combo in itertools.product(*grid.values())
+        ]
     where = "study.sample"
     if not (isinstance(sample.count, int) and sample.count >= 1):
-        raise ConfigError(f"{where}.count = {sample.count!r} is invalid: "
-                          "allowed an integer >= 1")
+        raise ConfigError(
+            f"{where}.count = {sample.count!r} is invalid: "
+            "allowed an integer >= 1"
+        )
     if sample.seed < 0:
-        raise ConfigError(f"{where}.seed = {sample.seed!r} is invalid: "
-                          "allowed an integer >= 0")
+        raise ConfigError(
+            f"{where}.seed = {sample.seed!r} is invalid: "
+            "allowed an integer >= 0"
+        )
     rng = np.random.default_rng(sample.seed)
     columns = {}
     for name, d in sample.fields.items():  # in the file's order
@@ -274,32 +327,44 @@ def _points(study: Study, base: Scenario) -> List[Dict[str, float]]:
         _check_distribution(d, kind, f"{where}.fields.{name}")
         drawn = _draw(d, kind, rng, sample.count)
         columns[name] = [int(v) if kind is int else float(v) for v in drawn]
-    return [{name: columns[name][k] for name in columns}
-            for k in range(sample.count)]
+    return [
+        {name: columns[name][k] for name in columns}
+        for k in range(sample.count)
+    ]
 
 
 def _invalid(study: Study, run_index: int, params, e: ConfigError):
     section = "grid" if study.grid else "sample.fields"
     shown = ", ".join(f"{n} = {v:.6g}" for n, v in params.items())
-    return ConfigError(f"study.{section}: run {run_index} ({shown}) gives an "
-                       f"invalid scenario: {e}")
+    return ConfigError(
+        f"study.{section}: run {run_index} ({shown}) gives an "
+        f"invalid scenario: {e}"
+    )
 
 
 def expand_runs(study: Study) -> List[RunSpec]:
     """Every run of the study as a full, validated scenario. ConfigError
     names the study field that gave an invalid scenario, and the run.
     (Whether the arm reaches the part: :func:`check_reach`.)"""
-    if not (isinstance(study.duration, (int, float))
-            and math.isfinite(study.duration) and study.duration > 0):
-        raise ConfigError(f"study.duration = {study.duration!r} is invalid: "
-                          "allowed a finite number > 0 (simulated seconds)")
+    if not (
+        isinstance(study.duration, (int, float))
+        and math.isfinite(study.duration)
+        and study.duration > 0
+    ):
+        raise ConfigError(
+            f"study.duration = {study.duration!r} is invalid: "
+            "allowed a finite number > 0 (simulated seconds)"
+        )
     if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.+-]*", study.name):
-        raise ConfigError(f"study.name = {study.name!r} is invalid: allowed "
-                          "a plain file name")
+        raise ConfigError(
+            f"study.name = {study.name!r} is invalid: allowed a plain file name"
+        )
     for k, name in enumerate(study.metrics):
         if name not in METRICS:
-            raise ConfigError(f"study.metrics[{k}]: metric {name!r} is "
-                              f"unknown: allowed {', '.join(METRICS)}")
+            raise ConfigError(
+                f"study.metrics[{k}]: metric {name!r} is "
+                f"unknown: allowed {', '.join(METRICS)}"
+            )
     rules_of(study)
     base = _base(study)
     base.simulation.duration = float(study.duration)
@@ -312,8 +377,11 @@ def expand_runs(study: Study) -> List[RunSpec]:
             scenario.validate()
         except ConfigError as e:
             raise _invalid(study, index, params, e) from None
-        runs.append(RunSpec(index, params, yaml_dump_typed(scenario),
-                            float(study.duration)))
+        runs.append(
+            RunSpec(
+                index, params, yaml_dump_typed(scenario), float(study.duration)
+            )
+        )
     return runs
 
 
@@ -322,6 +390,7 @@ def check_reach(study: Study, runs: List[RunSpec]):
     inverse kinematics along the edge: about 0.1 s a run, so only for the
     runs about to start)."""
     from deburr_drake.cell.reach import check_part_in_reach
+
     for run in runs:
         try:
             check_part_in_reach(scenario_from_text(run.scenario_text))
@@ -330,8 +399,9 @@ def check_reach(study: Study, runs: List[RunSpec]):
 
 
 def rules_of(study: Study) -> List[Rule]:
-    return [parse_rule(t, f"study.rules[{k}]")
-            for k, t in enumerate(study.rules)]
+    return [
+        parse_rule(t, f"study.rules[{k}]") for k, t in enumerate(study.rules)
+    ]
 
 
 def metrics_of(study: Study) -> List[str]:
@@ -341,4 +411,3 @@ def metrics_of(study: Study) -> List[str]:
         if rule.metric not in names:
             names.append(rule.metric)
     return names
-

@@ -5,10 +5,15 @@ with known answers."""
 import numpy as np
 import pytest
 
-from deburr_drake.analysis.settled import (RunSignals, SettleTolerances,
-                                           describe_oscillation, fast_part,
-                                           first_guard_trip, scan_run,
-                                           settle_check)
+from deburr_drake.analysis.settled import (
+    RunSignals,
+    SettleTolerances,
+    describe_oscillation,
+    fast_part,
+    first_guard_trip,
+    scan_run,
+    settle_check,
+)
 
 T = 0.0025  # s, the log period
 
@@ -24,14 +29,17 @@ def _signals(duration=6.0, *, f_t=None, depth=None, speed=None, seed=0):
         t=t,
         depth=(depth(t) if depth else 5e-4 + 1e-7 * rng.standard_normal(n)),
         normal_force=5.0 + 0.03 * rng.standard_normal(n),
-        chamfering_force=(f_t(t) if f_t else
-                          10.0 + 0.03 * rng.standard_normal(n)),
-        speed=(speed(t) if speed else
-               2.4e-3 + 1e-6 * rng.standard_normal(n)),
+        chamfering_force=(
+            f_t(t) if f_t else 10.0 + 0.03 * rng.standard_normal(n)
+        ),
+        speed=(speed(t) if speed else 2.4e-3 + 1e-6 * rng.standard_normal(n)),
         s=1e-5 * rng.standard_normal((n, 2)),
         arc_position=2.4e-3 * t,
-        desired_depth=5e-4, desired_force=10.0, default_feed=1e-3,
-        sliding_lambda=np.array([100.0, 100.0]))
+        desired_depth=5e-4,
+        desired_force=10.0,
+        default_feed=1e-3,
+        sliding_lambda=np.array([100.0, 100.0]),
+    )
 
 
 def test_fast_part_leaves_out_a_ramp_and_keeps_a_fast_sine():
@@ -40,8 +48,9 @@ def test_fast_part_leaves_out_a_ramp_and_keeps_a_fast_sine():
     inner = (t > 0.2) & (t < 1.8)
     assert np.max(np.abs(ramp[inner])) < 1e-9
     sine = np.sin(2 * np.pi * 50 * t)
-    assert np.sqrt(np.mean(fast_part(t, sine, 0.25)[inner] ** 2)) == \
-        pytest.approx(np.sqrt(0.5), rel=0.05)
+    assert np.sqrt(
+        np.mean(fast_part(t, sine, 0.25)[inner] ** 2)
+    ) == pytest.approx(np.sqrt(0.5), rel=0.05)
 
 
 def test_steady_cutting_is_settled():
@@ -54,23 +63,26 @@ def test_steady_cutting_is_settled():
 def test_a_limit_cycle_is_not_settled_and_names_the_signal():
     def f_t(t):  # 200 Hz (the 2.5 ms loop's Nyquist), 3 N amplitude
         return 10.0 + 3.0 * np.cos(np.pi * t / T)
+
     check = settle_check(_signals(f_t=f_t), 5.0)
     assert not check.settled
-    assert any(r.startswith("chamfering_force oscillates")
-               for r in check.reasons)
+    assert any(
+        r.startswith("chamfering_force oscillates") for r in check.reasons
+    )
     # sampled at the Nyquist frequency the cosine is +-3 N: RMS 3 N
-    assert check.fast_rms["chamfering_force"] == pytest.approx(3.0,
-                                                                rel=0.02)
+    assert check.fast_rms["chamfering_force"] == pytest.approx(3.0, rel=0.02)
 
 
 def test_a_small_growing_oscillation_in_two_signals_is_not_settled():
     # 40 Hz, doubling every 0.25 s, 0.4 N RMS at 5 s: below the 0.5 N
     # tolerance, but growing in the force and the speed together.
     def grow(t):
-        return np.exp(np.log(2) / 0.25 * (t - 5.0)) * np.sin(
-            2 * np.pi * 40 * t)
-    sig = _signals(f_t=lambda t: 10.0 + 0.57 * grow(t),
-                   speed=lambda t: 2.4e-3 + 0.11e-3 * grow(t))
+        return np.exp(np.log(2) / 0.25 * (t - 5.0)) * np.sin(2 * np.pi * 40 * t)
+
+    sig = _signals(
+        f_t=lambda t: 10.0 + 0.57 * grow(t),
+        speed=lambda t: 2.4e-3 + 0.11e-3 * grow(t),
+    )
     check = settle_check(sig, 5.0)
     assert not check.settled
     assert sum("grows" in r for r in check.reasons) >= 2
@@ -86,6 +98,7 @@ def test_a_slow_burr_slowdown_is_settled():
 
     def f_t(t):
         return 10.0 - 1.0 * np.sin(np.pi * np.clip((t - 3.5) / 1.5, 0, 1))
+
     check = settle_check(_signals(f_t=f_t, speed=speed), 5.0)
     assert check.settled, check.reasons
 
@@ -98,8 +111,8 @@ def test_out_of_contact_is_not_settled():
 
 def test_scan_finds_a_late_oscillation():
     def f_t(t):
-        return 10.0 + np.where(t > 4.0, 3.0, 0.0) * np.sin(
-            2 * np.pi * 60 * t)
+        return 10.0 + np.where(t > 4.0, 3.0, 0.0) * np.sin(2 * np.pi * 60 * t)
+
     sig = _signals(f_t=f_t, duration=6.0)
     late = scan_run(sig, 1.0, 5.9)
     assert late is not None and 3.0 < late.end <= 5.0
@@ -110,9 +123,11 @@ def test_describe_oscillation_finds_start_frequency_and_growth():
     sigma, t0, f = 2.0, 2.0, 50.0  # 1/s, s, Hz
 
     def f_t(t):
-        envelope = np.where(t < t0, 0.0, np.minimum(
-            0.5 * np.exp(sigma * (t - t0)), 20.0))
+        envelope = np.where(
+            t < t0, 0.0, np.minimum(0.5 * np.exp(sigma * (t - t0)), 20.0)
+        )
         return 10.0 + envelope * np.sin(2 * np.pi * f * t)
+
     osc = describe_oscillation(_signals(f_t=f_t, duration=8.0), 0.5)
     # The RMS of the fast part exceeds 0.5 N once 0.5 exp(2 dt) / sqrt 2
     # does: dt = ln(sqrt 2) / 2 = 0.17 s after t0, in the 0.1 s block
@@ -130,24 +145,38 @@ def test_first_guard_trip_takes_the_earliest_guard():
     tau[t >= 1.0, 1] = 25.0  # > 20 N m
     force = np.zeros((len(t), 3))
     force[t >= 0.5, 0] = 150.0  # > 100 N
-    trip = first_guard_trip(t, actuation=tau,
-                            effort_limits=np.array([50.0, 20.0]),
-                            tool_force=force, tool_force_limit=100.0,
-                            names=["a", "b"])
+    trip = first_guard_trip(
+        t,
+        actuation=tau,
+        effort_limits=np.array([50.0, 20.0]),
+        tool_force=force,
+        tool_force_limit=100.0,
+        names=["a", "b"],
+    )
     assert trip["guard"] == "tool_force"
     assert trip["time"] == pytest.approx(0.5)
-    trip = first_guard_trip(t, actuation=tau,
-                            effort_limits=np.array([50.0, 20.0]),
-                            names=["a", "b"])
-    assert trip["guard"] == "joint_torque" and trip["time"] == \
-        pytest.approx(1.0) and "b |tau| = 25" in trip["detail"]
+    trip = first_guard_trip(
+        t, actuation=tau, effort_limits=np.array([50.0, 20.0]), names=["a", "b"]
+    )
+    assert (
+        trip["guard"] == "joint_torque"
+        and trip["time"] == pytest.approx(1.0)
+        and "b |tau| = 25" in trip["detail"]
+    )
     fn = np.where((t > 0.2) & (t < 1.0), 5.0, 0.0)
-    trip = first_guard_trip(t, normal_force=fn, contact_force=1.0,
-                            contact_lost_time=0.5)
+    trip = first_guard_trip(
+        t, normal_force=fn, contact_force=1.0, contact_lost_time=0.5
+    )
     assert trip["guard"] == "contact_lost"
     assert trip["time"] == pytest.approx(1.5, abs=2 * T)
-    assert first_guard_trip(t, actuation=np.zeros((len(t), 2)),
-                            effort_limits=np.array([50.0, np.inf])) is None
+    assert (
+        first_guard_trip(
+            t,
+            actuation=np.zeros((len(t), 2)),
+            effort_limits=np.array([50.0, np.inf]),
+        )
+        is None
+    )
 
 
 def test_tolerances_scale_with_the_task():

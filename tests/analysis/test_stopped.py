@@ -10,12 +10,18 @@ import pytest
 from deburr_drake.cli import main
 
 
-@pytest.mark.parametrize("args", [["--at", "-3"], ["--at", "nan"],
-                                  ["--after-contact", "-1"],
-                                  ["--lyapunov", "0"], ["--until", "0"],
-                                  ["--at", "3", "--until", "2"]])
-def test_bad_options_are_refused_before_anything_runs(tmp_path, capsys,
-                                                      args):
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--at", "-3"],
+        ["--at", "nan"],
+        ["--after-contact", "-1"],
+        ["--lyapunov", "0"],
+        ["--until", "0"],
+        ["--at", "3", "--until", "2"],
+    ],
+)
+def test_bad_options_are_refused_before_anything_runs(tmp_path, capsys, args):
     out = tmp_path / "analysis"
     start = time.perf_counter()
     assert main(["analyze", *args, "--out", str(out)]) == 2
@@ -27,16 +33,29 @@ def test_bad_options_are_refused_before_anything_runs(tmp_path, capsys,
 
 @pytest.mark.slow
 def test_a_run_that_never_reaches_steady_cutting_says_what_stopped_it(
-        tmp_path, capsys):
+    tmp_path, capsys
+):
     out = tmp_path / "analysis"
-    code = main(["analyze", "--scenario", "paper", "--scenario-text",
-                 "controller: {sliding_gain: [20000.0, 400.0, 1500.0]}",
-                 "--until", "2", "--no-robust", "--out", str(out)])
+    code = main(
+        [
+            "analyze",
+            "--scenario",
+            "paper",
+            "--scenario-text",
+            "controller: {sliding_gain: [20000.0, 400.0, 1500.0]}",
+            "--until",
+            "2",
+            "--no-robust",
+            "--out",
+            str(out),
+        ]
+    )
     assert code == 0
     lines = capsys.readouterr().out.splitlines()
     # the summary's first line is the verdict
-    first = next(i for i, line in enumerate(lines)
-                 if line.startswith("verdict:"))
+    first = next(
+        i for i, line in enumerate(lines) if line.startswith("verdict:")
+    )
     assert lines[first].startswith("verdict: UNSTABLE")
     assert lines[first - 1] == ""
     assert lines[first + 1].startswith("deburr-drake analyze:")

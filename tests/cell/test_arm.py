@@ -4,13 +4,19 @@ import math
 import xml.etree.ElementTree as ET
 
 import numpy as np
-import pytest
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.systems.framework import DiagramBuilder
+import pytest
 
-from deburr_drake.cell.arm import (ARM_JOINTS, ARM_URL, DEFAULT_PART_POSITION,
-                                   Q_READY, add_arm, solve_tool_pose)
+from deburr_drake.cell.arm import (
+    ARM_JOINTS,
+    ARM_URL,
+    DEFAULT_PART_POSITION,
+    Q_READY,
+    add_arm,
+    solve_tool_pose,
+)
 from deburr_drake.cell.models import make_kinematic_model, models_dir
 from deburr_drake.cell.part import add_cartesian_tool
 
@@ -24,8 +30,11 @@ def _sdf_joint_values():
     for joint in root.iter("joint"):
         if joint.get("type") == "revolute":
             out[joint.get("name")] = (
-                float(joint.find(f"{ns}rotor_inertia").text), float(joint.find(f"{ns}gear_ratio").text),
-                float(joint.find("axis/limit/effort").text), float(joint.find("axis/dynamics/damping").text))
+                float(joint.find(f"{ns}rotor_inertia").text),
+                float(joint.find(f"{ns}gear_ratio").text),
+                float(joint.find("axis/limit/effort").text),
+                float(joint.find("axis/dynamics/damping").text),
+            )
     return out
 
 
@@ -36,8 +45,10 @@ def plant():
 
 def _circle(radius, n=12):
     cx, cy, _ = DEFAULT_PART_POSITION
-    return [np.array([cx + radius * math.cos(t), cy + radius * math.sin(t), TIP_Z])
-            for t in np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)]
+    return [
+        np.array([cx + radius * math.cos(t), cy + radius * math.sin(t), TIP_Z])
+        for t in np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
+    ]
 
 
 def test_model_loads(plant):
@@ -51,24 +62,39 @@ def test_model_loads(plant):
         assert actuator.joint().index() == joint.index()
         assert actuator.default_rotor_inertia() == pytest.approx(rotor)
         assert actuator.default_gear_ratio() == pytest.approx(gear)
-        assert actuator.default_reflected_inertia() == pytest.approx(gear**2 * rotor)
+        assert actuator.default_reflected_inertia() == pytest.approx(
+            gear**2 * rotor
+        )
         assert actuator.effort_limit() == pytest.approx(effort)
         assert joint.default_damping() == pytest.approx(damping)
         assert 1e-4 <= rotor <= 3e-4 and gear == 100
     ft = plant.GetJointByName("ft_sensor")
     assert ft.type_name() == "weld"
-    assert ft.parent_body().name() == "flange" and ft.child_body().name() == "tool"
+    assert (
+        ft.parent_body().name() == "flange" and ft.child_body().name() == "tool"
+    )
     base = plant.GetJointByName("base_weld")
-    assert base.type_name() == "weld" and base.parent_body().index() == plant.world_body().index()
+    assert (
+        base.type_name() == "weld"
+        and base.parent_body().index() == plant.world_body().index()
+    )
     tip = plant.GetFrameByName("tool_tip")
     assert tip.body().name() == "tool"
     assert np.allclose(tip.GetFixedPoseInBodyFrame().GetAsMatrix4(), np.eye(4))
     context = plant.CreateDefaultContext()
-    assert np.allclose(plant.GetFrameByName("base").CalcPoseInWorld(context).GetAsMatrix4(), np.eye(4))
+    assert np.allclose(
+        plant.GetFrameByName("base").CalcPoseInWorld(context).GetAsMatrix4(),
+        np.eye(4),
+    )
     # Reflected inertia enters the mass matrix diagonal.
     plant.SetPositions(context, Q_READY)
     M = plant.CalcMassMatrix(context)
-    reflected = np.array([plant.GetJointActuatorByName(j).default_reflected_inertia() for j in ARM_JOINTS])
+    reflected = np.array(
+        [
+            plant.GetJointActuatorByName(j).default_reflected_inertia()
+            for j in ARM_JOINTS
+        ]
+    )
     assert np.all(np.diag(M) > reflected)
 
 
@@ -80,15 +106,25 @@ def test_add_arm_with_cutter():
     tool = plant.GetBodyByName("tool", instance)
     assert len(plant.GetCollisionGeometriesForBody(tool)) == 1
     for name in ("base", "link1", "link2", "link3", "link4", "link5", "flange"):
-        assert plant.GetCollisionGeometriesForBody(plant.GetBodyByName(name, instance)) == []
+        assert (
+            plant.GetCollisionGeometriesForBody(
+                plant.GetBodyByName(name, instance)
+            )
+            == []
+        )
 
 
 @pytest.mark.parametrize("radius", [0.017, 0.030, 0.057])
 def test_ik_circle_tool_vertical(plant, radius):
     context = plant.CreateDefaultContext()
     tip = plant.GetFrameByName("tool_tip")
-    lower, upper = plant.GetPositionLowerLimits(), plant.GetPositionUpperLimits()
-    effort = np.array([plant.GetJointActuatorByName(j).effort_limit() for j in ARM_JOINTS])
+    lower, upper = (
+        plant.GetPositionLowerLimits(),
+        plant.GetPositionUpperLimits(),
+    )
+    effort = np.array(
+        [plant.GetJointActuatorByName(j).effort_limit() for j in ARM_JOINTS]
+    )
     q_prev = None
     for p in _circle(radius):
         q = solve_tool_pose(plant, p, q_guess=q_prev)
@@ -99,8 +135,10 @@ def test_ik_circle_tool_vertical(plant, radius):
         assert np.linalg.norm(X_WT.translation() - p) < 1e-6
         z_axis = X_WT.rotation().matrix()[:, 2]
         assert math.acos(min(1.0, z_axis[2])) < 1e-6
-        assert np.min(np.minimum(q - lower, upper - q)) > 0.5   # rad of margin to every limit
-        assert q[1] > 0 and q[3] < 0                              # elbow up: shoulder forward, wrist back
+        assert (
+            np.min(np.minimum(q - lower, upper - q)) > 0.5
+        )  # rad of margin to every limit
+        assert q[1] > 0 and q[3] < 0  # elbow up: shoulder forward, wrist back
         tau_g = plant.CalcGravityGeneralizedForces(context)
         assert np.all(np.abs(tau_g) < 0.5 * effort)
 
@@ -115,7 +153,15 @@ def test_ik_on_plant_with_other_models():
     q = solve_tool_pose(plant, p)
     context = plant.CreateDefaultContext()
     plant.SetPositions(context, arm, q)
-    assert np.linalg.norm(plant.GetFrameByName("tool_tip", arm).CalcPoseInWorld(context).translation() - p) < 1e-6
+    assert (
+        np.linalg.norm(
+            plant.GetFrameByName("tool_tip", arm)
+            .CalcPoseInWorld(context)
+            .translation()
+            - p
+        )
+        < 1e-6
+    )
 
 
 def test_ik_failure_raises(plant):
@@ -134,11 +180,17 @@ def test_task_space_inertia_positive(plant):
     context = plant.CreateDefaultContext()
     plant.SetPositions(context, solve_tool_pose(plant, _circle(0.030)[0]))
     M = plant.CalcMassMatrix(context)
-    J = plant.CalcJacobianTranslationalVelocity(context, JacobianWrtVariable.kV, plant.GetFrameByName("tool_tip"),
-                                                np.zeros(3), plant.world_frame(), plant.world_frame())
+    J = plant.CalcJacobianTranslationalVelocity(
+        context,
+        JacobianWrtVariable.kV,
+        plant.GetFrameByName("tool_tip"),
+        np.zeros(3),
+        plant.world_frame(),
+        plant.world_frame(),
+    )
     Lam = np.linalg.inv(J @ np.linalg.solve(M, J.T))
     eig = np.linalg.eigvalsh(0.5 * (Lam + Lam.T))
-    assert np.all(eig > 1.0) and np.all(eig < 100.0)   # kg
+    assert np.all(eig > 1.0) and np.all(eig < 100.0)  # kg
 
 
 def test_check_reach_follows_the_edge_and_names_another_seed(monkeypatch):
@@ -146,6 +198,7 @@ def test_check_reach_follows_the_edge_and_names_another_seed(monkeypatch):
     previous point's solution; one reached only from the nearest reachable
     posture gives distance 0 and that posture, never "0.0 mm beyond"."""
     from deburr_drake.cell import arm
+
     plant = make_kinematic_model(ARM_URL)
     x, y, z = DEFAULT_PART_POSITION
     points = [[x + 0.03, y, 0.048], [x, y + 0.03, 0.048]]
@@ -153,12 +206,17 @@ def test_check_reach_follows_the_edge_and_names_another_seed(monkeypatch):
 
     def misses_from_the_seed(plant_, p, *, q_guess=None, **kw):
         calls.append(q_guess)
-        if len(calls) in (2, 3):  # the second point: from the seed and from the first
+        if len(calls) in (
+            2,
+            3,
+        ):  # the second point: from the seed and from the first
             raise RuntimeError("missed")
         return real(plant_, p, q_guess=q_guess, **kw)
 
     monkeypatch.setattr(arm, "solve_tool_pose", misses_from_the_seed)
-    k, p, distance, q = arm.check_reach(plant, points, q_guess=arm.default_q_guess)
+    k, p, distance, q = arm.check_reach(
+        plant, points, q_guess=arm.default_q_guess
+    )
     assert (k, distance) == (1, 0.0)
     np.testing.assert_allclose(p, points[1])
     np.testing.assert_allclose(real(plant, points[1], q_guess=q), q, atol=1e-6)

@@ -6,10 +6,10 @@ import pytest
 
 from deburr_drake.cell.diagram import SYSTEM_NAMES, make_deburring_diagram
 from deburr_drake.cell.edge import make_contour, start_position
-from deburr_drake.config import BurrConfig, ProcessConfig, load_scenario
-from deburr_drake.math.geometry import CircularContour
 from deburr_drake.cell.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.cell.process import CuttingProcess, burr_profile
+from deburr_drake.config import BurrConfig, ProcessConfig, load_scenario
+from deburr_drake.math.geometry import CircularContour
 
 
 @pytest.fixture(scope="module")
@@ -37,11 +37,13 @@ def test_arm_starts_at_the_contour_start_in_contact(paper_diagram):
     plant = diagram.GetSubsystemByName("plant")
     pc = plant.GetMyContextFromRoot(context)
     tip = plant.GetFrameByName("tool_tip").CalcPoseInWorld(pc)
-    np.testing.assert_allclose(tip.translation(), start_position(scenario),
-                               atol=1e-7)
+    np.testing.assert_allclose(
+        tip.translation(), start_position(scenario), atol=1e-7
+    )
     # Tool axis vertical.
-    np.testing.assert_allclose(tip.rotation().matrix()[:, 2], [0, 0, 1],
-                               atol=1e-7)
+    np.testing.assert_allclose(
+        tip.rotation().matrix()[:, 2], [0, 0, 1], atol=1e-7
+    )
     contour = make_contour(scenario)
     assert contour.depth(tip.translation()) == pytest.approx(0.0, abs=1e-7)
 
@@ -53,28 +55,40 @@ def test_burr_profile_raised_cosine():
     h = burr_profile(arc, burrs, L, closed=True)
     np.testing.assert_allclose(h, [0.001, 0.0005, 0.0, 0.0], atol=1e-15)
     # Wraps on a closed edge.
-    h_wrap = burr_profile([0.099], [BurrConfig(center_fraction=0.0)], L,
-                          closed=True)
+    h_wrap = burr_profile(
+        [0.099], [BurrConfig(center_fraction=0.0)], L, closed=True
+    )
     assert h_wrap[0] > 0
 
 
 def test_process_records_finish_and_removes_swept_burr():
     contour = CircularContour([0.0, 0.0, 0.048], 0.027)
-    config = ProcessConfig(burrs=[BurrConfig(center_fraction=0.1,
-                                             length=0.008, height=0.001)])
+    config = ProcessConfig(
+        burrs=[BurrConfig(center_fraction=0.1, length=0.008, height=0.001)]
+    )
     model = make_kinematic_model(POINT_MASS_URL)
-    process = CuttingProcess(model, "tool_tip", contour, config,
-                             cut_height=0.002, cutter_radius=0.003)
+    process = CuttingProcess(
+        model,
+        "tool_tip",
+        contour,
+        config,
+        cut_height=0.002,
+        cutter_radius=0.003,
+    )
     context = process.CreateDefaultContext()
     s = 0.1 * contour.length  # the tool's contact point at the burr centre
     p = contour.point_at(s)
     x_p = p + 4e-4 * contour.n1(p)
     v = 2e-3 * contour.tangent(p)
-    process.GetInputPort("plant_state").FixValue(context,
-                                                 np.concatenate([x_p, v]))
+    process.GetInputPort("plant_state").FixValue(
+        context, np.concatenate([x_p, v])
+    )
     # process.sample_mean's inputs: nothing else acts on the point.
-    for name in ("generalized_acceleration", "applied_generalized_force",
-                 "actuation"):
+    for name in (
+        "generalized_acceleration",
+        "applied_generalized_force",
+        "actuation",
+    ):
         port = process.GetInputPort(name)
         port.FixValue(context, np.zeros(port.size()))
     burr0 = process.GetOutputPort("burr_height").Eval(context).copy()
@@ -85,6 +99,7 @@ def test_process_records_finish_and_removes_swept_burr():
     # The burr is cut at the cutter's front, s + r: raised cosine there.
     front = burr_profile([s + 0.003], config.burrs, contour.length, True)[0]
     from deburr_drake.cell.process import PROCESS_STATE
+
     area = PROCESS_STATE.get(state, "burr_area")
     bins = process.bins
     assert area == pytest.approx(burr0[bins.index(s + 0.003)] * 0.002)
@@ -93,9 +108,10 @@ def test_process_records_finish_and_removes_swept_burr():
     g = PROCESS_STATE.get(state, "g")
     # the bore (path radius 27 mm, cutter 3 mm): the band 30 .. 30.4 mm
     # per metre of the cutter centre's travel at 27.4 mm
-    scale = (0.0304 ** 2 - 0.03 ** 2) / 2 / 0.0274 / 4e-4
-    assert g == pytest.approx(config.cutting_coefficient * scale
-                              * (4e-4 * 0.002 + area), rel=1e-3)
+    scale = (0.0304**2 - 0.03**2) / 2 / 0.0274 / 4e-4
+    assert g == pytest.approx(
+        config.cutting_coefficient * scale * (4e-4 * 0.002 + area), rel=1e-3
+    )
     burr1 = process.GetOutputPort("burr_height").Eval(context)
     finish = process.GetOutputPort("finish_depth").Eval(context)
     k = bins.index(s)
@@ -112,24 +128,31 @@ def test_process_records_finish_and_removes_swept_burr():
 def test_straight_edge_cell():
     from deburr_drake.cell.truth import contact_normal_force
     from deburr_drake.math.geometry import StraightContour
+
     scenario = load_scenario("paper", text="edge: {kind: straight}")
     contour = make_contour(scenario)
     assert isinstance(contour, StraightContour)
     assert contour.length == pytest.approx(0.1)
     # Material on the right of the travel direction (+y): n1 = +x.
-    np.testing.assert_allclose(contour.n1(contour.point_at(0.0)),
-                               [1, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(
+        contour.n1(contour.point_at(0.0)), [1, 0, 0], atol=1e-12
+    )
     f = contact_normal_force(scenario, [-1e-4, 2e-4, 5e-4, 8e-4])
     assert f[0] == 0.0 and 0 < f[1] < f[2] < f[3]
     # About the ring's 10 N/mm at 0.5 mm: the same material and wall.
-    k = (contact_normal_force(scenario, [5.2e-4])[0]
-         - contact_normal_force(scenario, [4.8e-4])[0]) / 4e-5
+    k = (
+        contact_normal_force(scenario, [5.2e-4])[0]
+        - contact_normal_force(scenario, [4.8e-4])[0]
+    ) / 4e-5
     assert 8e3 < k < 12e3
     diagram = make_deburring_diagram(scenario=scenario)
     context = diagram.CreateDefaultContext()
     plant = diagram.GetSubsystemByName("plant")
-    tip = plant.GetFrameByName("tool_tip").CalcPoseInWorld(
-        plant.GetMyContextFromRoot(context)).translation()
+    tip = (
+        plant.GetFrameByName("tool_tip")
+        .CalcPoseInWorld(plant.GetMyContextFromRoot(context))
+        .translation()
+    )
     np.testing.assert_allclose(tip, contour.point_at(0.0), atol=1e-7)
 
 
@@ -139,8 +162,10 @@ def _one_sample_from(source, context, scenario, kick):
     state copied by subsystem), with the tool's joint velocities kicked
     by ``kick`` along the edge's direction (joint space, J^+ n2)."""
     from pydrake.systems.analysis import InitializeParams
+
     from deburr_drake.analysis.operating_point import transfer_state
     from deburr_drake.runs.simulation import make_simulator
+
     diagram = make_deburring_diagram(scenario=scenario)
     simulator = make_simulator(diagram, scenario)
     root = simulator.get_mutable_context()
@@ -148,8 +173,7 @@ def _one_sample_from(source, context, scenario, kick):
     plant = diagram.GetSubsystemByName("plant")
     pc = plant.GetMyMutableContextFromRoot(root)
     plant.SetVelocities(pc, plant.GetVelocities(pc) + kick)
-    simulator.Initialize(InitializeParams(
-        suppress_initialization_events=True))
+    simulator.Initialize(InitializeParams(suppress_initialization_events=True))
     # from just before the sample at 1 s: its updates (the process's terms)
     # are each scenario's own
     simulator.AdvanceTo(1.0 + scenario.controller.control_period)
@@ -168,6 +192,7 @@ def test_held_mean_at_one_step_follows_eq3_at_fine_steps():
     off-diagonal damping explicit) is more than 3 times as far off
     (measured: 3.4 % of the kick)."""
     from deburr_drake.runs.simulation import make_simulator
+
     shipped = load_scenario("paper")
     assert shipped.process.sample_mean
     assert shipped.simulation.max_step == shipped.controller.control_period
@@ -180,23 +205,39 @@ def test_held_mean_at_one_step_follows_eq3_at_fine_steps():
     pc = plant.GetMyContextFromRoot(context)
     frame = plant.GetFrameByName(shipped.robot.tool_frame)
     from pydrake.multibody.tree import JacobianWrtVariable
+
     J = plant.CalcJacobianTranslationalVelocity(
-        pc, JacobianWrtVariable.kV, frame, [0, 0, 0], plant.world_frame(),
-        plant.world_frame())
+        pc,
+        JacobianWrtVariable.kV,
+        frame,
+        [0, 0, 0],
+        plant.world_frame(),
+        plant.world_frame(),
+    )
     observer = diagram.GetSubsystemByName("chamfer_observer")
     from deburr_drake.control.layout import CHAMFER_STATE
-    n2 = CHAMFER_STATE.get(observer.GetOutputPort("chamfer_state").Eval(
-        observer.GetMyContextFromRoot(context)), "n2")
+
+    n2 = CHAMFER_STATE.get(
+        observer.GetOutputPort("chamfer_state").Eval(
+            observer.GetMyContextFromRoot(context)
+        ),
+        "n2",
+    )
     kick = np.linalg.pinv(J) @ (2e-3 * n2)
     speeds = {}
     for name, text in (
-            ("held", None),
-            ("fine", "{process: {sample_mean: false}, "
-                     "simulation: {max_step: 0.000125}}"),
-            ("explicit", "{process: {sample_mean: false}}")):
+        ("held", None),
+        (
+            "fine",
+            "{process: {sample_mean: false}, simulation: {max_step: 0.000125}}",
+        ),
+        ("explicit", "{process: {sample_mean: false}}"),
+    ):
         scenario = load_scenario("paper", text=text)
-        speeds[name] = float(_one_sample_from(
-            diagram, context, scenario, kick) @ n2)
+        speeds[name] = float(
+            _one_sample_from(diagram, context, scenario, kick) @ n2
+        )
     assert abs(speeds["held"] - speeds["fine"]) < 0.01 * 2e-3, speeds
-    assert abs(speeds["explicit"] - speeds["fine"]) > \
-        3 * abs(speeds["held"] - speeds["fine"]), speeds
+    assert abs(speeds["explicit"] - speeds["fine"]) > 3 * abs(
+        speeds["held"] - speeds["fine"]
+    ), speeds

@@ -3,21 +3,20 @@
 converted, collision geometry left out, drives for joints without a
 transmission, joints past the flange welded."""
 
-import xml.etree.ElementTree as ET
 from importlib import metadata
+import xml.etree.ElementTree as ET
 
 import numpy as np
-import pytest
-import trimesh
 from pydrake.geometry import Role
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.systems.framework import DiagramBuilder
+import pytest
+from test_robot_model import _urdf_of_arm6
+import trimesh
 
 from deburr_drake.cell.description import convert_mesh
 from deburr_drake.cell.robot import add_robot, check_robot, robot_joints
 from deburr_drake.config import ConfigError, RobotConfig, load_scenario
-
-from test_robot_model import _urdf_of_arm6
 
 
 def _geometries(config):
@@ -27,8 +26,10 @@ def _geometries(config):
     plant.Finalize()
     inspector = scene_graph.model_inspector()
     ids = inspector.GetAllGeometryIds()
-    roles = {role: [g for g in ids if inspector.GetProperties(g, role) is not None]
-             for role in (Role.kIllustration, Role.kProximity)}
+    roles = {
+        role: [g for g in ids if inspector.GetProperties(g, role) is not None]
+        for role in (Role.kIllustration, Role.kProximity)
+    }
     return plant, inspector, roles
 
 
@@ -41,8 +42,9 @@ def _package(tmp_path, *, xml_name="not_the_folder_name"):
     (root / "meshes").mkdir(parents=True)
     (root / "package.xml").write_text(
         f'<?xml version="1.0"?><package format="3"><name>{xml_name}</name>'
-        '<version>1.0.0</version><description>d</description>'
-        '<maintainer email="m@example.com">m</maintainer><license>BSD</license></package>')
+        "<version>1.0.0</version><description>d</description>"
+        '<maintainer email="m@example.com">m</maintainer><license>BSD</license></package>'
+    )
     box = trimesh.creation.box([0.1, 0.1, 0.2])
     box.export(str(root / "meshes" / "link3.stl"))
     box.export(str(root / "meshes" / "link5.dae"))
@@ -55,28 +57,49 @@ def _package(tmp_path, *, xml_name="not_the_folder_name"):
             f'<link name="{link}"><inertial>',
             f'<link name="{link}"><visual><geometry><mesh filename="{uri}/{mesh}"/></geometry>'
             f'</visual><collision><geometry><mesh filename="{uri}/collision.STL"/></geometry>'
-            '</collision><inertial>')
+            "</collision><inertial>",
+        )
     urdf.write_text(text)
     return share, urdf
 
 
-def test_a_package_resolves_by_folder_name_whose_package_xml_says_otherwise(tmp_path):
+def test_a_package_resolves_by_folder_name_whose_package_xml_says_otherwise(
+    tmp_path,
+):
     share, _ = _package(tmp_path)
-    config = RobotConfig(model="package://my_arm_data/arm6.urdf", package_paths=[str(share)],
-                         flange_frame="flange")
+    config = RobotConfig(
+        model="package://my_arm_data/arm6.urdf",
+        package_paths=[str(share)],
+        flange_frame="flange",
+    )
     plant, inspector, roles = _geometries(config)
-    assert [j.name() for j in robot_joints(plant)] == ["a1", "a2", "a3", "a4", "a5", "a6"]
+    assert [j.name() for j in robot_joints(plant)] == [
+        "a1",
+        "a2",
+        "a3",
+        "a4",
+        "a5",
+        "a6",
+    ]
     # robot.packages names a package's folder directly.
-    named = RobotConfig(model="package://arm/arm6.urdf",
-                        packages={"arm": str(share / "my_arm_data"),
-                                  "my_arm_data": str(share / "my_arm_data")},
-                        flange_frame="flange")
+    named = RobotConfig(
+        model="package://arm/arm6.urdf",
+        packages={
+            "arm": str(share / "my_arm_data"),
+            "my_arm_data": str(share / "my_arm_data"),
+        },
+        flange_frame="flange",
+    )
     assert check_robot(named).num_positions() == 6
 
 
-def test_an_unknown_package_is_one_line_naming_it_and_where_it_was_looked_for(tmp_path):
+def test_an_unknown_package_is_one_line_naming_it_and_where_it_was_looked_for(
+    tmp_path,
+):
     share, urdf = _package(tmp_path)
-    config = RobotConfig(model=str(urdf), flange_frame="flange")  # no package folders
+    config = RobotConfig(
+        model=str(urdf), flange_frame="flange"
+    )  # no package folders
     with pytest.raises(ConfigError) as e:
         check_robot(config)
     message = str(e.value)
@@ -87,11 +110,17 @@ def test_an_unknown_package_is_one_line_naming_it_and_where_it_was_looked_for(tm
 
 def _meshes(share):
     """The package's arm: its visual meshes and its geometries by role."""
-    config = RobotConfig(model="package://my_arm_data/arm6.urdf", package_paths=[str(share)],
-                         flange_frame="flange")
+    config = RobotConfig(
+        model="package://my_arm_data/arm6.urdf",
+        package_paths=[str(share)],
+        flange_frame="flange",
+    )
     plant, inspector, roles = _geometries(config)
-    meshes = [g for g in roles[Role.kIllustration]
-              if type(inspector.GetShape(g)).__name__ == "Mesh"]
+    meshes = [
+        g
+        for g in roles[Role.kIllustration]
+        if type(inspector.GetShape(g)).__name__ == "Mesh"
+    ]
     return inspector, meshes, roles
 
 
@@ -105,15 +134,23 @@ def test_stl_and_dae_visuals_are_converted_and_collisions_left_out(tmp_path):
         path = str(inspector.GetShape(g).source().path())
         assert path.endswith(".obj")
         converted = trimesh.load(path, force="mesh")
-        np.testing.assert_allclose(converted.extents, [0.1, 0.1, 0.2], atol=1e-9)
+        np.testing.assert_allclose(
+            converted.extents, [0.1, 0.1, 0.2], atol=1e-9
+        )
 
 
-def test_a_mesh_that_cannot_be_converted_is_dropped_with_one_warning(tmp_path, capsys):
+def test_a_mesh_that_cannot_be_converted_is_dropped_with_one_warning(
+    tmp_path, capsys
+):
     share, _ = _package(tmp_path)
     (share / "my_arm_data" / "meshes" / "link5.dae").write_text("not a mesh")
     _, meshes, _ = _meshes(share)
     assert len(meshes) == 1
-    warnings = [line for line in capsys.readouterr().err.splitlines() if "link5.dae" in line]
+    warnings = [
+        line
+        for line in capsys.readouterr().err.splitlines()
+        if "link5.dae" in line
+    ]
     assert len(warnings) == 1 and "dropped" in warnings[0]
 
 
@@ -154,18 +191,27 @@ def _with_gripper(path):
     return path
 
 
-def test_a_urdf_without_transmissions_gets_drives_and_its_fingers_are_welded(tmp_path, capsys):
-    path = _with_gripper(_urdf_of_arm6(tmp_path / "bare.urdf", transmissions=False))
+def test_a_urdf_without_transmissions_gets_drives_and_its_fingers_are_welded(
+    tmp_path, capsys
+):
+    path = _with_gripper(
+        _urdf_of_arm6(tmp_path / "bare.urdf", transmissions=False)
+    )
     config = RobotConfig(model=str(path), flange_frame="flange")
     plant = check_robot(config)
     joints = robot_joints(plant)
     assert [j.name() for j in joints] == ["a1", "a2", "a3", "a4", "a5", "a6"]
     assert plant.num_actuators() == 6
-    limits = {j.get("name"): float(j.find("limit").get("effort"))
-              for j in ET.parse(path).getroot().findall("joint") if j.find("limit") is not None}
+    limits = {
+        j.get("name"): float(j.find("limit").get("effort"))
+        for j in ET.parse(path).getroot().findall("joint")
+        if j.find("limit") is not None
+    }
     for i in plant.GetJointActuatorIndices():
         actuator = plant.get_joint_actuator(i)
-        assert actuator.effort_limit() == pytest.approx(limits[actuator.joint().name()])
+        assert actuator.effort_limit() == pytest.approx(
+            limits[actuator.joint().name()]
+        )
     # finger1 welded at its lower limit (0 is outside [0.01, 0.04]), finger2 at 0.
     context = plant.CreateDefaultContext()
     X_1 = plant.GetFrameByName("finger1").CalcPoseInWorld(context)
@@ -178,31 +224,52 @@ def test_a_urdf_without_transmissions_gets_drives_and_its_fingers_are_welded(tmp
     assert len(lines) == 1 and "'a1'" in lines[0] and "finger" not in lines[0]
     welded = [line for line in err.splitlines() if "welded" in line]
     assert len(welded) == 1
-    assert all(name in welded[0] for name in ("finger_joint1", "finger_joint2", "side_joint"))
+    assert all(
+        name in welded[0]
+        for name in ("finger_joint1", "finger_joint2", "side_joint")
+    )
 
 
 def test_reflected_inertia_sets_the_drives_rotor_inertia(tmp_path):
     path = _urdf_of_arm6(tmp_path / "bare.urdf", transmissions=False)
     inertia = [1.0, 2.0, 0.5, 0.1, 0.1, 0.05]
-    plant = check_robot(RobotConfig(model=str(path), flange_frame="flange",
-                                    reflected_inertia=inertia))
-    by_joint = {plant.get_joint_actuator(i).joint().name(): plant.get_joint_actuator(i)
-                for i in plant.GetJointActuatorIndices()}
+    plant = check_robot(
+        RobotConfig(
+            model=str(path), flange_frame="flange", reflected_inertia=inertia
+        )
+    )
+    by_joint = {
+        plant.get_joint_actuator(i).joint().name(): plant.get_joint_actuator(i)
+        for i in plant.GetJointActuatorIndices()
+    }
     for k, value in enumerate(inertia):
-        assert by_joint[f"a{k + 1}"].default_reflected_inertia() == pytest.approx(value)
+        assert by_joint[
+            f"a{k + 1}"
+        ].default_reflected_inertia() == pytest.approx(value)
     with pytest.raises(ConfigError, match="robot.reflected_inertia"):
-        check_robot(RobotConfig(model=str(path), flange_frame="flange",
-                                reflected_inertia=[1.0, 2.0]))
+        check_robot(
+            RobotConfig(
+                model=str(path),
+                flange_frame="flange",
+                reflected_inertia=[1.0, 2.0],
+            )
+        )
 
 
 def test_pip_package_folders_and_a_missing_distribution(tmp_path):
     with pytest.raises(ConfigError) as e:
-        RobotConfig(model="arm6", package_paths=["pip:no-such-dist-xyz/share"]).validate()
-    assert "robot.package_paths[0]" in str(e.value) and "pip install no-such-dist-xyz" in str(e.value)
+        RobotConfig(
+            model="arm6", package_paths=["pip:no-such-dist-xyz/share"]
+        ).validate()
+    assert "robot.package_paths[0]" in str(
+        e.value
+    ) and "pip install no-such-dist-xyz" in str(e.value)
     scenario = tmp_path / "cell.yaml"
     (tmp_path / "pkgs").mkdir()
-    scenario.write_text("name: c\nbase: paper_6dof\nrobot: {model: arm6, flange_frame: flange,"
-                        " package_paths: [pkgs]}\n")
+    scenario.write_text(
+        "name: c\nbase: paper_6dof\nrobot: {model: arm6, flange_frame: flange,"
+        " package_paths: [pkgs]}\n"
+    )
     loaded = load_scenario(str(scenario))
     assert loaded.robot.package_paths == [str((tmp_path / "pkgs").resolve())]
     # base: the part and the task of paper_6dof, the robot's own section.
@@ -218,19 +285,26 @@ def _has_example_robot_data():
         return False
 
 
-needs_erd = pytest.mark.skipif(not _has_example_robot_data(),
-                               reason="example-robot-data is not installed (the test extra)")
+needs_erd = pytest.mark.skipif(
+    not _has_example_robot_data(),
+    reason="example-robot-data is not installed (the test extra)",
+)
 
 
 @needs_erd
-@pytest.mark.parametrize("urdf, flange, joints", [
-    ("ur_description/urdf/ur10_robot.urdf", "tool0", 6),
-    ("panda_description/urdf/panda.urdf", "panda_link8", 7),
-    ("xarm_description/urdf/xarm7.urdf", "link7", 7),
-])
+@pytest.mark.parametrize(
+    "urdf, flange, joints",
+    [
+        ("ur_description/urdf/ur10_robot.urdf", "tool0", 6),
+        ("panda_description/urdf/panda.urdf", "panda_link8", 7),
+        ("xarm_description/urdf/xarm7.urdf", "link7", 7),
+    ],
+)
 def test_example_robot_data_arms_load(urdf, flange, joints):
-    config = RobotConfig(model=f"package://example-robot-data/robots/{urdf}",
-                         package_paths=["pip:example-robot-data/cmeel.prefix/share"],
-                         flange_frame=flange)
+    config = RobotConfig(
+        model=f"package://example-robot-data/robots/{urdf}",
+        package_paths=["pip:example-robot-data/cmeel.prefix/share"],
+        flange_frame=flange,
+    )
     plant = check_robot(config)
     assert len(robot_joints(plant)) == joints == plant.num_actuators()

@@ -7,8 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from deburr_drake.cell.edge import (believed_contour, edge_points,
-                                    make_contour, start_position)
+from deburr_drake.cell.edge import (
+    believed_contour,
+    edge_points,
+    make_contour,
+    start_position,
+)
 from deburr_drake.config import load_scenario
 
 
@@ -17,30 +21,33 @@ def test_pocket_path_is_the_profile_offset_by_the_cutter():
     c = make_contour(sc)
     assert c.height == pytest.approx(0.050 - 0.002)
     # starts mid right side: x = 0.4 + 0.03 - 0.003
-    np.testing.assert_allclose(c.point_at(0.0), [0.427, 0.0, 0.048],
-                               atol=1e-12)
+    np.testing.assert_allclose(c.point_at(0.0), [0.427, 0.0, 0.048], atol=1e-12)
     # the edge drawn where the chamfer is cut: the wall's face at the top
-    np.testing.assert_allclose(edge_points(sc, [0.0])[0], [0.43, 0.0, 0.05],
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        edge_points(sc, [0.0])[0], [0.43, 0.0, 0.05], atol=1e-12
+    )
     assert start_position(sc)[0] == pytest.approx(
-        0.427 + sc.simulation.initial_depth)
+        0.427 + sc.simulation.initial_depth
+    )
 
 
 def test_believed_profile_moved_turned_and_grown():
-    sc = load_scenario("pocket", text="part_error: {offset: [0.001, 0.0, "
-                       "0.0], yaw: 0.1, radius: 0.0005}")
+    sc = load_scenario(
+        "pocket",
+        text="part_error: {offset: [0.001, 0.0, "
+        "0.0], yaw: 0.1, radius: 0.0005}",
+    )
     real, belief = make_contour(sc), believed_contour(sc)
     # grown by 0.5 mm: 4 lines keep their lengths, the fillets' path radius
     # 5.5 instead of 5 mm
-    assert belief.length - real.length == pytest.approx(
-        2 * math.pi * 0.0005)
+    assert belief.length - real.length == pytest.approx(2 * math.pi * 0.0005)
     # the start turned with the part: at polar angle 0.1 about the moved
     # centre, 27.5 mm out (the right side moved 0.5 mm into the material)
     p = belief.point_at(0.0)
     q = p[:2] - [0.401, 0.0]
     assert math.atan2(q[1], q[0]) == pytest.approx(0.1)
-    assert q[0] * math.cos(0.1) + q[1] * math.sin(0.1) == pytest.approx(
-        0.0275)
+    assert q[0] * math.cos(0.1) + q[1] * math.sin(0.1) == pytest.approx(0.0275)
     boss = load_scenario("boss", text="part_error: {radius: 0.0005}")
-    assert believed_contour(boss).length - make_contour(boss).length \
-        == pytest.approx(2 * math.pi * 0.0005)
+    assert believed_contour(boss).length - make_contour(
+        boss
+    ).length == pytest.approx(2 * math.pi * 0.0005)

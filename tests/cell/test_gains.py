@@ -6,8 +6,12 @@ import copy
 
 import pytest
 
-from deburr_drake.cell.gains import (SAMPLED_RATE, VERTICAL_ERROR, design_gains,
-                                     resolve_gains)
+from deburr_drake.cell.gains import (
+    SAMPLED_RATE,
+    VERTICAL_ERROR,
+    design_gains,
+    resolve_gains,
+)
 from deburr_drake.cell.robot import loop_numbers
 from deburr_drake.config import load_scenario
 
@@ -51,7 +55,9 @@ def test_a_light_wrist_gets_lower_gains_within_the_sampled_rate():
     """arm6 without its motors' reflected inertia (robot.reflected_inertia
     zero): the rule's gains exceed the sampled rate, the design scales them
     to it."""
-    scenario = load_scenario("paper_6dof", text="robot: {reflected_inertia: [0, 0, 0, 0, 0, 0]}")
+    scenario = load_scenario(
+        "paper_6dof", text="robot: {reflected_inertia: [0, 0, 0, 0, 0, 0]}"
+    )
     before = loop_numbers(scenario)["sampled_rate"]
     design = design_gains(scenario)
     assert before > SAMPLED_RATE
@@ -67,16 +73,23 @@ def test_resolve_writes_the_gains_for_a_file_robot_only():
     shipped.controller.design = "auto"
     shipped.controller.sliding_gain = [1.0, 1.0, 1.0]
     design = resolve_gains(shipped)
-    assert shipped.controller.sliding_gain == design.sliding_gain == written.sliding_gain
+    assert (
+        shipped.controller.sliding_gain
+        == design.sliding_gain
+        == written.sliding_gain
+    )
     assert shipped.controller.design == "written"
 
 
 def test_slope_bound_designed_from_the_lightest_task_mass():
     """fuzzy.max_slope 0: 0.75 x 2 m / T - K (m the lightest task mass at
     the start pose), written into the scenario; a given bound is kept."""
-    from deburr_drake.cell.gains import (SLOPE_LIMIT_FRACTION,
-                                         resolve_slope_bound)
+    from deburr_drake.cell.gains import (
+        SLOPE_LIMIT_FRACTION,
+        resolve_slope_bound,
+    )
     from deburr_drake.cell.robot import loop_numbers
+
     for name in ("paper", "point_mass"):
         s = load_scenario(name)
         m = loop_numbers(s)["lightest_task_mass"]
@@ -98,6 +111,7 @@ def test_the_step_is_lowered_only_for_eq3_between_samples():
     arm5 (g_max = k_c (0.5 mm x 2 mm + 1 mm x 2 mm) = 9900 N s/m, 7.03 kg)
     two steps per sample."""
     from deburr_drake.cell.gains import STEP_RATE
+
     scenario = load_scenario("paper")
     assert scenario.simulation.max_step == 0.0025
     assert design_gains(scenario).max_step == 0.0025

@@ -5,50 +5,76 @@ commanded torque at the effort limits."""
 import json
 
 import numpy as np
-import pytest
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
+import pytest
 
 from deburr_drake import cli
 from deburr_drake.cell.diagram import make_deburring_diagram
-from deburr_drake.config import ConfigError, load_scenario
 from deburr_drake.cell.guards import GuardLimits, SafetyGuards
+from deburr_drake.config import ConfigError, load_scenario
 from deburr_drake.control.layout import CHAMFER_STATE
 from deburr_drake.runs.simulation import simulate
 
 LIMITS = GuardLimits(
-    joint_names=["a", "b"], effort_limits=np.array([10.0, np.inf]),
-    joint_torque_fraction=1.0, tool_force=50.0, depth=0.002,
+    joint_names=["a", "b"],
+    effort_limits=np.array([10.0, np.inf]),
+    joint_torque_fraction=1.0,
+    tool_force=50.0,
+    depth=0.002,
     workspace_low=np.array([-0.1, -0.1, 0.0]),
-    workspace_high=np.array([0.1, 0.1, 0.1]), contact_lost_time=0.1,
-    contact_force=1.0, nan=True, check_period=0.0025, torque_period=0.0)
+    workspace_high=np.array([0.1, 0.1, 0.1]),
+    contact_lost_time=0.1,
+    contact_force=1.0,
+    nan=True,
+    check_period=0.0025,
+    torque_period=0.0,
+)
 
 
 def _chamfer(**values):
-    base = dict(x_p=[0.0, 0.0, 0.05], xdot_p=[0.0] * 3, n1=[1.0, 0, 0],
-                n2=[0, 1.0, 0], delta=0.0005, delta_dot=0.0, f_n=5.0,
-                f_t=10.0, arc_position=0.0, n1_rate=[0.0] * 3)
+    base = dict(
+        x_p=[0.0, 0.0, 0.05],
+        xdot_p=[0.0] * 3,
+        n1=[1.0, 0, 0],
+        n2=[0, 1.0, 0],
+        delta=0.0005,
+        delta_dot=0.0,
+        f_n=5.0,
+        f_t=10.0,
+        arc_position=0.0,
+        n1_rate=[0.0] * 3,
+    )
     base.update(values)
     return CHAMFER_STATE.pack(**base)
 
 
-def _run(tau=(1.0, 1e6), force=(0.0, 0.0, 10.0), chamfer=None,
-         contact=None, extra=(0.0,)):
+def _run(
+    tau=(1.0, 1e6),
+    force=(0.0, 0.0, 10.0),
+    chamfer=None,
+    contact=None,
+    extra=(0.0,),
+):
     builder = DiagramBuilder()
-    signals = {"actuation": np.array(tau, float),
-               "tool_force": np.array(force, float),
-               "chamfer": _chamfer() if chamfer is None else chamfer,
-               "estimates": np.array(extra, float)}
-    guards = builder.AddNamedSystem("guards", SafetyGuards(
-        LIMITS, {k: len(v) for k, v in signals.items()}))
+    signals = {
+        "actuation": np.array(tau, float),
+        "tool_force": np.array(force, float),
+        "chamfer": _chamfer() if chamfer is None else chamfer,
+        "estimates": np.array(extra, float),
+    }
+    guards = builder.AddNamedSystem(
+        "guards", SafetyGuards(LIMITS, {k: len(v) for k, v in signals.items()})
+    )
     for name, value in signals.items():
         source = builder.AddSystem(ConstantVectorSource(value))
         builder.Connect(source.get_output_port(), guards.GetInputPort(name))
     simulator = Simulator(builder.Build())
     if contact is not None:
         guards.GetMyMutableContextFromRoot(
-            simulator.get_mutable_context()).SetDiscreteState(contact)
+            simulator.get_mutable_context()
+        ).SetDiscreteState(contact)
     simulator.Initialize()
     status = simulator.AdvanceTo(0.5)
     return status
@@ -59,18 +85,26 @@ def test_nothing_trips_within_the_limits():
     assert status.reason() == status.ReturnReason.kReachedBoundaryTime
 
 
-@pytest.mark.parametrize("kwargs, name, values", [
-    (dict(tau=(-12.0, 0.0)), "joint_torque", "a |tau| = 12 > 1 x effort"),
-    (dict(force=(0.0, 60.0, 0.0)), "tool_force", "|f| = 60 N > 50 N"),
-    (dict(chamfer=_chamfer(delta=0.003)), "depth", "delta = 3 mm measured"),
-    (dict(chamfer=_chamfer(x_p=[0.0, 0.2, 0.05])), "workspace",
-     "outside the box"),
-    (dict(extra=(np.nan,)), "nan", "signal estimates has non-finite"),
-    (dict(chamfer=_chamfer(f_n=0.0), contact=[1.0, 0.0]), "contact_lost",
-     "||f_n|| = 0 N <= 1 N for"),
-])
-def test_each_guard_requests_termination_with_its_values(kwargs, name,
-                                                         values):
+@pytest.mark.parametrize(
+    "kwargs, name, values",
+    [
+        (dict(tau=(-12.0, 0.0)), "joint_torque", "a |tau| = 12 > 1 x effort"),
+        (dict(force=(0.0, 60.0, 0.0)), "tool_force", "|f| = 60 N > 50 N"),
+        (dict(chamfer=_chamfer(delta=0.003)), "depth", "delta = 3 mm measured"),
+        (
+            dict(chamfer=_chamfer(x_p=[0.0, 0.2, 0.05])),
+            "workspace",
+            "outside the box",
+        ),
+        (dict(extra=(np.nan,)), "nan", "signal estimates has non-finite"),
+        (
+            dict(chamfer=_chamfer(f_n=0.0), contact=[1.0, 0.0]),
+            "contact_lost",
+            "||f_n|| = 0 N <= 1 N for",
+        ),
+    ],
+)
+def test_each_guard_requests_termination_with_its_values(kwargs, name, values):
     status = _run(**kwargs)
     assert status.reason() == status.ReturnReason.kReachedTerminationCondition
     assert status.system().get_name() == "guards"
@@ -98,15 +132,21 @@ def test_the_drives_clamp_the_commanded_torque_at_the_effort_limits():
     saturation = diagram.GetSubsystemByName("drive_saturation")
     context = saturation.CreateDefaultContext()
     saturation.get_input_port().FixValue(context, np.full(5, 1e4))
-    np.testing.assert_allclose(saturation.get_output_port().Eval(context),
-                               [150.0, 150.0, 80.0, 20.0, 10.0])
-    names = [diagram.GetSystems()[i].get_name()
-             for i in range(len(diagram.GetSystems()))]
+    np.testing.assert_allclose(
+        saturation.get_output_port().Eval(context),
+        [150.0, 150.0, 80.0, 20.0, 10.0],
+    )
+    names = [
+        diagram.GetSystems()[i].get_name()
+        for i in range(len(diagram.GetSystems()))
+    ]
     assert "guards" in names
-    off = load_scenario("paper", text="guards: {enabled: false, "
-                                      "saturate_effort: false}")
-    names = [s.get_name() for s in make_deburring_diagram(
-        scenario=off).GetSystems()]
+    off = load_scenario(
+        "paper", text="guards: {enabled: false, saturate_effort: false}"
+    )
+    names = [
+        s.get_name() for s in make_deburring_diagram(scenario=off).GetSystems()
+    ]
     assert "guards" not in names and "drive_saturation" not in names
 
 
@@ -116,10 +156,16 @@ def test_a_runaway_gain_stops_on_the_torque_guard(tmp_path, capsys):
     and the plant never takes more than the limit (run past the pre-flight,
     which refuses these gains: tests/analysis/test_preflight.py)."""
     out = tmp_path / "run"
-    code = cli.main(["simulate", "--out", str(out), "--no-preflight",
-                     "--scenario-text",
-                     "controller: {sliding_gain: [20000.0, 20000.0, "
-                     "1500.0]}"])
+    code = cli.main(
+        [
+            "simulate",
+            "--out",
+            str(out),
+            "--no-preflight",
+            "--scenario-text",
+            "controller: {sliding_gain: [20000.0, 20000.0, 1500.0]}",
+        ]
+    )
     assert code == 3
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["stop_reason"] == "guard:joint_torque"
@@ -132,6 +178,7 @@ def test_a_runaway_gain_stops_on_the_torque_guard(tmp_path, capsys):
 
 def test_the_paper_cell_runs_without_a_trip():
     scenario = load_scenario("paper")
-    log = simulate(make_deburring_diagram(scenario=scenario), scenario,
-                   duration=0.5)
+    log = simulate(
+        make_deburring_diagram(scenario=scenario), scenario, duration=0.5
+    )
     assert log.stop_reason == "duration"

@@ -3,11 +3,14 @@
 import numpy as np
 import pytest
 
-from deburr_drake.cell.part import (CALIBRATED_FORCE_AT_HALF_MM,
-                                    CALIBRATED_HYDROELASTIC_MODULUS,
-                                    RingContactProbe, add_cartesian_tool,
-                                    measure_normal_force,
-                                    register_compliant_ring)
+from deburr_drake.cell.part import (
+    CALIBRATED_FORCE_AT_HALF_MM,
+    CALIBRATED_HYDROELASTIC_MODULUS,
+    RingContactProbe,
+    add_cartesian_tool,
+    measure_normal_force,
+    register_compliant_ring,
+)
 
 E = CALIBRATED_HYDROELASTIC_MODULUS
 
@@ -19,7 +22,10 @@ def probe():
 
 def test_force_at_half_mm_matches_calibration():
     f = measure_normal_force([5e-4], hydroelastic_modulus=E)[0]
-    assert abs(f - CALIBRATED_FORCE_AT_HALF_MM) <= 0.2 * CALIBRATED_FORCE_AT_HALF_MM
+    assert (
+        abs(f - CALIBRATED_FORCE_AT_HALF_MM)
+        <= 0.2 * CALIBRATED_FORCE_AT_HALF_MM
+    )
 
 
 def test_force_increases_with_depth():
@@ -31,16 +37,24 @@ def test_force_increases_with_depth():
 
 
 def test_zero_force_out_of_contact(probe):
-    assert measure_normal_force([-1e-4, -1e-3], hydroelastic_modulus=E).tolist() == [0.0, 0.0]
-    np.testing.assert_array_equal(probe.contact_force_on_tool([0.0, 0.0, 0.048]), 0.0)
+    assert measure_normal_force(
+        [-1e-4, -1e-3], hydroelastic_modulus=E
+    ).tolist() == [0.0, 0.0]
+    np.testing.assert_array_equal(
+        probe.contact_force_on_tool([0.0, 0.0, 0.048]), 0.0
+    )
 
 
 def test_force_on_tool_points_inward_and_scales_with_modulus(probe):
     rho, angle = 0.030 - 0.003 + 5e-4, 1.0
     e_r = np.array([np.cos(angle), np.sin(angle), 0.0])
     f = probe.contact_force_on_tool(rho * e_r + [0.0, 0.0, 0.048])
-    assert f @ e_r < -0.9 * np.linalg.norm(f)  # the wall pushes the tool toward the axis
-    f2 = measure_normal_force([5e-4], hydroelastic_modulus=2 * E, angle=angle)[0]
+    assert f @ e_r < -0.9 * np.linalg.norm(
+        f
+    )  # the wall pushes the tool toward the axis
+    f2 = measure_normal_force([5e-4], hydroelastic_modulus=2 * E, angle=angle)[
+        0
+    ]
     np.testing.assert_allclose(f2, -2 * (f @ e_r), rtol=1e-9)
 
 
@@ -52,23 +66,42 @@ def test_register_compliant_ring_roles_and_errors():
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
     add_cartesian_tool(plant)
-    kw = dict(inner_radius=0.03, outer_radius=0.035, z_bottom=0.044, z_top=0.05, n_theta=36)
+    kw = dict(
+        inner_radius=0.03,
+        outer_radius=0.035,
+        z_bottom=0.044,
+        z_top=0.05,
+        n_theta=36,
+    )
     with pytest.raises(ValueError, match="hydroelastic_modulus"):
-        register_compliant_ring(plant, hydroelastic_modulus=0.0, hunt_crossley_dissipation=1.0, **kw)
+        register_compliant_ring(
+            plant, hydroelastic_modulus=0.0, hunt_crossley_dissipation=1.0, **kw
+        )
     with pytest.raises(ValueError, match="hunt_crossley_dissipation"):
-        register_compliant_ring(plant, hydroelastic_modulus=E, hunt_crossley_dissipation=-1.0, **kw)
-    gid = register_compliant_ring(plant, hydroelastic_modulus=E, hunt_crossley_dissipation=1.0, **kw)
+        register_compliant_ring(
+            plant, hydroelastic_modulus=E, hunt_crossley_dissipation=-1.0, **kw
+        )
+    gid = register_compliant_ring(
+        plant, hydroelastic_modulus=E, hunt_crossley_dissipation=1.0, **kw
+    )
     inspector = scene_graph.model_inspector()
     props = inspector.GetProximityProperties(gid)
     assert props.GetProperty("hydroelastic", "hydroelastic_modulus") == E
     assert props.GetProperty("material", "hunt_crossley_dissipation") == 1.0
-    assert props.GetProperty("material", "coulomb_friction").dynamic_friction() == 0.0
-    assert inspector.GetFrameId(gid) == plant.GetBodyFrameIdOrThrow(plant.world_body().index())
+    assert (
+        props.GetProperty("material", "coulomb_friction").dynamic_friction()
+        == 0.0
+    )
+    assert inspector.GetFrameId(gid) == plant.GetBodyFrameIdOrThrow(
+        plant.world_body().index()
+    )
     world_frame = inspector.world_frame_id()
     assert len(inspector.GetGeometries(world_frame, Role.kIllustration)) == 1
     plant.Finalize()
     with pytest.raises(ValueError, match="plant"):
-        register_compliant_ring(plant, hydroelastic_modulus=E, hunt_crossley_dissipation=1.0, **kw)
+        register_compliant_ring(
+            plant, hydroelastic_modulus=E, hunt_crossley_dissipation=1.0, **kw
+        )
 
 
 def test_cartesian_tool_model():
@@ -84,21 +117,28 @@ def test_cartesian_tool_model():
         joint = plant.GetJointByName(name, instance)
         np.testing.assert_array_equal(joint.translation_axis(), axis)
         assert joint.default_damping() == 0.0
-        assert plant.GetJointActuatorByName(name, instance).effort_limit() == 200.0
-    masses = [plant.GetBodyByName(b, instance).default_mass() for b in ("x_carriage", "y_carriage", "tool")]
+        assert (
+            plant.GetJointActuatorByName(name, instance).effort_limit() == 200.0
+        )
+    masses = [
+        plant.GetBodyByName(b, instance).default_mass()
+        for b in ("x_carriage", "y_carriage", "tool")
+    ]
     assert masses == [0.5, 0.5, 1.0]
     context = plant.CreateDefaultContext()
     plant.SetPositions(context, [0.1, -0.2, 0.3])
     tip = plant.GetFrameByName("tool_tip", instance)
-    np.testing.assert_allclose(tip.CalcPoseInWorld(context).translation(), [0.1, -0.2, 0.3])
+    np.testing.assert_allclose(
+        tip.CalcPoseInWorld(context).translation(), [0.1, -0.2, 0.3]
+    )
 
 
 def test_a_profile_part_is_a_compliant_mesh_with_visuals():
-    from pydrake.geometry import Role
     from pydrake.systems.framework import DiagramBuilder
 
     from deburr_drake.cell.plant import add_cell_plant
     from deburr_drake.config import load_scenario
+
     builder = DiagramBuilder()
     plant, scene_graph = add_cell_plant(builder, load_scenario("boss"))
     inspector = scene_graph.model_inspector()

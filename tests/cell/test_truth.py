@@ -7,14 +7,15 @@ import numpy as np
 import pytest
 
 from deburr_drake.cell.diagram import make_deburring_diagram
+from deburr_drake.cell.process import cutting_force, material_overlap
 from deburr_drake.config import ProcessConfig, load_scenario
 from deburr_drake.math.geometry import CircularContour, StraightContour
-from deburr_drake.cell.process import cutting_force, material_overlap
 from deburr_drake.runs.simulation import simulate
 
 R = 0.003  # m, cutter radius
-LINE = StraightContour([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0],
-                       length=0.01)
+LINE = StraightContour(
+    [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], length=0.01
+)
 
 
 def test_a_closed_edge_is_material_everywhere():
@@ -22,39 +23,52 @@ def test_a_closed_edge_is_material_everywhere():
     assert material_overlap(circle, 0.5, 5e-4, R) == 1.0
 
 
-@pytest.mark.parametrize("arc, overlap", [
-    (0.005, 1.0),     # the middle of the edge
-    (0.0, 0.5),       # the cutter's chord half on the wall at its start
-    (0.01, 0.5),      # and at its end
-    (0.0121, 0.0),    # past the end by more than the half chord (1.73 mm)
-    (-0.002, 0.0),
-])
+@pytest.mark.parametrize(
+    "arc, overlap",
+    [
+        (0.005, 1.0),  # the middle of the edge
+        (0.0, 0.5),  # the cutter's chord half on the wall at its start
+        (0.01, 0.5),  # and at its end
+        (0.0121, 0.0),  # past the end by more than the half chord (1.73 mm)
+        (-0.002, 0.0),
+    ],
+)
 def test_overlap_of_the_cutter_chord_with_a_straight_wall(arc, overlap):
     assert material_overlap(LINE, arc, 5e-4, R) == pytest.approx(
-        overlap, abs=1e-9)
+        overlap, abs=1e-9
+    )
 
 
 def test_no_force_off_the_material():
     config = ProcessConfig()
     p = np.array([5e-4, 0.015, 0.0])  # 0.5 mm deep, 5 mm past the end
-    force, state = cutting_force(config, LINE, p, [0.0, 2.4e-3, 0.0],
-                                 cut_height=0.002, overlap=0.0)
+    force, state = cutting_force(
+        config, LINE, p, [0.0, 2.4e-3, 0.0], cut_height=0.002, overlap=0.0
+    )
     assert np.all(force == 0.0)
-    inside, _ = cutting_force(config, LINE, p - [0, 0.01, 0],
-                              [0.0, 2.4e-3, 0.0], cut_height=0.002)
+    inside, _ = cutting_force(
+        config, LINE, p - [0, 0.01, 0], [0.0, 2.4e-3, 0.0], cut_height=0.002
+    )
     assert np.linalg.norm(inside) > 8.0
 
 
 @pytest.mark.slow
 def test_running_off_a_straight_edge_cuts_nothing_and_stops():
-    scenario = load_scenario("paper", text="""
+    scenario = load_scenario(
+        "paper",
+        text="""
 edge: {kind: straight, length: 0.01}
 process: {burrs: []}
 simulation: {stop_after_passes: 0}
 guards: {joint_torque_fraction: 1000.0}
-""")
-    log = simulate(make_deburring_diagram(scenario=scenario), scenario,
-                   duration=10.0, progress_interval=10.0)
+""",
+    )
+    log = simulate(
+        make_deburring_diagram(scenario=scenario),
+        scenario,
+        duration=10.0,
+        progress_interval=10.0,
+    )
     proc = log["process"]
     # Past the end by more than the cutter chord's half-width at the depth
     # of each sample (the tool plunges once it has no material ahead).
@@ -71,14 +85,19 @@ guards: {joint_torque_fraction: 1000.0}
 
 def test_the_believed_part_is_the_real_one_moved_turned_and_resized():
     from deburr_drake.cell.edge import believed_contour, make_contour
+
     real = load_scenario("paper")
     assert believed_contour(real).radius == make_contour(real).radius
-    wrong = load_scenario("paper", text="part_error: {offset: [0.001, 0.0, "
-                                        "0.0], yaw: 0.1, radius: 0.0003}")
+    wrong = load_scenario(
+        "paper",
+        text="part_error: {offset: [0.001, 0.0, "
+        "0.0], yaw: 0.1, radius: 0.0003}",
+    )
     believed, truth = believed_contour(wrong), make_contour(wrong)
     assert believed.radius == pytest.approx(truth.radius + 3e-4)
-    np.testing.assert_allclose(believed.center - truth.center,
-                               [1e-3, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(
+        believed.center - truth.center, [1e-3, 0.0, 0.0], atol=1e-12
+    )
     assert wrong.tube.position == [0.4, 0.0, 0.0]  # the real part stays
 
 
@@ -87,26 +106,31 @@ def test_the_metrics_measure_depth_on_the_real_part():
     """The controller believes the inner radius 0.3 mm larger: it holds
     its (believed) 0.5 mm, the real chamfer is 0.8 mm deep."""
     scenario = load_scenario("paper", text="part_error: {radius: 0.0003}")
-    log = simulate(make_deburring_diagram(scenario=scenario), scenario,
-                   duration=4.0, progress_interval=4.0)
+    log = simulate(
+        make_deburring_diagram(scenario=scenario),
+        scenario,
+        duration=4.0,
+        progress_interval=4.0,
+    )
     late = log["process"]["t"] > 3.0
-    np.testing.assert_allclose(log["process"]["delta"][late], 8e-4,
-                               atol=3e-5)
+    np.testing.assert_allclose(log["process"]["delta"][late], 8e-4, atol=3e-5)
     late = log["chamfer"]["t"] > 3.0
-    np.testing.assert_allclose(log["chamfer"]["delta"][late], 5e-4,
-                               atol=3e-5)
+    np.testing.assert_allclose(log["chamfer"]["delta"][late], 5e-4, atol=3e-5)
     from deburr_drake.runs.pass_metrics import pass_metrics
+
     values = pass_metrics(log, only_cut=True)
-    assert values["chamfer_depth_mean_error_mm"] == pytest.approx(0.3,
-                                                                  abs=0.03)
+    assert values["chamfer_depth_mean_error_mm"] == pytest.approx(0.3, abs=0.03)
 
 
-SQUARE_2R = ("edge: {kind: profile, vertices: [[-0.03, -0.03], [0.03, -0.03], "
-             "[0.03, 0.03], [-0.03, 0.03]], fillet_radius: 0.03}")
+SQUARE_2R = (
+    "edge: {kind: profile, vertices: [[-0.03, -0.03], [0.03, -0.03], "
+    "[0.03, 0.03], [-0.03, 0.03]], fillet_radius: 0.03}"
+)
 
 
 def test_truth_is_measured_on_the_body_built_for_the_edge():
     from deburr_drake.cell.truth import contact_normal_force, contact_truth
+
     tube = load_scenario("paper")
     square = load_scenario("paper", text=SQUARE_2R)
     depths = [2e-4, 5e-4, 8e-4]
@@ -114,7 +138,8 @@ def test_truth_is_measured_on_the_body_built_for_the_edge():
     np.testing.assert_allclose(
         contact_normal_force(square, depths, arc_fraction=[0.1, 0.6]),
         contact_normal_force(tube, depths, arc_fraction=[0.1, 0.6]),
-        rtol=1e-9)
+        rtol=1e-9,
+    )
     pocket = contact_truth(load_scenario("pocket"))
     low, high = pocket.force_range
     # the lines' force at delta*, below the concave fillets'

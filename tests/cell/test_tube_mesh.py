@@ -5,10 +5,13 @@ import collections
 import numpy as np
 import pytest
 
-from deburr_drake.cell.tube_mesh import (make_ring_volume_mesh,
-                                         polygonal_ring_volume,
-                                         ring_mesh_path, tet_volumes,
-                                         write_vtk)
+from deburr_drake.cell.tube_mesh import (
+    make_ring_volume_mesh,
+    polygonal_ring_volume,
+    ring_mesh_path,
+    tet_volumes,
+    write_vtk,
+)
 
 CASES = [
     (0.030, 0.035, 0.044, 0.050, 720, 2, 2),
@@ -28,7 +31,12 @@ def _faces(tets):
 def _on_boundary(v, args):
     ri, ro, zb, zt, n = args[:5]
     r = np.hypot(v[:, 0], v[:, 1])
-    return (np.isclose(r, ri) | np.isclose(r, ro) | np.isclose(v[:, 2], zb) | np.isclose(v[:, 2], zt))
+    return (
+        np.isclose(r, ri)
+        | np.isclose(r, ro)
+        | np.isclose(v[:, 2], zb)
+        | np.isclose(v[:, 2], zt)
+    )
 
 
 @pytest.mark.parametrize("args", CASES)
@@ -37,7 +45,9 @@ def test_positive_volumes_and_total_volume(args):
     assert t.shape == (6 * args[4] * args[5] * args[6], 4)
     vol = tet_volumes(v, t)
     assert vol.min() > 0
-    np.testing.assert_allclose(vol.sum(), polygonal_ring_volume(*args[:5]), rtol=1e-12)
+    np.testing.assert_allclose(
+        vol.sum(), polygonal_ring_volume(*args[:5]), rtol=1e-12
+    )
 
 
 @pytest.mark.parametrize("args", CASES[1:])
@@ -81,7 +91,9 @@ def test_deterministic_bytes(tmp_path):
     assert p.read_bytes() == a
     assert ring_mesh_path(*CASES[1], cache_dir=tmp_path / "cache") == p
     assert ring_mesh_path(*CASES[0], cache_dir=tmp_path / "cache") != p
-    assert [x.name for x in (tmp_path / "cache").iterdir() if x.suffix != ".vtk"] == []
+    assert [
+        x.name for x in (tmp_path / "cache").iterdir() if x.suffix != ".vtk"
+    ] == []
 
 
 def test_default_cache_dir(tmp_path, monkeypatch):
@@ -90,17 +102,26 @@ def test_default_cache_dir(tmp_path, monkeypatch):
     assert p.parent == tmp_path / "deburr_drake" / "meshes" and p.exists()
 
 
-@pytest.mark.parametrize("kwargs, name", [
-    (dict(inner_radius=0.0), "inner_radius"),
-    (dict(outer_radius=0.02), "outer_radius"),
-    (dict(z_top=0.0), "z_top"),
-    (dict(z_bottom=float("nan")), "z_bottom"),
-    (dict(n_theta=2), "n_theta"),
-    (dict(n_radial=1), "n_radial"),
-    (dict(n_z=1.5), "n_z"),
-])
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        (dict(inner_radius=0.0), "inner_radius"),
+        (dict(outer_radius=0.02), "outer_radius"),
+        (dict(z_top=0.0), "z_top"),
+        (dict(z_bottom=float("nan")), "z_bottom"),
+        (dict(n_theta=2), "n_theta"),
+        (dict(n_radial=1), "n_radial"),
+        (dict(n_z=1.5), "n_z"),
+    ],
+)
 def test_bad_arguments(kwargs, name):
-    args = dict(inner_radius=0.03, outer_radius=0.035, z_bottom=0.044, z_top=0.05, n_theta=8)
+    args = dict(
+        inner_radius=0.03,
+        outer_radius=0.035,
+        z_bottom=0.044,
+        z_top=0.05,
+        n_theta=8,
+    )
     args.update(kwargs)
     with pytest.raises(ValueError, match=name):
         make_ring_volume_mesh(**args)
@@ -116,8 +137,11 @@ def test_drake_reads_mesh_without_refinement(tmp_path):
 
 
 def test_surface_obj_closed_outward(tmp_path):
-    from deburr_drake.cell.tube_mesh import (make_ring_surface_mesh,
-                                             ring_surface_path)
+    from deburr_drake.cell.tube_mesh import (
+        make_ring_surface_mesh,
+        ring_surface_path,
+    )
+
     args = CASES[1][:5]
     v, q = make_ring_surface_mesh(*args)
     tris = np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
@@ -127,39 +151,73 @@ def test_surface_obj_closed_outward(tmp_path):
     np.testing.assert_allclose(vol, polygonal_ring_volume(*args), rtol=1e-12)
     path = ring_surface_path(*args, cache_dir=tmp_path)
     text = path.read_text()
-    assert path.suffix == ".obj" and text.count("\nv ") == len(v) and text.count("\nf ") == len(q)
-    assert ring_surface_path(*args, cache_dir=tmp_path).read_bytes() == path.read_bytes()
+    assert (
+        path.suffix == ".obj"
+        and text.count("\nv ") == len(v)
+        and text.count("\nf ") == len(q)
+    )
+    assert (
+        ring_surface_path(*args, cache_dir=tmp_path).read_bytes()
+        == path.read_bytes()
+    )
 
 
 # ------------------------------------------------------------ profile walls
-from deburr_drake.cell.tube_mesh import (make_swept_surface_mesh,  # noqa: E402
-                                         make_swept_volume_mesh,
-                                         profile_mesh_paths)
+from deburr_drake.cell.tube_mesh import (  # noqa: E402
+    make_swept_surface_mesh,
+    make_swept_volume_mesh,
+    profile_mesh_paths,
+)
 from deburr_drake.math.geometry import ProfileContour  # noqa: E402
 
-L_SHAPE = [[-0.03, -0.03], [0.03, -0.03], [0.03, 0.0], [0.0, 0.0],
-           [0.0, 0.03], [-0.03, 0.03]]
+L_SHAPE = [
+    [-0.03, -0.03],
+    [0.03, -0.03],
+    [0.03, 0.0],
+    [0.0, 0.0],
+    [0.0, 0.03],
+    [-0.03, 0.03],
+]
 
 
 def _shoelace(p):
-    return 0.5 * abs(np.sum(p[:, 0] * np.roll(p[:, 1], -1)
-                            - np.roll(p[:, 0], -1) * p[:, 1]))
+    return 0.5 * abs(
+        np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
+    )
 
 
-@pytest.mark.parametrize("vertices, fillet, material", [
-    ([[-0.03, -0.03], [0.03, -0.03], [0.03, 0.03], [-0.03, 0.03]], 0.03,
-     "outside"),
-    ([[-0.03, -0.02], [0.03, -0.02], [0.03, 0.02], [-0.03, 0.02]], 0.008,
-     "outside"),
-    ([[-0.025, -0.025], [0.025, -0.025], [0.025, 0.025], [-0.025, 0.025]],
-     0.004, "inside"),   # the wall thinner inside the small fillets
-    (L_SHAPE, 0.004, "outside"),
-    (L_SHAPE, 0.004, "inside"),
-])
+@pytest.mark.parametrize(
+    "vertices, fillet, material",
+    [
+        (
+            [[-0.03, -0.03], [0.03, -0.03], [0.03, 0.03], [-0.03, 0.03]],
+            0.03,
+            "outside",
+        ),
+        (
+            [[-0.03, -0.02], [0.03, -0.02], [0.03, 0.02], [-0.03, 0.02]],
+            0.008,
+            "outside",
+        ),
+        (
+            [
+                [-0.025, -0.025],
+                [0.025, -0.025],
+                [0.025, 0.025],
+                [-0.025, 0.025],
+            ],
+            0.004,
+            "inside",
+        ),  # the wall thinner inside the small fillets
+        (L_SHAPE, 0.004, "outside"),
+        (L_SHAPE, 0.004, "inside"),
+    ],
+)
 def test_profile_wall_mesh_fills_the_band(vertices, fillet, material):
     edge = ProfileContour(vertices, fillet, material=material)
     points, normals, depths = edge.material_band(
-        0.005, segments_per_turn=120, max_step=0.005)
+        0.005, segments_per_turn=120, max_step=0.005
+    )
     assert depths.max() == pytest.approx(0.005)
     assert depths.min() > 0
     v, t = make_swept_volume_mesh(points, normals, depths, 0.044, 0.050)
@@ -169,7 +227,7 @@ def test_profile_wall_mesh_fills_the_band(vertices, fillet, material):
     area = abs(_shoelace(far) - _shoelace(points))
     np.testing.assert_allclose(vol.sum(), area * 0.006, rtol=1e-9)
     faces = _faces(t)
-    assert max(faces.values()) == 2     # no face shared by three tets
+    assert max(faces.values()) == 2  # no face shared by three tets
     # every tet touches an interior vertex (the middle of the wall)
     interior = np.zeros(len(v), bool)
     interior.reshape(len(points), 3, 3)[:, 1, 1] = True
@@ -182,21 +240,27 @@ def test_square_pocket_of_fillet_R_is_the_ring():
     R = 0.03
     edge = ProfileContour([[-R, -R], [R, -R], [R, R], [-R, R]], R)
     points, normals, depths = edge.material_band(
-        0.005, segments_per_turn=120, max_step=0.005)
+        0.005, segments_per_turn=120, max_step=0.005
+    )
     assert len(points) == 120
     v, t = make_swept_volume_mesh(points, normals, depths, 0.044, 0.050)
     np.testing.assert_allclose(
         tet_volumes(v, t).sum(),
-        polygonal_ring_volume(0.030, 0.035, 0.044, 0.050, 120), rtol=1e-12)
+        polygonal_ring_volume(0.030, 0.035, 0.044, 0.050, 120),
+        rtol=1e-12,
+    )
 
 
 def test_profile_mesh_is_cached(tmp_path):
-    edge = ProfileContour([[-0.03, -0.02], [0.03, -0.02], [0.03, 0.02],
-                           [-0.03, 0.02]], 0.008)
+    edge = ProfileContour(
+        [[-0.03, -0.02], [0.03, -0.02], [0.03, 0.02], [-0.03, 0.02]], 0.008
+    )
     band = edge.material_band(0.005, segments_per_turn=120, max_step=0.005)
-    first = profile_mesh_paths(*band, 0.044, 0.05, visual_z_bottom=0.0,
-                               cache_dir=tmp_path)
-    again = profile_mesh_paths(*band, 0.044, 0.05, visual_z_bottom=0.0,
-                               cache_dir=tmp_path)
+    first = profile_mesh_paths(
+        *band, 0.044, 0.05, visual_z_bottom=0.0, cache_dir=tmp_path
+    )
+    again = profile_mesh_paths(
+        *band, 0.044, 0.05, visual_z_bottom=0.0, cache_dir=tmp_path
+    )
     assert first == again and all(p.is_file() for p in first)
     assert first[0].read_text().startswith("# vtk DataFile")

@@ -9,12 +9,14 @@ import typing
 
 import pytest
 
-from deburr_drake.config import Scenario, load_scenario
-from deburr_drake.config import reference
-from deburr_drake.config.reference import (convention_problems, is_unit,
-                                           scenario_fields,
-                                           scenario_reference_markdown,
-                                           split_unit)
+from deburr_drake.config import Scenario, load_scenario, reference
+from deburr_drake.config.reference import (
+    convention_problems,
+    is_unit,
+    scenario_fields,
+    scenario_reference_markdown,
+    split_unit,
+)
 
 
 @pytest.fixture(scope="module")
@@ -63,34 +65,68 @@ def test_a_field_without_unit_or_meaning_is_named(tmp_path, monkeypatch):
         "    cutoff: float = 3.0\n"
         "    depth: float = 0.1  # m\n\n"
         "    def validate(self):\n"
-        "        return self\n")
+        "        return self\n"
+    )
     spec = importlib.util.spec_from_file_location("bad_config", source)
     module = importlib.util.module_from_spec(spec)
     monkeypatch.setitem(sys.modules, "bad_config", module)
     spec.loader.exec_module(module)
-    docs = list(reference._walk(module.BadConfig, "bad.", module.BadConfig(),
-                                module.BadConfig(), module.BadConfig(),
-                                lambda obj: obj))
+    docs = list(
+        reference._walk(
+            module.BadConfig,
+            "bad.",
+            module.BadConfig(),
+            module.BadConfig(),
+            module.BadConfig(),
+            lambda obj: obj,
+        )
+    )
     problems = convention_problems(docs)
     assert len(problems) == 3
     assert problems[0].startswith(
-        f"bad.plain ({source}:7) has no a unit and no a meaning")
+        f"bad.plain ({source}:7) has no a unit and no a meaning"
+    )
     assert problems[1].startswith(f"bad.cutoff ({source}:9) has no a unit")
     assert "no a meaning" not in problems[1]
-    assert problems[2].startswith(f"bad.depth ({source}:10) has no a "
-                                  "meaning")
+    assert problems[2].startswith(f"bad.depth ({source}:10) has no a meaning")
 
 
-@pytest.mark.parametrize("text", [
-    "m", "N s/m", "m/(N s)", "1/s", "N m s/rad", "N or N m", "m/s or rad/s",
-    "N s/m^3", "Pa", "Hz", "-", "[N, N/m, N s/m]", "N s/m per s", "kg"])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "m",
+        "N s/m",
+        "m/(N s)",
+        "1/s",
+        "N m s/rad",
+        "N or N m",
+        "m/s or rad/s",
+        "N s/m^3",
+        "Pa",
+        "Hz",
+        "-",
+        "[N, N/m, N s/m]",
+        "N s/m per s",
+        "kg",
+    ],
+)
 def test_units_by_the_convention(text):
     assert is_unit(text)
 
 
-@pytest.mark.parametrize("text", [
-    "", "meters", "Around the circumference", "x sensor.noise_std", "N,",
-    "[N, N/m", "0..3", "m of arc"])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "",
+        "meters",
+        "Around the circumference",
+        "x sensor.noise_std",
+        "N,",
+        "[N, N/m",
+        "0..3",
+        "m of arc",
+    ],
+)
 def test_not_units(text):
     assert not is_unit(text)
 
@@ -98,7 +134,9 @@ def test_not_units(text):
 def test_split_unit():
     assert split_unit("m/s, the feed; more") == ("m/s", "the feed; more")
     assert split_unit("[N, N/m, N s/m], c0, c1, c2") == (
-        "[N, N/m, N s/m]", "c0, c1, c2")
+        "[N, N/m, N s/m]",
+        "c0, c1, c2",
+    )
     assert split_unit("s. With cenic") == ("s", "With cenic")
     assert split_unit("Hz") == ("Hz", "")
     assert split_unit("the feed") == ("", "the feed")
@@ -117,7 +155,8 @@ def test_defaults_types_and_ranges(fields):
     assert "a finite number > 0" in depth
     assert "< tube.wall_thickness" in depth
     assert by["controller.kind"].allowed == (
-        "one of fuzzy, robust, ideal, impedance, position")
+        "one of fuzzy, robust, ideal, impedance, position"
+    )
     assert by["guards.enabled"].allowed == "true or false"
     assert "a list of 3 numbers" in by["controller.sliding_gain"].allowed
     # A list of dataclasses: its element's fields, the paper's values.
@@ -125,9 +164,11 @@ def test_defaults_types_and_ranges(fields):
     assert height.paper == [b.height for b in paper.process.burrs]
     assert by["faults.dropouts[].mode"].allowed.startswith("one of")
     # Every numeric field has a range from validate().
-    unchecked = [d.path for d in fields
-                 if d.type in ("float", "int", "List[float]")
-                 and not d.allowed]
+    unchecked = [
+        d.path
+        for d in fields
+        if d.type in ("float", "int", "List[float]") and not d.allowed
+    ]
     assert unchecked == []
 
 

@@ -1,18 +1,23 @@
 """CommandGenerator (feedrate law, R5, R6) and FirstOrderHold (eq. 5, R2)."""
 
 import numpy as np
+from pydrake.systems.analysis import (
+    ApplySimulatorConfig,
+    Simulator,
+    SimulatorConfig,
+)
+from pydrake.systems.framework import DiagramBuilder, LeafSystem
 import pytest
 
-from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
-                                      SimulatorConfig)
-from pydrake.systems.framework import DiagramBuilder, LeafSystem
-
-from deburr_drake.control.command import (CommandGenerator, FirstOrderHold,
-                                          feedrate)
 from deburr_drake.config import CommandConfig, ConfigError, TaskConfig
-from deburr_drake.math.geometry import CircularContour
+from deburr_drake.control.command import (
+    CommandGenerator,
+    FirstOrderHold,
+    feedrate,
+)
 from deburr_drake.control.layout import COMMAND_STATE
 from deburr_drake.control.observer import chamfer_quantities
+from deburr_drake.math.geometry import CircularContour
 
 CONTOUR = CircularContour([0.0, 0.0, 0.048], 0.027)
 
@@ -20,8 +25,9 @@ CONTOUR = CircularContour([0.0, 0.0, 0.048], 0.027)
 def _chamfer(x_p, xdot_p, f_t):
     """Chamfer state whose measured force has ||f_t|| = f_t."""
     n2 = CONTOUR.n2(x_p, xdot_p, 1e-5)
-    return chamfer_quantities(CONTOUR, x_p, xdot_p, -f_t * n2,
-                              min_tangential_speed=1e-5)
+    return chamfer_quantities(
+        CONTOUR, x_p, xdot_p, -f_t * n2, min_tangential_speed=1e-5
+    )
 
 
 def _step(system, chamfer):
@@ -32,8 +38,12 @@ def _step(system, chamfer):
 
 
 def test_feedrate_law_branches():
-    kw = dict(desired_force=10.0, threshold_force=2.0, force_offset=0.5,
-              default_feed=0.001)
+    kw = dict(
+        desired_force=10.0,
+        threshold_force=2.0,
+        force_offset=0.5,
+        default_feed=0.001,
+    )
     # ||f_t|| - P' = 4 > v_eps: v = |v_t| * 8 / 4.
     assert feedrate(0.002, 6.0, **kw) == pytest.approx(0.004)
     assert feedrate(-0.002, 6.0, **kw) == pytest.approx(0.004)
@@ -56,11 +66,14 @@ def test_command_generator_clamps_the_feed():
     assert out["feed"] == pytest.approx(config.max_feed, rel=1e-12)
 
 
-@pytest.mark.parametrize("f_t, speed, expected", [
-    (12.0, 0.003, 0.003 * 8.0 / 10.0),   # force too high: slow down
-    (6.0, 0.002, 0.002 * 8.0 / 4.0),     # force too low: speed up
-    (1.0, 0.002, 0.001),                 # below P' + v_eps: v0
-])
+@pytest.mark.parametrize(
+    "f_t, speed, expected",
+    [
+        (12.0, 0.003, 0.003 * 8.0 / 10.0),  # force too high: slow down
+        (6.0, 0.002, 0.002 * 8.0 / 4.0),  # force too low: speed up
+        (1.0, 0.002, 0.001),  # below P' + v_eps: v0
+    ],
+)
 def test_command_advances_on_contour(f_t, speed, expected):
     config, task = CommandConfig(), TaskConfig()
     x0 = CONTOUR.point_at(0.01)
@@ -74,9 +87,11 @@ def test_command_advances_on_contour(f_t, speed, expected):
     # projection of x_p; the depth is not carried into the command.
     assert CONTOUR.depth(out["x_c"]) == pytest.approx(0.0, abs=1e-12)
     assert CONTOUR.arc_position(out["x_c"]) == pytest.approx(
-        0.01 + expected * config.period, abs=1e-12)
+        0.01 + expected * config.period, abs=1e-12
+    )
     assert out["arc_position"] == pytest.approx(
-        0.01 + expected * config.period, abs=1e-12)
+        0.01 + expected * config.period, abs=1e-12
+    )
 
 
 def test_command_counts_arc_past_one_revolution():
@@ -84,11 +99,15 @@ def test_command_counts_arc_past_one_revolution():
     L = CONTOUR.length
     generator = CommandGenerator(config, task, CONTOUR, CONTOUR.point_at(0))
     context = generator.CreateDefaultContext()
-    context.SetDiscreteState(COMMAND_STATE.pack(
-        x_c=CONTOUR.point_at(L - 1e-5), feed=0.001, arc_position=L - 1e-5))
+    context.SetDiscreteState(
+        COMMAND_STATE.pack(
+            x_c=CONTOUR.point_at(L - 1e-5), feed=0.001, arc_position=L - 1e-5
+        )
+    )
     x_p = CONTOUR.point_at(L - 1e-5)
     generator.GetInputPort("chamfer_state").FixValue(
-        context, _chamfer(x_p, np.zeros(3), 0.0))
+        context, _chamfer(x_p, np.zeros(3), 0.0)
+    )
     xd = generator.EvalUniquePeriodicDiscreteUpdate(context).get_vector(0)
     s = COMMAND_STATE.get(xd.CopyToVector(), "arc_position")
     assert s == pytest.approx(L - 1e-5 + 0.001 * config.period, abs=1e-12)
@@ -97,8 +116,12 @@ def test_command_counts_arc_past_one_revolution():
 
 def test_command_rejects_unreachable_force():
     with pytest.raises(ConfigError, match="desired_chamfering_force"):
-        CommandGenerator(CommandConfig(threshold_power_force=12.0),
-                         TaskConfig(), CONTOUR, CONTOUR.point_at(0))
+        CommandGenerator(
+            CommandConfig(threshold_power_force=12.0),
+            TaskConfig(),
+            CONTOUR,
+            CONTOUR.point_at(0),
+        )
 
 
 class _Samples(LeafSystem):
@@ -111,9 +134,13 @@ class _Samples(LeafSystem):
         self._k = self.DeclareDiscreteState(2)  # [value, k]
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
         self.DeclareVectorOutputPort(
-            "value", 1, lambda c, o: o.SetAtIndex(
-                0, c.get_discrete_state(self._k).get_value()[0]),
-            prerequisites_of_calc={self.xd_ticket()})
+            "value",
+            1,
+            lambda c, o: o.SetAtIndex(
+                0, c.get_discrete_state(self._k).get_value()[0]
+            ),
+            prerequisites_of_calc={self.xd_ticket()},
+        )
 
     def _update(self, context, state):
         k = int(context.get_discrete_state(self._k).get_value()[1])
@@ -127,12 +154,14 @@ def _run_hold(variant, samples, period=0.025, integrator="runge_kutta3"):
     builder = DiagramBuilder()
     source = builder.AddSystem(_Samples(samples, period))
     hold = builder.AddSystem(
-        FirstOrderHold(period, [samples[0]], variant=variant))
+        FirstOrderHold(period, [samples[0]], variant=variant)
+    )
     builder.Connect(source.get_output_port(), hold.GetInputPort("sampled"))
     diagram = builder.Build()
     simulator = Simulator(diagram)
-    ApplySimulatorConfig(SimulatorConfig(integration_scheme=integrator),
-                         simulator)
+    ApplySimulatorConfig(
+        SimulatorConfig(integration_scheme=integrator), simulator
+    )
     context = hold.GetMyContextFromRoot(simulator.get_context())
     at_knots, midpoints = [], []
     for k in range(len(samples)):
@@ -142,7 +171,8 @@ def _run_hold(variant, samples, period=0.025, integrator="runge_kutta3"):
         midpoints.append(hold.GetOutputPort("position").Eval(context)[0])
         velocity = hold.GetOutputPort("velocity").Eval(context)[0]
         assert velocity == pytest.approx(
-            (midpoints[-1] - at_knots[-1]) / (period / 2), abs=1e-9)
+            (midpoints[-1] - at_knots[-1]) / (period / 2), abs=1e-9
+        )
     return np.array(at_knots), np.array(midpoints)
 
 

@@ -6,12 +6,12 @@ import copy
 import numpy as np
 import pytest
 
-from deburr_drake.config import ControllerConfig, ConfigError
-from deburr_drake.control.controller import HybridController, make_rule_bases
-from deburr_drake.math.geometry import CircularContour
-from deburr_drake.control.layout import CONTROLLER_DIAGNOSTICS
 from deburr_drake.cell.models import POINT_MASS_URL, make_kinematic_model
+from deburr_drake.config import ConfigError, ControllerConfig
+from deburr_drake.control.controller import HybridController, make_rule_bases
+from deburr_drake.control.layout import CONTROLLER_DIAGNOSTICS
 from deburr_drake.control.observer import chamfer_quantities
+from deburr_drake.math.geometry import CircularContour
 
 CONTOUR = CircularContour([0.0, 0.0, 0.048], 0.027)
 G = 9.81
@@ -23,11 +23,17 @@ def model():
 
 
 def _inputs(x_p, v, force, x_c, v_c, f_nd):
-    chamfer = chamfer_quantities(CONTOUR, x_p, v, force,
-                                 min_tangential_speed=1e-5)
-    return dict(plant_state=np.concatenate([x_p, v]), chamfer_state=chamfer,
-                tool_force=force, commanded_position=x_c,
-                commanded_velocity=v_c, desired_normal_force=[f_nd])
+    chamfer = chamfer_quantities(
+        CONTOUR, x_p, v, force, min_tangential_speed=1e-5
+    )
+    return dict(
+        plant_state=np.concatenate([x_p, v]),
+        chamfer_state=chamfer,
+        tool_force=force,
+        commanded_position=x_c,
+        commanded_velocity=v_c,
+        desired_normal_force=[f_nd],
+    )
 
 
 def _context(controller, inputs, delta_d, theta=None):
@@ -59,14 +65,23 @@ def test_structure(model):
     assert controller.get_name() == "controller"
     n_rules = (2 * config.fuzzy.upsilon + 1) ** 2
     assert controller.num_continuous_states() == 1 + 2 * n_rules  # 243
-    ports = [controller.get_input_port(i).get_name()
-             for i in range(controller.num_input_ports())]
-    assert ports == ["plant_state", "chamfer_state", "tool_force",
-                     "commanded_position", "commanded_velocity",
-                     "desired_normal_force"]
+    ports = [
+        controller.get_input_port(i).get_name()
+        for i in range(controller.num_input_ports())
+    ]
+    assert ports == [
+        "plant_state",
+        "chamfer_state",
+        "tool_force",
+        "commanded_position",
+        "commanded_velocity",
+        "desired_normal_force",
+    ]
     assert controller.GetOutputPort("actuation").size() == 3
-    assert controller.GetOutputPort("diagnostics").size() == \
-        CONTROLLER_DIAGNOSTICS.size
+    assert (
+        controller.GetOutputPort("diagnostics").size()
+        == CONTROLLER_DIAGNOSTICS.size
+    )
     assert controller.ToAutoDiffXdMaybe() is not None
 
 
@@ -77,18 +92,24 @@ def test_control_law_by_hand(model):
     controller = HybridController(model, "tool_tip", config)
     x_p, v, force, x_c, v_c, n1 = _scenario_point()
     f_nd, delta_d = 6.0, 3e-4
-    context = _context(controller, _inputs(x_p, v, force, x_c, v_c, f_nd),
-                       delta_d)
+    context = _context(
+        controller, _inputs(x_p, v, force, x_c, v_c, f_nd), delta_d
+    )
     f_n = 5.0
     e_f = f_nd - f_n
     dd = config.depth_gain * e_f
     x_pd = x_c + delta_d * n1
     e = x_pd - x_p
     # x_pd moves at xdot* + dd n1 + delta_d n1' (n1 turns along the arc)
-    n1_rate = v @ CONTOUR.tangent(x_p) / np.linalg.norm(
-        (x_p - CONTOUR.center)[:2]) * CONTOUR.tangent(x_p)
-    s = (v_c + dd * n1 + delta_d * n1_rate - v) \
-        + np.array(config.sliding_lambda) * e
+    n1_rate = (
+        v
+        @ CONTOUR.tangent(x_p)
+        / np.linalg.norm((x_p - CONTOUR.center)[:2])
+        * CONTOUR.tangent(x_p)
+    )
+    s = (v_c + dd * n1 + delta_d * n1_rate - v) + np.array(
+        config.sliding_lambda
+    ) * e
     assert np.all(np.abs(s[:2]) < 5 * 0.2 * 0.005)  # inside Omega_k
     f_tau = np.array(config.sliding_gain) * s - force
     m_z = 1.2 * (0.3 + 1.0)  # flange + tool, as the controller models them
@@ -96,7 +117,8 @@ def test_control_law_by_hand(model):
     actuation = controller.GetOutputPort("actuation").Eval(context)
     np.testing.assert_allclose(actuation, expected, rtol=1e-9, atol=1e-9)
     d = CONTROLLER_DIAGNOSTICS.split(
-        controller.GetOutputPort("diagnostics").Eval(context))
+        controller.GetOutputPort("diagnostics").Eval(context)
+    )
     np.testing.assert_allclose(d["s"], s, rtol=1e-12)
     np.testing.assert_allclose(d["x_pd"], x_pd, rtol=1e-12)
     assert d["e_f"] == pytest.approx(e_f)
@@ -118,13 +140,16 @@ def test_fuzzy_term_and_adaptation(model):
     base = _context(controller, inputs, 3e-4)
     ctx = _context(controller, inputs, 3e-4, theta)
     s = CONTROLLER_DIAGNOSTICS.get(
-        controller.GetOutputPort("diagnostics").Eval(ctx), "s")
+        controller.GetOutputPort("diagnostics").Eval(ctx), "s"
+    )
     y0 = np.linalg.norm(x_p)
-    du = (controller.GetOutputPort("actuation").Eval(ctx)
-          - controller.GetOutputPort("actuation").Eval(base))
+    du = controller.GetOutputPort("actuation").Eval(
+        ctx
+    ) - controller.GetOutputPort("actuation").Eval(base)
     for k in range(2):
-        assert du[k] == pytest.approx(rb[k].evaluate(theta[k], y0, s[k]),
-                                      rel=1e-9)
+        assert du[k] == pytest.approx(
+            rb[k].evaluate(theta[k], y0, s[k]), rel=1e-9
+        )
     rate = controller.EvalTimeDerivatives(ctx).CopyToVector()[1:]
     rate = rate.reshape(2, -1)
     r = config.fuzzy.adaptation_gain
@@ -144,29 +169,37 @@ def test_fuzzy_weight_scales_output_and_adaptation(model):
     w = 0 freezes theta."""
     config = ControllerConfig(control_period=0.0)
     plain = HybridController(model, "tool_tip", config)
-    weighted = HybridController(model, "tool_tip", config,
-                                fuzzy_weight_input=True)
+    weighted = HybridController(
+        model, "tool_tip", config, fuzzy_weight_input=True
+    )
     rng = np.random.default_rng(1)
     theta = rng.normal(size=(2, make_rule_bases(config)[0].n_rules))
     x_p, v, force, x_c, v_c, _ = _scenario_point()
     v = v + 4e-3 * CONTOUR.tangent(x_p)  # s outside the dead zone
     inputs = _inputs(x_p, v, force, x_c, v_c, 6.0)
     full = plain.EvalTimeDerivatives(
-        _context(plain, inputs, 3e-4, theta)).CopyToVector()
-    u_full = CONTROLLER_DIAGNOSTICS.get(plain.GetOutputPort(
-        "diagnostics").Eval(_context(plain, inputs, 3e-4, theta)), "u_fuzzy")
+        _context(plain, inputs, 3e-4, theta)
+    ).CopyToVector()
+    u_full = CONTROLLER_DIAGNOSTICS.get(
+        plain.GetOutputPort("diagnostics").Eval(
+            _context(plain, inputs, 3e-4, theta)
+        ),
+        "u_fuzzy",
+    )
     assert np.count_nonzero(full[1:]) > 0
     for w in (1.0, 0.3, 0.0):
-        ctx = _context(weighted, {**inputs, "fuzzy_weight": [w]}, 3e-4,
-                       theta)
+        ctx = _context(weighted, {**inputs, "fuzzy_weight": [w]}, 3e-4, theta)
         rate = weighted.EvalTimeDerivatives(ctx).CopyToVector()
-        np.testing.assert_allclose(rate[1:], w * full[1:], rtol=1e-12,
-                                   atol=1e-15)
+        np.testing.assert_allclose(
+            rate[1:], w * full[1:], rtol=1e-12, atol=1e-15
+        )
         assert rate[0] == pytest.approx(full[0])
-        u = CONTROLLER_DIAGNOSTICS.get(weighted.GetOutputPort(
-            "diagnostics").Eval(ctx), "u_fuzzy")
-        np.testing.assert_allclose(u[:2], w * u_full[:2], rtol=1e-12,
-                                   atol=1e-15)
+        u = CONTROLLER_DIAGNOSTICS.get(
+            weighted.GetOutputPort("diagnostics").Eval(ctx), "u_fuzzy"
+        )
+        np.testing.assert_allclose(
+            u[:2], w * u_full[:2], rtol=1e-12, atol=1e-15
+        )
 
 
 def test_robust_term_outside_omega(model):
@@ -177,7 +210,8 @@ def test_robust_term_outside_omega(model):
     v = v + np.array([0.0, -0.05, 0.0])  # s_y far outside Omega
     ctx = _context(controller, _inputs(x_p, v, force, x_c, v_c, 6.0), 3e-4)
     d = CONTROLLER_DIAGNOSTICS.split(
-        controller.GetOutputPort("diagnostics").Eval(ctx))
+        controller.GetOutputPort("diagnostics").Eval(ctx)
+    )
     assert d["zeta"][1] == 0.0
     assert d["u_fuzzy"][1] == pytest.approx(config.robust_gain[1])
     rate = controller.EvalTimeDerivatives(ctx).CopyToVector()[1:]
@@ -188,6 +222,7 @@ def test_autodiff_matches_finite_difference(model):
     """The AutoDiffXd controller's d(actuation)/d(delta_d) equals a finite
     difference of the float controller."""
     from pydrake.autodiffutils import AutoDiffXd, ExtractGradient
+
     config = ControllerConfig(control_period=0.0)  # the law itself
     controller = HybridController(model, "tool_tip", config)
     x_p, v, force, x_c, v_c, _ = _scenario_point()
@@ -195,8 +230,10 @@ def test_autodiff_matches_finite_difference(model):
     ad = controller.ToAutoDiffXd()
     ctx_ad = ad.CreateDefaultContext()
     for name, value in inputs.items():
-        ad.GetInputPort(name).FixValue(ctx_ad, np.array(
-            [AutoDiffXd(float(x)) for x in np.asarray(value, float)]))
+        ad.GetInputPort(name).FixValue(
+            ctx_ad,
+            np.array([AutoDiffXd(float(x)) for x in np.asarray(value, float)]),
+        )
     x_ad = [AutoDiffXd(0.0) for _ in range(controller.num_continuous_states())]
     x_ad[0] = AutoDiffXd(3e-4, np.array([1.0]))
     ctx_ad.SetContinuousState(np.array(x_ad))
@@ -204,21 +241,28 @@ def test_autodiff_matches_finite_difference(model):
     grad = ExtractGradient(u_ad)[:, 0]
     h = 1e-7
     u1 = controller.GetOutputPort("actuation").Eval(
-        _context(controller, inputs, 3e-4 + h))
+        _context(controller, inputs, 3e-4 + h)
+    )
     u0 = controller.GetOutputPort("actuation").Eval(
-        _context(controller, inputs, 3e-4 - h))
-    np.testing.assert_allclose(grad, (u1 - u0) / (2 * h), rtol=1e-5,
-                               atol=1e-6)
+        _context(controller, inputs, 3e-4 - h)
+    )
+    np.testing.assert_allclose(grad, (u1 - u0) / (2 * h), rtol=1e-5, atol=1e-6)
 
 
-@pytest.mark.parametrize("path, value, match", [
-    (("fuzzy", "order"), 4, "fuzzy.order"),
-    (("fuzzy", "upsilon"), 0, "fuzzy.upsilon"),
-    (("fuzzy", "dead_zone_half_widths"), [0.01, 0.01],
-     "fuzzy.dead_zone_half_widths"),
-    (("depth_gain",), -1.0, "controller.depth_gain"),
-    (("sliding_gain",), [1.0, 1.0], "controller.sliding_gain"),
-])
+@pytest.mark.parametrize(
+    "path, value, match",
+    [
+        (("fuzzy", "order"), 4, "fuzzy.order"),
+        (("fuzzy", "upsilon"), 0, "fuzzy.upsilon"),
+        (
+            ("fuzzy", "dead_zone_half_widths"),
+            [0.01, 0.01],
+            "fuzzy.dead_zone_half_widths",
+        ),
+        (("depth_gain",), -1.0, "controller.depth_gain"),
+        (("sliding_gain",), [1.0, 1.0], "controller.sliding_gain"),
+    ],
+)
 def test_invalid_config_names_the_field(model, path, value, match):
     config = copy.deepcopy(ControllerConfig())
     target = config
@@ -235,26 +279,33 @@ def test_sampled_law_holds_its_terms_between_samples(model):
     inputs move."""
     x_p, v, force, x_c, v_c, n1 = _scenario_point()
     inputs = _inputs(x_p, v, force, x_c, v_c, 6.0)
-    continuous = HybridController(model, "tool_tip",
-                                  ControllerConfig(control_period=0.0))
-    sampled = HybridController(model, "tool_tip",
-                               ControllerConfig(control_period=0.0025))
+    continuous = HybridController(
+        model, "tool_tip", ControllerConfig(control_period=0.0)
+    )
+    sampled = HybridController(
+        model, "tool_tip", ControllerConfig(control_period=0.0025)
+    )
     cc = _context(continuous, inputs, 4e-4)
     sc = _context(sampled, inputs, 4e-4)
     sc.SetDiscreteState(sampled.EvalUniquePeriodicDiscreteUpdate(sc))
     for port in ("actuation", "diagnostics"):
-        np.testing.assert_allclose(sampled.GetOutputPort(port).Eval(sc),
-                                   continuous.GetOutputPort(port).Eval(cc),
-                                   rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(
+            sampled.GetOutputPort(port).Eval(sc),
+            continuous.GetOutputPort(port).Eval(cc),
+            rtol=1e-12,
+            atol=1e-12,
+        )
     np.testing.assert_allclose(
         sampled.EvalTimeDerivatives(sc).CopyToVector(),
-        continuous.EvalTimeDerivatives(cc).CopyToVector(), rtol=1e-12,
-        atol=1e-12)
+        continuous.EvalTimeDerivatives(cc).CopyToVector(),
+        rtol=1e-12,
+        atol=1e-12,
+    )
     held = sampled.GetOutputPort("actuation").Eval(sc).copy()
     sampled.GetInputPort("commanded_position").FixValue(sc, x_c + 1e-3 * n1)
     np.testing.assert_array_equal(
-        sampled.GetOutputPort("actuation").Eval(sc), held)
-
+        sampled.GetOutputPort("actuation").Eval(sc), held
+    )
 
 
 def test_shared_tool_point_gives_the_same_law_on_the_arm():
@@ -263,45 +314,58 @@ def test_shared_tool_point_gives_the_same_law_on_the_arm():
     own; its AutoDiffXd copy computes its own."""
     from deburr_drake.cell.arm import ARM_URL
     from deburr_drake.control.kinematics import ToolPoint
+
     arm = make_kinematic_model(ARM_URL)
     tool_point = ToolPoint(arm, arm.GetFrameByName("tool_tip"))
     config = ControllerConfig(control_period=0.0)
     rotation = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
     own = HybridController(arm, "tool_tip", config, rotation)
-    shared = HybridController(arm, "tool_tip", config, rotation,
-                              tool_point=tool_point)
+    shared = HybridController(
+        arm, "tool_tip", config, rotation, tool_point=tool_point
+    )
     state = np.array([0.1, 0.6, -1.2, 0.5, 0.2, 0.01, -0.02, 0.03, 0.0, 0.1])
     x_p, v = tool_point(state)
     _, _, force, x_c, v_c, _ = _scenario_point()
-    inputs = _inputs(x_p, v, force, x_c + x_p - CONTOUR.point_at(0.01),
-                     v_c, 6.0)
+    inputs = _inputs(
+        x_p, v, force, x_c + x_p - CONTOUR.point_at(0.01), v_c, 6.0
+    )
     inputs["plant_state"] = state
     theta = np.random.default_rng(0).normal(size=2 * 121)
     outputs = []
     for controller in (own, shared):
         context = _context(controller, inputs, 3e-4, theta)
-        outputs.append([controller.GetOutputPort(name).Eval(context)
-                        for name in ("actuation", "diagnostics")]
-                       + [controller.EvalTimeDerivatives(context)
-                          .CopyToVector()])
+        outputs.append(
+            [
+                controller.GetOutputPort(name).Eval(context)
+                for name in ("actuation", "diagnostics")
+            ]
+            + [controller.EvalTimeDerivatives(context).CopyToVector()]
+        )
     assert np.linalg.norm(outputs[0][0]) > 1.0
     for a, b in zip(*outputs):
         np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12)
     assert tool_point.full_evaluations == 1
     assert shared.ToAutoDiffXd() is not None
     with pytest.raises(ValueError, match="tool_point"):
-        HybridController(make_kinematic_model(ARM_URL), "tool_tip", config,
-                         tool_point=tool_point)
+        HybridController(
+            make_kinematic_model(ARM_URL),
+            "tool_tip",
+            config,
+            tool_point=tool_point,
+        )
 
 
 def test_slope_rate_autodiff_matches_float():
     from pydrake.autodiffutils import InitializeAutoDiff
+
     from deburr_drake.math.fuzzy import RuleBase
+
     rb = RuleBase(m=2, upsilon=5, delta0=0.2, deltak=0.004)
     rng = np.random.default_rng(3)
     theta = 30.0 * rng.normal(size=121)
     ad = InitializeAutoDiff(theta).ravel()
     rate = rb.slope_rate(ad, 1000.0, 80.0)
-    np.testing.assert_allclose([r.value() if hasattr(r, "value") else r
-                                for r in rate],
-                               rb.slope_rate(theta, 1000.0, 80.0))
+    np.testing.assert_allclose(
+        [r.value() if hasattr(r, "value") else r for r in rate],
+        rb.slope_rate(theta, 1000.0, 80.0),
+    )

@@ -9,12 +9,19 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
 import deburr_drake as dd
-from deburr_drake.control.loop import (DeburringController,
-                                       add_deburring_controller)
 from deburr_drake.cell.models import POINT_MASS_URL, make_kinematic_model
+from deburr_drake.control.loop import (
+    DeburringController,
+    add_deburring_controller,
+)
 
-LOOP_SYSTEMS = ("chamfer_observer", "command_generator", "first_order_hold",
-                "contact_estimator", "controller")
+LOOP_SYSTEMS = (
+    "chamfer_observer",
+    "command_generator",
+    "first_order_hold",
+    "contact_estimator",
+    "controller",
+)
 
 
 def test_the_loops_close_around_two_signals():
@@ -23,13 +30,20 @@ def test_the_loops_close_around_two_signals():
     contour = dd.make_contour(scenario)
     start = contour.point_at(0.0)
     builder = DiagramBuilder()
-    state = builder.AddSystem(ConstantVectorSource(
-        np.concatenate([start, np.zeros(model.num_velocities())])))
+    state = builder.AddSystem(
+        ConstantVectorSource(
+            np.concatenate([start, np.zeros(model.num_velocities())])
+        )
+    )
     force = builder.AddSystem(ConstantVectorSource(np.zeros(3)))
     loops = add_deburring_controller(
-        builder, scenario=scenario, plant=model, contour=contour,
+        builder,
+        scenario=scenario,
+        plant=model,
+        contour=contour,
         plant_state=state.get_output_port(),
-        tool_force=force.get_output_port())
+        tool_force=force.get_output_port(),
+    )
     assert isinstance(loops, DeburringController)
     assert loops.actuation.size() == model.num_actuators()
     diagram = builder.Build()
@@ -41,7 +55,8 @@ def test_the_loops_close_around_two_signals():
     diagram.ExecuteInitializationEvents(context)
     controller = diagram.GetSubsystemByName("controller")
     u = controller.GetOutputPort("actuation").Eval(
-        controller.GetMyContextFromRoot(context))
+        controller.GetMyContextFromRoot(context)
+    )
     assert np.all(np.isfinite(u))
     # No contact force measured: the controller pushes the tool into the
     # material (n1 at the start), against the small depth error.
@@ -54,8 +69,9 @@ def test_the_cell_uses_the_same_loops():
     diagram = dd.make_deburring_diagram(scenario=scenario)
     for name in LOOP_SYSTEMS:
         diagram.GetSubsystemByName(name)
-    assert isinstance(diagram.GetSubsystemByName("controller"),
-                      dd.HybridController)
+    assert isinstance(
+        diagram.GetSubsystemByName("controller"), dd.HybridController
+    )
 
 
 def test_every_public_name_resolves():
@@ -65,9 +81,12 @@ def test_every_public_name_resolves():
 
 
 def test_importing_the_package_imports_no_drake():
-    code = ("import sys, deburr_drake, deburr_drake.math.fuzzy, "
-            "deburr_drake.math.geometry, deburr_drake.math.metrics; "
-            "print('pydrake' in sys.modules)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True,
-                         text=True, check=True)
+    code = (
+        "import sys, deburr_drake, deburr_drake.math.fuzzy, "
+        "deburr_drake.math.geometry, deburr_drake.math.metrics; "
+        "print('pydrake' in sys.modules)"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    )
     assert out.stdout.strip() == "False"

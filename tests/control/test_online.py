@@ -7,8 +7,7 @@ import pytest
 
 from deburr_drake.config import EstimatorConfig, OnlineRegistrationConfig
 from deburr_drake.control.layout import CHAMFER_STATE
-from deburr_drake.control.online import (ONLINE_STATE,
-                                                OnlineRegistration)
+from deburr_drake.control.online import ONLINE_STATE, OnlineRegistration
 from deburr_drake.math.geometry import CircularContour
 from deburr_drake.math.registration import moved_contour
 
@@ -17,8 +16,12 @@ def _run(offset, *, active=1.0, seconds=40.0, c0=2.0, c1=9000.0, seed=0):
     believed = CircularContour([0.4, 0.0, 0.048], 0.027)
     real = moved_contour(believed, [*offset, 0.0, 0.0])
     config = OnlineRegistrationConfig(enabled=True)
-    system = OnlineRegistration(believed, config, EstimatorConfig(
-        initial_estimates=[3.0, 4000.0, 20.0]), latency=0.018)
+    system = OnlineRegistration(
+        believed,
+        config,
+        EstimatorConfig(initial_estimates=[3.0, 4000.0, 20.0]),
+        latency=0.018,
+    )
     context = system.CreateDefaultContext()
     system.GetInputPort("base_registration").FixValue(context, np.zeros(4))
     system.GetInputPort("active").FixValue(context, [active])
@@ -33,15 +36,25 @@ def _run(offset, *, active=1.0, seconds=40.0, c0=2.0, c1=9000.0, seed=0):
         x_p = p + depth * n1
         f_n = c0 + c1 * depth + 0.1 * rng.standard_normal()
         chamfer = CHAMFER_STATE.pack(
-            x_p=x_p, xdot_p=v * real.tangent(p), n1=n1, n2=n1, delta=depth,
-            delta_dot=0.0, f_n=f_n, f_t=0.0, arc_position=v * t,
-            n1_rate=np.zeros(3))
+            x_p=x_p,
+            xdot_p=v * real.tangent(p),
+            n1=n1,
+            n2=n1,
+            delta=depth,
+            delta_dot=0.0,
+            f_n=f_n,
+            f_t=0.0,
+            arc_position=v * t,
+            n1_rate=np.zeros(3),
+        )
         system.GetInputPort("chamfer_state").FixValue(context, chamfer)
         context.SetDiscreteState(
-            system.EvalUniquePeriodicDiscreteUpdate(context))
+            system.EvalUniquePeriodicDiscreteUpdate(context)
+        )
         context.SetTime(t + T)
-    return system.GetOutputPort("registration").Eval(context), \
-        context.get_discrete_state(0).get_value()
+    return system.GetOutputPort("registration").Eval(
+        context
+    ), context.get_discrete_state(0).get_value()
 
 
 def test_online_estimate_converges_on_a_known_offset():
@@ -64,14 +77,22 @@ def test_profile_offset_found_with_stiffer_fillets_left_out():
     # the simulated cell: the cutter in a concave corner): the model
     # learns on the sides only and finds the move and the turn.
     from deburr_drake.math.geometry import ProfileContour
-    believed = ProfileContour([[-0.03, -0.02], [0.03, -0.02], [0.03, 0.02],
-                               [-0.03, 0.02]], 0.008, offset=0.003,
-                              center=[0.4, 0.0, 0.048])
+
+    believed = ProfileContour(
+        [[-0.03, -0.02], [0.03, -0.02], [0.03, 0.02], [-0.03, 0.02]],
+        0.008,
+        offset=0.003,
+        center=[0.4, 0.0, 0.048],
+    )
     move = [5e-4, -3e-4, 0.004, 0.0]
     real = moved_contour(believed, move)
     config = OnlineRegistrationConfig(enabled=True)
-    system = OnlineRegistration(believed, config, EstimatorConfig(
-        initial_estimates=[3.0, 4000.0, 20.0]), latency=0.018)
+    system = OnlineRegistration(
+        believed,
+        config,
+        EstimatorConfig(initial_estimates=[3.0, 4000.0, 20.0]),
+        latency=0.018,
+    )
     context = system.CreateDefaultContext()
     system.GetInputPort("base_registration").FixValue(context, np.zeros(4))
     system.GetInputPort("active").FixValue(context, [1.0])
@@ -95,12 +116,23 @@ def test_profile_offset_found_with_stiffer_fillets_left_out():
         stiff = 1.5 if real.curvature(p) != 0.0 else 1.0
         f_n = c0 + stiff * c1 * depth + 0.1 * rng.standard_normal()
         system.GetInputPort("chamfer_state").FixValue(
-            context, CHAMFER_STATE.pack(
-                x_p=x_p, xdot_p=v * real.tangent(p), n1=n1, n2=n1,
-                delta=depth, delta_dot=0.0, f_n=f_n, f_t=0.0,
-                arc_position=v * t, n1_rate=np.zeros(3)))
+            context,
+            CHAMFER_STATE.pack(
+                x_p=x_p,
+                xdot_p=v * real.tangent(p),
+                n1=n1,
+                n2=n1,
+                delta=depth,
+                delta_dot=0.0,
+                f_n=f_n,
+                f_t=0.0,
+                arc_position=v * t,
+                n1_rate=np.zeros(3),
+            ),
+        )
         context.SetDiscreteState(
-            system.EvalUniquePeriodicDiscreteUpdate(context))
+            system.EvalUniquePeriodicDiscreteUpdate(context)
+        )
         context.SetTime(t + T)
     reg = system.GetOutputPort("registration").Eval(context)
     assert worst < 5e-5

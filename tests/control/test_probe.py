@@ -10,9 +10,15 @@ import pytest
 
 from deburr_drake.config import ProbeConfig
 from deburr_drake.control.layout import CHAMFER_STATE
-from deburr_drake.control.probe import (PHASES, PROBE_STATE, ProbeGate,
-                                        ProbingSequence, detection_depth,
-                                        probe_arcs, sensor_timing)
+from deburr_drake.control.probe import (
+    PHASES,
+    PROBE_STATE,
+    ProbeGate,
+    ProbingSequence,
+    detection_depth,
+    probe_arcs,
+    sensor_timing,
+)
 from deburr_drake.math.geometry import CircularContour, StraightContour
 
 
@@ -21,11 +27,13 @@ def test_touches_spread_on_closed_and_open_edges():
     arcs = probe_arcs(circle, ProbeConfig(points=4))
     np.testing.assert_allclose(arcs, np.arange(4) * circle.length / 4)
     line = StraightContour([0, 0, 0], [1, 0, 0], [0, -1, 0], length=0.06)
-    np.testing.assert_allclose(probe_arcs(line, ProbeConfig(points=3)),
-                               [0.01, 0.03, 0.05])
+    np.testing.assert_allclose(
+        probe_arcs(line, ProbeConfig(points=3)), [0.01, 0.03, 0.05]
+    )
     np.testing.assert_allclose(
         probe_arcs(line, ProbeConfig(points=3, spacing=0.01, first_arc=0.02)),
-        [0.02, 0.03, 0.04])
+        [0.02, 0.03, 0.04],
+    )
 
 
 @pytest.mark.parametrize("speed,stiffness", [(0.002, 5e3), (0.004, 1e4)])
@@ -45,16 +53,23 @@ def test_detection_depth_matches_the_sensor_filter(speed, stiffness):
                 depths.append(speed * t)
                 break
             y += a * (stiffness * speed * max(t, 0.0) - y)
-    model = detection_depth(speed, threshold, stiffness,
-                            sensor_timing(T, fc))
+    model = detection_depth(speed, threshold, stiffness, sensor_timing(T, fc))
     assert np.mean(depths) == pytest.approx(model, abs=1e-6)
 
 
 def _chamfer(x_p, xdot_p=(0, 0, 0)):
     return CHAMFER_STATE.pack(
-        x_p=np.asarray(x_p, float), xdot_p=np.asarray(xdot_p, float),
-        n1=np.zeros(3), n2=np.zeros(3), delta=0.0, delta_dot=0.0, f_n=0.0,
-        f_t=0.0, arc_position=0.0, n1_rate=np.zeros(3))
+        x_p=np.asarray(x_p, float),
+        xdot_p=np.asarray(xdot_p, float),
+        n1=np.zeros(3),
+        n2=np.zeros(3),
+        delta=0.0,
+        delta_dot=0.0,
+        f_n=0.0,
+        f_t=0.0,
+        arc_position=0.0,
+        n1_rate=np.zeros(3),
+    )
 
 
 class _Run:
@@ -70,20 +85,20 @@ class _Run:
 
     def fix(self, speed=(0, 0, 0)):
         self.probe.GetInputPort("chamfer_state").FixValue(
-            self.context, _chamfer(self.x_p, speed))
-        self.probe.GetInputPort("tool_force").FixValue(self.context,
-                                                       self.force)
+            self.context, _chamfer(self.x_p, speed)
+        )
+        self.probe.GetInputPort("tool_force").FixValue(self.context, self.force)
 
     def state(self):
         return self.context.get_discrete_state(0).get_value()
 
     def phase(self):
-        return PHASES[int(round(float(PROBE_STATE.get(self.state(),
-                                                      "phase"))))]
+        return PHASES[int(round(float(PROBE_STATE.get(self.state(), "phase"))))]
 
     def step(self, T=0.0025):
         self.context.SetDiscreteState(
-            self.probe.EvalUniquePeriodicDiscreteUpdate(self.context))
+            self.probe.EvalUniquePeriodicDiscreteUpdate(self.context)
+        )
         self.context.SetTime(self.context.get_time() + T)
 
     def command(self):
@@ -96,9 +111,11 @@ def test_sequence_touches_compensates_the_bias_and_drops_a_burr():
     cfg = ProbeConfig(points=6, settle_time=0.01, travel_speed=0.05)
     timing = sensor_timing(0.0025, 10.0)
     x0 = believed.point_at(0.0) - cfg.standoff * believed.n1(
-        believed.point_at(0.0))
-    probe = ProbingSequence(believed, cfg, sample_period=0.0025,
-                            timing=timing, initial_position=x0)
+        believed.point_at(0.0)
+    )
+    probe = ProbingSequence(
+        believed, cfg, sample_period=0.0025, timing=timing, initial_position=x0
+    )
     run = _Run(probe, x0)
     burr = 3  # this touch lands on a 0.8 mm burr
     expected = {}
@@ -114,11 +131,11 @@ def test_sequence_touches_compensates_the_bias_and_drops_a_burr():
             d += 0.0008
         n = believed.n1(believed.point_at(probe.arcs[min(i, 5)]))
         v = cfg.approach_speed
-        bias = detection_depth(v, cfg.force_threshold, cfg.contact_stiffness,
-                               timing)
+        bias = detection_depth(
+            v, cfg.force_threshold, cfg.contact_stiffness, timing
+        )
         touching = run.phase() == "approach" and d >= bias
-        run.force = -2.0 * cfg.force_threshold * n if touching else \
-            np.zeros(3)
+        run.force = -2.0 * cfg.force_threshold * n if touching else np.zeros(3)
         if touching:
             expected[i] = run.x_p - bias * n
         run.fix(speed=v * n if run.phase() == "approach" else (0, 0, 0))
@@ -141,8 +158,7 @@ def test_sequence_touches_compensates_the_bias_and_drops_a_burr():
     # tool brought to the corrected start.
     assert probe.GetOutputPort("spindle").Eval(run.context)[0] == 1.0
     start = np.r_[real_center, 0.048] + [believed.radius, 0, 0]
-    np.testing.assert_allclose(PROBE_STATE.get(x, "command"), start,
-                               atol=1e-5)
+    np.testing.assert_allclose(PROBE_STATE.get(x, "command"), start, atol=1e-5)
     probe.GetInputPort("command_in").FixValue(run.context, [1.0, 2.0, 3.0])
     np.testing.assert_allclose(run.command(), [1.0, 2.0, 3.0])
 
@@ -153,13 +169,19 @@ def test_feed_holds_at_the_entry_until_the_cut_reaches_its_depth():
     desired depth, or ``entry_dwell`` passes; ``probing`` is 0 and the
     spindle on meanwhile."""
     from deburr_drake.control.probe import CUT_ESTABLISHED
+
     believed = CircularContour([0.4, 0.0, 0.048], 0.027)
     x0 = believed.point_at(0.0)
 
     def done_run(cfg):
-        probe = ProbingSequence(believed, cfg, sample_period=0.0025,
-                                timing=sensor_timing(0.0025, 10.0),
-                                initial_position=x0, desired_depth=5e-4)
+        probe = ProbingSequence(
+            believed,
+            cfg,
+            sample_period=0.0025,
+            timing=sensor_timing(0.0025, 10.0),
+            initial_position=x0,
+            desired_depth=5e-4,
+        )
         run = _Run(probe, x0)
         x = run.state().copy()
         x[PROBE_STATE.slice("phase")] = PHASES.index("done")
@@ -213,37 +235,47 @@ def test_gate_hides_contact_while_probing():
     assert gate.GetOutputPort("desired_normal_force").Eval(context)[0] == 0
     gate.GetInputPort("probing").FixValue(context, [0.0])
     np.testing.assert_allclose(
-        gate.GetOutputPort("chamfer_state").Eval(context), chamfer)
+        gate.GetOutputPort("chamfer_state").Eval(context), chamfer
+    )
     assert gate.GetOutputPort("desired_normal_force").Eval(context)[0] == 7
 
 
 def _square(**kw):
     from deburr_drake.math.geometry import ProfileContour
-    return ProfileContour([[-0.025, -0.025], [0.025, -0.025],
-                           [0.025, 0.025], [-0.025, 0.025]], 0.01,
-                          material="inside", offset=0.003, **kw)
+
+    return ProfileContour(
+        [[-0.025, -0.025], [0.025, -0.025], [0.025, 0.025], [-0.025, 0.025]],
+        0.01,
+        material="inside",
+        offset=0.003,
+        **kw,
+    )
 
 
 def test_profile_layout_fixes_the_turn_and_a_bad_one_is_refused():
     from deburr_drake.config import ConfigError
     from deburr_drake.control.probe import check_probe_layout
     from deburr_drake.math.registration import rigid_fit_amplification
+
     square = _square()
     # Evenly from the middle of a side, 8 touches fall on the middles of
     # the sides and fillets, which see no turn: the layout is shifted.
     arcs = probe_arcs(square, ProbeConfig(points=8))
-    np.testing.assert_allclose(np.diff(arcs) % square.length,
-                               square.length / 8)
+    np.testing.assert_allclose(np.diff(arcs) % square.length, square.length / 8)
     assert 0.0 < arcs[0] < square.length / 8
     points = [square.point_at(s) for s in arcs]
     assert rigid_fit_amplification(square, points) < 1.0
     check_probe_layout(square, ProbeConfig(points=8))
     # Given a spacing it is kept as given; all on one side it is refused.
     config = ProbeConfig(points=4, spacing=0.005, first_arc=0.0)
-    np.testing.assert_allclose(probe_arcs(square, config),
-                               [0.0, 0.005, 0.010, 0.015])
-    with pytest.raises(ConfigError, match=r"^localisation\.probe\.spacing "
-                       r"= 0\.005 is invalid: .*do not fix"):
+    np.testing.assert_allclose(
+        probe_arcs(square, config), [0.0, 0.005, 0.010, 0.015]
+    )
+    with pytest.raises(
+        ConfigError,
+        match=r"^localisation\.probe\.spacing "
+        r"= 0\.005 is invalid: .*do not fix",
+    ):
         check_probe_layout(square, config)
 
 
@@ -256,11 +288,13 @@ def test_travel_between_touches_stays_off_a_boss():
     cfg = ProbeConfig(points=8, settle_time=0.01, travel_speed=0.05)
     timing = sensor_timing(0.0025, 10.0)
     x0 = boss.point_at(0.0) - cfg.standoff * boss.n1(boss.point_at(0.0))
-    probe = ProbingSequence(boss, cfg, sample_period=0.0025, timing=timing,
-                            initial_position=x0)
+    probe = ProbingSequence(
+        boss, cfg, sample_period=0.0025, timing=timing, initial_position=x0
+    )
     run = _Run(probe, x0)
-    bias = detection_depth(cfg.approach_speed, cfg.force_threshold,
-                           cfg.contact_stiffness, timing)
+    bias = detection_depth(
+        cfg.approach_speed, cfg.force_threshold, cfg.contact_stiffness, timing
+    )
     clearance = np.inf
     for _ in range(40000):
         if run.phase() == "done":
@@ -271,10 +305,12 @@ def test_travel_between_touches_stays_off_a_boss():
             clearance = min(clearance, -depth)
         touching = run.phase() == "approach" and depth >= bias
         n = boss.n1(run.x_p)
-        run.force = -2.0 * cfg.force_threshold * n if touching else \
-            np.zeros(3)
-        run.fix(speed=cfg.approach_speed * n if run.phase() == "approach"
-                else (0, 0, 0))
+        run.force = -2.0 * cfg.force_threshold * n if touching else np.zeros(3)
+        run.fix(
+            speed=cfg.approach_speed * n
+            if run.phase() == "approach"
+            else (0, 0, 0)
+        )
         run.step()
     assert run.phase() == "done"
     x = run.state()
@@ -283,5 +319,6 @@ def test_travel_between_touches_stays_off_a_boss():
     # At the standoff all the way round (the retract ends the bias short
     # of it).
     assert clearance > cfg.standoff - 2 * bias
-    np.testing.assert_allclose(PROBE_STATE.get(x, "registration"), 0.0,
-                               atol=2e-5)
+    np.testing.assert_allclose(
+        PROBE_STATE.get(x, "registration"), 0.0, atol=2e-5
+    )

@@ -9,10 +9,14 @@ from deburr_drake.math.damping import held_damper_end_speed, held_damper_mean
 
 def _integrated(c, offset, u0, beta, b, h):
     """(mean of F, u(h)) by a tight numerical integration."""
-    sol = solve_ivp(lambda t, y: [b - beta * (c * y[0] + offset),
-                                  c * y[0] + offset],
-                    (0.0, h), [u0, 0.0], rtol=1e-12, atol=1e-15,
-                    method="DOP853")
+    sol = solve_ivp(
+        lambda t, y: [b - beta * (c * y[0] + offset), c * y[0] + offset],
+        (0.0, h),
+        [u0, 0.0],
+        rtol=1e-12,
+        atol=1e-15,
+        method="DOP853",
+    )
     return sol.y[1, -1] / h, sol.y[0, -1]
 
 
@@ -27,9 +31,11 @@ def test_mean_matches_the_integrated_damper(x):
         assert k0 + k1 * p == pytest.approx(mean, rel=1e-9, abs=1e-12)
         # one constant force at the mean gives the exact end speed
         assert u0 + h * (b + p - beta * (k0 + k1 * p)) == pytest.approx(
-            end, rel=1e-9, abs=1e-15)
-    assert held_damper_end_speed(c, offset, u0, beta, b, h) == \
-        pytest.approx(_integrated(c, offset, u0, beta, b, h)[1], rel=1e-9)
+            end, rel=1e-9, abs=1e-15
+        )
+    assert held_damper_end_speed(c, offset, u0, beta, b, h) == pytest.approx(
+        _integrated(c, offset, u0, beta, b, h)[1], rel=1e-9
+    )
 
 
 def test_limits():
@@ -37,7 +43,9 @@ def test_limits():
     # no damping: the force at u0, nothing from p
     assert held_damper_mean(0.0, offset, u0, beta, b, h) == (offset, 0.0)
     assert held_damper_mean(5000.0, offset, u0, 0.0, b, h) == (
-        5000.0 * u0 + offset, 0.0)
+        5000.0 * u0 + offset,
+        0.0,
+    )
     # stiff: the force that stops u within h and holds it at rest,
     # u0 / (beta h) + (b + p) / beta
     k0, k1 = held_damper_mean(1e9, offset, u0, beta, b, h)

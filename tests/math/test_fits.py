@@ -3,18 +3,24 @@
 import numpy as np
 import pytest
 
-from deburr_drake.math.fits import (fit_circle, fit_circle_taubin, fit_line,
-                                    fit_rejecting)
+from deburr_drake.math.fits import (
+    fit_circle,
+    fit_circle_taubin,
+    fit_line,
+    fit_rejecting,
+)
 
 
 def _circle(center, radius, angles):
     return np.asarray(center) + radius * np.column_stack(
-        [np.cos(angles), np.sin(angles)])
+        [np.cos(angles), np.sin(angles)]
+    )
 
 
 def test_exact_circle_recovered_by_both_fits():
-    pts = _circle([0.4003, -0.0007], 0.027, np.linspace(0, 2 * np.pi, 7,
-                                                         endpoint=False))
+    pts = _circle(
+        [0.4003, -0.0007], 0.027, np.linspace(0, 2 * np.pi, 7, endpoint=False)
+    )
     for fit in (fit_circle_taubin(pts), fit_circle(pts)):
         np.testing.assert_allclose(fit.center, [0.4003, -0.0007], atol=1e-12)
         assert fit.radius == pytest.approx(0.027, abs=1e-12)
@@ -32,7 +38,8 @@ def test_partial_arc_geometric_fit_beats_noise_bound():
         errors.append(fit_circle(pts, radius=0.030).center)
     # sigma sqrt(2 / N) per axis (the figure) within 20 %.
     assert np.std(np.array(errors), axis=0) == pytest.approx(
-        sigma * np.sqrt(2 / n), rel=0.2)
+        sigma * np.sqrt(2 / n), rel=0.2
+    )
 
 
 def test_known_radius_on_a_short_arc():
@@ -52,7 +59,8 @@ def test_line_offset_and_heading():
     assert fit.heading == pytest.approx(heading, abs=1e-12)
     # The line passes 0.2 mm to the left of (0.3, 0.1).
     assert (np.array([0.3, 0.1]) - fit.point) @ nrm == pytest.approx(
-        -2e-4, abs=1e-12)
+        -2e-4, abs=1e-12
+    )
     held = fit_line(pts, heading=heading)
     np.testing.assert_allclose(held.residuals, 0.0, atol=1e-12)
 
@@ -78,8 +86,9 @@ def test_line_burr_rejected_and_clean_points_kept():
     fit, kept = fit_rejecting(fit_line, pts, max_residual=1e-4, minimum=2)
     assert list(np.flatnonzero(~kept)) == [2]
     assert fit.heading == pytest.approx(0.0, abs=1e-12)
-    clean, kept = fit_rejecting(fit_line, np.delete(pts, 2, axis=0),
-                                max_residual=1e-4, minimum=2)
+    clean, kept = fit_rejecting(
+        fit_line, np.delete(pts, 2, axis=0), max_residual=1e-4, minimum=2
+    )
     assert kept.all()
 
 

@@ -5,10 +5,14 @@ import math
 import numpy as np
 import pytest
 
-from deburr_drake.math.fuzzy import (RuleBase, active_indices,
-                                     bspline_membership,
-                                     bspline_membership_derivative, dead_zone,
-                                     default_dead_zone_half_width)
+from deburr_drake.math.fuzzy import (
+    RuleBase,
+    active_indices,
+    bspline_membership,
+    bspline_membership_derivative,
+    dead_zone,
+    default_dead_zone_half_width,
+)
 
 ORDERS = [0, 1, 2, 3]
 
@@ -22,7 +26,11 @@ def cox_de_boor(y, m, delta):
         if p == 0:
             return 1.0 if knots[l] <= x < knots[l + 1] else 0.0
         left = (x - knots[l]) / (knots[l + p] - knots[l]) * b(l, p - 1, x)
-        right = (knots[l + p + 1] - x) / (knots[l + p + 1] - knots[l + 1]) * b(l + 1, p - 1, x)
+        right = (
+            (knots[l + p + 1] - x)
+            / (knots[l + p + 1] - knots[l + 1])
+            * b(l + 1, p - 1, x)
+        )
         return left + right
 
     return b(0, m, y)
@@ -38,7 +46,9 @@ def test_partition_of_unity_inside_omega(m):
     delta, U = 0.37, 5
     # away from the edges of Omega by the half-support
     y = rng.uniform(-(U - (m + 1) / 2) * delta, (U - (m + 1) / 2) * delta, 500)
-    total = sum(bspline_membership(y - i * delta, m, delta) for i in range(-U, U + 1))
+    total = sum(
+        bspline_membership(y - i * delta, m, delta) for i in range(-U, U + 1)
+    )
     np.testing.assert_allclose(total, 1.0, atol=1e-12)
 
 
@@ -47,16 +57,24 @@ def test_support_symmetry_positivity(m):
     delta = 0.6
     h = 0.5 * (m + 1) * delta
     rng = np.random.default_rng(10 + m)
-    outside = np.concatenate([rng.uniform(h, 5 * h, 200), rng.uniform(-5 * h, -h - 1e-12, 200),
-                              [h, np.inf, -np.inf]])
+    outside = np.concatenate(
+        [
+            rng.uniform(h, 5 * h, 200),
+            rng.uniform(-5 * h, -h - 1e-12, 200),
+            [h, np.inf, -np.inf],
+        ]
+    )
     np.testing.assert_array_equal(bspline_membership(outside, m, delta), 0.0)
     inside = rng.uniform(-h, h, 500)
     inside = inside[np.abs(inside) < h]
     assert np.all(bspline_membership(inside, m, delta) > 0.0)
     if m >= 1:
         np.testing.assert_array_equal(bspline_membership(-h, m, delta), 0.0)
-        np.testing.assert_allclose(bspline_membership(inside, m, delta),
-                                   bspline_membership(-inside, m, delta), atol=1e-14)
+        np.testing.assert_allclose(
+            bspline_membership(inside, m, delta),
+            bspline_membership(-inside, m, delta),
+            atol=1e-14,
+        )
     else:
         # half-open indicator of [-delta/2, delta/2)
         assert bspline_membership(-h, 0, delta) == 1.0
@@ -67,9 +85,13 @@ def test_r1_peak_values_not_scaled_by_delta():
     delta = 0.2  # != 1: without the 1/delta**m factor N_1(0) would be 0.2
     assert bspline_membership(0.0, 1, delta) == pytest.approx(1.0, abs=1e-15)
     assert bspline_membership(0.0, 2, delta) == pytest.approx(0.75, abs=1e-15)
-    assert bspline_membership(0.0, 3, delta) == pytest.approx(2.0 / 3.0, abs=1e-15)
+    assert bspline_membership(0.0, 3, delta) == pytest.approx(
+        2.0 / 3.0, abs=1e-15
+    )
     assert bspline_membership(0.0, 0, delta) == 1.0
-    assert bspline_membership(0.5 * delta, 1, delta) == pytest.approx(0.5, abs=1e-15)
+    assert bspline_membership(0.5 * delta, 1, delta) == pytest.approx(
+        0.5, abs=1e-15
+    )
 
 
 @pytest.mark.parametrize("m", ORDERS)
@@ -78,7 +100,9 @@ def test_equals_cox_de_boor(m):
     rng = np.random.default_rng(20 + m)
     y = rng.uniform(-(m + 2) / 2 * delta, (m + 2) / 2 * delta, 300)
     expected = np.array([cox_de_boor(v, m, delta) for v in y])
-    np.testing.assert_allclose(bspline_membership(y, m, delta), expected, atol=1e-12)
+    np.testing.assert_allclose(
+        bspline_membership(y, m, delta), expected, atol=1e-12
+    )
 
 
 def test_vectorized_shape_and_nan():
@@ -96,9 +120,16 @@ def test_derivative_matches_finite_difference(m):
     # stay away from knots (where m = 1 has a kink)
     t = y / delta + (m + 1) / 2
     y = y[np.abs(t - np.round(t)) > 1e-3]
-    fd = (bspline_membership(y + eps, m, delta) - bspline_membership(y - eps, m, delta)) / (2 * eps)
-    np.testing.assert_allclose(bspline_membership_derivative(y, m, delta), fd, atol=1e-6)
-    np.testing.assert_array_equal(bspline_membership_derivative(y, 0, delta), 0.0)
+    fd = (
+        bspline_membership(y + eps, m, delta)
+        - bspline_membership(y - eps, m, delta)
+    ) / (2 * eps)
+    np.testing.assert_allclose(
+        bspline_membership_derivative(y, m, delta), fd, atol=1e-6
+    )
+    np.testing.assert_array_equal(
+        bspline_membership_derivative(y, 0, delta), 0.0
+    )
 
 
 @pytest.mark.parametrize("m", ORDERS)
@@ -107,9 +138,12 @@ def test_continuity_at_knots(m):
     m = 1 has derivative jumps 1/delta (outer knots) and 2/delta (centre)."""
     delta, eps = 0.7, 1e-9
     knots = (np.arange(m + 2) - (m + 1) / 2) * delta
-    val_jump = bspline_membership(knots + eps, m, delta) - bspline_membership(knots - eps, m, delta)
-    der_jump = (bspline_membership_derivative(knots + eps, m, delta)
-                - bspline_membership_derivative(knots - eps, m, delta))
+    val_jump = bspline_membership(knots + eps, m, delta) - bspline_membership(
+        knots - eps, m, delta
+    )
+    der_jump = bspline_membership_derivative(
+        knots + eps, m, delta
+    ) - bspline_membership_derivative(knots - eps, m, delta)
     if m == 0:
         np.testing.assert_allclose(val_jump, [1.0, -1.0], atol=1e-12)
         return
@@ -117,7 +151,9 @@ def test_continuity_at_knots(m):
     if m >= 2:
         np.testing.assert_allclose(der_jump, 0.0, atol=1e-7)
     else:
-        np.testing.assert_allclose(der_jump, [1 / delta, -2 / delta, 1 / delta], rtol=1e-6)
+        np.testing.assert_allclose(
+            der_jump, [1 / delta, -2 / delta, 1 / delta], rtol=1e-6
+        )
 
 
 @pytest.mark.parametrize("m", ORDERS)
@@ -150,8 +186,9 @@ def dense_u(rb, theta, y0, yk):
     U = rb.upsilon
     for i in range(-U, U + 1):
         for j in range(-U, U + 1):
-            nu = (bspline_membership(y0 - i * rb.delta0, rb.m, rb.delta0)
-                  * bspline_membership(yk - j * rb.deltak, rb.m, rb.deltak))
+            nu = bspline_membership(
+                y0 - i * rb.delta0, rb.m, rb.delta0
+            ) * bspline_membership(yk - j * rb.deltak, rb.m, rb.deltak)
             u += nu * theta[(i + U) * (2 * U + 1) + (j + U)]
     return float(u)
 
@@ -162,10 +199,16 @@ def test_sparse_evaluate_equals_dense_sum(m):
     rng = np.random.default_rng(50 + m)
     theta = rng.normal(size=rb.n_rules)
     # include points near and beyond the edges of Omega (fewer active rules there)
-    y0s = rng.uniform(-1.3 * rb.omega0_half_width, 1.3 * rb.omega0_half_width, 60)
-    yks = rng.uniform(-1.3 * rb.omegak_half_width, 1.3 * rb.omegak_half_width, 60)
+    y0s = rng.uniform(
+        -1.3 * rb.omega0_half_width, 1.3 * rb.omega0_half_width, 60
+    )
+    yks = rng.uniform(
+        -1.3 * rb.omegak_half_width, 1.3 * rb.omegak_half_width, 60
+    )
     for y0, yk in zip(y0s, yks):
-        assert rb.evaluate(theta, y0, yk) == pytest.approx(dense_u(rb, theta, y0, yk), abs=1e-12)
+        assert rb.evaluate(theta, y0, yk) == pytest.approx(
+            dense_u(rb, theta, y0, yk), abs=1e-12
+        )
 
 
 @pytest.mark.parametrize("m", ORDERS)
@@ -174,7 +217,9 @@ def test_active_rule_count(m):
     rng = np.random.default_rng(60 + m)
     inner0 = rb.omega0_half_width - (m + 1) / 2 * rb.delta0
     innerk = rb.omegak_half_width - (m + 1) / 2 * rb.deltak
-    for y0, yk in zip(rng.uniform(-inner0, inner0, 100), rng.uniform(-innerk, innerk, 100)):
+    for y0, yk in zip(
+        rng.uniform(-inner0, inner0, 100), rng.uniform(-innerk, innerk, 100)
+    ):
         idx, nu = rb.active_rules(y0, yk)
         assert len(idx) == (m + 1) ** 2 == len(nu)
         assert len(set(idx.tolist())) == len(idx)
@@ -182,7 +227,9 @@ def test_active_rule_count(m):
     # far outside: no rule
     idx, nu = rb.active_rules(0.0, 10 * rb.omegak_half_width)
     assert len(idx) == 0 and len(nu) == 0
-    assert rb.evaluate(np.ones(rb.n_rules), 0.0, 10 * rb.omegak_half_width) == 0.0
+    assert (
+        rb.evaluate(np.ones(rb.n_rules), 0.0, 10 * rb.omegak_half_width) == 0.0
+    )
 
 
 def test_layout_and_n_rules():
@@ -210,7 +257,9 @@ def test_proposition2_sign(m):
     mag = rng.uniform(0.1, 3.0, grid.shape)
     grid[:, jj < 0] = -mag[:, jj < 0]
     grid[:, jj > 0] = mag[:, jj > 0]
-    grid[:, U] = 100.0 * rng.normal(size=2 * U + 1)  # j = 0: arbitrary, inactive outside the dead zone
+    grid[:, U] = 100.0 * rng.normal(
+        size=2 * U + 1
+    )  # j = 0: arbitrary, inactive outside the dead zone
     theta = grid.ravel()
     h = (m + 1) / 2 * rb.deltak
     n_checked = 0
@@ -231,14 +280,19 @@ def test_proposition2_sign(m):
 def test_dead_zone_default_r4():
     assert default_dead_zone_half_width(2, 0.2) == pytest.approx(0.3)
     assert default_dead_zone_half_width(0, 0.2) == pytest.approx(0.1)
-    assert RuleBase(m=3, upsilon=5, delta0=0.2, deltak=0.1).resolved_dead_zone_half_width \
-        == pytest.approx(0.2)
-    rb = RuleBase(m=1, upsilon=5, delta0=0.2, deltak=0.1, dead_zone_half_width=0.05)
+    assert RuleBase(
+        m=3, upsilon=5, delta0=0.2, deltak=0.1
+    ).resolved_dead_zone_half_width == pytest.approx(0.2)
+    rb = RuleBase(
+        m=1, upsilon=5, delta0=0.2, deltak=0.1, dead_zone_half_width=0.05
+    )
     assert rb.resolved_dead_zone_half_width == 0.05
     assert dead_zone(0.29, 0.3) == 0.0
     assert dead_zone(0.3, 0.3) == 0.0
     assert dead_zone(-0.31, 0.3) == -0.31
-    np.testing.assert_array_equal(dead_zone(np.array([-0.5, 0.1, 0.5]), 0.3), [-0.5, 0.0, 0.5])
+    np.testing.assert_array_equal(
+        dead_zone(np.array([-0.5, 0.1, 0.5]), 0.3), [-0.5, 0.0, 0.5]
+    )
 
 
 def test_adaptation_rate():
@@ -279,20 +333,26 @@ def test_in_domain_edges():
     assert not rb.in_domain(0.5000001) and not rb.in_domain(-0.51)
 
 
-@pytest.mark.parametrize("kwargs, field", [
-    (dict(m=4), "m"),
-    (dict(m=-1), "m"),
-    (dict(m=1.0), "m"),
-    (dict(upsilon=0), "upsilon"),
-    (dict(upsilon=2.5), "upsilon"),
-    (dict(delta0=0.0), "delta0"),
-    (dict(delta0=np.inf), "delta0"),
-    (dict(deltak=-0.1), "deltak"),
-    (dict(deltak=np.nan), "deltak"),
-    (dict(dead_zone_half_width=-0.01), "dead_zone_half_width"),
-    (dict(dead_zone_half_width=0.51), "dead_zone_half_width"),
-    (dict(m=3, upsilon=1), "dead_zone_half_width"),  # default 2*deltak > U*deltak
-])
+@pytest.mark.parametrize(
+    "kwargs, field",
+    [
+        (dict(m=4), "m"),
+        (dict(m=-1), "m"),
+        (dict(m=1.0), "m"),
+        (dict(upsilon=0), "upsilon"),
+        (dict(upsilon=2.5), "upsilon"),
+        (dict(delta0=0.0), "delta0"),
+        (dict(delta0=np.inf), "delta0"),
+        (dict(deltak=-0.1), "deltak"),
+        (dict(deltak=np.nan), "deltak"),
+        (dict(dead_zone_half_width=-0.01), "dead_zone_half_width"),
+        (dict(dead_zone_half_width=0.51), "dead_zone_half_width"),
+        (
+            dict(m=3, upsilon=1),
+            "dead_zone_half_width",
+        ),  # default 2*deltak > U*deltak
+    ],
+)
 def test_validation_names_field(kwargs, field):
     args = dict(m=2, upsilon=5, delta0=0.2, deltak=0.1)
     args.update(kwargs)
@@ -308,7 +368,9 @@ def test_function_argument_validation():
     with pytest.raises(ValueError, match="delta"):
         active_indices(0.0, 2, -1.0)
     with pytest.raises(ValueError, match="yk"):
-        RuleBase(m=2, upsilon=5, delta0=0.2, deltak=0.1).active_rules(0.0, np.nan)
+        RuleBase(m=2, upsilon=5, delta0=0.2, deltak=0.1).active_rules(
+            0.0, np.nan
+        )
 
 
 # ---------------------------------------------------------------------------
@@ -321,15 +383,25 @@ def test_autodiff_membership_derivative(m):
     delta = 0.3
     rng = np.random.default_rng(90 + m)
     y = rng.uniform(-(m + 1) / 2 * delta * 1.1, (m + 1) / 2 * delta * 1.1, 50)
-    y_ad = np.array([ad.AutoDiffXd(v, np.array([1.0])) for v in y], dtype=object)
+    y_ad = np.array(
+        [ad.AutoDiffXd(v, np.array([1.0])) for v in y], dtype=object
+    )
     out = bspline_membership(y_ad, m, delta)
     vals = np.array([o.value() for o in out])
-    ders = np.array([o.derivatives()[0] if o.derivatives().size else 0.0 for o in out])
-    np.testing.assert_allclose(vals, bspline_membership(y, m, delta), atol=1e-14)
-    np.testing.assert_allclose(ders, bspline_membership_derivative(y, m, delta), atol=1e-12)
+    ders = np.array(
+        [o.derivatives()[0] if o.derivatives().size else 0.0 for o in out]
+    )
+    np.testing.assert_allclose(
+        vals, bspline_membership(y, m, delta), atol=1e-14
+    )
+    np.testing.assert_allclose(
+        ders, bspline_membership_derivative(y, m, delta), atol=1e-12
+    )
     # scalar AutoDiff in, AutoDiff out
     s = bspline_membership(ad.AutoDiffXd(0.1, np.array([1.0])), m, delta)
-    assert s.derivatives()[0] == pytest.approx(float(bspline_membership_derivative(0.1, m, delta)))
+    assert s.derivatives()[0] == pytest.approx(
+        float(bspline_membership_derivative(0.1, m, delta))
+    )
     # dead zone is T-generic
     z = dead_zone(ad.AutoDiffXd(0.1, np.array([1.0])), 0.3)
     assert z.value() == 0.0
@@ -348,8 +420,12 @@ def test_autodiff_rule_base_gradient(m):
         u, idx, dth = rb.evaluate_and_rate(theta, a0, ak, 2.0)
         assert u.value() == pytest.approx(rb.evaluate(theta, y0, yk), abs=1e-14)
         g = u.derivatives()
-        g0 = (rb.evaluate(theta, y0 + eps, yk) - rb.evaluate(theta, y0 - eps, yk)) / (2 * eps)
-        gk = (rb.evaluate(theta, y0, yk + eps) - rb.evaluate(theta, y0, yk - eps)) / (2 * eps)
+        g0 = (
+            rb.evaluate(theta, y0 + eps, yk) - rb.evaluate(theta, y0 - eps, yk)
+        ) / (2 * eps)
+        gk = (
+            rb.evaluate(theta, y0, yk + eps) - rb.evaluate(theta, y0, yk - eps)
+        ) / (2 * eps)
         np.testing.assert_allclose(g, [g0, gk], atol=1e-5)
         _, dth_f = rb.adaptation_rate(y0, yk, 2.0)
         np.testing.assert_allclose([d.value() for d in dth], dth_f, atol=1e-14)
@@ -379,4 +455,3 @@ def test_slope_rate_bounds_the_surface_slope(m):
     assert slope.max() <= bound * 1.01
     u0 = np.array([rb.evaluate(theta, 0.4, y) for y in yk])
     assert np.abs(np.diff(u0) / np.diff(yk)).max() > 1.5 * bound
-

@@ -9,8 +9,9 @@ from deburr_drake.math import metrics
 def test_time_constant_of_an_exponential():
     t = np.linspace(0, 2, 2001)
     y = 5e-4 * (1 - np.exp(-t / 0.25))
-    tau = metrics.exponential_time_constant(t, y, 5e-4, lower=1e-5,
-                                            upper=1.5e-4)
+    tau = metrics.exponential_time_constant(
+        t, y, 5e-4, lower=1e-5, upper=1.5e-4
+    )
     assert tau == pytest.approx(0.25, rel=1e-6)
     with pytest.raises(ValueError):
         metrics.exponential_time_constant(t, y, 5e-4, lower=1.0, upper=2.0)
@@ -23,7 +24,8 @@ def test_arc_span_mask_wraps_on_a_closed_edge():
     assert metrics.arc_span_mask(arc, 0.0, 2.0, 1.0, True).all()
     np.testing.assert_array_equal(
         metrics.arc_span_mask(arc, 0.4, 0.92, 1.0, closed=False),
-        [False, True, True, False])
+        [False, True, True, False],
+    )
 
 
 def test_total_variation_rms_and_speed():
@@ -38,19 +40,22 @@ def test_total_variation_rms_and_speed():
 
 def test_surface_roughness_of_a_plane_a_staircase_and_a_parabola():
     from deburr_drake.math.metrics import surface_roughness
-    plane = surface_roughness(lambda y, s: 2.0 + 3.0 * y - 5.0 * s,
-                              (0.3, 0.5), (-1.0, 1.0))
+
+    plane = surface_roughness(
+        lambda y, s: 2.0 + 3.0 * y - 5.0 * s, (0.3, 0.5), (-1.0, 1.0)
+    )
     assert plane == pytest.approx(0.0, abs=1e-12)
     # Steps of 1 every 0.1 over [-1, 1): about 1 / sqrt(12).
-    stairs = surface_roughness(lambda y, s: np.floor(s / 0.1),
-                               (0.3, 0.5), (-1.0, 1.0), n_s=2000)
+    stairs = surface_roughness(
+        lambda y, s: np.floor(s / 0.1), (0.3, 0.5), (-1.0, 1.0), n_s=2000
+    )
     assert stairs == pytest.approx(1 / np.sqrt(12), rel=0.02)
     # s^2 on [-1, 1]: residual s^2 - 1/3, RMS sqrt(1/5 - 1/9).
-    parabola = surface_roughness(lambda y, s: s * s, (0.4, 0.4),
-                                 (-1.0, 1.0), n_s=4001)
+    parabola = surface_roughness(
+        lambda y, s: s * s, (0.4, 0.4), (-1.0, 1.0), n_s=4001
+    )
     assert parabola == pytest.approx(np.sqrt(1 / 5 - 1 / 9), rel=1e-3)
-    assert np.isnan(surface_roughness(lambda y, s: s, (0.4, 0.4),
-                                      (0.1, 0.1)))
+    assert np.isnan(surface_roughness(lambda y, s: s, (0.4, 0.4), (0.1, 0.1)))
 
 
 def test_the_second_order_surface_is_smoother_than_the_zeroth():
@@ -59,11 +64,13 @@ def test_the_second_order_surface_is_smoother_than_the_zeroth():
     plane through it."""
     from deburr_drake.math.fuzzy import RuleBase
     from deburr_drake.math.metrics import surface_roughness
+
     rough = {}
     for m in (0, 2):
         rb = RuleBase(m=m, upsilon=5, delta0=0.2, deltak=0.004)
         theta = np.tile(np.arange(-5, 6, dtype=float), 11)  # theta_ij = j
-        rough[m] = surface_roughness(lambda y, s: rb.evaluate(theta, y, s),
-                                     (0.4, 0.45), (-0.012, 0.012))
+        rough[m] = surface_roughness(
+            lambda y, s: rb.evaluate(theta, y, s), (0.4, 0.45), (-0.012, 0.012)
+        )
     assert rough[0] == pytest.approx(1 / np.sqrt(12), rel=0.1)
     assert rough[2] < 0.2 * rough[0]

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from deburr_drake.cell.truth import contact_truth
-from deburr_drake.runs import demo
-from deburr_drake.math import metrics
 from deburr_drake.config import load_scenario
+from deburr_drake.math import metrics
+from deburr_drake.runs import demo
 
 pytestmark = pytest.mark.slow
 
@@ -41,8 +41,10 @@ def summary(log, truth, frozen_log):
 def test_depth_reference_follows_eq8_without_adaptation(summary):
     """Estimates frozen at the truth: delta_d -> delta* with
     tau = (1 + k_delta c2) / (k_delta c1) of (8), c1 the local stiffness."""
-    tau, tau8 = summary["depth_time_constant"], \
-        summary["depth_time_constant_eq8"]
+    tau, tau8 = (
+        summary["depth_time_constant"],
+        summary["depth_time_constant_eq8"],
+    )
     assert abs(tau - tau8) / tau8 < 0.10, (tau, tau8)
     assert summary["depth_final_frozen"] == pytest.approx(5e-4, abs=2e-5)
 
@@ -64,11 +66,13 @@ def test_estimates_predict_the_true_force(summary):
 def test_command_follows_the_feedrate_law(summary):
     # The generator's feed is the law on the measured signals.
     assert summary["commanded_feed_mean"] == pytest.approx(
-        summary["feedrate_law_mean"], rel=0.01)
+        summary["feedrate_law_mean"], rel=0.01
+    )
     # The command advances along the zero-depth contour at that feed (the
     # tool runs 0.5 mm outside it: 1.8 % more path per radian).
     assert summary["command_speed"] == pytest.approx(
-        summary["commanded_feed_mean"], rel=0.03)
+        summary["commanded_feed_mean"], rel=0.03
+    )
     # ... which holds the chamfering force at the desired 10 N.
     assert summary["chamfering_force_mean"] == pytest.approx(10.0, rel=0.03)
 
@@ -90,11 +94,11 @@ def test_no_sample_rate_chatter_after_a_kick(scenario, kick):
     by the integrator, moves it P'_th h / m = 3 mm/s per step)."""
     from deburr_drake.cell.diagram import make_deburring_diagram
     from deburr_drake.runs.simulation import make_simulator
+
     diagram = make_deburring_diagram(scenario=scenario)
     simulator = make_simulator(diagram, scenario)
     plant = diagram.GetSubsystemByName("plant")
-    context = plant.GetMyMutableContextFromRoot(
-        simulator.get_mutable_context())
+    context = plant.GetMyMutableContextFromRoot(simulator.get_mutable_context())
     simulator.Initialize()
     simulator.AdvanceTo(0.3)
     v = plant.GetVelocities(context).copy()

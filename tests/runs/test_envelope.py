@@ -3,16 +3,19 @@ logs, the cenic behaviour behind the surge, and the issue's reproduction
 burr (2 mm x 20 mm at 10 N) in a short window on the paper cell."""
 
 import numpy as np
-import pytest
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.multibody.tree import PrismaticJoint, SpatialInertia
-from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
-                                      SimulatorConfig)
+from pydrake.systems.analysis import (
+    ApplySimulatorConfig,
+    Simulator,
+    SimulatorConfig,
+)
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import MatrixGain
+import pytest
 
-from deburr_drake.runs import envelope
 from deburr_drake.config import load_scenario
+from deburr_drake.runs import envelope
 
 
 @pytest.fixture(scope="module")
@@ -27,14 +30,17 @@ def test_bounds_follow_the_feed_law(paper):
     v_off = 8.0 / 3300.0
     assert envelope.off_burr_feed(paper) == pytest.approx(v_off)
     assert b["max_chamfering_force_N"] == pytest.approx(
-        20.0 + 3.3e9 * 0.002 * 0.002 * v_off)
+        20.0 + 3.3e9 * 0.002 * 0.002 * v_off
+    )
     assert b["max_tool_speed_m_s"] == pytest.approx(1.5 * v_off)
     # Below v_eps the law runs at v0: 2.5 N on the 1 mm/s default.
     low = envelope.BurrCell(height=0.001, length=0.008, force=2.5)
-    paper_low = load_scenario("paper", text="task: "
-                              "{desired_chamfering_force: 2.5}")
-    assert envelope.burr_bounds(paper_low, low)["max_tool_speed_m_s"] \
-        == pytest.approx(1.5e-3)
+    paper_low = load_scenario(
+        "paper", text="task: {desired_chamfering_force: 2.5}"
+    )
+    assert envelope.burr_bounds(paper_low, low)[
+        "max_tool_speed_m_s"
+    ] == pytest.approx(1.5e-3)
 
 
 def _signals(f_t, v_t, delta, burr_area, g):
@@ -48,9 +54,14 @@ def _signals(f_t, v_t, delta, burr_area, g):
         return np.concatenate([[value], np.asarray(rest, float)])
 
     return {
-        "process": {"t": t, "f_t": first(30.0, f_t), "v_t": first(9e-3, v_t),
-                    "delta": first(1e-4, delta),
-                    "burr_area": first(0.0, burr_area), "g": first(600, g)},
+        "process": {
+            "t": t,
+            "f_t": first(30.0, f_t),
+            "v_t": first(9e-3, v_t),
+            "delta": first(1e-4, delta),
+            "burr_area": first(0.0, burr_area),
+            "g": first(600, g),
+        },
         "chamfer": {"t": t, "f_n": np.full(n + 1, 5.0)},
     }
 
@@ -58,25 +69,38 @@ def _signals(f_t, v_t, delta, burr_area, g):
 def test_burr_metrics_on_a_hand_made_log(paper):
     cell = envelope.BurrCell(height=0.001, length=0.008, force=10.0)
     on = np.array([0, 0, 1, 1, 0], float) * 2e-6
-    sig = _signals(f_t=[10, 11, 12, 9, 10], v_t=[2.4e-3, 2.4e-3, 1e-3,
-                                                 1.2e-3, 2.4e-3],
-                   delta=[5e-4, 5e-4, 5.3e-4, 4.9e-4, 5e-4], burr_area=on,
-                   g=[3300, 3300, 8000, 8000, 3300])
+    sig = _signals(
+        f_t=[10, 11, 12, 9, 10],
+        v_t=[2.4e-3, 2.4e-3, 1e-3, 1.2e-3, 2.4e-3],
+        delta=[5e-4, 5e-4, 5.3e-4, 4.9e-4, 5e-4],
+        burr_area=on,
+        g=[3300, 3300, 8000, 8000, 3300],
+    )
     m = envelope.burr_metrics(sig, paper, cell)
     assert m["max_chamfering_force_N"] == 12.0
     assert m["max_tool_speed_m_s"] == pytest.approx(2.4e-3)
     assert m["depth_rms_error_on_burr_m"] == pytest.approx(
-        np.sqrt((0.03e-3 ** 2 + 0.01e-3 ** 2) / 2))
+        np.sqrt((0.03e-3**2 + 0.01e-3**2) / 2)
+    )
     assert m["feed_on_burr_m_s"] == pytest.approx(1.1e-3)
     assert m["feed_law_on_burr_m_s"] == pytest.approx(8.0 / 8000)
     assert m["passed"] == 1.0 and m["nan"] == 0.0
 
-    surge = _signals(f_t=[10, 900, 12, 9, 10], v_t=[2.4e-3, 50e-3, 1e-3,
-                                                    1.2e-3, 2.4e-3],
-                     delta=[5e-4] * 5, burr_area=on, g=[3300] * 5)
+    surge = _signals(
+        f_t=[10, 900, 12, 9, 10],
+        v_t=[2.4e-3, 50e-3, 1e-3, 1.2e-3, 2.4e-3],
+        delta=[5e-4] * 5,
+        burr_area=on,
+        g=[3300] * 5,
+    )
     assert envelope.burr_metrics(surge, paper, cell)["passed"] == 0.0
-    never = _signals(f_t=[10] * 5, v_t=[2.4e-3] * 5, delta=[5e-4] * 5,
-                     burr_area=np.zeros(5), g=[3300] * 5)
+    never = _signals(
+        f_t=[10] * 5,
+        v_t=[2.4e-3] * 5,
+        delta=[5e-4] * 5,
+        burr_area=np.zeros(5),
+        g=[3300] * 5,
+    )
     assert envelope.burr_metrics(never, paper, cell)["passed"] == 0.0
 
 
@@ -85,26 +109,31 @@ def test_burr_scenario_places_the_burr_ahead(paper):
     sc = envelope.burr_scenario(paper, cell, lead_time=1.0)
     (burr,) = sc.process.burrs
     from deburr_drake.cell.edge import make_contour
+
     L = make_contour(sc).length
     start = burr.center_fraction * L - burr.length / 2
     # The cutter's front (arc + r) reaches it after 2 s + 1 s at 2.42 mm/s.
     assert start == pytest.approx(3.0 * 8.0 / 3300 + 0.003)
     assert sc.simulation.stop_after_passes * L == pytest.approx(
-        start + 0.02 + 1e-3)
+        start + 0.02 + 1e-3
+    )
 
 
 def _point_on_three_joints(builder, mass):
     """A continuous plant: a point of ``mass`` on three prismatic joints
     along x, y, z (massless links), each with an actuator, no gravity."""
-    plant, _ = AddMultibodyPlant(MultibodyPlantConfig(time_step=0.0),
-                                 builder)
+    plant, _ = AddMultibodyPlant(MultibodyPlantConfig(time_step=0.0), builder)
     parent = plant.world_body()
     for i, axis in enumerate(np.eye(3)):
-        body = plant.AddRigidBody(f"body{i}", SpatialInertia.
-                                  SolidSphereWithMass(
-                                      mass if i == 2 else 1e-6, 0.01))
-        joint = plant.AddJoint(PrismaticJoint(
-            f"joint{i}", parent.body_frame(), body.body_frame(), axis))
+        body = plant.AddRigidBody(
+            f"body{i}",
+            SpatialInertia.SolidSphereWithMass(mass if i == 2 else 1e-6, 0.01),
+        )
+        joint = plant.AddJoint(
+            PrismaticJoint(
+                f"joint{i}", parent.body_frame(), body.body_frame(), axis
+            )
+        )
         plant.AddJointActuator(f"actuator{i}", joint)
         parent = body
     plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
@@ -114,14 +143,16 @@ def _point_on_three_joints(builder, mass):
 
 def _fixed_cenic(diagram, h):
     simulator = Simulator(diagram)
-    ApplySimulatorConfig(SimulatorConfig(
-        integration_scheme="cenic", max_step_size=h,
-        use_error_control=False), simulator)
+    ApplySimulatorConfig(
+        SimulatorConfig(
+            integration_scheme="cenic", max_step_size=h, use_error_control=False
+        ),
+        simulator,
+    )
     return simulator
 
 
-def _rank_one_damper_velocities(direction, *, g=3000.0, mass=1.0,
-                                h=0.0025):
+def _rank_one_damper_velocities(direction, *, g=3000.0, mass=1.0, h=0.0025):
     """A point mass on three prismatic joints under the force -g a a^T v,
     a the unit ``direction``, from an initial speed along a: its speed
     along a after each of 5 fixed cenic steps of ``h`` (later steps reach
@@ -129,14 +160,16 @@ def _rank_one_damper_velocities(direction, *, g=3000.0, mass=1.0,
     builder = DiagramBuilder()
     plant = _point_on_three_joints(builder, mass)
     a = np.asarray(direction, float) / np.linalg.norm(direction)
-    damper = builder.AddSystem(MatrixGain(
-        np.hstack([np.zeros((3, 3)), -g * np.outer(a, a)])))
+    damper = builder.AddSystem(
+        MatrixGain(np.hstack([np.zeros((3, 3)), -g * np.outer(a, a)]))
+    )
     builder.Connect(plant.get_state_output_port(), damper.get_input_port())
-    builder.Connect(damper.get_output_port(),
-                    plant.get_applied_generalized_force_input_port())
+    builder.Connect(
+        damper.get_output_port(),
+        plant.get_applied_generalized_force_input_port(),
+    )
     simulator = _fixed_cenic(builder.Build(), h)
-    context = plant.GetMyMutableContextFromRoot(
-        simulator.get_mutable_context())
+    context = plant.GetMyMutableContextFromRoot(simulator.get_mutable_context())
     plant.get_actuation_input_port().FixValue(context, np.zeros(3))
     plant.SetVelocities(context, 1e-3 * a)
     speeds = []
@@ -155,14 +188,15 @@ def test_cenic_treats_only_the_diagonal_of_an_applied_damping_implicitly():
     h g / 3 m) = -1.14 at h g / m = 7.5: it grows, alternating sign. Half
     the step (3.75) gives -0.57."""
     along_axis = _rank_one_damper_velocities([1, 0, 0])
-    np.testing.assert_allclose(along_axis[1:] / along_axis[:-1],
-                               1 / 8.5, rtol=1e-3)
+    np.testing.assert_allclose(
+        along_axis[1:] / along_axis[:-1], 1 / 8.5, rtol=1e-3
+    )
     diagonal = _rank_one_damper_velocities([1, 1, 1])
-    np.testing.assert_allclose(diagonal[1:] / diagonal[:-1],
-                               -4.0 / 3.5, rtol=1e-3)
+    np.testing.assert_allclose(
+        diagonal[1:] / diagonal[:-1], -4.0 / 3.5, rtol=1e-3
+    )
     half = _rank_one_damper_velocities([1, 1, 1], h=0.00125)
-    np.testing.assert_allclose(half[1:] / half[:-1],
-                               -1.5 / 2.25, rtol=1e-3)
+    np.testing.assert_allclose(half[1:] / half[:-1], -1.5 / 2.25, rtol=1e-3)
 
 
 def _cutting_law_velocities(treatment, h=0.0025, push=0.0):
@@ -173,23 +207,35 @@ def _cutting_law_velocities(treatment, h=0.0025, push=0.0):
     each step's start as the process does: ``treatment`` "plain" (eq. (3)
     between samples), "implicit" (process.implicit_damping) or "held"
     (process.sample_mean: nothing but the push acts, so the rest is 0)."""
-    from deburr_drake.cell.process import (HeldMean, force_law_terms,
-                                           make_cutting_force_law)
+    from deburr_drake.cell.process import (
+        HeldMean,
+        force_law_terms,
+        make_cutting_force_law,
+    )
     from deburr_drake.config import ProcessConfig
+
     builder = DiagramBuilder()
     plant = _point_on_three_joints(builder, 1.0)
-    config = ProcessConfig(cutting_coefficient=3.0e9,
-                           threshold_power_force=0.0,
-                           contact_threshold_force=0.0)
-    law = builder.AddSystem(make_cutting_force_law(
-        3, 3, config.smoothing_speed))
-    builder.Connect(plant.get_state_output_port(),
-                    law.GetInputPort("plant_state"))
-    builder.Connect(law.GetOutputPort("generalized_force"),
-                    plant.get_applied_generalized_force_input_port())
+    config = ProcessConfig(
+        cutting_coefficient=3.0e9,
+        threshold_power_force=0.0,
+        contact_threshold_force=0.0,
+    )
+    law = builder.AddSystem(
+        make_cutting_force_law(3, 3, config.smoothing_speed)
+    )
+    builder.Connect(
+        plant.get_state_output_port(), law.GetInputPort("plant_state")
+    )
+    builder.Connect(
+        law.GetOutputPort("generalized_force"),
+        plant.get_applied_generalized_force_input_port(),
+    )
     terms_port = builder.ExportInput(law.GetInputPort("force_law_terms"))
-    pushes = [builder.ExportInput(law.GetInputPort("actuation")),
-              builder.ExportInput(plant.get_actuation_input_port())]
+    pushes = [
+        builder.ExportInput(law.GetInputPort("actuation")),
+        builder.ExportInput(plant.get_actuation_input_port()),
+    ]
     diagram = builder.Build()
     simulator = _fixed_cenic(diagram, h)
     root = simulator.get_mutable_context()
@@ -205,11 +251,23 @@ def _cutting_law_velocities(treatment, h=0.0025, push=0.0):
         held = None
         if treatment == "held":
             M = plant.CalcMassMatrix(context)
-            held = HeldMean(np.linalg.solve(M, a), 0.0,
-                            plant.MakeActuationMatrix(), h)
-        diagram.get_input_port(terms_port).FixValue(root, force_law_terms(
-            config, n1, a, 5e-4, np.eye(3), v, cut_height=0.002,
-            v=v if treatment != "plain" else None, held=held))
+            held = HeldMean(
+                np.linalg.solve(M, a), 0.0, plant.MakeActuationMatrix(), h
+            )
+        diagram.get_input_port(terms_port).FixValue(
+            root,
+            force_law_terms(
+                config,
+                n1,
+                a,
+                5e-4,
+                np.eye(3),
+                v,
+                cut_height=0.002,
+                v=v if treatment != "plain" else None,
+                held=held,
+            ),
+        )
         simulator.AdvanceTo(k * h)
         speeds.append(plant.GetVelocities(context) @ a)
     return np.array(speeds)
@@ -221,8 +279,7 @@ def test_cutting_laws_implicit_damping_holds_any_g_at_one_cenic_step():
     above); with process.implicit_damping's term it decays as implicit
     Euler, 1 / (1 + h g / m) (here D = g I exactly)."""
     plain = _cutting_law_velocities("plain")
-    np.testing.assert_allclose(plain[1:] / plain[:-1], -4.0 / 3.5,
-                               rtol=1e-3)
+    np.testing.assert_allclose(plain[1:] / plain[:-1], -4.0 / 3.5, rtol=1e-3)
     held = _cutting_law_velocities("implicit")
     np.testing.assert_allclose(held[1:] / held[:-1], 1 / 8.5, rtol=1e-3)
 
@@ -234,11 +291,13 @@ def test_cutting_laws_held_mean_is_the_exact_damper_at_one_cenic_step():
     actuators (the held mean takes the sample's actuation) it settles at
     push / g = 2 mm/s, as the continuous damper does."""
     from deburr_drake.math.damping import held_damper_end_speed
+
     free = _cutting_law_velocities("held")
     # (after two steps the speed, 1.5e-8 m/s, is at the solver's
     # tolerance)
-    np.testing.assert_allclose(free[:2] / [0.05, free[0]], np.exp(-7.5),
-                               rtol=1e-4)
+    np.testing.assert_allclose(
+        free[:2] / [0.05, free[0]], np.exp(-7.5), rtol=1e-4
+    )
     pushed = _cutting_law_velocities("held", push=6.0)
     u, expected = 0.05, []
     for _ in range(4):
@@ -258,18 +317,25 @@ def test_tall_long_burr_does_not_surge(paper):
     times the off-burr feed, and the feed on the burr follows the law."""
     from deburr_drake.cell.diagram import make_deburring_diagram
     from deburr_drake.runs.simulation import simulate
+
     cell = envelope.BurrCell(height=0.002, length=0.02, force=10.0)
     sc = envelope.burr_scenario(paper, cell)
-    log = simulate(make_deburring_diagram(scenario=sc), sc, duration=17.0,
-                   loggers=("process", "chamfer"))
+    log = simulate(
+        make_deburring_diagram(scenario=sc),
+        sc,
+        duration=17.0,
+        loggers=("process", "chamfer"),
+    )
     m = envelope.burr_metrics(log.signals, sc, cell)
     bounds = envelope.burr_bounds(sc, cell)
     assert m["nan"] == 0.0 and m["burr_reached"] == 1.0
     assert m["max_chamfering_force_N"] < min(
-        30.0, bounds["max_chamfering_force_N"]), m
+        30.0, bounds["max_chamfering_force_N"]
+    ), m
     assert m["max_tool_speed_m_s"] < bounds["max_tool_speed_m_s"], m
     assert m["depth_rms_error_on_burr_m"] < envelope.DEPTH_RMS_LIMIT, m
     # On the burr the feed falls from 2.4 mm/s toward (f_d - P'_th) / g.
     assert m["feed_on_burr_m_s"] < 1.2e-3, m
     assert m["feed_on_burr_m_s"] == pytest.approx(
-        m["feed_law_on_burr_m_s"], rel=0.25), m
+        m["feed_law_on_burr_m_s"], rel=0.25
+    ), m

@@ -7,8 +7,8 @@ import matplotlib.image as mpimg
 import numpy as np
 import pytest
 
-from deburr_drake.runs.figures import compare_figures, make_figures
 from deburr_drake.math.fuzzy import RuleBase
+from deburr_drake.runs.figures import compare_figures, make_figures
 
 N, M, B, U, A = 20000, 2000, 200, 5, 2
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -20,15 +20,25 @@ def synthetic_logs(m=2, seed=0, contact_start=True):
     T = 50.0
     t = np.linspace(0.0, T, N)
     tc = np.linspace(0.0, T, M)
-    delta = 0.5e-3 * (1 - np.exp(-t / 2)) + 2e-5 * np.sin(3 * t) + 5e-6 * rng.standard_normal(N)
+    delta = (
+        0.5e-3 * (1 - np.exp(-t / 2))
+        + 2e-5 * np.sin(3 * t)
+        + 5e-6 * rng.standard_normal(N)
+    )
     arc = np.linspace(0.0, 0.12, B)
-    burr = 0.2e-3 + sum(1e-3 * np.exp(-((arc - c) / 4e-3) ** 2) for c in (0.03, 0.06, 0.09))
+    burr = 0.2e-3 + sum(
+        1e-3 * np.exp(-(((arc - c) / 4e-3) ** 2)) for c in (0.03, 0.06, 0.09)
+    )
     depth = np.where(arc > 0.005, 0.5e-3 + 3e-5 * np.sin(arc * 300), 0.0)
     R = (2 * U + 1) ** 2
     rb = RuleBase(m, U, 0.02, 0.004, dead_zone_half_width=0.0)
     ii, jj = np.divmod(np.arange(R), 2 * U + 1)
-    theta = np.stack([k * 2.0 + 5.0 * np.tanh((jj - U) / 2.0) + 0.3 * (ii - U)
-                      for k in range(A)]).astype(float)
+    theta = np.stack(
+        [
+            k * 2.0 + 5.0 * np.tanh((jj - U) / 2.0) + 0.3 * (ii - U)
+            for k in range(A)
+        ]
+    ).astype(float)
     assert theta.shape == (A, rb.n_rules)
     logs = {
         "chamfer.t": t,
@@ -106,7 +116,10 @@ def test_missing_theta_skips_fig11_12(tmp_path):
     with pytest.warns(UserWarning, match="theta.final"):
         paths = make_figures(logs, tmp_path)
     names = {p.name for p in paths}
-    assert names == EXPECTED - {"fig11_12_fuzzy_axis0.png", "fig11_12_fuzzy_axis1.png"}
+    assert names == EXPECTED - {
+        "fig11_12_fuzzy_axis0.png",
+        "fig11_12_fuzzy_axis1.png",
+    }
     for p in paths:
         check_png(p)
     assert not list(tmp_path.glob("fig11_12*"))
@@ -122,7 +135,10 @@ def test_missing_finish_skips_only_fig08(tmp_path):
 
 
 def test_compare_figures(tmp_path):
-    runs = {"m = 0": synthetic_logs(m=0, seed=1), "m = 2": synthetic_logs(m=2, seed=2)}
+    runs = {
+        "m = 0": synthetic_logs(m=0, seed=1),
+        "m = 2": synthetic_logs(m=2, seed=2),
+    }
     paths = compare_figures(runs, tmp_path)
     assert {p.name for p in paths} == {
         "compare_fig08_surface_finish.png",

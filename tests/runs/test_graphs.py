@@ -5,9 +5,9 @@ import shutil
 
 import pytest
 
-from deburr_drake.runs import graphs
 from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
+from deburr_drake.runs import graphs
 
 
 @pytest.fixture(scope="module")
@@ -19,35 +19,53 @@ def test_graph_names_every_system_and_port(diagram, tmp_path):
     written, message = graphs.write_graphs(diagram, tmp_path / "cell.dot")
     assert message is None
     text = (tmp_path / "cell.dot").read_text()
-    for name in ("command_generator", "first_order_hold", "contact_estimator",
-                 "controller", "plant", "scene_graph", "cutting_process",
-                 "force_sensor", "chamfer_observer", "cutting_force"):
+    for name in (
+        "command_generator",
+        "first_order_hold",
+        "contact_estimator",
+        "controller",
+        "plant",
+        "scene_graph",
+        "cutting_process",
+        "force_sensor",
+        "chamfer_observer",
+        "cutting_force",
+    ):
         assert f"name={name}" in text, name
-    for port in ("chamfer_state", "desired_normal_force",
-                 "commanded_position", "force_law_terms",
-                 "generalized_force", "tool_force"):
+    for port in (
+        "chamfer_state",
+        "desired_normal_force",
+        "commanded_position",
+        "force_law_terms",
+        "generalized_force",
+        "tool_force",
+    ):
         assert port in text, port
     controller = (tmp_path / "cell_controller.dot").read_text()
     assert "name=controller" in controller and "actuation" in controller
     assert [p.name for p in written] == ["cell.dot", "cell_controller.dot"]
 
 
-@pytest.mark.skipif(shutil.which("dot") is None,
-                    reason="GraphViz's dot is not installed")
+@pytest.mark.skipif(
+    shutil.which("dot") is None, reason="GraphViz's dot is not installed"
+)
 @pytest.mark.parametrize("fmt", ["svg", "png"])
 def test_renders_with_dot(diagram, tmp_path, fmt):
-    written, message = graphs.write_graphs(diagram, tmp_path / "cell",
-                                           fmt=fmt, max_depth=1)
+    written, message = graphs.write_graphs(
+        diagram, tmp_path / "cell", fmt=fmt, max_depth=1
+    )
     assert message is None
     for name in (f"cell.{fmt}", f"cell_controller.{fmt}"):
         assert (tmp_path / name).stat().st_size > 1000
 
 
-def test_missing_dot_says_so_and_keeps_the_dot_file(diagram, tmp_path,
-                                                    monkeypatch):
+def test_missing_dot_says_so_and_keeps_the_dot_file(
+    diagram, tmp_path, monkeypatch
+):
     monkeypatch.setattr(graphs.shutil, "which", lambda name: None)
-    written, message = graphs.write_graphs(diagram, tmp_path / "cell",
-                                           fmt="svg")
+    written, message = graphs.write_graphs(
+        diagram, tmp_path / "cell", fmt="svg"
+    )
     assert "apt-get install graphviz" in message
     assert (tmp_path / "cell.dot").exists()
     assert not (tmp_path / "cell.svg").exists()

@@ -5,9 +5,9 @@ established and the chamfer depth converges. The full pass is
 import numpy as np
 import pytest
 
-from deburr_drake.math import metrics
 from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
+from deburr_drake.math import metrics
 from deburr_drake.runs.simulation import simulate
 
 pytestmark = pytest.mark.slow
@@ -16,8 +16,9 @@ pytestmark = pytest.mark.slow
 @pytest.fixture(scope="module")
 def log():
     scenario = load_scenario("paper")
-    return simulate(make_deburring_diagram(scenario=scenario), scenario,
-                    duration=5.0)
+    return simulate(
+        make_deburring_diagram(scenario=scenario), scenario, duration=5.0
+    )
 
 
 def test_contact_is_established(log):
@@ -39,5 +40,6 @@ def test_the_tool_feeds_along_the_edge(log):
     late = metrics.window(cmd["t"], 2.0)
     speed = metrics.mean_speed(cmd["t"][late], cmd["arc_position"][late])
     assert 1.5e-3 < speed < 3.5e-3
-    assert not metrics.any_nan(*[v for b in log.signals.values()
-                                 for v in b.values()])
+    assert not metrics.any_nan(
+        *[v for b in log.signals.values() for v in b.values()]
+    )

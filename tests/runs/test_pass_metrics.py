@@ -10,9 +10,17 @@ import pytest
 from deburr_drake.cell.edge import make_contour
 from deburr_drake.config import load_scenario
 from deburr_drake.runs.pass_metrics import (
-    CONTACT_FORCE, TRANSIENT, estimate_metrics, feed_metrics, finish_metrics,
-    force_metrics, pass_metrics, pass_window, smoothness_metrics,
-    status_metrics)
+    CONTACT_FORCE,
+    TRANSIENT,
+    estimate_metrics,
+    feed_metrics,
+    finish_metrics,
+    force_metrics,
+    pass_metrics,
+    pass_window,
+    smoothness_metrics,
+    status_metrics,
+)
 from deburr_drake.runs.simulation import RunLog
 
 CONTACT = 0.5  # s, ||f_n|| crosses CONTACT_FORCE here
@@ -37,28 +45,39 @@ def _log(*, nan=False):
     n2 = np.tile([0.0, 1.0, 0.0], (n, 1))
     speed = np.where(on, V_ON, V_OFF)
     f_n = np.where(t >= CONTACT, 5.0, 0.0)
-    f_t = np.where(t >= START, sc.task.desired_chamfering_force + 0.3,
-                   50.0)  # the transient's 50 N must not count
+    f_t = np.where(
+        t >= START, sc.task.desired_chamfering_force + 0.3, 50.0
+    )  # the transient's 50 N must not count
     actuation = np.zeros((n, 5))
     actuation[:, 0] = np.where(t >= START, np.arange(n) % 2, 7.0 * t)
     signals = {
-        "chamfer": {"t": t, "f_n": f_n, "n2": n2,
-                    "xdot_p": speed[:, None] * n2, "arc_position": arc,
-                    "delta": np.full(n, d_star),
-                    "x_p": np.tile([0.4, 0.0, 0.05], (n, 1))},
-        "controller": {"t": t, "e_f": np.where(t >= START, 0.2, 9.0),
-                       "delta_d": np.full(n, d_star - 1e-6),
-                       "u_fuzzy": np.zeros((n, 6)), "s": np.zeros((n, 6))},
+        "chamfer": {
+            "t": t,
+            "f_n": f_n,
+            "n2": n2,
+            "xdot_p": speed[:, None] * n2,
+            "arc_position": arc,
+            "delta": np.full(n, d_star),
+            "x_p": np.tile([0.4, 0.0, 0.05], (n, 1)),
+        },
+        "controller": {
+            "t": t,
+            "e_f": np.where(t >= START, 0.2, 9.0),
+            "delta_d": np.full(n, d_star - 1e-6),
+            "u_fuzzy": np.zeros((n, 6)),
+            "s": np.zeros((n, 6)),
+        },
         "process": {"t": t, "f_t": f_t, "arc_position": arc},
         "command": {"t": t[::10], "feed": np.full(n // 10, 2.4e-3)},
         "estimates": {"t": t, "value": np.tile([2.0, 8000.0, 0.0], (n, 1))},
         "actuation": {"t": t, "value": actuation},
         # the bins a pass leaves: 20 um deeper than asked everywhere but
         # one bin 0.1 mm shallow; one 5 um burr stub left
-        "finish": {"arc": np.linspace(0, L, 400, endpoint=False),
-                   "depth": np.r_[np.full(399, d_star + 2e-5),
-                                  d_star - 1e-4],
-                   "burr_remaining": np.array([0.0, 5e-6, 0.0])},
+        "finish": {
+            "arc": np.linspace(0, L, 400, endpoint=False),
+            "depth": np.r_[np.full(399, d_star + 2e-5), d_star - 1e-4],
+            "burr_remaining": np.array([0.0, 5e-6, 0.0]),
+        },
     }
     # the process logged only after the transient: no bin is skipped
     proc = signals["process"]
@@ -66,9 +85,15 @@ def _log(*, nan=False):
     signals["process"] = {k: v[late] for k, v in proc.items()}
     if nan:
         signals["controller"]["e_f"][-1] = np.nan
-    return RunLog(scenario=sc, signals=signals, wall_time=3.0, sim_time=10.0,
-                  completed_pass=True, stop_reason="pass_complete",
-                  stop_time=10.0)
+    return RunLog(
+        scenario=sc,
+        signals=signals,
+        wall_time=3.0,
+        sim_time=10.0,
+        completed_pass=True,
+        stop_reason="pass_complete",
+        stop_time=10.0,
+    )
 
 
 def test_the_window_starts_transient_after_contact():
@@ -83,9 +108,11 @@ def test_finish_metrics_on_known_bins():
     out = finish_metrics(log, pass_window(log))
     error = np.r_[np.full(399, 2e-5), -1e-4]
     assert out["chamfer_depth_mean_error_mm"] == pytest.approx(
-        np.mean(error) * 1e3)
+        np.mean(error) * 1e3
+    )
     assert out["chamfer_depth_rms_error_mm"] == pytest.approx(
-        math.sqrt(np.mean(error ** 2)) * 1e3)
+        math.sqrt(np.mean(error**2)) * 1e3
+    )
     assert out["chamfer_depth_max_error_mm"] == pytest.approx(0.1)
     assert out["edge_coverage"] == 1.0
     assert out["burr_remaining_max_mm"] == pytest.approx(0.005)
@@ -112,8 +139,7 @@ def test_estimate_metrics_against_a_truth():
     d_star = log.scenario.task.desired_depth
     predicted = 2.0 + 8000.0 * d_star
     out = estimate_metrics(log, 1.25 * predicted)
-    assert out["predicted_force_at_desired_depth_N"] == pytest.approx(
-        predicted)
+    assert out["predicted_force_at_desired_depth_N"] == pytest.approx(predicted)
     assert out["force_prediction_error_rel"] == pytest.approx(0.2)
     alone = estimate_metrics(log)
     assert math.isnan(alone["force_prediction_error_rel"])
@@ -129,16 +155,17 @@ def test_estimate_metrics_read_the_estimate_before_the_cutter_left_the_part():
     log["estimates"]["value"] = log["estimates"]["value"].copy()
     log["estimates"]["value"][off] = [1.0, 4000.0, 0.0]
     process = log.signals["process"]
-    process["engagement"] = np.where(
-        np.isin(process["t"], t[off]), 0.5, 1.0)
+    process["engagement"] = np.where(np.isin(process["t"], t[off]), 0.5, 1.0)
     d_star = log.scenario.task.desired_depth
     out = estimate_metrics(log, 6.0)
     assert out["predicted_force_at_desired_depth_N"] == pytest.approx(
-        2.0 + 8000.0 * d_star)
-    process["engagement"][:] = 1.0   # a closed edge: the last estimate
+        2.0 + 8000.0 * d_star
+    )
+    process["engagement"][:] = 1.0  # a closed edge: the last estimate
     out = estimate_metrics(log, 6.0)
     assert out["predicted_force_at_desired_depth_N"] == pytest.approx(
-        1.0 + 4000.0 * d_star)
+        1.0 + 4000.0 * d_star
+    )
 
 
 def test_smoothness_metrics_count_only_after_the_transient():
@@ -160,9 +187,14 @@ def test_status_metrics_see_a_nan():
 def test_pass_metrics_is_the_union_of_the_families():
     log = _log()
     window = pass_window(log)
-    families = [finish_metrics(log, window), force_metrics(log, window),
-                feed_metrics(log, window), estimate_metrics(log, 6.0),
-                smoothness_metrics(log, window), status_metrics(log)]
+    families = [
+        finish_metrics(log, window),
+        force_metrics(log, window),
+        feed_metrics(log, window),
+        estimate_metrics(log, 6.0),
+        smoothness_metrics(log, window),
+        status_metrics(log),
+    ]
     out = pass_metrics(log, true_force_at_desired_depth=6.0)
     names = set().union(*families) | {"contact_time_s"}
     assert set(out) == names
@@ -182,8 +214,10 @@ def test_a_run_without_contact_gives_reasons_not_errors():
 @pytest.mark.parametrize("name", ["pocket", "boss", "paper"])
 def test_registration_error_of_the_true_registration_is_zero(name):
     from deburr_drake.runs.pass_metrics import registration_error
-    scenario = load_scenario(name, text=(
-        "part_error: {offset: [0.0006, -0.0004, 0.0], yaw: 0.01}"))
+
+    scenario = load_scenario(
+        name, text=("part_error: {offset: [0.0006, -0.0004, 0.0], yaw: 0.01}")
+    )
     # Believed minus real is (offset, yaw), turned about tube.position
     # (the vertices' centroid and the circle's centre here): the real
     # part is the believed one turned back and moved back.

@@ -8,8 +8,10 @@ from deburr_drake.runs.probe_study import refit_touches
 
 
 def test_refit_touches_drops_the_burr_and_finds_the_part():
-    scenario = load_scenario("pocket", text=(
-        "part_error: {offset: [0.0006, -0.0004, 0.0], yaw: 0.01}"))
+    scenario = load_scenario(
+        "pocket",
+        text=("part_error: {offset: [0.0006, -0.0004, 0.0], yaw: 0.01}"),
+    )
     real = make_contour(scenario)
     arcs = np.arange(8) * real.length / 8 + 0.004
     touches = np.zeros((8, 4))

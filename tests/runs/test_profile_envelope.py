@@ -16,8 +16,9 @@ def paper():
     return load_scenario("paper")
 
 
-@pytest.mark.parametrize("fillet, side", [(0.004, "inner"), (0.015, "outer"),
-                                          (0.030, "inner")])
+@pytest.mark.parametrize(
+    "fillet, side", [(0.004, "inner"), (0.015, "outer"), (0.030, "inner")]
+)
 def test_a_cell_runs_through_its_first_fillet(paper, fillet, side):
     sc = pe.fillet_scenario(paper, pe.FilletCell(fillet, side, 10.0))
     contour = make_contour(sc)
@@ -25,12 +26,13 @@ def test_a_cell_runs_through_its_first_fillet(paper, fillet, side):
     r = sc.tool.cutter_radius
     radius = fillet - r if side == "inner" else fillet + r
     assert end - start == pytest.approx(0.5 * math.pi * radius)
-    assert start == pytest.approx(min(pe.LEAD, pe.HALF_SIDE - fillet),
-                                  abs=1e-9)
-    assert contour.curvature(contour.point_at(0.5 * (start + end))) \
-        == pytest.approx((1 if side == "inner" else -1) / radius)
-    assert sc.simulation.stop_after_passes * contour.length \
-        == pytest.approx(end + pe.TAIL)
+    assert start == pytest.approx(min(pe.LEAD, pe.HALF_SIDE - fillet), abs=1e-9)
+    assert contour.curvature(
+        contour.point_at(0.5 * (start + end))
+    ) == pytest.approx((1 if side == "inner" else -1) / radius)
+    assert sc.simulation.stop_after_passes * contour.length == pytest.approx(
+        end + pe.TAIL
+    )
     assert sc.process.burrs == []
 
 

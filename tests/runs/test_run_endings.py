@@ -4,19 +4,19 @@ and a documented exit code."""
 
 import json
 import os
+from pathlib import Path
 import signal
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from deburr_drake import cli
-from deburr_drake.runs import report
-from deburr_drake.runs.pass_metrics import pass_metrics
 from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
+from deburr_drake.runs import report
+from deburr_drake.runs.pass_metrics import pass_metrics
 from deburr_drake.runs.simulation import simulate
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -25,11 +25,13 @@ ROOT = Path(__file__).resolve().parents[2]
 def _strict_json(path):
     def reject(constant):
         raise ValueError(f"non-strict JSON constant {constant}")
+
     return json.loads(Path(path).read_text(), parse_constant=reject)
 
 
 def test_a_run_shorter_than_the_transient_writes_logs_and_metrics(
-        tmp_path, capsys):
+    tmp_path, capsys
+):
     out = tmp_path / "d"
     code = cli.main(["simulate", "--duration", "1", "--out", str(out)])
     assert code == 0
@@ -39,8 +41,7 @@ def test_a_run_shorter_than_the_transient_writes_logs_and_metrics(
     assert metrics["stop_time_s"] == pytest.approx(1.0)
     # Metrics after the 2 s transient cannot be computed: null, with why.
     assert metrics["chamfering_force_rms_error_N"] is None
-    assert "transient" in metrics["unavailable"][
-        "chamfering_force_rms_error_N"]
+    assert "transient" in metrics["unavailable"]["chamfering_force_rms_error_N"]
     assert metrics["contact_time_s"] < 0.5
     # The feed law never reached command.max_feed (20 mm/s).
     assert metrics["feed_at_max_fraction"] == 0.0
@@ -57,14 +58,27 @@ def test_a_clamped_feed_is_counted_in_the_metrics(tmp_path):
     """command.max_feed below the feeds the law asks for: the metrics say
     for how much of the run the feed was held at the clamp."""
     out = tmp_path / "d"
-    assert cli.main(["simulate", "--duration", "1", "--out", str(out),
-                     "--scenario-text", "command: {max_feed: 0.0015}"]) == 0
+    assert (
+        cli.main(
+            [
+                "simulate",
+                "--duration",
+                "1",
+                "--out",
+                str(out),
+                "--scenario-text",
+                "command: {max_feed: 0.0015}",
+            ]
+        )
+        == 0
+    )
     metrics = _strict_json(out / "metrics.json")
     with np.load(out / "logs.npz") as logs:
         feed = logs["command.feed"]
     assert feed.max() == pytest.approx(0.0015)
     assert metrics["feed_at_max_fraction"] == pytest.approx(
-        np.mean(feed >= 0.0015 * (1 - 1e-9)))
+        np.mean(feed >= 0.0015 * (1 - 1e-9))
+    )
     assert metrics["feed_at_max_fraction"] > 0.3
 
 
@@ -74,10 +88,22 @@ def _run_and_signal(tmp_path, number):
     out = tmp_path / "run"
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     proc = subprocess.Popen(
-        [sys.executable, "-m", "deburr_drake.cli", "simulate", "--out",
-         str(out), "--progress-interval", "0.5"],
-        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
-        env=env, cwd=tmp_path)
+        [
+            sys.executable,
+            "-m",
+            "deburr_drake.cli",
+            "simulate",
+            "--out",
+            str(out),
+            "--progress-interval",
+            "0.5",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+    )
     try:
         for line in proc.stdout:
             if "t =   2.00 s simulated" in line:
@@ -91,10 +117,12 @@ def _run_and_signal(tmp_path, number):
     return code, _strict_json(out / "metrics.json"), out
 
 
-@pytest.mark.parametrize("number, code", [(signal.SIGINT, 130),
-                                          (signal.SIGTERM, 143)])
+@pytest.mark.parametrize(
+    "number, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)]
+)
 def test_a_signal_stops_the_run_and_its_results_are_written(
-        tmp_path, number, code):
+    tmp_path, number, code
+):
     exit_code, metrics, out = _run_and_signal(tmp_path, number)
     assert exit_code == code
     assert metrics["stop_reason"] == "interrupted"
@@ -102,7 +130,8 @@ def test_a_signal_stops_the_run_and_its_results_are_written(
     assert 2.0 <= metrics["stop_time_s"] < 10.0
     with np.load(out / "logs.npz") as logs:
         assert logs["chamfer.t"][-1] == pytest.approx(
-            metrics["stop_time_s"], abs=0.003)
+            metrics["stop_time_s"], abs=0.003
+        )
 
 
 @pytest.fixture(scope="module")
@@ -111,12 +140,16 @@ def point_mass():
     return scenario, make_deburring_diagram(scenario=scenario)
 
 
-@pytest.mark.parametrize("message, reason", [
-    ("Detected NaN in the actuation input port", "nan"),
-    ("something else broke", "error"),
-])
-def test_an_exception_during_the_run_keeps_the_logs(point_mass, message,
-                                                    reason):
+@pytest.mark.parametrize(
+    "message, reason",
+    [
+        ("Detected NaN in the actuation input port", "nan"),
+        ("something else broke", "error"),
+    ],
+)
+def test_an_exception_during_the_run_keeps_the_logs(
+    point_mass, message, reason
+):
     scenario, diagram = point_mass
     calls = []
 

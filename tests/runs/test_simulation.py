@@ -12,8 +12,11 @@ def test_extra_logs_come_back_by_name():
     scenario = load_scenario("point_mass")
     diagram = make_deburring_diagram(
         scenario=scenario,
-        extra_logs={"feed": ("command_generator", "feed"),
-                    "state": ("plant", "state")})
+        extra_logs={
+            "feed": ("command_generator", "feed"),
+            "state": ("plant", "state"),
+        },
+    )
     assert set(logger_names(diagram)) == set(LOGGED) | {"feed", "state"}
     log = simulate(diagram, scenario, duration=0.05)
     period = scenario.simulation.log_period
@@ -26,8 +29,10 @@ def test_extra_logs_come_back_by_name():
 def test_an_extra_log_may_not_replace_a_standard_one():
     scenario = load_scenario("point_mass")
     with pytest.raises(ValueError, match="'chamfer' is logged already"):
-        make_deburring_diagram(scenario=scenario, extra_logs={
-            "chamfer": ("command_generator", "feed")})
+        make_deburring_diagram(
+            scenario=scenario,
+            extra_logs={"chamfer": ("command_generator", "feed")},
+        )
 
 
 def _tool_velocity_after_steps(make):
@@ -44,9 +49,12 @@ def _tool_velocity_after_steps(make):
     context = plant.GetMyContextFromRoot(simulator.get_context())
     fresh = plant.CreateDefaultContext()
     plant.SetPositionsAndVelocities(
-        fresh, plant.get_state_output_port().Eval(context))
-    return (frame.CalcSpatialVelocityInWorld(context).translational(),
-            frame.CalcSpatialVelocityInWorld(fresh).translational())
+        fresh, plant.get_state_output_port().Eval(context)
+    )
+    return (
+        frame.CalcSpatialVelocityInWorld(context).translational(),
+        frame.CalcSpatialVelocityInWorld(fresh).translational(),
+    )
 
 
 def test_cenic_leaves_the_plant_kinematics_a_step_old_and_the_cell_refreshes():
@@ -57,16 +65,24 @@ def test_cenic_leaves_the_plant_kinematics_a_step_old_and_the_cell_refreshes():
     so a sample's readers of the plant (the force sensor, the held mean)
     see the sample's state. If Drake fixes this, the first assertion fails:
     then the refresh can go."""
-    from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
-                                          SimulatorConfig)
+    from pydrake.systems.analysis import (
+        ApplySimulatorConfig,
+        Simulator,
+        SimulatorConfig,
+    )
+
     from deburr_drake.runs.simulation import make_simulator
 
     def bare(diagram, scenario):
         simulator = Simulator(diagram)
-        ApplySimulatorConfig(SimulatorConfig(
-            integration_scheme="cenic",
-            max_step_size=scenario.simulation.max_step,
-            use_error_control=False), simulator)
+        ApplySimulatorConfig(
+            SimulatorConfig(
+                integration_scheme="cenic",
+                max_step_size=scenario.simulation.max_step,
+                use_error_control=False,
+            ),
+            simulator,
+        )
         return simulator
 
     stale, truth = _tool_velocity_after_steps(bare)

@@ -7,8 +7,8 @@ as a row."""
 
 import json
 import math
-import textwrap
 from pathlib import Path
+import textwrap
 
 import numpy as np
 import pytest
@@ -56,7 +56,8 @@ def write(tmp_path, text, name="study.yaml"):
 
 
 def test_monte_carlo_runs_are_full_validated_scenarios_and_reproducible(
-        tmp_path):
+    tmp_path,
+):
     study = sweep.load_study(write(tmp_path, MC.format(extra="")))
     runs = sweep.expand_runs(study)
     assert len(runs) == 6
@@ -78,55 +79,74 @@ def test_monte_carlo_runs_are_full_validated_scenarios_and_reproducible(
 
 
 def test_grid_is_every_combination(tmp_path):
-    study = sweep.load_study(write(tmp_path, """\
+    study = sweep.load_study(
+        write(
+            tmp_path,
+            """\
         base: point_mass
         grid:
           tube.inner_radius: [0.02, 0.03, 0.045]
           task.desired_depth: [0.0004, 0.0006]
-        """))
+        """,
+        )
+    )
     runs = sweep.expand_runs(study)
     assert [tuple(r.params.values()) for r in runs] == [
-        (r, d) for r in (0.02, 0.03, 0.045) for d in (0.0004, 0.0006)]
+        (r, d) for r in (0.02, 0.03, 0.045) for d in (0.0004, 0.0006)
+    ]
 
 
 BAD = {
     "unknown scenario field": (
         "tube.inner_radiu: {distribution: uniform, low: 0.02, high: 0.06}",
-        "study.sample.fields.tube.inner_radiu"),
+        "study.sample.fields.tube.inner_radiu",
+    ),
     "empty range": (
         "tube.inner_radius: {distribution: uniform, low: 0.06, high: 0.02}",
-        "study.sample.fields.tube.inner_radius: empty range"),
+        "study.sample.fields.tube.inner_radius: empty range",
+    ),
     "normal on an integer field": (
         "sensor.noise_seed: {distribution: normal, mean: 3, std: 1}",
         "study.sample.fields.sensor.noise_seed: an integer field cannot "
-        "take a normal distribution"),
+        "take a normal distribution",
+    ),
     "a list field without an index": (
         "tube.position: {distribution: uniform, low: 0, high: 1}",
-        "study.sample.fields.tube.position: the field is of type"),
+        "study.sample.fields.tube.position: the field is of type",
+    ),
     "a string field": (
         "robot.model: {distribution: uniform, low: 0, high: 1}",
-        "study.sample.fields.robot.model: the field is of type str"),
+        "study.sample.fields.robot.model: the field is of type str",
+    ),
     "unknown distribution": (
         "tube.inner_radius: {distribution: beta, low: 0.02, high: 0.06}",
-        "study.sample.fields.tube.inner_radius: distribution = 'beta'"),
+        "study.sample.fields.tube.inner_radius: distribution = 'beta'",
+    ),
     "log-uniform from zero": (
         "sensor.noise_std: {distribution: log_uniform, low: 0, high: 1}",
-        "study.sample.fields.sensor.noise_std: log_uniform needs low > 0"),
+        "study.sample.fields.sensor.noise_std: log_uniform needs low > 0",
+    ),
     "unknown key of a distribution": (
         "tube.inner_radius: {distribution: uniform, lo: 0.02}",
-        "study.sample.fields.tube.inner_radius.lo is unknown"),
+        "study.sample.fields.tube.inner_radius.lo is unknown",
+    ),
     "a value the scenario rejects": (
         "tube.inner_radius: {distribution: uniform, low: 0.001, high: 0.002}",
-        "study.sample.fields: run 0 (tube.inner_radius = "),
+        "study.sample.fields: run 0 (tube.inner_radius = ",
+    ),
 }
 
 
 @pytest.mark.parametrize("case", sorted(BAD))
 def test_bad_study_is_one_line_naming_the_field_before_any_run(
-        tmp_path, capsys, case):
+    tmp_path, capsys, case
+):
     extra, expected = BAD[case]
-    lines = [line for line in MC.format(extra="").splitlines()
-             if not line.strip().startswith(extra.split(":")[0] + ":")]
+    lines = [
+        line
+        for line in MC.format(extra="").splitlines()
+        if not line.strip().startswith(extra.split(":")[0] + ":")
+    ]
     text = "\n".join(lines).replace("  fields:", f"  fields:\n    {extra}")
     path = write(tmp_path, text)
     out = tmp_path / "out"
@@ -139,22 +159,37 @@ def test_bad_study_is_one_line_naming_the_field_before_any_run(
     assert not out.exists()
 
 
-@pytest.mark.parametrize("text, expected", [
-    ("name: x\nsampel: {count: 3}\n", "study.sampel is unknown"),
-    ("duration: 0\ngrid: {task.desired_depth: [0.0004]}\n",
-     "study.duration = 0"),
-    ("grid:\n  tube.inner_radius: []\n", "study.grid.tube.inner_radius: "
-                                         "empty list"),
-    ("grid:\n  tube.inner_radius: [a]\n",
-     "study.grid.tube.inner_radius[0] = 'a' is invalid"),
-    ("grid: {tube.inner_radius: [0.03]}\nrules: ['depth < 1']\n",
-     "study.rules[0]: metric 'depth' is unknown"),
-    ("grid: {tube.inner_radius: [0.03]}\nrules: ['edge_coverage ~ 1']\n",
-     "study.rules[0] = 'edge_coverage ~ 1' is invalid"),
-    ("grid: {tube.inner_radius: [0.03]}\nbase_text: 'tube: {radius: 1}'\n",
-     "study.base: --scenario-text:1:8: tube.radius is unknown"),
-    ("name: x\n", "study: give grid"),
-])
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        ("name: x\nsampel: {count: 3}\n", "study.sampel is unknown"),
+        (
+            "duration: 0\ngrid: {task.desired_depth: [0.0004]}\n",
+            "study.duration = 0",
+        ),
+        (
+            "grid:\n  tube.inner_radius: []\n",
+            "study.grid.tube.inner_radius: empty list",
+        ),
+        (
+            "grid:\n  tube.inner_radius: [a]\n",
+            "study.grid.tube.inner_radius[0] = 'a' is invalid",
+        ),
+        (
+            "grid: {tube.inner_radius: [0.03]}\nrules: ['depth < 1']\n",
+            "study.rules[0]: metric 'depth' is unknown",
+        ),
+        (
+            "grid: {tube.inner_radius: [0.03]}\nrules: ['edge_coverage ~ 1']\n",
+            "study.rules[0] = 'edge_coverage ~ 1' is invalid",
+        ),
+        (
+            "grid: {tube.inner_radius: [0.03]}\nbase_text: 'tube: {radius: 1}'\n",
+            "study.base: --scenario-text:1:8: tube.radius is unknown",
+        ),
+        ("name: x\n", "study: give grid"),
+    ],
+)
 def test_bad_study_files(tmp_path, text, expected):
     path = write(tmp_path, text)
     with pytest.raises(ConfigError) as e:
@@ -173,7 +208,8 @@ def test_wilson_interval_and_association():
     x = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]
     assert sweep.association(x, [1, 2, 3, 4, 5, 6]) == pytest.approx(1.0)
     assert sweep.association(x, [0, 0, 0, 1, 1, 1]) == pytest.approx(
-        0.878, abs=1e-3)
+        0.878, abs=1e-3
+    )
     assert math.isnan(sweep.association(x, [0] * 6))
     # Bad at both ends (a symmetric error): by the distance from the
     # median.
@@ -182,12 +218,19 @@ def test_wilson_interval_and_association():
 
 
 def test_badness_is_the_most_failed_rules_metric_null_worst():
-    rules = [sweep.parse_rule("guard_tripped == 0", "a"),
-             sweep.parse_rule("chamfer_depth_rms_error_mm <= 0.05", "b")]
-    rows = [{"pass: guard_tripped == 0": g, "pass_all": False,
-             "pass: chamfer_depth_rms_error_mm <= 0.05": False,
-             "chamfer_depth_rms_error_mm": d}
-            for g, d in ((True, 0.1), (True, 0.3), (False, None))]
+    rules = [
+        sweep.parse_rule("guard_tripped == 0", "a"),
+        sweep.parse_rule("chamfer_depth_rms_error_mm <= 0.05", "b"),
+    ]
+    rows = [
+        {
+            "pass: guard_tripped == 0": g,
+            "pass_all": False,
+            "pass: chamfer_depth_rms_error_mm <= 0.05": False,
+            "chamfer_depth_rms_error_mm": d,
+        }
+        for g, d in ((True, 0.1), (True, 0.3), (False, None))
+    ]
     np.testing.assert_allclose(sweep.badness(rows, rules), [0.1, 0.3, 1.3])
 
 
@@ -208,32 +251,41 @@ def _check_outputs(out: Path, n: int):
 
 
 @pytest.mark.slow
-def test_local_sweep_records_a_guard_and_a_rerun_does_no_work(
-        tmp_path, capsys):
+def test_local_sweep_records_a_guard_and_a_rerun_does_no_work(tmp_path, capsys):
     path = write(tmp_path, TINY)
     out = tmp_path / "out"
-    assert cli.main(["sweep", str(path), "--workers", "2",
-                     "--out", str(out)]) == 0
+    assert (
+        cli.main(["sweep", str(path), "--workers", "2", "--out", str(out)]) == 0
+    )
     rows, summary = _check_outputs(out, 2)
     assert "guard_tripped == 0" in rows[0]
     assert summary["stop_reasons"] == {"duration": 1, "guard:tool_force": 1}
     rule = summary["rules"][0]
-    assert (rule["rule"], rule["passed"], rule["runs"]) == \
-        ("guard_tripped == 0", 1, 2)
+    assert (rule["rule"], rule["passed"], rule["runs"]) == (
+        "guard_tripped == 0",
+        1,
+        2,
+    )
     assert summary["metric_window"].startswith(f"from {TRANSIENT:g} s")
     runs = sweep.expand_runs(sweep.load_study(path))
     results = [sweep.read_result(out, r.key) for r in runs]
     assert results[1]["stop_reason"] == "guard:tool_force"
     # Every metric is there (the force at delta* only when a metric asks).
-    assert set(sweep.METRICS) - {"true_force_at_desired_depth_N"} \
-        <= set(results[0])
+    assert set(sweep.METRICS) - {"true_force_at_desired_depth_N"} <= set(
+        results[0]
+    )
     # ... and every metric the run reports is a column (METRICS is the
     # sweep's list: a metric added to the report must be added there).
     reported = json.loads(
-        (out / "runs" / runs[0].key / "metrics.json").read_text())
-    assert set(reported) - {"scenario", "stop_reason", "stop_time_s",
-                            "stop_detail", "unavailable"} \
-        <= set(sweep.METRICS)
+        (out / "runs" / runs[0].key / "metrics.json").read_text()
+    )
+    assert set(reported) - {
+        "scenario",
+        "stop_reason",
+        "stop_time_s",
+        "stop_detail",
+        "unavailable",
+    } <= set(sweep.METRICS)
     assert (out / "runs" / runs[0].key / "logs.npz").exists()
     capsys.readouterr()
     assert cli.main(["sweep", str(path), "--out", str(out)]) == 0
@@ -247,65 +299,101 @@ def test_local_sweep_records_a_guard_and_a_rerun_does_no_work(
 @pytest.mark.slow
 def test_sweep_against_a_distributed_scheduler(tmp_path, capsys):
     from distributed import LocalCluster
+
     path = write(tmp_path, TINY.replace("[0.0, 0.5]", "[0.0]"))
     out = tmp_path / "out"
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                      dashboard_address=":0") as cluster:
-        code = cli.main(["sweep", str(path), "--scheduler",
-                         cluster.scheduler_address, "--out", str(out)])
+    with LocalCluster(
+        n_workers=1,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=":0",
+    ) as cluster:
+        code = cli.main(
+            [
+                "sweep",
+                str(path),
+                "--scheduler",
+                cluster.scheduler_address,
+                "--out",
+                str(out),
+            ]
+        )
     assert code == 0
     assert f"scheduler {cluster.scheduler_address}" in capsys.readouterr().out
     _check_outputs(out, 1)
 
 
 def test_a_run_that_raises_is_recorded_with_its_reason(tmp_path):
-    result = sweep.run_scenario("tube: {inner_radius: -1}",
-                                str(tmp_path / "run"), "k")
+    result = sweep.run_scenario(
+        "tube: {inner_radius: -1}", str(tmp_path / "run"), "k"
+    )
     assert result["stop_reason"] == "error"
     assert "tube.inner_radius" in result["stop_detail"]
     assert result["run_failed"] == 1.0
-    assert json.loads((tmp_path / "run" / "result.json").read_text())[
-        "stop_reason"] == "error"
+    assert (
+        json.loads((tmp_path / "run" / "result.json").read_text())[
+            "stop_reason"
+        ]
+        == "error"
+    )
 
 
 def test_binned_success_shows_where_runs_fail():
     from deburr_drake.sweep.results import binned_success
+
     x = [0.1, 0.9, 0.2, 0.8, 0.3, 0.7]
     bins = binned_success(x, [True, False, True, False, True, True], bins=2)
-    assert [(b["low"], b["high"], b["passed"], b["runs"]) for b in bins] == \
-        [(0.1, 0.3, 3, 3), (0.7, 0.9, 1, 3)]
+    assert [(b["low"], b["high"], b["passed"], b["runs"]) for b in bins] == [
+        (0.1, 0.3, 3, 3),
+        (0.7, 0.9, 1, 3),
+    ]
 
 
 def test_a_crashed_or_failed_run_fails_every_rule_and_is_a_row():
     from deburr_drake.sweep.results import table_rows
     from deburr_drake.sweep.runner import failed_result
-    runs = [sweep.RunSpec(0, {"tube.inner_radius": 0.03}, "a", 1.0),
-            sweep.RunSpec(1, {"tube.inner_radius": 0.04}, "b", 1.0),
-            sweep.RunSpec(2, {"tube.inner_radius": 0.05}, "c", 1.0)]
+
+    runs = [
+        sweep.RunSpec(0, {"tube.inner_radius": 0.03}, "a", 1.0),
+        sweep.RunSpec(1, {"tube.inner_radius": 0.04}, "b", 1.0),
+        sweep.RunSpec(2, {"tube.inner_radius": 0.05}, "c", 1.0),
+    ]
     rule = sweep.parse_rule("guard_tripped == 0", "r")
-    results = {runs[0].key: failed_result(runs[0].key, "crash", "died"),
-               runs[1].key: {"stop_reason": "duration", "guard_tripped": 0.0,
-                             "run_failed": 0.0}}
+    results = {
+        runs[0].key: failed_result(runs[0].key, "crash", "died"),
+        runs[1].key: {
+            "stop_reason": "duration",
+            "guard_tripped": 0.0,
+            "run_failed": 0.0,
+        },
+    }
     rows = table_rows(runs, results, ["guard_tripped"], [rule])
-    assert [(r["index"], r["stop_reason"], r["pass_all"]) for r in rows] == \
-        [(0, "crash", False), (1, "duration", True)]
+    assert [(r["index"], r["stop_reason"], r["pass_all"]) for r in rows] == [
+        (0, "crash", False),
+        (1, "duration", True),
+    ]
 
 
 @pytest.mark.slow
 def test_a_run_the_preflight_refuses_is_one_line_naming_it(tmp_path, capsys):
-    path = write(tmp_path, """\
+    path = write(
+        tmp_path,
+        """\
         name: unstable
         base: paper
         duration: 0.05
         grid:
           controller.sliding_gain[0]: [400.0, 20000.0]
         rules: ["guard_tripped == 0"]
-        """)
+        """,
+    )
     out = tmp_path / "out"
     assert cli.main(["sweep", str(path), "--out", str(out)]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1, lines
-    assert lines[0].startswith("deburr-drake: error: study.grid: run 1 "
-                               "(controller.sliding_gain[0] = 20000): "
-                               "controller.sliding_gain[0] = 20000 is predicted unstable")
+    assert lines[0].startswith(
+        "deburr-drake: error: study.grid: run 1 "
+        "(controller.sliding_gain[0] = 20000): "
+        "controller.sliding_gain[0] = 20000 is predicted unstable"
+    )
     assert not (out / "runs").exists()
