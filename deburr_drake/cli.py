@@ -26,7 +26,8 @@ def _progress(t, wall, feed):
     )
 
 
-#: Exit codes of ``deburr-drake`` (also in docs/scenarios.md, "Stop reasons", and ``--help``).
+#: Exit codes of ``deburr-drake`` (also in docs/scenarios.md, "Stop
+#: reasons", and ``--help``).
 EXIT_CODES = {
     "pass_complete": 0,
     "duration": 0,  # a normal ending
@@ -47,6 +48,15 @@ _EXIT_HELP = (
 )
 #: What ``simulate`` writes into its output directory.
 _OUTPUTS = ("logs.npz", "metrics.json")
+#: What ``analyze`` writes into its output directory (those that apply).
+_ANALYSIS_OUTPUTS = (
+    "analysis.json",
+    "poles.png",
+    "rho_along_run.png",
+    "bode_nyquist.png",
+    "stability_map.png",
+    "lyapunov.png",
+)
 
 
 def _bad(message: str):
@@ -211,30 +221,12 @@ def _simulate(args) -> int:
 def _run_and_write(args, scenario, out, received, running, found) -> int:
     import signal
 
-    from deburr_drake.cell.diagram import make_deburring_diagram
-    from deburr_drake.cell.truth import contact_truth
-    from deburr_drake.runs import figures, report
+    from deburr_drake.runs import report
     from deburr_drake.runs.pass_metrics import pass_metrics
-    from deburr_drake.runs.simulation import simulate
 
+    # The run; a signal in ``received`` stops it after the current step.
     try:
-        meshcat = None
-        if args.meshcat or args.record:
-            from pydrake.geometry import Meshcat
-
-            meshcat = Meshcat()
-            if args.meshcat:
-                print(f"Meshcat: {meshcat.web_url()}", flush=True)
-        diagram = make_deburring_diagram(scenario=scenario, meshcat=meshcat)
-        if args.record:
-            meshcat.StartRecording(frames_per_second=10.0)
-        log = simulate(
-            diagram,
-            scenario,
-            progress=_progress,
-            progress_interval=args.progress_interval,
-            should_stop=lambda: "interrupted" if received else None,
-        )
+        log, meshcat = _run(args, scenario, received)
     finally:
         running[0] = False
     signal_number = received[0] if received else None
@@ -245,46 +237,21 @@ def _run_and_write(args, scenario, out, received, running, found) -> int:
         + (f" ({log.stop_detail})" if log.stop_detail else ""),
         flush=True,
     )
+    # The replay, however the run ended.
     if args.record:
-        from deburr_drake.runs.replay import write_recording
-
-        try:
-            path = write_recording(meshcat, args.record)
-            print(f"wrote the replay {path}")
-        except Exception as e:
-            print(
-                f"deburr-drake: could not write the replay: {e}",
-                file=sys.stderr,
-            )
-    try:
-        truth = contact_truth(scenario).force_at_desired_depth
-    except Exception as e:  # the metrics then leave it out, with why
-        print(
-            f"deburr-drake: no contact truth: {type(e).__name__}: {e}",
-            file=sys.stderr,
-        )
-        truth = None
+        _write_replay(meshcat, args.record)
     # A run that stopped before the pass was done: the finish over the
     # bins the tool reached.
     values = pass_metrics(
-        log, true_force_at_desired_depth=truth, only_cut=not log.completed_pass
+        log,
+        true_force_at_desired_depth=_contact_truth_force(scenario),
+        only_cut=not log.completed_pass,
     )
+    # logs.npz, metrics.json, the scenario as run and the figures.
     files = report.write_run(log, out, values)
     _write_resolved(out, scenario, found)
-    try:
-        with np.load(files["logs"]) as logs:
-            pngs = figures.make_figures(
-                dict(logs),
-                out,
-                label=f"{scenario.name} (m = "
-                f"{scenario.controller.fuzzy.order})",
-            )
-    except Exception as e:  # too little to draw
-        print(
-            f"deburr-drake: no figures: {type(e).__name__}: {e}",
-            file=sys.stderr,
-        )
-        pngs = []
+    pngs = _figures(files["logs"], out, scenario)
+    # The metrics and what was written.
     print()
     _print_metrics(values)
     written = "scenario.yaml" + (
@@ -297,6 +264,132 @@ def _run_and_write(args, scenario, out, received, running, found) -> int:
         f"{len(pngs)} figures in {out}/"
     )
     return _exit_code(log, signal_number)
+
+
+def _run(args, scenario, received):
+    """The diagram built (drawn in Meshcat with --meshcat or --record) and
+    simulated; returns the log and the Meshcat (or None)."""
+    from deburr_drake.cell.diagram import make_deburring_diagram
+    from deburr_drake.runs.simulation import simulate
+
+    meshcat = None
+    if args.meshcat or args.record:
+        from pydrake.geometry import Meshcat
+
+        meshcat = Meshcat()
+        if args.meshcat:
+            print(f"Meshcat: {meshcat.web_url()}", flush=True)
+    diagram = make_deburring_diagram(scenario=scenario, meshcat=meshcat)
+    if args.record:
+        meshcat.StartRecording(frames_per_second=10.0)
+    log = simulate(
+        diagram,
+        scenario,
+        progress=_progress,
+        progress_interval=args.progress_interval,
+        should_stop=lambda: "interrupted" if received else None,
+    )
+    return log, meshcat
+
+
+def _write_replay(meshcat, path):
+    """The HTML replay; a failure is said, not raised (the run's outputs
+    still get written)."""
+    from deburr_drake.runs.replay import write_recording
+
+    try:
+        path = write_recording(meshcat, path)
+        print(f"wrote the replay {path}")
+    except Exception as e:
+        print(
+            f"deburr-drake: could not write the replay: {e}",
+            file=sys.stderr,
+        )
+
+
+def _contact_truth_force(scenario):
+    """||f_n|| at the desired depth from the contact model, or None (the
+    metrics then leave out what needs it, with why)."""
+    from deburr_drake.cell.truth import contact_truth
+
+    try:
+        return contact_truth(scenario).force_at_desired_depth
+    except Exception as e:
+        print(
+            f"deburr-drake: no contact truth: {type(e).__name__}: {e}",
+            file=sys.stderr,
+        )
+        return None
+
+
+def _figures(logs_path, out, scenario):
+    """The run's figures from logs.npz; none (said on stderr) when the run
+    is too short to draw."""
+    from deburr_drake.runs import figures
+
+    try:
+        with np.load(logs_path) as logs:
+            return figures.make_figures(
+                dict(logs),
+                out,
+                label=f"{scenario.name} (m = "
+                f"{scenario.controller.fuzzy.order})",
+            )
+    except Exception as e:
+        print(
+            f"deburr-drake: no figures: {type(e).__name__}: {e}",
+            file=sys.stderr,
+        )
+        return []
+
+
+#: The demo's summary as printed: label, key, scale, unit.
+_DEMO_ROWS = (
+    (
+        "delta_d time constant, adaptation off",
+        "depth_time_constant",
+        1.0,
+        "s",
+    ),
+    (
+        "  eq. (8) with the local stiffness",
+        "depth_time_constant_eq8",
+        1.0,
+        "s",
+    ),
+    ("final depth (adaptive)", "depth_final", 1e3, "mm"),
+    (
+        "max |delta - delta*| after 2 s",
+        "depth_max_error_after_settle",
+        1e3,
+        "mm",
+    ),
+    (
+        "c0 + c1 delta* (estimated)",
+        "predicted_force_at_desired_depth",
+        1.0,
+        "N",
+    ),
+    ("true ||f_n|| at delta*", "true_force_at_desired_depth", 1.0, "N"),
+    ("  relative error", "force_prediction_error_rel", 1.0, ""),
+    ("commanded feed (mean after 2 s)", "commanded_feed_mean", 1e3, "mm/s"),
+    ("feedrate law on measured signals", "feedrate_law_mean", 1e3, "mm/s"),
+    ("command speed along the contour", "command_speed", 1e3, "mm/s"),
+    (
+        "chamfering force (mean after 2 s)",
+        "chamfering_force_mean",
+        1.0,
+        "N",
+    ),
+    (
+        "fraction of s in the dead zone after 2 s",
+        "dead_zone_fraction_after_settle",
+        1.0,
+        "",
+    ),
+    ("NaN detected", "nan_detected", 1.0, ""),
+    ("wall time of the adaptive run", "wall_time_s", 1.0, "s"),
+)
 
 
 def _demo(args) -> int:
@@ -332,54 +425,8 @@ def _demo(args) -> int:
     print("run 2/2: adaptive (estimator and fuzzy rules on)")
     log = demo.run(scenario, duration, progress=_progress)
     summary = demo.summarize(log, truth, frozen)
-    rows = [
-        (
-            "delta_d time constant, adaptation off",
-            "depth_time_constant",
-            1.0,
-            "s",
-        ),
-        (
-            "  eq. (8) with the local stiffness",
-            "depth_time_constant_eq8",
-            1.0,
-            "s",
-        ),
-        ("final depth (adaptive)", "depth_final", 1e3, "mm"),
-        (
-            "max |delta - delta*| after 2 s",
-            "depth_max_error_after_settle",
-            1e3,
-            "mm",
-        ),
-        (
-            "c0 + c1 delta* (estimated)",
-            "predicted_force_at_desired_depth",
-            1.0,
-            "N",
-        ),
-        ("true ||f_n|| at delta*", "true_force_at_desired_depth", 1.0, "N"),
-        ("  relative error", "force_prediction_error_rel", 1.0, ""),
-        ("commanded feed (mean after 2 s)", "commanded_feed_mean", 1e3, "mm/s"),
-        ("feedrate law on measured signals", "feedrate_law_mean", 1e3, "mm/s"),
-        ("command speed along the contour", "command_speed", 1e3, "mm/s"),
-        (
-            "chamfering force (mean after 2 s)",
-            "chamfering_force_mean",
-            1.0,
-            "N",
-        ),
-        (
-            "fraction of s in the dead zone after 2 s",
-            "dead_zone_fraction_after_settle",
-            1.0,
-            "",
-        ),
-        ("NaN detected", "nan_detected", 1.0, ""),
-        ("wall time of the adaptive run", "wall_time_s", 1.0, "s"),
-    ]
     print()
-    for label, key, scale, unit in rows:
+    for label, key, scale, unit in _DEMO_ROWS:
         print(f"  {label:42s} {summary[key] * scale:10.4f} {unit}")
     if args.json:
         with open(args.json, "w") as f:
@@ -690,14 +737,9 @@ def _sweep_report(study, runs, out, outcome=None):
     return summary if outcome is not None else 0
 
 
-def _analyze(args) -> int:
-    from pathlib import Path
-
-    from deburr_drake import analysis
-
-    scenario = _load(args)
-    grid = analysis.parse_map(scenario, args.map) if args.map else None
-    overrides = analysis.parse_settings(scenario, args.set or [])
+def _check_analyze_times(args):
+    """--at, --until, --spacing, --lyapunov > 0, --after-contact >= 0 and
+    --at before --until: refused before anything runs."""
     for name in ("at", "until", "spacing", "lyapunov"):
         value = getattr(args, name)
         if value is not None and not (np.isfinite(value) and value > 0):
@@ -712,9 +754,29 @@ def _analyze(args) -> int:
             f"--at = {args.at!r} is invalid: allowed a time before "
             f"--until ({args.until!r} s)"
         )
+
+
+def _analyze(args) -> int:
+    from pathlib import Path
+
+    from deburr_drake import analysis
+
+    # The scenario and every option, checked before anything runs.
+    scenario = _load(args)
+    grid = analysis.parse_map(scenario, args.map) if args.map else None
+    overrides = analysis.parse_settings(scenario, args.set or [])
+    _check_analyze_times(args)
     out = Path(args.out or f"out/{scenario.name}/analysis")
-    _check_writable_target(out, "--out", True, is_dir=True)
+    _check_writable_target(
+        out, "--out", args.force, is_dir=True, names=_ANALYSIS_OUTPUTS
+    )
     out.mkdir(parents=True, exist_ok=True)
+
+    def say(message):
+        print(f"  {message}", flush=True)
+
+    # The verdict on the run and, if it settles, the operating point's
+    # analysis.
     result = analysis.analyze(
         scenario,
         at=args.at,
@@ -723,23 +785,26 @@ def _analyze(args) -> int:
         until=args.until,
         spacing=args.spacing or analysis.DEFAULT_SPACING,
         robust=not args.no_robust,
-        progress=lambda m: print(f"  {m}", flush=True),
+        progress=say,
     )
     settled = result.get("eigenvalues") is not None
+    # --validate: predicted against simulated boundaries at that point.
     if args.validate and settled:
         result["boundaries"] = analysis.validate_boundaries(
-            result["_objects"]["op"],
-            progress=lambda m: print(f"  {m}", flush=True),
+            result["_objects"]["op"], progress=say
         )
+    # --lyapunov: a run of its own, V1 and V traced along it.
     if args.lyapunov:
         trace = analysis.lyapunov_trace(scenario, duration=args.lyapunov)
         result["lyapunov"] = trace.summary
         analysis.plot_lyapunov(trace, out / "lyapunov.png", title=scenario.name)
+    # --map: rho over one or two fields at the operating point.
     if grid is not None and settled:
         result["_objects"]["map"] = analysis.stability_map(
             result["_objects"]["op"], grid
         )
         result["map"] = result["_objects"]["map"].to_dict()
+    # analysis.json, the figures and the one-screen summary.
     files = analysis.write_analysis(result, out)
     print()
     print(analysis.summary_text(result))
@@ -779,15 +844,8 @@ def _preflight_argument(parser):
     )
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="deburr-drake",
-        description="Adaptive fuzzy hybrid position/force deburring on "
-        "Drake (Hsu & Fu, 2000).",
-        epilog=_EXIT_HELP,
-    )
-    sub = parser.add_subparsers(dest="command", required=True)
-    p = sub.add_parser(
+def _add_demo_parser(subparsers):
+    p = subparsers.add_parser(
         "demo",
         help="run the point-mass testbed and print its convergence numbers",
     )
@@ -797,7 +855,9 @@ def main(argv=None) -> int:
     p.add_argument("--json", default=None, help="also write the numbers")
     p.set_defaults(func=_demo)
 
-    p = sub.add_parser(
+
+def _add_simulate_parser(subparsers):
+    p = subparsers.add_parser(
         "simulate",
         help="run a deburring scenario (the paper's experiment by default)",
         epilog=_EXIT_HELP,
@@ -834,7 +894,9 @@ def main(argv=None) -> int:
     _preflight_argument(p)
     p.set_defaults(func=_simulate)
 
-    p = sub.add_parser(
+
+def _add_batch_parser(subparsers):
+    p = subparsers.add_parser(
         "batch",
         help="K parts in sequence through one cell "
         "(probe, cut, next), the learning "
@@ -884,7 +946,9 @@ def main(argv=None) -> int:
     )
     p.set_defaults(func=_batch)
 
-    p = sub.add_parser(
+
+def _add_compare_parser(subparsers):
+    p = subparsers.add_parser(
         "compare",
         help="run several controllers on one scenario and compare them",
     )
@@ -916,7 +980,9 @@ def main(argv=None) -> int:
     _preflight_argument(p)
     p.set_defaults(func=_compare)
 
-    p = sub.add_parser(
+
+def _add_diagram_parser(subparsers):
+    p = subparsers.add_parser(
         "diagram",
         help="export the diagram and the controller as GraphViz graphs",
     )
@@ -940,7 +1006,9 @@ def main(argv=None) -> int:
     )
     p.set_defaults(func=_diagram)
 
-    p = sub.add_parser(
+
+def _add_sweep_parser(subparsers):
+    p = subparsers.add_parser(
         "sweep",
         help="run a study (a grid or Monte Carlo "
         "samples of scenario fields) on Dask, "
@@ -988,14 +1056,34 @@ def main(argv=None) -> int:
     _preflight_argument(p)
     p.set_defaults(func=_sweep)
 
-    p = sub.add_parser(
+
+def _add_analyze_parser(subparsers):
+    p = subparsers.add_parser(
         "analyze",
         help="is the run stable? the verdict on "
         "the scenario's run, then the "
         "analysis in steady cutting",
     )
     _scenario_arguments(p, "paper", None)
+    _operating_point_arguments(p)
+    _analyzed_run_arguments(p)
     p.add_argument(
+        "--out",
+        default=None,
+        help="output directory (default out/<scenario>/analysis)",
+    )
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="overwrite an existing analysis in --out",
+    )
+    p.set_defaults(func=_analyze)
+
+
+def _operating_point_arguments(parser):
+    """analyze's options of the operating point and what is done there
+    (--lyapunov runs on its own)."""
+    parser.add_argument(
         "--at",
         type=float,
         default=None,
@@ -1003,13 +1091,13 @@ def main(argv=None) -> int:
         "(default: --after-contact s after the first "
         "contact)",
     )
-    p.add_argument(
+    parser.add_argument(
         "--after-contact",
         type=float,
         default=3.0,
         help="seconds of cutting before the operating point (default 3)",
     )
-    p.add_argument(
+    parser.add_argument(
         "--map",
         nargs="+",
         default=None,
@@ -1019,7 +1107,7 @@ def main(argv=None) -> int:
         "sensor.cutoff_frequency=5:80:16 "
         "controller.sliding_gain[0]=100:3000:16",
     )
-    p.add_argument(
+    parser.add_argument(
         "--set",
         nargs="+",
         default=None,
@@ -1029,7 +1117,7 @@ def main(argv=None) -> int:
         "steady cutting first), e.g. "
         "controller.sliding_gain[0]=4500",
     )
-    p.add_argument(
+    parser.add_argument(
         "--lyapunov",
         type=float,
         default=None,
@@ -1037,13 +1125,17 @@ def main(argv=None) -> int:
         help="also run the scenario this long and trace V1 of "
         "Prop. 1 and V of (38) (lyapunov.png)",
     )
-    p.add_argument(
+    parser.add_argument(
         "--validate",
         action="store_true",
         help="predicted against simulated stability boundaries "
         "(short runs from the operating point)",
     )
-    p.add_argument(
+
+
+def _analyzed_run_arguments(parser):
+    """analyze's options of the run and the maps along it."""
+    parser.add_argument(
         "--until",
         type=float,
         default=None,
@@ -1051,7 +1143,7 @@ def main(argv=None) -> int:
         help="end the analysed run here (default: the "
         "scenario's duration or pass)",
     )
-    p.add_argument(
+    parser.add_argument(
         "--spacing",
         type=float,
         default=None,
@@ -1060,17 +1152,28 @@ def main(argv=None) -> int:
         "(default 5; burrs and curvature changes add "
         "their own)",
     )
-    p.add_argument(
+    parser.add_argument(
         "--no-robust",
         action="store_true",
         help="skip the robust margin over the uncertain parameters (11 maps)",
     )
-    p.add_argument(
-        "--out",
-        default=None,
-        help="output directory (default out/<scenario>/analysis)",
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="deburr-drake",
+        description="Adaptive fuzzy hybrid position/force deburring on "
+        "Drake (Hsu & Fu, 2000).",
+        epilog=_EXIT_HELP,
     )
-    p.set_defaults(func=_analyze)
+    subparsers = parser.add_subparsers(dest="command", required=True)
+    _add_demo_parser(subparsers)
+    _add_simulate_parser(subparsers)
+    _add_batch_parser(subparsers)
+    _add_compare_parser(subparsers)
+    _add_diagram_parser(subparsers)
+    _add_sweep_parser(subparsers)
+    _add_analyze_parser(subparsers)
     args = parser.parse_args(argv)
     from deburr_drake.config import ConfigError
 

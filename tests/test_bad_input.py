@@ -1,4 +1,4 @@
-"""Every bad input of issue 10 through the command line's entry point: one
+"""Every bad input through the command line's entry point: one
 line on stderr naming the field (full dotted path) and what is allowed,
 exit code 2, nothing run (no output on stdout) and nothing written. No
 simulation runs here."""

@@ -1,13 +1,15 @@
 """analyze's own checks before it simulates, and what it says for a
 scenario that never reaches steady cutting: the verdict, the oscillation
-and the guard that would have stopped the run (issues 19 and 24)."""
+and the guard that would have stopped the run."""
 
 import json
 import time
 
 import pytest
 
+from deburr_drake import analysis
 from deburr_drake.cli import main
+from deburr_drake.config import ConfigError
 
 
 @pytest.mark.parametrize(
@@ -29,6 +31,31 @@ def test_bad_options_are_refused_before_anything_runs(tmp_path, capsys, args):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and args[0] in err[0]
     assert not out.exists()
+
+
+def _reached_the_run(scenario, **kwargs):
+    raise ConfigError("the checks passed")
+
+
+@pytest.mark.parametrize("held", ["analysis.json", "poles.png"])
+def test_an_existing_analysis_is_kept_without_force(
+    tmp_path, capsys, monkeypatch, held
+):
+    # As simulate: an --out that holds an analysis is refused before
+    # anything runs; --force, or a folder holding other files, passes.
+    monkeypatch.setattr(analysis, "analyze", _reached_the_run)
+    (tmp_path / held).write_text("kept")
+    (tmp_path / "notes.txt").write_text("not the analysis's")
+    args = ["analyze", "--scenario", "point_mass", "--out", str(tmp_path)]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and held in err[0] and "--force" in err[0]
+    assert (tmp_path / held).read_text() == "kept"
+    assert main([*args, "--force"]) == 2
+    assert "the checks passed" in capsys.readouterr().err
+    (tmp_path / held).unlink()
+    assert main(args) == 2
+    assert "the checks passed" in capsys.readouterr().err
 
 
 @pytest.mark.slow
