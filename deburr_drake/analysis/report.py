@@ -40,6 +40,7 @@ from deburr_drake.analysis.settled import (
     scan_run,
     settle_check,
 )
+from deburr_drake.cell.truth import contact_truth
 from deburr_drake.config import Scenario
 
 __all__ = [
@@ -50,6 +51,12 @@ __all__ = [
     "SUMMARY_KEYS",
 ]
 
+#: What the linear models at the operating point hold constant.
+FROZEN = (
+    "outer loop (command generator, first-order hold)",
+    "adaptation (estimator c-hat, fuzzy theta)",
+    "sensor noise",
+)
 #: Keys analysis.json always holds (null where the run gives no value:
 #: no linearization of a run that is not steady).
 SUMMARY_KEYS = (
@@ -117,28 +124,25 @@ def analyze(
     robust: bool = True,
     progress: Optional[Callable[[str], None]] = None,
 ) -> Dict:
-    """The verdict on the run the user will run, then (only if the run
-    settled into steady cutting) the operating point's analysis:
-    continuous linearization (modes, eq. (8) check), sampled one-period
-    map (rho), normal-force loop margins; rho along the run; the robust
-    margin. Returns the dict of analysis.json (SI units) with the live
-    objects under ``"_objects"`` (for figures; not written).
+    """The verdict on the run the user will run and, only if it settles
+    into steady cutting, the analysis at its operating point: continuous
+    linearization (modes, eq. (8) check), sampled one-period map (rho),
+    normal-force loop margins; rho along the run; the robust margin.
+    Returns the dict of analysis.json (SI units) with the live objects
+    under ``"_objects"`` (for figures; not written).
 
-    The verdict (``verdict``: "stable", "unstable" or "not settled";
-    ``verdict_reason``): "unstable" when the run oscillates at ``at`` or
-    later (:mod:`deburr_drake.analysis.settled`, with the oscillation's
-    frequency, start, amplitude, growth and the guard that would have
-    stopped it) or when rho >= 1 at a steady point along it; "not
-    settled" when it is out of contact without oscillating; otherwise
-    "stable". ``overrides`` (scenario fields by dotted name) apply at the
-    operating point only: a what-if on the run as given (the verdict is
-    the run's)."""
+    ``verdict`` is "unstable" when the run oscillates at ``at`` or later
+    (:mod:`deburr_drake.analysis.settled`; ``oscillation`` describes it,
+    with the guard that would have stopped it) or when rho >= 1 at a
+    steady point along it; "not settled" when it is out of contact
+    without oscillating; otherwise "stable"; ``verdict_reason`` says why.
+    ``overrides`` (scenario fields by dotted name) apply at the operating
+    point only: a what-if on the run as given (the verdict is the
+    run's)."""
     overrides = dict(overrides or {})
-    from deburr_drake.cell.truth import contact_truth
-
     say = progress or (lambda message: None)
-    timings = {}
     tol = SettleTolerances()
+    # The run as the user will run it (guards off), mapped along the way.
     say(
         "the run: simulating the scenario (guards off), with the 2.5 ms "
         "map at points along it"
@@ -151,10 +155,95 @@ def analyze(
         spacing=spacing,
         progress=say,
     )
-    timings["run_s"] = run.wall_time_s - run.map_time_s
-    timings["maps_along_run_s"] = run.map_time_s
-    op = run.op
-    sig = run.signals
+    timings = {
+        "run_s": run.wall_time_s - run.map_time_s,
+        "maps_along_run_s": run.map_time_s,
+    }
+    result = _run_header(scenario, run, overrides, tol)
+    result["_objects"] = {"run": run}
+    # Steady at the analysed time? The run's own signals say.
+    check = _operating_point_check(run, at, after_contact, tol)
+    result["settle_check"] = check.to_dict()
+    guard = guard_that_would_stop(run, scenario)
+    result["guard_that_would_stop"] = guard
+    # The verdict the run gives by itself: not steady, or not staying so.
+    result.update(_run_verdict(run, check, guard, tol))
+    # A limit cycle is not an operating point: nothing to linearize.
+    if not check.settled:
+        result.update(_unsettled_keys(run), timings_s=timings)
+        say(
+            "not steady at the analysed time: no linearization (a limit "
+            "cycle is not an operating point)"
+        )
+        return result
+    # In steady cutting: the operating point's linear models, rho along
+    # the run and the robust margin.
+    keys, models = _steady_analysis(
+        scenario,
+        run,
+        overrides,
+        robust=robust,
+        tol=tol,
+        decided=result["verdict"] is not None,
+        say=say,
+        timings=timings,
+    )
+    result.update(keys, timings_s=timings)
+    result["_objects"].update(models)
+    return result
+
+
+def _unsettled_keys(run) -> Dict:
+    """What a run not steady at the analysed time gives: where it was
+    analysed and the maps along it (those not steady without rho)."""
+    return {
+        "operating_point": run.op.summary() if run.op is not None else None,
+        "rho_along_run": [p.to_dict() for p in run.points],
+        "robust": None,
+    }
+
+
+def _steady_analysis(
+    scenario, run, overrides, *, robust, tol, decided, say, timings
+):
+    """The keys of a run steady at its operating point (the verdict too
+    unless ``decided``) and the live models (for figures)."""
+    # The operating point: its linearization, one-period map and margins.
+    truth = contact_truth(scenario)
+    lin, tau_eq8, sampled, loop, tangential = _operating_point_models(
+        scenario, run.op, truth, overrides, say, timings
+    )
+    keys = {
+        **_continuous_result(run.op, truth, lin, tau_eq8),
+        **_sampled_result(sampled, loop, tangential),
+    }
+    # rho along the run, the operating point's own map among its points.
+    points = _points_with_operating_point(run, sampled, overrides)
+    steady = [p for p in points if p.rho is not None]
+    keys["rho_along_run"] = [p.to_dict() for p in points]
+    keys["frozen"] = list(FROZEN)
+    # The smallest margin along the run decides a steady run's verdict.
+    weakest = max(steady, key=lambda p: p.rho) if steady else None
+    keys.update(_smallest_margins(steady))
+    if not decided:
+        keys.update(_steady_verdict(run, weakest, len(steady), tol))
+    # The robust margin at the weakest point.
+    keys["robust"] = (
+        _robust_at(scenario, run, weakest, say, timings)
+        if robust and weakest is not None
+        else None
+    )
+    return keys, {
+        "op": run.op,
+        "linearization": lin,
+        "sampled": sampled,
+        "loop": loop,
+    }
+
+
+def _run_header(scenario, run, overrides, tol) -> Dict:
+    """The result's first keys: what was run, then SUMMARY_KEYS (None
+    until found)."""
     result = {
         "scenario": scenario.name,
         "overrides_at_operating_point": overrides,
@@ -170,94 +259,121 @@ def analyze(
     }
     for key in SUMMARY_KEYS:
         result.setdefault(key, None)
-    objects = {"run": run}
-    result["_objects"] = objects
-    if op is not None:
-        check = settle_check(sig, op.time, tol)
-    else:
-        check = settle_check(sig, run.end_time, tol)
-        check.settled = False
-        check.reasons.append(
-            run.op_note
-            or (
-                f"no steady operating point from "
-                f"{at if at is not None else run.contact_time + after_contact:.3f}"
-                f" s to the end of the run ({run.end_time:.3f} s, "
-                f"{run.stop_reason})"
-            )
+    return result
+
+
+def _operating_point_check(run, at, after_contact, tol):
+    """The settle check at the operating point, or, without one, at the
+    run's end and failed with why there is none."""
+    if run.op is not None:
+        return settle_check(run.signals, run.op.time, tol)
+    check = settle_check(run.signals, run.end_time, tol)
+    check.settled = False
+    start = at if at is not None else run.contact_time + after_contact
+    check.reasons.append(
+        run.op_note
+        or (
+            f"no steady operating point from {start:.3f} s to the end of "
+            f"the run ({run.end_time:.3f} s, {run.stop_reason})"
         )
-    result["settle_check"] = check.to_dict()
-    guard = guard_that_would_stop(run, scenario)
-    result["guard_that_would_stop"] = guard
+    )
+    return check
+
+
+def _run_verdict(run, check, guard, tol) -> Dict:
+    """``verdict``, ``verdict_reason`` and ``oscillation`` from the run
+    alone: unstable or not settled when it is not steady at the analysed
+    time, unstable when it stops being steady later by a sustained (or
+    final) oscillation; empty while the run is steady throughout (the
+    maps along it decide)."""
+    sig, op = run.signals, run.op
     final = settle_check(sig, run.end_time, tol)
-    late, osc = None, None
     if check.settled:
         late = scan_run(sig, op.time, run.end_time, tol)
-        if late is not None:
-            osc = describe_oscillation(sig, late.start, tol)
-            if osc["start_time"] is None or not (
-                osc.get("sustained") or not final.settled
-            ):
-                late = None  # a passing transient (a burr's entry)
-    if not check.settled:
-        osc = describe_oscillation(sig, run.contact_time + 0.5, tol)
-        transient = op is not None and final.settled
-        if run.stop_reason in ("nan", "error"):
-            result["verdict"] = "unstable"
-            result["verdict_reason"] = (
-                f"the run failed at {run.end_time:.3f} s "
-                f"({run.stop_detail}); " + _oscillation_reason(osc, guard)
-            )
-        elif transient or (op is None and run.op_note):
-            result["verdict"] = "not settled"
-            result["verdict_reason"] = (
-                f"not steady over [{check.start:.3f}, {check.end:.3f}] s: "
-                + "; ".join(check.reasons[:3])
-                + (
-                    f"; steady at the end of the run ({run.end_time:.2f} s):"
-                    " analyse a later time (--at)"
-                    if transient
-                    else ""
-                )
-            )
-        else:
-            result["verdict"] = "unstable"
-            where = (
-                f"not steady over [{check.start:.3f}, "
-                f"{check.end:.3f}] s and at the end of the run: "
-                if op is not None
-                else "never steady from the analysed time to the end of "
-                f"the run; over its last {tol.window:g} s: "
-            )
-            result["verdict_reason"] = (
-                where
-                + "; ".join(check.reasons[:2])
+        if late is None:
+            return {}
+        osc = describe_oscillation(sig, late.start, tol)
+        if osc["start_time"] is None or not (
+            osc.get("sustained") or not final.settled
+        ):
+            return {}  # a passing transient (a burr's entry)
+        return {
+            "oscillation": osc,
+            "verdict": "unstable",
+            "verdict_reason": (
+                f"steady at the analysed time {op.time:.3f} s but not over "
+                f"[{late.start:.2f}, {late.end:.2f}] s: "
+                + "; ".join(late.reasons[:2])
                 + "; "
                 + _oscillation_reason(osc, guard)
+            ),
+        }
+    osc = describe_oscillation(sig, run.contact_time + 0.5, tol)
+    transient = op is not None and final.settled
+    if run.stop_reason in ("nan", "error"):
+        verdict = "unstable"
+        reason = (
+            f"the run failed at {run.end_time:.3f} s "
+            f"({run.stop_detail}); " + _oscillation_reason(osc, guard)
+        )
+    elif transient or (op is None and run.op_note):
+        verdict = "not settled"
+        reason = (
+            f"not steady over [{check.start:.3f}, {check.end:.3f}] s: "
+            + "; ".join(check.reasons[:3])
+            + (
+                f"; steady at the end of the run ({run.end_time:.2f} s):"
+                " analyse a later time (--at)"
+                if transient
+                else ""
             )
-        result["oscillation"] = osc
-    elif late is not None:
-        result["oscillation"] = osc
-        result["verdict"] = "unstable"
-        result["verdict_reason"] = (
-            f"steady at the analysed time {op.time:.3f} s but not over "
-            f"[{late.start:.2f}, {late.end:.2f}] s: "
-            + "; ".join(late.reasons[:2])
+        )
+    else:
+        verdict = "unstable"
+        where = (
+            f"not steady over [{check.start:.3f}, "
+            f"{check.end:.3f}] s and at the end of the run: "
+            if op is not None
+            else "never steady from the analysed time to the end of "
+            f"the run; over its last {tol.window:g} s: "
+        )
+        reason = (
+            where
+            + "; ".join(check.reasons[:2])
             + "; "
             + _oscillation_reason(osc, guard)
         )
-    if not check.settled:
-        result["operating_point"] = op.summary() if op is not None else None
-        result["rho_along_run"] = [p.to_dict() for p in run.points]
-        result["robust"] = None
-        result["timings_s"] = timings
-        say(
-            "not steady at the analysed time: no linearization (a limit "
-            "cycle is not an operating point)"
-        )
-        return result
+    return {"verdict": verdict, "verdict_reason": reason, "oscillation": osc}
 
-    truth = contact_truth(scenario)
+
+def _points_with_operating_point(run, sampled, overrides) -> list:
+    """The run's points in time order, with the operating point's map
+    among them unless ``overrides`` make it a point of another run."""
+    points = list(run.points)
+    if not overrides:
+        op = run.op
+        r = rho_of_map(sampled.Phi, sampled.period)
+        points.append(
+            RhoPoint(
+                t=op.time,
+                arc_position=op.signals["arc_position"],
+                kind="operating point",
+                rho=r["rho"],
+                frequency_hz=r["frequency_hz"],
+                decay_rate=r["decay_rate"],
+                rho_oscillatory=r["rho_oscillatory"],
+                burr_area=op.signals["burr_area"],
+                context=op.context,
+            )
+        )
+    points.sort(key=lambda p: p.t)
+    return points
+
+
+def _operating_point_models(scenario, op, truth, overrides, say, timings):
+    """At ``op`` (``overrides`` applied): the continuous linearization,
+    eq. (8)'s depth time constant, the sampled loop's one-period map and
+    its normal and tangential force loops; their times into ``timings``."""
     t1 = time.perf_counter()
     say("continuous-time linearization")
     lin = linearize_closed_loop(
@@ -274,85 +390,73 @@ def analyze(
     loop = normal_force_loop(sampled)
     tangential = normal_force_loop(sampled, direction=sampled.n2)
     timings["sampled_map_s"] = time.perf_counter() - t2
+    return lin, tau_eq8, sampled, loop, tangential
+
+
+def _continuous_result(op, truth, lin, tau_eq8) -> Dict:
+    """The operating point, the contact truth, the continuous modes and
+    the depth time constant against eq. (8)'s."""
+    return {
+        "operating_point": op.summary(),
+        "contact_truth": {
+            "local_stiffness": truth.local_stiffness,
+            "secant_stiffness": truth.secant_stiffness,
+            "c0": truth.c0,
+            "c2": truth.c2,
+        },
+        "eigenvalues": [
+            [float(e.real), float(e.imag)] for e in lin.eigenvalues
+        ],
+        "modes": [
+            {
+                "group": m.group,
+                "re": m.eigenvalue.real,
+                "im": m.eigenvalue.imag,
+                "natural_frequency_rad_s": m.natural_frequency,
+                "damping_ratio": m.damping_ratio,
+                "time_constant_s": m.time_constant,
+            }
+            for m in lin.modes
+        ],
+        "depth_time_constant_s": lin.depth_time_constant,
+        "depth_time_constant_eq8_s": tau_eq8,
+        "depth_time_constant_error_rel": abs(lin.depth_time_constant - tau_eq8)
+        / tau_eq8,
+    }
+
+
+def _sampled_result(sampled, loop, tangential) -> Dict:
+    """The one-period map's eigenvalues and the normal and tangential
+    force loops' margins."""
     z_eigs = sampled.eigenvalues
     z_eigs = z_eigs[np.argsort(-np.abs(z_eigs))]
     worst = z_eigs[0]
-    points = list(run.points)
-    if not overrides:  # the operating point is a point of the run
-        r = rho_of_map(sampled.Phi, sampled.period)
-        points.append(
-            RhoPoint(
-                t=op.time,
-                arc_position=op.signals["arc_position"],
-                kind="operating point",
-                rho=r["rho"],
-                frequency_hz=r["frequency_hz"],
-                decay_rate=r["decay_rate"],
-                rho_oscillatory=r["rho_oscillatory"],
-                burr_area=op.signals["burr_area"],
-                context=op.context,
-            )
-        )
-    points.sort(key=lambda p: p.t)
-    steady = [p for p in points if p.rho is not None]
-    result.update(
-        {
-            "operating_point": op.summary(),
-            "contact_truth": {
-                "local_stiffness": truth.local_stiffness,
-                "secant_stiffness": truth.secant_stiffness,
-                "c0": truth.c0,
-                "c2": truth.c2,
-            },
-            "eigenvalues": [
-                [float(e.real), float(e.imag)] for e in lin.eigenvalues
-            ],
-            "modes": [
-                {
-                    "group": m.group,
-                    "re": m.eigenvalue.real,
-                    "im": m.eigenvalue.imag,
-                    "natural_frequency_rad_s": m.natural_frequency,
-                    "damping_ratio": m.damping_ratio,
-                    "time_constant_s": m.time_constant,
-                }
-                for m in lin.modes
-            ],
-            "depth_time_constant_s": lin.depth_time_constant,
-            "depth_time_constant_eq8_s": tau_eq8,
-            "depth_time_constant_error_rel": abs(
-                lin.depth_time_constant - tau_eq8
-            )
-            / tau_eq8,
-            "sampled_period_s": sampled.period,
-            "sampled_spectral_radius": sampled.spectral_radius,
-            "sampled_dominant_eigenvalue": [
-                float(worst.real),
-                float(worst.imag),
-            ],
-            "sampled_dominant_frequency_hz": float(
-                abs(np.angle(worst)) / (2 * np.pi * sampled.period)
-            ),
-            "sampled_eigenvalues": [
-                [float(e.real), float(e.imag)] for e in z_eigs
-            ],
-            "gain_margin_dB": loop.gain_margin_dB,
-            "phase_margin_deg": loop.phase_margin_deg,
-            "phase_crossover_hz": loop.phase_crossover_hz,
-            "gain_crossover_hz": loop.gain_crossover_hz,
-            "tangential_gain_margin_dB": tangential.gain_margin_dB,
-            "tangential_phase_margin_deg": tangential.phase_margin_deg,
-            "rho_along_run": [p.to_dict() for p in points],
-            "frozen": [
-                "outer loop (command generator, first-order hold)",
-                "adaptation (estimator c-hat, fuzzy theta)",
-                "sensor noise",
-            ],
-        }
-    )
-    if steady:
-        w = max(steady, key=lambda p: p.rho)
-        result["smallest_margin"] = {
+    return {
+        "sampled_period_s": sampled.period,
+        "sampled_spectral_radius": sampled.spectral_radius,
+        "sampled_dominant_eigenvalue": [float(worst.real), float(worst.imag)],
+        "sampled_dominant_frequency_hz": float(
+            abs(np.angle(worst)) / (2 * np.pi * sampled.period)
+        ),
+        "sampled_eigenvalues": [[float(e.real), float(e.imag)] for e in z_eigs],
+        "gain_margin_dB": loop.gain_margin_dB,
+        "phase_margin_deg": loop.phase_margin_deg,
+        "phase_crossover_hz": loop.phase_crossover_hz,
+        "gain_crossover_hz": loop.gain_crossover_hz,
+        "tangential_gain_margin_dB": tangential.gain_margin_dB,
+        "tangential_phase_margin_deg": tangential.phase_margin_deg,
+    }
+
+
+def _smallest_margins(steady) -> Dict:
+    """The steady point of largest rho and that of the largest |z| of the
+    oscillatory modes (``smallest_margin`` None without steady points)."""
+    if not steady:
+        return {"smallest_margin": None}
+    w = max(steady, key=lambda p: p.rho)
+    o = max(steady, key=lambda p: p.rho_oscillatory)
+    return {
+        "smallest_margin": {
             "rho": w.rho,
             "margin": 1.0 - w.rho,
             "t": w.t,
@@ -360,63 +464,66 @@ def analyze(
             "kind": w.kind,
             "frequency_hz": w.frequency_hz,
             "decay_rate_per_s": w.decay_rate,
-        }
-        o = max(steady, key=lambda p: p.rho_oscillatory)
-        result["smallest_oscillatory_margin"] = {
+        },
+        "smallest_oscillatory_margin": {
             "rho_oscillatory": o.rho_oscillatory,
             "t": o.t,
             "arc_position": o.arc_position,
             "kind": o.kind,
-        }
-    else:
-        w = None
-        result["smallest_margin"] = None
-    if result.get("verdict") is None:
-        if w is not None and w.rho >= 1.0:
-            result["verdict"] = "unstable"
-            result["verdict_reason"] = (
+        },
+    }
+
+
+def _steady_verdict(run, weakest, steady_count, tol) -> Dict:
+    """The verdict of a run steady throughout: unstable if the sampled
+    loop is (rho >= 1) at its weakest steady point, else stable."""
+    w, op = weakest, run.op
+    if w is not None and w.rho >= 1.0:
+        return {
+            "verdict": "unstable",
+            "verdict_reason": (
                 f"the run is steady, but the sampled loop is unstable at "
                 f"t = {w.t:.2f} s ({w.kind}, arc "
                 f"{w.arc_position * 1e3:.1f} mm): rho = {w.rho:.5f}, "
                 f"dominant eigenvalue at {w.frequency_hz:.1f} Hz"
-            )
-        else:
-            result["verdict"] = "stable"
-            result["verdict_reason"] = (
-                f"steady cutting at {op.time:.3f} s (all signals within "
-                f"their tolerances over the {tol.window:g} s before) and "
-                f"to the end of the run ({run.end_time:.2f} s, "
-                f"{run.stop_reason}); rho < 1 at all {len(steady)} steady "
-                "points along it"
-                + (
-                    f", largest {w.rho:.5f} at t = {w.t:.2f} s ({w.kind})"
-                    if w is not None
-                    else ""
-                )
-            )
-    if robust and w is not None:
-        t3 = time.perf_counter()
-        say("robust margin over the uncertain parameters' ranges")
-        result["robust"] = robust_margin(
-            scenario,
-            run.diagram,
-            w.context,
-            on_burr=w.burr_area > 0,
-            progress=say,
-        )
-        result["robust"]["point"] = {
-            "t": w.t,
-            "kind": w.kind,
-            "arc_position": w.arc_position,
+            ),
         }
-        timings["robust_s"] = time.perf_counter() - t3
-    else:
-        result["robust"] = None
-    result["timings_s"] = timings
-    objects.update(
-        {"op": op, "linearization": lin, "sampled": sampled, "loop": loop}
+    return {
+        "verdict": "stable",
+        "verdict_reason": (
+            f"steady cutting at {op.time:.3f} s (all signals within "
+            f"their tolerances over the {tol.window:g} s before) and "
+            f"to the end of the run ({run.end_time:.2f} s, "
+            f"{run.stop_reason}); rho < 1 at all {steady_count} steady "
+            "points along it"
+            + (
+                f", largest {w.rho:.5f} at t = {w.t:.2f} s ({w.kind})"
+                if w is not None
+                else ""
+            )
+        ),
+    }
+
+
+def _robust_at(scenario, run, point, say, timings) -> Dict:
+    """The robust margin over the uncertain parameters' ranges from the
+    run's Context at ``point``; its time into ``timings``."""
+    t0 = time.perf_counter()
+    say("robust margin over the uncertain parameters' ranges")
+    robust = robust_margin(
+        scenario,
+        run.diagram,
+        point.context,
+        on_burr=point.burr_area > 0,
+        progress=say,
     )
-    return result
+    robust["point"] = {
+        "t": point.t,
+        "kind": point.kind,
+        "arc_position": point.arc_position,
+    }
+    timings["robust_s"] = time.perf_counter() - t0
+    return robust
 
 
 def summary_text(result: Dict) -> str:
@@ -429,22 +536,53 @@ def summary_text(result: Dict) -> str:
         f"to {result['run']['end_time']:.2f} s "
         f"({result['run']['stop_reason']}, guards off)",
     ]
-    op = result.get("operating_point")
     if result.get("eigenvalues") is None:
-        g = result.get("guard_that_would_stop")
-        if g:
-            lines.append(
-                f"guard that would have stopped the run: "
-                f"{g['guard']} at t = {g['time']:.3f} s "
-                f"({g['detail']})"
-            )
+        return "\n".join(lines + _unsettled_lines(result))
+    lines += _operating_point_lines(result)
+    lines += _rho_lines(result)
+    lines += _robust_lines(result.get("robust"))
+    lines.append(
+        f"normal-force loop: gain margin {result['gain_margin_dB']:.1f} dB "
+        f"(at {result['phase_crossover_hz']:.2f} Hz), phase margin "
+        f"{result['phase_margin_deg']:.1f} deg (at "
+        f"{result['gain_crossover_hz']:.2f} Hz)"
+    )
+    if "lyapunov" in result:
+        ly = result["lyapunov"]
         lines.append(
-            "no linearization: the run is not in steady cutting "
-            "at the analysed time (a limit cycle is not an "
-            "operating point)"
+            "Lyapunov: dV/dt > 0 in "
+            f"{100 * ly['fraction_dV_positive_outside_dead_zone']:.0f} % of "
+            f"{ly['samples_outside_dead_zone']} samples outside the dead "
+            f"zone (V1: "
+            f"{100 * ly['fraction_dV1_positive_outside_dead_zone']:.0f} %)"
         )
-        return "\n".join(lines)
-    lines += [
+    if "boundaries" in result:
+        lines += _boundary_lines(result["boundaries"])
+    return "\n".join(lines)
+
+
+def _unsettled_lines(result: Dict) -> list:
+    lines = []
+    g = result.get("guard_that_would_stop")
+    if g:
+        lines.append(
+            f"guard that would have stopped the run: "
+            f"{g['guard']} at t = {g['time']:.3f} s "
+            f"({g['detail']})"
+        )
+    lines.append(
+        "no linearization: the run is not in steady cutting "
+        "at the analysed time (a limit cycle is not an "
+        "operating point)"
+    )
+    return lines
+
+
+def _operating_point_lines(result: Dict) -> list:
+    """The operating point, what is frozen there and the continuous
+    modes (one of each complex pair)."""
+    op = result["operating_point"]
+    lines = [
         f"operating point t = {op['time']:.4f} s (contact at "
         f"{op['contact_time']:.3f} s): depth {op['depth'] * 1e3:.4f} mm, "
         f"feed {op['feed'] * 1e3:.3f} mm/s, |f_n| {op['normal_force']:.2f} N,"
@@ -470,7 +608,14 @@ def summary_text(result: Dict) -> str:
             f"{m['natural_frequency_rad_s']:11.3f} {m['damping_ratio']:7.3f} "
             f"{m['time_constant_s']:9.4f}"
         )
-    lines += [
+    return lines
+
+
+def _rho_lines(result: Dict) -> list:
+    """eq. (8) against the depth mode, rho at the operating point and the
+    smallest margins along the run."""
+    rho = result["sampled_spectral_radius"]
+    lines = [
         "",
         f"slowest depth mode tau = {result['depth_time_constant_s']:.4f} s;"
         f" eq. (8) (1 + k c2) / (k c1), c1 = "
@@ -478,10 +623,8 @@ def summary_text(result: Dict) -> str:
         f"{result['depth_time_constant_eq8_s']:.4f} s "
         f"({100 * result['depth_time_constant_error_rel']:.1f} % apart)",
         f"sampled loop ({result['sampled_period_s'] * 1e3:g} ms) at the "
-        f"operating point: spectral radius rho = "
-        f"{result['sampled_spectral_radius']:.5f} "
-        f"({'stable' if result['sampled_spectral_radius'] < 1 else 'UNSTABLE'}"
-        f"), dominant eigenvalue at "
+        f"operating point: spectral radius rho = {rho:.5f} "
+        f"({'stable' if rho < 1 else 'UNSTABLE'}), dominant eigenvalue at "
         f"{result['sampled_dominant_frequency_hz']:.1f} Hz",
     ]
     along = result.get("rho_along_run") or []
@@ -502,50 +645,46 @@ def summary_text(result: Dict) -> str:
             f"{so['rho_oscillatory']:.5f} at t = {so['t']:.2f} s "
             f"({so['kind']})"
         )
-    rb = result.get("robust")
-    if rb:
-        for key, label in (
-            ("", "rho"),
-            ("_oscillatory", "|z| of the modes above 1 Hz"),
-        ):
-            at = ", ".join(f"{k} {v:.4g}" for k, v in rb["at" + key].items())
-            lines.append(
-                f"robust: worst {label} {rb['rho_worst' + key]:.5f} "
-                f"(nominal {rb['rho_nominal' + key]:.5f}) over "
-                f"{len(rb['maps'])} maps at t = {rb['point']['t']:.2f} s, "
-                f"at {at}"
-            )
-    lines.append(
-        f"normal-force loop: gain margin {result['gain_margin_dB']:.1f} dB "
-        f"(at {result['phase_crossover_hz']:.2f} Hz), phase margin "
-        f"{result['phase_margin_deg']:.1f} deg (at "
-        f"{result['gain_crossover_hz']:.2f} Hz)"
-    )
-    if "lyapunov" in result:
-        ly = result["lyapunov"]
+    return lines
+
+
+def _robust_lines(rb: Optional[Dict]) -> list:
+    """The worst rho and the worst |z| of the oscillatory modes over the
+    robust margin's maps, with where they are."""
+    if not rb:
+        return []
+    lines = []
+    for key, label in (
+        ("", "rho"),
+        ("_oscillatory", "|z| of the modes above 1 Hz"),
+    ):
+        at = ", ".join(f"{k} {v:.4g}" for k, v in rb["at" + key].items())
         lines.append(
-            "Lyapunov: dV/dt > 0 in "
-            f"{100 * ly['fraction_dV_positive_outside_dead_zone']:.0f} % of "
-            f"{ly['samples_outside_dead_zone']} samples outside the dead "
-            f"zone (V1: "
-            f"{100 * ly['fraction_dV1_positive_outside_dead_zone']:.0f} %)"
+            f"robust: worst {label} {rb['rho_worst' + key]:.5f} "
+            f"(nominal {rb['rho_nominal' + key]:.5f}) over "
+            f"{len(rb['maps'])} maps at t = {rb['point']['t']:.2f} s, "
+            f"at {at}"
         )
-    if "boundaries" in result:
-        lines += [
-            "",
-            f"  {'parameter':52s} {'predicted':>11s} {'simulated':>11s}",
-        ]
+    return lines
 
-        def fmt(x):
-            return "none" if x is None else f"{x:.4g}"
 
-        for b in result["boundaries"]:
-            lines.append(
-                f"  {b['parameter'][:52]:52s} "
-                f"{fmt(b['predicted']):>11s} "
-                f"{fmt(b['simulated']):>11s}"
-            )
-    return "\n".join(lines)
+def _boundary_lines(boundaries) -> list:
+    """--validate's table: predicted against simulated boundaries."""
+
+    def fmt(x):
+        return "none" if x is None else f"{x:.4g}"
+
+    lines = [
+        "",
+        f"  {'parameter':52s} {'predicted':>11s} {'simulated':>11s}",
+    ]
+    for b in boundaries:
+        lines.append(
+            f"  {b['parameter'][:52]:52s} "
+            f"{fmt(b['predicted']):>11s} "
+            f"{fmt(b['simulated']):>11s}"
+        )
+    return lines
 
 
 def plot_poles(result: Dict, path, *, title: str = ""):
