@@ -54,6 +54,7 @@ from deburr_drake.analysis.settled import (
 )
 from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import ConfigError, Scenario
+from deburr_drake.control.layout import CHAMFER_STATE
 from deburr_drake.runs.simulation import _collect, logger_names, make_simulator
 
 __all__ = [
@@ -164,7 +165,43 @@ def analysis_run(
     (s) ends the run earlier than the scenario's duration or pass;
     ``maps`` False takes none (the settled test alone). ConfigError when
     the tool never reaches contact within 5 s."""
-    say = progress or (lambda m: None)
+    # The times asked for, before anything is built.
+    _check_times(at=at, after_contact=after_contact, spacing=spacing)
+    scenario.validate()
+    # The scenario as run: the runtime guards off, to ``until`` if given.
+    run = without_guards(scenario)
+    duration = run.simulation.duration if until is None else until
+    if not (np.isfinite(duration) and duration > 0):
+        raise ConfigError(
+            f"--until = {until!r} is invalid: allowed a time > 0 s"
+        )
+    # One diagram and simulator for the whole run, its noise seeded.
+    walk = _Walk(
+        scenario, run, duration, maps=maps, say=progress or (lambda m: None)
+    )
+    # To the first contact, then along the pass: the operating point and
+    # the maps on the way. A NaN or a failure ends it, keeping what was
+    # computed.
+    try:
+        walk.to_contact()
+        walk.along(
+            at=at,
+            after_contact=after_contact,
+            spacing=spacing,
+            max_burr_delay=max_burr_delay,
+        )
+    except ConfigError:
+        raise
+    except Exception as e:
+        walk.result.stop_reason = "nan" if "NaN" in str(e) else "error"
+        walk.result.stop_detail = f"{type(e).__name__}: {e}"
+    # The run's logs, then the maps not preceded by steady cutting voided.
+    result = walk.finish()
+    _void_unsteady_maps(result)
+    return result
+
+
+def _check_times(*, at, after_contact, spacing):
     if at is not None and not (np.isfinite(at) and at > 0):
         raise ConfigError(f"--at = {at!r} is invalid: allowed a time > 0 s")
     if not (np.isfinite(after_contact) and after_contact >= 0):
@@ -176,186 +213,12 @@ def analysis_run(
         raise ConfigError(
             f"--spacing = {spacing!r} is invalid: allowed a time > 0 s"
         )
-    scenario.validate()
-    run = without_guards(scenario)
-    duration = run.simulation.duration if until is None else until
-    if not (np.isfinite(duration) and duration > 0):
-        raise ConfigError(
-            f"--until = {until!r} is invalid: allowed a time > 0 s"
-        )
-    period = run.controller.control_period or run.sensor.sample_period
-    outer = run.command.period
-    diagram = make_deburring_diagram(scenario=run)
-    simulator = make_simulator(diagram, run)
-    context = simulator.get_mutable_context()
-    diagram.SetRandomContext(context, RandomGenerator(run.sensor.noise_seed))
-    generator = diagram.GetSubsystemByName("command_generator")
-    gen_context = generator.GetMyContextFromRoot(context)
-    passes = run.simulation.stop_after_passes
-    pass_end = generator.start_arc_position + passes * generator.contour.length
-    frozen = FrozenMap(scenario) if maps else None
-    wall0 = time.perf_counter()
-    map_time = 0.0
-    result = AnalysisRun(
-        scenario=run,
-        diagram=diagram,
-        log={},
-        signals=None,
-        contact_time=float("nan"),
-        end_time=0.0,
-        stop_reason="duration",
-    )
-    simulator.Initialize()
 
-    def advance(t):
-        simulator.AdvanceTo(min(t, duration))
-        return context.get_time()
 
-    def take_map(kind, s):
-        nonlocal map_time
-        point = RhoPoint(
-            t=context.get_time(),
-            arc_position=s["arc_position"],
-            kind=kind,
-            burr_area=s["burr_area"],
-        )
-        if frozen is not None:
-            t0 = time.perf_counter()
-            point.context = context.Clone()
-            try:
-                r = rho_of_map(frozen.at(diagram, context), frozen.period)
-                point.rho, point.frequency_hz, point.decay_rate = (
-                    r["rho"],
-                    r["frequency_hz"],
-                    r["decay_rate"],
-                )
-                point.rho_oscillatory = r["rho_oscillatory"]
-            except (RuntimeError, ValueError) as e:
-                point.note = f"map failed: {type(e).__name__}: {e}"
-            map_time += time.perf_counter() - t0
-            say(
-                f"map at t = {point.t:.3f} s ({kind}): rho = "
-                f"{point.rho if point.rho is None else round(point.rho, 5)}"
-            )
-        result.points.append(point)
-
-    try:
-        contact = first_contact(
-            diagram,
-            context,
-            advance,
-            limit=min(MAX_TIME_TO_CONTACT, duration),
-            name=scenario.name,
-        )
-        t = context.get_time()
-        result.contact_time = contact
-        target = at if at is not None else contact + after_contact
-        op_time = _next_analysis_time(target, period, outer)
-        op_limit = op_time + max_burr_delay
-        schedule = [contact + 0.25] + list(
-            np.arange(contact + 1.0, duration, spacing)
-        )
-        schedule = [_next_analysis_time(x, period, outer) for x in schedule]
-        burr_max, burr_done, burr_count = 0.0, False, 0
-        last_curvature = None
-        while t < duration - 1e-9:
-            nxt = min(
-                [x for x in schedule if x > t + 1e-9]
-                + [
-                    op_time
-                    if result.op is None and op_time > t + 1e-9
-                    else np.inf,
-                    t + _CHUNK,
-                ]
-            )
-            t = advance(nxt)
-            if passes > 0 and generator.arc_progress(gen_context) >= pass_end:
-                result.stop_reason = "pass_complete"
-                break
-            s = _signals(diagram, context)
-            on_sample = (
-                abs(t / period - round(t / period)) < 1e-6
-                and abs(t / outer - round(t / outer)) > 1e-6
-            )
-            if result.op is None and t >= op_time - 1e-9 and on_sample:
-                if s["burr_area"] > 0 and t < op_limit:
-                    op_time = _next_analysis_time(t + 0.1, period, outer)
-                elif s["depth"] <= 0 or s["normal_force"] <= CONTACT_FORCE:
-                    result.op_note = (
-                        f"out of contact at t = {t:g} s (depth "
-                        f"{s['depth']:.3g} m, ||f_n|| "
-                        f"{s['normal_force']:.3g} N): no operating point"
-                    )
-                    op_time = np.inf
-                elif (
-                    at is None
-                    and not settle_check(
-                        RunSignals.from_log(
-                            _collect(
-                                diagram, context, ["chamfer", "controller"]
-                            ),
-                            run,
-                        ),
-                        t,
-                    ).settled
-                ):
-                    # still in a transient (or oscillating): look again
-                    # 0.5 s later; the user's own --at is kept as given
-                    op_time = _next_analysis_time(t + 0.5, period, outer)
-                else:
-                    result.op = OperatingPoint(
-                        scenario=scenario,
-                        diagram=diagram,
-                        context=context.Clone(),
-                        time=t,
-                        contact_time=contact,
-                        signals=s,
-                    )
-            if any(abs(x - t) < 1e-9 for x in schedule):
-                take_map("transient" if t < contact + 0.5 else "cutting", s)
-                continue
-            if not on_sample:
-                continue
-            # a burr's middle: its area under the tool starts to fall
-            if s["burr_area"] > 0:
-                if s["burr_area"] >= burr_max:
-                    burr_max = s["burr_area"]
-                elif not burr_done and s["burr_area"] < 0.98 * burr_max:
-                    burr_count += 1
-                    burr_done = True
-                    take_map(f"burr {burr_count}", s)
-            else:
-                burr_max, burr_done = 0.0, False
-            speed = abs(s["tangential_speed"])
-            if speed > 1e-4:
-                chamfer = diagram.GetSubsystemByName("chamfer_observer")
-                from deburr_drake.control.layout import CHAMFER_STATE
-
-                rate = CHAMFER_STATE.get(
-                    chamfer.GetOutputPort("chamfer_state").Eval(
-                        chamfer.GetMyContextFromRoot(context)
-                    ),
-                    "n1_rate",
-                )
-                kappa = float(np.linalg.norm(rate)) / speed
-                if last_curvature is None:
-                    last_curvature = kappa
-                elif (
-                    abs(kappa - last_curvature)
-                    > 0.2 * abs(last_curvature) + 1.0
-                ):
-                    last_curvature = kappa
-                    take_map("curvature", s)
-    except ConfigError:
-        raise
-    except Exception as e:  # NaN or a failure: keep what was computed
-        result.stop_reason = "nan" if "NaN" in str(e) else "error"
-        result.stop_detail = f"{type(e).__name__}: {e}"
-    result.end_time = context.get_time()
-    result.log = _collect(diagram, context, logger_names(diagram))
-    result.signals = RunSignals.from_log(result.log, run)
-    result.wall_time_s = time.perf_counter() - wall0
-    result.map_time_s = map_time
+def _void_unsteady_maps(result: AnalysisRun):
+    """A map on a limit cycle linearizes nothing: past the contact
+    transient, a point's rho counts only if the run was steady over the
+    POINT_WINDOW before it."""
     tol = SettleTolerances()
     for p in result.points:
         if p.rho is None:
@@ -365,7 +228,216 @@ def analysis_run(
             p.note = "not steady: " + "; ".join(check.reasons[:2])
             p.rho = p.frequency_hz = p.decay_rate = None
             p.rho_oscillatory = None
-    return result
+
+
+class _Walk:
+    """The simulation :func:`analysis_run` steps through, the operating
+    point and the maps taken from its Context on the way, into
+    ``result``."""
+
+    def __init__(self, scenario, run, duration, *, maps, say):
+        self.scenario, self.run, self.duration = scenario, run, duration
+        self.say = say
+        self.period = run.controller.control_period or run.sensor.sample_period
+        self.outer = run.command.period
+        self.diagram = make_deburring_diagram(scenario=run)
+        self.simulator = make_simulator(self.diagram, run)
+        self.context = self.simulator.get_mutable_context()
+        self.diagram.SetRandomContext(
+            self.context, RandomGenerator(run.sensor.noise_seed)
+        )
+        self.generator = self.diagram.GetSubsystemByName("command_generator")
+        self.gen_context = self.generator.GetMyContextFromRoot(self.context)
+        self.passes = run.simulation.stop_after_passes
+        self.pass_end = (
+            self.generator.start_arc_position
+            + self.passes * self.generator.contour.length
+        )
+        self.frozen = FrozenMap(scenario) if maps else None
+        self.wall0 = time.perf_counter()
+        self.map_time = 0.0
+        self.result = AnalysisRun(
+            scenario=run,
+            diagram=self.diagram,
+            log={},
+            signals=None,
+            contact_time=float("nan"),
+            end_time=0.0,
+            stop_reason="duration",
+        )
+        # The burr under the tool (its largest area so far, whether its
+        # middle was mapped, how many were) and the last mapped curvature.
+        self.burr_max, self.burr_done, self.burr_count = 0.0, False, 0
+        self.last_curvature = None
+        # When to try for the operating point next, and till when a burr
+        # may delay it (set by along).
+        self.op_time = self.op_limit = np.inf
+        self.simulator.Initialize()
+
+    def advance(self, t):
+        self.simulator.AdvanceTo(min(t, self.duration))
+        return self.context.get_time()
+
+    def to_contact(self):
+        self.result.contact_time = first_contact(
+            self.diagram,
+            self.context,
+            self.advance,
+            limit=min(MAX_TIME_TO_CONTACT, self.duration),
+            name=self.scenario.name,
+        )
+
+    def along(self, *, at, after_contact, spacing, max_burr_delay):
+        """On in chunks of _CHUNK s, stopping at the scheduled maps and the
+        operating point's time, to the run's end or the pass's."""
+        contact = self.result.contact_time
+        t = self.context.get_time()
+        target = at if at is not None else contact + after_contact
+        self.op_time = self._analysis_time(target)
+        self.op_limit = self.op_time + max_burr_delay
+        schedule = [contact + 0.25] + list(
+            np.arange(contact + 1.0, self.duration, spacing)
+        )
+        schedule = [self._analysis_time(x) for x in schedule]
+        while t < self.duration - 1e-9:
+            pending_op = self.result.op is None and self.op_time > t + 1e-9
+            t = self.advance(
+                min(
+                    [x for x in schedule if x > t + 1e-9]
+                    + [self.op_time if pending_op else np.inf, t + _CHUNK]
+                )
+            )
+            if (
+                self.passes > 0
+                and self.generator.arc_progress(self.gen_context)
+                >= self.pass_end
+            ):
+                self.result.stop_reason = "pass_complete"
+                break
+            s = _signals(self.diagram, self.context)
+            on_sample = (
+                abs(t / self.period - round(t / self.period)) < 1e-6
+                and abs(t / self.outer - round(t / self.outer)) > 1e-6
+            )
+            if (
+                self.result.op is None
+                and t >= self.op_time - 1e-9
+                and on_sample
+            ):
+                self._operating_point(t, s, free=at is None)
+            if any(abs(x - t) < 1e-9 for x in schedule):
+                kind = "transient" if t < contact + 0.5 else "cutting"
+                self._take_map(kind, s)
+            elif on_sample:
+                self._burr_middle(s)
+                self._curvature_change(s)
+
+    def _analysis_time(self, t):
+        return _next_analysis_time(t, self.period, self.outer)
+
+    def _operating_point(self, t, s, *, free):
+        """The operating point here, or the time to look again: past a
+        burr, and (unless the user gave --at, ``free`` False) past a
+        transient or an oscillation, 0.5 s at a time; none out of
+        contact."""
+        if s["burr_area"] > 0 and t < self.op_limit:
+            self.op_time = self._analysis_time(t + 0.1)
+        elif s["depth"] <= 0 or s["normal_force"] <= CONTACT_FORCE:
+            self.result.op_note = (
+                f"out of contact at t = {t:g} s (depth "
+                f"{s['depth']:.3g} m, ||f_n|| "
+                f"{s['normal_force']:.3g} N): no operating point"
+            )
+            self.op_time = np.inf
+        elif free and not self._settled(t):
+            self.op_time = self._analysis_time(t + 0.5)
+        else:
+            self.result.op = OperatingPoint(
+                scenario=self.scenario,
+                diagram=self.diagram,
+                context=self.context.Clone(),
+                time=t,
+                contact_time=self.result.contact_time,
+                signals=s,
+            )
+
+    def _settled(self, t) -> bool:
+        log = _collect(self.diagram, self.context, ["chamfer", "controller"])
+        return settle_check(RunSignals.from_log(log, self.run), t).settled
+
+    def _burr_middle(self, s):
+        """A map at a burr's middle: where its area under the tool starts
+        to fall."""
+        area = s["burr_area"]
+        if not area > 0:
+            self.burr_max, self.burr_done = 0.0, False
+        elif area >= self.burr_max:
+            self.burr_max = area
+        elif not self.burr_done and area < 0.98 * self.burr_max:
+            self.burr_count += 1
+            self.burr_done = True
+            self._take_map(f"burr {self.burr_count}", s)
+
+    def _curvature_change(self, s):
+        """A map where the edge's curvature |dn1/dt| / |v| changed by more
+        than 20 % (and 1 1/m) since the last one."""
+        speed = abs(s["tangential_speed"])
+        if not speed > 1e-4:
+            return
+        chamfer = self.diagram.GetSubsystemByName("chamfer_observer")
+        rate = CHAMFER_STATE.get(
+            chamfer.GetOutputPort("chamfer_state").Eval(
+                chamfer.GetMyContextFromRoot(self.context)
+            ),
+            "n1_rate",
+        )
+        kappa = float(np.linalg.norm(rate)) / speed
+        if self.last_curvature is None:
+            self.last_curvature = kappa
+        elif (
+            abs(kappa - self.last_curvature)
+            > 0.2 * abs(self.last_curvature) + 1.0
+        ):
+            self.last_curvature = kappa
+            self._take_map("curvature", s)
+
+    def _take_map(self, kind, s):
+        point = RhoPoint(
+            t=self.context.get_time(),
+            arc_position=s["arc_position"],
+            kind=kind,
+            burr_area=s["burr_area"],
+        )
+        if self.frozen is not None:
+            t0 = time.perf_counter()
+            point.context = self.context.Clone()
+            try:
+                r = rho_of_map(
+                    self.frozen.at(self.diagram, self.context),
+                    self.frozen.period,
+                )
+                point.rho = r["rho"]
+                point.frequency_hz = r["frequency_hz"]
+                point.decay_rate = r["decay_rate"]
+                point.rho_oscillatory = r["rho_oscillatory"]
+            except (RuntimeError, ValueError) as e:
+                point.note = f"map failed: {type(e).__name__}: {e}"
+            self.map_time += time.perf_counter() - t0
+            shown = point.rho if point.rho is None else round(point.rho, 5)
+            self.say(f"map at t = {point.t:.3f} s ({kind}): rho = {shown}")
+        self.result.points.append(point)
+
+    def finish(self) -> AnalysisRun:
+        """The result with the run's end, logs and times."""
+        result = self.result
+        result.end_time = self.context.get_time()
+        result.log = _collect(
+            self.diagram, self.context, logger_names(self.diagram)
+        )
+        result.signals = RunSignals.from_log(result.log, self.run)
+        result.wall_time_s = time.perf_counter() - self.wall0
+        result.map_time_s = self.map_time
+        return result
 
 
 def guard_that_would_stop(
@@ -437,44 +509,7 @@ def plot_rho_along_run(
         (axes[0], "t", 1.0, "time (s)"),
         (axes[1], "arc_position", 1e3, "arc position along the edge (mm)"),
     ):
-        for kind, marker in (
-            ("transient", "s"),
-            ("cutting", "o"),
-            ("burr", "^"),
-            ("curvature", "D"),
-            ("operating point", "*"),
-        ):
-            sel = [p for p in good if p["kind"].startswith(kind)]
-            if sel:
-                ax.plot(
-                    [p[key] * scale for p in sel],
-                    [p["rho"] for p in sel],
-                    marker,
-                    ls="none",
-                    label=kind,
-                    ms=9 if kind == "operating point" else 6,
-                )
-        if good:
-            order = sorted(good, key=lambda p: p["t"])
-            ax.plot(
-                [p[key] * scale for p in order],
-                [p["rho"] for p in order],
-                "-",
-                color="0.6",
-                lw=0.7,
-                zorder=0,
-            )
-            fast = [p for p in order if p.get("rho_oscillatory")]
-            if fast:
-                ax.plot(
-                    [p[key] * scale for p in fast],
-                    [p["rho_oscillatory"] for p in fast],
-                    "o",
-                    mfc="none",
-                    color="0.4",
-                    ms=5,
-                    label="|z| of the modes above 1 Hz",
-                )
+        _plot_rho_axis(ax, good, lambda p: p[key] * scale)
         if bad:
             ax.plot(
                 [p[key] * scale for p in bad],
@@ -497,3 +532,47 @@ def plot_rho_along_run(
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def _plot_rho_axis(ax, good, x):
+    """The steady points' rho on ``ax`` against ``x(point)``: a marker per
+    kind, a line in time order and the oscillatory modes' |z|."""
+    for kind, marker in (
+        ("transient", "s"),
+        ("cutting", "o"),
+        ("burr", "^"),
+        ("curvature", "D"),
+        ("operating point", "*"),
+    ):
+        sel = [p for p in good if p["kind"].startswith(kind)]
+        if sel:
+            ax.plot(
+                [x(p) for p in sel],
+                [p["rho"] for p in sel],
+                marker,
+                ls="none",
+                label=kind,
+                ms=9 if kind == "operating point" else 6,
+            )
+    if not good:
+        return
+    order = sorted(good, key=lambda p: p["t"])
+    ax.plot(
+        [x(p) for p in order],
+        [p["rho"] for p in order],
+        "-",
+        color="0.6",
+        lw=0.7,
+        zorder=0,
+    )
+    fast = [p for p in order if p.get("rho_oscillatory")]
+    if fast:
+        ax.plot(
+            [x(p) for p in fast],
+            [p["rho_oscillatory"] for p in fast],
+            "o",
+            mfc="none",
+            color="0.4",
+            ms=5,
+            label="|z| of the modes above 1 Hz",
+        )
