@@ -22,16 +22,17 @@ The map is :func:`deburr_drake.analysis.sampled.period_map` on the cell
 frozen as the analysis freezes it (:func:`frozen_scenario`), taken at the
 first inner-loop sample after the start (2.5 ms), the tool at the start of
 the edge, reached with the feedback gains near zero (so the state is the
-same for every gain checked). It is split, as :func:`deburr_drake.analysis.maps.fast_rho`
-does, into the sample at t_k (affine in each gain: f_tau = K s ..., m = K_o
-s_o) and the integration over the period, so rho at other gains costs an
-eigenvalue problem each.
+same for every gain checked). It is split, as
+:func:`deburr_drake.analysis.maps.fast_rho` does, into the sample at t_k
+(affine in each gain: f_tau = K s ..., m = K_o s_o) and the integration
+over the period, so rho at other gains costs an eigenvalue problem each.
 """
 
 from __future__ import annotations
 
 import copy
 from dataclasses import dataclass, field
+import time
 from typing import Callable, Dict, List, Optional
 
 import numpy as np
@@ -76,10 +77,8 @@ GAIN_MARGIN = 2.0
 MIN_MARGIN_SCALE = 0.25
 #: |z| of the map known to this: its columns are finite differences of
 #: 1e-8..1e-5 perturbations. A mode within it of the unit circle is neutral
-#: (marginal), not predicted unstable: the boss's start pose has one at
-#: 1 + 3.9e-7 in two held torques (the gains do not move it; its pass
-#: completes with the written gains), the other shipped cells none above
-#: 0.9985.
+#: (marginal), not predicted unstable: a held torque's mode can sit there
+#: whatever the gains, and the run completes.
 NEUTRAL_TOLERANCE = 1e-6
 
 
@@ -359,8 +358,6 @@ def preflight(
     ``scenario``, in place) and proves them, then checks the sampled loop
     at the start pose; ConfigError (one line: the gain, rho, its largest
     stable value) if it is predicted unstable. Returns what it found."""
-    import time
-
     t0 = time.perf_counter()
     c = scenario.controller
     if not c.control_period > 0:
@@ -373,77 +370,25 @@ def preflight(
                 "loop to check"
             ],
         )
+    # controller.design auto: the gains from the model, into ``scenario``.
     design = None
     if c.resolved_design(scenario.robot) == "auto":
         design = design_gains(scenario)
         apply_gains(scenario, design)
+    # The one-period map at the start pose.
     op = start_operating_point(scenario)
     maps = GainMaps(op)
-    rho = maps.rho_full
-    result = Preflight(rho=rho, time=op.time, design=design)
-    scale = 1.0
-    if design is not None and not predicted_unstable(rho):
-        _both_paths(maps, scenario)
-        result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
-        scale = 1.0
-        while (
-            predicted_unstable(result.rho_at_margin)
-            and scale > MIN_MARGIN_SCALE
-        ):
-            scale *= 0.7
-            result.rho_at_margin = maps.rho(
-                K=GAIN_MARGIN * scale, K_o=GAIN_MARGIN * scale
-            )
-        if predicted_unstable(result.rho_at_margin):
-            # Not the gains (twice a quarter of them is not stable either):
-            # the design as it is, and the margin it does not hold said.
-            scale = 1.0
-            result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
-        elif scale < 1.0:
-            design = design.scaled(scale)
-            apply_gains(scenario, design)
-            result.design, result.margin_scale = design, scale
-            op = start_operating_point(scenario)
-            maps = GainMaps(op)
-            _both_paths(maps, scenario)
-            result.rho = rho = maps.rho_full
-            result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
-    if design is not None:
-        n = design.numbers
-        margin = (
-            "not computed (unstable at the design)"
-            if result.rho_at_margin is None
-            else f"{result.rho_at_margin:.5f}"
-            + (
-                ""
-                if not predicted_unstable(result.rho_at_margin)
-                else " (the margin is NOT held)"
-            )
-        )
-        result.lines += [
-            f"gains designed from the model (controller.design: auto; "
-            f"lightest task mass {n['lightest_task_mass_kg']:.2f} kg, "
-            f"gravity error at the tool "
-            f"{np.round(n['gravity_error_force_N'], 1).tolist()} N, "
-            f"max eig(M^-1 D) T = {n['sampled_rate']:.2f}"
-            + (
-                f", K and K_o x {scale:.3g} for the gain margin"
-                if scale < 1.0
-                else ""
-            )
-            + "):",
-            f"  sliding_gain {design.sliding_gain} N s/m, sliding_lambda "
-            f"{design.sliding_lambda} 1/s, orientation_gain "
-            f"{design.orientation_gain} N m s/rad, orientation_lambda "
-            f"{design.orientation_lambda} 1/s",
-            f"  fuzzy.sliding_scales {design.sliding_scales} m/s (Delta_k "
-            f"{design.sliding_scales[0] * c.fuzzy.width_fraction * 1e3:g} "
-            f"mm/s), fuzzy.position_scale {design.position_scale:g} m",
-            f"  predicted rho {rho:.5f} at the start pose, {margin} with K "
-            f"and K_o x {GAIN_MARGIN:g}",
-        ]
+    result = Preflight(rho=maps.rho_full, time=op.time, design=design)
+    # A design must hold the gain margin: K and K_o scaled down till it
+    # does.
+    if design is not None and not predicted_unstable(result.rho):
+        maps = _hold_gain_margin(scenario, maps, result)
+    rho = result.rho
+    if result.design is not None:
+        result.lines += _design_lines(result, c)
     for line in result.lines:
         say(line)
+    # Predicted unstable: the one line naming the gain to lower.
     if predicted_unstable(rho):
         raise ConfigError(_refusal(scenario, maps, rho))
     if rho >= 1.0:
@@ -460,6 +405,75 @@ def preflight(
     )
     say(result.lines[-1])
     return result
+
+
+def _hold_gain_margin(
+    scenario: Scenario, maps: GainMaps, result: Preflight
+) -> GainMaps:
+    """rho at GAIN_MARGIN x the designed K and K_o into ``result``; where
+    it is not stable, K and K_o scaled down by 0.7 at a time (to
+    MIN_MARGIN_SCALE at most) until it is, the scaled design written into
+    ``scenario`` and ``result`` and the start pose's map taken again.
+    Returns the maps of the gains kept."""
+    _both_paths(maps, scenario)
+    result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
+    scale = 1.0
+    while predicted_unstable(result.rho_at_margin) and scale > MIN_MARGIN_SCALE:
+        scale *= 0.7
+        result.rho_at_margin = maps.rho(
+            K=GAIN_MARGIN * scale, K_o=GAIN_MARGIN * scale
+        )
+    if predicted_unstable(result.rho_at_margin):
+        # Not the gains (twice a quarter of them is not stable either):
+        # the design as it is, and the margin it does not hold said.
+        result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
+    elif scale < 1.0:
+        design = result.design.scaled(scale)
+        apply_gains(scenario, design)
+        result.design, result.margin_scale = design, scale
+        maps = GainMaps(start_operating_point(scenario))
+        _both_paths(maps, scenario)
+        result.rho = maps.rho_full
+        result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
+    return maps
+
+
+def _design_lines(result: Preflight, c) -> List[str]:
+    """What the design gave (``c``: the scenario's controller), its rho
+    and whether it holds the gain margin."""
+    design, scale, n = result.design, result.margin_scale, result.design.numbers
+    margin = (
+        "not computed (unstable at the design)"
+        if result.rho_at_margin is None
+        else f"{result.rho_at_margin:.5f}"
+        + (
+            ""
+            if not predicted_unstable(result.rho_at_margin)
+            else " (the margin is NOT held)"
+        )
+    )
+    return [
+        f"gains designed from the model (controller.design: auto; "
+        f"lightest task mass {n['lightest_task_mass_kg']:.2f} kg, "
+        f"gravity error at the tool "
+        f"{np.round(n['gravity_error_force_N'], 1).tolist()} N, "
+        f"max eig(M^-1 D) T = {n['sampled_rate']:.2f}"
+        + (
+            f", K and K_o x {scale:.3g} for the gain margin"
+            if scale < 1.0
+            else ""
+        )
+        + "):",
+        f"  sliding_gain {design.sliding_gain} N s/m, sliding_lambda "
+        f"{design.sliding_lambda} 1/s, orientation_gain "
+        f"{design.orientation_gain} N m s/rad, orientation_lambda "
+        f"{design.orientation_lambda} 1/s",
+        f"  fuzzy.sliding_scales {design.sliding_scales} m/s (Delta_k "
+        f"{design.sliding_scales[0] * c.fuzzy.width_fraction * 1e3:g} "
+        f"mm/s), fuzzy.position_scale {design.position_scale:g} m",
+        f"  predicted rho {result.rho:.5f} at the start pose, {margin} with "
+        f"K and K_o x {GAIN_MARGIN:g}",
+    ]
 
 
 def loop_key(scenario: Scenario) -> str:
