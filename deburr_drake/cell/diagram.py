@@ -15,9 +15,11 @@ The controller side alone, around a plant of your own, is
 
 from __future__ import annotations
 
+from typing import Mapping, NamedTuple, Optional, Tuple
+
 import numpy as np
 from pydrake.common import RandomDistribution
-from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 from pydrake.systems.primitives import LogVectorOutput, RandomSource
 
 from deburr_drake.cell.arm import solve_tool_pose
@@ -29,20 +31,19 @@ from deburr_drake.cell.edge import (
     start_position,
 )
 from deburr_drake.cell.faults import add_noise_scale, add_sensor_faults
-from deburr_drake.cell.gains import resolve_gains, resolve_slope_bound
+from deburr_drake.cell.gains import resolve_design
 from deburr_drake.cell.guards import add_effort_saturation, add_guards
 from deburr_drake.cell.plant import add_cell_plant
 from deburr_drake.cell.process import CuttingProcess
 from deburr_drake.cell.reach import check_part_in_reach
 from deburr_drake.cell.robot import ik_seed, make_robot_model
 from deburr_drake.cell.sensor import ForceSensor
-from deburr_drake.config import RobotConfig, Scenario
+from deburr_drake.config import ConfigError, RobotConfig, Scenario
 from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.control.loop import add_deburring_controller
 
 __all__ = [
     "make_deburring_diagram",
-    "MakeDeburringDiagram",
     "TOOL_FRAME",
     "SENSOR_JOINT",
     "LOGGED",
@@ -65,10 +66,11 @@ LOGGED = {
     "command": ("command_generator", "command_state"),
     "reference": ("first_order_hold", "position"),
     "process": ("cutting_process", "process_state"),
-    "tool_force": ("force_sensor", "tool_force"),
+    "tool_force": ("force_sensor", "measured_force"),
 }
 
-#: Logged when localisation adds the system (issue 21).
+#: Logged when the controller side has localisation's systems (touch
+#: probing and online registration, ``localisation``).
 LOCALISATION_LOGGED = {
     "probe": ("probing_sequence", "probe_state"),
     "touch_points": ("probing_sequence", "touch_points"),
@@ -91,6 +93,23 @@ SYSTEM_NAMES = (
 )
 
 
+class _Start(NamedTuple):
+    """Where the pass starts."""
+
+    position: np.ndarray  # m, world: the tool tip
+    q: np.ndarray  # the plant's positions there
+    rotation: np.ndarray  # the tool's orientation there, held on the pass
+
+
+class _PlantSide(NamedTuple):
+    """The systems between the plant and the controller side."""
+
+    process: CuttingProcess
+    force_law: Diagram
+    sensor: ForceSensor
+    reading: OutputPort  # what the controller side reads (after faults)
+
+
 def _initial_positions(plant, scenario: Scenario, x0) -> np.ndarray:
     robot = scenario.robot
     if robot.model == "cartesian_tool":
@@ -106,84 +125,46 @@ def _initial_positions(plant, scenario: Scenario, x0) -> np.ndarray:
     )
 
 
-def make_deburring_diagram(
-    *, scenario: Scenario, meshcat=None, extra_logs=None
-) -> Diagram:
-    """The closed loop as a named Diagram.
-
-    Systems (see :data:`SYSTEM_NAMES`): ``plant``, ``scene_graph``,
-    ``cutting_process`` and its force law ``cutting_force``,
-    ``force_sensor``, ``sensor_noise``, ``chamfer_observer``,
-    ``command_generator``, ``first_order_hold``, ``contact_estimator``,
-    ``controller``, ``guards`` (deburr_drake.cell.guards, unless
-    ``guards.enabled`` is false) and ``drive_saturation`` (the drives clamp
-    the commanded torque at the effort limits, unless
-    ``guards.saturate_effort`` is false),
-    and one ``log_<name>`` VectorLogSink per entry of :data:`LOGGED`. The
-    plant's default positions put the tool tip at the contour start (by
-    inverse kinematics for the arm), in contact. With a ``meshcat``, the
-    cell is drawn there too (see :mod:`deburr_drake.cell.meshcat`).
-
-    With ``controller.design`` auto (the default for a robot from a file)
-    the gains are designed from the model first and written into
-    ``scenario`` (deburr_drake.cell.gains.resolve_gains; the command line
-    also proves them, deburr_drake.analysis.preflight).
-
-    ``extra_logs`` ({name: (system name, output port name)}) logs more
-    signals at ``simulation.log_period``, e.g. ``{"feed": ("command_generator",
-    "feed"), "state": ("plant", "state")}``: loggers ``log_<name>`` that
-    :func:`deburr_drake.runs.simulation.simulate` collects as ``log[name]``
-    (``t`` and ``value``)."""
-    scenario.validate()
+def _start(scenario: Scenario, plant, model, belief) -> _Start:
+    """The tool at the believed contour's start, in contact (with touch
+    probing, the probe's standoff off the part before it), the arm posed
+    there by inverse kinematics."""
     c = scenario
-    check_part_in_reach(c)
-    # controller.design auto: the gains from the model, written into the
-    # scenario (deburr_drake.cell.gains).
-    resolve_gains(c)
-    # fuzzy.max_slope 0: the learned surface's slope bound from the model.
-    resolve_slope_bound(c)
-    builder = DiagramBuilder()
-    plant, _ = add_cell_plant(builder, c)
-    contour = make_contour(c)  # the real part: the plant's truth
-    belief = believed_contour(c)  # the part the controller believes in
-    belief_step = believed_contour_step(c)  # ... after the part moved
-    probing = c.localisation.probe.enabled
     x0 = start_position(c, belief)
-    if probing:  # off the part, the probe's standoff before the start
+    if c.localisation.probe.enabled:
         x0 = x0 - (
             c.simulation.initial_depth + c.localisation.probe.standoff
         ) * belief.n1(x0)
     q0 = _initial_positions(plant, c, x0)
-    plant.SetDefaultPositions(q0)
-
-    model = make_robot_model(c.robot)
-    tool_frame = c.robot.tool_frame
     model_context = model.CreateDefaultContext()
     model.SetPositions(model_context, q0)
-    # The tool's orientation at the start is held (the tool axis vertical;
-    # on a 6-DOF arm also its rotation about that axis).
-    desired_rotation = (
-        model.GetFrameByName(tool_frame)
+    # The tool axis vertical; on a 6-DOF arm also its rotation about it.
+    rotation = (
+        model.GetFrameByName(c.robot.tool_frame)
         .CalcPoseInWorld(model_context)
         .rotation()
         .matrix()
     )
+    return _Start(x0, q0, rotation)
 
-    # The process (truth), the sensor, the observer (measurement) and the
-    # controller read the same joint state through the same kinematics: one
-    # memo serves all.
-    tool_point = ToolPoint(model, model.GetFrameByName(tool_frame))
+
+def _add_plant_side(
+    builder, scenario: Scenario, plant, contour, tool_point
+) -> _PlantSide:
+    """The cutting process on the real edge, its force law on the plant,
+    and the force sensor with its noise and faults, wired to the plant."""
+    c = scenario
     process = builder.AddNamedSystem(
         "cutting_process",
         CuttingProcess(
             plant,
-            tool_frame,
+            c.robot.tool_frame,
             contour,
             c.process,
             cut_height=c.tool.engagement,
             cutter_radius=c.tool.cutter_radius,
             tool_point=tool_point,
-            spindle_input=probing,
+            spindle_input=c.localisation.probe.enabled,
         ),
     )
     sensor = builder.AddNamedSystem(
@@ -196,87 +177,67 @@ def make_deburring_diagram(
         "sensor_noise",
         RandomSource(RandomDistribution.kGaussian, 3, c.sensor.sample_period),
     )
-    state = plant.get_state_output_port()
-    for system in (process, sensor):
-        builder.Connect(state, system.GetInputPort("plant_state"))
     force_law = builder.AddSystem(process.force_law())
-    builder.Connect(
+    state = plant.get_state_output_port()
+    connect = builder.Connect
+    for system in (process, sensor, force_law):
+        connect(state, system.GetInputPort("plant_state"))
+    connect(
         process.GetOutputPort("force_law_terms"),
         force_law.GetInputPort("force_law_terms"),
     )
-    builder.Connect(
-        force_law.GetOutputPort("tool_force"),
+    connect(
+        force_law.GetOutputPort("applied_force"),
         sensor.GetInputPort("applied_force"),
     )
-    builder.Connect(state, force_law.GetInputPort("plant_state"))
-    builder.Connect(
+    connect(
         force_law.GetOutputPort("generalized_force"),
         plant.get_applied_generalized_force_input_port(),
     )
-    builder.Connect(
+    connect(
         plant.get_reaction_forces_output_port(),
         sensor.GetInputPort("reaction_forces"),
     )
-    builder.Connect(
+    connect(
         add_noise_scale(builder, c.faults, noise.get_output_port()),
         sensor.GetInputPort("noise"),
     )
     # What the observer and the controller read (faults: bias, dropouts).
-    force = add_sensor_faults(
+    reading = add_sensor_faults(
         builder,
         c.faults,
-        sensor.GetOutputPort("tool_force"),
+        sensor.GetOutputPort("measured_force"),
         sample_period=c.sensor.sample_period,
     )
-    # The paper's loops around the plant (deburr_drake.control.loop).
-    loops = add_deburring_controller(
-        builder,
-        scenario=c,
-        plant=model,
-        contour=belief,
-        plant_state=state,
-        tool_force=force,
-        tool_frame=tool_frame,
-        start=x0,
-        desired_rotation=desired_rotation,
-        tool_point=tool_point,
-        contour_step=belief_step,
-        true_plant=plant,
-        posture=q0,
-    )
-    if probing:
-        builder.Connect(loops.spindle, process.GetInputPort("spindle"))
-    actuation = add_effort_saturation(builder, c, plant, loops.actuation)
+    return _PlantSide(process, force_law, sensor, reading)
+
+
+def _connect_actuation(builder, scenario: Scenario, plant, side, actuation):
+    """The controller's ``actuation`` to the plant through the drives
+    (clamped at the effort limits), and to the force law and the process
+    that hold the sample's torque (``process.sample_mean``)."""
+    actuation = add_effort_saturation(builder, scenario, plant, actuation)
     builder.Connect(actuation, plant.get_actuation_input_port())
-    # The law's held mean (process.sample_mean) takes the sample's torque.
-    builder.Connect(actuation, force_law.GetInputPort("actuation"))
-    if c.process.sample_mean:
-        for port, source in (
-            (
-                "generalized_acceleration",
-                plant.get_generalized_acceleration_output_port(),
-            ),
-            (
-                "applied_generalized_force",
-                force_law.GetOutputPort("generalized_force"),
-            ),
-            ("actuation", actuation),
-        ):
-            builder.Connect(source, process.GetInputPort(port))
+    builder.Connect(actuation, side.force_law.GetInputPort("actuation"))
+    if not scenario.process.sample_mean:
+        return
+    for port, source in (
+        (
+            "generalized_acceleration",
+            plant.get_generalized_acceleration_output_port(),
+        ),
+        (
+            "applied_generalized_force",
+            side.force_law.GetOutputPort("generalized_force"),
+        ),
+        ("actuation", actuation),
+    ):
+        builder.Connect(source, side.process.GetInputPort(port))
 
-    if meshcat is not None:
-        from deburr_drake.cell.meshcat import add_meshcat
 
-        scene_graph = builder.GetSubsystemByName("scene_graph")
-        add_meshcat(
-            builder,
-            meshcat,
-            plant=plant,
-            scene_graph=scene_graph,
-            process=process,
-            edge_points=edge_points(c, process.bins.centers),
-        )
-
+def _logged_signals(builder, loops, probing: bool) -> dict:
+    """{logger name: output port} of :data:`LOGGED` and, where the systems
+    are there, :data:`LOCALISATION_LOGGED`."""
     logged = {
         name: builder.GetSubsystemByName(system).GetOutputPort(port)
         for name, (system, port) in LOGGED.items()
@@ -292,23 +253,114 @@ def make_deburring_diagram(
             logged[name] = builder.GetSubsystemByName(system).GetOutputPort(
                 port
             )
-    add_guards(builder, c, plant, contour, logged)
+    return logged
+
+
+def _add_loggers(builder, scenario: Scenario, logged, extra_logs):
+    """A ``log_<name>`` VectorLogSink per ``logged`` signal and per entry
+    of ``extra_logs``, at ``simulation.log_period``."""
+    logged = dict(logged)
     for name, (system, port) in (extra_logs or {}).items():
         if name in logged:
-            raise ValueError(
+            raise ConfigError(
                 f"extra_logs: {name!r} is logged already: "
                 f"allowed a name not in {sorted(logged)}"
             )
-        logged_port = builder.GetSubsystemByName(system).GetOutputPort(port)
-        # After add_guards: the guards read the standard signals only.
-        logged = {**logged, name: logged_port}
+        logged[name] = builder.GetSubsystemByName(system).GetOutputPort(port)
     for name, port in logged.items():
-        logger = LogVectorOutput(port, builder, c.simulation.log_period)
+        logger = LogVectorOutput(port, builder, scenario.simulation.log_period)
         logger.set_name(f"log_{name}")
+
+
+def _add_meshcat(builder, meshcat, scenario, plant, scene_graph, process):
+    """The cell, its contact forces and the edge drawn in ``meshcat``."""
+    from deburr_drake.cell.meshcat import add_meshcat
+
+    add_meshcat(
+        builder,
+        meshcat,
+        plant=plant,
+        scene_graph=scene_graph,
+        process=process,
+        edge_points=edge_points(scenario, process.bins.centers),
+    )
+
+
+def make_deburring_diagram(
+    *,
+    scenario: Scenario,
+    meshcat=None,
+    extra_logs: Optional[Mapping[str, Tuple[str, str]]] = None,
+) -> Diagram:
+    """The closed loop as a named Diagram ``deburr_<scenario name>``.
+
+    Systems: :data:`SYSTEM_NAMES`, ``guards`` (deburr_drake.cell.guards,
+    unless ``guards.enabled`` is false), ``drive_saturation`` (the drives
+    clamp the commanded torque at the effort limits, unless
+    ``guards.saturate_effort`` is false), ``sensor_faults`` and
+    ``sensor_noise_scale`` with faults (deburr_drake.cell.faults), and a
+    ``log_<name>`` VectorLogSink per entry of :data:`LOGGED`. The tool
+    starts at the contour start, in contact. With a ``meshcat``, the cell
+    is drawn there too (deburr_drake.cell.meshcat).
+
+    Built from ``scenario`` with its designed values resolved
+    (:func:`deburr_drake.cell.gains.resolve_design`: the gains where
+    ``controller.design`` resolves to auto, the fuzzy slope bound where it
+    is 0); ``scenario`` itself is left as it is. To report the values
+    built, resolve it first: ``scenario = resolve_design(scenario)``.
+
+    ``extra_logs`` ({name: (system name, output port name)}) logs more
+    signals, e.g. ``{"feed": ("command_generator", "feed")}``: loggers
+    ``log_<name>`` that :func:`deburr_drake.runs.simulation.simulate`
+    collects as ``log[name]`` (``t`` and ``value``)."""
+    scenario.validate()
+    # The designed values resolved on a copy; the caller's scenario stays.
+    c = resolve_design(scenario)
+    check_part_in_reach(c)
+    probing = c.localisation.probe.enabled
+    builder = DiagramBuilder()
+    # The plant: the robot with its cutter and friction, the real part.
+    plant, scene_graph = add_cell_plant(builder, c)
+    # The real edge (the plant's truth), the one the controller believes in.
+    contour, belief = make_contour(c), believed_contour(c)
+    # The controller's model of the robot, its pose at the start.
+    model = make_robot_model(c.robot)
+    start = _start(c, plant, model, belief)
+    plant.SetDefaultPositions(start.q)
+    # One kinematics memo for the process (truth), the sensor, the observer
+    # and the controller: they read the same joint state.
+    tool_point = ToolPoint(model, model.GetFrameByName(c.robot.tool_frame))
+    # The plant side: the cutting process, its force law, the force sensor
+    # and its faults.
+    side = _add_plant_side(builder, c, plant, contour, tool_point)
+    # The paper's loops around the plant (deburr_drake.control.loop).
+    loops = add_deburring_controller(
+        builder,
+        scenario=c,
+        plant=model,
+        contour=belief,
+        plant_state=plant.get_state_output_port(),
+        tool_force=side.reading,
+        tool_frame=c.robot.tool_frame,
+        start=start.position,
+        desired_rotation=start.rotation,
+        tool_point=tool_point,
+        contour_step=believed_contour_step(c),  # after the part moved
+        true_plant=plant,
+        posture=start.q,
+    )
+    # Touch probing: the loops turn the spindle off and on.
+    if probing:
+        builder.Connect(loops.spindle, side.process.GetInputPort("spindle"))
+    # The drives: the controller's torque to the plant and the force law.
+    _connect_actuation(builder, c, plant, side, loops.actuation)
+    # The cell drawn in Meshcat.
+    if meshcat is not None:
+        _add_meshcat(builder, meshcat, c, plant, scene_graph, side.process)
+    # The guards read the standard signals, the loggers those and more.
+    logged = _logged_signals(builder, loops, probing)
+    add_guards(builder, c, plant, contour, logged)
+    _add_loggers(builder, c, logged, extra_logs)
     diagram = builder.Build()
     diagram.set_name(f"deburr_{c.name}")
     return diagram
-
-
-#: The builder under the name the design uses.
-MakeDeburringDiagram = make_deburring_diagram

@@ -22,12 +22,25 @@ __all__ = ["SensorFaults", "add_sensor_faults", "add_noise_scale"]
 
 
 class SensorFaults(LeafSystem):
-    """``tool_force`` (3, N) in, ``tool_force`` (3, N) out: the reading
-    plus ``sensor_bias``; inside a dropout window [start, start +
-    duration) the reading held at its last value before the window
-    (``hold``) or zero (``zero``). Discrete state ``last`` (3, N): the
-    output at the last sample outside a window, updated every
-    ``sample_period``."""
+    """The force sensor's reading as the faults leave it: the reading plus
+    ``sensor_bias``; inside a dropout window [start, start + duration)
+    the reading held at its last value before the window (``hold``) or
+    zero (``zero``).
+
+    .. pydrake_system::
+
+        name: SensorFaults
+        input_ports:
+        - measured_force
+        output_ports:
+        - faulted_force
+
+    - ``measured_force`` (3, N, world): the force sensor's reading.
+    - ``faulted_force`` (3, N, world): what the observer and the
+      controller read.
+    - Discrete state ``last`` (3, N): the output at the last sample
+      outside a window, updated every ``sample_period``.
+    """
 
     def __init__(self, config: FaultsConfig, sample_period: float):
         super().__init__()
@@ -36,10 +49,10 @@ class SensorFaults(LeafSystem):
         self._windows = [
             (d.start, d.start + d.duration, d.mode) for d in config.dropouts
         ]
-        self._input = self.DeclareVectorInputPort("tool_force", 3)
+        self._input = self.DeclareVectorInputPort("measured_force", 3)
         self._last = self.DeclareDiscreteState(BasicVector(np.zeros(3)))
         self.DeclareVectorOutputPort(
-            "tool_force",
+            "faulted_force",
             3,
             self._output,
             prerequisites_of_calc={
@@ -74,17 +87,18 @@ class SensorFaults(LeafSystem):
 
 
 def add_sensor_faults(
-    builder, faults: FaultsConfig, tool_force, *, sample_period: float
+    builder, faults: FaultsConfig, measured_force, *, sample_period: float
 ):
     """The port that carries the force reading to the observer and the
-    controller: ``tool_force`` through :class:`SensorFaults` named
-    ``sensor_faults``, or ``tool_force`` itself without sensor faults."""
+    controller: ``measured_force`` (the sensor's output port) through
+    :class:`SensorFaults` named ``sensor_faults``, or ``measured_force``
+    itself without sensor faults."""
     if not faults.sensor_faults():
-        return tool_force
+        return measured_force
     system = builder.AddNamedSystem(
         "sensor_faults", SensorFaults(faults, sample_period)
     )
-    builder.Connect(tool_force, system.get_input_port())
+    builder.Connect(measured_force, system.get_input_port())
     return system.get_output_port()
 
 

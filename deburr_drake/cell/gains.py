@@ -12,11 +12,11 @@ file gives or ``robot.reflected_inertia``):
   rounded up to 1000 N s/m;
 - the orientation PD: the paper's K_o = 20 N m s/rad, lambda_o = 20 1/s;
 - the 2.5 ms loop: the sampled rate max eig(M^-1 D) T (D = J_v^T K J_v +
-  J_w^T K_o J_w) at most :data:`SAMPLED_RATE` (0.35; arm5 with paper.yaml
-  0.30, arm6 0.33, the measured limit about 1.6): above it the
-  translational and orientation gains are scaled down, each part to half
-  the limit (the rate is linear in the gains), then both up together to
-  the limit (never above the rule's values);
+  J_w^T K_o J_w) at most :data:`SAMPLED_RATE` (0.35, well below the
+  loop's limit; arm5's and arm6's written gains are within it): above it
+  the translational and orientation gains are scaled down, each part to
+  half the limit (the rate is linear in the gains), then both up together
+  to the limit (never above the rule's values);
 - Delta_k (``fuzzy.sliding_scales`` x ``width_fraction``): the learned
   surface's slope, about f / Delta_k for a learned force f (the gravity
   error along x1, x2), must stay below :data:`SLOPE_RATE` (0.4) of the
@@ -27,9 +27,7 @@ file gives or ``robot.reflected_inertia``):
   false (with it, the default, the cutting damping is integrated exactly
   over the sample at any step): cenic treats the cutting force's damping
   g a a^T explicitly but for its diagonal, and on a light arm eq. (3)
-  between samples oscillates once g h / m exceeds about 4-5 (arm6:
-  11,700 N s/m at one 2.5 ms step, 20,500 at two; the Panda at two steps
-  and 1.6 kg tripped the tool-force guard on the first burr). The step
+  between samples oscillates once g h / m exceeds about 4-5. The step
   keeps g_max h / m below :data:`STEP_RATE` (2.5), g_max = k_c (delta* x
   engagement + the tallest burr's area): arm5 and arm6 two steps per
   sample (``process.implicit_damping`` stays off: it moves the loop's
@@ -41,16 +39,19 @@ file gives or ``robot.reflected_inertia``):
   0.5 m, at least 1 m (y0 = ||x_p|| / x_max inside the rule base).
 
 :func:`design_gains` returns them with the numbers they came from;
-:func:`resolve_gains` writes them into a scenario whose
-``controller.design`` is ``auto``. The analysis package proves the choice
-with the one-period map (deburr_drake.analysis.preflight).
+:func:`resolve_design` returns a copy of a scenario with every designed
+value resolved (the gains where ``controller.design`` is ``auto``, the
+fuzzy slope bound where it is 0); no function here changes the scenario
+it is given. The analysis package proves the choice with the one-period
+map (deburr_drake.analysis.preflight).
 """
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 import math
-from typing import Dict
+from typing import Dict, Optional
 
 import numpy as np
 
@@ -59,9 +60,11 @@ from deburr_drake.config import Scenario
 __all__ = [
     "GainDesign",
     "design_gains",
+    "resolve_design",
     "resolve_gains",
     "apply_gains",
     "resolve_slope_bound",
+    "slope_bound",
     "SLOPE_LIMIT_FRACTION",
     "MIN_SLOPE_BOUND",
     "VERTICAL_ERROR",
@@ -71,7 +74,7 @@ __all__ = [
 
 #: m: the vertical error x3's PD may leave under the gravity error.
 VERTICAL_ERROR = 2.0e-4
-#: max eig(M^-1 D) T the design allows (arm5 0.30, arm6 0.33 as written).
+#: max eig(M^-1 D) T the design allows.
 SAMPLED_RATE = 0.35
 #: The fuzzy surface's slope f / Delta_k, at most this x (lightest task
 #: mass / T) ...
@@ -190,6 +193,94 @@ def _rates(plant, q, frame_name, K, K_o, period, d_n=0.0):
     return rate(D_v), rate(D_w), rate(D_v + D_w + D_n)
 
 
+def _rule_gains(gravity_error_force):
+    """(K, lambda, K_o, lambda_o) of the rules before the sampled rate:
+    x1, x2 the paper's, x3's K large enough for :data:`VERTICAL_ERROR`."""
+    lam = [100.0, 100.0, 100.0]
+    K3 = max(
+        1000.0,
+        _ceil_to(
+            abs(gravity_error_force[2]) / (VERTICAL_ERROR * lam[2]), 1000.0
+        ),
+    )
+    return [400.0, 400.0, K3], lam, [20.0, 20.0, 20.0], [20.0, 20.0, 20.0]
+
+
+def _within_sampled_rate(rates, K, K_o):
+    """(K, K_o, rate_v, rate_w, rate): the rule's gains, scaled down to
+    :data:`SAMPLED_RATE` when they exceed it; ``rates(K, K_o)`` gives
+    :func:`_rates`' three rates."""
+    rate_v, rate_w, rate = rates(K, K_o)
+    if rate <= SAMPLED_RATE:
+        return K, K_o, rate_v, rate_w, rate
+    # Each part to its share of the limit, as the rate is linear in the
+    # gains (lambda max of a sum of PSD pencils <= the sum).
+    share = SAMPLED_RATE / 2
+    sv = min(1.0, share / rate_v) if rate_v > 0 else 1.0
+    sw = min(1.0, share / rate_w) if rate_w > 0 else 1.0
+    if sv == 1.0:
+        sw = min(1.0, (SAMPLED_RATE - rate_v) / rate_w)
+    elif sw == 1.0:
+        sv = min(1.0, (SAMPLED_RATE - rate_w) / rate_v)
+    K_v = [k * sv for k in K]
+    K_w = [k * sw for k in K_o]
+    # Both parts act on different joints mostly: the sum's rate is below
+    # the parts' sum; scale both up to the limit again (never above the
+    # rule's gains).
+    up = SAMPLED_RATE / rates(K_v, K_w)[2]
+    K = [_nice(min(k, kv * up)) for k, kv in zip(K, K_v)]
+    K_o = [_nice(min(k, kw * up)) for k, kw in zip(K_o, K_w)]
+    return (K, K_o, *rates(K, K_o))
+
+
+def _null_space_gains(rates, K, K_o):
+    """(k_n, d_n, rate) of more than 6 joints: the null-space posture PD
+    (200 N m/rad, 10 N m s/rad: stiffness over damping 20 1/s) within
+    what the sampled rate leaves; ``rates(K, K_o, d_n)`` as in
+    :func:`_within_sampled_rate`."""
+    d_n, k_n = 10.0, 200.0
+    if rates(K, K_o, d_n)[2] > SAMPLED_RATE * 1.2:
+        per_unit_damping = rates([0.0] * 3, [0.0] * 3, 1.0)[2]
+        d_n = _nice(min(10.0, 0.5 * SAMPLED_RATE / per_unit_damping))
+        k_n = _nice(20.0 * d_n)
+    return k_n, d_n, rates(K, K_o, d_n)[2]
+
+
+def _sliding_scale(fuzzy, gravity_error_force, mass, period):
+    """(Delta_k, the learned force): the fuzzy surface's slope f / Delta_k
+    within :data:`SLOPE_RATE` x mass / T and :data:`SLOPE_MAX`."""
+    slope = (
+        min(SLOPE_MAX, SLOPE_RATE * mass / period) if period > 0 else SLOPE_MAX
+    )
+    learned = (
+        max(abs(gravity_error_force[a]) for a in fuzzy.axes)
+        if fuzzy.axes
+        else 0.0
+    )
+    delta_k = max(MIN_DELTA_K, learned / slope)
+    return _ceil_to(delta_k, 0.001 if delta_k < 0.01 else 0.005), learned
+
+
+def _max_step(scenario: Scenario, period: float, mass: float):
+    """(g_max, the integration step): with eq. (3) between samples
+    (``process.sample_mean`` false), g_max h / mass below
+    :data:`STEP_RATE`; the step is only ever lowered, to a whole fraction
+    of T."""
+    p = scenario.process
+    g_max = p.cutting_coefficient * (
+        scenario.task.desired_depth * scenario.tool.engagement
+        + max([b.height * b.thickness for b in p.burrs], default=0.0)
+    )
+    max_step = scenario.simulation.max_step
+    # With process.sample_mean the damping is exact at any step.
+    if period > 0 and g_max > 0 and not p.sample_mean:
+        steps = max(
+            1, math.ceil(g_max * period / (STEP_RATE * mass) * (1 - 5e-3))
+        )
+        max_step = min(max_step, period / steps)
+    return g_max, max_step
+
+
 def design_gains(scenario: Scenario, q=None) -> GainDesign:
     """The gains the rules of the module docstring give for ``scenario``'s
     robot at joint angles ``q`` (default: the start pose)."""
@@ -207,84 +298,26 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
     numbers = loop_numbers(scenario, q)
     f = numbers["gravity_error_force"]
     mass = numbers["lightest_task_mass"]
-    lam = [100.0, 100.0, 100.0]
-    K3 = max(1000.0, _ceil_to(abs(f[2]) / (VERTICAL_ERROR * lam[2]), 1000.0))
-    K = [400.0, 400.0, K3]
-    K_o = [20.0, 20.0, 20.0]
-    lam_o = [20.0, 20.0, 20.0]
     plant = make_robot_model(scenario.robot)
-    rate_v, rate_w, rate = (
-        _rates(plant, q, scenario.robot.tool_frame, K, K_o, period)
-        if period > 0
-        else (0.0, 0.0, 0.0)
+    frame = scenario.robot.tool_frame
+
+    def rates(K, K_o, d_n=0.0):
+        if not period > 0:
+            return 0.0, 0.0, 0.0
+        return _rates(plant, q, frame, K, K_o, period, d_n)
+
+    K, lam, K_o, lam_o = _rule_gains(f)
+    K, K_o, rate_v, rate_w, rate = _within_sampled_rate(rates, K, K_o)
+    k_n, d_n = c.null_space_stiffness, c.null_space_damping
+    if len(q) > 6 and period > 0:
+        k_n, d_n, rate = _null_space_gains(rates, K, K_o)
+    delta_k, learned = _sliding_scale(c.fuzzy, f, mass, period)
+    x_p = float(
+        np.linalg.norm(start_position(scenario, believed_contour(scenario)))
     )
-    if rate > SAMPLED_RATE:
-        # Each part to its share of the limit, as the rate is linear in
-        # the gains (lambda max of a sum of PSD pencils <= the sum).
-        share = SAMPLED_RATE / 2
-        sv = min(1.0, share / rate_v) if rate_v > 0 else 1.0
-        sw = min(1.0, share / rate_w) if rate_w > 0 else 1.0
-        if sv == 1.0:
-            sw = min(1.0, (SAMPLED_RATE - rate_v) / rate_w)
-        elif sw == 1.0:
-            sv = min(1.0, (SAMPLED_RATE - rate_w) / rate_v)
-        K_v = [k * sv for k in K]
-        K_w = [k * sw for k in K_o]
-        # Both parts act on different joints mostly: the sum's rate is
-        # below the parts' sum; scale both up to the limit again (never
-        # above the rule's gains).
-        both = _rates(plant, q, scenario.robot.tool_frame, K_v, K_w, period)[2]
-        up = SAMPLED_RATE / both
-        K = [_nice(min(k, kv * up)) for k, kv in zip(K, K_v)]
-        K_o = [_nice(min(k, kw * up)) for k, kw in zip(K_o, K_w)]
-        rate_v, rate_w, rate = _rates(
-            plant, q, scenario.robot.tool_frame, K, K_o, period
-        )
-    # More than 6 joints: the null-space posture PD (stiffness / damping
-    # 20 1/s as written, 200 / 10) within what the rate leaves.
-    d_n, k_n = c.null_space_damping, c.null_space_stiffness
-    n_joints = len(q)
-    if n_joints > 6 and period > 0:
-        d_n, k_n = 10.0, 200.0
-        with_null = _rates(
-            plant, q, scenario.robot.tool_frame, K, K_o, period, d_n
-        )[2]
-        if with_null > SAMPLED_RATE * 1.2:
-            alone = _rates(
-                plant,
-                q,
-                scenario.robot.tool_frame,
-                [0.0] * 3,
-                [0.0] * 3,
-                period,
-                1.0,
-            )[2]  # per unit of d_n
-            d_n = _nice(min(10.0, 0.5 * SAMPLED_RATE / alone))
-            k_n = _nice(20.0 * d_n)
-        rate = _rates(plant, q, scenario.robot.tool_frame, K, K_o, period, d_n)[
-            2
-        ]
-    slope = (
-        min(SLOPE_MAX, SLOPE_RATE * mass / period) if period > 0 else SLOPE_MAX
-    )
-    learned = max(abs(f[a]) for a in c.fuzzy.axes) if c.fuzzy.axes else 0.0
-    delta_k = max(MIN_DELTA_K, learned / slope)
-    delta_k = _ceil_to(delta_k, 0.001 if delta_k < 0.01 else 0.005)
-    contour = believed_contour(scenario)
-    x_p = float(np.linalg.norm(start_position(scenario, contour)))
+    # y0 = ||x_p|| / x_max inside the rule base, with room.
     x_max = max(1.0, _ceil_to(1.25 * x_p, 0.5))
-    p = scenario.process
-    g_max = p.cutting_coefficient * (
-        scenario.task.desired_depth * scenario.tool.engagement
-        + max([b.height * b.thickness for b in p.burrs], default=0.0)
-    )
-    max_step = scenario.simulation.max_step
-    # With process.sample_mean the damping is exact at any step.
-    if period > 0 and g_max > 0 and not p.sample_mean:
-        steps = max(
-            1, math.ceil(g_max * period / (STEP_RATE * mass) * (1 - 5e-3))
-        )
-        max_step = min(max_step, period / steps)
+    g_max, max_step = _max_step(scenario, period, mass)
     numbers = {
         "cutting_damping_max_Ns_per_m": float(g_max),
         "gravity_error_force_N": [float(v) for v in f],
@@ -314,26 +347,34 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
     )
 
 
-def apply_gains(scenario: Scenario, design: GainDesign) -> Scenario:
-    """Writes ``design``'s gains into ``scenario`` (in place) and marks
-    them written (``controller.design: written``)."""
+def _write_gains(scenario: Scenario, design: GainDesign):
+    """Writes ``design`` into ``scenario``, a copy the caller owns."""
     from deburr_drake.config import set_field
 
     for path, value in design.as_fields().items():
         set_field(scenario, path, value)
     scenario.controller.design = "written"
-    return scenario.validate()
+    scenario.validate()
 
 
-def resolve_gains(scenario: Scenario) -> GainDesign:
-    """If ``controller.design`` resolves to ``auto`` (the default for a
-    robot from a file), designs the gains (:func:`design_gains`), writes
-    them into ``scenario`` and returns the design; otherwise None."""
-    if scenario.controller.resolved_design(scenario.robot) != "auto":
-        return None
-    design = design_gains(scenario)
-    apply_gains(scenario, design)
-    return design
+def apply_gains(scenario: Scenario, design: GainDesign) -> Scenario:
+    """A copy of ``scenario`` with ``design``'s gains written and marked
+    written (``controller.design: written``); ``scenario`` is left as
+    it is."""
+    resolved = copy.deepcopy(scenario)
+    _write_gains(resolved, design)
+    return resolved
+
+
+def resolve_gains(scenario: Scenario) -> Scenario:
+    """A copy of ``scenario`` with its gains designed
+    (:func:`design_gains`) if ``controller.design`` resolves to ``auto``
+    (the default for a robot from a file), else an equal copy;
+    ``scenario`` is left as it is."""
+    resolved = copy.deepcopy(scenario)
+    if scenario.controller.resolved_design(scenario.robot) == "auto":
+        _write_gains(resolved, design_gains(scenario))
+    return resolved
 
 
 #: The designed slope bound keeps K_k plus the learned slope at this
@@ -344,20 +385,18 @@ SLOPE_LIMIT_FRACTION = 0.75
 MIN_SLOPE_BOUND = 1.0
 
 
-def resolve_slope_bound(scenario: Scenario):
-    """``controller.fuzzy.max_slope`` 0 (designed) of a fuzzy controller:
+def slope_bound(scenario: Scenario) -> Optional[float]:
+    """The designed ``controller.fuzzy.max_slope`` (N s/m) of a fuzzy
+    controller whose bound is 0 (designed), else None:
     SLOPE_LIMIT_FRACTION x 2 m / T - max K_k over the fuzzy axes, m the
     lightest task mass at the start pose
-    (:func:`deburr_drake.cell.robot.loop_numbers`), written into
-    ``scenario``; returns it (None when nothing was designed). The sampled
-    loop's limit on the total gain on s_k is about 2 m / T (a mass under a
-    sampled damper: the per-sample factor 1 - K T / m reaches -1; arm5:
-    m = 7.03 kg, 2 m / T = 5625 N s/m, and validate_stability measured the
-    limit between K = 5500, stable, and 5656, a 200 Hz cycle). arm5 with
-    paper.yaml: 3819 N s/m; its paper pass learns up to 3147 N s/m (axis
-    x1, between s = -4 and 0 mm/s), so the bound leaves the paper's
-    experiment as it was, and a batch whose fifth part had learned 6100
-    N s/m (the sixth then cycled) stays below it."""
+    (:func:`deburr_drake.cell.robot.loop_numbers`).
+
+    The sampled loop's limit on the total gain on s_k is about 2 m / T (a
+    mass under a sampled damper: the per-sample factor 1 - K T / m
+    reaches -1); the fraction leaves the learned slope room below it.
+    docs/stability.md compares the bound with arm5's measured limit and
+    with what its paper pass learns."""
     c = scenario.controller
     f = c.fuzzy
     if f.max_slope != 0 or c.kind != "fuzzy" or not c.control_period > 0:
@@ -366,7 +405,25 @@ def resolve_slope_bound(scenario: Scenario):
 
     m = loop_numbers(scenario)["lightest_task_mass"]
     K = max(c.sliding_gain[a] for a in f.axes)
-    f.max_slope = max(
+    return max(
         SLOPE_LIMIT_FRACTION * 2.0 * m / c.control_period - K, MIN_SLOPE_BOUND
     )
-    return f.max_slope
+
+
+def resolve_slope_bound(scenario: Scenario) -> Scenario:
+    """A copy of ``scenario`` with ``controller.fuzzy.max_slope`` designed
+    (:func:`slope_bound`) where it is 0, else an equal copy; ``scenario``
+    is left as it is."""
+    resolved = copy.deepcopy(scenario)
+    bound = slope_bound(scenario)
+    if bound is not None:
+        resolved.controller.fuzzy.max_slope = bound
+    return resolved
+
+
+def resolve_design(scenario: Scenario) -> Scenario:
+    """A copy of ``scenario`` with every designed value resolved: the
+    gains (:func:`resolve_gains`), then the fuzzy slope bound from them
+    (:func:`resolve_slope_bound`). What the diagram is built from and
+    what a run is simulated with; a resolved scenario comes back equal."""
+    return resolve_slope_bound(resolve_gains(scenario))

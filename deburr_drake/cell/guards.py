@@ -34,7 +34,7 @@ from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 from pydrake.systems.primitives import Saturation
 
 from deburr_drake.cell.process import PROCESS_STATE
-from deburr_drake.config import GuardsConfig, Scenario
+from deburr_drake.config import ConfigError, GuardsConfig, Scenario
 from deburr_drake.control.layout import CHAMFER_STATE
 
 __all__ = [
@@ -144,9 +144,29 @@ class SafetyGuards(LeafSystem):
     """Checks the logged signals every ``limits.check_period`` and requests
     termination naming the guard that tripped.
 
-    Input ports: one per logged signal, named as its logger
-    (``signal_sizes``); the checks read ``actuation`` (N m), ``tool_force``
-    (N, world) and ``chamfer`` (the observer's CHAMFER_STATE).
+    .. pydrake_system::
+
+        name: SafetyGuards
+        input_ports:
+        - chamfer
+        - actuation
+        - tool_force
+        - controller (optional)
+        - estimates (optional)
+        - desired_normal_force (optional)
+        - command (optional)
+        - reference (optional)
+        - process (optional)
+        - probe (optional)
+        - touch_points (optional)
+        - registration (optional)
+
+    One input port per logged signal, named as its logger
+    (``signal_sizes``; the names above are the cell's, see
+    deburr_drake.cell.diagram.LOGGED). The checks read ``actuation``
+    (N m), ``tool_force`` (N, world: the force sensor's reading),
+    ``chamfer`` (the observer's CHAMFER_STATE) and, where it is logged,
+    ``process`` (the true depth); every input is checked for NaN.
     Discrete state ``contact``: [contact made (0/1), time contact was lost
     (s, -1 while in contact)], written only when it changes. Every guard
     is checked each ``check_period``; the joint torque also each
@@ -166,7 +186,7 @@ class SafetyGuards(LeafSystem):
         }
         for name in ("actuation", "tool_force", "chamfer"):
             if name not in self._inputs:
-                raise ValueError(f"SafetyGuards needs the {name!r} signal")
+                raise ConfigError(f"SafetyGuards needs the {name!r} signal")
         self._ports = list(self._inputs.values())
         self._slices, start = {}, 0
         for name, size in signal_sizes.items():

@@ -42,43 +42,60 @@ def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
     )
     add_joint_friction(plant, scenario.robot)
     if scenario.edge.kind == "straight":
-        mid, tangent, normal = straight_frame(scenario)
-        register_compliant_wall(
-            plant,
-            mid=mid,
-            tangent=tangent,
-            normal=normal,
-            length=scenario.edge.length,
-            thickness=scenario.tube.wall_thickness,
-            height=scenario.tube.height,
-            layer_height=scenario.tube.compliant_layer_height,
-            hydroelastic_modulus=scenario.tube.hydroelastic_modulus,
-            hunt_crossley_dissipation=scenario.tube.hunt_crossley_dissipation,
-            # The wall is the edge: the process cuts only where it is
-            # (process.material_overlap), and off its ends there is no
-            # contact either.
-            margin=0.0,
-        )
-        finalize(plant)
-        return plant, scene_graph
+        _add_wall(plant, scenario)
+    elif scenario.edge.kind == "profile":
+        _add_profile(plant, scenario)
+    else:
+        _add_ring(plant, scenario)
+    finalize(plant)
+    return plant, scene_graph
+
+
+def _add_wall(plant, scenario: Scenario):
+    """A straight edge: a compliant wall as long as the edge."""
+    tube = scenario.tube
+    mid, tangent, normal = straight_frame(scenario)
+    register_compliant_wall(
+        plant,
+        mid=mid,
+        tangent=tangent,
+        normal=normal,
+        length=scenario.edge.length,
+        thickness=tube.wall_thickness,
+        height=tube.height,
+        layer_height=tube.compliant_layer_height,
+        hydroelastic_modulus=tube.hydroelastic_modulus,
+        hunt_crossley_dissipation=tube.hunt_crossley_dissipation,
+        # The wall is the edge: the process cuts only where it is
+        # (process.material_overlap), and off its ends there is no
+        # contact either.
+        margin=0.0,
+    )
+
+
+def _add_profile(plant, scenario: Scenario):
+    """A profiled edge: a compliant layer along the contour."""
     tube = scenario.tube
     z_top = tube.position[2] + tube.height
-    if scenario.edge.kind == "profile":
-        register_compliant_profile(
-            plant,
-            make_contour(scenario).with_offset(0.0),
-            wall_thickness=tube.wall_thickness,
-            z_bottom=z_top - tube.compliant_layer_height,
-            z_top=z_top,
-            hydroelastic_modulus=tube.hydroelastic_modulus,
-            hunt_crossley_dissipation=tube.hunt_crossley_dissipation,
-            segments_per_turn=tube.mesh_segments,
-            n_radial=tube.mesh_radial_cells,
-            n_z=tube.mesh_height_cells,
-            visual_z_bottom=tube.position[2],
-        )
-        plant.Finalize()
-        return plant, scene_graph
+    register_compliant_profile(
+        plant,
+        make_contour(scenario).with_offset(0.0),
+        wall_thickness=tube.wall_thickness,
+        z_bottom=z_top - tube.compliant_layer_height,
+        z_top=z_top,
+        hydroelastic_modulus=tube.hydroelastic_modulus,
+        hunt_crossley_dissipation=tube.hunt_crossley_dissipation,
+        segments_per_turn=tube.mesh_segments,
+        n_radial=tube.mesh_radial_cells,
+        n_z=tube.mesh_height_cells,
+        visual_z_bottom=tube.position[2],
+    )
+
+
+def _add_ring(plant, scenario: Scenario):
+    """The tube's inner edge: a compliant ring on a rigid tube's visual."""
+    tube = scenario.tube
+    z_top = tube.position[2] + tube.height
     register_compliant_ring(
         plant,
         inner_radius=tube.inner_radius,
@@ -101,5 +118,3 @@ def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
         center_xy=tube.position[:2],
         n_theta=tube.mesh_segments,
     )
-    finalize(plant)
-    return plant, scene_graph

@@ -19,7 +19,7 @@ from pydrake.systems.primitives import (
     Saturation,
 )
 
-from deburr_drake.config import BurrConfig, ProcessConfig
+from deburr_drake.config import BurrConfig, ConfigError, ProcessConfig
 from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.control.layout import VectorLayout
 from deburr_drake.math.damping import held_damper_mean
@@ -83,7 +83,7 @@ class FinishBins:
 
     def __init__(self, length: float, bin_length: float):
         if not math.isfinite(length):
-            raise ValueError(
+            raise ConfigError(
                 "the surface-finish record needs a finite edge "
                 f"length, got {length}"
             )
@@ -256,7 +256,7 @@ def force_law_terms(
     v=None,
     inertia=None,
     nu: int | None = None,
-    held: HeldMean = None,
+    held: HeldMean | None = None,
 ) -> np.ndarray:
     """The terms of :func:`make_cutting_force_law` that make it give
     :func:`cutting_force` (J: the tool point's translational Jacobian, 3 x
@@ -450,9 +450,9 @@ def make_cutting_force_law(
     ``process.sample_mean``'s terms read it) and the process's held
     ``force_law_terms`` (:func:`force_law_terms_size`), outputs
     ``generalized_force`` (nv, for the plant's applied generalized force)
-    and ``tool_force`` (3, N, world: the same force on the tool, for the
-    force sensor: a force applied through the joints does not pass the
-    sensor's weld).
+    and ``applied_force`` (3, N, world: the same force, the true force
+    applied on the tool, for the force sensor: a force applied through the
+    joints does not pass the sensor's weld).
 
     The integrator evaluates whatever feeds the plant's applied forces
     about eight times a step to linearize it, so the law is built from
@@ -480,7 +480,7 @@ def make_cutting_force_law(
     sign = add("direction", Saturation([-1.0], [1.0]))
     mux = add("speed_and_direction", Multiplexer([1, 1]))
     joint_force = affine("generalized_force", 2, nv)
-    tool_force = affine("tool_force", 2, 3)
+    applied_force = affine("applied_force", 2, 3)
     # S (v - v0): the diagonal-making term (force_law_terms).
     stabilized = affine("stabilized_generalized_force", nv, nv)
     # k . u_act + k0: minus the held mean force along the edge, applied
@@ -494,7 +494,7 @@ def make_cutting_force_law(
     connect(scale.get_output_port(), sign.get_input_port())
     connect(speed.GetOutputPort("w_out"), mux.get_input_port(0))
     connect(sign.get_output_port(), mux.get_input_port(1))
-    for k, law in ((1, joint_force), (3, tool_force)):
+    for k, law in ((1, joint_force), (3, applied_force)):
         connect(mux.get_output_port(), law.GetInputPort("w_in"))
         connect(terms.get_output_port(k), law.GetInputPort("A"))
         connect(terms.get_output_port(k + 1), law.GetInputPort("b"))
@@ -510,7 +510,7 @@ def make_cutting_force_law(
     builder.ExportInput(mean.GetInputPort("w_in"), "actuation")
     builder.ExportInput(terms.get_input_port(), "force_law_terms")
     builder.ExportOutput(along_edge.GetOutputPort("w_out"), "generalized_force")
-    builder.ExportOutput(tool_force.GetOutputPort("w_out"), "tool_force")
+    builder.ExportOutput(applied_force.GetOutputPort("w_out"), "applied_force")
     diagram = builder.Build()
     diagram.set_name("cutting_force")
     return diagram
@@ -525,6 +525,9 @@ class CuttingProcess(LeafSystem):
         name: CuttingProcess
         input_ports:
         - plant_state
+        - generalized_acceleration (optional)
+        - applied_generalized_force (optional)
+        - actuation (optional)
         - spindle (optional)
         output_ports:
         - force_law_terms
@@ -576,7 +579,7 @@ class CuttingProcess(LeafSystem):
         *,
         cut_height: float,
         cutter_radius: float,
-        tool_point: ToolPoint = None,
+        tool_point: ToolPoint | None = None,
         spindle_input: bool = False,
     ):
         super().__init__()

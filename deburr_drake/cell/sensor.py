@@ -2,8 +2,8 @@
 joint of the plant), sampled and low-pass filtered like a real one.
 
 Use: ``ForceSensor(plant, "ft_sensor", scenario.sensor)`` on a plant with
-a weld joint between flange and tool; its ``tool_force`` output is what
-the observer and the controller read."""
+a weld joint between flange and tool; its ``measured_force`` output is
+what the observer and the controller read."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
-from deburr_drake.config import SensorConfig
+from deburr_drake.config import ConfigError, SensorConfig
 from deburr_drake.control.kinematics import ToolPoint
 
 __all__ = ["ForceSensor"]
@@ -42,10 +42,10 @@ class ForceSensor(LeafSystem):
         input_ports:
         - reaction_forces
         - plant_state
-        - applied_force
+        - applied_force (optional)
         - noise
         output_ports:
-        - tool_force
+        - measured_force
 
     - ``reaction_forces``: the plant's reaction forces (one SpatialForce per
       joint, on the child body at the child joint frame, in that frame).
@@ -53,7 +53,7 @@ class ForceSensor(LeafSystem):
     - ``applied_force`` (3, N, world): force on the tool applied through
       the joints (zero if unconnected).
     - ``noise`` (3): unit-variance samples, scaled by ``noise_std`` (N).
-    - ``tool_force`` (3, N): filtered force on the tool, world frame.
+    - ``measured_force`` (3, N): filtered force on the tool, world frame.
     - Discrete state (3, N): the filter, updated every ``sample_period``.
 
     A ``tool_point`` (a ToolPoint of a frame on the sensor's child body, on
@@ -67,7 +67,7 @@ class ForceSensor(LeafSystem):
         joint_name: str,
         config: SensorConfig,
         *,
-        tool_point: ToolPoint = None,
+        tool_point: ToolPoint | None = None,
     ):
         super().__init__()
         config.validate()
@@ -83,7 +83,7 @@ class ForceSensor(LeafSystem):
             # R_WJ = R_WF R_FJ, F the tool point's frame, fixed on the body.
             frame = plant.GetFrameByName(tool_point.frame.name())
             if frame.body().index() != tool.index():
-                raise ValueError(
+                raise ConfigError(
                     f"tool_point's frame {frame.name()!r} is not on the "
                     f"sensor's child body {tool.name()!r}"
                 )
@@ -112,7 +112,7 @@ class ForceSensor(LeafSystem):
         self.DeclarePeriodicDiscreteUpdateEvent(
             config.sample_period, 0.0, self._update
         )
-        self.DeclareStateOutputPort("tool_force", self._state_index)
+        self.DeclareStateOutputPort("measured_force", self._state_index)
 
     def raw_force(self, context) -> np.ndarray:
         """The unfiltered, noise-free, weight-compensated reading (N,

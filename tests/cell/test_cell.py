@@ -1,11 +1,14 @@
 """The deburring cell: named systems, the arm's start pose, the cutting
 process's burrs and surface-finish record."""
 
+import copy
+
 import numpy as np
 import pytest
 
 from deburr_drake.cell.diagram import SYSTEM_NAMES, make_deburring_diagram
 from deburr_drake.cell.edge import make_contour, start_position
+from deburr_drake.cell.gains import resolve_design
 from deburr_drake.cell.models import POINT_MASS_URL, make_kinematic_model
 from deburr_drake.cell.process import CuttingProcess, burr_profile
 from deburr_drake.config import BurrConfig, ProcessConfig, load_scenario
@@ -29,6 +32,39 @@ def test_every_system_is_named(paper_diagram):
     controller = diagram.GetSubsystemByName("controller")
     # 242 rules (2 x 11^2) plus delta_d.
     assert controller.num_continuous_states() == 243
+
+
+@pytest.mark.parametrize(
+    "name, text",
+    [("paper", None), ("paper_6dof", "controller: {design: auto}")],
+)
+def test_the_builder_leaves_the_scenario_as_it_is_and_builds_the_design(
+    name, text
+):
+    """The diagram is built from the designed values (the gains of
+    ``design: auto``, the fuzzy slope bound), the scenario given stays as
+    it was."""
+    scenario = load_scenario(name, text=text)
+    given = copy.deepcopy(scenario)
+    diagram = make_deburring_diagram(scenario=scenario)
+    assert scenario == given
+    resolved = resolve_design(scenario)
+    built = diagram.GetSubsystemByName("controller").config
+    assert built == resolved.controller != scenario.controller
+
+
+def test_the_force_path_ports_say_where_the_force_comes_from(paper_diagram):
+    """The force law's ``applied_force`` (the true force on the tool) into
+    the sensor, whose ``measured_force`` the controller side reads."""
+    _, diagram = paper_diagram
+    law = diagram.GetSubsystemByName("cutting_force")
+    sensor = diagram.GetSubsystemByName("force_sensor")
+    assert law.HasOutputPort("applied_force")
+    assert sensor.HasInputPort("applied_force")
+    assert [
+        sensor.get_output_port(i).get_name()
+        for i in range(sensor.num_output_ports())
+    ] == ["measured_force"]
 
 
 def test_arm_starts_at_the_contour_start_in_contact(paper_diagram):

@@ -1,5 +1,4 @@
-"""Fault injection (issue 10): each fault's effect on the signal it
-touches."""
+"""Fault injection: each fault's effect on the signal it touches."""
 
 import numpy as np
 import pytest
@@ -25,6 +24,8 @@ def test_bias_and_dropouts_on_the_reading():
     system = SensorFaults(faults, 0.0025)
     context = system.CreateDefaultContext()
     port = system.get_input_port()
+    assert port.get_name() == "measured_force"
+    assert system.get_output_port().get_name() == "faulted_force"
     port.FixValue(context, [3.0, 4.0, 5.0])
     out = system.get_output_port()
     context.SetTime(0.9)

@@ -143,7 +143,10 @@ def test_cutting_force_law_is_eq3_through_the_jacobian(arm, speed):
         atol=1e-12,
     )
     np.testing.assert_allclose(
-        law.GetOutputPort("tool_force").Eval(context), f, rtol=1e-12, atol=1e-12
+        law.GetOutputPort("applied_force").Eval(context),
+        f,
+        rtol=1e-12,
+        atol=1e-12,
     )
 
 
@@ -357,7 +360,10 @@ def test_held_mean_law_is_the_damper_s_mean_and_reads_the_actuation(arm, speed):
         atol=1e-12,
     )
     np.testing.assert_allclose(
-        law.GetOutputPort("tool_force").Eval(context), f, rtol=1e-12, atol=1e-12
+        law.GetOutputPort("applied_force").Eval(context),
+        f,
+        rtol=1e-12,
+        atol=1e-12,
     )
 
 

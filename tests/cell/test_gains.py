@@ -8,9 +8,14 @@ import pytest
 
 from deburr_drake.cell.gains import (
     SAMPLED_RATE,
+    SLOPE_LIMIT_FRACTION,
     VERTICAL_ERROR,
+    apply_gains,
     design_gains,
+    resolve_design,
     resolve_gains,
+    resolve_slope_bound,
+    slope_bound,
 )
 from deburr_drake.cell.robot import loop_numbers
 from deburr_drake.config import load_scenario
@@ -66,28 +71,25 @@ def test_a_light_wrist_gets_lower_gains_within_the_sampled_rate():
     assert design.orientation_gain[0] < 20.0
 
 
-def test_resolve_writes_the_gains_for_a_file_robot_only():
+def test_resolve_designs_the_gains_of_a_file_robot_only_on_a_copy():
     shipped = load_scenario("paper_6dof")
-    written = copy.deepcopy(shipped.controller)
-    assert resolve_gains(shipped) is None and shipped.controller == written
-    shipped.controller.design = "auto"
-    shipped.controller.sliding_gain = [1.0, 1.0, 1.0]
-    design = resolve_gains(shipped)
-    assert (
-        shipped.controller.sliding_gain
-        == design.sliding_gain
-        == written.sliding_gain
+    assert resolve_gains(shipped) == shipped  # written: an equal copy
+    auto = load_scenario(
+        "paper_6dof",
+        text="controller: {design: auto, sliding_gain: [1.0, 1.0, 1.0]}",
     )
-    assert shipped.controller.design == "written"
+    given = copy.deepcopy(auto)
+    resolved = resolve_gains(auto)
+    assert auto == given
+    assert resolved.controller.sliding_gain == shipped.controller.sliding_gain
+    assert resolved.controller.design == "written"
+    design = design_gains(auto)
+    assert apply_gains(auto, design) == resolved and auto == given
 
 
 def test_slope_bound_designed_from_the_lightest_task_mass():
     """fuzzy.max_slope 0: 0.75 x 2 m / T - K (m the lightest task mass at
-    the start pose), written into the scenario; a given bound is kept."""
-    from deburr_drake.cell.gains import (
-        SLOPE_LIMIT_FRACTION,
-        resolve_slope_bound,
-    )
+    the start pose), in a resolved copy; a given bound is kept."""
     from deburr_drake.cell.robot import loop_numbers
 
     for name in ("paper", "point_mass"):
@@ -95,13 +97,31 @@ def test_slope_bound_designed_from_the_lightest_task_mass():
         m = loop_numbers(s)["lightest_task_mass"]
         T = s.controller.control_period
         expected = SLOPE_LIMIT_FRACTION * 2 * m / T - 400.0
-        assert resolve_slope_bound(s) == pytest.approx(expected)
-        assert s.controller.fuzzy.max_slope == pytest.approx(expected)
-        assert resolve_slope_bound(s) is None  # designed once
+        assert slope_bound(s) == pytest.approx(expected)
+        resolved = resolve_slope_bound(s)
+        assert s.controller.fuzzy.max_slope == 0.0
+        assert resolved.controller.fuzzy.max_slope == pytest.approx(expected)
+        assert slope_bound(resolved) is None  # designed once
+        assert resolve_slope_bound(resolved) == resolved
     s = load_scenario("paper")
     s.controller.fuzzy.max_slope = 1234.0
-    assert resolve_slope_bound(s) is None
-    assert s.controller.fuzzy.max_slope == 1234.0
+    assert slope_bound(s) is None
+    assert resolve_slope_bound(s).controller.fuzzy.max_slope == 1234.0
+
+
+@pytest.mark.parametrize(
+    "name, text",
+    [("paper", None), ("paper_6dof", "controller: {design: auto}")],
+)
+def test_the_design_leaves_the_scenario_it_is_given_as_it_is(name, text):
+    scenario = load_scenario(name, text=text)
+    given = copy.deepcopy(scenario)
+    resolved = resolve_design(scenario)
+    assert scenario == given
+    assert resolved != scenario  # something was designed
+    assert resolve_design(resolved) == resolved
+    design_gains(scenario)
+    assert scenario == given
 
 
 def test_the_step_is_lowered_only_for_eq3_between_samples():

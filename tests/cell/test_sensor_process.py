@@ -112,7 +112,7 @@ def test_low_pass_update():
     alpha = 1 - np.exp(-2 * np.pi * 20.0 * 0.0025)
     y = sensor.EvalUniquePeriodicDiscreteUpdate(sc).get_vector(0)
     np.testing.assert_allclose(y.CopyToVector(), alpha * f_ext, rtol=1e-9)
-    assert sensor.GetOutputPort("tool_force").Eval(sc) == pytest.approx(
+    assert sensor.GetOutputPort("measured_force").Eval(sc) == pytest.approx(
         np.zeros(3)
     )  # no feedthrough: the state, not the input
 

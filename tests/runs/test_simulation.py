@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from deburr_drake.cell.diagram import LOGGED, make_deburring_diagram
-from deburr_drake.config import load_scenario
+from deburr_drake.config import ConfigError, load_scenario
 from deburr_drake.runs.simulation import logger_names, simulate
 
 
@@ -19,6 +19,10 @@ def test_extra_logs_come_back_by_name():
     )
     assert set(logger_names(diagram)) == set(LOGGED) | {"feed", "state"}
     log = simulate(diagram, scenario, duration=0.05)
+    # The run reports the designed values it was built with (the fuzzy
+    # slope bound); the scenario given stays as it is.
+    assert scenario.controller.fuzzy.max_slope == 0.0
+    assert log.scenario.controller.fuzzy.max_slope > 0.0
     period = scenario.simulation.log_period
     assert log["feed"]["value"].shape == (len(log["feed"]["t"]), 1)
     np.testing.assert_allclose(np.diff(log["feed"]["t"]), period)
@@ -28,7 +32,7 @@ def test_extra_logs_come_back_by_name():
 
 def test_an_extra_log_may_not_replace_a_standard_one():
     scenario = load_scenario("point_mass")
-    with pytest.raises(ValueError, match="'chamfer' is logged already"):
+    with pytest.raises(ConfigError, match="'chamfer' is logged already"):
         make_deburring_diagram(
             scenario=scenario,
             extra_logs={"chamfer": ("command_generator", "feed")},
