@@ -146,6 +146,14 @@ def _preflight(args, scenario):
     return preflight(scenario, say=lambda line: print(line, flush=True))
 
 
+def _as_run(scenario, found):
+    """The scenario as it will run: the pre-flight's (its design written)
+    if there was one, every designed value resolved."""
+    from deburr_drake.cell.gains import resolve_design
+
+    return resolve_design(found.scenario if found is not None else scenario)
+
+
 def _write_resolved(out, scenario, found):
     """scenario.yaml (the scenario as run: the designed gains written) and,
     after a pre-flight, preflight.json, so the run can be repeated."""
@@ -188,6 +196,7 @@ def _simulate(args) -> int:
         )
     check_part_in_reach(scenario)
     found = _preflight(args, scenario)
+    scenario = _as_run(scenario, found)
     passes = scenario.simulation.stop_after_passes
     print(
         f"deburr-drake simulate: scenario '{scenario.name}' "
@@ -484,6 +493,7 @@ def _compare(args) -> int:
     )
     check_part_in_reach(scenario)
     found = _preflight(args, scenario)
+    scenario = _as_run(scenario, found)
     print(
         f"deburr-drake compare: scenario '{scenario.name}', "
         f"{', '.join(controllers)}, "

@@ -44,6 +44,7 @@ from pydrake.common import RandomGenerator
 from pydrake.systems.framework import Context, Diagram
 
 from deburr_drake.cell.diagram import make_deburring_diagram
+from deburr_drake.cell.gains import resolve_design
 from deburr_drake.cell.process import PROCESS_STATE
 from deburr_drake.config import (
     ConfigError,
@@ -258,6 +259,9 @@ def find_operating_point(
         raise ConfigError(
             f"after_contact = {after_contact!r} is invalid: allowed >= 0 s"
         )
+    # The designed values resolved once: the operating point's scenario is
+    # what its maps and frozen variants are built from.
+    scenario = resolve_design(scenario)
     diagram = make_deburring_diagram(scenario=scenario)
     simulator = make_simulator(diagram, scenario)
     context = simulator.get_mutable_context()

@@ -104,8 +104,7 @@ def start_operating_point(scenario: Scenario) -> OperatingPoint:
     first period is run with K and K_o at 1e-9 of theirs, so the state
     does not depend on the gains checked (a gain far too high moves the
     arm within one sample)."""
-    quiet = copy.deepcopy(scenario)
-    resolve_gains(quiet)
+    quiet = resolve_gains(scenario)
     c = quiet.controller
     c.sliding_gain = [1e-9 * k for k in c.sliding_gain]
     c.orientation_gain = [1e-9 * k for k in c.orientation_gain]
@@ -232,6 +231,9 @@ class Preflight:
     rho: float  # the one-period map's spectral radius at the start pose
     time: float  # s, where it was taken
     design: Optional[GainDesign] = None  # when controller.design is auto
+    # The scenario checked: the caller's with the design written (the
+    # caller's own is left as it is).
+    scenario: Optional[Scenario] = None
     rho_at_margin: Optional[float] = None  # rho at GAIN_MARGIN x K, K_o
     margin_scale: float = 1.0  # the design's K, K_o scaled by this
     seconds: float = 0.0
@@ -354,10 +356,11 @@ def _both_paths(maps: GainMaps, scenario: Scenario):
 def preflight(
     scenario: Scenario, *, say: Callable[[str], None] = lambda line: None
 ) -> Preflight:
-    """Designs the gains if ``controller.design`` is auto (written into
-    ``scenario``, in place) and proves them, then checks the sampled loop
-    at the start pose; ConfigError (one line: the gain, rho, its largest
-    stable value) if it is predicted unstable. Returns what it found."""
+    """Designs the gains if ``controller.design`` is auto and proves them,
+    then checks the sampled loop at the start pose; ConfigError (one line:
+    the gain, rho, its largest stable value) if it is predicted unstable.
+    Returns what it found, with ``scenario`` the one checked (the design
+    written in a copy: ``scenario`` is left as it is)."""
     t0 = time.perf_counter()
     c = scenario.controller
     if not c.control_period > 0:
@@ -369,23 +372,26 @@ def preflight(
                 "(a continuous controller): no sampled "
                 "loop to check"
             ],
+            scenario=resolve_gains(scenario),
         )
-    # controller.design auto: the gains from the model, into ``scenario``.
+    # controller.design auto: the gains from the model, in a copy.
     design = None
     if c.resolved_design(scenario.robot) == "auto":
         design = design_gains(scenario)
-        apply_gains(scenario, design)
+        scenario = apply_gains(scenario, design)
     # The one-period map at the start pose.
     op = start_operating_point(scenario)
     maps = GainMaps(op)
-    result = Preflight(rho=maps.rho_full, time=op.time, design=design)
+    result = Preflight(
+        rho=maps.rho_full, time=op.time, design=design, scenario=scenario
+    )
     # A design must hold the gain margin: K and K_o scaled down till it
     # does.
     if design is not None and not predicted_unstable(result.rho):
         maps = _hold_gain_margin(scenario, maps, result)
-    rho = result.rho
+    scenario, rho = result.scenario, result.rho
     if result.design is not None:
-        result.lines += _design_lines(result, c)
+        result.lines += _design_lines(result, scenario.controller)
     for line in result.lines:
         say(line)
     # Predicted unstable: the one line naming the gain to lower.
@@ -413,7 +419,8 @@ def _hold_gain_margin(
     """rho at GAIN_MARGIN x the designed K and K_o into ``result``; where
     it is not stable, K and K_o scaled down by 0.7 at a time (to
     MIN_MARGIN_SCALE at most) until it is, the scaled design written into
-    ``scenario`` and ``result`` and the start pose's map taken again.
+    ``result`` (and a copy of ``scenario`` in it) and the start pose's map
+    taken again.
     Returns the maps of the gains kept."""
     _both_paths(maps, scenario)
     result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
@@ -429,8 +436,9 @@ def _hold_gain_margin(
         result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
     elif scale < 1.0:
         design = result.design.scaled(scale)
-        apply_gains(scenario, design)
+        scenario = apply_gains(scenario, design)
         result.design, result.margin_scale = design, scale
+        result.scenario = scenario
         maps = GainMaps(start_operating_point(scenario))
         _both_paths(maps, scenario)
         result.rho = maps.rho_full

@@ -26,7 +26,7 @@ from pydrake.systems.analysis import (
 from pydrake.systems.framework import Diagram, EventStatus
 from pydrake.systems.primitives import VectorLogSink
 
-from deburr_drake.cell.gains import resolve_design
+from deburr_drake.cell.gains import resolve_design, resolve_gains
 from deburr_drake.cell.process import PROCESS_STATE
 from deburr_drake.config import ConfigError, Scenario
 from deburr_drake.control.layout import (
@@ -149,8 +149,9 @@ def make_simulator(
     diagram: Diagram, scenario: Scenario, *, monitor: Optional[Callable] = None
 ) -> Simulator:
     """The scenario's integrator on ``diagram``, with :func:`set_monitor`'s
-    cache refresh and ``monitor``."""
-    sim = scenario.simulation
+    cache refresh and ``monitor``. A designed step (``controller.design``
+    auto) is taken from the design, as the builder takes its gains."""
+    sim = resolve_gains(scenario).simulation
     simulator = Simulator(diagram)
     ApplySimulatorConfig(
         SimulatorConfig(
