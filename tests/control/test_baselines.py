@@ -175,11 +175,13 @@ def test_kinds_need_their_inputs(model):
     with pytest.raises(ConfigError, match="controller.kind"):
         ControllerConfig(kind="pid").validate()
     with pytest.raises(ConfigError, match=r"controller.robust.gains\[2\]"):
-        _bad_robust().validate()
+        HybridController(model, "tool_tip", _bad_robust("robust"))
+    # The fuzzy law does not read robust.gains.
+    HybridController(model, "tool_tip", _bad_robust("fuzzy"))
 
 
-def _bad_robust():
-    config = ControllerConfig()
+def _bad_robust(kind):
+    config = ControllerConfig(kind=kind)
     config.robust.gains = [1.0, 0.0, -1.0, 0.0, 0.0]
     return config
 
