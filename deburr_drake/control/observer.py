@@ -150,10 +150,10 @@ class ChamferObserver(LeafSystem):
             if registered
             else None
         )
-        # The kinematic part changes with the plant state only, not with
-        # each new force sample; Drake invalidates the output whenever any
-        # discrete state changes (every sample) or the integrator perturbs
-        # and restores the state.
+        # The kinematic part changes with the plant state only. Drake's
+        # cache tracks changes, not values: the output is recomputed at
+        # every force sample and after the integrator perturbs and
+        # restores the state, where the memo saves the kinematics.
         self._last = None  # (plant state's bytes, its kinematics): a memo
         # Narrow: the state, the force and (a part that moves) the time;
         # not every discrete update of the diagram.
