@@ -52,12 +52,11 @@ class CommandConfig:
     # impedance, position; no feedrate law), about the paper's average feed.
     constant_feed: float = 0.0024
     # m/s: the feed law's output is clamped here, as a machine's feed is.
-    # The law scales the tool's speed by (f_td - P'_th) / (f_t - P'_th):
-    # on a chamfer that vanishes under the tool (a part error larger than
-    # the depth) f_t stays near P'_th + v_eps and the feed grew about 20 x
-    # per 25 ms sample, to 450 mm/s and the joint-torque guard (the
-    # robustness study, issue 12). The steady feed (f_td - P'_th) / g of the
-    # study's ranges is at most 14 mm/s (0.2 mm deep, 15 N, k_c - 30 %).
+    # The law scales the tool's speed by (f_td - P'_th) / (f_t - P'_th),
+    # which grows without bound where the chamfer vanishes under the tool
+    # (a part error larger than the depth: f_t stays near P'_th + v_eps).
+    # The clamp sits above the steady feeds (f_td - P'_th) / g of the
+    # scenarios' ranges.
     max_feed: float = 0.02
 
     def validate(self):
@@ -134,11 +133,11 @@ class FuzzyConfig:
     # every fuzzy axis (adjacent weights along s_k differ by at most
     # max_slope x Delta_k; an excess is pulled back at max_slope_rate).
     # The slope adds to K_k on the sampled loop, whose limit on the total
-    # gain is about 2 m / T (m the lightest task mass): unbounded, (35)
-    # steepened the surface part after part in a batch until the 2.5 ms
-    # loop cycled at 200 Hz. 0: designed, 1.5 m / T - K_k at the start
-    # pose (the total then at most 3/4 of the limit,
-    # deburr_drake.cell.gains.resolve_slope_bound); inf: no bound.
+    # gain is about 2 m / T (m the lightest task mass), and (35) alone
+    # can steepen the surface past it over many parts. 0: designed,
+    # 1.5 m / T - K_k at the start pose (the total then at most 3/4 of
+    # the limit, deburr_drake.cell.gains.resolve_slope_bound); inf: no
+    # bound.
     max_slope: float = (
         0.0  # N s/m, bound on the learned surface's slope in s_k (0: designed)
     )
@@ -154,6 +153,20 @@ class FuzzyConfig:
         )
 
     def validate(self, o="controller.fuzzy"):
+        """The fuzzy law's section: the rule base and its adaptation."""
+        self.validate_rule_base(o)
+        _positive(o, "adaptation_gain", self.adaptation_gain)
+        _require(
+            isinstance(self.max_slope, (int, float)) and self.max_slope >= 0.0,
+            f"{o}.max_slope",
+            self.max_slope,
+            "a number >= 0 (0: designed; .inf: none)",
+        )
+        _positive(o, "max_slope_rate", self.max_slope_rate)
+
+    def validate_rule_base(self, o="controller.fuzzy"):
+        """The task axes and the rule base on them: what the controller's
+        state (the rule weights) and the robust law are shaped by."""
         _require(
             isinstance(self.order, int) and 0 <= self.order <= 3,
             f"{o}.order",
@@ -168,14 +181,6 @@ class FuzzyConfig:
         )
         _positive(o, "position_scale", self.position_scale)
         _positive(o, "width_fraction", self.width_fraction)
-        _positive(o, "adaptation_gain", self.adaptation_gain)
-        _require(
-            isinstance(self.max_slope, (int, float)) and self.max_slope >= 0.0,
-            f"{o}.max_slope",
-            self.max_slope,
-            "a number >= 0 (0: designed; .inf: none)",
-        )
-        _positive(o, "max_slope_rate", self.max_slope_rate)
         _require(
             len(set(self.axes)) == len(self.axes)
             and all(a in (0, 1, 2) for a in self.axes),
@@ -260,9 +265,10 @@ class ControllerConfig:
     """Inner-loop hybrid position/force controller (7), (9)-(11), (36), (37),
     R9, R10. Task axes are world x, y, z of the tool tip.
 
-    ``kind`` selects the law (deburr_drake.baselines): ``fuzzy`` (36), (37);
-    ``robust`` (22); ``ideal`` (12) with the true model; ``impedance`` and
-    ``position`` at constant feed. Everything else is shared."""
+    ``kind`` selects the law (deburr_drake.control.laws): ``fuzzy`` (36),
+    (37); ``robust`` (22); ``ideal`` (12) with the true model;
+    ``impedance`` and ``position`` at constant feed. Each reads its own
+    fields (:meth:`validate` checks those and the shared ones only)."""
 
     KINDS = ("fuzzy", "robust", "ideal", "impedance", "position")
     #: Kinds that run at constant feed and ignore the estimator.
@@ -302,10 +308,10 @@ class ControllerConfig:
     # A robot of more than 6 joints: a joint-space PD towards the start
     # posture, projected into the null space of the tool frame's Jacobian
     # (tau_n = (I - J^T J^T+) (k (q_0 - q) - d v)), so the redundancy does
-    # not drift; unused on 5 and 6 joints. A 7-joint arm6 (two coaxial
-    # flange rolls) held its null coordinate within 1 mrad against 0.04 N m
-    # of joint friction; d T / I = 0.13 on its lightest joint.
-    null_space_stiffness: float = 200.0  # N m/rad
+    # not drift; unused on 5 and 6 joints. d T / I below 1 on the lightest
+    # joint (I its inertia, T control_period) keeps the sampled damper
+    # from oscillating.
+    null_space_stiffness: float = 200.0  # N m/rad, k
     null_space_damping: float = 10.0  # N m s/rad, d
     gravity_compensation: bool = True  # -, -tau_g from the controller's model
     model_mass_scale: float = 1.2  # -, controller's model masses / true masses
@@ -326,32 +332,58 @@ class ControllerConfig:
     def validate(self):
         o = "controller"
         _require(
-            self.design in self.DESIGNS,
-            f"{o}.design",
-            self.design,
-            "auto, written or '' (auto for a robot from a file)",
-        )
-        _require(
             self.kind in self.KINDS,
             f"{o}.kind",
             self.kind,
             "one of " + ", ".join(self.KINDS),
         )
+        self._validate_shared(o)
+        {
+            "fuzzy": self._validate_fuzzy,
+            "robust": self._validate_robust,
+            "ideal": self._validate_ideal,
+            "impedance": self.impedance.validate,
+            "position": self.position.validate,
+        }[self.kind]()
+
+    def _validate_shared(self, o):
+        """What every law reads: the controller's shell, K and lambda (the
+        gains design writes them whatever the kind), and the fuzzy axes'
+        rule base. Every law's state holds the rule weights on those axes
+        (one state layout, one log format, whatever the kind), and the
+        robust law acts on the same axes, so the rule base is shared; the
+        fuzzy law's own part is its adaptation (FuzzyConfig.validate)."""
+        _require(
+            self.design in self.DESIGNS,
+            f"{o}.design",
+            self.design,
+            "auto, written or '' (auto for a robot from a file)",
+        )
         _vector(o, "sliding_lambda", self.sliding_lambda, 3, _positive)
         _vector(o, "sliding_gain", self.sliding_gain, 3, _positive)
-        _positive(o, "depth_gain", self.depth_gain)
         _non_negative(o, "control_period", self.control_period)
         _vector(o, "orientation_lambda", self.orientation_lambda, 3, _positive)
         _vector(o, "orientation_gain", self.orientation_gain, 3, _non_negative)
         _positive(o, "model_mass_scale", self.model_mass_scale)
         _non_negative(o, "null_space_stiffness", self.null_space_stiffness)
         _non_negative(o, "null_space_damping", self.null_space_damping)
-        n = len(self.fuzzy.axes)
+        self.fuzzy.validate_rule_base()
+
+    def _validate_fuzzy(self):
+        # robust_gain and robust_boundary_layer are R10's H_bar, the fuzzy
+        # law's fallback outside Omega_k (not the robust law's gains), one
+        # per fuzzy axis.
+        o, n = "controller", len(self.fuzzy.axes)
+        _positive(o, "depth_gain", self.depth_gain)
         _vector(o, "robust_gain", self.robust_gain, n, _non_negative)
         _vector(
             o, "robust_boundary_layer", self.robust_boundary_layer, n, _positive
         )
         self.fuzzy.validate()
+
+    def _validate_robust(self):
+        _positive("controller", "depth_gain", self.depth_gain)
         self.robust.validate()
-        self.impedance.validate()
-        self.position.validate()
+
+    def _validate_ideal(self):
+        _positive("controller", "depth_gain", self.depth_gain)

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 import inspect
 import io
+import itertools
 import math
 import re
 import textwrap
@@ -45,6 +46,7 @@ import typing
 from typing import Dict, List, Optional, Tuple
 
 from deburr_drake.config.checks import ConfigError
+from deburr_drake.config.control import ControllerConfig
 from deburr_drake.config.scenario import Scenario, load_scenario
 
 __all__ = [
@@ -213,8 +215,14 @@ def _allowed(scenario, path: str, hint, owner, name: str) -> str:
                 break
             setattr(owner(base), bad.rsplit(".", 1)[1], 1.0)
     found = []
-    for probe in _probes(hint, getattr(owner(base), name)):
+    # A control law's fields are validated only with that law chosen.
+    kinds = ControllerConfig.KINDS if path.startswith("controller.") else [None]
+    for kind, probe in itertools.product(
+        kinds, _probes(hint, getattr(owner(base), name))
+    ):
         trial = copy.deepcopy(base)
+        if kind is not None:
+            trial.controller.kind = kind
         setattr(owner(trial), name, probe)
         try:
             trial.validate()

@@ -8,9 +8,10 @@
   (``ChamferObserver``);
 - ``estimator``: the contact parameters c0, c1, c2 (13)-(18)
   (``ContactParameterEstimator``, R3);
-- ``controller``: the adaptive fuzzy hybrid law (23), (35)-(37) and the
-  baselines selected by ``controller.kind`` (``HybridController``);
-- ``laws``: the baselines' terms (robust (22), impedance, appendix gains);
+- ``controller``: the hybrid position/force controller
+  (``HybridController``): everything but the law;
+- ``laws``: the inner-loop laws, one per ``controller.kind`` (the paper's
+  adaptive fuzzy law (23), (35)-(37) and the baselines), chosen once;
 - ``loop``: the loops wired around any plant
   (``add_deburring_controller``);
 - ``kinematics``: the tool point's position, velocity and Jacobian

@@ -62,11 +62,13 @@ class CommandGenerator(LeafSystem):
         - registration (optional)
         - hold (optional)
         output_ports:
+        - command_state
         - command
         - feed
 
     - ``chamfer_state`` (CHAMFER_STATE layout): x_p (m), xdot_p (m/s), n2
       and ||f_t|| (N) are read.
+    - ``command_state`` (COMMAND_STATE layout): the discrete state below.
     - ``command`` (3, m): x_c(kT), world frame.
     - ``feed`` (1, m/s): the commanded feed speed v.
     - ``registration`` (4) and ``hold`` (1), only with ``registered=True``:

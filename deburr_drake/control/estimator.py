@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
-from deburr_drake.config import EstimatorConfig, TaskConfig
+from deburr_drake.config import ConfigError, EstimatorConfig, TaskConfig
 from deburr_drake.control.layout import CHAMFER_STATE
 
 __all__ = ["ContactParameterEstimator", "estimator_rate"]
@@ -89,8 +89,9 @@ class ContactParameterEstimator(LeafSystem):
         config.validate()
         task.validate()
         if not sample_period >= 0.0:
-            raise ValueError(
-                f"sample_period must be >= 0 s, got {sample_period}"
+            raise ConfigError(
+                f"sample_period = {sample_period!r} is invalid: allowed a "
+                "number >= 0 (s)"
             )
         self.set_name("contact_estimator")
         self._law = dict(

@@ -10,6 +10,8 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import Frame, JacobianWrtVariable
 
+from deburr_drake.config import ConfigError
+
 __all__ = ["ToolPoint"]
 
 
@@ -54,8 +56,9 @@ class ToolPoint:
         reuse_tolerance: float = 1e-9,
     ):
         if not reuse_tolerance >= 0.0:
-            raise ValueError(
-                f"reuse_tolerance must be >= 0, got {reuse_tolerance}"
+            raise ConfigError(
+                f"reuse_tolerance = {reuse_tolerance!r} is invalid: allowed "
+                "a number >= 0 (rad or m)"
             )
         self._plant = plant
         self._context = plant.CreateDefaultContext()

@@ -7,8 +7,8 @@ The outer loop is the ``CommandGenerator`` (feedrate law, T = 25 ms) and its
 (36), (37). Together they need two signals from the user's side of the
 diagram and give one back::
 
-    plant state [q; v] ──┐                ┌── actuation (nu) ──> plant
-    tool force (3, N) ───┴─> the loops ───┘
+    plant state [q; v] ─────┐               ┌── actuation (nu) ──> plant
+    measured force (3, N) ──┴─> the loops ──┘
 
 ``make_deburring_diagram`` builds the paper's cell with it; a user with a
 plant of their own (``examples/own_plant.py``) calls it the same way::
@@ -16,19 +16,19 @@ plant of their own (``examples/own_plant.py``) calls it the same way::
     loops = add_deburring_controller(
         builder, scenario=scenario, plant=plant, contour=contour,
         plant_state=plant.get_state_output_port(),
-        tool_force=my_force_sensor.get_output_port())
+        measured_force=my_force_sensor.get_output_port())
     builder.Connect(loops.actuation, plant.get_actuation_input_port())
 
 The systems get the cell's names (``chamfer_observer``,
 ``command_generator``, ``first_order_hold``, ``contact_estimator``,
-``controller``), so :data:`deburr_drake.cell.diagram.LOGGED` names their outputs in
-a user's diagram too.
+``controller``), so :data:`deburr_drake.cell.diagram.LOGGED` names their
+outputs in a user's diagram too.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Optional
+from dataclasses import dataclass, replace
+from typing import NamedTuple, Optional
 
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
@@ -91,108 +91,256 @@ def _connect(builder: DiagramBuilder, pairs):
         builder.Connect(output, input_port)
 
 
-def _add_localisation(
-    builder,
-    c: Scenario,
-    *,
-    contour,
-    x0,
-    observer,
-    generator,
-    controller,
-    chamfer,
-    command,
-    desired,
-    tool_force,
+def _constant(builder, name, value) -> OutputPort:
+    return builder.AddNamedSystem(
+        name, ConstantVectorSource(np.asarray(value, float))
+    ).get_output_port()
+
+
+class _Signals(NamedTuple):
+    """What the inner loop reads from the outer loop and the observer:
+    the chamfer state, the sampled command and the desired normal
+    force (output ports)."""
+
+    chamfer: OutputPort
+    command: OutputPort
+    desired: OutputPort
+
+    @staticmethod
+    def of(loops: DeburringController) -> _Signals:
+        """The observer's, the generator's and the estimator's."""
+        return _Signals(
+            chamfer=loops.observer.GetOutputPort("chamfer_state"),
+            command=loops.command_generator.GetOutputPort("command"),
+            desired=loops.estimator.GetOutputPort("desired_normal_force"),
+        )
+
+
+def _add_loops(
+    builder, c: Scenario, *, plant, contour, x0, tool_frame, **passed
+) -> DeburringController:
+    """The observer, the command generator, its hold, the estimator and
+    the controller (``passed``: the controller's and observer's optional
+    arguments), not yet connected."""
+    probing = c.localisation.probe.enabled
+    # The constant-feed laws run a timed path, no feedrate law.
+    constant_feed = (
+        c.command.constant_feed
+        if c.controller.kind in c.controller.CONSTANT_FEED_KINDS
+        else None
+    )
+    observer = builder.AddNamedSystem(
+        "chamfer_observer",
+        ChamferObserver(
+            plant,
+            tool_frame,
+            contour,
+            min_tangential_speed=c.command.min_tangential_speed,
+            tool_point=passed["tool_point"],
+            contour_step=passed["contour_step"],
+            registered=c.localisation.enabled,
+        ),
+    )
+    generator = builder.AddNamedSystem(
+        "command_generator",
+        CommandGenerator(
+            c.command,
+            c.task,
+            contour,
+            x0,
+            constant_feed=constant_feed,
+            contour_step=passed["contour_step"],
+            registered=c.localisation.enabled,
+        ),
+    )
+    # Probing starts off the part, at x0 (the probe's standoff).
+    foh = builder.AddNamedSystem(
+        "first_order_hold",
+        FirstOrderHold(
+            c.command.period, x0 if probing else contour.project(x0)
+        ),
+    )
+    estimator = builder.AddNamedSystem(
+        "contact_estimator",
+        ContactParameterEstimator(
+            c.estimator, c.task, sample_period=c.controller.control_period
+        ),
+    )
+    controller = builder.AddNamedSystem(
+        "controller",
+        HybridController(
+            plant,
+            tool_frame,
+            c.controller,
+            passed["desired_rotation"],
+            tool_point=passed["tool_point"],
+            nominal_depth=c.task.desired_depth,
+            true_plant=passed["true_plant"],
+            posture=passed["posture"],
+            fuzzy_weight_input=probing,
+        ),
+    )
+    return DeburringController(
+        observer=observer,
+        command_generator=generator,
+        first_order_hold=foh,
+        estimator=estimator,
+        controller=controller,
+    )
+
+
+def _add_probing(
+    builder, c: Scenario, loops, signals, *, contour, x0, timing, force
 ):
-    """The localisation systems (issue 21) between the loops: with
-    ``localisation.probe`` the probing sequence and its gate (which then
-    stand between the observer, the generator and the estimator and the
-    rest), with ``localisation.online`` the registration while cutting; the
-    registration into the observer and the generator. Returns the chamfer
-    state, the command and the desired normal force the loops use from
-    then on, and the systems (probe, gate, online; None when off)."""
-    timing = sensor_timing(c.sensor.sample_period, c.sensor.cutoff_frequency)
-
-    def constant(name, value):
-        return builder.AddNamedSystem(
-            name, ConstantVectorSource(np.asarray(value, float))
-        ).get_output_port()
-
-    probe = gate = online = None
-    if c.localisation.probe.enabled:
-        probe = builder.AddNamedSystem(
-            "probing_sequence",
-            ProbingSequence(
-                contour,
-                c.localisation.probe,
-                sample_period=c.sensor.sample_period,
-                timing=timing,
-                initial_position=x0,
-                start_depth=c.simulation.initial_depth,
-                desired_depth=c.task.desired_depth,
+    """The probing sequence and its gate between the observer, the
+    generator and the estimator and the rest. Returns the signals the
+    loops use from then on, the sequence and the gate."""
+    probe = builder.AddNamedSystem(
+        "probing_sequence",
+        ProbingSequence(
+            contour,
+            c.localisation.probe,
+            sample_period=c.sensor.sample_period,
+            timing=timing,
+            initial_position=x0,
+            start_depth=c.simulation.initial_depth,
+            desired_depth=c.task.desired_depth,
+        ),
+    )
+    gate = builder.AddNamedSystem("probe_gate", ProbeGate())
+    _connect(
+        builder,
+        [
+            (signals.chamfer, probe.GetInputPort("chamfer_state")),
+            (force, probe.GetInputPort("measured_force")),
+            (signals.command, probe.GetInputPort("command_in")),
+            (probe.GetOutputPort("probing"), gate.GetInputPort("probing")),
+            (signals.chamfer, gate.GetInputPort("chamfer_state")),
+            (signals.desired, gate.GetInputPort("desired_normal_force")),
+            (
+                probe.GetOutputPort("hold"),
+                loops.command_generator.GetInputPort("hold"),
             ),
-        )
-        gate = builder.AddNamedSystem("probe_gate", ProbeGate())
-        probing = probe.GetOutputPort("probing")
-        spindle = probe.GetOutputPort("spindle")
-        registration = probe.GetOutputPort("registration")
-        _connect(
+            (
+                probe.GetOutputPort("fuzzy_weight"),
+                loops.controller.GetInputPort("fuzzy_weight"),
+            ),
+        ],
+    )
+    gated = _Signals(
+        chamfer=gate.GetOutputPort("chamfer_state"),
+        command=probe.GetOutputPort("command"),
+        desired=gate.GetOutputPort("desired_normal_force"),
+    )
+    return gated, probe, gate
+
+
+def _add_online(builder, c: Scenario, loops, base, *, contour, timing, probe):
+    """Registration while cutting, on top of the ``base`` registration
+    (the probe's, or zero). Returns its system."""
+    online = builder.AddNamedSystem(
+        "online_registration",
+        OnlineRegistration(
+            contour,
+            c.localisation.online,
+            c.estimator,
+            latency=timing.latency,
+            probed=probe is not None,
+        ),
+    )
+    # It learns while the spindle turns.
+    active = (
+        _constant(builder, "spindle_on", [1.0])
+        if probe is None
+        else probe.GetOutputPort("spindle")
+    )
+    _connect(
+        builder,
+        [
+            (
+                loops.observer.GetOutputPort("chamfer_state"),
+                online.GetInputPort("chamfer_state"),
+            ),
+            (base, online.GetInputPort("base_registration")),
+            (active, online.GetInputPort("active")),
+        ],
+    )
+    return online
+
+
+def _add_localisation(
+    builder, c: Scenario, loops, signals, *, contour, x0, measured_force
+):
+    """``localisation.probe``: the probing sequence and its gate;
+    ``localisation.online``: registration while cutting; the registration
+    into the observer and the generator. Returns the loops with those
+    systems and the signals the loops use from then on."""
+    timing = sensor_timing(c.sensor.sample_period, c.sensor.cutoff_frequency)
+    generator = loops.command_generator
+    probe = gate = online = None
+    # Touch probing, or neither hold nor registration from it.
+    if c.localisation.probe.enabled:
+        signals, probe, gate = _add_probing(
             builder,
-            [
-                (chamfer, probe.GetInputPort("chamfer_state")),
-                (tool_force, probe.GetInputPort("tool_force")),
-                (command, probe.GetInputPort("command_in")),
-                (probing, gate.GetInputPort("probing")),
-                (chamfer, gate.GetInputPort("chamfer_state")),
-                (desired, gate.GetInputPort("desired_normal_force")),
-                (probe.GetOutputPort("hold"), generator.GetInputPort("hold")),
-                (
-                    probe.GetOutputPort("fuzzy_weight"),
-                    controller.GetInputPort("fuzzy_weight"),
-                ),
-            ],
+            c,
+            loops,
+            signals,
+            contour=contour,
+            x0=x0,
+            timing=timing,
+            force=measured_force,
         )
-        chamfer = gate.GetOutputPort("chamfer_state")
-        command = probe.GetOutputPort("command")
-        desired = gate.GetOutputPort("desired_normal_force")
+        registration = probe.GetOutputPort("registration")
     else:
         builder.Connect(
-            constant("no_probing", [0.0]), generator.GetInputPort("hold")
+            _constant(builder, "no_probing", [0.0]),
+            generator.GetInputPort("hold"),
         )
-        spindle = None
-        registration = constant(
-            "no_probe_registration", np.zeros(REGISTRATION_SIZE)
+        registration = _constant(
+            builder, "no_probe_registration", np.zeros(REGISTRATION_SIZE)
         )
+    # Registration while cutting.
     if c.localisation.online.enabled:
-        online = builder.AddNamedSystem(
-            "online_registration",
-            OnlineRegistration(
-                contour,
-                c.localisation.online,
-                c.estimator,
-                latency=timing.latency,
-                probed=probe is not None,
-            ),
-        )
-        _connect(
+        online = _add_online(
             builder,
-            [
-                (
-                    observer.GetOutputPort("chamfer_state"),
-                    online.GetInputPort("chamfer_state"),
-                ),
-                (registration, online.GetInputPort("base_registration")),
-                (
-                    spindle or constant("spindle_on", [1.0]),
-                    online.GetInputPort("active"),
-                ),
-            ],
+            c,
+            loops,
+            registration,
+            contour=contour,
+            timing=timing,
+            probe=probe,
         )
         registration = online.GetOutputPort("registration")
-    for system in (observer, generator):
+    # The believed part, moved by the registration.
+    for system in (loops.observer, generator):
         builder.Connect(registration, system.GetInputPort("registration"))
-    return chamfer, command, desired, probe, gate, online
+    return replace(loops, probe=probe, gate=gate, online=online), signals
+
+
+def _connect_loops(builder, loops: DeburringController, signals: _Signals):
+    """The loops to each other: the chamfer state to the generator, the
+    estimator and the controller; the command through the hold."""
+    foh, controller = loops.first_order_hold, loops.controller
+    for system in (loops.command_generator, loops.estimator, controller):
+        builder.Connect(signals.chamfer, system.GetInputPort("chamfer_state"))
+    _connect(
+        builder,
+        [
+            (signals.command, foh.GetInputPort("sampled")),
+            (
+                foh.GetOutputPort("position"),
+                controller.GetInputPort("commanded_position"),
+            ),
+            (
+                foh.GetOutputPort("velocity"),
+                controller.GetInputPort("commanded_velocity"),
+            ),
+            (
+                signals.desired,
+                controller.GetInputPort("desired_normal_force"),
+            ),
+        ],
+    )
 
 
 def add_deburring_controller(
@@ -202,7 +350,7 @@ def add_deburring_controller(
     plant: MultibodyPlant,
     contour: Contour,
     plant_state: OutputPort,
-    tool_force: OutputPort,
+    measured_force: OutputPort,
     tool_frame: str = "tool_tip",
     start=None,
     desired_rotation=None,
@@ -218,8 +366,9 @@ def add_deburring_controller(
 
     - ``plant_state``: an output port with [q; v] of ``plant`` (m or rad,
       m/s or rad/s), e.g. ``plant.get_state_output_port()``;
-    - ``tool_force``: an output port (3, N, world) with the measured force
-      of the part on the tool (a force sensor, or your contact model).
+    - ``measured_force``: an output port (3, N, world) with the measured
+      force of the part on the tool (a force sensor, or your contact
+      model).
 
     ``plant`` is a finalized MultibodyPlant of the robot that the
     controller uses as its model (kinematics, Jacobian, gravity with masses
@@ -240,108 +389,36 @@ def add_deburring_controller(
     input (directly, or through your own saturation or fault systems)."""
     c = scenario
     x0 = contour.point_at(0.0) if start is None else np.asarray(start, float)
-    localised = c.localisation.enabled
-    probing = c.localisation.probe.enabled
-    # The constant-feed baselines (controller.kind) run a timed path.
-    constant_feed = (
-        c.command.constant_feed
-        if c.controller.kind in c.controller.CONSTANT_FEED_KINDS
-        else None
+    # The systems of the two loops.
+    loops = _add_loops(
+        builder,
+        c,
+        plant=plant,
+        contour=contour,
+        x0=x0,
+        tool_frame=tool_frame,
+        desired_rotation=desired_rotation,
+        tool_point=tool_point,
+        contour_step=contour_step,
+        true_plant=true_plant,
+        posture=posture,
     )
-    observer = builder.AddNamedSystem(
-        "chamfer_observer",
-        ChamferObserver(
-            plant,
-            tool_frame,
-            contour,
-            min_tangential_speed=c.command.min_tangential_speed,
-            tool_point=tool_point,
-            contour_step=contour_step,
-            registered=localised,
-        ),
-    )
-    generator = builder.AddNamedSystem(
-        "command_generator",
-        CommandGenerator(
-            c.command,
-            c.task,
-            contour,
-            x0,
-            constant_feed=constant_feed,
-            contour_step=contour_step,
-            registered=localised,
-        ),
-    )
-    # Probing starts off the part, at x0 (the probe's standoff).
-    foh = builder.AddNamedSystem(
-        "first_order_hold",
-        FirstOrderHold(
-            c.command.period, x0 if probing else contour.project(x0)
-        ),
-    )
-    estimator = builder.AddNamedSystem(
-        "contact_estimator",
-        ContactParameterEstimator(
-            c.estimator, c.task, sample_period=c.controller.control_period
-        ),
-    )
-    # The law (controller.kind) is the only thing that differs: the ideal
-    # law reads the true plant's model, the constant-feed ones the depth.
-    controller = builder.AddNamedSystem(
-        "controller",
-        HybridController(
-            plant,
-            tool_frame,
-            c.controller,
-            desired_rotation,
-            tool_point=tool_point,
-            nominal_depth=c.task.desired_depth,
-            true_plant=true_plant if c.controller.kind == "ideal" else None,
-            posture=posture,
-            fuzzy_weight_input=probing,
-        ),
-    )
-
-    for system in (observer, controller):
+    # The two signals from the user's side of the diagram.
+    for system in (loops.observer, loops.controller):
         builder.Connect(plant_state, system.GetInputPort("plant_state"))
-        builder.Connect(tool_force, system.GetInputPort("tool_force"))
-    chamfer = observer.GetOutputPort("chamfer_state")
-    command = generator.GetOutputPort("command")
-    desired = estimator.GetOutputPort("desired_normal_force")
-    probe = gate = online = None
-    if localised:
-        chamfer, command, desired, probe, gate, online = _add_localisation(
+        builder.Connect(measured_force, system.GetInputPort("measured_force"))
+    signals = _Signals.of(loops)
+    # Localisation between the loops.
+    if c.localisation.enabled:
+        loops, signals = _add_localisation(
             builder,
             c,
+            loops,
+            signals,
             contour=contour,
             x0=x0,
-            observer=observer,
-            generator=generator,
-            controller=controller,
-            chamfer=chamfer,
-            command=command,
-            desired=desired,
-            tool_force=tool_force,
+            measured_force=measured_force,
         )
-    for system in (generator, estimator, controller):
-        builder.Connect(chamfer, system.GetInputPort("chamfer_state"))
-    builder.Connect(command, foh.GetInputPort("sampled"))
-    builder.Connect(
-        foh.GetOutputPort("position"),
-        controller.GetInputPort("commanded_position"),
-    )
-    builder.Connect(
-        foh.GetOutputPort("velocity"),
-        controller.GetInputPort("commanded_velocity"),
-    )
-    builder.Connect(desired, controller.GetInputPort("desired_normal_force"))
-    return DeburringController(
-        observer=observer,
-        command_generator=generator,
-        first_order_hold=foh,
-        estimator=estimator,
-        controller=controller,
-        probe=probe,
-        gate=gate,
-        online=online,
-    )
+    # The loops to each other.
+    _connect_loops(builder, loops, signals)
+    return loops

@@ -100,13 +100,14 @@ class ChamferObserver(LeafSystem):
         name: ChamferObserver
         input_ports:
         - plant_state
-        - tool_force
+        - measured_force
         - registration (optional)
         output_ports:
         - chamfer_state
 
     - ``plant_state`` (nq + nv): robot positions (m or rad) and velocities.
-    - ``tool_force`` (3, N): force of the environment on the tool, world.
+    - ``measured_force`` (3, N): the force sensor's reading of the force
+      of the environment on the tool, world.
     - ``chamfer_state`` (CHAMFER_STATE layout): x_p, xdot_p, n1, n2, delta,
       delta_dot, ||f_n||, ||f_t||, arc position.
     - ``registration`` (4; only with ``registered=True``): dx, dy (m), dyaw
@@ -143,16 +144,16 @@ class ChamferObserver(LeafSystem):
         self._min_speed = min_tangential_speed
         nx = plant.num_multibody_states()
         self._state_port = self.DeclareVectorInputPort("plant_state", nx)
-        self._force_port = self.DeclareVectorInputPort("tool_force", 3)
+        self._force_port = self.DeclareVectorInputPort("measured_force", 3)
         self._registration = RegisteredContour(
             self.DeclareVectorInputPort("registration", REGISTRATION_SIZE)
             if registered
             else None
         )
-        # The kinematic part changes with the plant state only, not with
-        # each new force sample; Drake invalidates the output whenever any
-        # discrete state changes (every sample) or the integrator perturbs
-        # and restores the state.
+        # The kinematic part changes with the plant state only. Drake's
+        # cache tracks changes, not values: the output is recomputed at
+        # every force sample and after the integrator perturbs and
+        # restores the state, where the memo saves the kinematics.
         self._last = None  # (plant state's bytes, its kinematics): a memo
         # Narrow: the state, the force and (a part that moves) the time;
         # not every discrete update of the diagram.

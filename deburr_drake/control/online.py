@@ -1,4 +1,4 @@
-"""Registration while cutting (issue 21): :class:`OnlineRegistration`.
+"""Registration while cutting: :class:`OnlineRegistration`.
 
 The contact force against the depth delta_0 on a reference contour (the
 believed part moved by the probe's registration) is

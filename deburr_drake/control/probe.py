@@ -1,14 +1,14 @@
-"""Touch probing before the pass (issue 21): the robot's procedure, with the
-spindle off, as Drake systems.
+"""Touch probing before the pass: the robot's procedure, with the spindle
+off, as Drake systems.
 
 - :class:`ProbingSequence`: a state machine in the Context's discrete state
   that commands guarded moves along the believed normal n1 at N points of
   the edge, detects each contact on the force sensor, compensates the
   detection bias (:func:`detection_depth`), fits the circle, straight
   edge or profile (deburr_drake.math.registration, touches that came
-  early on a burr dropped), outputs the registration that corrects the believed part, and
-  brings the tool to the pass's start on the corrected part; then it hands
-  the command over to the command generator.
+  early on a burr dropped), outputs the registration that corrects the
+  believed part, and brings the tool to the pass's start on the corrected
+  part; then it hands the command over to the command generator.
 - :class:`ProbeGate`: while probing, the estimator, the force loop and the
   guards see no contact (the touches are not chamfering).
 
@@ -179,9 +179,9 @@ def probe_arcs(contour: Contour, config: ProbeConfig) -> np.ndarray:
         best = int(np.argmin(gains))
         return (arcs + best * step / _LAYOUT_SHIFTS) % L
     if not math.isfinite(L) and not config.spacing:
-        raise ValueError(
-            "localisation.probe.spacing = 0 needs an edge of "
-            "finite length: allowed > 0 on an endless edge"
+        raise ConfigError(
+            "localisation.probe.spacing = 0 is invalid on an edge of "
+            "infinite length: allowed > 0"
         )
     step = config.spacing or L / n
     span = step * (n - 1)
@@ -216,6 +216,19 @@ def check_probe_layout(
         )
 
 
+class _Step(NamedTuple):
+    """One sample of the sequence: its context, the state x and the touch
+    points being written, the time, the command and whether the move
+    under way has finished."""
+
+    context: object
+    x: np.ndarray
+    t: float
+    command: np.ndarray
+    finished: bool
+    touches: np.ndarray
+
+
 class ProbingSequence(LeafSystem):
     """Guarded moves at N points of the believed edge, the fit, and the way
     to the pass's start on the corrected part.
@@ -225,11 +238,12 @@ class ProbingSequence(LeafSystem):
         name: ProbingSequence
         input_ports:
         - chamfer_state
-        - tool_force
+        - measured_force
         - command_in
         output_ports:
         - command
         - probing
+        - hold
         - spindle
         - fuzzy_weight
         - registration
@@ -237,7 +251,7 @@ class ProbingSequence(LeafSystem):
         - touch_points
 
     - ``chamfer_state`` (CHAMFER_STATE): x_p (m) and xdot_p (m/s) are read.
-    - ``tool_force`` (3, N, world): the force sensor's reading.
+    - ``measured_force`` (3, N, world): the force sensor's reading.
     - ``command_in`` (3, m): the command generator's x_c, passed through to
       ``command`` once probing is done.
     - ``command`` (3, m): the commanded tool point (to the first-order hold).
@@ -260,14 +274,14 @@ class ProbingSequence(LeafSystem):
 
     Each touch: travel (smooth, along the believed edge at the standoff:
     a straight move would cut a convex corner) to the standoff point
-    ``standoff`` before the believed zero-depth path along -n1, settle, tare the force, move
-    along n1 at ``approach_speed`` until -(f - tare).n1 exceeds
-    ``force_threshold`` (or ``search_distance``: a miss), record x_p minus
-    the :func:`detection_depth` along n1, retract by ``retract``. Then the
-    fit, a travel (along the corrected edge) to the corrected start's
-    standoff and an entry at the
-    approach speed to ``start`` on the corrected part (the tool point the
-    pass starts from); the command generator takes over from there.
+    ``standoff`` before the believed zero-depth path along -n1, settle,
+    tare the force, move along n1 at ``approach_speed`` until
+    -(f - tare).n1 exceeds ``force_threshold`` (or ``search_distance``: a
+    miss), record x_p minus the :func:`detection_depth` along n1, retract
+    by ``retract``. Then the fit, a travel (along the corrected edge) to
+    the corrected start's standoff and an entry at the approach speed to
+    ``start`` on the corrected part (the tool point the pass starts from);
+    the command generator takes over from there.
     """
 
     def __init__(
@@ -289,10 +303,29 @@ class ProbingSequence(LeafSystem):
         self._timing = timing
         self._start_depth = start_depth
         self._established_depth = CUT_ESTABLISHED * desired_depth
+        # The touches, checked to fix the part.
         self._arcs = probe_arcs(contour, config)
         self._n = len(self._arcs)
         check_probe_layout(contour, config, self._arcs)
-        x0 = np.asarray(initial_position, float)
+        # State: the sequence (PROBE_STATE) and the touch points.
+        self._state = self.DeclareDiscreteState(
+            self._initial_state(np.asarray(initial_position, float))
+        )
+        self._touch_state = self.DeclareDiscreteState(np.zeros(4 * self._n))
+        # Inputs, and the sequence stepped at the sensor's samples.
+        self._chamfer_port = self.DeclareVectorInputPort(
+            "chamfer_state", CHAMFER_STATE.size
+        )
+        self._force_port = self.DeclareVectorInputPort("measured_force", 3)
+        self._command_in = self.DeclareVectorInputPort("command_in", 3)
+        self.DeclarePeriodicDiscreteUpdateEvent(
+            sample_period, 0.0, self._update
+        )
+        self._declare_outputs()
+
+    def _initial_state(self, x0):
+        """PROBE_STATE at the start: travelling from x0 to the first
+        touch's standoff."""
         initial = PROBE_STATE.pack(
             phase=_P["travel"],
             index=0,
@@ -313,17 +346,12 @@ class ProbingSequence(LeafSystem):
             kept=0.0,
             fit_rms=0.0,
         )
-        self._edge_segment(initial, 0.0, "travel", x0, contour, self._arcs[0])
-        self._state = self.DeclareDiscreteState(initial)
-        self._touch_state = self.DeclareDiscreteState(np.zeros(4 * self._n))
-        self._chamfer_port = self.DeclareVectorInputPort(
-            "chamfer_state", CHAMFER_STATE.size
+        self._edge_segment(
+            initial, 0.0, "travel", x0, self._contour, self._arcs[0]
         )
-        self._force_port = self.DeclareVectorInputPort("tool_force", 3)
-        self._command_in = self.DeclareVectorInputPort("command_in", 3)
-        self.DeclarePeriodicDiscreteUpdateEvent(
-            sample_period, 0.0, self._update
-        )
+        return initial
+
+    def _declare_outputs(self):
         state = {self.xd_ticket()}
         self.DeclareVectorOutputPort(
             "command",
@@ -331,15 +359,14 @@ class ProbingSequence(LeafSystem):
             self._calc_command,
             prerequisites_of_calc={self.xd_ticket(), self._command_in.ticket()},
         )
-        self.DeclareVectorOutputPort(
-            "probing", 1, self._calc_probing, prerequisites_of_calc=state
-        )
-        self.DeclareVectorOutputPort(
-            "hold", 1, self._calc_hold, prerequisites_of_calc=state
-        )
-        self.DeclareVectorOutputPort(
-            "spindle", 1, self._calc_spindle, prerequisites_of_calc=state
-        )
+        for name, calc in (
+            ("probing", self._calc_probing),
+            ("hold", self._calc_hold),
+            ("spindle", self._calc_spindle),
+        ):
+            self.DeclareVectorOutputPort(
+                name, 1, calc, prerequisites_of_calc=state
+            )
         self.DeclareVectorOutputPort(
             "fuzzy_weight",
             1,
@@ -437,105 +464,141 @@ class ProbingSequence(LeafSystem):
         x = context.get_discrete_state(self._state).get_value()
         phase = PHASES[int(round(float(PROBE_STATE.get(x, "phase"))))]
         t = context.get_time()
-        if phase == "done":  # every sample of the pass: copy only to write
-            if PROBE_STATE.get(x, "cut_time") < 0 and (
-                CHAMFER_STATE.get(self._chamfer_port.Eval(context), "delta")
-                >= self._established_depth
-                or t - PROBE_STATE.get(x, "done_time")
-                >= self._config.entry_dwell
-            ):
-                x = x.copy()
-                x[PROBE_STATE.slice("cut_time")] = t
-                discrete_state.set_value(self._state, x)
+        if phase == "done":
+            self._watch_entry(context, x, t, discrete_state)
             return
         x = x.copy()
-        c = self._config
         command, finished = self._along(x, t)
         x[PROBE_STATE.slice("command")] = command
-        i = int(round(float(PROBE_STATE.get(x, "index"))))
         touches = (
             context.get_discrete_state(self._touch_state).get_value().copy()
         )
-        if phase == "travel" and finished:
-            self._segment(
-                x, t, "settle", command, command, c.settle_time, False
-            )
-        elif phase == "settle" and finished:
-            x[PROBE_STATE.slice("tare")] = self._force_port.Eval(context)
-            n = self._contour.n1(self._contour.point_at(self._arcs[i]))
-            self._segment(
-                x,
-                t,
-                "approach",
-                command,
-                command + c.search_distance * n,
-                c.search_distance / c.approach_speed,
-                True,
-            )
-        elif phase == "approach":
-            a = PROBE_STATE.get(x, "segment_start")
-            n = PROBE_STATE.get(x, "segment_end") - a
-            n /= np.linalg.norm(n)
-            f = self._force_port.Eval(context) - PROBE_STATE.get(x, "tare")
-            if -float(f @ n) >= c.force_threshold:
-                chamfer = self._chamfer_port.Eval(context)
-                x_p = CHAMFER_STATE.get(chamfer, "x_p")
-                speed = float(CHAMFER_STATE.get(chamfer, "xdot_p") @ n)
-                touch = x_p - n * detection_depth(
-                    speed, c.force_threshold, c.contact_stiffness, self._timing
-                )
-                touches[4 * i : 4 * i + 4] = [*touch, 1.0]
-                x[PROBE_STATE.slice("touches")] += 1.0
-                back = x_p - c.retract * n
-                self._segment(
-                    x,
-                    t,
-                    "retract",
-                    command,
-                    back,
-                    self._travel_time(command, back),
-                    False,
-                )
-            elif finished:  # a miss: nothing within the search distance
-                self._segment(
-                    x,
-                    t,
-                    "retract",
-                    command,
-                    a,
-                    self._travel_time(command, a),
-                    False,
-                )
-        elif phase == "retract" and finished:
-            i += 1
-            x[PROBE_STATE.slice("index")] = i
-            if i < self._n:
-                self._edge_segment(
-                    x, t, "travel", command, self._contour, self._arcs[i]
-                )
-            else:
-                self._fit(x, touches)
-                self._edge_segment(
-                    x, t, "return", command, self._registered(x), 0.0
-                )
-        elif phase == "return" and finished:
-            contour = self._registered(x)
-            p = contour.point_at(0.0)
-            start = p + self._start_depth * contour.n1(p)
-            self._segment(
-                x,
-                t,
-                "enter",
-                command,
-                start,
-                float(np.linalg.norm(start - command)) / c.approach_speed,
-                True,
-            )
-        elif phase == "enter" and finished:
-            x[PROBE_STATE.slice("phase")] = _P["done"]
-            x[PROBE_STATE.slice("done_time")] = t
+        step = _Step(context, x, t, command, finished, touches)
+        self._PHASE_STEPS[phase](self, step)
         discrete_state.set_value(self._state, x)
         discrete_state.set_value(self._touch_state, touches)
+
+    def _watch_entry(self, context, x, t, discrete_state):
+        """Every sample of the pass: the time the entry's cut is
+        established, written once (a copy of the state only then)."""
+        if PROBE_STATE.get(x, "cut_time") < 0 and (
+            CHAMFER_STATE.get(self._chamfer_port.Eval(context), "delta")
+            >= self._established_depth
+            or t - PROBE_STATE.get(x, "done_time") >= self._config.entry_dwell
+        ):
+            x = x.copy()
+            x[PROBE_STATE.slice("cut_time")] = t
+            discrete_state.set_value(self._state, x)
+
+    # One method per phase: what a sample does in it (it writes ``step.x``
+    # and ``step.touches``).
+    def _travel(self, step):
+        if step.finished:
+            self._segment(
+                step.x,
+                step.t,
+                "settle",
+                step.command,
+                step.command,
+                self._config.settle_time,
+                False,
+            )
+
+    def _settle(self, step):
+        if not step.finished:
+            return
+        c, x = self._config, step.x
+        i = int(round(float(PROBE_STATE.get(x, "index"))))
+        x[PROBE_STATE.slice("tare")] = self._force_port.Eval(step.context)
+        n = self._contour.n1(self._contour.point_at(self._arcs[i]))
+        self._segment(
+            x,
+            step.t,
+            "approach",
+            step.command,
+            step.command + c.search_distance * n,
+            c.search_distance / c.approach_speed,
+            True,
+        )
+
+    def _approach(self, step):
+        c, x, command = self._config, step.x, step.command
+        a = PROBE_STATE.get(x, "segment_start")
+        n = PROBE_STATE.get(x, "segment_end") - a
+        n /= np.linalg.norm(n)
+        f = self._force_port.Eval(step.context) - PROBE_STATE.get(x, "tare")
+        if -float(f @ n) >= c.force_threshold:
+            chamfer = self._chamfer_port.Eval(step.context)
+            x_p = CHAMFER_STATE.get(chamfer, "x_p")
+            speed = float(CHAMFER_STATE.get(chamfer, "xdot_p") @ n)
+            touch = x_p - n * detection_depth(
+                speed, c.force_threshold, c.contact_stiffness, self._timing
+            )
+            i = int(round(float(PROBE_STATE.get(x, "index"))))
+            step.touches[4 * i : 4 * i + 4] = [*touch, 1.0]
+            x[PROBE_STATE.slice("touches")] += 1.0
+            back = x_p - c.retract * n
+        elif step.finished:  # a miss: nothing within the search distance
+            back = a
+        else:
+            return
+        self._segment(
+            x,
+            step.t,
+            "retract",
+            command,
+            back,
+            self._travel_time(command, back),
+            False,
+        )
+
+    def _retract(self, step):
+        if not step.finished:
+            return
+        x = step.x
+        i = int(round(float(PROBE_STATE.get(x, "index")))) + 1
+        x[PROBE_STATE.slice("index")] = i
+        if i < self._n:
+            self._edge_segment(
+                x, step.t, "travel", step.command, self._contour, self._arcs[i]
+            )
+        else:
+            self._fit(x, step.touches)
+            self._edge_segment(
+                x, step.t, "return", step.command, self._registered(x), 0.0
+            )
+
+    def _return(self, step):
+        if not step.finished:
+            return
+        contour = self._registered(step.x)
+        p = contour.point_at(0.0)
+        start = p + self._start_depth * contour.n1(p)
+        self._segment(
+            step.x,
+            step.t,
+            "enter",
+            step.command,
+            start,
+            float(np.linalg.norm(start - step.command))
+            / self._config.approach_speed,
+            True,
+        )
+
+    def _enter(self, step):
+        if step.finished:
+            step.x[PROBE_STATE.slice("phase")] = _P["done"]
+            step.x[PROBE_STATE.slice("done_time")] = step.t
+
+    #: phase -> what a sample does in it
+    _PHASE_STEPS = {
+        "travel": _travel,
+        "settle": _settle,
+        "approach": _approach,
+        "retract": _retract,
+        "return": _return,
+        "enter": _enter,
+    }
 
     def _registered(self, x) -> Contour:
         return moved_contour(self._contour, PROBE_STATE.get(x, "registration"))

@@ -1,4 +1,4 @@
-"""Baseline controllers (issue 11): each law's output by hand on the
+"""Baseline controllers: each law's output by hand on the
 Cartesian point mass (J = I), the Appendix gains, the constant-feed command,
 and a short closed-loop run of each baseline on the paper cell. The full
 passes are ``scripts/paper_comparison.py``, not tests."""
@@ -21,7 +21,7 @@ from deburr_drake.config import (
 )
 from deburr_drake.control.command import CommandGenerator
 from deburr_drake.control.controller import HybridController
-from deburr_drake.control.laws import appendix_gains, robust_term
+from deburr_drake.control.laws import LAWS, appendix_gains, robust_term
 from deburr_drake.control.layout import COMMAND_STATE, CONTROLLER_DIAGNOSTICS
 from deburr_drake.control.observer import chamfer_quantities
 
@@ -46,7 +46,7 @@ def _context(controller, delta_d=3e-4, f_nd=6.0):
     for name, value in dict(
         plant_state=np.concatenate([x_p, v]),
         chamfer_state=chamfer,
-        tool_force=force,
+        measured_force=force,
         commanded_position=x_c,
         commanded_velocity=v_c,
         desired_normal_force=[f_nd],
@@ -175,13 +175,30 @@ def test_kinds_need_their_inputs(model):
     with pytest.raises(ConfigError, match="controller.kind"):
         ControllerConfig(kind="pid").validate()
     with pytest.raises(ConfigError, match=r"controller.robust.gains\[2\]"):
-        _bad_robust().validate()
+        HybridController(model, "tool_tip", _bad_robust("robust"))
+    # The fuzzy law does not read robust.gains.
+    HybridController(model, "tool_tip", _bad_robust("fuzzy"))
 
 
-def _bad_robust():
-    config = ControllerConfig()
+def _bad_robust(kind):
+    config = ControllerConfig(kind=kind)
     config.robust.gains = [1.0, 0.0, -1.0, 0.0, 0.0]
     return config
+
+
+@pytest.mark.parametrize("kind", ControllerConfig.KINDS)
+def test_the_kind_chooses_the_law_once(model, kind):
+    """One law object per controller, of the kind's class, also in the
+    AutoDiffXd copy; the constant-feed laws are the config's."""
+    config = ControllerConfig(control_period=0.0, kind=kind)
+    controller = HybridController(
+        model, "tool_tip", config, nominal_depth=5e-4, true_plant=model
+    )
+    assert type(controller.law) is LAWS[kind]
+    assert type(controller.ToAutoDiffXd().law) is LAWS[kind]
+    assert controller.law.constant_feed == (
+        kind in ControllerConfig.CONSTANT_FEED_KINDS
+    )
 
 
 def test_appendix_gains_by_hand():

@@ -29,7 +29,7 @@ def _inputs(x_p, v, force, x_c, v_c, f_nd):
     return dict(
         plant_state=np.concatenate([x_p, v]),
         chamfer_state=chamfer,
-        tool_force=force,
+        measured_force=force,
         commanded_position=x_c,
         commanded_velocity=v_c,
         desired_normal_force=[f_nd],
@@ -72,7 +72,7 @@ def test_structure(model):
     assert ports == [
         "plant_state",
         "chamfer_state",
-        "tool_force",
+        "measured_force",
         "commanded_position",
         "commanded_velocity",
         "desired_normal_force",

@@ -42,7 +42,7 @@ def test_the_loops_close_around_two_signals():
         plant=model,
         contour=contour,
         plant_state=state.get_output_port(),
-        tool_force=force.get_output_port(),
+        measured_force=force.get_output_port(),
     )
     assert isinstance(loops, DeburringController)
     assert loops.actuation.size() == model.num_actuators()

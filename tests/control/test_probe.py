@@ -87,7 +87,9 @@ class _Run:
         self.probe.GetInputPort("chamfer_state").FixValue(
             self.context, _chamfer(self.x_p, speed)
         )
-        self.probe.GetInputPort("tool_force").FixValue(self.context, self.force)
+        self.probe.GetInputPort("measured_force").FixValue(
+            self.context, self.force
+        )
 
     def state(self):
         return self.context.get_discrete_state(0).get_value()
