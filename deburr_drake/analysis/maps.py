@@ -186,8 +186,8 @@ def fast_rho(op: OperatingPoint, fields: Sequence[str], *, delta: float = 1e-9):
     base = frozen_scenario(op.scenario)
     if any(c is None for c in coords) or base.simulation.error_control:
         # An error-controlled integrator steps differently over a split
-        # period (measured on the point mass: 0.99 against 1.156 at a
-        # 60 Hz cutoff); fixed steps (the paper's) compose exactly.
+        # period, so the pieces do not compose into the one-period map;
+        # fixed steps (the paper's) compose exactly.
         return None
     period = base.controller.control_period
     config = simulator_config(base)

@@ -141,10 +141,8 @@ def robust_margin(
                 "rho_oscillatory": r["rho_oscillatory"],
             }
         )
-        say(
-            f"robust: {overrides or ''}{' burr x' + str(burr[0]) if modify else ''}"
-            f" rho = {rho:.5f}"
-        )
+        burr_text = f" burr x{burr[0]}" if modify else ""
+        say(f"robust: {overrides or ''}{burr_text} rho = {rho:.5f}")
         return rho
 
     rho0 = rho_at(nominal)

@@ -64,7 +64,7 @@ class SimulationConfig:
     max_step: float = 0.01
     # -; false: fixed steps of max_step (accuracy unused). With the 2.5 ms
     # sampled loop every step ends at a sample anyway; on 12 s of the paper
-    # run cenic's error control at 1e-4 took 14 % more steps and 19 % more
+    # run cenic's error control at 1e-4 takes 14 % more steps and 19 % more
     # wall time for means within 1.5e-4 (scripts/integrator_check.py).
     error_control: bool = True
     # s; the control period: no extra integrator stops (an unaligned 4 ms

@@ -1,8 +1,8 @@
 """Part-edge geometry for contour-following deburring (pure numpy, no pydrake).
 
-A ``Contour`` is the zero-depth path of the tool reference point x_p (the paper's
-x_s with phi(x_s) = 0, Sec. II, Fig. 2): a planar curve at height ``height`` in a
-horizontal plane.  The part wall is vertical, so phi ignores z.
+A ``Contour`` is the zero-depth path of the tool reference point x_p (the
+paper's x_s with phi(x_s) = 0, Sec. II, Fig. 2): a planar curve at height
+``height`` in a horizontal plane.  The part wall is vertical, so phi ignores z.
 
 Sign conventions (all in the horizontal plane, |grad phi| = 1):
   * phi > 0 on the free side, phi < 0 in the material;
@@ -10,14 +10,15 @@ Sign conventions (all in the horizontal plane, |grad phi| = 1):
     (Sec. II; the contact force on the tool is f_n = -|f_n| n1);
   * chamfer depth delta = -phi(p) (positive in the material);
   * n2 = (I - n1 n1^T) v / |(I - n1 n1^T) v| is the direction of motion (eq. 2,
-    correction R5 of DESIGN.md), with the contour tangent in the configured
-    traversal direction as the start-up fallback at near-zero tangential speed;
+    correction R5 in docs/cell-and-paper.md), with the contour tangent in the
+    configured traversal direction as the start-up fallback at near-zero
+    tangential speed;
   * the outer-loop command lies on the zero-depth contour: ``advance`` projects
     x_p onto phi = 0 and moves along it by the arc length ds (correction R6).
 
 "T-generic" methods (phi, grad_phi, n1, depth, depth_rate, tangent, n2) accept
-float arrays or numpy object arrays of pydrake AutoDiffXd and use only arithmetic
-and np.sqrt/np.dot on them.  The path methods (project, arc_position,
+float arrays or numpy object arrays of pydrake AutoDiffXd and use only
+arithmetic and np.sqrt/np.dot on them.  The path methods (project, arc_position,
 unwrapped_arc_position, point_at, advance) work on floats; AutoDiffXd inputs are
 reduced to their values and the results are float arrays.
 
@@ -67,7 +68,8 @@ def _vec3(p, name):
 
 
 def _vec3_float(p, name):
-    """Shape-(3,) finite float array; AutoDiffXd entries are reduced to values."""
+    """Shape-(3,) finite float array; AutoDiffXd entries are reduced to
+    values."""
     if (
         type(p) is np.ndarray
         and p.dtype == np.float64
@@ -125,7 +127,8 @@ class Contour(abc.ABC):
     @property
     @abc.abstractmethod
     def length(self) -> float:
-        """Arc length of the contour [m]; math.inf for an open, unbounded one."""
+        """Arc length of the contour [m]; math.inf for an open, unbounded
+        one."""
 
     @property
     @abc.abstractmethod
@@ -165,12 +168,14 @@ class Contour(abc.ABC):
 
     # ----- shared defaults ---------------------------------------------------
     def n1(self, p):
-        """n1 = -grad phi / |grad phi| (Sec. II), unit, into the material (T-generic)."""
+        """n1 = -grad phi / |grad phi| (Sec. II), unit, into the material
+        (T-generic)."""
         g = self.grad_phi(p)
         return -g / np.sqrt(np.dot(g, g))
 
     def depth(self, p):
-        """Chamfer depth delta = -phi(p), positive in the material (T-generic)."""
+        """Chamfer depth delta = -phi(p), positive in the material
+        (T-generic)."""
         return -self.phi(p)
 
     def depth_rate(self, p, v):
@@ -238,7 +243,8 @@ class Contour(abc.ABC):
         ds = _finite_scalar(ds, "ds")
         if ds < 0.0:
             raise ValueError(
-                f"ds must be >= 0 (arc length along the traversal direction), got {ds}"
+                "ds must be >= 0 (arc length along the traversal "
+                f"direction), got {ds}"
             )
         return self.point_at(self.arc_position(p) + ds)
 
@@ -262,7 +268,8 @@ class _ClosedAboutCenter(Contour):
         self._start_angle = _finite_scalar(start_angle, "start_angle")
         if direction not in (1, -1):
             raise ValueError(
-                f"direction must be +1 (counter-clockwise) or -1 (clockwise), got {direction}"
+                "direction must be +1 (counter-clockwise) or -1 "
+                f"(clockwise), got {direction}"
             )
         self._direction = int(direction)
 
@@ -288,10 +295,11 @@ class _ClosedAboutCenter(Contour):
 
 
 class CircularContour(_ClosedAboutCenter):
-    """Circle of ``radius`` around ``center`` = (x, y, z); z is the contour height.
+    """Circle of ``radius`` around ``center`` = (x, y, z); z is the contour
+    height.
 
-    Material lies OUTSIDE the circle (inner edge of a tube, tool inside):
-    phi = radius - rho, n1 = radial outward (rho = planar distance to the centre).
+    Material lies OUTSIDE the circle (inner edge of a tube, tool inside): phi =
+    radius - rho, n1 = radial outward (rho = planar distance to the centre).
     ``direction`` +1 = counter-clockwise seen from +z, -1 = clockwise; arc
     position 0 at polar angle ``start_angle`` [rad].  Points closer than 1e-9 m
     to the centre axis raise ValueError (n1 undefined).
@@ -320,7 +328,8 @@ class CircularContour(_ClosedAboutCenter):
         rho2 = dx * dx + dy * dy
         if _value(rho2) < _MIN_RHO * _MIN_RHO:
             raise ValueError(
-                f"p must be at least {_MIN_RHO} m from the circle's centre axis (n1 undefined)"
+                f"p must be at least {_MIN_RHO} m from the circle's "
+                "centre axis (n1 undefined)"
             )
         return dx, dy, np.sqrt(rho2)
 
@@ -401,15 +410,16 @@ class CircularContour(_ClosedAboutCenter):
 
 
 class StraightContour(Contour):
-    """Horizontal straight edge through ``start`` with traversal direction ``tangent``.
+    """Horizontal straight edge through ``start`` with traversal direction
+    ``tangent``.
 
     ``tangent`` and ``material_normal`` are unit, horizontal and mutually
-    orthogonal (within 1e-9, else ValueError); ``material_normal`` points into the
-    material, so phi = -(p - start) . material_normal and n1 = material_normal.
-    Arc position is the signed (p - start) . tangent: negative before the start,
-    and NOT limited to ``length``.  ``length`` (> 0, default math.inf) is
-    informational for callers (end of the edge); phi, project, point_at and
-    advance extend the line beyond both ends without raising.
+    orthogonal (within 1e-9, else ValueError); ``material_normal`` points into
+    the material, so phi = -(p - start) . material_normal and n1 =
+    material_normal. Arc position is the signed (p - start) . tangent: negative
+    before the start, and NOT limited to ``length``.  ``length`` (> 0, default
+    math.inf) is informational for callers (end of the edge); phi, project,
+    point_at and advance extend the line beyond both ends without raising.
     """
 
     def __init__(self, start, tangent, material_normal, length=math.inf):
@@ -419,7 +429,8 @@ class StraightContour(Contour):
         for name, u in (("tangent", t), ("material_normal", n)):
             if abs(np.linalg.norm(u) - 1.0) > _TOL:
                 raise ValueError(
-                    f"{name} must be a unit vector (|norm - 1| <= {_TOL}), got norm {np.linalg.norm(u)}"
+                    f"{name} must be a unit vector (|norm - 1| <= {_TOL}), "
+                    f"got norm {np.linalg.norm(u)}"
                 )
             if abs(u[2]) > _TOL:
                 raise ValueError(
@@ -427,7 +438,8 @@ class StraightContour(Contour):
                 )
         if abs(float(np.dot(t, n))) > _TOL:
             raise ValueError(
-                f"material_normal must be orthogonal to tangent (|dot| <= {_TOL}), got {np.dot(t, n)}"
+                "material_normal must be orthogonal to tangent "
+                f"(|dot| <= {_TOL}), got {np.dot(t, n)}"
             )
         length = float(length)
         if math.isnan(length) or length <= 0.0:
@@ -877,20 +889,19 @@ class ProfileContour(_ClosedAboutCenter):
         return self._aC[i] + self._aR[i] * e, -self._aSig[i] * e
 
     def material_band(self, width, *, segments_per_turn, max_step):
-        """Stations along the profile for a mesh of the material next to
-        it, ``width`` (m) deep: (points (N, 2) about ``center``, unit
-        normals into the material (N, 2), depths (N,)), counter-clockwise
-        from the path's origin. Arcs get one station every 2 pi /
-        ``segments_per_turn`` rad, lines one every ``max_step`` m at
-        least. Where a fillet's centre lies in the material the band is
-        at most 0.9 times the fillet's radius deep there (its far side
-        would fold over the centre), deepening again at 1 m per m along
-        the path. (Drake's pressure field, E times the distance to the
-        surface over the largest such distance, then rises more slowly
-        under the top face in that thinner wall: at half the radius the
-        force in a boss's 4 mm fillet was 2.10 N at 0.5 mm, at 0.9 times
-        2.49 N, against 3.46 N on a line.) ValueError if the band's far side overlaps itself or the
-        profile (walls closer than ``width``)."""
+        """Stations along the profile for a mesh of the material next to it,
+        ``width`` (m) deep: (points (N, 2) about ``center``, unit normals into
+        the material (N, 2), depths (N,)), counter-clockwise from the path's
+        origin. Arcs get one station every 2 pi / ``segments_per_turn`` rad,
+        lines one every ``max_step`` m at least. Where a fillet's centre lies in
+        the material the band is at most 0.9 times the fillet's radius deep
+        there (its far side would fold over the centre), deepening again at 1 m
+        per m along the path. (Drake's pressure field, E times the distance to
+        the surface over the largest such distance, then rises more slowly under
+        the top face in that thinner wall: at half the radius the force in a
+        boss's 4 mm fillet is 2.10 N at 0.5 mm, at 0.9 times 2.49 N, against
+        3.46 N on a line.) ValueError if the band's far side overlaps itself or
+        the profile (walls closer than ``width``)."""
         width = _finite_scalar(width, "width")
         if width <= 0.0:
             raise ValueError(f"width must be > 0, got {width}")
