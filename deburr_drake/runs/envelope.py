@@ -39,6 +39,7 @@ from typing import Callable, Dict, Iterable, List, Optional
 
 import numpy as np
 
+from deburr_drake.config import ConfigError
 from deburr_drake.math import metrics
 from deburr_drake.runs.pass_metrics import TRANSIENT
 
@@ -164,7 +165,7 @@ def burr_scenario(
     start = (TRANSIENT + lead_time) * v_off + sc.tool.cutter_radius
     center = start + cell.length / 2
     if center + cell.length / 2 >= length:
-        raise ValueError(
+        raise ConfigError(
             f"{cell.label}: the burr does not fit on the edge "
             f"({length * 1e3:.1f} mm)"
         )
