@@ -153,6 +153,28 @@ def solve_tool_pose(
         )
 
     tip = plant.GetFrameByName(tool_frame, instance)
+    prog, q, q_full_guess = _tool_vertical_program(
+        plant, tip, p, arm_idx, q_guess
+    )
+    options = SolverOptions()
+    snopt = SnoptSolver().solver_id()
+    options.SetOption(snopt, "Major feasibility tolerance", 1e-10)
+    options.SetOption(snopt, "Major optimality tolerance", 1e-10)
+    result = Solve(prog, q_full_guess, options)
+    q_sol = result.GetSolution(q)
+    if not result.is_success():
+        raise RuntimeError(
+            f"tool pose IK failed for tool tip target p_W_tip={p.tolist()} m "
+            f"({result.get_solution_result()})"
+        )
+    _check_tool_pose(plant, tip, q_sol, p, tolerance)
+    return q_sol[arm_idx]
+
+
+def _tool_vertical_program(plant, tip, p, arm_idx, q_guess):
+    """(program, q, initial guess of all positions): the tool tip at p with
+    the tool axis vertical, the other models' positions at the plant's
+    defaults, the cost |q_arm - q_guess|^2."""
     world = plant.world_frame()
     ik = InverseKinematics(plant, with_joint_limits=True)
     q = ik.q()
@@ -176,19 +198,13 @@ def solve_tool_pose(
     others = np.flatnonzero(~arm_mask)
     if others.size:
         prog.AddBoundingBoxConstraint(q0[others], q0[others], q[others])
-    prog.AddQuadraticErrorCost(np.eye(n), q_guess, q[arm_idx])
+    prog.AddQuadraticErrorCost(np.eye(len(arm_idx)), q_guess, q[arm_idx])
+    return prog, q, q_full_guess
 
-    options = SolverOptions()
-    snopt = SnoptSolver().solver_id()
-    options.SetOption(snopt, "Major feasibility tolerance", 1e-10)
-    options.SetOption(snopt, "Major optimality tolerance", 1e-10)
-    result = Solve(prog, q_full_guess, options)
-    q_sol = result.GetSolution(q)
-    if not result.is_success():
-        raise RuntimeError(
-            f"tool pose IK failed for tool tip target p_W_tip={p.tolist()} m "
-            f"({result.get_solution_result()})"
-        )
+
+def _check_tool_pose(plant, tip, q_sol, p, tolerance):
+    """RuntimeError when the positions q_sol miss the tip target p or tilt
+    the tool axis by more than ``tolerance`` (m; tilt times 0.1 m)."""
     context = plant.CreateDefaultContext()
     plant.SetPositions(context, q_sol)
     X_WT = tip.CalcPoseInWorld(context)
@@ -200,7 +216,6 @@ def solve_tool_pose(
             f"position error {pos_err:.3g} m, "
             f"axis error {axis_err / _AXIS_POINT:.3g} rad"
         )
-    return q_sol[arm_idx]
 
 
 def closest_tool_position(

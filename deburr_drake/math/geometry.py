@@ -576,6 +576,107 @@ def polyline_self_intersection(points, *, closed=True):
     return None
 
 
+def _profile_vertices(vertices):
+    """``vertices`` as a finite (N, 2) float array, N >= 3."""
+    V = np.asarray(vertices, float)
+    if V.ndim != 2 or V.shape[1] != 2 or len(V) < 3:
+        raise ValueError(
+            f"vertices must be at least 3 points [x, y], got shape {V.shape}"
+        )
+    if not np.all(np.isfinite(V)):
+        raise ValueError("vertices must be finite")
+    return V
+
+
+def _profile_turns(V):
+    """(D, side, turn, scale) of the polygon V: unit side directions (side
+    k: V[k] -> V[k+1]), side lengths, the signed turn at each vertex (rad,
+    left positive) and the longest side. ValueError for coincident
+    vertices, clockwise order, a self-intersection or a U-turn."""
+    n = len(V)
+    E = np.roll(V, -1, axis=0) - V
+    side = np.hypot(E[:, 0], E[:, 1])
+    scale = float(np.max(side))
+    for k in range(n):
+        if side[k] <= 1e-9 * max(scale, 1e-300):
+            raise ValueError(
+                f"degenerate profile: vertices {k} and {(k + 1) % n} coincide"
+            )
+    D = E / side[:, None]
+    area = 0.5 * float(
+        np.sum(V[:, 0] * np.roll(V[:, 1], -1) - np.roll(V[:, 0], -1) * V[:, 1])
+    )
+    if area <= 0.0:
+        raise ValueError(
+            "vertices must run counter-clockwise (signed "
+            f"area {area:.3g} m^2 <= 0)"
+        )
+    hit = polyline_self_intersection(V)
+    if hit is not None:
+        raise ValueError(
+            f"the profile intersects itself (sides {hit[0]} and {hit[1]})"
+        )
+    Din = np.roll(D, 1, axis=0)  # side into vertex k
+    turn = np.arctan2(
+        Din[:, 0] * D[:, 1] - Din[:, 1] * D[:, 0],
+        np.einsum("ij,ij->i", Din, D),
+    )
+    for k in range(n):
+        if abs(abs(turn[k]) - math.pi) < 1e-9:
+            raise ValueError(
+                f"degenerate profile: the sides turn back on "
+                f"themselves at vertex {k}"
+            )
+    return D, side, turn, scale
+
+
+def _profile_segments(V, R, material, offset):
+    """(kinds, lines, arcs) of the polygon V with fillets R, offset by
+    ``offset`` towards the free side, in counter-clockwise order (side k,
+    then the arc at vertex k + 1): kinds [(0 line or 1 arc, index in its
+    list, length)], lines [(start, direction, free-side normal, length)],
+    arcs [(centre, radius, start angle, signed sweep, sign of phi)]."""
+    n = len(V)
+    D, side, turn, scale = _profile_turns(V)
+    tan_len = R * np.tan(0.5 * np.abs(turn))
+    free = 1.0 if material == "outside" else -1.0  # free side: +left
+    left = np.stack([-D[:, 1], D[:, 0]], axis=1)
+    line_len = side - tan_len - np.roll(tan_len, -1)
+    for k in range(n):
+        if line_len[k] < -1e-12 * scale:
+            raise ValueError(
+                f"the fillets of radius {R} do not fit on side {k} "
+                f"(vertices {k} -> {(k + 1) % n}, {side[k]:.6g} m long, "
+                f"the fillets take {side[k] - line_len[k]:.6g} m)"
+            )
+    line_len = np.maximum(line_len, 0.0)
+    kinds, lines, arcs = [], [], []
+    for k in range(n):
+        a = V[k] + tan_len[k] * D[k] + free * offset * left[k]
+        lines.append((a, D[k], free * left[k], line_len[k]))
+        kinds.append((0, len(lines) - 1, line_len[k]))
+        v = (k + 1) % n
+        if abs(turn[v]) < 1e-12:
+            continue
+        sgn = 1.0 if turn[v] > 0 else -1.0
+        t_in = V[v] - tan_len[v] * D[k]
+        c = t_in + sgn * R * left[k]
+        rho = R - offset * free * sgn
+        if rho <= 0.0:
+            raise ValueError(
+                f"the arc at vertex {v} has radius {R} - {abs(offset)} "
+                f"<= 0 after the offset {offset} (the fillet must be "
+                "larger than the cutter radius where the cutter runs "
+                "inside it)"
+            )
+        start = a + line_len[k] * D[k] - c
+        th0 = math.atan2(start[1], start[0])
+        sigma = -free * sgn  # phi = sigma (|p - c| - rho)
+        arcs.append((c, rho, th0, turn[v], sigma))
+        kinds.append((1, len(arcs) - 1, rho * abs(turn[v])))
+    return kinds, lines, arcs
+
+
 class ProfileContour(_ClosedAboutCenter):
     """A closed planar profile: the polygon ``vertices`` (N >= 3, (x, y) in
     m about ``center``, counter-clockwise, not self-intersecting) with
@@ -614,14 +715,7 @@ class ProfileContour(_ClosedAboutCenter):
         start_angle=0.0,
         direction=1,
     ):
-        V = np.asarray(vertices, float)
-        if V.ndim != 2 or V.shape[1] != 2 or len(V) < 3:
-            raise ValueError(
-                "vertices must be at least 3 points [x, y], got "
-                f"shape {V.shape}"
-            )
-        if not np.all(np.isfinite(V)):
-            raise ValueError("vertices must be finite")
+        V = _profile_vertices(vertices)
         R = _finite_scalar(fillet_radius, "fillet_radius")
         if R <= 0.0:
             raise ValueError(f"fillet_radius must be > 0, got {R}")
@@ -633,81 +727,23 @@ class ProfileContour(_ClosedAboutCenter):
         offset = _finite_scalar(offset, "offset")
         self._vertices, self._fillet, self._material = V.copy(), R, material
         self._offset = offset
-        n = len(V)
-        E = np.roll(V, -1, axis=0) - V  # side k: V[k] -> V[k+1]
-        side = np.hypot(E[:, 0], E[:, 1])
-        scale = float(np.max(side))
-        for k in range(n):
-            if side[k] <= 1e-9 * max(scale, 1e-300):
-                raise ValueError(
-                    f"degenerate profile: vertices {k} and "
-                    f"{(k + 1) % n} coincide"
-                )
-        D = E / side[:, None]
-        area = 0.5 * float(
-            np.sum(
-                V[:, 0] * np.roll(V[:, 1], -1) - np.roll(V[:, 0], -1) * V[:, 1]
-            )
-        )
-        if area <= 0.0:
-            raise ValueError(
-                "vertices must run counter-clockwise (signed "
-                f"area {area:.3g} m^2 <= 0)"
-            )
-        hit = polyline_self_intersection(V)
+        kinds, lines, arcs = _profile_segments(V, R, material, offset)
+        self._store_segments(kinds, lines, arcs)
+        path = self.sample_path(max(4000, 40 * len(kinds)))
+        hit = polyline_self_intersection(path)
         if hit is not None:
+            u = self._U[-1] * np.array(hit) / len(path)
             raise ValueError(
-                f"the profile intersects itself (sides {hit[0]} and {hit[1]})"
+                f"the path offset by {offset} m overlaps itself (near "
+                f"{u[0] * 1e3:.1f} and {u[1] * 1e3:.1f} mm along it): the "
+                "profile is too narrow for the cutter there"
             )
-        Din = np.roll(D, 1, axis=0)  # side into vertex k
-        turn = np.arctan2(
-            Din[:, 0] * D[:, 1] - Din[:, 1] * D[:, 0],
-            np.einsum("ij,ij->i", Din, D),
-        )
-        for k in range(n):
-            if abs(abs(turn[k]) - math.pi) < 1e-9:
-                raise ValueError(
-                    f"degenerate profile: the sides turn back on "
-                    f"themselves at vertex {k}"
-                )
-        tan_len = R * np.tan(0.5 * np.abs(turn))
-        free = 1.0 if material == "outside" else -1.0  # free side: +left
-        left = np.stack([-D[:, 1], D[:, 0]], axis=1)
-        line_len = side - tan_len - np.roll(tan_len, -1)
-        for k in range(n):
-            if line_len[k] < -1e-12 * scale:
-                raise ValueError(
-                    f"the fillets of radius {R} do not fit on side {k} "
-                    f"(vertices {k} -> {(k + 1) % n}, {side[k]:.6g} m long, "
-                    f"the fillets take {side[k] - line_len[k]:.6g} m)"
-                )
-        line_len = np.maximum(line_len, 0.0)
-        # Segments in counter-clockwise order: side k, then the arc at
-        # vertex k + 1.
-        kinds, lines, arcs = [], [], []
-        for k in range(n):
-            a = V[k] + tan_len[k] * D[k] + free * offset * left[k]
-            lines.append((a, D[k], free * left[k], line_len[k]))
-            kinds.append((0, len(lines) - 1, line_len[k]))
-            v = (k + 1) % n
-            if abs(turn[v]) < 1e-12:
-                continue
-            sgn = 1.0 if turn[v] > 0 else -1.0
-            t_in = V[v] - tan_len[v] * D[k]
-            c = t_in + sgn * R * left[k]
-            rho = R - offset * free * sgn
-            if rho <= 0.0:
-                raise ValueError(
-                    f"the arc at vertex {v} has radius {R} - {abs(offset)} "
-                    f"<= 0 after the offset {offset} (the fillet must be "
-                    "larger than the cutter radius where the cutter runs "
-                    "inside it)"
-                )
-            start = a + line_len[k] * D[k] - c
-            th0 = math.atan2(start[1], start[0])
-            sigma = -free * sgn  # phi = sigma (|p - c| - rho)
-            arcs.append((c, rho, th0, turn[v], sigma))
-            kinds.append((1, len(arcs) - 1, rho * abs(turn[v])))
+        self._u_start = self._start_parameter(path)
+
+    def _store_segments(self, kinds, lines, arcs):
+        """The segments of :func:`_profile_segments` as arrays: the path
+        parameter U at each segment's start, the lines' and the arcs'
+        fields."""
         self._kinds = np.array([k for k, _, _ in kinds])
         self._index = np.array([i for _, i, _ in kinds])
         lengths = np.array([L for _, _, L in kinds])
@@ -728,16 +764,6 @@ class ProfileContour(_ClosedAboutCenter):
         self._aSw = np.array([a[3] for a in arcs])
         self._aSig = np.array([a[4] for a in arcs])
         self._aU = self._U[ak]
-        path = self.sample_path(max(4000, 40 * len(kinds)))
-        hit = polyline_self_intersection(path)
-        if hit is not None:
-            u = self._U[-1] * np.array(hit) / len(path)
-            raise ValueError(
-                f"the path offset by {offset} m overlaps itself (near "
-                f"{u[0] * 1e3:.1f} and {u[1] * 1e3:.1f} mm along it): the "
-                "profile is too narrow for the cutter there"
-            )
-        self._u_start = self._start_parameter(path)
 
     # ----- construction helpers ------------------------------------------
     def _point_u(self, u):
