@@ -1,12 +1,12 @@
 """Sphinx configuration of the deburr_drake site.
 
-Build it (warnings are errors, internal links checked) with the command in
-the README: ``python -m sphinx -W --keep-going -n -b html docs docs/_build/html``
+Build it (warnings are errors, internal links checked) with the command in the
+README: ``python -m sphinx -W --keep-going -n -b html docs docs/_build/html``
 (``.ci/run`` runs it). Two pages are generated here at every build, never
 written by hand: ``scenario-reference.md`` from the config dataclasses
-(``deburr_drake.config.reference``) and ``api/*.md``, one page per module of
-the package (autodoc), so a module or a field added later is documented
-without touching the docs.
+(``deburr_drake.config.reference``) and ``api/*.md``, one page per module of the
+package (autodoc), so a module or a field added later is documented without
+touching the docs.
 """
 
 from pathlib import Path

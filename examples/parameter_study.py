@@ -6,7 +6,8 @@ the diagram, simulates it and computes the pass metrics (after the 2 s
 contact transient; a run of a few seconds gives about a second of them).
 
     python examples/parameter_study.py --duration 4 --values 0.3,0.5,0.7
-    python examples/parameter_study.py --field controller.fuzzy.order --values 0,2
+    python examples/parameter_study.py --field controller.fuzzy.order \\
+        --values 0,2
 """
 
 import argparse

@@ -65,26 +65,16 @@ class _IdleSampler(LeafSystem):
         discrete_state.set_value(0, self._state.Eval(context)[:1])
 
 
-def make_floor_simulator(step=None, sensor=True, python_systems=0):
-    """(simulator, plant) of the floor, initialized; ``step`` (s) the fixed
-    cenic step, the control period by default; ``python_systems`` idle
-    Python samplers (:class:`_IdleSampler`) added beside the physics."""
-    scenario = load_scenario("paper")
-    T = scenario.controller.control_period
-    builder = DiagramBuilder()
-    plant, _ = add_cell_plant(builder, scenario)
-    contour = make_contour(scenario)
-    p = contour.point_at(0.0)
-    # Aimed 1.5 mm deep: the joint PID settles near 0.5 mm, about 5 N.
-    q0 = solve_tool_pose(plant, p + 1.5e-3 * contour.n1(p))
-    plant.SetDefaultPositions(q0)
+def _add_cutting_force(builder, plant, context, scenario, contour, q0):
+    """The cell's cutting-force law with its terms held constant at 0.5 mm
+    depth at the contour's start, applied to the plant; returns the law."""
     nq, nv = plant.num_positions(), plant.num_velocities()
-
+    T = scenario.controller.control_period
+    p = contour.point_at(0.0)
     _, _, J = ToolPoint(plant, plant.GetFrameByName(TOOL_FRAME)).evaluate(
         np.concatenate([q0, np.zeros(nv)])
     )
     n1, tangent, delta, _ = contour.frame(p + 5e-4 * contour.n1(p))
-    context = plant.CreateDefaultContext()
     a = J.T @ tangent
     B = plant.MakeActuationMatrix()
     held = HeldMean(
@@ -118,7 +108,13 @@ def make_floor_simulator(step=None, sensor=True, python_systems=0):
         law.GetOutputPort("generalized_force"),
         plant.get_applied_generalized_force_input_port(),
     )
+    return law
 
+
+def _add_joint_control(builder, plant, context, q0, T, law):
+    """A joint PID holding q0 with gravity feedforward, through a zero-order
+    hold of period T, into the plant and the force law's actuation."""
+    nv = plant.num_velocities()
     pid = builder.AddSystem(
         PidController(
             kp=np.full(nv, 2000.0), ki=np.zeros(nv), kd=np.full(nv, 100.0)
@@ -144,6 +140,24 @@ def make_floor_simulator(step=None, sensor=True, python_systems=0):
     builder.Connect(total.get_output_port(), hold.get_input_port())
     builder.Connect(hold.get_output_port(), plant.get_actuation_input_port())
     builder.Connect(hold.get_output_port(), law.GetInputPort("actuation"))
+
+
+def make_floor_simulator(step=None, sensor=True, python_systems=0):
+    """(simulator, plant) of the floor, initialized; ``step`` (s) the fixed
+    cenic step, the control period by default; ``python_systems`` idle
+    Python samplers (:class:`_IdleSampler`) added beside the physics."""
+    scenario = load_scenario("paper")
+    T = scenario.controller.control_period
+    builder = DiagramBuilder()
+    plant, _ = add_cell_plant(builder, scenario)
+    contour = make_contour(scenario)
+    p = contour.point_at(0.0)
+    # Aimed 1.5 mm deep: the joint PID settles near 0.5 mm, about 5 N.
+    q0 = solve_tool_pose(plant, p + 1.5e-3 * contour.n1(p))
+    plant.SetDefaultPositions(q0)
+    context = plant.CreateDefaultContext()
+    law = _add_cutting_force(builder, plant, context, scenario, contour, q0)
+    _add_joint_control(builder, plant, context, q0, T, law)
     if sensor:
         reactions = plant.get_reaction_forces_output_port()
         sample = builder.AddSystem(

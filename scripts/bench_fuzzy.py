@@ -1,4 +1,5 @@
-"""Microseconds per RuleBase.evaluate_and_rate call (m = 2, Upsilon = 5, floats)."""
+"""Microseconds per RuleBase.evaluate_and_rate call (m = 2, Upsilon = 5,
+floats)."""
 
 from pathlib import Path
 import sys

@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
-"""Calibrate and tabulate the tool/ring hydroelastic contact law (force vs radial depth).
+"""Calibrate and tabulate the tool/ring hydroelastic contact law (force vs
+radial depth).
 
-Prints: the hydroelastic modulus E giving the target local stiffness at 0.5 mm, the
-table of force and dF/d(delta) for depths 0.1..1.0 mm, the power-law exponent, the
-force ripple over one mesh segment, and the cost of one contact-force evaluation.
+Prints: the hydroelastic modulus E giving the target local stiffness at 0.5 mm,
+the table of force and dF/d(delta) for depths 0.1..1.0 mm, the power-law
+exponent, the force ripple over one mesh segment, and the cost of one
+contact-force evaluation.
 """
 
 import argparse
@@ -52,18 +54,17 @@ def main():
     print(f"{'depth mm':>9} {'F N':>8} {'dF/dd N/mm':>11} {'local exp':>9}")
     for d, f, k in zip(depths, forces, stiffness):
         print(f"{d * 1e3:9.2f} {f:8.3f} {k * 1e-3:11.2f} {k * d / f:9.2f}")
-    print(
-        f"power-law exponent (fit 0.1..1.0 mm): {power_law_exponent(depths, forces):.3f}"
-    )
-    print(
-        f"out of contact (depth -0.1 mm): F = {measure_normal_force([-1e-4], hydroelastic_modulus=E, **common)[0]} N"
-    )
+    exponent = power_law_exponent(depths, forces)
+    print(f"power-law exponent (fit 0.1..1.0 mm): {exponent:.3f}")
+    (f_out,) = measure_normal_force([-1e-4], hydroelastic_modulus=E, **common)
+    print(f"out of contact (depth -0.1 mm): F = {f_out} N")
 
     ripple, f_seg = force_ripple(
         args.depth * 1e-3, hydroelastic_modulus=E, **common
     )
     print(
-        f"ripple over one mesh segment at {args.depth} mm: (max-min)/mean = {ripple:.2e} "
+        f"ripple over one mesh segment at {args.depth} mm: "
+        f"(max-min)/mean = {ripple:.2e} "
         f"(F {f_seg.min():.4f}..{f_seg.max():.4f} N)"
     )
 
@@ -75,7 +76,8 @@ def main():
         probe.radial_force(args.depth * 1e-3, a)
     dt = (time.perf_counter() - t0) / len(angles)
     print(
-        f"one contact-force evaluation (new pose, contact results port): {dt * 1e3:.3f} ms"
+        "one contact-force evaluation (new pose, contact results port): "
+        f"{dt * 1e3:.3f} ms"
     )
 
 

@@ -1,4 +1,4 @@
-"""The paper scenario under each fault of issue 10, DURATION simulated
+"""The paper scenario under each fault the cell injects, DURATION simulated
 seconds each (default 20), one row per fault: NaN seen, the largest true
 normal force (the force sensor's own reading, before the injected faults,
 along n1), the chamfer depth error on the real part (the cutting process's
@@ -29,12 +29,14 @@ FAULTS = {
     "believed radius +0.3 mm": "part_error: {radius: 0.0003}",
     "believed part 1 mm off in x": "part_error: {offset: [0.001, 0.0, 0.0]}",
     "believed part turned 0.2 rad": "part_error: {yaw: 0.2}",
-    "part moves 0.3 mm along x at 10 s": "faults: {part_step: {time: 10.0, offset: [0.0003, 0.0, 0.0]}}",
-    "sliding gain 2e4 (runaway)": "controller: {sliding_gain: [20000.0, 20000.0, 1500.0]}",
+    "part moves 0.3 mm along x at 10 s": "faults: {part_step: {time: 10.0, "
+    "offset: [0.0003, 0.0, 0.0]}}",
+    "sliding gain 2e4 (runaway)": "controller: {sliding_gain: "
+    "[20000.0, 20000.0, 1500.0]}",
     # Taller than the cutter's 2 mm engagement below the edge (g = 23,100
     # N s/m on it, beyond the envelope's 2 mm: scripts/envelope.py).
-    "burr 3 mm x 8 mm (> engagement)": "process: {burrs: [{center_fraction: 0.1, length: 0.008, "
-    "height: 0.003, thickness: 0.002}]}",
+    "burr 3 mm x 8 mm (> engagement)": "process: {burrs: [{center_fraction: "
+    "0.1, length: 0.008, height: 0.003, thickness: 0.002}]}",
     "straight 10 mm edge, run off": "{edge: {kind: straight, length: 0.01}, "
     "process: {burrs: []}, "
     "simulation: {stop_after_passes: 0}}",

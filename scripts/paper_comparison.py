@@ -1,4 +1,4 @@
-"""The paper's comparisons reproduced (issue 11): the paper scenario, one full
+"""The paper's comparisons reproduced: the paper scenario, one full
 pass, with every controller (fuzzy m = 2, fuzzy m = 0, impedance at constant
 feed, the robust law (22), the ideal law (12), stiff position control),
 then prints comparison.md. Minutes per controller; not a test. Usage:

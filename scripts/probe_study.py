@@ -1,4 +1,4 @@
-"""Touch probing studies (issue 21): accuracy against the number of touches
+"""Touch probing studies: accuracy against the number of touches
 and the sensor's noise, and the probe's qualification (25 repeats on the
 reference ring, centre and radius fitted). Prints the tables.
 

@@ -21,6 +21,47 @@ def _floats(text, scale=1.0):
     return [float(x) * scale for x in text.split(",") if x.strip()]
 
 
+def _show(cell, row):
+    """One cell's row of the table."""
+    if "error" in row:
+        print(f"{cell.label:>26s}: ERROR {row['error']}", flush=True)
+        return
+    print(
+        f"{cell.label:>26s} | "
+        f"{row['chamfer_depth_rms_error_mm']:9.4f} "
+        f"{row['chamfer_depth_max_error_mm']:6.3f} | "
+        f"{row['chamfering_force_rms_error_N']:7.3f} | "
+        f"{row['feed_line_mm_s']:9.2f} {row['law_line_mm_s']:5.2f} "
+        f"| {row['feed_fillet_mm_s']:6.2f} "
+        f"{row['law_fillet_mm_s']:5.2f} | "
+        f"{row['edge_coverage']:5.3f} | {row['stop_reason']:>13s} "
+        f"| {row['sim_time_s']:4.0f} {row['wall_time_s']:4.0f} | "
+        f"{'PASS' if row['passed'] else 'FAIL'}",
+        flush=True,
+    )
+
+
+def _replay_json(args):
+    """The rows of a --json file, the feed law's columns recomputed, each
+    shown; returns the file's content."""
+    from deburr_drake.config import load_scenario
+
+    with open(args.from_json) as f:
+        saved = json.load(f)
+    base = load_scenario(args.scenario, text=args.scenario_text)
+    for row in saved["rows"]:
+        cell = pe.FilletCell(**row["cell"])
+        if "error" not in row:
+            laws = pe.law_feeds(
+                pe.fillet_scenario(base, cell), row["fillet_curvature_1_m"]
+            )
+            row["law_line_mm_s"], row["law_fillet_mm_s"] = (
+                v * 1e3 for v in laws
+            )
+        _show(cell, row)
+    return saved
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--workers", type=int, default=2)
@@ -64,41 +105,9 @@ def main(argv=None) -> int:
     )
     start = time.perf_counter()
 
-    def show(cell, row):
-        if "error" in row:
-            print(f"{cell.label:>26s}: ERROR {row['error']}", flush=True)
-            return
-        print(
-            f"{cell.label:>26s} | "
-            f"{row['chamfer_depth_rms_error_mm']:9.4f} "
-            f"{row['chamfer_depth_max_error_mm']:6.3f} | "
-            f"{row['chamfering_force_rms_error_N']:7.3f} | "
-            f"{row['feed_line_mm_s']:9.2f} {row['law_line_mm_s']:5.2f} "
-            f"| {row['feed_fillet_mm_s']:6.2f} "
-            f"{row['law_fillet_mm_s']:5.2f} | "
-            f"{row['edge_coverage']:5.3f} | {row['stop_reason']:>13s} "
-            f"| {row['sim_time_s']:4.0f} {row['wall_time_s']:4.0f} | "
-            f"{'PASS' if row['passed'] else 'FAIL'}",
-            flush=True,
-        )
-
     if args.from_json:
-        from deburr_drake.config import load_scenario
-
-        with open(args.from_json) as f:
-            saved = json.load(f)
+        saved = _replay_json(args)
         rows = saved["rows"]
-        base = load_scenario(args.scenario, text=args.scenario_text)
-        for row in rows:
-            cell = pe.FilletCell(**row["cell"])
-            if "error" not in row:
-                laws = pe.law_feeds(
-                    pe.fillet_scenario(base, cell), row["fillet_curvature_1_m"]
-                )
-                row["law_line_mm_s"], row["law_fillet_mm_s"] = (
-                    v * 1e3 for v in laws
-                )
-            show(cell, row)
     else:
         rows = run_cells(
             pe.run_fillet_cell,
@@ -106,7 +115,7 @@ def main(argv=None) -> int:
             args.scenario,
             args.scenario_text,
             workers=args.workers,
-            on_row=show,
+            on_row=_show,
         )
     wall = (
         saved["wall_time_s"] if args.from_json else time.perf_counter() - start

@@ -50,10 +50,8 @@ def main(argv=None) -> int:
         name = (
             "line"
             if k == 0
-            else (
-                f"{'concave' if k > 0 else 'convex'} fillet r {1e3 / abs(k):.0f}"
-                " mm"
-            )
+            else f"{'concave' if k > 0 else 'convex'} fillet "
+            f"r {1e3 / abs(k):.0f} mm"
         )
         print(
             f"{name:>24s} {int(on.sum()):8d} {np.mean(v[on]) * 1e3:10.3f} "

@@ -3,7 +3,8 @@ several ``max_residual`` values: the touches kept and the registration's
 error against the real edge (um), per run. Each argument is a run's
 output directory (``deburr-drake simulate --out DIR`` with probing on).
 
-    python scripts/refit_touches.py out/pocket out/boss --thresholds 40e-6 50e-6 80e-6
+    python scripts/refit_touches.py out/pocket out/boss \\
+        --thresholds 40e-6 50e-6 80e-6
 """
 
 import argparse

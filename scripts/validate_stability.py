@@ -50,12 +50,14 @@ def _verdicts(args):
         sim = r["simulation"]
         ft = sim["max_f_t_N"]
         guard = f"{r['guard']}@{r['guard_time_s']:.2f}" if r["guard"] else "-"
+        rho = r["rho_max_along_run"]
+        hz = r["oscillation_hz"]
         print(
             f"{i:2d} {label:40s} {r['verdict']:>8s} "
             f"{sim['verdict']:>10s} "
             f"{'-' if ft is None else f'{ft:.1f}':>11s} "
-            f"{'-' if r['rho_max_along_run'] is None else format(r['rho_max_along_run'], '.5f'):>8s} "
-            f"{'-' if r['oscillation_hz'] is None else format(r['oscillation_hz'], '.1f'):>8s} "
+            f"{'-' if rho is None else format(rho, '.5f'):>8s} "
+            f"{'-' if hz is None else format(hz, '.1f'):>8s} "
             f"{guard:>13s} {'yes' if r['agree'] else 'NO':>5s}",
             flush=True,
         )

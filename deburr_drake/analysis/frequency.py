@@ -61,7 +61,7 @@ def margins(f, L):
     Hz) of a loop response ``L`` sampled at increasing frequencies ``f``
     (Hz), by interpolating the crossings on the grid: the smallest margins
     over all crossings (inf where there is none). Computed here rather than
-    by ``control.stability_margins``, whose root-finding fell back to an
+    by ``control.stability_margins``, whose root-finding falls back to an
     inaccurate method on these loops (an integrator, delta_d, at z = 1)."""
     mag = np.abs(L)
     phase = np.degrees(np.unwrap(np.angle(L)))

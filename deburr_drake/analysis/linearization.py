@@ -175,12 +175,9 @@ def classify_modes(
     return sorted(modes, key=lambda m: (m.group, -m.eigenvalue.real))
 
 
-def linearize_closed_loop(
-    op: OperatingPoint, *, stiffness: float | None = None, **overrides
-) -> ContinuousLinearization:
-    """The continuous-time linearization of ``op``'s closed loop (see the
-    module docstring), with scenario ``overrides`` by dotted name.
-    ``stiffness`` (N/m, for grouping modes) defaults to 1e4."""
+def _continuous_cell(op: OperatingPoint, overrides):
+    """(scenario, diagram, context): ``op``'s cell made continuous
+    (frozen_scenario) with ``overrides``, at ``op``'s state."""
     scenario = frozen_scenario(op.scenario, continuous=True, **overrides)
     diagram = make_deburring_diagram(scenario=scenario)
     context = diagram.CreateDefaultContext()
@@ -192,6 +189,49 @@ def linearize_closed_loop(
     process_context.SetDiscreteState(
         process.EvalUniquePeriodicDiscreteUpdate(process_context)
     )
+    return scenario, diagram, context
+
+
+def _modes(diagram, context, scenario, A, slices, stiffness):
+    """(eigenvalues, modes) of A, the modes grouped by the tool's motion
+    along the edge's directions at the state in ``context``."""
+    plant = diagram.GetSubsystemByName("plant")
+    plant_context = plant.GetMyContextFromRoot(context)
+    frame = plant.GetFrameByName(scenario.robot.tool_frame)
+    J = plant.CalcJacobianSpatialVelocity(
+        plant_context,
+        JacobianWrtVariable.kV,
+        frame,
+        np.zeros(3),
+        plant.world_frame(),
+        plant.world_frame(),
+    )
+    # q' = v for the cell's joints (revolute or prismatic).
+    observer = diagram.GetSubsystemByName("chamfer_observer")
+    chamfer = observer.GetOutputPort("chamfer_state").Eval(
+        observer.GetMyContextFromRoot(context)
+    )
+    eigenvalues, vectors = np.linalg.eig(A)
+    modes = classify_modes(
+        eigenvalues,
+        vectors,
+        slices=slices,
+        J_v=J[3:],
+        J_w=J[:3],
+        n1=CHAMFER_STATE.get(chamfer, "n1"),
+        n2=CHAMFER_STATE.get(chamfer, "n2"),
+        stiffness=stiffness,
+    )
+    return eigenvalues, modes
+
+
+def linearize_closed_loop(
+    op: OperatingPoint, *, stiffness: float | None = None, **overrides
+) -> ContinuousLinearization:
+    """The continuous-time linearization of ``op``'s closed loop (see the
+    module docstring), with scenario ``overrides`` by dotted name.
+    ``stiffness`` (N/m, for grouping modes) defaults to 1e4."""
+    scenario, diagram, context = _continuous_cell(op, overrides)
     plant = diagram.GetSubsystemByName("plant")
     sensor = diagram.GetSubsystemByName("force_sensor")
     sensor_context = sensor.GetMyMutableContextFromRoot(context)
@@ -238,31 +278,8 @@ def linearize_closed_loop(
     A = numerical_jacobian(f, z0, steps)
     f(z0)  # leave the context at the operating point
 
-    plant_context = plant.GetMyContextFromRoot(context)
-    frame = plant.GetFrameByName(scenario.robot.tool_frame)
-    J = plant.CalcJacobianSpatialVelocity(
-        plant_context,
-        JacobianWrtVariable.kV,
-        frame,
-        np.zeros(3),
-        plant.world_frame(),
-        plant.world_frame(),
-    )
-    # q' = v for the cell's joints (revolute or prismatic).
-    observer = diagram.GetSubsystemByName("chamfer_observer")
-    chamfer = observer.GetOutputPort("chamfer_state").Eval(
-        observer.GetMyContextFromRoot(context)
-    )
-    eigenvalues, vectors = np.linalg.eig(A)
-    modes = classify_modes(
-        eigenvalues,
-        vectors,
-        slices=slices,
-        J_v=J[3:],
-        J_w=J[:3],
-        n1=CHAMFER_STATE.get(chamfer, "n1"),
-        n2=CHAMFER_STATE.get(chamfer, "n2"),
-        stiffness=stiffness or 1e4,
+    eigenvalues, modes = _modes(
+        diagram, context, scenario, A, slices, stiffness or 1e4
     )
     depth = [
         m for m in modes if m.group == "depth/force" and m.eigenvalue.real < 0

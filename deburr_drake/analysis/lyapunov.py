@@ -37,6 +37,41 @@ class LyapunovTrace:
     summary: Dict[str, float]
 
 
+def _task_inertia(plant, plant_context, frame):
+    """The task-space inertia (kg, 3 x 3) of ``frame``'s origin:
+    (J M^-1 J^T)^-1."""
+    M = plant.CalcMassMatrix(plant_context)
+    J = plant.CalcJacobianTranslationalVelocity(
+        plant_context,
+        JacobianWrtVariable.kV,
+        frame,
+        np.zeros(3),
+        plant.world_frame(),
+        plant.world_frame(),
+    )
+    return np.linalg.inv(J @ np.linalg.solve(M, J.T))
+
+
+def _summary(t, V1, V, outside, settle) -> Dict[str, float]:
+    """The fractions of samples after ``settle`` where V and V1 grow."""
+    late = t[1:] > settle
+    mask = late & outside[1:]
+    dV = np.diff(V)
+    dV1 = np.diff(V1)
+    return {
+        "samples_outside_dead_zone": int(np.sum(mask)),
+        "fraction_dV_positive_outside_dead_zone": float(np.mean(dV[mask] > 0))
+        if np.any(mask)
+        else float("nan"),
+        "fraction_dV1_positive_outside_dead_zone": float(np.mean(dV1[mask] > 0))
+        if np.any(mask)
+        else float("nan"),
+        "fraction_dV_positive_all": float(np.mean(dV[late] > 0))
+        if np.any(late)
+        else float("nan"),
+    }
+
+
 def lyapunov_trace(
     scenario: Scenario,
     *,
@@ -82,16 +117,7 @@ def lyapunov_trace(
         s = CONTROLLER_DIAGNOSTICS.get(
             controller.GetOutputPort("diagnostics").Eval(cc), "s"
         )
-        M = plant.CalcMassMatrix(pc)
-        J = plant.CalcJacobianTranslationalVelocity(
-            pc,
-            JacobianWrtVariable.kV,
-            frame,
-            np.zeros(3),
-            plant.world_frame(),
-            plant.world_frame(),
-        )
-        M_x = np.linalg.inv(J @ np.linalg.solve(M, J.T))
+        M_x = _task_inertia(plant, pc, frame)
         adapted = r_c > 0
         V1 = float(
             np.sum((c_hat - c_true)[adapted] ** 2 / (2 * r_c[adapted]))
@@ -105,22 +131,7 @@ def lyapunov_trace(
     V = V1 + np.array(
         [np.sum((th - theta_star) ** 2) / (2 * r_f) for th in thetas]
     )
-    late = t[1:] > settle
-    mask = late & outside[1:]
-    dV = np.diff(V)
-    dV1 = np.diff(V1)
-    summary = {
-        "samples_outside_dead_zone": int(np.sum(mask)),
-        "fraction_dV_positive_outside_dead_zone": float(np.mean(dV[mask] > 0))
-        if np.any(mask)
-        else float("nan"),
-        "fraction_dV1_positive_outside_dead_zone": float(np.mean(dV1[mask] > 0))
-        if np.any(mask)
-        else float("nan"),
-        "fraction_dV_positive_all": float(np.mean(dV[late] > 0))
-        if np.any(late)
-        else float("nan"),
-    }
+    summary = _summary(t, V1, V, outside, settle)
     return LyapunovTrace(t, V1, V, outside, summary)
 
 

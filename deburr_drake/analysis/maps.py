@@ -158,51 +158,29 @@ def _affine_coordinate(scenario: Scenario, field: str):
     return None
 
 
-def fast_rho(op: OperatingPoint, fields: Sequence[str], *, delta: float = 1e-9):
-    """``rho_of(**overrides)`` for :func:`stability_map` that reuses what
-    does not change between grid points, or None when a field is not one
-    it knows. The one-period map is split at t_k + delta into the sample
-    (the discrete updates at t_k: sensor, controller, process) and the
-    integration over the rest of the period. The integration's map is
-    taken once, at the operating point's own parameters (first order: the
-    held actuation and reading move little between grid points at a
-    steady operating point); the sample map is affine in the sensor's
-    alpha and in the sliding gains (separate rows), so it is taken at the
-    base and once per field, and each grid point costs one 48 x 48
-    eigenvalue problem. Fixed-step scenarios only (None otherwise).
-    On the paper arm at its 3 s operating point it matched the full map
-    within 2e-5 at cutoffs 10-100 Hz and gains 400-6000 N s/m; 1 s after
-    contact (less steady) 1.50 against 1.42 at 60 Hz and 5000 N s/m."""
+def _prepared(op: OperatingPoint, overrides):
+    """(diagram, context, map entries) of ``op``'s frozen scenario with
+    ``overrides``, at ``op``'s state."""
     from deburr_drake.analysis.operating_point import transfer_state
-    from deburr_drake.analysis.sampled import (
-        cell_map_entries,
-        period_map,
-        simulator_config,
-        spectral_radius,
-    )
+    from deburr_drake.analysis.sampled import cell_map_entries
     from deburr_drake.cell.diagram import make_deburring_diagram
 
-    coords = [_affine_coordinate(op.scenario, f) for f in fields]
-    base = frozen_scenario(op.scenario)
-    if any(c is None for c in coords) or base.simulation.error_control:
-        # An error-controlled integrator steps differently over a split
-        # period (measured on the point mass: 0.99 against 1.156 at a
-        # 60 Hz cutoff); fixed steps (the paper's) compose exactly.
-        return None
-    period = base.controller.control_period
-    config = simulator_config(base)
+    scenario = frozen_scenario(op.scenario, **overrides)
+    diagram = make_deburring_diagram(scenario=scenario)
+    context = diagram.CreateDefaultContext()
+    transfer_state(op.diagram, op.context, diagram, context)
+    return diagram, context, cell_map_entries(diagram)
 
-    def prepared(overrides):
-        scenario = frozen_scenario(op.scenario, **overrides)
-        diagram = make_deburring_diagram(scenario=scenario)
-        context = diagram.CreateDefaultContext()
-        transfer_state(op.diagram, op.context, diagram, context)
-        return diagram, context, cell_map_entries(diagram)
 
-    diagram, context, entries = prepared({})
-    sample0 = period_map(diagram, context, entries, period=delta, config=config)
-    # The state just after the sample, then the rest of the period.
-    from deburr_drake.analysis.sampled import _one_period, _read, _write
+def _rest_of_period_map(diagram, context, entries, delta, period, config):
+    """The map of the integration from t_k + delta to the period's end,
+    taken at the state just after the sample."""
+    from deburr_drake.analysis.sampled import (
+        _one_period,
+        _read,
+        _write,
+        period_map,
+    )
 
     after = context.Clone()
     _write(
@@ -221,14 +199,53 @@ def fast_rho(op: OperatingPoint, fields: Sequence[str], *, delta: float = 1e-9):
     # _one_period moved only the entries; the rest of the state (FOH,
     # adaptation: frozen or slow) is the operating point's.
     after.SetTime(context.get_time() + delta)
-    integrate = period_map(
+    return period_map(
         diagram, after, entries, period=period - delta, config=config
+    )
+
+
+def fast_rho(op: OperatingPoint, fields: Sequence[str], *, delta: float = 1e-9):
+    """``rho_of(**overrides)`` for :func:`stability_map` that reuses what
+    does not change between grid points, or None when a field is not one
+    it knows. The one-period map is split at t_k + delta into the sample
+    (the discrete updates at t_k: sensor, controller, process) and the
+    integration over the rest of the period. The integration's map is
+    taken once, at the operating point's own parameters (first order: the
+    held actuation and reading move little between grid points at a
+    steady operating point); the sample map is affine in the sensor's
+    alpha and in the sliding gains (separate rows), so it is taken at the
+    base and once per field, and each grid point costs one 48 x 48
+    eigenvalue problem. Fixed-step scenarios only (None otherwise).
+    On the paper arm at its 3 s operating point it matches the full map
+    within 2e-5 at cutoffs 10-100 Hz and gains 400-6000 N s/m; 1 s after
+    contact (less steady) it gives 1.50 against 1.42 at 60 Hz and
+    5000 N s/m."""
+    from deburr_drake.analysis.sampled import (
+        period_map,
+        simulator_config,
+        spectral_radius,
+    )
+
+    coords = [_affine_coordinate(op.scenario, f) for f in fields]
+    base = frozen_scenario(op.scenario)
+    if any(c is None for c in coords) or base.simulation.error_control:
+        # An error-controlled integrator steps differently over a split
+        # period, so the pieces do not compose into the one-period map;
+        # fixed steps (the paper's) compose exactly.
+        return None
+    period = base.controller.control_period
+    config = simulator_config(base)
+
+    diagram, context, entries = _prepared(op, {})
+    sample0 = period_map(diagram, context, entries, period=delta, config=config)
+    integrate = _rest_of_period_map(
+        diagram, context, entries, delta, period, config
     )
     slopes = []
     for field, coord in zip(fields, coords):
         v0 = float(get_field(op.scenario, field))
         v1 = v0 * 1.5 if v0 else 1.0
-        d, c, e = prepared({field: v1})
+        d, c, e = _prepared(op, {field: v1})
         sample = period_map(d, c, e, period=delta, config=config)
         slopes.append(
             (

@@ -21,13 +21,11 @@ What is frozen, and why:
   neither is in the linear model; the clamp bounds a limit cycle, and a
   guard stops the run that should show it.
 
-And one numerical setting: a scenario integrated with error control is
-analysed with fixed steps of one control period (the paper scenarios run
-fixed steps of their own ``max_step``, two per control period). An error-controlled step size is hidden state that the one-period map
-cannot perturb: on the point mass at its 1e-4 a run's frames stopped
-following the map after the first, and at 1e-7 the predicted limits missed
-the simulated ones by 25-40 %; with fixed steps the 2.5 ms map and the runs
-agree.
+And one numerical setting: a scenario integrated with error control is analysed
+with fixed steps of one control period (the paper scenarios run fixed steps of
+their own ``max_step``, two per control period). An error-controlled step size
+is hidden state that the one-period map cannot perturb, so error-controlled runs
+do not follow the map; with fixed steps the 2.5 ms map and the runs agree.
 
 Everything else is live: plant (hydroelastic contact), controller,
 force sensor (sampled low-pass), the cutting process's sampled force law.

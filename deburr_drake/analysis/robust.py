@@ -101,6 +101,19 @@ def _scale_burr(factor: float) -> Callable:
     return modify
 
 
+def _parameter_table(scenario: Scenario, active) -> List[Dict]:
+    """[{name, field, unit, range}] of the parameters varied."""
+    return [
+        {
+            "name": p.name,
+            "field": p.field,
+            "unit": p.unit,
+            "range": list(p.values(scenario)[1:]),
+        }
+        for p in active
+    ]
+
+
 def robust_margin(
     scenario: Scenario,
     diagram,
@@ -141,10 +154,8 @@ def robust_margin(
                 "rho_oscillatory": r["rho_oscillatory"],
             }
         )
-        say(
-            f"robust: {overrides or ''}{' burr x' + str(burr[0]) if modify else ''}"
-            f" rho = {rho:.5f}"
-        )
+        burr_text = f" burr x{burr[0]}" if modify else ""
+        say(f"robust: {overrides or ''}{burr_text} rho = {rho:.5f}")
         return rho
 
     rho0 = rho_at(nominal)
@@ -172,15 +183,7 @@ def robust_margin(
         "rho_worst_oscillatory": fast["rho_oscillatory"],
         "at_oscillatory": fast["values"],
         "maps": maps,
-        "parameters": [
-            {
-                "name": p.name,
-                "field": p.field,
-                "unit": p.unit,
-                "range": list(p.values(scenario)[1:]),
-            }
-            for p in active
-        ],
+        "parameters": _parameter_table(scenario, active),
         "left_out": [p.name for p in parameters if p not in active],
         "method": "each parameter alone at both ends, then the corner of "
         "the worse ends (vertex search)",

@@ -306,10 +306,10 @@ def sampled_loop(
     ``overrides`` by dotted name (e.g. ``sensor.cutoff_frequency``);
     ``modify(diagram, context)`` may change the operating point's state
     first (e.g. the fuzzy surface, see
-    :func:`deburr_drake.analysis.add_fuzzy_slope`). (The map over one
-    25 ms outer period with the feed law live is no longer offered: on the
-    paper arm it said rho = 1.008 for a gain whose run is stable and 0.988
-    for one whose run oscillates at 150 N; see docs/drafts/stability.md.)"""
+    :func:`deburr_drake.analysis.add_fuzzy_slope`). (A map over one 25 ms
+    outer period with the feed law live is not offered: on the paper arm its
+    spectral radius contradicts the runs both ways, above 1 for a stable
+    gain and below 1 for one whose run oscillates.)"""
     from deburr_drake.control.layout import CHAMFER_STATE
 
     frozen = FrozenMap(op.scenario, **overrides)

@@ -344,6 +344,103 @@ def describe_oscillation(
     return out
 
 
+# Each guard's first trip in logged samples t: (time, guard, value, limit,
+# detail), or None.
+def _torque_trip(t, actuation, effort_limits, torque_fraction, names):
+    tau = np.abs(np.asarray(actuation, float))
+    lim = np.asarray(effort_limits, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(np.isfinite(lim), tau / lim, 0.0)
+    bad = np.flatnonzero(np.any(ratio > torque_fraction, axis=1))
+    if not bad.size:
+        return None
+    i = int(bad[0])
+    j = int(np.argmax(ratio[i]))
+    name = names[j] if names is not None else f"joint {j}"
+    return (
+        t[i],
+        "joint_torque",
+        float(tau[i, j]),
+        float(torque_fraction * lim[j]),
+        f"{name} |tau| = {tau[i, j]:.4g} N m > "
+        f"{torque_fraction:g} x effort limit "
+        f"{lim[j]:.4g} N m",
+    )
+
+
+def _tool_force_trip(t, tool_force, tool_force_limit):
+    mag = np.linalg.norm(np.asarray(tool_force, float), axis=1)
+    bad = np.flatnonzero(mag > tool_force_limit)
+    if not bad.size:
+        return None
+    i = int(bad[0])
+    return (
+        t[i],
+        "tool_force",
+        float(mag[i]),
+        float(tool_force_limit),
+        f"|f| = {mag[i]:.4g} N > {tool_force_limit:.4g} N",
+    )
+
+
+def _depth_trip(t, depth, true_depth, depth_limit):
+    d = np.asarray(depth, float)
+    if true_depth is not None:
+        d = np.maximum(d, np.asarray(true_depth, float))
+    bad = np.flatnonzero(d > depth_limit)
+    if not bad.size:
+        return None
+    i = int(bad[0])
+    return (
+        t[i],
+        "depth",
+        float(d[i]),
+        float(depth_limit),
+        f"delta = {d[i] * 1e3:.4g} mm > {depth_limit * 1e3:.4g} mm",
+    )
+
+
+def _workspace_trip(t, x_p, workspace_low, workspace_high):
+    x = np.asarray(x_p, float)
+    out = np.any((x < workspace_low) | (x > workspace_high), axis=1)
+    bad = np.flatnonzero(out)
+    if not bad.size:
+        return None
+    i = int(bad[0])
+    return (
+        t[i],
+        "workspace",
+        None,
+        None,
+        f"tool tip {np.round(x[i], 4).tolist()} m outside the workspace box",
+    )
+
+
+def _contact_lost_trip(t, normal_force, contact_force, contact_lost_time):
+    fn = np.asarray(normal_force, float)
+    on = fn > contact_force
+    if not on.any():
+        return None
+    first = int(np.argmax(on))
+    lost_since = None
+    for i in range(first, len(t)):
+        if on[i]:
+            lost_since = None
+        elif lost_since is None:
+            lost_since = t[i]
+        elif t[i] - lost_since > contact_lost_time:
+            return (
+                t[i],
+                "contact_lost",
+                float(fn[i]),
+                float(contact_force),
+                f"||f_n|| <= {contact_force:g} N for more"
+                f" than {contact_lost_time:g} s (since "
+                f"{lost_since:.3f} s)",
+            )
+    return None
+
+
 def first_guard_trip(
     t,
     *,
@@ -372,96 +469,22 @@ def first_guard_trip(
     t = np.asarray(t, float)
     trips = []
     if actuation is not None and effort_limits is not None:
-        tau = np.abs(np.asarray(actuation, float))
-        lim = np.asarray(effort_limits, float)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = np.where(np.isfinite(lim), tau / lim, 0.0)
-        bad = np.flatnonzero(np.any(ratio > torque_fraction, axis=1))
-        if bad.size:
-            i = int(bad[0])
-            j = int(np.argmax(ratio[i]))
-            name = names[j] if names is not None else f"joint {j}"
-            trips.append(
-                (
-                    t[i],
-                    "joint_torque",
-                    float(tau[i, j]),
-                    float(torque_fraction * lim[j]),
-                    f"{name} |tau| = {tau[i, j]:.4g} N m > "
-                    f"{torque_fraction:g} x effort limit "
-                    f"{lim[j]:.4g} N m",
-                )
-            )
+        trips.append(
+            _torque_trip(t, actuation, effort_limits, torque_fraction, names)
+        )
     if tool_force is not None:
-        mag = np.linalg.norm(np.asarray(tool_force, float), axis=1)
-        bad = np.flatnonzero(mag > tool_force_limit)
-        if bad.size:
-            i = int(bad[0])
-            trips.append(
-                (
-                    t[i],
-                    "tool_force",
-                    float(mag[i]),
-                    float(tool_force_limit),
-                    f"|f| = {mag[i]:.4g} N > {tool_force_limit:.4g} N",
-                )
-            )
+        trips.append(_tool_force_trip(t, tool_force, tool_force_limit))
     if depth is not None:
-        d = np.asarray(depth, float)
-        if true_depth is not None:
-            d = np.maximum(d, np.asarray(true_depth, float))
-        bad = np.flatnonzero(d > depth_limit)
-        if bad.size:
-            i = int(bad[0])
-            trips.append(
-                (
-                    t[i],
-                    "depth",
-                    float(d[i]),
-                    float(depth_limit),
-                    f"delta = {d[i] * 1e3:.4g} mm > {depth_limit * 1e3:.4g} mm",
-                )
-            )
+        trips.append(_depth_trip(t, depth, true_depth, depth_limit))
     if x_p is not None and workspace_low is not None:
-        x = np.asarray(x_p, float)
-        out = np.any((x < workspace_low) | (x > workspace_high), axis=1)
-        bad = np.flatnonzero(out)
-        if bad.size:
-            i = int(bad[0])
-            trips.append(
-                (
-                    t[i],
-                    "workspace",
-                    None,
-                    None,
-                    f"tool tip {np.round(x[i], 4).tolist()} m outside"
-                    " the workspace box",
-                )
-            )
+        trips.append(_workspace_trip(t, x_p, workspace_low, workspace_high))
     if normal_force is not None and np.isfinite(contact_lost_time):
-        fn = np.asarray(normal_force, float)
-        on = fn > contact_force
-        if on.any():
-            first = int(np.argmax(on))
-            lost_since = None
-            for i in range(first, len(t)):
-                if on[i]:
-                    lost_since = None
-                elif lost_since is None:
-                    lost_since = t[i]
-                elif t[i] - lost_since > contact_lost_time:
-                    trips.append(
-                        (
-                            t[i],
-                            "contact_lost",
-                            float(fn[i]),
-                            float(contact_force),
-                            f"||f_n|| <= {contact_force:g} N for more"
-                            f" than {contact_lost_time:g} s (since "
-                            f"{lost_since:.3f} s)",
-                        )
-                    )
-                    break
+        trips.append(
+            _contact_lost_trip(
+                t, normal_force, contact_force, contact_lost_time
+            )
+        )
+    trips = [trip for trip in trips if trip is not None]
     if not trips:
         return None
     time, guard, value, limit, detail = min(trips, key=lambda x: x[0])

@@ -6,11 +6,8 @@ boundary is where the spectral radius rho of the one-period (2.5 ms) map
 crosses 1 (bisection); the simulated boundary is where short runs from
 the operating point go unstable (bisection on a growth test). Both freeze
 the adaptation (with it on, (35) would reshape the surface being tested);
-the simulation keeps the outer loop running. (The 25 ms map with the
-feed law live, ``sampled_loop(outer_loop=True)``, agreed with the runs on
-the arm, 5-7 %, but on the point mass it has an eigenvalue of 1.5-2.3 the
-runs do not show, concentrated on the vertical axis and the held
-force-law terms; not resolved.)
+the simulation keeps the outer loop running. (A 25 ms map with the feed
+law live is not used: see :func:`~deburr_drake.analysis.sampled.sampled_loop`.)
 
 The growth test: two runs of ``duration`` from the operating point with
 the parameter set, one as is and one kicked (0.05 N on the sensor's
@@ -30,7 +27,7 @@ the unkicked run's late RMS is also compared with
 :data:`LIMIT_CYCLE_FACTOR` times that of a run with the scenario's own
 (stable) parameters. (Approaching the limit, a lightly damped mode near
 z = -1 amplifies the outer loop's 25 ms steps: on the paper arm the RMS
-grew 37 times from K = 400 to 4000 N s/m, stable, then 400 times more by
+grows 37 times from K = 400 to 4000 N s/m, stable, then 400 times more by
 4500, a limit cycle.)
 """
 
@@ -120,7 +117,8 @@ def _sliding_gain(scenario):
 
 
 def PARAMETERS(scenario) -> List[Parameter]:
-    """The three parameters of the issue for ``scenario``."""
+    """The three validated parameters for ``scenario``: the sensor's cutoff,
+    the sliding gain on the fuzzy axes, the fuzzy surface's slope."""
     nyquist = 0.5 / scenario.sensor.sample_period
     return [
         Parameter(
@@ -270,9 +268,9 @@ def simulated_growth(
     second difference of the kicked run's deviation from the unkicked one
     over the last quarter over its RMS over the first 10 periods and (b)
     the unkicked run's own late RMS of that difference over
-    :data:`LIMIT_CYCLE_FACTOR` times ``baseline`` (:func:`baseline_oscillation`; a loop unstable on its
-    own settles both runs on the same limit cycle, which (a) misses); inf
-    when a run diverges."""
+    :data:`LIMIT_CYCLE_FACTOR` times ``baseline`` (:func:`baseline_oscillation`;
+    a loop unstable on its own settles both runs on the same limit cycle, which
+    (a) misses); inf when a run diverges."""
     overrides, modify = parameter.bind(value)
     scenario = frozen_scenario(op.scenario, **overrides)
     runs = [_run(op, scenario, modify, duration, k) for k in (0.0, kick)]
@@ -322,7 +320,7 @@ def validate_boundaries(
     progress=None,
 ) -> List[Dict]:
     """[{parameter, unit, range, predicted, simulated, error_rel}] for the
-    issue's three parameters (None: no limit in the searched range)."""
+    three :func:`PARAMETERS` (None: no limit in the searched range)."""
     say = progress or (lambda m: None)
     rows = []
     for p in parameters or PARAMETERS(op.scenario):

@@ -1,17 +1,18 @@
-"""The 5-DOF deburring arm (models/arm5.sdf), and the tool-vertical inverse kinematics of any arm.
+"""The 5-DOF deburring arm (models/arm5.sdf), and the tool-vertical inverse
+kinematics of any arm.
 
-The arm is the paper's class of robot (an industrial arm with a spindle and a wrist
-force/torque sensor, Section IV); its dynamics (1) are the MultibodyPlant's, with the
-motors' reflected inertia (drake:rotor_inertia, drake:gear_ratio) and viscous joint
-damping from the SDF (DESIGN.md §8). The task coordinates are the tool tip's
-position (frame `tool_tip`, the origin of body `tool`); the tool axis is kept
-vertical (tool +z = world +z), which fixes the wrist pitch; wrist_roll turns about
-the tool axis and does not move the tip.
+The arm is the paper's class of robot (an industrial arm with a spindle and a
+wrist force/torque sensor, Section IV); its dynamics (1) are the
+MultibodyPlant's, with the motors' reflected inertia (drake:rotor_inertia,
+drake:gear_ratio) and viscous joint damping from the SDF. The
+task coordinates are the tool tip's position (frame `tool_tip`, the origin of
+body `tool`); the tool axis is kept vertical (tool +z = world +z), which fixes
+the wrist pitch; wrist_roll turns about the tool axis and does not move the tip.
 
-`solve_tool_pose`, `closest_tool_position` and `check_reach` work on any arm of n >= 5
-joints (deburr_drake.cell.robot loads other models): the tool axis vertical, the rest of
-the posture (for n = 6 the tool's rotation about its axis) the one nearest the
-initial guess.
+`solve_tool_pose`, `closest_tool_position` and `check_reach` work on any arm of
+n >= 5 joints (deburr_drake.cell.robot loads other models): the tool axis
+vertical, the rest of the posture (for n = 6 the tool's rotation about its axis)
+the one nearest the initial guess.
 """
 
 from __future__ import annotations
@@ -41,14 +42,16 @@ ARM_URL = "package://deburr_drake_models/arm5.sdf"
 ARM_MODEL_NAME = "arm5"
 ARM_JOINTS = ("waist", "shoulder", "elbow", "wrist_pitch", "wrist_roll")
 
-# Where the tube's axis stands (m, world; the tube's bottom at z = 0). Chosen by IK
-# around circles of radius 17..57 mm at z = 0.048 m (tests/cell/test_arm.py): the wrist
-# centre is then 0.34..0.46 m from the shoulder (links 0.30 + 0.30 m), elbow up, every
-# joint at least 0.78 rad from its limits (the largest margin of x = 0.30..0.50 m), static
-# gravity torques at most 21 % of the effort limits (shoulder, about 31 N m).
+# Where the tube's axis stands (m, world; the tube's bottom at z = 0). Chosen by
+# IK around circles of radius 17..57 mm at z = 0.048 m (tests/cell/test_arm.py):
+# the wrist centre is then 0.34..0.46 m from the shoulder (links 0.30 + 0.30 m),
+# elbow up, every joint at least 0.78 rad from its limits (the largest margin of
+# x = 0.30..0.50 m), static gravity torques at most 21 % of the effort limits
+# (shoulder, about 31 N m).
 DEFAULT_PART_POSITION = [0.40, 0.0, 0.0]
 
-# Elbow-up pose with the tool vertical, tip at (0.40, 0, 0.048) m (rad, order ARM_JOINTS).
+# Elbow-up pose with the tool vertical, tip at (0.40, 0, 0.048) m (rad, order
+# ARM_JOINTS).
 Q_READY = np.array([0.0, 0.8393, 0.1015, -0.9408, 0.0])
 
 _AXIS_POINT = (
@@ -57,17 +60,18 @@ _AXIS_POINT = (
 
 
 def add_arm(plant, **cutter):
-    """Add models/arm5.sdf (welded to the world at the origin; body `tool` with origin at the
-    tool tip, weld `ft_sensor` flange -> tool) and its cutter (part.add_tool_robot's keyword
-    arguments). The plant must be registered with a SceneGraph (the cutter is geometry); for a
-    geometry-free model of the arm use models.make_kinematic_model(ARM_URL). Call before
-    Finalize. Returns the model instance."""
+    """Add models/arm5.sdf (welded to the world at the origin; body `tool` with
+    origin at the tool tip, weld `ft_sensor` flange -> tool) and its cutter
+    (part.add_tool_robot's keyword arguments). The plant must be registered with
+    a SceneGraph (the cutter is geometry); for a geometry-free model of the arm
+    use models.make_kinematic_model(ARM_URL). Call before Finalize. Returns the
+    model instance."""
     return add_tool_robot(plant, ARM_URL, **cutter)
 
 
 def default_q_guess(p_W_tip):
-    """Elbow-up initial guess (rad) for a tip target p_W_tip (m): Q_READY turned by the waist
-    towards the target."""
+    """Elbow-up initial guess (rad) for a tip target p_W_tip (m): Q_READY turned
+    by the waist towards the target."""
     p = np.asarray(p_W_tip, dtype=float)
     q = Q_READY.copy()
     if math.hypot(p[0], p[1]) > 1e-9:
@@ -80,13 +84,15 @@ def _arm_instance(plant, instance):
         return instance
     if not plant.HasModelInstanceNamed(ARM_MODEL_NAME):
         raise ValueError(
-            f"plant has no model instance named {ARM_MODEL_NAME!r}: pass instance="
+            f"plant has no model instance named {ARM_MODEL_NAME!r}: "
+            "pass instance="
         )
     return plant.GetModelInstanceByName(ARM_MODEL_NAME)
 
 
 def _arm_positions(plant, instance):
-    """Indices into the plant's q of the instance's joint positions, in joint position order."""
+    """Indices into the plant's q of the instance's joint positions, in joint
+    position order."""
     starts = []
     for index in plant.GetJointIndices(instance):
         joint = plant.get_joint(index)
@@ -114,18 +120,19 @@ def solve_tool_pose(
     tolerance=1e-7,
     tool_frame="tool_tip",
 ):
-    """Arm joint angles q (n,) (rad, the instance's joints in position order; arm5: ARM_JOINTS)
-    with the tool tip at p_W_tip (m, world) and the tool axis vertical (tool +z = world +z),
-    within the joint limits.
+    """Arm joint angles q (n,) (rad, the instance's joints in position order;
+    arm5: ARM_JOINTS) with the tool tip at p_W_tip (m, world) and the tool axis
+    vertical (tool +z = world +z), within the joint limits.
 
-    Drake InverseKinematics (SNOPT) on the finalized `plant`, which may hold other models:
-    their positions stay at the plant's defaults. Constraints: frame `tool_frame` at p_W_tip;
-    the axis point 0.1 m up the tool axis has the tip's x, y and lies above the tip.
-    Cost: |q - q_guess|^2 (fixes what the constraints leave free: arm5's wrist_roll, a 6-DOF
-    arm's rotation about the tool axis). q_guess defaults to default_q_guess(p_W_tip) (elbow
-    up) on arm5 and to the plant's default positions on other arms. Raises RuntimeError naming
-    the target if the solver fails or the result misses the target by more than `tolerance`
-    (m; axis tilt times 0.1 m).
+    Drake InverseKinematics (SNOPT) on the finalized `plant`, which may hold
+    other models: their positions stay at the plant's defaults. Constraints:
+    frame `tool_frame` at p_W_tip; the axis point 0.1 m up the tool axis has the
+    tip's x, y and lies above the tip. Cost: |q - q_guess|^2 (fixes what the
+    constraints leave free: arm5's wrist_roll, a 6-DOF arm's rotation about the
+    tool axis). q_guess defaults to default_q_guess(p_W_tip) (elbow up) on arm5
+    and to the plant's default positions on other arms. Raises RuntimeError
+    naming the target if the solver fails or the result misses the target by
+    more than `tolerance` (m; axis tilt times 0.1 m).
     """
     if not plant.is_finalized():
         raise ValueError("plant must be finalized")
@@ -146,6 +153,28 @@ def solve_tool_pose(
         )
 
     tip = plant.GetFrameByName(tool_frame, instance)
+    prog, q, q_full_guess = _tool_vertical_program(
+        plant, tip, p, arm_idx, q_guess
+    )
+    options = SolverOptions()
+    snopt = SnoptSolver().solver_id()
+    options.SetOption(snopt, "Major feasibility tolerance", 1e-10)
+    options.SetOption(snopt, "Major optimality tolerance", 1e-10)
+    result = Solve(prog, q_full_guess, options)
+    q_sol = result.GetSolution(q)
+    if not result.is_success():
+        raise RuntimeError(
+            f"tool pose IK failed for tool tip target p_W_tip={p.tolist()} m "
+            f"({result.get_solution_result()})"
+        )
+    _check_tool_pose(plant, tip, q_sol, p, tolerance)
+    return q_sol[arm_idx]
+
+
+def _tool_vertical_program(plant, tip, p, arm_idx, q_guess):
+    """(program, q, initial guess of all positions): the tool tip at p with
+    the tool axis vertical, the other models' positions at the plant's
+    defaults, the cost |q_arm - q_guess|^2."""
     world = plant.world_frame()
     ik = InverseKinematics(plant, with_joint_limits=True)
     q = ik.q()
@@ -169,19 +198,13 @@ def solve_tool_pose(
     others = np.flatnonzero(~arm_mask)
     if others.size:
         prog.AddBoundingBoxConstraint(q0[others], q0[others], q[others])
-    prog.AddQuadraticErrorCost(np.eye(n), q_guess, q[arm_idx])
+    prog.AddQuadraticErrorCost(np.eye(len(arm_idx)), q_guess, q[arm_idx])
+    return prog, q, q_full_guess
 
-    options = SolverOptions()
-    snopt = SnoptSolver().solver_id()
-    options.SetOption(snopt, "Major feasibility tolerance", 1e-10)
-    options.SetOption(snopt, "Major optimality tolerance", 1e-10)
-    result = Solve(prog, q_full_guess, options)
-    q_sol = result.GetSolution(q)
-    if not result.is_success():
-        raise RuntimeError(
-            f"tool pose IK failed for tool tip target p_W_tip={p.tolist()} m "
-            f"({result.get_solution_result()})"
-        )
+
+def _check_tool_pose(plant, tip, q_sol, p, tolerance):
+    """RuntimeError when the positions q_sol miss the tip target p or tilt
+    the tool axis by more than ``tolerance`` (m; tilt times 0.1 m)."""
     context = plant.CreateDefaultContext()
     plant.SetPositions(context, q_sol)
     X_WT = tip.CalcPoseInWorld(context)
@@ -190,9 +213,9 @@ def solve_tool_pose(
     if pos_err > tolerance or axis_err > tolerance:
         raise RuntimeError(
             f"tool pose IK missed tool tip target p_W_tip={p.tolist()} m: "
-            f"position error {pos_err:.3g} m, axis error {axis_err / _AXIS_POINT:.3g} rad"
+            f"position error {pos_err:.3g} m, "
+            f"axis error {axis_err / _AXIS_POINT:.3g} rad"
         )
-    return q_sol[arm_idx]
 
 
 def closest_tool_position(
@@ -204,9 +227,10 @@ def closest_tool_position(
     tool_frame="tool_tip",
     return_positions=False,
 ):
-    """The tool tip position (m, world) nearest to p_W_tip that the arm reaches with the tool
-    axis vertical within its joint limits: how far out of reach a target is. With
-    ``return_positions`` also the arm's joint angles there (rad)."""
+    """The tool tip position (m, world) nearest to p_W_tip that the arm reaches
+    with the tool axis vertical within its joint limits: how far out of reach a
+    target is. With ``return_positions`` also the arm's joint angles there
+    (rad)."""
     p = np.asarray(p_W_tip, dtype=float).reshape(3)
     instance = _arm_instance(plant, instance)
     tip = plant.GetFrameByName(tool_frame, instance)
@@ -267,19 +291,21 @@ def _closest_of_many(plant, p, instance, guess, tool_frame, starts=8):
     return best[1], best[2]
 
 
-#: A point the closest-position search reaches within this (m) is tried from there.
+#: A point the closest-position search reaches within this (m) is tried from
+#: there.
 REACHED = 1e-5
 
 
 def check_reach(
     plant, points, *, instance=None, q_guess=None, tool_frame="tool_tip"
 ):
-    """None if the tool reaches every point (m, world, rows) vertically; otherwise
-    (index, point, distance (m) to the nearest reachable tool position, joint angles) of the
-    first one it does not reach. `q_guess` (a function of the point, or None) seeds each
-    solve; a point it does not reach from there is tried from the previous point's solution
-    (the arm moves along the path), then from the nearest reachable position's posture. A
-    point reached only from that last one gives distance 0 and the posture (rad) that
+    """None if the tool reaches every point (m, world, rows) vertically;
+    otherwise (index, point, distance (m) to the nearest reachable tool
+    position, joint angles) of the first one it does not reach. `q_guess` (a
+    function of the point, or None) seeds each solve; a point it does not reach
+    from there is tried from the previous point's solution (the arm moves along
+    the path), then from the nearest reachable position's posture. A point
+    reached only from that last one gives distance 0 and the posture (rad) that
     reaches it (the seed to give); otherwise the posture is None."""
     previous = None
     for k, p in enumerate(np.asarray(points, dtype=float)):

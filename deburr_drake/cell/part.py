@@ -1,9 +1,11 @@
-"""The part (tube) in Drake: its compliant hydroelastic top ring, and the tool/ring contact law it yields.
+"""The part (tube) in Drake: its compliant hydroelastic top ring, and the
+tool/ring contact law it yields.
 
-The normal contact force of the paper's eq. (4) (R7: c2*delta_dot + c1*delta + c0)
-is not modelled by hand: it emerges from Drake's hydroelastic contact between the
-rigid cutter and this compliant ring (DESIGN.md §5, §8). `measure_normal_force`
-measures that force as a function of the radial depth, for calibration and tests.
+The normal contact force of the paper's eq. (4) (R7: c2*delta_dot + c1*delta +
+c0) is not modelled by hand: it emerges from Drake's hydroelastic contact
+between the rigid cutter and this compliant ring (docs/cell-and-paper.md).
+`measure_normal_force` measures that force as a function of the radial depth,
+for calibration and tests.
 """
 
 from __future__ import annotations
@@ -56,11 +58,12 @@ __all__ = [
     "force_ripple",
 ]
 
-# Calibration by scripts/contact_stiffness.py (n_theta = 240, n_radial = n_z = 2, the
-# default geometry of measure_normal_force): with this modulus the local stiffness
-# dF/d(delta) at delta = 0.5 mm is about 10 N/mm; the force there is as stated. The
-# scenarios' coarser default (120 segments, 0.6 mm cutter mesh) gives the same force
-# within 0.3 % (TubeConfig.mesh_segments, scripts/contact_mesh.py).
+# Calibration by scripts/contact_stiffness.py (n_theta = 240, n_radial = n_z =
+# 2, the default geometry of measure_normal_force): with this modulus the local
+# stiffness dF/d(delta) at delta = 0.5 mm is about 10 N/mm; the force there is
+# as stated. The scenarios' coarser default (120 segments, 0.6 mm cutter mesh)
+# gives the same force within 0.3 % (TubeConfig.mesh_segments,
+# scripts/contact_mesh.py).
 CALIBRATED_HYDROELASTIC_MODULUS = 4.5e6  # Pa
 CALIBRATED_FORCE_AT_HALF_MM = 3.72  # N
 
@@ -89,19 +92,22 @@ def register_compliant_ring(
     n_z=2,
     name="tube_edge",
 ):
-    """Register the ring inner_radius <= r <= outer_radius, z_bottom <= z <= z_top (m) about the
-    vertical axis through center_xy (m, world) on the world body.
+    """Register the ring inner_radius <= r <= outer_radius, z_bottom <= z <=
+    z_top (m) about the vertical axis through center_xy (m, world) on the world
+    body.
 
-    Collision: the tetrahedral mesh of `tube_mesh.ring_mesh_path` (an n_theta-gon annulus)
-    as a compliant hydroelastic `Mesh` with modulus E = hydroelastic_modulus (Pa),
-    Hunt-Crossley dissipation (s/m) and zero friction (tool-part friction is 0: the
-    tangential force is the cutting process's, DESIGN.md §8). Visual: the ring's
-    surface as .obj (`tube_mesh.ring_surface_path`; Meshcat does not draw .vtk),
-    illustration role only. Call before plant.Finalize(). Returns the collision GeometryId.
+    Collision: the tetrahedral mesh of `tube_mesh.ring_mesh_path` (an
+    n_theta-gon annulus) as a compliant hydroelastic `Mesh` with modulus E =
+    hydroelastic_modulus (Pa), Hunt-Crossley dissipation (s/m) and zero friction
+    (tool-part friction is 0: the tangential force is the cutting process's).
+    Visual: the ring's surface as .obj (`tube_mesh.ring_surface_path`; Meshcat
+    does not draw .vtk), illustration role only. Call before plant.Finalize().
+    Returns the collision GeometryId.
     """
     if plant.is_finalized():
         raise ValueError(
-            "plant must not be finalized yet (register the ring before Finalize())"
+            "plant must not be finalized yet "
+            "(register the ring before Finalize())"
         )
     _check_positive("hydroelastic_modulus", hydroelastic_modulus)
     if not (
@@ -112,14 +118,16 @@ def register_compliant_ring(
         and hunt_crossley_dissipation >= 0
     ):
         raise ValueError(
-            f"hunt_crossley_dissipation must be a finite number >= 0, got {hunt_crossley_dissipation!r}"
+            "hunt_crossley_dissipation must be a finite number >= 0, "
+            f"got {hunt_crossley_dissipation!r}"
         )
     path = ring_mesh_path(
         inner_radius, outer_radius, z_bottom, z_top, n_theta, n_radial, n_z
     )
     mesh = Mesh(str(path))
     props = ProximityProperties()
-    # The resolution hint is ignored for a Mesh (its tetrahedra are used as they are).
+    # The resolution hint is ignored for a Mesh (its tetrahedra are used as they
+    # are).
     AddCompliantHydroelasticProperties(
         resolution_hint=outer_radius - inner_radius,
         hydroelastic_modulus=hydroelastic_modulus,
@@ -161,11 +169,12 @@ def register_compliant_wall(
     margin=0.01,
     name="wall_edge",
 ):
-    """A straight wall whose top edge runs through `mid` (m, world, on the wall face at the top)
-    along `tangent`, the material on the side of `normal` (unit, horizontal): its top
-    `layer_height` as a compliant hydroelastic Box (Drake meshes it; pressure zero on the
-    surface, rising to E at its medial axis), `margin` longer than the edge at both ends,
-    frictionless; the rest of the wall as illustration. Call before Finalize. Returns the
+    """A straight wall whose top edge runs through `mid` (m, world, on the wall
+    face at the top) along `tangent`, the material on the side of `normal`
+    (unit, horizontal): its top `layer_height` as a compliant hydroelastic Box
+    (Drake meshes it; pressure zero on the surface, rising to E at its medial
+    axis), `margin` longer than the edge at both ends, frictionless; the rest of
+    the wall as illustration. Call before Finalize. Returns the
     collision GeometryId."""
     _check_positive("hydroelastic_modulus", hydroelastic_modulus)
     for label, value in (
@@ -230,16 +239,17 @@ def register_compliant_profile(
     name="profile_edge",
 ):
     """The material along a closed profile's edge (`edge`: a
-    math.geometry.ProfileContour with offset 0, its centre's x, y in the
-    world): `wall_thickness` deep into the material (a pocket's plate
-    around it, a boss's outer wall; thinner only inside fillets whose centre
-    is in the material, ProfileContour.material_band), z_bottom <= z <= z_top,
-    as a compliant hydroelastic tetrahedral mesh made and cached as the
-    ring's is (tube_mesh.profile_mesh_paths: our structured sweep of the
-    ring's cross-section along the profile, stations every 2 pi /
-    `segments_per_turn` on the fillets and at most `wall_thickness` apart on
-    the lines), frictionless; visuals of the layer and of the wall down to
-    `visual_z_bottom`. Call before Finalize. Returns the collision GeometryId."""
+    math.geometry.ProfileContour with offset 0, its centre's x, y in the world):
+    `wall_thickness` deep into the material (a pocket's plate around it, a
+    boss's outer wall; thinner only inside fillets whose centre is in the
+    material, ProfileContour.material_band), z_bottom <= z <= z_top, as a
+    compliant hydroelastic tetrahedral mesh made and cached as the ring's is
+    (tube_mesh.profile_mesh_paths: our structured sweep of the ring's
+    cross-section along the profile, stations every 2 pi / `segments_per_turn`
+    on the fillets and at most `wall_thickness` apart on the lines),
+    frictionless; visuals of the layer and of the wall down to
+    `visual_z_bottom`. Call before Finalize. Returns the collision
+    GeometryId."""
     _check_positive("hydroelastic_modulus", hydroelastic_modulus)
     points, normals, depths = edge.material_band(
         wall_thickness,
@@ -297,8 +307,8 @@ def register_tube_visual(
     n_theta=240,
     name="tube_body",
 ):
-    """The rest of the tube below the compliant edge ring, for illustration only (it never
-    touches the tool). Call before Finalize."""
+    """The rest of the tube below the compliant edge ring, for illustration only
+    (it never touches the tool). Call before Finalize."""
     surface = ring_surface_path(
         inner_radius, outer_radius, z_bottom, z_top, n_theta
     )
@@ -319,10 +329,11 @@ def register_cutter(
     resolution_hint=4e-4,
     X_BT=None,
 ):
-    """The cylindrical cutter on `body`, tip at the tool frame T (pose X_BT in the body; default the
-    body origin), axis T's +z (m): rigid hydroelastic, frictionless (the tangential force is the
-    cutting process's, DESIGN.md §8), with a visual. The default resolution hint gives
-    ceil(2 pi r / hint) = 48 side facets for r = 3 mm. Call before Finalize. Returns the collision
+    """The cylindrical cutter on `body`, tip at the tool frame T (pose X_BT in
+    the body; default the body origin), axis T's +z (m): rigid hydroelastic,
+    frictionless (the tangential force is the cutting process's),
+    with a visual. The default resolution hint gives ceil(2 pi r / hint) = 48
+    side facets for r = 3 mm. Call before Finalize. Returns the collision
     GeometryId."""
     _check_positive("cutter_radius", cutter_radius)
     _check_positive("cutter_length", cutter_length)
@@ -350,8 +361,9 @@ def add_tool_robot(
     cutter_length=0.020,
     resolution_hint=4e-4,
 ):
-    """Add the robot model at `url` (its body `tool` has its origin at the tool tip, weld
-    `ft_sensor` holds it) and register the cutter on `tool`. Returns the model instance."""
+    """Add the robot model at `url` (its body `tool` has its origin at the tool
+    tip, weld `ft_sensor` holds it) and register the cutter on `tool`. Returns
+    the model instance."""
     (instance,) = make_parser(plant).AddModels(url=url)
     register_cutter(
         plant,
@@ -364,15 +376,17 @@ def add_tool_robot(
 
 
 def add_cartesian_tool(plant, **cutter):
-    """Add models/cartesian_tool.sdf (joints x, y, z, weld ft_sensor) and its cutter
-    (`add_tool_robot`'s keyword arguments). Returns the model instance."""
+    """Add models/cartesian_tool.sdf (joints x, y, z, weld ft_sensor) and its
+    cutter (`add_tool_robot`'s keyword arguments). Returns the model
+    instance."""
     return add_tool_robot(plant, POINT_MASS_URL, **cutter)
 
 
 def contact_force_on_body(results, geometry_id, body_index):
-    """Sum of the contact forces (N, world) that ContactResults `results` apply ON the body
-    `body_index`, whose collision geometry is `geometry_id`: hydroelastic (F_Ac_W acts on the
-    body of the surface's geometry M) and fallback point contacts (contact_force() acts on B)."""
+    """Sum of the contact forces (N, world) that ContactResults `results` apply
+    ON the body `body_index`, whose collision geometry is `geometry_id`:
+    hydroelastic (F_Ac_W acts on the body of the surface's geometry M) and
+    fallback point contacts (contact_force() acts on B)."""
     f = np.zeros(3)
     for i in range(results.num_hydroelastic_contacts()):
         info = results.hydroelastic_contact_info(i)
@@ -386,10 +400,12 @@ def contact_force_on_body(results, geometry_id, body_index):
 
 
 class RingContactProbe:
-    """A continuous plant with the cartesian tool and a compliant ring, to evaluate contact forces statically.
+    """A continuous plant with the cartesian tool and a compliant ring, to
+    evaluate contact forces statically.
 
     Contact model hydroelastic_with_fallback, time_step 0. The ring is
-    inner_radius <= r <= inner_radius + wall, z_top - layer_height <= z <= z_top.
+    inner_radius <= r <= inner_radius + wall, z_top - layer_height <= z <=
+    z_top.
     """
 
     def __init__(
@@ -438,13 +454,15 @@ class RingContactProbe:
         )[0]
 
     def set_tip_position(self, p_WT):
-        """Place the tool tip at p_WT (m, world frame); joints x, y, z are the tip's coordinates."""
+        """Place the tool tip at p_WT (m, world frame); joints x, y, z are the
+        tip's coordinates."""
         self.plant.SetPositions(
             self.plant_context, self._instance, np.asarray(p_WT, dtype=float)
         )
 
     def contact_force_on_tool(self, p_WT):
-        """Sum of the hydroelastic (and fallback point) contact forces ON the tool (N, world frame)."""
+        """Sum of the hydroelastic (and fallback point) contact forces ON the
+        tool (N, world frame)."""
         self.set_tip_position(p_WT)
         results = self.plant.get_contact_results_output_port().Eval(
             self.plant_context
@@ -457,9 +475,10 @@ class RingContactProbe:
     ):
         """Radial component magnitude (N) of the contact force on the tool.
 
-        The cutter axis is at rho = inner_radius - cutter_radius + depth, azimuth `angle`
-        (rad), tip at z = z_top - engagement: the cutter's side presses radially outward
-        into the wall by `depth` (m) and extends above the ring's top.
+        The cutter axis is at rho = inner_radius - cutter_radius + depth,
+        azimuth `angle` (rad), tip at z = z_top - engagement: the cutter's side
+        presses radially outward into the wall by `depth` (m) and extends above
+        the ring's top.
         """
         rho = self.inner_radius - cutter_radius + depth
         e_r = np.array([math.cos(angle), math.sin(angle), 0.0])
@@ -481,12 +500,14 @@ def measure_normal_force(
     angle=0.0,
     n_theta=240,
 ):
-    """Normal (radial) contact force (N) on the cartesian tool's cutter for each radial depth (m).
+    """Normal (radial) contact force (N) on the cartesian tool's cutter for each
+    radial depth (m).
 
-    Static evaluation of Drake's hydroelastic contact (continuous plant, contact model
-    hydroelastic_with_fallback) between the rigid cutter (radius cutter_radius) and the
-    compliant ring of modulus hydroelastic_modulus (Pa); the contact part of the
-    paper's eq. (4) at delta_dot = 0. Depth <= -0 gives zero force (out of contact).
+    Static evaluation of Drake's hydroelastic contact (continuous plant, contact
+    model hydroelastic_with_fallback) between the rigid cutter (radius
+    cutter_radius) and the compliant ring of modulus hydroelastic_modulus (Pa);
+    the contact part of the paper's eq. (4) at delta_dot = 0. Depth <= -0 gives
+    zero force (out of contact).
     """
     _check_positive("engagement", engagement)
     _check_positive("cutter_radius", cutter_radius)
@@ -511,7 +532,8 @@ def measure_normal_force(
 
 
 def local_stiffness(depths, *, step=2e-5, **kwargs):
-    """Local stiffness dF/d(delta) (N/m) at each depth (m), central differences of +-step (m).
+    """Local stiffness dF/d(delta) (N/m) at each depth (m), central differences
+    of +-step (m).
 
     kwargs go to measure_normal_force (hydroelastic_modulus is required).
     """
@@ -524,7 +546,8 @@ def local_stiffness(depths, *, step=2e-5, **kwargs):
 
 
 def power_law_exponent(depths, forces):
-    """Least-squares exponent n of F = a * delta**n over the given samples (all must be > 0)."""
+    """Least-squares exponent n of F = a * delta**n over the given samples (all
+    must be > 0)."""
     depths, forces = (
         np.asarray(depths, dtype=float),
         np.asarray(forces, dtype=float),
@@ -544,10 +567,11 @@ def calibrate_hydroelastic_modulus(
     significant_digits=2,
     **kwargs,
 ):
-    """Hydroelastic modulus E (Pa) giving dF/d(delta) = target_stiffness (N/m) at `depth` (m).
+    """Hydroelastic modulus E (Pa) giving dF/d(delta) = target_stiffness (N/m)
+    at `depth` (m).
 
-    Soft-rigid hydroelastic force is linear in E (pressure p = E * e, geometry fixed),
-    so one measurement at reference_modulus suffices; E is rounded to
+    Soft-rigid hydroelastic force is linear in E (pressure p = E * e, geometry
+    fixed), so one measurement at reference_modulus suffices; E is rounded to
     significant_digits. kwargs go to measure_normal_force.
     """
     _check_positive("target_stiffness", target_stiffness)
@@ -559,17 +583,20 @@ def calibrate_hydroelastic_modulus(
     )
     if not k_ref > 0:
         raise ValueError(
-            f"no contact stiffness at depth={depth!r} m: the tool does not touch the ring there"
+            f"no contact stiffness at depth={depth!r} m: "
+            "the tool does not touch the ring there"
         )
     E = reference_modulus * target_stiffness / k_ref
     return float(f"{E:.{significant_digits - 1}e}")
 
 
 def force_ripple(depth, *, n_samples=25, n_theta=240, **kwargs):
-    """Force ripple (max - min) / mean over one mesh segment (2 pi / n_theta rad) around the ring at `depth` (m).
+    """Force ripple (max - min) / mean over one mesh segment (2 pi / n_theta
+    rad) around the ring at `depth` (m).
 
-    Also returns the forces (N) at the n_samples angles in [0, 2 pi / n_theta]. kwargs
-    (hydroelastic_modulus required; inner_radius, wall, ...) go to RingContactProbe.
+    Also returns the forces (N) at the n_samples angles in [0, 2 pi / n_theta].
+    kwargs (hydroelastic_modulus required; inner_radius, wall, ...) go to
+    RingContactProbe.
     """
     if (
         isinstance(n_samples, bool)

@@ -44,8 +44,8 @@ def truth_stations(scenario: Scenario) -> np.ndarray:
     there) or of a straight edge; on a profile, whose lines and fillets
     differ, 64 evenly spaced places from the start, which is where a
     closed pass ends: the estimator follows the local law within a few
-    seconds (on the pocket c0 + c1 delta* rose from 5.1 N on the lines to
-    5.9 N in each fillet and fell back), so its last estimate is that
+    seconds (on the pocket c0 + c1 delta* goes from 5.1 N on the lines to
+    5.9 N in each fillet and back), so its last estimate is that
     place's."""
     if scenario.edge.kind == "profile":
         return np.arange(64) / 64.0

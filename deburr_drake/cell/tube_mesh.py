@@ -1,14 +1,16 @@
-"""Tetrahedral volume mesh of a ring (the tube's top layer) for Drake's compliant hydroelastic model.
+"""Tetrahedral volume mesh of a ring (the tube's top layer) for Drake's
+compliant hydroelastic model.
 
 Pure numpy, no pydrake. Drake builds the pressure field of a compliant ``Mesh``
-from its tetrahedra (DESIGN.md §8): boundary vertices get pressure 0, so the mesh
-needs vertices strictly inside the volume. This module makes a structured annular
-grid that has them, writes it as legacy ASCII VTK, and caches the file by the hash
-of its arguments.
+from its tetrahedra (docs/own-part.md): boundary vertices get pressure 0, so the
+mesh needs vertices strictly inside the volume. This module makes a structured
+annular grid that has them, writes it as legacy ASCII VTK, and caches the file
+by the hash of its arguments.
 
-The ring is the n_theta-gon annulus: vertices at angles 2*pi*i/n_theta on circles of
-radius inner_radius .. outer_radius, so its faces are planar and its volume is
-exactly ``0.5 * n_theta * sin(2*pi/n_theta) * (R_o**2 - R_i**2) * (z_top - z_bottom)``.
+The ring is the n_theta-gon annulus: vertices at angles 2*pi*i/n_theta on
+circles of radius inner_radius .. outer_radius, so its faces are planar and its
+volume is exactly ``0.5 * n_theta * sin(2*pi/n_theta) * (R_o**2 - R_i**2) *
+(z_top - z_bottom)``.
 """
 
 from __future__ import annotations
@@ -62,7 +64,8 @@ def _validate(
     _check_positive_finite("outer_radius", outer_radius)
     if not outer_radius > inner_radius:
         raise ValueError(
-            f"outer_radius must be > inner_radius = {inner_radius!r}, got {outer_radius!r}"
+            f"outer_radius must be > inner_radius = {inner_radius!r}, "
+            f"got {outer_radius!r}"
         )
     for name, value in (("z_bottom", z_bottom), ("z_top", z_top)):
         if not (
@@ -92,12 +95,14 @@ def polygonal_ring_volume(inner_radius, outer_radius, z_bottom, z_top, n_theta):
 
 
 def _cross_section_triangles(n_radial, n_z):
-    """Triangles (T, 3, 2) of (j, k) grid indices covering the wall's cross section.
+    """Triangles (T, 3, 2) of (j, k) grid indices covering the wall's cross
+    section.
 
-    "Union Jack" pattern: each cell's diagonal points at the nearest corner of the
-    cross section, so no triangle has only boundary vertices and no interior edge
-    joins two boundary vertices (the simplices Drake's pressure field cannot handle:
-    they would be zero-pressure regions right at the edge the tool touches).
+    "Union Jack" pattern: each cell's diagonal points at the nearest corner of
+    the cross section, so no triangle has only boundary vertices and no interior
+    edge joins two boundary vertices (the simplices Drake's pressure field
+    cannot handle: they would be zero-pressure regions right at the edge the
+    tool touches).
     """
     tris = []
     for j in range(n_radial):
@@ -126,11 +131,12 @@ _PRISM_PERM = np.array(
 
 
 def _split_prisms(prisms, rank):
-    """Split prisms (M, 6) into 3 tets each; quad-face diagonals start at the lowest-rank vertex.
+    """Split prisms (M, 6) into 3 tets each; quad-face diagonals start at the
+    lowest-rank vertex.
 
-    Diagonals chosen by one global vertex order match on every shared face (no cracks),
-    and such a prism always splits into 3 tets (Dompierre et al., 1999). Every tet
-    contains the prism's lowest-rank vertex.
+    Diagonals chosen by one global vertex order match on every shared face (no
+    cracks), and such a prism always splits into 3 tets (Dompierre et al.,
+    1999). Every tet contains the prism's lowest-rank vertex.
     """
     m = np.argmin(rank[prisms], axis=1)
     P = np.take_along_axis(prisms, _PRISM_PERM[m], axis=1)
@@ -154,25 +160,30 @@ def _split_prisms(prisms, rank):
 def make_ring_volume_mesh(
     inner_radius, outer_radius, z_bottom, z_top, n_theta, n_radial=2, n_z=2
 ):
-    """Structured tetrahedral mesh of the ring inner_radius <= r <= outer_radius, z_bottom <= z <= z_top.
+    """Structured tetrahedral mesh of the ring inner_radius <= r <=
+    outer_radius, z_bottom <= z <= z_top.
 
-    Each hexahedral cell (one angular segment x one radial x one height step) is cut
-    into two triangular prisms by a "Union Jack" diagonal of its cross section and each
-    prism into 3 tets, with face diagonals chosen from one global vertex order
-    (interior vertices first), so neighbouring cells match and every tet touches an
-    interior vertex: Drake's pressure field (0 on the boundary) is positive in every tet.
+    Each hexahedral cell (one angular segment x one radial x one height step) is
+    cut into two triangular prisms by a "Union Jack" diagonal of its cross
+    section and each prism into 3 tets, with face diagonals chosen from one
+    global vertex order (interior vertices first), so neighbouring cells match
+    and every tet touches an interior vertex: Drake's pressure field (0 on the
+    boundary) is positive in every tet.
 
     Args:
-        inner_radius, outer_radius: radii (m), 0 < inner_radius < outer_radius.
+        inner_radius, outer_radius: radii (m),
+            0 < inner_radius < outer_radius.
         z_bottom, z_top: heights (m), z_bottom < z_top.
-        n_theta: segments around (>= 3); n_radial: cells through the wall (>= 2);
-            n_z: cells in height (>= 2). n_radial, n_z >= 2 guarantee interior vertices.
+        n_theta: segments around (>= 3); n_radial: cells through the wall
+            (>= 2); n_z: cells in height (>= 2). n_radial, n_z >= 2
+            guarantee interior vertices.
 
     Returns:
-        (vertices, tets): float array (n_theta*(n_radial+1)*(n_z+1), 3) in m and int
-        array (6*n_theta*n_radial*n_z, 4); every tet has positive signed volume
-        det([v1-v0, v2-v0, v3-v0]) / 6 > 0. Vertex index = (i*(n_radial+1) + j)*(n_z+1) + k
-        for angle index i (angle 2*pi*i/n_theta), radial index j, height index k.
+        (vertices, tets): float array (n_theta*(n_radial+1)*(n_z+1), 3) in m
+        and int array (6*n_theta*n_radial*n_z, 4); every tet has positive
+        signed volume det([v1-v0, v2-v0, v3-v0]) / 6 > 0. Vertex index =
+        (i*(n_radial+1) + j)*(n_z+1) + k for angle index i (angle
+        2*pi*i/n_theta), radial index j, height index k.
     """
     _validate(
         inner_radius, outer_radius, z_bottom, z_top, n_theta, n_radial, n_z
@@ -297,7 +308,8 @@ def _vtk_text(vertices, tets):
         "DATASET UNSTRUCTURED_GRID",
         f"POINTS {len(vertices)} double",
     ]
-    # Fixed format (and "+0.0" for "-0.0") so the bytes are the same on every run.
+    # Fixed format (and "+0.0" for "-0.0") so the bytes are the same on every
+    # run.
     lines += ["%.12e %.12e %.12e" % tuple(v) for v in (vertices + 0.0)]
     lines.append(f"CELLS {len(tets)} {5 * len(tets)}")
     lines += ["4 %d %d %d %d" % tuple(t) for t in tets]
@@ -307,7 +319,8 @@ def _vtk_text(vertices, tets):
 
 
 def write_vtk(path, vertices, tets):
-    """Write a legacy ASCII VTK UNSTRUCTURED_GRID of tetrahedra (cell type 10), byte-deterministic."""
+    """Write a legacy ASCII VTK UNSTRUCTURED_GRID of tetrahedra (cell type 10),
+    byte-deterministic."""
     pathlib.Path(path).write_bytes(_vtk_text(vertices, tets).encode("ascii"))
 
 
@@ -319,9 +332,10 @@ def _default_cache_dir():
 
 
 def _cached(directory, name, text):
-    """Write text to directory/name atomically (temp file + os.replace) unless it holds exactly
-    that text already; return the path. A cached file that differs (truncated, edited, a disk
-    error) is rebuilt: regenerating the text costs about 12 ms for the default ring."""
+    """Write text to directory/name atomically (temp file + os.replace) unless
+    it holds exactly that text already; return the path. A cached file that
+    differs (truncated, edited, a disk error) is rebuilt: regenerating the text
+    costs about 12 ms for the default ring."""
     directory = (
         pathlib.Path(directory)
         if directory is not None
@@ -373,12 +387,14 @@ def ring_mesh_path(
     n_z=2,
     cache_dir=None,
 ):
-    """Path of the cached ring volume mesh (.vtk) for these arguments; generated only when absent.
+    """Path of the cached ring volume mesh (.vtk) for these arguments; generated
+    only when absent.
 
-    The file name carries a SHA-256 of the arguments (repr of floats, exact); the file is
-    written to a temporary file in the cache dir and moved in place with os.replace, so
-    concurrent processes never see a partial file. cache_dir defaults to
-    $XDG_CACHE_HOME/deburr_drake/meshes (or ~/.cache/deburr_drake/meshes).
+    The file name carries a SHA-256 of the arguments (repr of floats, exact);
+    the file is written to a temporary file in the cache dir and moved in place
+    with os.replace, so concurrent processes never see a partial file. cache_dir
+    defaults to $XDG_CACHE_HOME/deburr_drake/meshes (or
+    ~/.cache/deburr_drake/meshes).
     """
     _validate(
         inner_radius, outer_radius, z_bottom, z_top, n_theta, n_radial, n_z
@@ -412,14 +428,16 @@ def ring_mesh_path(
 def make_ring_surface_mesh(
     inner_radius, outer_radius, z_bottom, z_top, n_theta
 ):
-    """Boundary of the n_theta-gon annulus as quads: (vertices (4*n_theta, 3), quads (4*n_theta, 4)).
+    """Boundary of the n_theta-gon annulus as quads: (vertices (4*n_theta, 3),
+    quads (4*n_theta, 4)).
 
     Quads are counter-clockwise seen from outside (outward normals). For visuals
     (Meshcat renders .obj, not .vtk).
     """
     _validate(inner_radius, outer_radius, z_bottom, z_top, n_theta, 2, 2)
     theta = 2.0 * np.pi * np.arange(n_theta) / n_theta
-    # Cross-section loop s = 0..3: inner-bottom, outer-bottom, outer-top, inner-top.
+    # Cross-section loop s = 0..3: inner-bottom, outer-bottom, outer-top,
+    # inner-top.
     loop = np.array(
         [
             [inner_radius, z_bottom],
@@ -464,7 +482,8 @@ def write_obj(path, vertices, faces):
 def ring_surface_path(
     inner_radius, outer_radius, z_bottom, z_top, n_theta, cache_dir=None
 ):
-    """Path of the cached ring surface (.obj), cached and written like ring_mesh_path."""
+    """Path of the cached ring surface (.obj), cached and written like
+    ring_mesh_path."""
     _validate(inner_radius, outer_radius, z_bottom, z_top, n_theta, 2, 2)
     digest = _key(
         "ring-obj-v1", inner_radius, outer_radius, z_bottom, z_top, (n_theta,)

@@ -6,11 +6,12 @@ unit. ``validate()`` on each class raises :class:`ConfigError` naming the field
 and the allowed range; nothing is clamped. :func:`load_scenario` validates the
 whole tree, so a loaded scenario is always usable.
 
-The layer on ``math``: it imports nothing else of the package (the pure
-geometry checks a profile edge), so a scenario (or a study of 200) is read and validated before any Drake
-system exists. The modules: ``checks`` (:class:`ConfigError`), ``control``
-(the paper's controller), ``cell`` (the simulated cell), ``scenario`` (the
-whole, its files and dotted field names). Import the names from here.
+The layer on ``math``: it imports nothing else of the package (the pure geometry
+checks a profile edge), so a scenario (or a study of 200) is read and validated
+before any Drake system exists. The modules: ``checks`` (:class:`ConfigError`),
+``control`` (the paper's controller), ``cell`` (the simulated cell),
+``scenario`` (the whole, its files and dotted field names). Import the names
+from here.
 """
 
 from deburr_drake.config.cell import (

@@ -53,12 +53,12 @@ class TubeConfig:
     hunt_crossley_dissipation: float = (
         5.0  # s/m, the contact's Hunt-Crossley dissipation
     )
-    # -, segments around the circumference. 120 (chord sag 10 um at 30 mm) with the
-    # cutter's 0.6 mm mesh gives within 0.3 % the normal force of 240 with
-    # a 0.4 mm cutter mesh (1.835/1.830, 3.695/3.700, 5.711/5.728 N at 0.3,
-    # 0.5, 0.7 mm), a ripple along the edge of +-0.006 N (against the
-    # sensor's 0.1 N noise) and a contact evaluation 38 % cheaper (188
-    # against 301 us): scripts/contact_mesh.py.
+    # -, segments around the circumference. 120 (chord sag 10 um at 30 mm) with
+    # the cutter's 0.6 mm mesh gives within 0.3 % the normal force of 240 with a
+    # 0.4 mm cutter mesh (1.835/1.830, 3.695/3.700, 5.711/5.728 N at 0.3, 0.5,
+    # 0.7 mm), a ripple along the edge of +-0.006 N (against the sensor's 0.1 N
+    # noise) and a contact evaluation 38 % cheaper (188 against 301 us):
+    # scripts/contact_mesh.py.
     mesh_segments: int = 120
     mesh_radial_cells: int = 2  # -, mesh cells through the wall
     mesh_height_cells: int = 2  # -, mesh cells through the modelled layer
@@ -77,8 +77,9 @@ class TubeConfig:
             o, "hunt_crossley_dissipation", self.hunt_crossley_dissipation
         )
         _vector(o, "position", self.position, 3, _finite)
-        # 1e300 Pa stopped the process inside Drake's contact solver (a
-        # C++ failure Python cannot catch, so nothing was written).
+        # An absurd modulus (1e300 Pa) stops the process inside Drake's
+        # contact solver, a C++ failure Python cannot catch, so nothing
+        # would be written.
         _require(
             self.hydroelastic_modulus <= 1e12,
             "tube.hydroelastic_modulus",
@@ -267,8 +268,8 @@ class SensorConfig:
     sample_period: float = 0.0025  # s, the reading is sampled this often
     # Hz, first-order low-pass. The controller cancels the measured force
     # (-f in (36)), which holds the process damping g of (3) through the
-    # sampled sensor: with the light point-mass testbed that loop went
-    # unstable at 50 Hz and was stable at 20 and 30 Hz (measured).
+    # sampled sensor: on the light point-mass testbed that loop is unstable
+    # at 50 Hz and stable at 20 (docs/numerics.md).
     cutoff_frequency: float = 20.0
     noise_std: float = 0.0  # N, white noise per axis before the filter
     noise_seed: int = 0  # -, seeds the noise (RandomSource)
@@ -701,9 +702,9 @@ class GuardsConfig:
     nan: bool = True  # -, any NaN or infinity in a logged signal
     # s; all guards are checked this often, the joint torque also at every
     # inner-loop sample. A multiple of the 2.5 ms inner loop adds no
-    # integrator steps. On a 10 s paper run (scripts/bench_guards.py) all
-    # guards every 2.5 ms took 4.5-4.7 % of the CPU time; every 10 ms with
-    # the torque every 2.5 ms 2.7-2.8 %.
+    # integrator steps. On a paper run all guards every 2.5 ms cost about
+    # 5 % of the CPU time, every 10 ms with the torque every 2.5 ms about 3 %
+    # (scripts/bench_guards.py).
     check_period: float = 0.02
     # -; the drives clamp the commanded torque at the effort limits, as real
     # ones do: a guard sees a torque one sample after it is commanded, so

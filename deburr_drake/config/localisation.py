@@ -1,4 +1,4 @@
-"""Configuration of localisation (issue 21): touch probing before the pass
+"""Configuration of localisation: touch probing before the pass
 (``localisation.probe``) and registration while cutting
 (``localisation.online``). Both are off by default; the ``paper_localised``
 scenario turns both on. SI units; each field's comment gives its unit."""
@@ -43,7 +43,8 @@ class ProbeConfig:
     # N/m, the contact stiffness the detection bias is modelled with
     # (threshold / stiffness of penetration at the threshold).
     contact_stiffness: float = 5.0e3
-    fit_radius: bool = False  # -, circle: fit the radius too (else the drawing's); only a circle
+    # -, circle: fit the radius too (else the drawing's); only a circle
+    fit_radius: bool = False
     # m, a touch off the circle, line or profile most touches agree on by
     # more is dropped: a burr under it (math.fits.fit_consensus)
     max_residual: float = (

@@ -352,12 +352,21 @@ def scenario_reference_markdown() -> str:
         sections.setdefault(doc.path.split(".")[0].split("[")[0], []).append(
             doc
         )
-    out = [
+    out = _reference_intro(len(fields))
+    for section, docs in sections.items():
+        out += _section_table(section, docs)
+    out += _WRITING_A_FIELD
+    return "\n".join(out)
+
+
+def _reference_intro(n_fields: int) -> List[str]:
+    """The page's title and introduction."""
+    return [
         "# Scenario reference",
         "",
         "Generated from the dataclasses in `deburr_drake/config/` by "
         "`deburr_drake.config.reference` at every docs build: every field "
-        f"of `Scenario` ({len(fields)} fields), by the dotted name that "
+        f"of `Scenario` ({n_fields} fields), by the dotted name that "
         "`--scenario-text`, `--set`, `set_field` and the study files use "
         "(`process.burrs[].height`: each element of a list; index it as "
         "`process.burrs[0].height`). *default* is the package's "
@@ -372,68 +381,73 @@ def scenario_reference_markdown() -> str:
         "[writing a field](#writing-a-field)).",
         "",
     ]
-    for section, docs in sections.items():
-        out.append(f"## `{section}`")
+
+
+def _section_table(section: str, docs: List[FieldDoc]) -> List[str]:
+    """One section's heading, docstring, table of fields and notes."""
+    out = []
+    out.append(f"## `{section}`")
+    out.append("")
+    cls = type(getattr(Scenario(), section))
+    if dataclasses.is_dataclass(cls) and cls.__doc__:
+        out.append(" ".join(cls.__doc__.split()))
         out.append("")
-        cls = type(getattr(Scenario(), section))
-        if dataclasses.is_dataclass(cls) and cls.__doc__:
-            out.append(" ".join(cls.__doc__.split()))
-            out.append("")
-        out.append("| field (type) | unit | default | meaning; *allowed* |")
-        out.append("|---|---|---|---|")
-        for d in docs:
-            default = f"`{_shown(d.default)}`"
-            if _shown(d.paper) != _shown(d.default):
-                default += f"; paper `{_shown(d.paper)}`"
-            allowed = f" *Allowed:* {d.allowed}." if d.allowed else ""
-            out.append(
-                "| "
-                + " | ".join(
-                    _cell(x)
-                    for x in (
-                        f"`{d.path}` ({d.type})",
-                        d.unit,
-                        default,
-                        (d.meaning.rstrip(".") + "." if allowed else d.meaning)
-                        + allowed,
-                    )
+    out.append("| field (type) | unit | default | meaning; *allowed* |")
+    out.append("|---|---|---|---|")
+    for d in docs:
+        default = f"`{_shown(d.default)}`"
+        if _shown(d.paper) != _shown(d.default):
+            default += f"; paper `{_shown(d.paper)}`"
+        allowed = f" *Allowed:* {d.allowed}." if d.allowed else ""
+        out.append(
+            "| "
+            + " | ".join(
+                _cell(x)
+                for x in (
+                    f"`{d.path}` ({d.type})",
+                    d.unit,
+                    default,
+                    (d.meaning.rstrip(".") + "." if allowed else d.meaning)
+                    + allowed,
                 )
-                + " |"
             )
+            + " |"
+        )
+    out.append("")
+    notes = [d for d in docs if d.detail]
+    if notes:
+        out.append("Notes from the source:")
         out.append("")
-        notes = [d for d in docs if d.detail]
-        if notes:
-            out.append("Notes from the source:")
-            out.append("")
-            for d in notes:
-                out.append(f"- `{d.path}`: {d.meaning} {d.detail}")
-            out.append("")
-    out += [
-        "## Writing a field",
-        "",
-        "A new field is documented by its comment, which this page and the "
-        "tests read:",
-        "",
-        "```python",
-        "cutoff_frequency: float = 20.0  # Hz, first-order low-pass of the "
-        "reading",
-        "```",
-        "",
-        "The comment starts with the unit: an SI expression (`m`, `N s/m`, "
-        "`m/(N s)`, `1/s`, `N or N m`), a bracketed list for a list whose "
-        "elements differ (`[N, N/m, N s/m]`), or `-` for a dimensionless "
-        "number, a name, a switch or a count; then `,` `;` `:` or `.` and "
-        "one line of meaning. A longer explanation goes in a comment block "
-        "directly above the field; a field with only that block takes its "
-        "unit and meaning from the block's first words. The range is "
-        "checked in the class's `validate()` with the helpers of "
-        "`deburr_drake/config/checks.py`, whose `allowed ...` text this "
-        "page shows. `tests/config/test_reference.py` names every field "
-        "without a unit or a meaning and checks that this page lists every "
-        "field of `Scenario`.",
-        "",
-    ]
-    return "\n".join(out)
+        for d in notes:
+            out.append(f"- `{d.path}`: {d.meaning} {d.detail}")
+        out.append("")
+    return out
+
+
+_WRITING_A_FIELD = [
+    "## Writing a field",
+    "",
+    "A new field is documented by its comment, which this page and the "
+    "tests read:",
+    "",
+    "```python",
+    "cutoff_frequency: float = 20.0  # Hz, first-order low-pass of the reading",
+    "```",
+    "",
+    "The comment starts with the unit: an SI expression (`m`, `N s/m`, "
+    "`m/(N s)`, `1/s`, `N or N m`), a bracketed list for a list whose "
+    "elements differ (`[N, N/m, N s/m]`), or `-` for a dimensionless "
+    "number, a name, a switch or a count; then `,` `;` `:` or `.` and "
+    "one line of meaning. A longer explanation goes in a comment block "
+    "directly above the field; a field with only that block takes its "
+    "unit and meaning from the block's first words. The range is "
+    "checked in the class's `validate()` with the helpers of "
+    "`deburr_drake/config/checks.py`, whose `allowed ...` text this "
+    "page shows. `tests/config/test_reference.py` names every field "
+    "without a unit or a meaning and checks that this page lists every "
+    "field of `Scenario`.",
+    "",
+]
 
 
 def write_scenario_reference(path) -> str:

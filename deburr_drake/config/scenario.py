@@ -64,7 +64,7 @@ class SimulationConfig:
     max_step: float = 0.01
     # -; false: fixed steps of max_step (accuracy unused). With the 2.5 ms
     # sampled loop every step ends at a sample anyway; on 12 s of the paper
-    # run cenic's error control at 1e-4 took 14 % more steps and 19 % more
+    # run cenic's error control at 1e-4 takes 14 % more steps and 19 % more
     # wall time for means within 1.5e-4 (scripts/integrator_check.py).
     error_control: bool = True
     # s; the control period: no extra integrator stops (an unaligned 4 ms
@@ -148,6 +148,13 @@ class Scenario:
             value = getattr(self, f.name)
             if hasattr(value, "validate"):
                 value.validate()
+        self._check_tool_on_part()
+        self._check_localisation()
+        self._check_periods()
+        return self
+
+    def _check_tool_on_part(self):
+        """The depth, the cutter and the part fit one another."""
         _require(
             self.task.desired_depth < self.tube.wall_thickness,
             "task.desired_depth",
@@ -183,6 +190,10 @@ class Scenario:
         )
         if self.edge.kind == "profile":
             self.edge.check_profile(self.tube, self.tool, self.part_error)
+
+    def _check_localisation(self):
+        """Probing fits what the edge allows; the believed part is one
+        the cutter fits in."""
         probe = self.localisation.probe
         _require(
             not (probe.enabled and probe.fit_radius)
@@ -202,6 +213,9 @@ class Scenario:
             f"({self.tube.wall_thickness}) with the believed inner "
             f"radius > tool.cutter_radius ({self.tool.cutter_radius})",
         )
+
+    def _check_periods(self):
+        """The outer loop and the guards sample the inner loop."""
         inner = self.controller.control_period
         if inner > 0:
             period = self.command.period
@@ -221,7 +235,6 @@ class Scenario:
                 "a whole multiple >= 1 of controller.control_period "
                 f"({inner:g} s): other times add integrator steps",
             )
-        return self
 
 
 def _parse_path(path: str):
@@ -330,78 +343,103 @@ def _check_node(where: str, node, schema, path: str):
     of the field's type. One ConfigError with file:line:column."""
     import typing
 
-    import yaml
-
     origin = typing.get_origin(schema)
     if dataclasses.is_dataclass(schema):
-        known = {f.name for f in dataclasses.fields(schema)}
-        if not isinstance(node, yaml.MappingNode):
+        _check_dataclass_node(where, node, schema, path)
+    elif origin is dict:
+        _check_dict_node(where, node, schema, path)
+    elif origin in (list, List):
+        _check_list_node(where, node, schema, path)
+    else:
+        _check_scalar_node(where, node, schema, path)
+
+
+def _check_dataclass_node(where: str, node, schema, path: str):
+    import typing
+
+    import yaml
+
+    known = {f.name for f in dataclasses.fields(schema)}
+    if not isinstance(node, yaml.MappingNode):
+        _schema_error(
+            where,
+            node,
+            f"{path or 'the scenario'} must be a mapping of {sorted(known)}",
+        )
+    hints = typing.get_type_hints(schema)
+    seen = {}
+    for key_node, value_node in node.value:
+        key = key_node.value
+        name = f"{path}.{key}" if path else key
+        _check_once(where, key_node, seen, name)
+        if key not in known:
             _schema_error(
                 where,
-                node,
-                f"{path or 'the scenario'} must be a "
-                f"mapping of {sorted(known)}",
+                key_node,
+                f"{name} is unknown: allowed fields of "
+                f"{path or 'the scenario'}: {sorted(known)}",
             )
-        hints = typing.get_type_hints(schema)
-        seen = {}
-        for key_node, value_node in node.value:
-            key = key_node.value
-            name = f"{path}.{key}" if path else key
-            if key in seen:
-                _schema_error(
-                    where,
-                    key_node,
-                    f"{name} is given twice (first at line "
-                    f"{seen[key].start_mark.line + 1})",
-                )
-            seen[key] = key_node
-            if key not in known:
-                _schema_error(
-                    where,
-                    key_node,
-                    f"{name} is unknown: allowed fields of "
-                    f"{path or 'the scenario'}: {sorted(known)}",
-                )
-            _check_node(where, value_node, hints[key], name)
-        return
-    if origin is dict:
-        key_type, item = typing.get_args(schema)
-        if not isinstance(node, yaml.MappingNode):
-            _schema_error(
-                where,
-                node,
-                f"{path} = {_shown(node)} is invalid: allowed a mapping",
-            )
-        seen = {}
-        for key_node, value_node in node.value:
-            name = f"{path}.{key_node.value}"
-            if key_node.value in seen:
-                _schema_error(
-                    where,
-                    key_node,
-                    f"{name} is given twice (first at line "
-                    f"{seen[key_node.value].start_mark.line + 1})",
-                )
-            seen[key_node.value] = key_node
-            _check_node(where, value_node, item, name)
-        return
-    if origin in (list, List):
-        (item,) = typing.get_args(schema)
-        if not isinstance(node, yaml.SequenceNode):
-            kind = {
-                float: "numbers",
-                int: "integers",
-                bool: "booleans",
-                str: "strings",
-            }.get(item, "mappings")
-            _schema_error(
-                where,
-                node,
-                f"{path} = {_shown(node)} is invalid: allowed a list of {kind}",
-            )
-        for k, child in enumerate(node.value):
-            _check_node(where, child, item, f"{path}[{k}]")
-        return
+        _check_node(where, value_node, hints[key], name)
+
+
+def _check_once(where: str, key_node, seen: dict, name: str):
+    """ConfigError when ``key_node``'s key is in ``seen`` (key -> its first
+    node); else records it."""
+    key = key_node.value
+    if key in seen:
+        _schema_error(
+            where,
+            key_node,
+            f"{name} is given twice (first at line "
+            f"{seen[key].start_mark.line + 1})",
+        )
+    seen[key] = key_node
+
+
+def _check_dict_node(where: str, node, schema, path: str):
+    import typing
+
+    import yaml
+
+    _, item = typing.get_args(schema)
+    if not isinstance(node, yaml.MappingNode):
+        _schema_error(
+            where,
+            node,
+            f"{path} = {_shown(node)} is invalid: allowed a mapping",
+        )
+    seen = {}
+    for key_node, value_node in node.value:
+        name = f"{path}.{key_node.value}"
+        _check_once(where, key_node, seen, name)
+        _check_node(where, value_node, item, name)
+
+
+def _check_list_node(where: str, node, schema, path: str):
+    import typing
+
+    import yaml
+
+    (item,) = typing.get_args(schema)
+    if not isinstance(node, yaml.SequenceNode):
+        kind = {
+            float: "numbers",
+            int: "integers",
+            bool: "booleans",
+            str: "strings",
+        }.get(item, "mappings")
+        _schema_error(
+            where,
+            node,
+            f"{path} = {_shown(node)} is invalid: allowed a list of {kind}",
+        )
+    for k, child in enumerate(node.value):
+        _check_node(where, child, item, f"{path}[{k}]")
+
+
+def _check_scalar_node(where: str, node, schema, path: str):
+    import yaml
+
     tags = {
         float: ("float", "int"),
         int: ("int",),

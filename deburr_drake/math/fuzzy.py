@@ -1,12 +1,15 @@
 """Central B-spline fuzzy rule base of Hsu & Fu, Section III.C, eqs. (24)-(35).
 
-Pure numpy (no pydrake).  Conventions and corrections (../shared/DESIGN.md §4):
+Pure numpy (no pydrake).  Conventions and corrections (R1-R10 in
+docs/cell-and-paper.md):
 
 * R1: the central cardinal B-spline of eq. (24) carries the factor 1/Delta**m,
   so shifted copies N_m(y - i*Delta) sum to one (partition of unity) and the
-  peak of N_1 is 1.  Order m = 0 is the half-open indicator of [-Delta/2, Delta/2).
+  peak of N_1 is 1.  Order m = 0 is the half-open indicator of [-Delta/2,
+  Delta/2).
 * R4: the dead zone of eq. (31) has a half-width parameter whose default is the
-  half-support (m+1)/2 * Delta_k used in the proof of Proposition 2 (not Delta_k).
+  half-support (m+1)/2 * Delta_k used in the proof of Proposition 2 (not
+  Delta_k).
 * R8: one two-input controller u_fk(y0, yk) has (2*Upsilon+1)**2 rules.
 
 Piecewise form used everywhere: with t = y/Delta + (m+1)/2, segment k = floor(t)
@@ -38,7 +41,8 @@ __all__ = [
 
 
 def _value(y):
-    """Plain float value of a float or AutoDiffXd scalar (never float() on AutoDiff)."""
+    """Plain float value of a float or AutoDiffXd scalar (never float() on
+    AutoDiff)."""
     return y.value() if hasattr(y, "value") else float(y)
 
 
@@ -71,8 +75,8 @@ def _is_object(y):
 
 
 # ---------------------------------------------------------------------------
-# Uniform B-spline pieces (unit spacing), segment k of [0, m+1), local u in [0,1).
-# Written with + - * only so they accept AutoDiffXd.
+# Uniform B-spline pieces (unit spacing), segment k of [0, m+1), local u in
+# [0,1). Written with + - * only so they accept AutoDiffXd.
 
 
 def _piece(m, k, u):
@@ -117,7 +121,8 @@ def _dpiece(m, k, u):
 
 
 def _active_weights(m, f):
-    """Weights of the m+1 active rules (p = 0..m) at fractional position f in [0,1).
+    """Weights of the m+1 active rules (p = 0..m) at fractional position f in
+    [0,1).
 
     Equals _piece(m, m - p, f); sums to one.  T-generic in f.
     """
@@ -170,12 +175,14 @@ def _membership_scalar_generic(y, m, delta):
 
 
 def bspline_membership(y, m, delta):
-    """Central cardinal B-spline N_m(y) of eq. (24) with the 1/delta**m factor (R1).
+    """Central cardinal B-spline N_m(y) of eq. (24) with the 1/delta**m factor
+    (R1).
 
     Support [-(m+1)/2*delta, (m+1)/2*delta]; sum_i N_m(y - i*delta) = 1; peak of
-    N_1 is 1.  m = 0: indicator of [-delta/2, delta/2).  Float arrays are evaluated
-    vectorized (NaN propagates); AutoDiffXd scalars / object arrays (m >= 1) are
-    evaluated element by element with arithmetic on y so derivatives flow.
+    N_1 is 1.  m = 0: indicator of [-delta/2, delta/2).  Float arrays are
+    evaluated vectorized (NaN propagates); AutoDiffXd scalars / object arrays (m
+    >= 1) are evaluated element by element with arithmetic on y so derivatives
+    flow.
     """
     m = _check_m(m)
     delta = _check_positive(delta, "delta")
@@ -190,7 +197,8 @@ def bspline_membership(y, m, delta):
 
 
 def bspline_membership_derivative(y, m, delta):
-    """dN_m/dy for float arrays (zeros for m = 0; right-sided at the knots for m = 1)."""
+    """dN_m/dy for float arrays (zeros for m = 0; right-sided at the knots for m
+    = 1)."""
     m = _check_m(m)
     delta = _check_positive(delta, "delta")
     return _membership_float(y, m, delta, deriv=True)
@@ -212,16 +220,19 @@ def active_indices(y, m, delta):
 
 
 def default_dead_zone_half_width(m, delta):
-    """Default dead-zone half-width (m+1)/2 * delta (R4: half-support, Prop. 2)."""
+    """Default dead-zone half-width (m+1)/2 * delta (R4: half-support, Prop.
+    2)."""
     m = _check_m(m)
     delta = _check_positive(delta, "delta")
     return 0.5 * (m + 1) * delta
 
 
 def dead_zone(y, half_width):
-    """y_Delta of eq. (31) with half-width as a parameter (R4): y if |y| > half_width else 0.
+    """y_Delta of eq. (31) with half-width as a parameter (R4): y if |y| >
+    half_width else 0.
 
-    T-generic: returns y or 0*y for AutoDiffXd; float arrays are handled elementwise.
+    T-generic: returns y or 0*y for AutoDiffXd; float arrays are handled
+    elementwise.
     """
     if isinstance(y, np.ndarray):
         if y.dtype == object:
@@ -243,16 +254,17 @@ class RuleBase:
     """One two-input fuzzy controller u_fk(y0, yk) of eq. (30).
 
     Rules (i, j), i, j in {-upsilon..upsilon}; i indexes y0 (spacing delta0), j
-    indexes yk (spacing deltak); nu_ij = N_m(y0 - i*delta0) * N_m(yk - j*deltak).
-    theta is flat of length n_rules = (2U+1)**2 (R8) with
+    indexes yk (spacing deltak); nu_ij = N_m(y0 - i*delta0) * N_m(yk -
+    j*deltak). theta is flat of length n_rules = (2U+1)**2 (R8) with
     flat_index(i, j) = (i+U)*(2U+1) + (j+U).
 
-    Only the (m+1)**2 rules active at (y0, yk) (eq. 25) are ever touched.  Inputs
-    outside Omega_0 x Omega_k are valid: rules whose index falls outside -U..U are
-    simply absent, so near/over the edges fewer (or no) rules are active, the
-    weights no longer sum to one and u decays to 0 (the controller then switches
-    to H_bar via zeta_k, eq. 37).  Adaptation (eq. 35) happens only for yk in
-    Omega_k and |yk| > dead-zone half-width (default (m+1)/2*deltak, R4).
+    Only the (m+1)**2 rules active at (y0, yk) (eq. 25) are ever touched.
+    Inputs outside Omega_0 x Omega_k are valid: rules whose index falls outside
+    -U..U are simply absent, so near/over the edges fewer (or no) rules are
+    active, the weights no longer sum to one and u decays to 0 (the controller
+    then switches to H_bar via zeta_k, eq. 37).  Adaptation (eq. 35) happens
+    only for yk in Omega_k and |yk| > dead-zone half-width (default
+    (m+1)/2*deltak, R4).
     """
 
     m: int
@@ -273,8 +285,9 @@ class RuleBase:
             hw = 0.5 * (self.m + 1) * dk
             if hw > hw_max:
                 raise ValueError(
-                    f"dead_zone_half_width default (m+1)/2*deltak = {hw} must lie in "
-                    f"[0, upsilon*deltak] = [0, {hw_max}]; pass it explicitly or raise upsilon"
+                    f"dead_zone_half_width default (m+1)/2*deltak = {hw} "
+                    f"must lie in [0, upsilon*deltak] = [0, {hw_max}]; "
+                    "pass it explicitly or raise upsilon"
                 )
         else:
             try:
@@ -283,7 +296,8 @@ class RuleBase:
                 hw = float("nan")
             if not (math.isfinite(hw) and 0.0 <= hw <= hw_max):
                 raise ValueError(
-                    f"dead_zone_half_width must lie in [0, upsilon*deltak] = [0, {hw_max}], "
+                    "dead_zone_half_width must lie in [0, upsilon*deltak] = "
+                    f"[0, {hw_max}], "
                     f"got {self.dead_zone_half_width!r}"
                 )
         m = int(self.m)
@@ -317,7 +331,8 @@ class RuleBase:
 
     @property
     def resolved_dead_zone_half_width(self) -> float:
-        """dead_zone_half_width, or its default (m+1)/2*deltak when None (R4)."""
+        """dead_zone_half_width, or its default (m+1)/2*deltak when None
+        (R4)."""
         return self._hw
 
     def flat_index(self, i, j):
@@ -330,7 +345,8 @@ class RuleBase:
 
     # -- evaluation ----------------------------------------------------------
     def _axis(self, y, delta, name):
-        """(lo, weights) of the in-range active rules of one axis, or (None, ())."""
+        """(lo, weights) of the in-range active rules of one axis, or (None,
+        ())."""
         yv = y.value() if hasattr(y, "value") else float(y)
         if not math.isfinite(yv):
             raise ValueError(f"{name} must be finite, got {yv!r}")
@@ -350,7 +366,8 @@ class RuleBase:
         return lo, w[lo - first : hi - first + 1]
 
     def active_rules(self, y0, yk):
-        """(idx, nu): flat indices of the active rules inside -U..U and their weights.
+        """(idx, nu): flat indices of the active rules inside -U..U and their
+        weights.
 
         nu_ij = N_m(y0 - i*delta0) * N_m(yk - j*deltak); T-generic in nu.
         """
@@ -385,7 +402,8 @@ class RuleBase:
         return np.dot(np.asarray(theta)[idx], nu)
 
     def in_domain(self, yk) -> bool:
-        """zeta_k of eq. (37): yk in Omega_k = [-U*deltak, U*deltak] (plain value)."""
+        """zeta_k of eq. (37): yk in Omega_k = [-U*deltak, U*deltak] (plain
+        value)."""
         yv = yk.value() if hasattr(yk, "value") else float(yk)
         return abs(yv) <= self._U * self._dk
 
@@ -396,10 +414,11 @@ class RuleBase:
         return np.zeros(len(nu)) if nu.dtype != object else (0.0 * yk) * nu
 
     def adaptation_rate(self, y0, yk, r):
-        """(idx, dtheta) of eq. (35): dtheta = r*nu*dead_zone(yk) on the active rules.
+        """(idx, dtheta) of eq. (35): dtheta = r*nu*dead_zone(yk) on the active
+        rules.
 
-        idx are the active rules (as active_rules); dtheta is zero when yk is in the
-        dead zone or outside Omega_k.  Rules not in idx have zero rate.
+        idx are the active rules (as active_rules); dtheta is zero when yk is in
+        the dead zone or outside Omega_k.  Rules not in idx have zero rate.
         """
         idx, nu = self.active_rules(y0, yk)
         return idx, self._rate(nu, yk, r)
@@ -434,7 +453,8 @@ class RuleBase:
         return out
 
     def evaluate_and_rate(self, theta, y0, yk, r):
-        """(u, idx, dtheta) = evaluate(...) and adaptation_rate(...), memberships once."""
+        """(u, idx, dtheta) = evaluate(...) and adaptation_rate(...),
+        memberships once."""
         idx, nu = self.active_rules(y0, yk)
         if len(idx) == 0:
             return 0.0 * yk, idx, nu

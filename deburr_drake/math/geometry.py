@@ -1,8 +1,8 @@
 """Part-edge geometry for contour-following deburring (pure numpy, no pydrake).
 
-A ``Contour`` is the zero-depth path of the tool reference point x_p (the paper's
-x_s with phi(x_s) = 0, Sec. II, Fig. 2): a planar curve at height ``height`` in a
-horizontal plane.  The part wall is vertical, so phi ignores z.
+A ``Contour`` is the zero-depth path of the tool reference point x_p (the
+paper's x_s with phi(x_s) = 0, Sec. II, Fig. 2): a planar curve at height
+``height`` in a horizontal plane.  The part wall is vertical, so phi ignores z.
 
 Sign conventions (all in the horizontal plane, |grad phi| = 1):
   * phi > 0 on the free side, phi < 0 in the material;
@@ -10,14 +10,15 @@ Sign conventions (all in the horizontal plane, |grad phi| = 1):
     (Sec. II; the contact force on the tool is f_n = -|f_n| n1);
   * chamfer depth delta = -phi(p) (positive in the material);
   * n2 = (I - n1 n1^T) v / |(I - n1 n1^T) v| is the direction of motion (eq. 2,
-    correction R5 of DESIGN.md), with the contour tangent in the configured
-    traversal direction as the start-up fallback at near-zero tangential speed;
+    correction R5 in docs/cell-and-paper.md), with the contour tangent in the
+    configured traversal direction as the start-up fallback at near-zero
+    tangential speed;
   * the outer-loop command lies on the zero-depth contour: ``advance`` projects
     x_p onto phi = 0 and moves along it by the arc length ds (correction R6).
 
 "T-generic" methods (phi, grad_phi, n1, depth, depth_rate, tangent, n2) accept
-float arrays or numpy object arrays of pydrake AutoDiffXd and use only arithmetic
-and np.sqrt/np.dot on them.  The path methods (project, arc_position,
+float arrays or numpy object arrays of pydrake AutoDiffXd and use only
+arithmetic and np.sqrt/np.dot on them.  The path methods (project, arc_position,
 unwrapped_arc_position, point_at, advance) work on floats; AutoDiffXd inputs are
 reduced to their values and the results are float arrays.
 
@@ -67,7 +68,8 @@ def _vec3(p, name):
 
 
 def _vec3_float(p, name):
-    """Shape-(3,) finite float array; AutoDiffXd entries are reduced to values."""
+    """Shape-(3,) finite float array; AutoDiffXd entries are reduced to
+    values."""
     if (
         type(p) is np.ndarray
         and p.dtype == np.float64
@@ -125,7 +127,8 @@ class Contour(abc.ABC):
     @property
     @abc.abstractmethod
     def length(self) -> float:
-        """Arc length of the contour [m]; math.inf for an open, unbounded one."""
+        """Arc length of the contour [m]; math.inf for an open, unbounded
+        one."""
 
     @property
     @abc.abstractmethod
@@ -165,12 +168,14 @@ class Contour(abc.ABC):
 
     # ----- shared defaults ---------------------------------------------------
     def n1(self, p):
-        """n1 = -grad phi / |grad phi| (Sec. II), unit, into the material (T-generic)."""
+        """n1 = -grad phi / |grad phi| (Sec. II), unit, into the material
+        (T-generic)."""
         g = self.grad_phi(p)
         return -g / np.sqrt(np.dot(g, g))
 
     def depth(self, p):
-        """Chamfer depth delta = -phi(p), positive in the material (T-generic)."""
+        """Chamfer depth delta = -phi(p), positive in the material
+        (T-generic)."""
         return -self.phi(p)
 
     def depth_rate(self, p, v):
@@ -238,7 +243,8 @@ class Contour(abc.ABC):
         ds = _finite_scalar(ds, "ds")
         if ds < 0.0:
             raise ValueError(
-                f"ds must be >= 0 (arc length along the traversal direction), got {ds}"
+                "ds must be >= 0 (arc length along the traversal "
+                f"direction), got {ds}"
             )
         return self.point_at(self.arc_position(p) + ds)
 
@@ -262,7 +268,8 @@ class _ClosedAboutCenter(Contour):
         self._start_angle = _finite_scalar(start_angle, "start_angle")
         if direction not in (1, -1):
             raise ValueError(
-                f"direction must be +1 (counter-clockwise) or -1 (clockwise), got {direction}"
+                "direction must be +1 (counter-clockwise) or -1 "
+                f"(clockwise), got {direction}"
             )
         self._direction = int(direction)
 
@@ -288,10 +295,11 @@ class _ClosedAboutCenter(Contour):
 
 
 class CircularContour(_ClosedAboutCenter):
-    """Circle of ``radius`` around ``center`` = (x, y, z); z is the contour height.
+    """Circle of ``radius`` around ``center`` = (x, y, z); z is the contour
+    height.
 
-    Material lies OUTSIDE the circle (inner edge of a tube, tool inside):
-    phi = radius - rho, n1 = radial outward (rho = planar distance to the centre).
+    Material lies OUTSIDE the circle (inner edge of a tube, tool inside): phi =
+    radius - rho, n1 = radial outward (rho = planar distance to the centre).
     ``direction`` +1 = counter-clockwise seen from +z, -1 = clockwise; arc
     position 0 at polar angle ``start_angle`` [rad].  Points closer than 1e-9 m
     to the centre axis raise ValueError (n1 undefined).
@@ -320,7 +328,8 @@ class CircularContour(_ClosedAboutCenter):
         rho2 = dx * dx + dy * dy
         if _value(rho2) < _MIN_RHO * _MIN_RHO:
             raise ValueError(
-                f"p must be at least {_MIN_RHO} m from the circle's centre axis (n1 undefined)"
+                f"p must be at least {_MIN_RHO} m from the circle's "
+                "centre axis (n1 undefined)"
             )
         return dx, dy, np.sqrt(rho2)
 
@@ -401,15 +410,16 @@ class CircularContour(_ClosedAboutCenter):
 
 
 class StraightContour(Contour):
-    """Horizontal straight edge through ``start`` with traversal direction ``tangent``.
+    """Horizontal straight edge through ``start`` with traversal direction
+    ``tangent``.
 
     ``tangent`` and ``material_normal`` are unit, horizontal and mutually
-    orthogonal (within 1e-9, else ValueError); ``material_normal`` points into the
-    material, so phi = -(p - start) . material_normal and n1 = material_normal.
-    Arc position is the signed (p - start) . tangent: negative before the start,
-    and NOT limited to ``length``.  ``length`` (> 0, default math.inf) is
-    informational for callers (end of the edge); phi, project, point_at and
-    advance extend the line beyond both ends without raising.
+    orthogonal (within 1e-9, else ValueError); ``material_normal`` points into
+    the material, so phi = -(p - start) . material_normal and n1 =
+    material_normal. Arc position is the signed (p - start) . tangent: negative
+    before the start, and NOT limited to ``length``.  ``length`` (> 0, default
+    math.inf) is informational for callers (end of the edge); phi, project,
+    point_at and advance extend the line beyond both ends without raising.
     """
 
     def __init__(self, start, tangent, material_normal, length=math.inf):
@@ -419,7 +429,8 @@ class StraightContour(Contour):
         for name, u in (("tangent", t), ("material_normal", n)):
             if abs(np.linalg.norm(u) - 1.0) > _TOL:
                 raise ValueError(
-                    f"{name} must be a unit vector (|norm - 1| <= {_TOL}), got norm {np.linalg.norm(u)}"
+                    f"{name} must be a unit vector (|norm - 1| <= {_TOL}), "
+                    f"got norm {np.linalg.norm(u)}"
                 )
             if abs(u[2]) > _TOL:
                 raise ValueError(
@@ -427,7 +438,8 @@ class StraightContour(Contour):
                 )
         if abs(float(np.dot(t, n))) > _TOL:
             raise ValueError(
-                f"material_normal must be orthogonal to tangent (|dot| <= {_TOL}), got {np.dot(t, n)}"
+                "material_normal must be orthogonal to tangent "
+                f"(|dot| <= {_TOL}), got {np.dot(t, n)}"
             )
         length = float(length)
         if math.isnan(length) or length <= 0.0:
@@ -564,6 +576,107 @@ def polyline_self_intersection(points, *, closed=True):
     return None
 
 
+def _profile_vertices(vertices):
+    """``vertices`` as a finite (N, 2) float array, N >= 3."""
+    V = np.asarray(vertices, float)
+    if V.ndim != 2 or V.shape[1] != 2 or len(V) < 3:
+        raise ValueError(
+            f"vertices must be at least 3 points [x, y], got shape {V.shape}"
+        )
+    if not np.all(np.isfinite(V)):
+        raise ValueError("vertices must be finite")
+    return V
+
+
+def _profile_turns(V):
+    """(D, side, turn, scale) of the polygon V: unit side directions (side
+    k: V[k] -> V[k+1]), side lengths, the signed turn at each vertex (rad,
+    left positive) and the longest side. ValueError for coincident
+    vertices, clockwise order, a self-intersection or a U-turn."""
+    n = len(V)
+    E = np.roll(V, -1, axis=0) - V
+    side = np.hypot(E[:, 0], E[:, 1])
+    scale = float(np.max(side))
+    for k in range(n):
+        if side[k] <= 1e-9 * max(scale, 1e-300):
+            raise ValueError(
+                f"degenerate profile: vertices {k} and {(k + 1) % n} coincide"
+            )
+    D = E / side[:, None]
+    area = 0.5 * float(
+        np.sum(V[:, 0] * np.roll(V[:, 1], -1) - np.roll(V[:, 0], -1) * V[:, 1])
+    )
+    if area <= 0.0:
+        raise ValueError(
+            "vertices must run counter-clockwise (signed "
+            f"area {area:.3g} m^2 <= 0)"
+        )
+    hit = polyline_self_intersection(V)
+    if hit is not None:
+        raise ValueError(
+            f"the profile intersects itself (sides {hit[0]} and {hit[1]})"
+        )
+    Din = np.roll(D, 1, axis=0)  # side into vertex k
+    turn = np.arctan2(
+        Din[:, 0] * D[:, 1] - Din[:, 1] * D[:, 0],
+        np.einsum("ij,ij->i", Din, D),
+    )
+    for k in range(n):
+        if abs(abs(turn[k]) - math.pi) < 1e-9:
+            raise ValueError(
+                f"degenerate profile: the sides turn back on "
+                f"themselves at vertex {k}"
+            )
+    return D, side, turn, scale
+
+
+def _profile_segments(V, R, material, offset):
+    """(kinds, lines, arcs) of the polygon V with fillets R, offset by
+    ``offset`` towards the free side, in counter-clockwise order (side k,
+    then the arc at vertex k + 1): kinds [(0 line or 1 arc, index in its
+    list, length)], lines [(start, direction, free-side normal, length)],
+    arcs [(centre, radius, start angle, signed sweep, sign of phi)]."""
+    n = len(V)
+    D, side, turn, scale = _profile_turns(V)
+    tan_len = R * np.tan(0.5 * np.abs(turn))
+    free = 1.0 if material == "outside" else -1.0  # free side: +left
+    left = np.stack([-D[:, 1], D[:, 0]], axis=1)
+    line_len = side - tan_len - np.roll(tan_len, -1)
+    for k in range(n):
+        if line_len[k] < -1e-12 * scale:
+            raise ValueError(
+                f"the fillets of radius {R} do not fit on side {k} "
+                f"(vertices {k} -> {(k + 1) % n}, {side[k]:.6g} m long, "
+                f"the fillets take {side[k] - line_len[k]:.6g} m)"
+            )
+    line_len = np.maximum(line_len, 0.0)
+    kinds, lines, arcs = [], [], []
+    for k in range(n):
+        a = V[k] + tan_len[k] * D[k] + free * offset * left[k]
+        lines.append((a, D[k], free * left[k], line_len[k]))
+        kinds.append((0, len(lines) - 1, line_len[k]))
+        v = (k + 1) % n
+        if abs(turn[v]) < 1e-12:
+            continue
+        sgn = 1.0 if turn[v] > 0 else -1.0
+        t_in = V[v] - tan_len[v] * D[k]
+        c = t_in + sgn * R * left[k]
+        rho = R - offset * free * sgn
+        if rho <= 0.0:
+            raise ValueError(
+                f"the arc at vertex {v} has radius {R} - {abs(offset)} "
+                f"<= 0 after the offset {offset} (the fillet must be "
+                "larger than the cutter radius where the cutter runs "
+                "inside it)"
+            )
+        start = a + line_len[k] * D[k] - c
+        th0 = math.atan2(start[1], start[0])
+        sigma = -free * sgn  # phi = sigma (|p - c| - rho)
+        arcs.append((c, rho, th0, turn[v], sigma))
+        kinds.append((1, len(arcs) - 1, rho * abs(turn[v])))
+    return kinds, lines, arcs
+
+
 class ProfileContour(_ClosedAboutCenter):
     """A closed planar profile: the polygon ``vertices`` (N >= 3, (x, y) in
     m about ``center``, counter-clockwise, not self-intersecting) with
@@ -602,14 +715,7 @@ class ProfileContour(_ClosedAboutCenter):
         start_angle=0.0,
         direction=1,
     ):
-        V = np.asarray(vertices, float)
-        if V.ndim != 2 or V.shape[1] != 2 or len(V) < 3:
-            raise ValueError(
-                "vertices must be at least 3 points [x, y], got "
-                f"shape {V.shape}"
-            )
-        if not np.all(np.isfinite(V)):
-            raise ValueError("vertices must be finite")
+        V = _profile_vertices(vertices)
         R = _finite_scalar(fillet_radius, "fillet_radius")
         if R <= 0.0:
             raise ValueError(f"fillet_radius must be > 0, got {R}")
@@ -621,81 +727,23 @@ class ProfileContour(_ClosedAboutCenter):
         offset = _finite_scalar(offset, "offset")
         self._vertices, self._fillet, self._material = V.copy(), R, material
         self._offset = offset
-        n = len(V)
-        E = np.roll(V, -1, axis=0) - V  # side k: V[k] -> V[k+1]
-        side = np.hypot(E[:, 0], E[:, 1])
-        scale = float(np.max(side))
-        for k in range(n):
-            if side[k] <= 1e-9 * max(scale, 1e-300):
-                raise ValueError(
-                    f"degenerate profile: vertices {k} and "
-                    f"{(k + 1) % n} coincide"
-                )
-        D = E / side[:, None]
-        area = 0.5 * float(
-            np.sum(
-                V[:, 0] * np.roll(V[:, 1], -1) - np.roll(V[:, 0], -1) * V[:, 1]
-            )
-        )
-        if area <= 0.0:
-            raise ValueError(
-                "vertices must run counter-clockwise (signed "
-                f"area {area:.3g} m^2 <= 0)"
-            )
-        hit = polyline_self_intersection(V)
+        kinds, lines, arcs = _profile_segments(V, R, material, offset)
+        self._store_segments(kinds, lines, arcs)
+        path = self.sample_path(max(4000, 40 * len(kinds)))
+        hit = polyline_self_intersection(path)
         if hit is not None:
+            u = self._U[-1] * np.array(hit) / len(path)
             raise ValueError(
-                f"the profile intersects itself (sides {hit[0]} and {hit[1]})"
+                f"the path offset by {offset} m overlaps itself (near "
+                f"{u[0] * 1e3:.1f} and {u[1] * 1e3:.1f} mm along it): the "
+                "profile is too narrow for the cutter there"
             )
-        Din = np.roll(D, 1, axis=0)  # side into vertex k
-        turn = np.arctan2(
-            Din[:, 0] * D[:, 1] - Din[:, 1] * D[:, 0],
-            np.einsum("ij,ij->i", Din, D),
-        )
-        for k in range(n):
-            if abs(abs(turn[k]) - math.pi) < 1e-9:
-                raise ValueError(
-                    f"degenerate profile: the sides turn back on "
-                    f"themselves at vertex {k}"
-                )
-        tan_len = R * np.tan(0.5 * np.abs(turn))
-        free = 1.0 if material == "outside" else -1.0  # free side: +left
-        left = np.stack([-D[:, 1], D[:, 0]], axis=1)
-        line_len = side - tan_len - np.roll(tan_len, -1)
-        for k in range(n):
-            if line_len[k] < -1e-12 * scale:
-                raise ValueError(
-                    f"the fillets of radius {R} do not fit on side {k} "
-                    f"(vertices {k} -> {(k + 1) % n}, {side[k]:.6g} m long, "
-                    f"the fillets take {side[k] - line_len[k]:.6g} m)"
-                )
-        line_len = np.maximum(line_len, 0.0)
-        # Segments in counter-clockwise order: side k, then the arc at
-        # vertex k + 1.
-        kinds, lines, arcs = [], [], []
-        for k in range(n):
-            a = V[k] + tan_len[k] * D[k] + free * offset * left[k]
-            lines.append((a, D[k], free * left[k], line_len[k]))
-            kinds.append((0, len(lines) - 1, line_len[k]))
-            v = (k + 1) % n
-            if abs(turn[v]) < 1e-12:
-                continue
-            sgn = 1.0 if turn[v] > 0 else -1.0
-            t_in = V[v] - tan_len[v] * D[k]
-            c = t_in + sgn * R * left[k]
-            rho = R - offset * free * sgn
-            if rho <= 0.0:
-                raise ValueError(
-                    f"the arc at vertex {v} has radius {R} - {abs(offset)} "
-                    f"<= 0 after the offset {offset} (the fillet must be "
-                    "larger than the cutter radius where the cutter runs "
-                    "inside it)"
-                )
-            start = a + line_len[k] * D[k] - c
-            th0 = math.atan2(start[1], start[0])
-            sigma = -free * sgn  # phi = sigma (|p - c| - rho)
-            arcs.append((c, rho, th0, turn[v], sigma))
-            kinds.append((1, len(arcs) - 1, rho * abs(turn[v])))
+        self._u_start = self._start_parameter(path)
+
+    def _store_segments(self, kinds, lines, arcs):
+        """The segments of :func:`_profile_segments` as arrays: the path
+        parameter U at each segment's start, the lines' and the arcs'
+        fields."""
         self._kinds = np.array([k for k, _, _ in kinds])
         self._index = np.array([i for _, i, _ in kinds])
         lengths = np.array([L for _, _, L in kinds])
@@ -716,16 +764,6 @@ class ProfileContour(_ClosedAboutCenter):
         self._aSw = np.array([a[3] for a in arcs])
         self._aSig = np.array([a[4] for a in arcs])
         self._aU = self._U[ak]
-        path = self.sample_path(max(4000, 40 * len(kinds)))
-        hit = polyline_self_intersection(path)
-        if hit is not None:
-            u = self._U[-1] * np.array(hit) / len(path)
-            raise ValueError(
-                f"the path offset by {offset} m overlaps itself (near "
-                f"{u[0] * 1e3:.1f} and {u[1] * 1e3:.1f} mm along it): the "
-                "profile is too narrow for the cutter there"
-            )
-        self._u_start = self._start_parameter(path)
 
     # ----- construction helpers ------------------------------------------
     def _point_u(self, u):
@@ -877,20 +915,19 @@ class ProfileContour(_ClosedAboutCenter):
         return self._aC[i] + self._aR[i] * e, -self._aSig[i] * e
 
     def material_band(self, width, *, segments_per_turn, max_step):
-        """Stations along the profile for a mesh of the material next to
-        it, ``width`` (m) deep: (points (N, 2) about ``center``, unit
-        normals into the material (N, 2), depths (N,)), counter-clockwise
-        from the path's origin. Arcs get one station every 2 pi /
-        ``segments_per_turn`` rad, lines one every ``max_step`` m at
-        least. Where a fillet's centre lies in the material the band is
-        at most 0.9 times the fillet's radius deep there (its far side
-        would fold over the centre), deepening again at 1 m per m along
-        the path. (Drake's pressure field, E times the distance to the
-        surface over the largest such distance, then rises more slowly
-        under the top face in that thinner wall: at half the radius the
-        force in a boss's 4 mm fillet was 2.10 N at 0.5 mm, at 0.9 times
-        2.49 N, against 3.46 N on a line.) ValueError if the band's far side overlaps itself or the
-        profile (walls closer than ``width``)."""
+        """Stations along the profile for a mesh of the material next to it,
+        ``width`` (m) deep: (points (N, 2) about ``center``, unit normals into
+        the material (N, 2), depths (N,)), counter-clockwise from the path's
+        origin. Arcs get one station every 2 pi / ``segments_per_turn`` rad,
+        lines one every ``max_step`` m at least. Where a fillet's centre lies in
+        the material the band is at most 0.9 times the fillet's radius deep
+        there (its far side would fold over the centre), deepening again at 1 m
+        per m along the path. (Drake's pressure field, E times the distance to
+        the surface over the largest such distance, then rises more slowly under
+        the top face in that thinner wall: at half the radius the force in a
+        boss's 4 mm fillet is 2.10 N at 0.5 mm, at 0.9 times 2.49 N, against
+        3.46 N on a line.) ValueError if the band's far side overlaps itself or
+        the profile (walls closer than ``width``)."""
         width = _finite_scalar(width, "width")
         if width <= 0.0:
             raise ValueError(f"width must be > 0, got {width}")

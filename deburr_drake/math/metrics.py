@@ -1,7 +1,7 @@
 """Metrics over logged runs: pure numpy functions of arrays (no Drake).
 
-The building blocks of :func:`deburr_drake.runs.pass_metrics.pass_metrics`; use them
-on a :class:`~deburr_drake.runs.simulation.RunLog`'s arrays for a metric of
+The building blocks of :func:`deburr_drake.runs.pass_metrics.pass_metrics`; use
+them on a :class:`~deburr_drake.runs.simulation.RunLog`'s arrays for a metric of
 your own, e.g. ``rms(log["chamfer"]["f_t"][window(t, 2.0)] - 10.0)``."""
 
 from __future__ import annotations

@@ -268,6 +268,89 @@ def _rigid(contour: Contour, *, level: bool):
     return fit
 
 
+def _circle_registration(contour, p, max_residual, fit_radius):
+    """(registration, kept, level) of a circle through the points ``p``
+    ((N, 2), m): see :func:`registration_from_points`."""
+    if len(p) < 3:
+        raise ValueError(
+            f"a circle's fit needs at least 3 touches, got {len(p)}"
+        )
+    if len(p) >= 4:
+        _, kept = fit_consensus(
+            fit_circle, p, minimal=3, max_residual=max_residual, minimum=3
+        )
+    else:
+        kept = np.ones(len(p), bool)
+    spread = _spread_around(p[kept], contour.center[:2])
+    free = fit_radius or spread > math.pi
+    fit = fit_circle(
+        p[kept],
+        radius=None if free else contour.radius,
+        seed=None if free else contour.center[:2],
+    )
+    d = fit.center - contour.center[:2]
+    reg = np.array(
+        [d[0], d[1], 0.0, fit.radius - contour.radius if fit_radius else 0.0]
+    )
+    level = 0.0 if fit_radius else -(fit.radius - contour.radius)
+    return reg, kept, level
+
+
+def _line_registration(contour, p, max_residual):
+    """(registration, kept, level 0) of a straight edge through the points
+    ``p`` ((N, 2), m): its offset and heading."""
+    if len(p) < 2:
+        raise ValueError(
+            f"a straight edge's fit needs at least 2 touches, got {len(p)}"
+        )
+    fit, kept = fit_consensus(
+        fit_line, p, minimal=2, max_residual=max_residual, minimum=2
+    )
+    t = contour.tangent(contour.point_at(0.0))[:2]
+    direction = fit.direction if fit.direction @ t >= 0 else -fit.direction
+    dyaw = math.atan2(t[0] * direction[1] - t[1] * direction[0], t @ direction)
+    # Turn about the pivot, then shift along the turned normal so the
+    # line passes through the fitted point.
+    turned = moved_contour(contour, [0.0, 0.0, dyaw, 0.0])
+    n = turned.material_normal[:2]
+    q = np.array([fit.point[0], fit.point[1], turned.height])
+    shift = -turned.phi(q) * n  # phi < 0 on the material side
+    return np.array([shift[0], shift[1], dyaw, 0.0]), kept, 0.0
+
+
+def _rigid_registration(contour, p, max_residual):
+    """(registration, kept, level) of any other contour through the points
+    ``p`` ((N, 2), m): its rigid move, and with 5 or more touches a common
+    level."""
+    pivot_of(contour)  # TypeError for a contour that cannot be moved
+    gain = rigid_fit_amplification(contour, p)
+    if gain > MAX_AMPLIFICATION:
+        raise ValueError(
+            f"the {len(p)} touches do not fix the part's position and "
+            f"turn (noise amplification {gain:.3g} > "
+            f"{MAX_AMPLIFICATION:g}): at least 3, spread over sides "
+            "that are not parallel"
+        )
+    free = len(p) >= 5
+    fit = _rigid(contour, level=free)
+    if len(p) >= 4:
+        _, kept = fit_consensus(
+            fit,
+            p,
+            minimal=4 if free else 3,
+            max_residual=max_residual,
+            minimum=4 if free else 3,
+        )
+    else:
+        kept = np.ones(len(p), bool)
+    if rigid_fit_amplification(contour, p[kept]) > MAX_AMPLIFICATION:
+        raise ValueError(
+            "the touches kept do not fix the part's position and turn"
+        )
+    found = _rigid(contour, level=free and kept.sum() >= 5)(p[kept])
+    return np.array([*found.move, 0.0]), kept, found.level
+
+
 def registration_from_points(
     contour: Contour, points, *, max_residual: float, fit_radius: bool = False
 ) -> ProbeFit:
@@ -285,8 +368,8 @@ def registration_from_points(
       goes into the radius rather than into the residuals; and the centre
       is that circle's: with the drawing's radius held, a common bias
       moves the centre whenever the kept touches are not symmetric (one
-      dropped on a burr: 0.14 mm of common bias put the centre 50 um off,
-      measured). The drawing's radius is held only when the kept touches
+      dropped on a burr: 0.14 mm of common bias puts the centre 50 um
+      off). The drawing's radius is held only when the kept touches
       lie within a half circle (the radius is then poorly known).
       ``fit_radius``: the fitted radius is applied too (else the
       drawing's is kept: a probe cannot tell a radius error from its own
@@ -304,88 +387,19 @@ def registration_from_points(
     ``fit_radius`` on anything but a circle is a ValueError; so are
     points that cannot fix the registration."""
     p = np.asarray(points, float)[:, :2]
-    level = 0.0  # a profile's common level (below)
     if fit_radius and not isinstance(contour, CircularContour):
         raise ValueError(
             f"fit_radius on a {type(contour).__name__}: only "
             "a circle's radius is fitted"
         )
     if isinstance(contour, CircularContour):
-        if len(p) < 3:
-            raise ValueError(
-                f"a circle's fit needs at least 3 touches, got {len(p)}"
-            )
-        if len(p) >= 4:
-            _, kept = fit_consensus(
-                fit_circle, p, minimal=3, max_residual=max_residual, minimum=3
-            )
-        else:
-            kept = np.ones(len(p), bool)
-        spread = _spread_around(p[kept], contour.center[:2])
-        free = fit_radius or spread > math.pi
-        fit = fit_circle(
-            p[kept],
-            radius=None if free else contour.radius,
-            seed=None if free else contour.center[:2],
+        reg, kept, level = _circle_registration(
+            contour, p, max_residual, fit_radius
         )
-        d = fit.center - contour.center[:2]
-        reg = np.array(
-            [
-                d[0],
-                d[1],
-                0.0,
-                fit.radius - contour.radius if fit_radius else 0.0,
-            ]
-        )
-        level = 0.0 if fit_radius else -(fit.radius - contour.radius)
     elif isinstance(contour, StraightContour):
-        if len(p) < 2:
-            raise ValueError(
-                f"a straight edge's fit needs at least 2 touches, got {len(p)}"
-            )
-        fit, kept = fit_consensus(
-            fit_line, p, minimal=2, max_residual=max_residual, minimum=2
-        )
-        t = contour.tangent(contour.point_at(0.0))[:2]
-        direction = fit.direction if fit.direction @ t >= 0 else -fit.direction
-        dyaw = math.atan2(
-            t[0] * direction[1] - t[1] * direction[0], t @ direction
-        )
-        # Turn about the pivot, then shift along the turned normal so the
-        # line passes through the fitted point.
-        turned = moved_contour(contour, [0.0, 0.0, dyaw, 0.0])
-        n = turned.material_normal[:2]
-        q = np.array([fit.point[0], fit.point[1], turned.height])
-        shift = -turned.phi(q) * n  # phi < 0 on the material side
-        reg = np.array([shift[0], shift[1], dyaw, 0.0])
+        reg, kept, level = _line_registration(contour, p, max_residual)
     else:
-        pivot_of(contour)  # TypeError for a contour that cannot be moved
-        gain = rigid_fit_amplification(contour, p)
-        if gain > MAX_AMPLIFICATION:
-            raise ValueError(
-                f"the {len(p)} touches do not fix the part's position and "
-                f"turn (noise amplification {gain:.3g} > "
-                f"{MAX_AMPLIFICATION:g}): at least 3, spread over sides "
-                "that are not parallel"
-            )
-        free = len(p) >= 5
-        fit = _rigid(contour, level=free)
-        if len(p) >= 4:
-            _, kept = fit_consensus(
-                fit,
-                p,
-                minimal=4 if free else 3,
-                max_residual=max_residual,
-                minimum=4 if free else 3,
-            )
-        else:
-            kept = np.ones(len(p), bool)
-        if rigid_fit_amplification(contour, p[kept]) > MAX_AMPLIFICATION:
-            raise ValueError(
-                "the touches kept do not fix the part's position and turn"
-            )
-        found = _rigid(contour, level=free and kept.sum() >= 5)(p[kept])
-        reg, level = np.array([*found.move, 0.0]), found.level
+        reg, kept, level = _rigid_registration(contour, p, max_residual)
     # Residuals: phi of every touch on the fitted contour less the level
     # (a circle's: its fitted radius less the drawing's): > 0 early.
     residuals = _phi(moved_contour(contour, reg), p) - level

@@ -1,4 +1,4 @@
-"""A batch of parts through one cell (issue 21): ``deburr-drake batch``.
+"""A batch of parts through one cell: ``deburr-drake batch``.
 
 K parts in sequence, each with its own part error drawn from a
 distribution (the offset uniform over a disc of radius ``max_offset``, the

@@ -1,6 +1,6 @@
-"""The point-mass demo: runs the testbed and measures what the foundation
-issue asks for (depth convergence and eq. (8)'s time constant, estimator
-convergence, feedrate, dead zone, NaN).
+"""The point-mass demo: runs the testbed and measures what the
+controller promises there (depth convergence and eq. (8)'s time constant,
+estimator convergence, feedrate, dead zone, NaN).
 
 Also :func:`run` (build a scenario's cell and simulate it in one call). The
 plant's contact truth it compares with is
@@ -54,7 +54,8 @@ def run(scenario: Scenario, duration: float, **kwargs) -> RunLog:
 def summarize(
     log: RunLog, truth: ContactTruth, frozen: RunLog = None
 ) -> Dict[str, float]:
-    """The numbers of the foundation issue, SI units."""
+    """The testbed's numbers (depth convergence, time constant, estimator,
+    feedrate, dead zone, NaN), SI units."""
     sc = log.scenario
     d_star = sc.task.desired_depth
     ch, ctl = log["chamfer"], log["controller"]

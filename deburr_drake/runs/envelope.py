@@ -15,10 +15,10 @@ engagement), the desired depth delta*, a burr of cross-section A_b
   v_off = max(v0, (f_d - P'_th) / (k_c delta* h));
 - the true chamfering force stays below 2 f_d + k_c A_b v_off: twice the
   desired force, plus what the burr would cut at the feed the tool had
-  before the law saw the burr (the issue's bound);
+  before the law saw the burr;
 - the tool's speed along the edge stays below 1.5 v_off: the fastest steady
-  feed of the pass plus half of it for transients (the surge this envelope
-  guards against reached 116 mm/s against 2.4 mm/s);
+  feed of the pass plus half of it for transients (a surge runs far past
+  it);
 - the true chamfer depth, while the cutter's front is on the burr, stays
   within 0.05 mm RMS of delta*.
 
@@ -26,7 +26,7 @@ The force and speed bounds hold from the end of the contact transient
 (``pass_metrics.TRANSIENT`` after first contact, as every pass metric), when the
 cutter is still ``LEAD_TIME`` of feed short of the burr. Before it the
 depth is still growing and the feed law runs fast on the shallow cut (at
-15 N the tool reached 7.2 mm/s at 0.5 s, depth 0.27 mm): a start-up
+15 N the tool reaches 7.2 mm/s at 0.5 s, depth 0.27 mm): a start-up
 transient the same with or without a burr.
 """
 
@@ -39,6 +39,7 @@ from typing import Callable, Dict, Iterable, List, Optional
 
 import numpy as np
 
+from deburr_drake.config import ConfigError
 from deburr_drake.math import metrics
 from deburr_drake.runs.pass_metrics import TRANSIENT
 
@@ -59,7 +60,7 @@ __all__ = [
     "run_cells",
 ]
 
-#: The grid of the issue: burr height (m), burr length (m of arc), desired
+#: The envelope's grid: burr height (m), burr length (m of arc), desired
 #: chamfering force (N).
 GRID_HEIGHTS = (0.0005, 0.001, 0.0015, 0.002)
 GRID_LENGTHS = (0.003, 0.008, 0.020, 0.040)
@@ -164,7 +165,7 @@ def burr_scenario(
     start = (TRANSIENT + lead_time) * v_off + sc.tool.cutter_radius
     center = start + cell.length / 2
     if center + cell.length / 2 >= length:
-        raise ValueError(
+        raise ConfigError(
             f"{cell.label}: the burr does not fit on the edge "
             f"({length * 1e3:.1f} mm)"
         )

@@ -1,16 +1,16 @@
 """Figures 8-12 of Hsu & Fu, Section IV, drawn from a run's logs (logs.npz).
 
-Pure matplotlib (explicit Agg canvas, no pyplot state, no pydrake).  Inputs are SI (m, N, s);
-plots show depths in mm, forces in N, time in s (../shared/DESIGN.md §6).
+Pure matplotlib (explicit Agg canvas, no pyplot state, no pydrake).  Inputs are
+SI (m, N, s); plots show depths in mm, forces in N, time in s.
 
-* Fig. 8  surface finish: initial burr profile and achieved chamfer depth along the
-  edge, desired depth (0.5 mm in the paper) dashed.
+* Fig. 8  surface finish: initial burr profile and achieved chamfer depth
+  along the edge, desired depth (0.5 mm in the paper) dashed.
 * Fig. 9  depth tracking error delta_d - delta and normal force error e_f
   (e_f = ||f_nd hat|| - ||f_n||, f_nd hat the identified desired normal force).
 * Fig. 10 chamfering force error ||f_t|| - f_d (f_d = 10 N in the paper).
-* Figs. 11/12 per fuzzy axis k: final theta_k as 3-D bars over the rule grid (i, j)
-  (R8: (2U+1)**2 rules, i indexes y0 = ||x||, j indexes y_k = s_k) and the control
-  surface u_fk(y0, s_k) of eq. (30).
+* Figs. 11/12 per fuzzy axis k: final theta_k as 3-D bars over the rule
+  grid (i, j) (R8: (2U+1)**2 rules, i indexes y0 = ||x||, j indexes
+  y_k = s_k) and the control surface u_fk(y0, s_k) of eq. (30).
 
 Missing keys skip the figure that needs them (with a warning); present but
 malformed arrays (wrong ndim or length) raise ValueError naming the key.
@@ -140,7 +140,8 @@ def _fig08_data(logs):
 
 
 def _fig09_data(logs):
-    """(t, delta_d - delta, (t_ctrl, e_f)); t = controller.t within chamfer.t's range.
+    """(t, delta_d - delta, (t_ctrl, e_f)); t = controller.t within chamfer.t's
+    range.
 
     delta (chamfer.t) is linearly interpolated onto controller.t, restricted to
     the overlap of the two time ranges (no extrapolation).
@@ -242,7 +243,8 @@ def _plot_fig10(logs, out_dir, label):
 
 
 def _fuzzy_setup(logs):
-    """(theta (A, R), rule bases [A], task axes [A], m, U) from theta.final and meta.*."""
+    """(theta (A, R), rule bases [A], task axes [A], m, U) from theta.final and
+    meta.*."""
     theta = _require(logs, "theta.final")
     m = _scalar(logs, "meta.fuzzy_order")
     U = _scalar(logs, "meta.upsilon")
@@ -261,23 +263,27 @@ def _fuzzy_setup(logs):
     R = (2 * U + 1) ** 2
     if theta.ndim != 2 or theta.shape[1] != R:
         raise ValueError(
-            f"theta.final must have shape (A, (2U+1)**2) = (A, {R}), got {theta.shape}"
+            f"theta.final must have shape (A, (2U+1)**2) = (A, {R}), "
+            f"got {theta.shape}"
         )
     A = theta.shape[0]
     if len(deltak) != A:
         raise ValueError(
-            f"meta.deltak has shape {deltak.shape}, expected ({A},) to match theta.final"
+            f"meta.deltak has shape {deltak.shape}, expected ({A},) "
+            "to match theta.final"
         )
     if "meta.fuzzy_axes" in logs:
         axes = np.atleast_1d(np.asarray(logs["meta.fuzzy_axes"]))
         if axes.shape != (A,):
             raise ValueError(
-                f"meta.fuzzy_axes has shape {axes.shape}, expected ({A},) to match theta.final"
+                f"meta.fuzzy_axes has shape {axes.shape}, expected ({A},) "
+                "to match theta.final"
             )
         axes = [int(a) for a in axes]
     else:
         axes = list(range(A))
-    # Only plotting: dead-zone width is irrelevant, pass it so small U never fails R4's default.
+    # Only plotting: dead-zone width is irrelevant, pass it so small U never
+    # fails R4's default.
     bases = [
         RuleBase(m, U, delta0, float(dk), dead_zone_half_width=0.0)
         for dk in deltak
@@ -286,7 +292,8 @@ def _fuzzy_setup(logs):
 
 
 def _control_surface(rb, theta_k, n=_SURFACE_POINTS):
-    """u_f(y0, s_k) of eq. (30) on y0 in [0, U*delta0], s_k in [-U*deltak, U*deltak]."""
+    """u_f(y0, s_k) of eq. (30) on y0 in [0, U*delta0], s_k in [-U*deltak,
+    U*deltak]."""
     y0 = np.linspace(0.0, rb.omega0_half_width, n)
     sk = np.linspace(-rb.omegak_half_width, rb.omegak_half_width, n)
     u = np.empty((n, n))
@@ -339,8 +346,9 @@ def _plot_fuzzy_axis(theta_k, rb, k, task_axis, m, U, out_dir, label):
         ax.set_box_aspect(None, zoom=0.88)  # keep axis labels inside the canvas
     fig.suptitle(
         _title(
-            f"Figs. 11/12  Fuzzy axis {k} (task axis {task_axis}): order m = {m}, "
-            f"Υ = {U}, Δ0 = {rb.delta0 * MM:g} mm, Δs = {rb.deltak * MM:g} mm/s",
+            f"Figs. 11/12  Fuzzy axis {k} (task axis {task_axis}): "
+            f"order m = {m}, Υ = {U}, Δ0 = {rb.delta0 * MM:g} mm, "
+            f"Δs = {rb.deltak * MM:g} mm/s",
             label,
         )
     )
@@ -371,11 +379,12 @@ def _run(name, fn, *args):
 def make_figures(
     logs: Mapping[str, np.ndarray], out_dir, *, label: str = ""
 ) -> list[pathlib.Path]:
-    """Write Figs. 8-12 of one run as PNGs into out_dir; return the written paths.
+    """Write Figs. 8-12 of one run as PNGs into out_dir; return the written
+    paths.
 
-    logs: dict (or NpzFile) of the run's arrays, SI units.  label goes into titles,
-    e.g. "paper (m = 2)".  Figures whose keys are missing are skipped with a
-    warning; malformed arrays raise ValueError naming the key.
+    logs: dict (or NpzFile) of the run's arrays, SI units.  label goes into
+    titles, e.g. "paper (m = 2)".  Figures whose keys are missing are skipped
+    with a warning; malformed arrays raise ValueError naming the key.
     """
     out_dir = pathlib.Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -398,7 +407,8 @@ def _collect(runs, name, fn):
             data[run] = fn(logs)
         except _Missing as e:
             warnings.warn(
-                f"figures: {name} without run {run!r}, missing key {e.args[0]!r}",
+                f"figures: {name} without run {run!r}, "
+                f"missing key {e.args[0]!r}",
                 stacklevel=3,
             )
     return data
@@ -407,10 +417,12 @@ def _collect(runs, name, fn):
 def compare_figures(
     runs: Mapping[str, Mapping[str, np.ndarray]], out_dir
 ) -> list[pathlib.Path]:
-    """Overlay Figs. 8 (chamfer depth), 9 and 10 of several runs, legend by run name.
+    """Overlay Figs. 8 (chamfer depth), 9 and 10 of several runs, legend by run
+    name.
 
-    runs: {name: logs}, e.g. {"m = 0": logs0, "m = 2": logs2}.  A run lacking the
-    keys of one figure is left out of it; a figure no run can feed is skipped.
+    runs: {name: logs}, e.g. {"m = 0": logs0, "m = 2": logs2}.  A run lacking
+    the keys of one figure is left out of it; a figure no run can feed is
+    skipped.
     """
     if not isinstance(runs, Mapping) or len(runs) == 0:
         raise ValueError("runs must be a non-empty dict {name: logs}")

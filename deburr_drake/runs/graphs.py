@@ -13,6 +13,8 @@ from typing import List, Optional, Tuple
 
 from pydrake.systems.framework import Diagram
 
+from deburr_drake.config import ConfigError
+
 __all__ = ["write_graphs", "FORMATS", "GRAPHVIZ_HINT"]
 
 FORMATS = ("dot", "svg", "png")
@@ -36,7 +38,7 @@ def write_graphs(
     and, when rendering was asked for but GraphViz's ``dot`` is missing, a
     one-line message with the install hint."""
     if fmt not in FORMATS:
-        raise ValueError(f"format {fmt!r} is invalid: allowed {FORMATS}")
+        raise ConfigError(f"format {fmt!r} is invalid: allowed {FORMATS}")
     out = Path(out)
     if out.suffix in (".dot", ".svg", ".png"):
         out = out.with_suffix("")

@@ -1,4 +1,4 @@
-"""The metrics of a deburring pass (DESIGN §6) from a run's logs, one
+"""The metrics of a deburring pass from a run's logs, one
 function per family, each usable alone:
 
 - :func:`finish_metrics`: the chamfer left on the edge (Fig. 8), coverage,
@@ -57,7 +57,8 @@ __all__ = [
     "CONTACT_FORCE",
 ]
 
-#: Excluded after contact is established (s), as the issue asks.
+#: Excluded after contact is established (s): the contact transient is not
+#: the steady cutting the metrics judge.
 TRANSIENT = 2.0
 #: Contact is established when ||f_n|| exceeds this (N).
 CONTACT_FORCE = 1.0
@@ -285,7 +286,7 @@ def _last_estimate_on_the_part(log: RunLog) -> int:
     """Index of the last estimate logged while the cutter was wholly on the
     part (the process's engagement 1): where an open edge ends, the cutter
     runs off it and the estimator learns the partial contact there (on the
-    100 mm straight wall c0 + c1 delta* fell from 5.13 to 2.91 N in the
+    100 mm straight wall c0 + c1 delta* falls from 5.13 to 2.91 N in the
     last 1.5 s); on a closed edge it is the last estimate."""
     process = log.signals.get("process", {})
     engagement = process.get("engagement")

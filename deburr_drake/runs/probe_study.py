@@ -1,4 +1,4 @@
-"""Studies of touch probing (issue 21), each run probing only (the pass is
+"""Studies of touch probing, each run probing only (the pass is
 not cut: the run stops once the sequence is done):
 
 - :func:`probe_once`: one probing of a scenario; the registration found

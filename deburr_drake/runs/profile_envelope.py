@@ -11,7 +11,7 @@ piece of line on each side, which is what differs between cells (the rest
 of the square repeats it four times). No burrs: the envelope is over the
 edge's curvature.
 
-Bounds (the issue's pass criteria for a profile): the pass reached its end
+Bounds (the pass criteria for a profile): the pass reached its end
 (``pass_complete``, no guard, no NaN), the chamfer depth left on the edge
 within 0.05 mm RMS and 0.1 mm at most of delta* (the bins the cutter
 passed after the transient), the chamfering force within 1.5 N RMS of the

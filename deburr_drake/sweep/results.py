@@ -240,38 +240,8 @@ def summarize(
         summary["stop_reasons"][reason] = (
             summary["stop_reasons"].get(reason, 0) + 1
         )
-    verdicts = [
-        (rule.text, [row[f"pass: {rule.text}"] for row in rows])
-        for rule in rules
-    ]
-    verdicts.append(("all rules", [row["pass_all"] for row in rows]))
-    for text, ok in verdicts:
-        k = int(sum(ok))
-        lo, hi = wilson_interval(k, n)
-        summary["rules"].append(
-            {
-                "rule": text,
-                "passed": k,
-                "runs": n,
-                "success_rate": k / n if n else None,
-                "ci95": [lo, hi] if n else None,
-            }
-        )
-    for name in metrics:
-        values = np.array(
-            [row[name] for row in rows if row[name] is not None], float
-        )
-        entry = {"n": int(values.size), "null": n - int(values.size)}
-        if values.size:
-            entry.update(
-                mean=float(values.mean()),
-                median=float(np.median(values)),
-                p5=float(np.percentile(values, 5)),
-                p95=float(np.percentile(values, 95)),
-                min=float(values.min()),
-                max=float(values.max()),
-            )
-        summary["metrics"][name] = entry
+    summary["rules"] = _rule_rates(rows, rules)
+    summary["metrics"] = {name: _metric_stats(rows, name) for name in metrics}
     scores = _explaining(rows, params, rules)
     summary["failures_explained_by"] = [
         {
@@ -295,6 +265,49 @@ def summarize(
         sum(row["run_wall_time_s"] or 0.0 for row in rows)
     )
     return summary
+
+
+def _rule_rates(rows: List[dict], rules) -> List[dict]:
+    """Each rule's (and all rules') passes, success rate and its 95 %
+    Wilson interval."""
+    n = len(rows)
+    verdicts = [
+        (rule.text, [row[f"pass: {rule.text}"] for row in rows])
+        for rule in rules
+    ]
+    verdicts.append(("all rules", [row["pass_all"] for row in rows]))
+    out = []
+    for text, ok in verdicts:
+        k = int(sum(ok))
+        lo, hi = wilson_interval(k, n)
+        out.append(
+            {
+                "rule": text,
+                "passed": k,
+                "runs": n,
+                "success_rate": k / n if n else None,
+                "ci95": [lo, hi] if n else None,
+            }
+        )
+    return out
+
+
+def _metric_stats(rows: List[dict], name: str) -> dict:
+    """The metric's count, nulls and, when any, its distribution."""
+    values = np.array(
+        [row[name] for row in rows if row[name] is not None], float
+    )
+    entry = {"n": int(values.size), "null": len(rows) - int(values.size)}
+    if values.size:
+        entry.update(
+            mean=float(values.mean()),
+            median=float(np.median(values)),
+            p5=float(np.percentile(values, 5)),
+            p95=float(np.percentile(values, 95)),
+            min=float(values.min()),
+            max=float(values.max()),
+        )
+    return entry
 
 
 def binned_success(

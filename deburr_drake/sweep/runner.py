@@ -249,7 +249,7 @@ def run_sweep(
     KeyboardInterrupt cancels what is still running and returns what is
     finished (``interrupted``). ``priority``: Dask's task priority (higher
     first), for studies that share a cluster."""
-    from distributed import KilledWorker, as_completed
+    from distributed import as_completed
 
     stream = stream or sys.stdout
     out = Path(out_dir).resolve()
@@ -279,53 +279,15 @@ def run_sweep(
         file=stream,
         flush=True,
     )
-    metrics = metrics_of(study)
     futures = {}
     try:
-        for run in todo:
-            run_dir = out / "runs" / run.key
-            future = client.submit(
-                run_scenario,
-                run.scenario_text,
-                str(run_dir),
-                run.key,
-                keep_logs=study.keep_logs,
-                metrics=metrics,
-                key=f"deburr-run-{run.key}",
-                pure=False,
-                priority=priority,
-            )
-            futures[future] = run
+        _submit(client, study, todo, out, priority, futures)
         progress = _Progress(len(todo), n_workers, stream)
         for future in as_completed(list(futures)):
             run = futures[future]
-            if future.status == "finished":
-                result = future.result()
-            else:
-                error = future.exception()
-                if not isinstance(error, KilledWorker):
-                    # Not the run's doing (e.g. the scheduler cannot
-                    # unpickle the task: deburr_drake not importable
-                    # there): nothing is recorded, a rerun tries again.
-                    message = f"{type(error).__name__}: {error}"
-                    if message not in outcome.errors:
-                        print(
-                            f"deburr-drake sweep: run {run.key} could not "
-                            f"run: {' '.join(message.split())}",
-                            file=sys.stderr,
-                            flush=True,
-                        )
-                    outcome.errors.append(message)
-                    continue
-                # The worker process died running it (a crash inside
-                # Drake, out of memory): recorded, never retried.
-                result = failed_result(
-                    run.key, "crash", f"{type(error).__name__}: {error}"
-                )
-                run_dir = out / "runs" / run.key
-                run_dir.mkdir(parents=True, exist_ok=True)
-                result["run_dir"] = str(run_dir)
-                _write_atomically(run_dir / "result.json", result)
+            result = _finished_result(future, run, out, outcome)
+            if result is None:
+                continue
             outcome.results[run.key] = result
             outcome.ran += 1
             progress.update(result)
@@ -340,3 +302,56 @@ def run_sweep(
             cluster.close()
     outcome.wall_time_s = time.perf_counter() - start
     return outcome
+
+
+def _submit(client, study: Study, todo, out: Path, priority, futures: dict):
+    """Submits every run of ``todo`` to ``client``, recording each in
+    ``futures`` ({future: run}) as it goes (an interrupt cancels what was
+    submitted)."""
+    metrics = metrics_of(study)
+    for run in todo:
+        future = client.submit(
+            run_scenario,
+            run.scenario_text,
+            str(out / "runs" / run.key),
+            run.key,
+            keep_logs=study.keep_logs,
+            metrics=metrics,
+            key=f"deburr-run-{run.key}",
+            pure=False,
+            priority=priority,
+        )
+        futures[future] = run
+
+
+def _finished_result(future, run: RunSpec, out: Path, outcome: SweepOutcome):
+    """The result of a finished task; for a task whose worker died, a
+    ``crash`` result (recorded, never retried); None for an error that is
+    not the run's doing (kept in ``outcome.errors``, nothing recorded)."""
+    from distributed import KilledWorker
+
+    if future.status == "finished":
+        return future.result()
+    error = future.exception()
+    if not isinstance(error, KilledWorker):
+        # Not the run's doing (e.g. the scheduler cannot unpickle the
+        # task: deburr_drake not importable there): nothing is recorded,
+        # a rerun tries again.
+        message = f"{type(error).__name__}: {error}"
+        if message not in outcome.errors:
+            print(
+                f"deburr-drake sweep: run {run.key} could not "
+                f"run: {' '.join(message.split())}",
+                file=sys.stderr,
+                flush=True,
+            )
+        outcome.errors.append(message)
+        return None
+    # The worker process died running it (a crash inside Drake, out of
+    # memory): recorded, never retried.
+    result = failed_result(run.key, "crash", f"{type(error).__name__}: {error}")
+    run_dir = out / "runs" / run.key
+    run_dir.mkdir(parents=True, exist_ok=True)
+    result["run_dir"] = str(run_dir)
+    _write_atomically(run_dir / "result.json", result)
+    return result

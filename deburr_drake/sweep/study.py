@@ -117,11 +117,11 @@ class Rule:
     op: str
     value: float
 
-    def passes(self, measured) -> bool:
+    def passes(self, metric_value) -> bool:
         """False for a missing or non-finite value (null in metrics.json)."""
-        if measured is None or not math.isfinite(measured):
+        if metric_value is None or not math.isfinite(metric_value):
             return False
-        return bool(_OPS[self.op](measured, self.value))
+        return bool(_OPS[self.op](metric_value, self.value))
 
 
 def parse_rule(text: str, where: str) -> Rule:

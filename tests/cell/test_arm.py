@@ -1,4 +1,5 @@
-"""The 5-DOF arm model (models/arm5.sdf) and its tool-vertical IK (deburr_drake.cell.arm)."""
+"""The 5-DOF arm model (models/arm5.sdf) and its tool-vertical IK
+(deburr_drake.cell.arm)."""
 
 import math
 import xml.etree.ElementTree as ET

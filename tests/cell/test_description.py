@@ -43,7 +43,8 @@ def _package(tmp_path, *, xml_name="not_the_folder_name"):
     (root / "package.xml").write_text(
         f'<?xml version="1.0"?><package format="3"><name>{xml_name}</name>'
         "<version>1.0.0</version><description>d</description>"
-        '<maintainer email="m@example.com">m</maintainer><license>BSD</license></package>'
+        '<maintainer email="m@example.com">m</maintainer>'
+        "<license>BSD</license></package>"
     )
     box = trimesh.creation.box([0.1, 0.1, 0.2])
     box.export(str(root / "meshes" / "link3.stl"))
@@ -55,9 +56,10 @@ def _package(tmp_path, *, xml_name="not_the_folder_name"):
     for link, mesh in (("link3", "link3.stl"), ("link5", "link5.dae")):
         text = text.replace(
             f'<link name="{link}"><inertial>',
-            f'<link name="{link}"><visual><geometry><mesh filename="{uri}/{mesh}"/></geometry>'
-            f'</visual><collision><geometry><mesh filename="{uri}/collision.STL"/></geometry>'
-            "</collision><inertial>",
+            f'<link name="{link}"><visual><geometry>'
+            f'<mesh filename="{uri}/{mesh}"/></geometry></visual>'
+            f'<collision><geometry><mesh filename="{uri}/collision.STL"/>'
+            "</geometry></collision><inertial>",
         )
     urdf.write_text(text)
     return share, urdf
@@ -174,18 +176,30 @@ def _with_gripper(path):
     chain to the flange)."""
     text = path.read_text()
     gripper = """
-<link name="hand"><inertial><mass value="0.5"/><inertia ixx="1e-3" iyy="1e-3" izz="1e-3" ixy="0" ixz="0" iyz="0"/></inertial></link>
-<joint name="hand_mount" type="fixed"><parent link="flange"/><child link="hand"/></joint>
-<link name="finger1"><inertial><mass value="0.05"/><inertia ixx="1e-5" iyy="1e-5" izz="1e-5" ixy="0" ixz="0" iyz="0"/></inertial></link>
-<link name="finger2"><inertial><mass value="0.05"/><inertia ixx="1e-5" iyy="1e-5" izz="1e-5" ixy="0" ixz="0" iyz="0"/></inertial></link>
-<joint name="finger_joint1" type="prismatic"><parent link="hand"/><child link="finger1"/>
-  <origin xyz="0 0 0.05"/><axis xyz="0 1 0"/><limit effort="100" lower="0.01" upper="0.04" velocity="0.2"/></joint>
-<joint name="finger_joint2" type="prismatic"><parent link="hand"/><child link="finger2"/>
-  <origin xyz="0 0 0.05"/><axis xyz="0 -1 0"/><limit effort="100" lower="0.0" upper="0.04" velocity="0.2"/>
+<link name="hand"><inertial><mass value="0.5"/>
+  <inertia ixx="1e-3" iyy="1e-3" izz="1e-3" ixy="0" ixz="0" iyz="0"/>
+</inertial></link>
+<joint name="hand_mount" type="fixed"><parent link="flange"/>
+  <child link="hand"/></joint>
+<link name="finger1"><inertial><mass value="0.05"/>
+  <inertia ixx="1e-5" iyy="1e-5" izz="1e-5" ixy="0" ixz="0" iyz="0"/>
+</inertial></link>
+<link name="finger2"><inertial><mass value="0.05"/>
+  <inertia ixx="1e-5" iyy="1e-5" izz="1e-5" ixy="0" ixz="0" iyz="0"/>
+</inertial></link>
+<joint name="finger_joint1" type="prismatic"><parent link="hand"/>
+  <child link="finger1"/><origin xyz="0 0 0.05"/><axis xyz="0 1 0"/>
+  <limit effort="100" lower="0.01" upper="0.04" velocity="0.2"/></joint>
+<joint name="finger_joint2" type="prismatic"><parent link="hand"/>
+  <child link="finger2"/><origin xyz="0 0 0.05"/><axis xyz="0 -1 0"/>
+  <limit effort="100" lower="0.0" upper="0.04" velocity="0.2"/>
   <mimic joint="finger_joint1"/></joint>
-<link name="side"><inertial><mass value="0.05"/><inertia ixx="1e-5" iyy="1e-5" izz="1e-5" ixy="0" ixz="0" iyz="0"/></inertial></link>
-<joint name="side_joint" type="revolute"><parent link="link6"/><child link="side"/>
-  <axis xyz="0 0 1"/><limit effort="10" lower="-1" upper="1" velocity="1"/></joint>
+<link name="side"><inertial><mass value="0.05"/>
+  <inertia ixx="1e-5" iyy="1e-5" izz="1e-5" ixy="0" ixz="0" iyz="0"/>
+</inertial></link>
+<joint name="side_joint" type="revolute"><parent link="link6"/>
+  <child link="side"/><axis xyz="0 0 1"/>
+  <limit effort="10" lower="-1" upper="1" velocity="1"/></joint>
 </robot>"""
     path.write_text(text.replace("</robot>", gripper))
     return path
@@ -212,7 +226,8 @@ def test_a_urdf_without_transmissions_gets_drives_and_its_fingers_are_welded(
         assert actuator.effort_limit() == pytest.approx(
             limits[actuator.joint().name()]
         )
-    # finger1 welded at its lower limit (0 is outside [0.01, 0.04]), finger2 at 0.
+    # finger1 welded at its lower limit (0 is outside [0.01, 0.04]), finger2 at
+    # 0.
     context = plant.CreateDefaultContext()
     X_1 = plant.GetFrameByName("finger1").CalcPoseInWorld(context)
     X_2 = plant.GetFrameByName("finger2").CalcPoseInWorld(context)

@@ -1,4 +1,5 @@
-"""Tests of deburr_drake.cell.part: the compliant ring and the tool/ring contact law."""
+"""Tests of deburr_drake.cell.part: the compliant ring and the tool/ring contact
+law."""
 
 import numpy as np
 import pytest

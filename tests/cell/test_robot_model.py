@@ -159,7 +159,8 @@ def test_wrong_lengths_of_the_per_joint_lists_are_one_line():
 
 
 def _arm_file(tmp_path, n_joints):
-    """arm6.sdf cut down to its first n_joints joints, flange on the last link."""
+    """arm6.sdf cut down to its first n_joints joints, flange on the last
+    link."""
     tree = ET.parse(models_dir() / "arm6.sdf")
     model = tree.getroot().find("model")
     keep = {f"link{i}" for i in range(1, n_joints + 1)} | {"base"}
@@ -178,9 +179,9 @@ def _arm_file(tmp_path, n_joints):
 
 
 def _urdf_of_arm6(path, *, transmissions=True, world_joint=True):
-    """models/arm6.sdf written as URDF (inertias, joints, limits, damping, drives;
-    no visuals): its links are parallel to the model frame at q = 0, so a joint's
-    origin is the child's position less the parent's."""
+    """models/arm6.sdf written as URDF (inertias, joints, limits, damping,
+    drives; no visuals): its links are parallel to the model frame at q = 0, so
+    a joint's origin is the child's position less the parent's."""
     ns = "{http://drake.mit.edu}"
     model = ET.parse(models_dir() / "arm6.sdf").getroot().find("model")
     position = {"world": np.zeros(3)}
@@ -199,8 +200,8 @@ def _urdf_of_arm6(path, *, transmissions=True, world_joint=True):
         out.append(
             f'<link name="{name}"><inertial><origin xyz="{com}"/>'
             f'<mass value="{inertial.find("mass").text}"/>'
-            f'<inertia ixx="{I["ixx"]}" iyy="{I["iyy"]}" izz="{I["izz"]}" ixy="0" ixz="0" '
-            'iyz="0"/></inertial></link>'
+            f'<inertia ixx="{I["ixx"]}" iyy="{I["iyy"]}" izz="{I["izz"]}" '
+            'ixy="0" ixz="0" iyz="0"/></inertial></link>'
         )
     for joint in model.findall("joint"):
         name, kind = joint.get("name"), joint.get("type")
@@ -213,20 +214,28 @@ def _urdf_of_arm6(path, *, transmissions=True, world_joint=True):
             f'<child link="{child}"/><origin xyz="{xyz}"/>'
         )
         if kind == "revolute":
-            limit = joint.find("axis/limit")
+            limit = {
+                k: joint.find(f"axis/limit/{k}").text
+                for k in ("lower", "upper", "effort", "velocity")
+            }
+            damping = joint.find("axis/dynamics/damping").text
             text += (
                 f'<axis xyz="{joint.find("axis/xyz").text}"/>'
-                f'<limit lower="{limit.find("lower").text}" upper="{limit.find("upper").text}" '
-                f'effort="{limit.find("effort").text}" velocity="{limit.find("velocity").text}"/>'
-                f'<dynamics damping="{joint.find("axis/dynamics/damping").text}"/>'
+                f'<limit lower="{limit["lower"]}" upper="{limit["upper"]}" '
+                f'effort="{limit["effort"]}" velocity="{limit["velocity"]}"/>'
+                f'<dynamics damping="{damping}"/>'
             )
             if transmissions:
+                rotor = joint.find(ns + "rotor_inertia").text
+                gear = joint.find(ns + "gear_ratio").text
                 out.append(
-                    f'<transmission name="{name}_drive"><type>transmission_interface/SimpleTransmission'
-                    f'</type><joint name="{name}"><hardwareInterface>EffortJointInterface'
-                    f'</hardwareInterface></joint><actuator name="{name}_motor">'
-                    f'<drake:rotor_inertia value="{joint.find(ns + "rotor_inertia").text}"/>'
-                    f'<drake:gear_ratio value="{joint.find(ns + "gear_ratio").text}"/>'
+                    f'<transmission name="{name}_drive"><type>'
+                    "transmission_interface/SimpleTransmission</type>"
+                    f'<joint name="{name}"><hardwareInterface>'
+                    "EffortJointInterface</hardwareInterface></joint>"
+                    f'<actuator name="{name}_motor">'
+                    f'<drake:rotor_inertia value="{rotor}"/>'
+                    f'<drake:gear_ratio value="{gear}"/>'
                     "</actuator></transmission>"
                 )
         out.append(text + "</joint>")
@@ -234,7 +243,8 @@ def _urdf_of_arm6(path, *, transmissions=True, world_joint=True):
     xyz_rpy = frame.find("pose").text.split()
     out.append('<link name="flange"/>')
     out.append(
-        f'<joint name="flange_mount" type="fixed"><parent link="{frame.get("attached_to")}"/>'
+        '<joint name="flange_mount" type="fixed">'
+        f'<parent link="{frame.get("attached_to")}"/>'
         f'<child link="flange"/><origin xyz="{" ".join(xyz_rpy[:3])}" '
         f'rpy="{" ".join(xyz_rpy[3:])}"/></joint>'
     )
@@ -245,7 +255,8 @@ def _urdf_of_arm6(path, *, transmissions=True, world_joint=True):
 def test_a_urdf_arm_is_the_same_arm(tmp_path):
     """arm6 as a user's URDF: the same joints, drives, kinematics and mass
     matrix as the shipped SDF; without its <transmission>s, one line."""
-    # As many URDFs are: no joint to the world (the base is welded at the origin).
+    # As many URDFs are: no joint to the world (the base is welded at the
+    # origin).
     urdf = RobotConfig(
         model=str(_urdf_of_arm6(tmp_path / "arm6.urdf", world_joint=False)),
         flange_frame="flange",
@@ -295,12 +306,15 @@ def _arm7_file(tmp_path):
         ) : text.index('    <joint name="base_weld"')
     ]
     link7 = """<link name="link7"><pose>1.088 0 1.39 0 0 0</pose>
-      <inertial><pose>0.01 0 0 0 0 0</pose><mass>0.3</mass><inertia><ixx>3.04e-4</ixx>
-      <iyy>1.62e-4</iyy><izz>1.62e-4</izz><ixy>0</ixy><ixz>0</ixz><iyz>0</iyz></inertia>
+      <inertial><pose>0.01 0 0 0 0 0</pose><mass>0.3</mass><inertia>
+      <ixx>3.04e-4</ixx><iyy>1.62e-4</iyy><izz>1.62e-4</izz>
+      <ixy>0</ixy><ixz>0</ixz><iyz>0</iyz></inertia>
       </inertial></link>
     <joint name="a7" type="revolute"><parent>link6</parent><child>link7</child>
-      <axis><xyz expressed_in="__model__">1 0 0</xyz><limit><lower>-6.1</lower><upper>6.1</upper>
-      <effort>70</effort><velocity>10.7</velocity></limit><dynamics><damping>1.0</damping>
+      <axis><xyz expressed_in="__model__">1 0 0</xyz>
+      <limit><lower>-6.1</lower><upper>6.1</upper>
+      <effort>70</effort><velocity>10.7</velocity></limit>
+      <dynamics><damping>1.0</damping>
       </dynamics></axis><drake:rotor_inertia>3.0e-5</drake:rotor_inertia>
       <drake:gear_ratio>80</drake:gear_ratio></joint>
     <frame name="flange" attached_to="link7">
@@ -320,7 +334,8 @@ def test_a_redundant_arm_holds_its_posture_in_the_null_space(tmp_path):
     scenario = load_scenario(
         "paper_6dof",
         text=(
-            f"robot: {{model: {path}, ik_seed: [0.0, 0.45, 0.5, 0.0, 0.6, 0.0, 0.0], "
+            f"robot: {{model: {path}, "
+            "ik_seed: [0.0, 0.45, 0.5, 0.0, 0.6, 0.0, 0.0], "
             "joint_coulomb_friction: [10.0, 8.0, 2.5, 0.12, 0.12, 0.04, 0.04]}"
         ),
     )
@@ -343,10 +358,9 @@ def test_a_redundant_arm_holds_its_posture_in_the_null_space(tmp_path):
     simulator.AdvanceTo(1.5)
     q = plant.GetPositions(plant_context)
     assert np.all(np.isfinite(q))
+    # From 0.1 rad apart; without the posture term friction keeps them there.
     null = (q - q0)[a6] - (q - q0)[a7]
-    assert abs(null) < 0.01, (
-        q - q0
-    )  # from 0.1 rad; without the term 0.103 (measured)
+    assert abs(null) < 0.01, q - q0
     chamfer = (
         diagram.GetSubsystemByName("chamfer_observer")
         .GetOutputPort("chamfer_state")
@@ -411,12 +425,14 @@ def _user_scenario(tmp_path):
     package = tmp_path / "my_cell" / "my_arms"
     (package / "meshes").mkdir(parents=True)
     (package / "package.xml").write_text(
-        '<?xml version="1.0"?><package format="2"><name>my_arms</name><version>0.0.1</version>'
-        '<description>a user arm</description><maintainer email="u@example.com">u</maintainer>'
+        '<?xml version="1.0"?><package format="2"><name>my_arms</name>'
+        "<version>0.0.1</version><description>a user arm</description>"
+        '<maintainer email="u@example.com">u</maintainer>'
         "<license>BSD</license></package>"
     )
     (package / "meshes" / "cover.obj").write_text(
-        "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+        "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\n"
+        "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
     )
     sdf = (
         (models_dir() / "arm6.sdf")

@@ -1,4 +1,4 @@
-"""The plant's truth is the real part (issue 10): the cutting process
+"""The plant's truth is the real part: the cutting process
 applies force only where the cutter overlaps material, so running off a
 straight edge's end cuts nothing, and the contact-lost guard stops the
 run."""

@@ -1,4 +1,5 @@
-"""Tests of deburr_drake.cell.tube_mesh (pure numpy; pydrake only to read the file back)."""
+"""Tests of deburr_drake.cell.tube_mesh (pure numpy; pydrake only to read the
+file back)."""
 
 import collections
 
@@ -56,7 +57,8 @@ def test_conforming_closed_surface(args):
     faces = _faces(t)
     assert max(faces.values()) <= 2
     boundary = [f for f, c in faces.items() if c == 1]
-    # Edge-manifold: every boundary edge is shared by exactly two boundary triangles.
+    # Edge-manifold: every boundary edge is shared by exactly two boundary
+    # triangles.
     edges = collections.Counter()
     for a, b, c in boundary:
         for e in ((a, b), (b, c), (a, c)):
@@ -65,7 +67,8 @@ def test_conforming_closed_surface(args):
     # A ring's surface is a torus: V - E + F = 0.
     nv = len({i for f in boundary for i in f})
     assert nv - len(edges) + len(boundary) == 0
-    # Boundary faces lie on the ring's boundary; interior faces don't all lie on it.
+    # Boundary faces lie on the ring's boundary; interior faces don't all lie on
+    # it.
     on = _on_boundary(v, args)
     assert all(on[list(f)].all() for f in boundary)
 
@@ -75,7 +78,8 @@ def test_interior_vertices_touch_every_tet(args):
     v, t = make_ring_volume_mesh(*args)
     on = _on_boundary(v, args)
     assert (~on).sum() == args[4] * (args[5] - 1) * (args[6] - 1)
-    # Every tet has an interior vertex, so Drake's pressure field is positive in it.
+    # Every tet has an interior vertex, so Drake's pressure field is positive in
+    # it.
     assert (~on[t]).any(axis=1).all()
 
 
@@ -130,8 +134,9 @@ def test_bad_arguments(kwargs, name):
 def test_drake_reads_mesh_without_refinement(tmp_path):
     geometry = pytest.importorskip("pydrake.geometry")
     p = ring_mesh_path(*CASES[0], cache_dir=tmp_path)
-    # Drake's refiner parses the VTK and splits "problematic" simplices (all-boundary
-    # tets, boundary-to-boundary interior edges); our mesh must need none.
+    # Drake's refiner parses the VTK and splits "problematic" simplices
+    # (all-boundary tets, boundary-to-boundary interior edges); our mesh must
+    # need none.
     text = geometry.RefineVolumeMeshIntoVtkFileContents(geometry.MeshSource(p))
     assert "POINTS 6480 " in text and "CELLS 17280 " in text
 
@@ -146,7 +151,8 @@ def test_surface_obj_closed_outward(tmp_path):
     v, q = make_ring_surface_mesh(*args)
     tris = np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
     p = v[tris]
-    # Divergence theorem: sum of signed tet volumes from the origin = enclosed volume (> 0: outward).
+    # Divergence theorem: sum of signed tet volumes from the origin = enclosed
+    # volume (> 0: outward).
     vol = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6.0
     np.testing.assert_allclose(vol, polygonal_ring_volume(*args), rtol=1e-12)
     path = ring_surface_path(*args, cache_dir=tmp_path)

@@ -36,7 +36,7 @@ def test_partial_arc_geometric_fit_beats_noise_bound():
         pts = _circle([0.0, 0.0], 0.030, angles)
         pts += sigma * rng.standard_normal(pts.shape)
         errors.append(fit_circle(pts, radius=0.030).center)
-    # sigma sqrt(2 / N) per axis (the figure) within 20 %.
+    # sigma sqrt(2 / N) per axis (the fit's standard error) within 20 %.
     assert np.std(np.array(errors), axis=0) == pytest.approx(
         sigma * np.sqrt(2 / n), rel=0.2
     )

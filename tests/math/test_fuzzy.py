@@ -1,4 +1,5 @@
-"""Tests of deburr_drake.math.fuzzy: eqs. (24)-(35) of Hsu & Fu, corrections R1, R4, R8."""
+"""Tests of deburr_drake.math.fuzzy: eqs. (24)-(35) of Hsu & Fu, corrections R1,
+R4, R8."""
 
 import math
 
@@ -134,8 +135,8 @@ def test_derivative_matches_finite_difference(m):
 
 @pytest.mark.parametrize("m", ORDERS)
 def test_continuity_at_knots(m):
-    """C^(m-1): value jumps vanish for m >= 1, derivative jumps vanish for m >= 2,
-    m = 1 has derivative jumps 1/delta (outer knots) and 2/delta (centre)."""
+    """C^(m-1): value jumps vanish for m >= 1, derivative jumps vanish for m >=
+    2, m = 1 has derivative jumps 1/delta (outer knots) and 2/delta (centre)."""
     delta, eps = 0.7, 1e-9
     knots = (np.arange(m + 2) - (m + 1) / 2) * delta
     val_jump = bspline_membership(knots + eps, m, delta) - bspline_membership(
@@ -198,7 +199,8 @@ def test_sparse_evaluate_equals_dense_sum(m):
     rb = RuleBase(m=m, upsilon=3, delta0=0.2, deltak=0.05)
     rng = np.random.default_rng(50 + m)
     theta = rng.normal(size=rb.n_rules)
-    # include points near and beyond the edges of Omega (fewer active rules there)
+    # include points near and beyond the edges of Omega (fewer active rules
+    # there)
     y0s = rng.uniform(
         -1.3 * rb.omega0_half_width, 1.3 * rb.omega0_half_width, 60
     )

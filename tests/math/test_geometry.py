@@ -30,7 +30,7 @@ def polar(rho, th, z=C[2]):
     return np.array([C[0] + rho * math.cos(th), C[1] + rho * math.sin(th), z])
 
 
-# ---------------------------------------------------------------- phi, n1, depth
+# ----------------------------------------------------------- phi, n1, depth
 def test_circle_phi_n1_depth_known_points():
     c = circ()
     p = polar(R + 0.002, 0.7, z=1.0)  # 2 mm into the material, z ignored
@@ -141,7 +141,8 @@ def test_n2_is_direction_of_motion_and_falls_back_to_tangent():
     v3 = np.array([0.01, 0.02, -0.01])
     np.testing.assert_allclose(c.n2(p, v3, 1e-6), [0.0, 1.0, 0.0], atol=1e-12)
     assert c.edge_speed(p, v3) == pytest.approx(0.02)
-    # start-up: tangential speed below min_speed -> tangent in traversal direction
+    # start-up: tangential speed below min_speed -> tangent in traversal
+    # direction
     tiny = np.array([0.5, 1e-8, 0.0])  # large normal, tiny tangential part
     np.testing.assert_allclose(c.n2(p, tiny, 1e-6), [0.0, 1.0, 0.0], atol=1e-12)
     np.testing.assert_allclose(
@@ -153,7 +154,7 @@ def test_n2_is_direction_of_motion_and_falls_back_to_tangent():
         c.n2(p, v, 0.0)
 
 
-# ---------------------------------------------------------------- projection, arc
+# ---------------------------------------------------------- projection, arc
 @pytest.mark.parametrize(
     "contour,p",
     [

@@ -94,8 +94,8 @@ def test_burr_flank_touches_and_common_bias_leave_the_centre():
     old 0.1 mm rejection of the worst residual after a fit they pulled),
     every touch 0.14 mm past the edge (a detection bias), and a third
     touch on a burr 0.8 mm early: the centre within 1 um. The
-    one-at-a-time rejection with the radius held was 20-60 um off on such
-    touches in the robustness study."""
+    one-at-a-time rejection with the radius held is 20-60 um off on such
+    touches."""
     believed = CircularContour([0.4, 0.0, 0.048], 0.049)
     real = CircularContour([0.3996, -0.0005, 0.048], 0.049)
     arcs = np.linspace(0, real.length, 8, endpoint=False)
@@ -191,7 +191,7 @@ def test_online_model_recovers_a_straight_edge_heading_and_offset():
         assert moved.phi(p) == pytest.approx(0.0, abs=5e-6)
 
 
-# -- profiles (issue 21 for every contour kind) ----------------------------
+# -- profiles (every contour kind) ---------------------------------------
 def _pocket(**kw):
     # The pocket scenario's cutter path: 60 x 40 mm, 8 mm fillets, the
     # cutter (3 mm) inside.

@@ -1,6 +1,6 @@
 """The tall-burr envelope: its bounds and per-run numbers on hand-made
-logs, the cenic behaviour behind the surge, and the issue's reproduction
-burr (2 mm x 20 mm at 10 N) in a short window on the paper cell."""
+logs, the cenic behaviour behind the surge, and a tall long burr
+(2 mm x 20 mm at 10 N) in a short window on the paper cell."""
 
 import numpy as np
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
@@ -309,11 +309,11 @@ def test_cutting_laws_held_mean_is_the_exact_damper_at_one_cenic_step():
 
 @pytest.mark.slow
 def test_tall_long_burr_does_not_surge(paper):
-    """The issue's reproduction burr, 2 mm x 20 mm at 10 N, the cutter's
-    front reaching it 3 s after the contact transient, simulated for 17 s
-    (to 6 mm past the burr's top). With one 2.5 ms cenic step per sample
-    this very window surged at 15.9 s: 286 N, 18 mm/s. The force stays
-    under the envelope's bound and the issue's 30 N, the speed under 1.5
+    """A tall long burr, 2 mm x 20 mm at 10 N, the cutter's front
+    reaching it 3 s after the contact transient, simulated for 17 s (to
+    6 mm past the burr's top): the window where a cutting force not held at
+    its sample mean surges (286 N, 18 mm/s at 15.9 s). The force stays
+    under the envelope's bound and under 30 N, the speed under 1.5
     times the off-burr feed, and the feed on the burr follows the law."""
     from deburr_drake.cell.diagram import make_deburring_diagram
     from deburr_drake.runs.simulation import simulate

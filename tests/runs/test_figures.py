@@ -1,4 +1,5 @@
-"""Tests of deburr_drake.runs.figures (Figs. 8-12 of Hsu & Fu) on synthetic logs."""
+"""Tests of deburr_drake.runs.figures (Figs. 8-12 of Hsu & Fu) on synthetic
+logs."""
 
 import time
 import warnings

@@ -6,7 +6,7 @@ import shutil
 import pytest
 
 from deburr_drake.cell.diagram import make_deburring_diagram
-from deburr_drake.config import load_scenario
+from deburr_drake.config import ConfigError, load_scenario
 from deburr_drake.runs import graphs
 
 
@@ -72,5 +72,5 @@ def test_missing_dot_says_so_and_keeps_the_dot_file(
 
 
 def test_bad_format(diagram, tmp_path):
-    with pytest.raises(ValueError, match="format"):
+    with pytest.raises(ConfigError, match="format"):
         graphs.write_graphs(diagram, tmp_path / "cell", fmt="pdf")

@@ -46,6 +46,6 @@ def test_probing_finds_a_misplaced_and_turned_boss():
     assert np.isfinite(result.probing_time)
     assert (result.touches, result.kept) == (4, 4)
     # The corrected edge within 60 um of the real one all the way round
-    # (measured 41 um: the touches' scatter, docs/localisation.md).
+    # (the touches' scatter, docs/localisation.md).
     assert registration_error(scenario, result.registration) < 6e-5
     assert result.registration[2] == pytest.approx(-0.01, abs=3e-3)

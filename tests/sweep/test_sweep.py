@@ -184,7 +184,8 @@ def test_bad_study_is_one_line_naming_the_field_before_any_run(
             "study.rules[0] = 'edge_coverage ~ 1' is invalid",
         ),
         (
-            "grid: {tube.inner_radius: [0.03]}\nbase_text: 'tube: {radius: 1}'\n",
+            "grid: {tube.inner_radius: [0.03]}\n"
+            "base_text: 'tube: {radius: 1}'\n",
             "study.base: --scenario-text:1:8: tube.radius is unknown",
         ),
         ("name: x\n", "study: give grid"),
