@@ -63,7 +63,7 @@ class CuttingWall(LeafSystem):
     """The part as the user models it: a wall outside ``contour`` (the
     zero-depth path of the tool point). Input ``plant_state`` [q; v] of the
     Cartesian tool (q is the tool point, so forces are generalized forces);
-    outputs ``generalized_force`` (3, N) and ``tool_force`` (3, N, world).
+    outputs ``generalized_force`` (3, N) and ``measured_force`` (3, N, world).
     """
 
     def __init__(
@@ -83,7 +83,7 @@ class CuttingWall(LeafSystem):
         self._cut = (threshold, cutting_damping, smoothing_speed)
         self._state = self.DeclareVectorInputPort("plant_state", 6)
         self.DeclareVectorOutputPort("generalized_force", 3, self._output)
-        self.DeclareVectorOutputPort("tool_force", 3, self._output)
+        self.DeclareVectorOutputPort("measured_force", 3, self._output)
 
     def force(self, x, v):
         n1, tangent, delta, _ = self._contour.frame(x)
@@ -124,7 +124,7 @@ def build(scenario):
         plant=plant,
         contour=contour,
         plant_state=state,
-        tool_force=wall.GetOutputPort("tool_force"),
+        measured_force=wall.GetOutputPort("measured_force"),
     )
     builder.Connect(loops.actuation, plant.get_actuation_input_port())
 

@@ -32,7 +32,7 @@ def main(n: int = 5000) -> None:
         chamfer_state=chamfer_quantities(
             contour, x_p, v, force, min_tangential_speed=1e-5
         ),
-        tool_force=force,
+        measured_force=force,
         commanded_position=p + 3e-5 * t,
         commanded_velocity=2.4e-3 * t,
         desired_normal_force=[6.0],

@@ -29,7 +29,9 @@ def test_dataflow_figure_is_the_diagrams_wiring():
     assert (DOCS / "figures" / "dataflow.svg").stat().st_size > 10_000
     # The loop is there: the sensor reaches the controller, the controller
     # the plant.
-    assert '"force_sensor" -> "controller" [label="tool_force"]' in committed
+    assert (
+        '"force_sensor" -> "controller" [label="measured_force"]' in committed
+    )
     assert '"controller" -> "drive_saturation"' in committed
 
 

@@ -340,7 +340,7 @@ def make_deburring_diagram(
         plant=model,
         contour=belief,
         plant_state=plant.get_state_output_port(),
-        tool_force=side.reading,
+        measured_force=side.reading,
         tool_frame=c.robot.tool_frame,
         start=start.position,
         desired_rotation=start.rotation,
