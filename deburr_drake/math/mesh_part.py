@@ -1,0 +1,619 @@
+"""A part from a CAD file and the edges on it (pure numpy/scipy/trimesh).
+
+``load_part`` reads an STL, OBJ or STEP file into a closed triangle mesh in
+metres, placed by a pose (xyz in m, roll-pitch-yaw in rad: the part frame P
+in the world W, R = Rz(yaw) Ry(pitch) Rx(roll) as Drake's RollPitchYaw).
+``sharp_edges`` finds the part's edges: the mesh edges whose two faces'
+normals differ by more than an angle, or for a STEP part the boundaries
+between its CAD faces, chained in order into open chains and closed loops.
+``choose_edge`` picks the chain nearest a point (or by index), and
+``EdgeCurve`` smooths it into a C2 curve parametrised by arc length u that
+carries the two faces' normals along it and gives the chamfer frame:
+
+  * n2: the unit tangent, in the traversal direction;
+  * left / right normal: the outward normals of the faces left and right of
+    the traversal, seen from outside the part;
+  * n1 = -(left + right) / |left + right|: into the edge between the two
+    faces, the direction that removes material;
+  * face angle: the angle between the two faces through the material (pi/2
+    for a box's edge, 2 pi/3 where two faces meet at 120 degrees).
+
+Everything is in SI units (m, rad) and in the world frame.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+from scipy.interpolate import BSpline, CubicSpline
+from scipy.spatial.transform import Rotation
+import trimesh
+
+__all__ = [
+    "UNITS",
+    "MeshPart",
+    "EdgeChain",
+    "EdgeCurve",
+    "ChamferFrame",
+    "load_part",
+    "sharp_edges",
+    "choose_edge",
+]
+
+# metres per file unit
+UNITS = {"m": 1.0, "mm": 1.0e-3, "cm": 1.0e-2, "in": 0.0254}
+
+_MESH_TYPES = {".stl": "stl", ".obj": "obj"}
+_STEP_TYPES = {".step", ".stp"}
+_DEFAULT_SHARP_ANGLE = math.radians(30.0)
+_TOOL_RULES = ("left", "right", "bisector")
+
+
+@dataclasses.dataclass(frozen=True)
+class MeshPart:
+    """A closed, consistently wound triangle mesh in the world frame (m),
+    outward normals. ``face_tags`` (STEP parts) holds the CAD face of each
+    triangle, else None. ``rotation`` and ``translation`` are the pose the
+    part was placed with (R_WP, p_WP)."""
+
+    mesh: trimesh.Trimesh
+    face_tags: np.ndarray | None
+    rotation: np.ndarray
+    translation: np.ndarray
+
+    def to_world(self, p_P):
+        """A point given in the part frame (m), in the world frame."""
+        return self.rotation @ np.asarray(p_P, float) + self.translation
+
+
+def _pose(xyz, rpy):
+    xyz = np.asarray(xyz, float)
+    rpy = np.asarray(rpy, float)
+    if xyz.shape != (3,) or rpy.shape != (3,):
+        raise ValueError("a pose is xyz (3 numbers, m) and rpy (3, rad)")
+    if not (np.all(np.isfinite(xyz)) and np.all(np.isfinite(rpy))):
+        raise ValueError("a pose's xyz and rpy must be finite")
+    # scipy's extrinsic "xyz" is Rz(yaw) Ry(pitch) Rx(roll), Drake's RPY
+    return Rotation.from_euler("xyz", rpy).as_matrix(), xyz
+
+
+def _read_step(path, deflection):
+    """Triangles and their CAD face indices of a STEP file through cascadio
+    (OpenCASCADE). trimesh's own STEP loader calls cascadio without the
+    face data, so cascadio is called here and its GLB read back."""
+    try:
+        import cascadio
+    except ImportError as error:
+        raise ValueError(
+            f"{path}: reading STEP needs cascadio "
+            "(pip install deburr_drake[cad])"
+        ) from error
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:
+        glb = Path(folder) / "part.glb"
+        try:
+            cascadio.step_to_glb(
+                str(path),
+                str(glb),
+                tol_linear=deflection,
+                tol_angular=0.05,
+                include_brep=True,
+            )
+            scene = trimesh.load(str(glb), file_type="glb")
+        except Exception as error:
+            raise ValueError(f"{path}: not a readable STEP file ({error})")
+    vertices, faces, tags = [], [], []
+    offset = 0
+    geometries = getattr(scene, "geometry", {}) or {}
+    for geometry in geometries.values():
+        index = geometry.face_attributes.get("brep_index")
+        if index is None:
+            raise ValueError(f"{path}: cascadio gave no CAD faces")
+        vertices.append(geometry.vertices)
+        faces.append(geometry.faces + offset)
+        # CAD face indices are per solid: keep solids apart
+        tags.append(np.asarray(index, int) + 1_000_000 * len(tags))
+        offset += len(geometry.vertices)
+    if not faces:
+        raise ValueError(f"{path}: no triangles in the STEP file")
+    # GLB is in metres; each CAD face is meshed apart, so the vertices on
+    # the faces' shared boundaries are merged here (faces keep their order)
+    mesh = trimesh.Trimesh(np.vstack(vertices), np.vstack(faces), process=True)
+    return mesh, np.concatenate(tags)
+
+
+def _read_mesh(path, file_type):
+    try:
+        mesh = trimesh.load_mesh(str(path), file_type=file_type)
+    except Exception as error:
+        raise ValueError(
+            f"{path}: not a readable {file_type.upper()} file ({error})"
+        )
+    if isinstance(mesh, trimesh.Scene):
+        mesh = mesh.to_geometry()
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        raise ValueError(
+            f"{path}: no triangles in it (not a {file_type.upper()} mesh?)"
+        )
+    return trimesh.Trimesh(mesh.vertices, mesh.faces, process=True)
+
+
+def _check_closed(path, mesh):
+    edges, counts = np.unique(mesh.edges_sorted, axis=0, return_counts=True)
+    open_edges = int(np.sum(counts == 1))
+    shared = int(np.sum(counts > 2))
+    if shared:
+        raise ValueError(
+            f"{path}: the mesh is not manifold ({shared} edges shared by "
+            "more than two triangles)"
+        )
+    if open_edges:
+        raise ValueError(
+            f"{path}: the mesh is open, not watertight ({open_edges} edges "
+            "on one triangle only): a part must be a closed solid"
+        )
+    if not mesh.is_winding_consistent:
+        raise ValueError(f"{path}: the triangles are not consistently wound")
+    del edges
+
+
+def load_part(
+    path,
+    *,
+    units: str = "m",
+    xyz=(0.0, 0.0, 0.0),
+    rpy=(0.0, 0.0, 0.0),
+    step_deflection: float = 0.01,
+) -> MeshPart:
+    """The part in ``path`` (STL, OBJ, or STEP with cascadio installed),
+    its coordinates in ``units`` (m, mm, cm or in) scaled to metres, then
+    rotated by ``rpy`` (rad) and moved by ``xyz`` (m). A STEP file keeps
+    its own unit (``units`` does not apply); ``step_deflection``, the
+    largest distance of its triangles from its CAD surfaces, is
+    cascadio's linear tolerance (OpenCASCADE reads it in the file's
+    unit), with 0.05 rad between neighbouring triangles at most.
+    ValueError says what is wrong: a missing or unreadable file, unknown
+    units, an open or non-manifold mesh."""
+    if units not in UNITS:
+        raise ValueError(f"unknown units {units!r}: one of {', '.join(UNITS)}")
+    rotation, translation = _pose(xyz, rpy)
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"{path}: no such file")
+    suffix = path.suffix.lower()
+    tags = None
+    if suffix in _MESH_TYPES:
+        mesh = _read_mesh(path, _MESH_TYPES[suffix])
+    elif suffix in _STEP_TYPES:
+        # cascadio writes metres whatever the STEP file's own unit: the
+        # STEP file carries its unit, so ``units`` does not apply
+        mesh, tags = _read_step(path, step_deflection)
+        units = "m"
+    else:
+        raise ValueError(
+            f"{path}: unknown file type {suffix!r}: .stl, .obj, .step, .stp"
+        )
+    keep = mesh.nondegenerate_faces()
+    if not np.all(keep):
+        mesh.update_faces(keep)
+        mesh.remove_unreferenced_vertices()
+        if tags is not None:
+            tags = tags[keep]
+    _check_closed(path, mesh)
+    if mesh.volume < 0.0:  # wound inwards: the normals turned outwards
+        mesh.invert()
+    vertices = (mesh.vertices * UNITS[units]) @ rotation.T + translation
+    placed = trimesh.Trimesh(vertices, mesh.faces, process=False)
+    return MeshPart(placed, tags, rotation, translation)
+
+
+@dataclasses.dataclass(frozen=True)
+class EdgeChain:
+    """An edge of the part as a polyline of mesh vertices (m), in order.
+    ``closed``: a loop (the last point joins the first; it is not
+    repeated). Per segment (i to i + 1; a loop's last segment closes it):
+    the outward unit normals of the faces left and right of the traversal,
+    seen from outside the part."""
+
+    points: np.ndarray
+    left_normals: np.ndarray
+    right_normals: np.ndarray
+    closed: bool
+
+    @property
+    def segments(self):
+        """Segment vectors (m), one per pair of normals."""
+        end = np.roll(self.points, -1, axis=0) if self.closed else None
+        if end is None:
+            return np.diff(self.points, axis=0)
+        return end - self.points
+
+    @property
+    def length(self):
+        """m, along the polyline."""
+        return float(np.linalg.norm(self.segments, axis=1).sum())
+
+    def reversed(self) -> EdgeChain:
+        """The same edge traversed the other way (left and right swap)."""
+        if self.closed:
+            points = np.roll(self.points[::-1], 1, axis=0)
+        else:
+            points = self.points[::-1]
+        return EdgeChain(
+            points.copy(),
+            self.right_normals[::-1].copy(),
+            self.left_normals[::-1].copy(),
+            self.closed,
+        )
+
+    def distance(self, point):
+        """m, from ``point`` to the polyline."""
+        a = self.points
+        b = np.roll(a, -1, axis=0) if self.closed else a[1:]
+        a = a if self.closed else a[:-1]
+        d = b - a
+        t = np.einsum("ij,ij->i", np.asarray(point) - a, d)
+        t = np.clip(t / np.maximum(np.einsum("ij,ij->i", d, d), 1e-300), 0, 1)
+        nearest = a + t[:, None] * d
+        return float(np.min(np.linalg.norm(nearest - point, axis=1)))
+
+
+def _walks(edges, n_vertices):
+    """Chains of the undirected ``edges`` (E x 2 vertex indices): lists of
+    edge indices and vertex paths, broken where a vertex does not have
+    exactly two edges; the rest are loops."""
+    incident = [[] for _ in range(n_vertices)]
+    for e, (a, b) in enumerate(edges):
+        incident[a].append(e)
+        incident[b].append(e)
+    used = np.zeros(len(edges), bool)
+
+    def walk(start, e):
+        path = [start]
+        while True:
+            used[e] = True
+            a, b = edges[e]
+            v = b if a == path[-1] else a
+            path.append(v)
+            if len(incident[v]) != 2:
+                return path, False
+            nxt = [f for f in incident[v] if not used[f]]
+            if not nxt:
+                return path[:-1], True  # back at the start: a loop
+            e = nxt[0]
+
+    chains = []
+    ends = [v for v in range(n_vertices) if len(incident[v]) not in (0, 2)]
+    for v in ends:
+        for e in incident[v]:
+            if not used[e]:
+                chains.append(walk(v, e))
+    for e in range(len(edges)):
+        if not used[e]:
+            chains.append(walk(edges[e][0], e))
+    return chains
+
+
+def sharp_edges(part: MeshPart, *, min_angle: float = _DEFAULT_SHARP_ANGLE):
+    """The part's edges as a list of ``EdgeChain``, longest first. A mesh
+    edge belongs to one where its two faces' normals differ by more than
+    ``min_angle`` (rad); on a STEP part, where the two faces lie on
+    different CAD faces (``min_angle`` unused). A chain ends where more
+    or fewer than two edge segments meet (a box's corner). Loops run
+    counter-clockwise seen from outside (about the mean of their faces'
+    normals), start at their lexicographically smallest vertex; open
+    chains start at that of their two ends."""
+    mesh = part.mesh
+    adjacency = mesh.face_adjacency
+    if part.face_tags is not None:
+        tags = part.face_tags
+        sharp = tags[adjacency[:, 0]] != tags[adjacency[:, 1]]
+    else:
+        sharp = mesh.face_adjacency_angles > min_angle
+    faces = adjacency[sharp]
+    edges = mesh.face_adjacency_edges[sharp]
+    # which of the two faces has the edge as (a -> b) in its winding: the
+    # face left of a -> b seen from outside
+    tri = mesh.faces[faces[:, 0]]
+    a, b = edges[:, 0], edges[:, 1]
+    forward = np.zeros(len(edges), bool)
+    for k in range(3):
+        forward |= (tri[:, k] == a) & (tri[:, (k + 1) % 3] == b)
+    left_of_ab = np.where(forward, faces[:, 0], faces[:, 1])
+    right_of_ab = np.where(forward, faces[:, 1], faces[:, 0])
+    lookup = {(int(p), int(q)): i for i, (p, q) in enumerate(edges)}
+    normals = mesh.face_normals
+    chains = []
+    for path, closed in _walks(edges, len(mesh.vertices)):
+        pairs = list(zip(path[:-1], path[1:]))
+        if closed:
+            pairs.append((path[-1], path[0]))
+        left, right = [], []
+        for p, q in pairs:
+            i = lookup.get((p, q))
+            if i is not None:
+                left.append(left_of_ab[i])
+                right.append(right_of_ab[i])
+            else:
+                i = lookup[(q, p)]
+                left.append(right_of_ab[i])
+                right.append(left_of_ab[i])
+        chain = EdgeChain(
+            mesh.vertices[path].copy(),
+            normals[left].copy(),
+            normals[right].copy(),
+            closed,
+        )
+        chains.append(_canonical(chain))
+    chains.sort(key=lambda c: -c.length)
+    return chains
+
+
+def _canonical(chain):
+    def first(points):
+        return int(np.lexsort(np.round(points, 12).T[::-1])[0])
+
+    if not chain.closed:
+        p = chain.points
+        ends = np.array([p[0], p[-1]])
+        return chain if first(ends) == 0 else chain.reversed()
+    p = chain.points
+    area = 0.5 * np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0)
+    outward = (chain.left_normals + chain.right_normals).sum(axis=0)
+    if area @ outward < 0.0:
+        chain = chain.reversed()
+    k = first(chain.points)
+    return EdgeChain(
+        np.roll(chain.points, -k, axis=0),
+        np.roll(chain.left_normals, -k, axis=0),
+        np.roll(chain.right_normals, -k, axis=0),
+        True,
+    )
+
+
+def choose_edge(chains, *, near=None, index=None) -> EdgeChain:
+    """The chain nearest the point ``near`` (m, the chains' frame) or the
+    one at ``index`` (``sharp_edges`` lists them longest first)."""
+    if not chains:
+        raise ValueError("the part has no edges")
+    if (near is None) == (index is None):
+        raise ValueError("choose an edge by near or by index (one of them)")
+    if index is not None:
+        if not 0 <= index < len(chains):
+            raise ValueError(
+                f"edge index {index}: the part has {len(chains)} edges "
+                f"(0 to {len(chains) - 1})"
+            )
+        return chains[index]
+    near = np.asarray(near, float)
+    if near.shape != (3,) or not np.all(np.isfinite(near)):
+        raise ValueError("near is a point: 3 finite numbers (m)")
+    return min(chains, key=lambda c: c.distance(near))
+
+
+@dataclasses.dataclass(frozen=True)
+class ChamferFrame:
+    """The edge at arc lengths u (arrays with u's shape first): the point
+    (m), n1 into the edge, n2 along it, the two faces' outward normals,
+    the angle between the faces through the material (rad) and whether
+    the edge is convex (material inside the faces' wedge)."""
+
+    point: np.ndarray
+    n1: np.ndarray
+    n2: np.ndarray
+    left_normal: np.ndarray
+    right_normal: np.ndarray
+    face_angle: np.ndarray
+    convex: np.ndarray
+
+
+def _unit(v):
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _densify(points, closed):
+    """Segments much longer than the chain's typical one (a straight run
+    between fine curved parts, a box's edge) split into pieces of the
+    typical length, so that the least-squares fit sees no long gap; the
+    points and, per piece, the chain segment it came from."""
+    ends = np.roll(points, -1, axis=0) if closed else points[1:]
+    starts = points if closed else points[:-1]
+    lengths = np.linalg.norm(ends - starts, axis=1)
+    typical = float(np.median(lengths))
+    pieces = np.where(
+        lengths > 2.0 * typical, np.ceil(lengths / typical), 1
+    ).astype(int)
+    # a chain of one or two segments (a box's edge): a few points more
+    pieces = np.maximum(pieces, math.ceil(16 / len(lengths)))
+    out = []
+    parent = []
+    for i, (a, b, k) in enumerate(zip(starts, ends, pieces)):
+        t = np.arange(k)[:, None] / k
+        out.append(a + t * (b - a))
+        parent += [i] * k
+    if not closed:
+        out.append(points[-1:])
+    return np.vstack(out), np.array(parent)
+
+
+def _least_squares_spline(x, y, period, spacing):
+    """A cubic B-spline fitted to y(x) (rows) by least squares on uniform
+    knots about ``spacing`` apart: periodic with ``period`` if given, else
+    clamped at x[0] and x[-1]. On uniform knots it is C2, and it follows a
+    curve sampled at vertices within (h^4 / 384) times its curvature cubed
+    while averaging out the wiggles of a boolean's vertices."""
+    length = period if period is not None else x[-1] - x[0]
+    n = max(4, round(length / spacing))
+    h = length / n
+    if period is not None:
+        knots = h * np.arange(-3, n + 4)
+        basis = BSpline.design_matrix(x, knots, 3).toarray()
+        # coefficients j and j + n are one: the spline repeats
+        basis[:, :3] += basis[:, n : n + 3]
+        basis = basis[:, :n]
+    else:
+        inner = x[0] + h * np.arange(1, n)
+        knots = np.concatenate([[x[0]] * 4, inner, [x[-1]] * 4])
+        basis = BSpline.design_matrix(x, knots, 3).toarray()
+    coefficients = np.linalg.lstsq(basis, y, rcond=None)[0]
+    if period is not None:
+        coefficients = np.vstack([coefficients, coefficients[:3]])
+        return BSpline(knots, coefficients, 3, extrapolate="periodic")
+    return BSpline(knots, coefficients, 3)
+
+
+class EdgeCurve:
+    """An ``EdgeChain`` smoothed into a C2 curve c(u) with u the arc length
+    (m, 0 <= u <= length; a loop's u is taken modulo its length).
+
+    The chain's points are fitted by a cubic least-squares B-spline on
+    knots ``knot_spacing`` (m) apart (at least twice the chain's median
+    segment; periodic for a loop), resampled every ``spacing`` (m) of its
+    arc length and interpolated by a cubic spline in arc length. The
+    faces' normals, one per chain segment, are averaged over a Gaussian
+    window of ``normal_window`` (m, standard deviation; at least the
+    longest piece) so that the facets of a curved face do not show, made
+    normal to the curve and interpolated the same way.
+    """
+
+    def __init__(
+        self,
+        chain: EdgeChain,
+        *,
+        knot_spacing: float = 1.0e-3,
+        spacing: float = 5.0e-4,
+        normal_window: float = 1.0e-3,
+    ):
+        self.closed = chain.closed
+        points, parent = _densify(chain.points, chain.closed)
+        data = np.vstack([points, points[:1]]) if self.closed else points
+        chord = np.linalg.norm(np.diff(data, axis=0), axis=1)
+        x = np.concatenate([[0.0], np.cumsum(chord)])
+        spacing_knots = max(
+            knot_spacing,
+            2.0 * float(np.median(np.linalg.norm(chain.segments, axis=1))),
+        )
+        if self.closed:
+            fit = _least_squares_spline(x[:-1], points, x[-1], spacing_knots)
+        else:
+            fit = _least_squares_spline(x, points, None, spacing_knots)
+        velocity = fit.derivative()
+        # arc length s(x) of the fitted spline by Gauss-Legendre quadrature
+        grid = np.linspace(0.0, x[-1], 16 * len(data) + 1)
+        g, w = np.polynomial.legendre.leggauss(5)
+        h = np.diff(grid)
+        nodes = grid[:-1, None] + 0.5 * h[:, None] * (g[None, :] + 1.0)
+        speed = np.linalg.norm(velocity(nodes.ravel()), axis=1)
+        speed = speed.reshape(nodes.shape)
+        s_grid = np.concatenate([[0.0], np.cumsum(0.5 * h * (speed @ w))])
+        self.length = float(s_grid[-1])
+        n = max(16, math.ceil(self.length / spacing))
+        s_k = np.linspace(0.0, self.length, n + 1)
+        p_k = fit(np.interp(s_k, s_grid, grid))
+        bc = "periodic" if self.closed else "not-a-knot"
+        if self.closed:
+            p_k[-1] = p_k[0]
+        self._point = CubicSpline(s_k, p_k, bc_type=bc)
+        self._tangent = self._point.derivative()
+        # the faces' normals at the chain's segment midpoints, averaged
+        s_mid = np.interp(0.5 * (x[:-1] + x[1:]), grid, s_grid)
+        d = s_k[:, None] - s_mid[None, :]
+        if self.closed:
+            d = (d + 0.5 * self.length) % self.length - 0.5 * self.length
+        # no wider than the fit's pieces: no sample without a neighbour
+        window = max(normal_window, float(chord.max()))
+        kernel = chord[None, :] * np.exp(-0.5 * (d / window) ** 2)
+        tangent = _unit(self._tangent(s_k))
+        splines = []
+        for normals in (chain.left_normals, chain.right_normals):
+            n_k = kernel @ normals[parent]
+            n_k -= np.einsum("ij,ij->i", n_k, tangent)[:, None] * tangent
+            n_k = _unit(n_k)
+            if self.closed:
+                n_k[-1] = n_k[0]
+            splines.append(CubicSpline(s_k, n_k, bc_type=bc))
+        self._left, self._right = splines
+
+    def _u(self, u):
+        u = np.asarray(u, float)
+        if self.closed:
+            return np.mod(u, self.length)
+        return np.clip(u, 0.0, self.length)
+
+    def point(self, u):
+        """m, c(u)."""
+        return self._point(self._u(u))
+
+    def tangent(self, u):
+        """The unit tangent n2 at u, in the traversal direction."""
+        return _unit(self._tangent(self._u(u)))
+
+    def curvature(self, u):
+        """1/m, |c''| at u (c is parametrised by arc length)."""
+        u = self._u(u)
+        t = self._tangent(u)
+        a = self._point.derivative(2)(u)
+        speed = np.linalg.norm(t, axis=-1)
+        return np.linalg.norm(np.cross(t, a), axis=-1) / speed**3
+
+    def face_normals(self, u):
+        """The outward unit normals of the faces left and right of the
+        traversal at u, normal to the tangent."""
+        u = self._u(u)
+        t = _unit(self._tangent(u))
+        out = []
+        for spline in (self._left, self._right):
+            n = spline(u)
+            n = n - np.sum(n * t, axis=-1, keepdims=True) * t
+            out.append(_unit(n))
+        return tuple(out)
+
+    def frame(self, u) -> ChamferFrame:
+        """The chamfer frame at arc lengths u (m)."""
+        u = self._u(u)
+        n2 = self.tangent(u)
+        left, right = self.face_normals(u)
+        n1 = -_unit(left + right)
+        between = np.arccos(np.clip(np.sum(left * right, axis=-1), -1, 1))
+        convex = np.sum(n2 * np.cross(left, right), axis=-1) > 0.0
+        angle = np.where(convex, math.pi - between, math.pi + between)
+        return ChamferFrame(self.point(u), n1, n2, left, right, angle, convex)
+
+    def tool_axis(self, u, *, rule="bisector", lead=0.0, tilt=0.0):
+        """The tool's axis at u: a unit vector out of the part (from the
+        cutter's tip towards its holder). ``rule``: ``left`` or ``right``
+        (along that face's normal) or ``bisector`` (-n1, between the two
+        normals). Then ``tilt`` (rad) turns it about n2 (right hand) and
+        ``lead`` (rad) leans it towards n2 (the holder ahead of the tip)."""
+        if rule not in _TOOL_RULES:
+            raise ValueError(
+                f"unknown tool axis rule {rule!r}: one of "
+                f"{', '.join(_TOOL_RULES)}"
+            )
+        frame = self.frame(u)
+        base = {
+            "left": frame.left_normal,
+            "right": frame.right_normal,
+            "bisector": -frame.n1,
+        }[rule]
+        t = frame.n2
+        side = np.cross(t, base)
+        axis = math.cos(tilt) * base + math.sin(tilt) * side
+        return math.cos(lead) * axis + math.sin(lead) * t
+
+    def project(self, point):
+        """The arc length u (m) of the curve's point nearest ``point``."""
+        point = np.asarray(point, float)
+        u = np.linspace(0.0, self.length, max(64, int(self.length / 1e-4)))
+        u0 = u[np.argmin(np.linalg.norm(self.point(u) - point, axis=1))]
+        for _ in range(8):  # Newton on (c(u) - p) . c'(u) = 0
+            r = self.point(u0) - point
+            d1 = self._tangent(self._u(u0))
+            d2 = self._point.derivative(2)(self._u(u0))
+            step = (r @ d1) / (d1 @ d1 + r @ d2)
+            u0 = float(self._u(u0 - step))
+        return u0

@@ -1,0 +1,259 @@
+"""A part from a mesh file, its edges and the chamfer frame along one,
+against meshes whose edges are known in closed form."""
+
+import importlib.util
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+import trimesh
+
+from deburr_drake.math.mesh_part import (
+    EdgeCurve,
+    choose_edge,
+    load_part,
+    sharp_edges,
+)
+
+PARTS = Path(__file__).resolve().parents[2] / "models" / "parts"
+INCLINE = math.radians(30.0)
+
+
+def _write(mesh, path):
+    mesh.export(path)
+    return path
+
+
+def _unit(v):
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+@pytest.fixture(scope="module")
+def tube_rim():
+    """The paper's tube (mm file): its bore's top edge, r = 30 mm at
+    z = 50 mm."""
+    part = load_part(PARTS / "tube.stl", units="mm")
+    chain = choose_edge(sharp_edges(part), near=[0.03, 0.0, 0.05])
+    return chain, EdgeCurve(chain)
+
+
+@pytest.fixture(scope="module")
+def inclined_rim(tmp_path_factory):
+    """A 20 mm hole (r = 10 mm) through a round plate whose top face is
+    tilted 30 degrees about x: its top rim is a circle in that plane."""
+    plate = trimesh.creation.annulus(
+        r_min=10.0, r_max=40.0, height=20.0, sections=200
+    )
+    plate.apply_translation([0.0, 0.0, -10.0])  # top face at z = 0
+    plate.apply_transform(
+        trimesh.transformations.rotation_matrix(INCLINE, [1, 0, 0])
+    )
+    path = _write(plate, tmp_path_factory.mktemp("parts") / "plate.stl")
+    part = load_part(path, units="mm")
+    chain = choose_edge(sharp_edges(part), near=[0.01, 0.0, 0.0])
+    return EdgeCurve(chain)
+
+
+def test_a_box_has_twelve_straight_edges(tmp_path):
+    box = trimesh.creation.box(extents=[0.1, 0.2, 0.3])
+    chains = sharp_edges(load_part(_write(box, tmp_path / "box.stl")))
+    assert len(chains) == 12
+    assert all(not c.closed and len(c.points) == 2 for c in chains)
+    lengths = [c.length for c in chains]
+    np.testing.assert_allclose(lengths, [0.3] * 4 + [0.2] * 4 + [0.1] * 4)
+    curve = EdgeCurve(chains[0])
+    frame = curve.frame(np.linspace(0.0, curve.length, 7))
+    np.testing.assert_allclose(frame.face_angle, math.pi / 2, atol=1e-9)
+    assert frame.convex.all()
+    # n1 points into the box: from the edge towards its centre's side
+    toward_center = -frame.point
+    assert np.all(np.sum(frame.n1 * toward_center, axis=1) > 0.0)
+
+
+def test_the_tube_rim_is_one_circle(tube_rim):
+    chain, curve = tube_rim
+    assert chain.closed and len(chain.points) == 256
+    assert curve.closed
+    assert curve.length == pytest.approx(2 * math.pi * 0.03, abs=1e-8)
+    u = np.linspace(0.0, curve.length, 2001)
+    p = curve.point(u)
+    # the smoothed curve on the true circle (the mesh's vertices are on it)
+    np.testing.assert_allclose(np.hypot(p[:, 0], p[:, 1]), 0.03, atol=1e-8)
+    np.testing.assert_allclose(p[:, 2], 0.05, atol=1e-12)
+    # arc length: the polar angle advances by u / r, counter-clockwise
+    angle = np.unwrap(np.arctan2(p[:, 1], p[:, 0]))
+    np.testing.assert_allclose(angle - angle[0], u / 0.03, atol=1e-6)
+    np.testing.assert_allclose(curve.curvature(u), 1 / 0.03, rtol=1e-3)
+
+
+def test_the_tube_rim_frame(tube_rim):
+    _, curve = tube_rim
+    u = np.linspace(0.0, curve.length, 301)
+    f = curve.frame(u)
+    radial = _unit(f.point * [1.0, 1.0, 0.0])
+    up = np.array([0.0, 0.0, 1.0])
+    np.testing.assert_allclose(f.left_normal, -radial, atol=1e-5)  # bore
+    np.testing.assert_allclose(f.right_normal, up + 0 * radial, atol=1e-5)
+    np.testing.assert_allclose(f.n1, _unit(radial - up), atol=1e-5)
+    np.testing.assert_allclose(f.n2, np.cross(up, radial), atol=1e-5)
+    np.testing.assert_allclose(f.face_angle, math.pi / 2, atol=1e-9)
+    # the tool held vertical: along the top face's normal
+    np.testing.assert_allclose(
+        curve.tool_axis(u, rule="right"), up + 0 * radial, atol=1e-5
+    )
+
+
+def test_the_frame_on_a_circle_in_an_inclined_plane(inclined_rim):
+    curve = inclined_rim
+    assert curve.length == pytest.approx(2 * math.pi * 0.01, rel=1e-7)
+    normal = np.array([0.0, -math.sin(INCLINE), math.cos(INCLINE)])
+    u = np.linspace(0.0, curve.length, 401)
+    f = curve.frame(u)
+    np.testing.assert_allclose(f.point @ normal, 0.0, atol=1e-9)
+    radial = _unit(f.point)
+    np.testing.assert_allclose(np.linalg.norm(f.point, axis=1), 0.01, 1e-6)
+    # counter-clockwise seen from outside (from the plane's normal side)
+    np.testing.assert_allclose(f.n2, np.cross(normal, radial), atol=1e-5)
+    np.testing.assert_allclose(f.left_normal, -radial, atol=1e-5)
+    np.testing.assert_allclose(
+        f.right_normal, normal + 0 * u[:, None], atol=1e-5
+    )
+    np.testing.assert_allclose(f.n1, _unit(radial - normal), atol=1e-5)
+    np.testing.assert_allclose(f.face_angle, math.pi / 2, atol=1e-6)
+    # the bisector, then leaned by 0.2 rad towards n2 and tilted about it
+    axis = curve.tool_axis(u, rule="bisector", lead=0.2)
+    np.testing.assert_allclose(np.sum(axis * f.n2, axis=1), math.sin(0.2))
+    axis = curve.tool_axis(u, rule="right", tilt=0.3)
+    np.testing.assert_allclose(axis @ normal, math.cos(0.3), atol=1e-5)
+    np.testing.assert_allclose(np.sum(axis * f.n2, axis=1), 0.0, atol=1e-9)
+
+
+def test_an_open_edge_where_faces_meet_at_120_degrees():
+    part = load_part(PARTS / "wedge.stl", units="mm")
+    chain = choose_edge(sharp_edges(part), near=[0.04, 0.03, 0.02])
+    assert not chain.closed
+    curve = EdgeCurve(chain)
+    assert curve.length == pytest.approx(0.06)
+    u = np.linspace(0.0, curve.length, 11)
+    f = curve.frame(u)
+    np.testing.assert_allclose(f.point[0], [0.04, 0.0, 0.02], atol=1e-12)
+    np.testing.assert_allclose(f.face_angle, 2 * math.pi / 3, atol=1e-6)
+    assert f.convex.all()
+    slope = [math.sin(math.radians(60)), 0.0, math.cos(math.radians(60))]
+    n1 = -_unit(np.array([0.0, 0.0, 1.0]) + slope)
+    np.testing.assert_allclose(f.n1, n1 + 0 * u[:, None], atol=1e-6)
+    reversed_curve = EdgeCurve(chain.reversed())
+    np.testing.assert_allclose(
+        reversed_curve.tangent(0.0), -f.n2[-1], atol=1e-9
+    )
+    np.testing.assert_allclose(
+        reversed_curve.frame(0.0).left_normal, f.right_normal[-1], atol=1e-9
+    )
+
+
+def test_the_cross_drilled_holes_saddle():
+    part = load_part(PARTS / "cross_hole.stl", units="mm")
+    chains = sharp_edges(part)
+    chain = choose_edge(chains, near=[0.03, 0.0, 0.048])
+    assert chain.closed
+    curve = EdgeCurve(chain)
+    u = np.linspace(0.0, curve.length, 2001)
+    f = curve.frame(u)
+    p = f.point
+    # on the tube's outer face and on the hole's wall
+    np.testing.assert_allclose(np.hypot(p[:, 0], p[:, 1]), 0.03, atol=1e-5)
+    np.testing.assert_allclose(np.hypot(p[:, 1], p[:, 2] - 0.04), 0.008, 1e-3)
+    outer = _unit(p * [1.0, 1.0, 0.0])
+    wall = -_unit(p * [0.0, 1.0, 1.0] - [0.0, 0.0, 0.04])
+    angle = math.pi - np.arccos(np.sum(outer * wall, axis=1))
+    # within half a facet of the 256-sided tube (0.7 degrees)
+    np.testing.assert_allclose(f.face_angle, angle, atol=math.radians(0.8))
+    assert math.radians(74) < f.face_angle.min() < math.radians(76)
+    assert f.convex.all()
+
+
+def test_choose_by_index_and_project(tube_rim):
+    part = load_part(PARTS / "tube.stl", units="mm")
+    chains = sharp_edges(part)
+    assert choose_edge(chains, index=3) is chains[3]
+    with pytest.raises(ValueError, match="edge index 4: the part has 4"):
+        choose_edge(chains, index=4)
+    _, curve = tube_rim
+    assert curve.project(curve.point(0.05)) == pytest.approx(0.05, abs=1e-9)
+
+
+def test_units_and_pose(tmp_path, tube_rim):
+    _, curve_mm = tube_rim
+    metres = trimesh.load_mesh(PARTS / "tube.stl")
+    metres.apply_scale(1e-3)
+    path = _write(metres, tmp_path / "tube_m.stl")
+    chain = choose_edge(sharp_edges(load_part(path)), near=[0.03, 0, 0.05])
+    u = np.linspace(0.0, curve_mm.length, 50)
+    # the same edge to the STL's float32 rounding
+    np.testing.assert_allclose(
+        EdgeCurve(chain).point(u), curve_mm.point(u), atol=1e-8
+    )
+    inches = metres.copy()
+    inches.apply_scale(1 / 0.0254)
+    path = _write(inches, tmp_path / "tube_in.stl")
+    part = load_part(path, units="in")
+    np.testing.assert_allclose(part.mesh.bounds, metres.bounds, atol=1e-12)
+    # placed by a pose: the same edge, moved and turned
+    xyz, rpy = [0.4, -0.1, 0.05], [0.3, -0.2, 1.0]
+    part = load_part(PARTS / "tube.stl", units="mm", xyz=xyz, rpy=rpy)
+    near = part.to_world([0.03, 0.0, 0.05])
+    curve = EdgeCurve(choose_edge(sharp_edges(part), near=near))
+    rotation = Rotation.from_euler("xyz", rpy).as_matrix()
+    assert curve.length == pytest.approx(curve_mm.length, rel=1e-9)
+    start = curve.project(rotation @ curve_mm.point(0.0) + xyz)
+    f = curve.frame(start + u)
+    g = curve_mm.frame(u)
+    np.testing.assert_allclose(f.point, g.point @ rotation.T + xyz, atol=1e-8)
+    np.testing.assert_allclose(f.n1, g.n1 @ rotation.T, atol=1e-5)
+    np.testing.assert_allclose(f.n2, g.n2 @ rotation.T, atol=1e-5)
+
+
+def test_bad_files_and_fields(tmp_path):
+    with pytest.raises(ValueError, match="no such file"):
+        load_part(tmp_path / "missing.stl")
+    text = tmp_path / "notes.stl"
+    text.write_text("not a mesh at all")
+    with pytest.raises(ValueError, match="no triangles"):
+        load_part(text)
+    with pytest.raises(ValueError, match="unknown file type '.txt'"):
+        load_part(text.rename(tmp_path / "notes.txt"))
+    with pytest.raises(ValueError, match="unknown units 'ft'"):
+        load_part(PARTS / "tube.stl", units="ft")
+    box = trimesh.creation.box()
+    box.update_faces(np.arange(len(box.faces)) != 0)
+    with pytest.raises(ValueError, match="open, not watertight"):
+        load_part(_write(box, tmp_path / "open.stl"))
+    # two tetrahedra sharing one edge: four triangles on it
+    a = trimesh.creation.box().convex_hull
+    vertices = np.array(
+        [[0, 0, 0], [0, 0, 1], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]],
+        float,
+    )
+    faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    faces += [[0, 4, 1], [0, 1, 5], [0, 5, 4], [1, 4, 5]]
+    del a
+    pair = trimesh.Trimesh(vertices, faces, process=False)
+    with pytest.raises(ValueError, match="not manifold"):
+        load_part(_write(pair, tmp_path / "pair.obj"))
+    with pytest.raises(ValueError, match="unknown tool axis rule"):
+        EdgeCurve(sharp_edges(load_part(PARTS / "wedge.stl"))[0]).tool_axis(
+            0.0, rule="normal"
+        )
+
+
+@pytest.mark.skipif(
+    importlib.util.find_spec("cascadio") is not None,
+    reason="cascadio is installed: STEP files are read",
+)
+def test_step_without_cascadio_says_so(tmp_path):
+    step = tmp_path / "part.step"
+    step.write_text("ISO-10303-21;\nEND-ISO-10303-21;\n")
+    with pytest.raises(ValueError, match="reading STEP needs cascadio"):
+        load_part(step)
