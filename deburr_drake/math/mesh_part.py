@@ -26,6 +26,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from pathlib import Path
+import tempfile
 
 import numpy as np
 from scipy.interpolate import BSpline, CubicSpline
@@ -91,8 +92,6 @@ def _read_step(path, deflection):
             f"{path}: reading STEP needs cascadio "
             "(pip install deburr_drake[cad])"
         ) from error
-    import tempfile
-
     with tempfile.TemporaryDirectory() as folder:
         glb = Path(folder) / "part.glb"
         try:
@@ -105,7 +104,9 @@ def _read_step(path, deflection):
             )
             scene = trimesh.load(str(glb), file_type="glb")
         except Exception as error:
-            raise ValueError(f"{path}: not a readable STEP file ({error})")
+            raise ValueError(
+                f"{path}: not a readable STEP file ({error})"
+            ) from error
     vertices, faces, tags = [], [], []
     offset = 0
     geometries = getattr(scene, "geometry", {}) or {}
@@ -132,7 +133,7 @@ def _read_mesh(path, file_type):
     except Exception as error:
         raise ValueError(
             f"{path}: not a readable {file_type.upper()} file ({error})"
-        )
+        ) from error
     if isinstance(mesh, trimesh.Scene):
         mesh = mesh.to_geometry()
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
@@ -143,7 +144,7 @@ def _read_mesh(path, file_type):
 
 
 def _check_closed(path, mesh):
-    edges, counts = np.unique(mesh.edges_sorted, axis=0, return_counts=True)
+    _, counts = np.unique(mesh.edges_sorted, axis=0, return_counts=True)
     open_edges = int(np.sum(counts == 1))
     shared = int(np.sum(counts > 2))
     if shared:
@@ -158,7 +159,6 @@ def _check_closed(path, mesh):
         )
     if not mesh.is_winding_consistent:
         raise ValueError(f"{path}: the triangles are not consistently wound")
-    del edges
 
 
 def load_part(

@@ -231,14 +231,12 @@ def test_bad_files_and_fields(tmp_path):
     with pytest.raises(ValueError, match="open, not watertight"):
         load_part(_write(box, tmp_path / "open.stl"))
     # two tetrahedra sharing one edge: four triangles on it
-    a = trimesh.creation.box().convex_hull
     vertices = np.array(
         [[0, 0, 0], [0, 0, 1], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]],
         float,
     )
     faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
     faces += [[0, 4, 1], [0, 1, 5], [0, 5, 4], [1, 4, 5]]
-    del a
     pair = trimesh.Trimesh(vertices, faces, process=False)
     with pytest.raises(ValueError, match="not manifold"):
         load_part(_write(pair, tmp_path / "pair.obj"))
