@@ -127,6 +127,53 @@ CASES = {
         SIM + ["--scenario-text", "tube: {hydroelastic_modulus: 1.0e300}"],
         ["tube.hydroelastic_modulus = 1e+300", "(0, 1e12] Pa"],
     ),
+    "a burr written in mm": (
+        SIM
+        + [
+            "--scenario-text",
+            "process: {burrs: [{length: 8, height: 1.5, thickness: 2}]}",
+        ],
+        ["process.burrs[0].length = 8.0 is invalid", "m, not mm"],
+    ),
+    "a burr taller than the cutter above the edge": (
+        SIM + ["--scenario-text", "process: {burrs: [{height: 1.5}]}"],
+        ["process.burrs[0].height = 1.5 is invalid", "tool.cutter_length"],
+    ),
+    "a burr thicker than the wall": (
+        SIM + ["--scenario-text", "process: {burrs: [{thickness: 2}]}"],
+        ["process.burrs[0].thickness = 2.0", "tube.wall_thickness"],
+    ),
+    "a profile started by a vertex and a fraction": (
+        SIM
+        + [
+            "--scenario",
+            "pocket",
+            "--scenario-text",
+            "edge: {start_vertex: 1, start_fraction: 0.5}",
+        ],
+        ["edge.start_fraction = 0.5", "edge.start_vertex (1)"],
+    ),
+    "a vertex start on a circle": (
+        SIM + ["--scenario-text", "edge: {start_vertex: 0}"],
+        ["edge.start_vertex = 0", "only a profile edge"],
+    ),
+    "an L pocket's origin on its inner corner, started by a ray": (
+        SIM
+        + [
+            "--scenario",
+            "pocket",
+            "--scenario-text",
+            "edge: {fillet_radius: 0.006, vertices: [[-0.03, -0.03], "
+            "[0.03, -0.03], [0.03, 0.0], [0.0, 0.0], [0.0, 0.03], "
+            "[-0.03, 0.03]]}",
+        ],
+        ["edge.start_angle = 0.0 is invalid", "start_vertex"],
+    ),
+    "a tool mount on a model holding its own tool": (
+        SIM
+        + ["--scenario-text", "robot: {tool_mount: {rpy: [0.0, 1.0, 0.0]}}"],
+        ["robot.tool_mount = ", "robot.flange_frame is empty"],
+    ),
     "unknown scenario": (
         SIM + ["--scenario", "no_such"],
         ["'no_such' is unknown", "paper"],

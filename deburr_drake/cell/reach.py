@@ -3,11 +3,19 @@ and every point of the tool's path within reach."""
 
 from __future__ import annotations
 
+import copy
+import math
+
 import numpy as np
 
 from deburr_drake.cell.arm import check_reach
 from deburr_drake.cell.edge import believed_contour, start_position
-from deburr_drake.cell.robot import check_robot, ik_seed
+from deburr_drake.cell.robot import (
+    check_robot,
+    ik_seed,
+    make_robot_model,
+    mount_pose,
+)
 from deburr_drake.config import ConfigError, Scenario
 
 __all__ = ["check_part_in_reach"]
@@ -30,6 +38,86 @@ def _mtime(robot):
         return None
 
 
+#: The spindle's turn in the flange frame (robot.tool_mount.rpy, rad)
+#: that points the tool along each axis of the flange frame.
+_FLANGE_AXES = {
+    "+z": [0.0, 0.0, 0.0],
+    "+x": [0.0, math.pi / 2, 0.0],
+    "-x": [0.0, -math.pi / 2, 0.0],
+    "+y": [-math.pi / 2, 0.0, 0.0],
+    "-y": [math.pi / 2, 0.0, 0.0],
+    "-z": [math.pi, 0.0, 0.0],
+}
+
+
+def _reaches(robot, points):
+    """Whether the arm with the tool frame of ``robot`` reaches every
+    point (some posture, the tool vertical, the joint limits)."""
+    model = make_robot_model(robot)
+    miss = check_reach(
+        model,
+        points,
+        instance=model.GetFrameByName(robot.tool_frame).model_instance(),
+        q_guess=lambda p: ik_seed(robot, p),
+        tool_frame=robot.tool_frame,
+    )
+    return miss is None or miss[2] == 0.0
+
+
+def _axis_that_reaches(robot, point):
+    """(axis name, robot with the spindle turned along it) of the first
+    axis of the flange frame along which the tool reaches ``point``, the
+    mount's offset kept; None if none does (or the model holds its own
+    tool)."""
+    if not robot.flange_frame:
+        return None
+    current = mount_pose(robot).rotation()
+    for axis, rpy in _FLANGE_AXES.items():
+        turned = copy.deepcopy(robot)
+        turned.tool_mount.rpy = [round(a, 6) for a in rpy]
+        turn = current.inverse() @ mount_pose(turned).rotation()
+        if turn.IsNearlyIdentity(1e-6):
+            continue
+        if _reaches(turned, [point]):
+            return axis, turned
+    return None
+
+
+def _shown_mount(mount) -> str:
+    def numbers(values):
+        return "[" + ", ".join(f"{v:.7g}" for v in values) + "]"
+
+    return f"{{xyz: {numbers(mount.xyz)}, rpy: {numbers(mount.rpy)}}}"
+
+
+def _axis_error(robot, where, p, distance, points):
+    """The ConfigError naming robot.tool_mount when the tool turned along
+    another axis of the flange frame reaches the point ``p`` the mount as
+    written does not; None when the axis does not explain it."""
+    found = _axis_that_reaches(robot, p)
+    if found is None:
+        return None
+    axis, turned = found
+    z = mount_pose(robot).rotation().matrix()[:, 2]
+    whole = (
+        "every point of the path"
+        if _reaches(turned, points)
+        else "that point (not every point of the path)"
+    )
+    return ConfigError(
+        f"robot.tool_mount = {_shown_mount(robot.tool_mount)} is invalid: "
+        f"the tool axis, not the distance, puts {where}, tool tip at "
+        f"{np.round(p, 4).tolist()} m, out of reach ({_mm(distance)} mm "
+        "beyond the nearest reachable tool position with the spindle along "
+        f"{np.round(z, 3).tolist()} of robot.flange_frame "
+        f"{robot.flange_frame!r}); with the tool along {axis} of that "
+        f"frame the arm reaches {whole}: the tool axis points along {axis} "
+        "of the flange frame: allowed robot.tool_mount: "
+        f"{_shown_mount(turned.tool_mount)} (the spindle's pose in the "
+        "flange frame, m and rad)"
+    )
+
+
 #: Scenarios already checked (the robot, part and tool as text): a diagram
 #: built again for the same cell (the analysis builds many) checks once.
 _REACHED = set()
@@ -40,7 +128,9 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
     (deburr_drake.cell.robot.check_robot: the model file, its frames, its
     joints), or naming the first point of the tool's path (the start, then
     ``samples`` points along the edge) the arm cannot reach with the tool
-    vertical, and how far out of reach it is."""
+    vertical, and how far out of reach it is; when the tool turned along
+    another axis of the flange frame (the spindle's mount) reaches it, the
+    error names ``robot.tool_mount`` and that axis instead."""
     robot = scenario.robot
     key = (
         repr(
@@ -97,6 +187,9 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
                 f"{np.round(q_other, 3).tolist()} rad: allowed a seed "
                 "near that posture"
             )
+        axis_error = _axis_error(robot, where, p, distance, points)
+        if axis_error is not None:
+            raise axis_error
         raise ConfigError(
             f"tube.position = {list(scenario.tube.position)} is out of the "
             f"arm's reach: {where}, tool tip at {np.round(p, 4).tolist()} m, "

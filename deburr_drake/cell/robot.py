@@ -14,12 +14,13 @@ The tool is mounted one of two ways:
 - the model holds it (arm5, cartesian_tool): a body with frame
   ``robot.tool_frame`` at the tool tip, hanging from the weld joint
   ``robot.sensor_joint`` (the force/torque sensor);
-- the model is a bare arm with a mounting face, frame ``robot.flange_frame``
-  (+z out of the flange, ISO 9409-1): :func:`add_robot` welds the sensor
-  (joint ``robot.sensor_joint``) and a spindle body ``tool`` of
-  ``robot.tool_mass`` there, tip ``robot.tool_length`` along the flange's
-  +z, the tool frame's +z pointing back to the flange (the cutter stands on
-  +z from the tip, as on arm5).
+- the model is a bare arm with a mounting face, frame ``robot.flange_frame``:
+  :func:`add_robot` welds the sensor (joint ``robot.sensor_joint``) and a
+  spindle body ``tool`` of ``robot.tool_mass`` there, at
+  ``robot.tool_mount`` in the flange frame (default identity: the tool
+  along the flange's +z, ISO 9409-1), tip ``robot.tool_length`` along the
+  spindle's +z, the tool frame's +z pointing back to the flange (the
+  cutter stands on +z from the tip, as on arm5).
 
 The controller maps the task-space law through the tool frame's 6 x n
 Jacobian, tau = J_v^T f + J_w^T m (deburr_drake.control.controller), which needs
@@ -48,7 +49,7 @@ from pathlib import Path
 
 import numpy as np
 from pydrake.geometry import Cylinder
-from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
 from pydrake.multibody.tree import (
     FixedOffsetFrame,
@@ -85,6 +86,7 @@ __all__ = [
     "finalize",
     "LIMITS_NOTE",
     "spindle_inertia",
+    "mount_pose",
     "start_pose",
     "loop_numbers",
 ]
@@ -214,10 +216,12 @@ def _attach_spindle(plant, instance, config: RobotConfig):
     tool = plant.AddRigidBody(
         "tool", instance, spindle_inertia(config.tool_mass, config.tool_length)
     )
-    # Tip tool_length out along the flange's +z; tool +z back to the flange.
-    X_FT = RigidTransform(
+    # Tip tool_length out along the spindle's +z; tool +z back to the
+    # spindle. The spindle sits at tool_mount in the flange frame.
+    X_ST = RigidTransform(
         RotationMatrix.MakeXRotation(math.pi), [0.0, 0.0, config.tool_length]
     )
+    X_FT = mount_pose(config) @ X_ST
     plant.AddJoint(
         WeldJoint(config.sensor_joint, flange, tool.body_frame(), X_FT)
     )
@@ -233,6 +237,13 @@ def _attach_spindle(plant, instance, config: RobotConfig):
             "spindle",
             np.array([0.3, 0.3, 0.35, 1.0]),
         )
+
+
+def mount_pose(config: RobotConfig) -> RigidTransform:
+    """X_FS, the spindle's pose in the flange frame: ``robot.tool_mount``
+    (URDF's fixed-axis roll, pitch, yaw)."""
+    mount = config.tool_mount
+    return RigidTransform(RollPitchYaw(mount.rpy), np.asarray(mount.xyz, float))
 
 
 def _weld_free_base(plant, instance):

@@ -26,6 +26,7 @@ from deburr_drake.config.cell import (
     RobotConfig,
     SensorConfig,
     ToolConfig,
+    ToolMountConfig,
     TubeConfig,
 )
 from deburr_drake.config.checks import ConfigError
@@ -72,6 +73,7 @@ __all__ = [
     "ProcessConfig",
     "BurrConfig",
     "RobotConfig",
+    "ToolMountConfig",
     "SimulationConfig",
     "GuardsConfig",
     "PartErrorConfig",

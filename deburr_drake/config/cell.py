@@ -27,6 +27,7 @@ __all__ = [
     "SensorConfig",
     "BurrConfig",
     "ProcessConfig",
+    "ToolMountConfig",
     "RobotConfig",
     "PartErrorConfig",
     "DropoutConfig",
@@ -148,8 +149,10 @@ class EdgeConfig:
     material inside); the tube's wall thickness, height, compliant layer
     and modulus describe its material. The pass starts where the ray from
     ``tube.position`` at polar angle ``start_angle`` meets the cutter's
-    path (the crossing nearest to ``tube.position``) and runs in
-    ``direction``."""
+    path (the crossing nearest to ``tube.position``), or at the middle of
+    vertex ``start_vertex``'s fillet, or ``start_fraction`` of the path
+    counter-clockwise from there for vertex 0 (one of the three), and runs
+    in ``direction``."""
 
     kind: str = "circle"  # -, circle, straight or profile
     start_angle: float = 0.0  # rad, polar angle of the contour start
@@ -161,6 +164,12 @@ class EdgeConfig:
     vertices: list[list[float]] = field(default_factory=list)
     fillet_radius: float = 0.008  # m, every corner rounded (profile)
     side: str = "inner"  # -, profile: inner (pocket) or outer (boss)
+    # -, profile: the start at the middle of this vertex's fillet; -1: by
+    # start_angle
+    start_vertex: int = -1
+    # -, profile: the start this fraction of the path counter-clockwise
+    # from vertex 0's fillet; -1: by start_angle
+    start_fraction: float = -1.0
 
     KINDS = ("circle", "straight", "profile")
     SIDES = ("inner", "outer")
@@ -179,7 +188,20 @@ class EdgeConfig:
             center=center,
             start_angle=self.start_angle,
             direction=self.direction,
+            start_vertex=self.start_vertex if self.start_vertex >= 0 else None,
+            start_fraction=(
+                self.start_fraction if self.start_fraction >= 0 else None
+            ),
         )
+
+    def path_length(self, tube, tool) -> float:
+        """The cutter's path along the edge (m): the length a burr's arc
+        and ``center_fraction`` are measured on."""
+        if self.kind == "profile":
+            return self.profile_path([0.0, 0.0, 0.0], tool.cutter_radius).length
+        if self.kind == "straight":
+            return self.length
+        return 2 * math.pi * (tube.inner_radius - tool.cutter_radius)
 
     def check_profile(self, tube, tool, part_error):
         """One ConfigError naming the field if the profile, the cutter's
@@ -218,6 +240,44 @@ class EdgeConfig:
                 f"{field} = {value!r} is invalid: {message}"
             ) from None
 
+    def _check_start(self):
+        """At most one of start_angle, start_vertex, start_fraction places
+        a profile's start; the other edges start by angle or heading."""
+        vertex, fraction = self.start_vertex, self.start_fraction
+        _require(
+            isinstance(vertex, int)
+            and not isinstance(vertex, bool)
+            and -1 <= vertex < max(len(self.vertices), 0),
+            "edge.start_vertex",
+            vertex,
+            f"-1 or an index into edge.vertices (0 to {len(self.vertices) - 1})"
+            if self.kind == "profile"
+            else "-1 (only a profile edge starts at a vertex)",
+        )
+        _require(
+            isinstance(fraction, (int, float))
+            and (fraction == -1 or 0 <= fraction < 1)
+            and (fraction == -1 or self.kind == "profile"),
+            "edge.start_fraction",
+            fraction,
+            "-1 or a number in [0, 1) (a profile edge only)",
+        )
+        _require(
+            vertex == -1 or fraction == -1,
+            "edge.start_fraction",
+            fraction,
+            f"-1 while edge.start_vertex ({vertex}) places the start (one "
+            "of start_angle, start_vertex, start_fraction)",
+        )
+        placed = "start_vertex" if vertex != -1 else "start_fraction"
+        _require(
+            (vertex == -1 and fraction == -1) or self.start_angle == 0,
+            "edge.start_angle",
+            self.start_angle,
+            f"0 while edge.{placed} places the start (one of start_angle, "
+            "start_vertex, start_fraction)",
+        )
+
     def validate(self):
         _require(
             self.kind in self.KINDS,
@@ -249,6 +309,7 @@ class EdgeConfig:
             self.side,
             f"one of {self.SIDES}",
         )
+        self._check_start()
         if self.kind != "profile":
             return
         _require(
@@ -408,6 +469,37 @@ class ProcessConfig:
 
 
 @dataclass
+class ToolMountConfig:
+    """The spindle's pose in the flange frame (URDF's convention: the
+    flange-to-spindle transform, rotation R = Rz(yaw) Ry(pitch) Rx(roll)
+    about the flange's fixed axes). The spindle points its tool along its
+    own +z, so ``rpy: [0, 1.5707963, 0]`` points it along the flange's +x;
+    the default (identity) along the flange's +z (ISO 9409-1)."""
+
+    xyz: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0]
+    )  # m, the spindle's origin in the flange frame
+    rpy: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0]
+    )  # rad, roll, pitch, yaw about the flange's fixed x, y, z
+
+    def validate(self, owner="robot.tool_mount"):
+        _vector(owner, "xyz", self.xyz, 3, _finite)
+        _vector(owner, "rpy", self.rpy, 3, _finite)
+        for i, xyz in enumerate(self.xyz):
+            _require(
+                abs(xyz) <= 2.0,
+                f"{owner}.xyz[{i}]",
+                xyz,
+                "a number in [-2, 2] m (the spindle's origin near the "
+                "flange, in metres)",
+            )
+
+    def is_identity(self) -> bool:
+        return not any(self.xyz) and not any(self.rpy)
+
+
+@dataclass
 class RobotConfig:
     """Which robot holds the tool, the names the cell needs on it, and the
     plant's joint friction (the D term of (1)): viscous damping comes from
@@ -421,10 +513,11 @@ class RobotConfig:
     frame ``tool_frame`` at the tool tip (+z along the tool axis, away from
     the part) and a weld joint ``sensor_joint`` (the force/torque sensor)
     as its parent joint (``flange_frame`` empty: arm5 and cartesian_tool),
-    or ``flange_frame`` names the model's mounting face (+z out of the
-    flange) and the cell welds the sensor (joint ``sensor_joint``) and a
-    spindle of ``tool_mass`` there, its tip ``tool_length`` along the
-    flange's +z (deburr_drake.cell.robot). The controller's model of the arm
+    or ``flange_frame`` names the model's mounting face and the cell welds
+    the sensor (joint ``sensor_joint``) and a spindle of ``tool_mass``
+    there, at ``tool_mount`` in the flange frame (default: on the flange,
+    along its +z), its tip ``tool_length`` along the spindle's +z
+    (deburr_drake.cell.robot). The controller's model of the arm
     differs from the plant by ``controller.model_mass_scale``."""
 
     model: str = "cartesian_tool"  # -, shipped name, or a .urdf / .sdf path
@@ -439,6 +532,9 @@ class RobotConfig:
     flange_frame: str = ""  # -, frame the spindle is mounted on; "": none
     tool_length: float = 0.12  # m, flange face to tool tip (flange_frame)
     tool_mass: float = 1.5  # kg, sensor and spindle (flange_frame)
+    # The spindle's pose in the flange frame (flange_frame): a flange
+    # whose tool axis is not its +z, or a tilted or offset spindle.
+    tool_mount: ToolMountConfig = field(default_factory=ToolMountConfig)
     # rad, one per joint: the inverse kinematics' start and the posture it
     # stays near (elbow up, wrist flipped or not); empty: the model's
     # default (arm5: its ready pose turned towards the part).
@@ -507,6 +603,15 @@ class RobotConfig:
             )
         _positive(o, "tool_length", self.tool_length)
         _positive(o, "tool_mass", self.tool_mass)
+        self.tool_mount.validate(f"{o}.tool_mount")
+        _require(
+            self.flange_frame != "" or self.tool_mount.is_identity(),
+            f"{o}.tool_mount",
+            {"xyz": self.tool_mount.xyz, "rpy": self.tool_mount.rpy},
+            "the identity when robot.flange_frame is empty (the model "
+            "holds its own tool; name its mounting face in "
+            "robot.flange_frame for the cell to mount the spindle)",
+        )
         for i, q in enumerate(self.ik_seed):
             _require(
                 isinstance(q, (int, float)) and math.isfinite(q),

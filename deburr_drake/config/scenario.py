@@ -114,8 +114,10 @@ class Scenario:
     """Everything one simulation needs."""
 
     name: str = "point_mass"  # -, names the output directory out/<name>
-    # Its part, task, controller and simulation settings, not its robot
-    # (this file's robot section starts from the defaults).
+    # Every section this file does not set, and every field of a section
+    # it sets in part; a robot section that names robot.model starts from
+    # the defaults instead (the base's flange, seed and friction are its
+    # own arm's).
     base: str = ""  # -, a shipped scenario or YAML file this one starts from
     robot: RobotConfig = field(default_factory=RobotConfig)
     tube: TubeConfig = field(default_factory=TubeConfig)
@@ -190,6 +192,37 @@ class Scenario:
         )
         if self.edge.kind == "profile":
             self.edge.check_profile(self.tube, self.tool, self.part_error)
+        self._check_burrs()
+
+    def _check_burrs(self):
+        """Each burr fits on the edge, under the cutter and on the wall (a
+        size written in mm is a thousand times too large for all three)."""
+        edge = self.edge.path_length(self.tube, self.tool)
+        above = self.tool.cutter_length - self.tool.engagement
+        wall = self.tube.wall_thickness
+        for k, burr in enumerate(self.process.burrs):
+            name = f"process.burrs[{k}]"
+            _require(
+                burr.length <= edge,
+                f"{name}.length",
+                burr.length,
+                f"a number in (0, {edge:.6g}] m (the edge's length along "
+                "the cutter's path; m, not mm)",
+            )
+            _require(
+                burr.height <= above,
+                f"{name}.height",
+                burr.height,
+                f"a number in [0, {above:.6g}] m (the cutter above the "
+                "edge, tool.cutter_length - tool.engagement; m, not mm)",
+            )
+            _require(
+                burr.thickness <= wall,
+                f"{name}.thickness",
+                burr.thickness,
+                f"a number in [0, {wall:.6g}] m (tube.wall_thickness: "
+                "the burr stands on the wall; m, not mm)",
+            )
 
     def _check_localisation(self):
         """Probing fits what the edge allows; the believed part is one
@@ -560,8 +593,10 @@ def _resolve_robot_model(robot: RobotConfig, directory: Path):
 
 def _base_of(source: str, path: Path, depth: int = 0) -> Scenario:
     """The defaults a scenario file starts from: its ``base`` scenario
-    (a shipped name or a file relative to it) with the robot section reset,
-    or the dataclasses' defaults."""
+    (a shipped name or a file relative to it), or the dataclasses'
+    defaults. The file's sections then merge field by field over it, except
+    a robot section that names ``robot.model``: that starts from the
+    defaults."""
     import yaml
 
     data = yaml.safe_load(source)
@@ -583,7 +618,12 @@ def _base_of(source: str, path: Path, depth: int = 0) -> Scenario:
     scenario = yaml_load_typed(
         filename=str(base_path), defaults=_base_of(text, base_path, depth + 1)
     )
-    scenario.robot = RobotConfig()
+    _resolve_robot_model(scenario.robot, base_path.parent)
+    robot = data.get("robot")
+    if isinstance(robot, dict) and "model" in robot:
+        # A robot section that names its model describes that arm whole:
+        # the base's flange, seed, friction and mount are its own arm's.
+        scenario.robot = RobotConfig()
     scenario.base = ""
     return scenario
 

@@ -691,7 +691,12 @@ class ProfileContour(_ClosedAboutCenter):
     fillet_radius + offset on a boss (the opposite at a right turn).
 
     Arc position 0 is where the ray from ``center`` at polar angle
-    ``start_angle`` meets the path (the crossing nearest to the centre);
+    ``start_angle`` meets the path (the crossing nearest to the centre); or,
+    given ``start_vertex`` k, the path's point nearest vertex k (the middle
+    of its fillet); or, given ``start_fraction`` f in [0, 1), the point f of
+    the path's length counter-clockwise from vertex 0's (a vertex or a
+    fraction places the start where a ray would graze the path, e.g. from an
+    origin on a vertex; ``start_angle`` is then not used for the start).
     ``direction`` +1 runs counter-clockwise. A square of side 2 R with
     fillets R is the circle of radius R - offset (pocket) with the same
     start. ValueError names what is wrong with a profile: too few or
@@ -699,7 +704,7 @@ class ProfileContour(_ClosedAboutCenter):
     clockwise order, self-intersection, fillets that do not fit on a side,
     an arc radius <= 0 after the offset (a pocket's fillet not larger than
     the cutter), a path that overlaps itself, a start ray that misses the
-    path.
+    path, a start vertex that is not one or a fraction outside [0, 1).
     """
 
     MATERIALS = ("outside", "inside")
@@ -714,6 +719,8 @@ class ProfileContour(_ClosedAboutCenter):
         center=(0.0, 0.0, 0.0),
         start_angle=0.0,
         direction=1,
+        start_vertex=None,
+        start_fraction=None,
     ):
         V = _profile_vertices(vertices)
         R = _finite_scalar(fillet_radius, "fillet_radius")
@@ -738,7 +745,37 @@ class ProfileContour(_ClosedAboutCenter):
                 f"{u[0] * 1e3:.1f} and {u[1] * 1e3:.1f} mm along it): the "
                 "profile is too narrow for the cutter there"
             )
-        self._u_start = self._start_parameter(path)
+        self._start_vertex, self._start_fraction = start_vertex, start_fraction
+        if start_vertex is not None and start_fraction is not None:
+            raise ValueError("give start_vertex or start_fraction, not both")
+        if start_vertex is not None:
+            self._u_start = self._vertex_parameter(start_vertex)
+        elif start_fraction is not None:
+            f = _finite_scalar(start_fraction, "start_fraction")
+            if not 0.0 <= f < 1.0:
+                raise ValueError(f"start_fraction must be in [0, 1), got {f}")
+            self._u_start = (
+                self._vertex_parameter(0) + f * self._length
+            ) % self._length
+        else:
+            self._u_start = self._start_parameter(path)
+
+    def _vertex_parameter(self, vertex):
+        """The counter-clockwise parameter of the path's point nearest
+        vertex ``vertex``: the middle of its fillet (the arc that follows
+        side vertex - 1), or where sides vertex - 1 and vertex meet if they
+        do not turn there."""
+        n = len(self._vertices)
+        if not (isinstance(vertex, (int, np.integer)) and 0 <= vertex < n):
+            raise ValueError(
+                f"start_vertex must be a vertex index in [0, {n - 1}], "
+                f"got {vertex!r}"
+            )
+        lines = np.flatnonzero(self._kinds == 0)  # side k is line k
+        k = (lines[(vertex - 1) % n] + 1) % len(self._kinds)
+        if self._kinds[k] == 1:
+            return float(self._U[k] + 0.5 * self._seg_len[k])
+        return float(self._U[k])
 
     def _store_segments(self, kinds, lines, arcs):
         """The segments of :func:`_profile_segments` as arrays: the path
@@ -802,7 +839,9 @@ class ProfileContour(_ClosedAboutCenter):
         if len(ks) == 0:
             raise ValueError(
                 f"the ray at start_angle {a} rad from the profile's origin "
-                "meets no point of the path (is the origin outside it?)"
+                "meets no point of the path (is the origin outside it? "
+                "start_vertex or start_fraction place the start without a "
+                "ray)"
             )
         du = self._length / len(path)
         radii = np.hypot(path[ks, 0], path[ks, 1])
@@ -842,6 +881,8 @@ class ProfileContour(_ClosedAboutCenter):
             center=self._center,
             start_angle=self._start_angle,
             direction=self._direction,
+            start_vertex=self._start_vertex,
+            start_fraction=self._start_fraction,
         )
 
     @property

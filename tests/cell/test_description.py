@@ -323,3 +323,58 @@ def test_example_robot_data_arms_load(urdf, flange, joints):
     )
     plant = check_robot(config)
     assert len(robot_joints(plant)) == joints == plant.num_actuators()
+
+
+_Z1 = """
+name: z1_cell
+base: paper_6dof
+robot:
+  model: package://example-robot-data/robots/z1_description/urdf/z1.urdf
+  package_paths: ["pip:example-robot-data/cmeel.prefix/share"]
+  flange_frame: link06
+controller: {design: auto}
+tube: {position: [0.35, 0.0, 0.0]}
+"""
+
+#: Unitree Z1's link06 points its tool along +x: the mount that says so.
+_Z1_MOUNT = "robot: {tool_mount: {rpy: [0.0, 1.5707963, 0.0]}}"
+
+
+@needs_erd
+def test_a_flange_pointing_its_tool_along_x_names_the_tool_mount(tmp_path):
+    from deburr_drake.cell.reach import check_part_in_reach
+
+    path = tmp_path / "z1.yaml"
+    path.write_text(_Z1)
+    with pytest.raises(ConfigError) as e:
+        check_part_in_reach(load_scenario(str(path)))
+    message = str(e.value)
+    assert message.startswith("robot.tool_mount = ") and "\n" not in message
+    assert "the tool axis, not the distance" in message
+    assert "along +x of the flange frame" in message
+    assert "every point of the path" in message
+    check_part_in_reach(load_scenario(str(path), text=_Z1_MOUNT))
+
+
+@needs_erd
+@pytest.mark.slow
+def test_a_flange_along_x_with_its_tool_mount_cuts(tmp_path):
+    """Z1 with the mount, designed gains, 4 s of paper_6dof: in contact,
+    at the desired depth, no guard."""
+    from deburr_drake.cell.diagram import make_deburring_diagram
+    from deburr_drake.cell.gains import resolve_design
+    from deburr_drake.math import metrics
+    from deburr_drake.runs.simulation import simulate
+
+    path = tmp_path / "z1.yaml"
+    path.write_text(_Z1)
+    scenario = resolve_design(load_scenario(str(path), text=_Z1_MOUNT))
+    log = simulate(
+        make_deburring_diagram(scenario=scenario), scenario, duration=4.0
+    )
+    assert log.stop_reason == "duration"
+    ch = log["chamfer"]
+    t_contact = metrics.first_time(ch["t"], ch["f_n"] > 1.0)
+    assert t_contact < 0.5
+    late = metrics.window(ch["t"], 2.0)
+    assert np.max(np.abs(ch["delta"][late] - 5e-4)) < 3e-5

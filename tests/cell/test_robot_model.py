@@ -23,6 +23,7 @@ from deburr_drake.cell.robot import (
 from deburr_drake.config import (
     ConfigError,
     RobotConfig,
+    ToolMountConfig,
     load_scenario,
     scenario_path,
 )
@@ -99,6 +100,39 @@ def test_the_spindle_hangs_from_the_flange_on_the_sensor_weld():
     np.testing.assert_allclose(
         X_WT.rotation().matrix()[:, 2], -flange_z, atol=1e-12
     )
+
+
+def test_the_tool_mount_turns_and_offsets_the_spindle_on_the_flange():
+    """robot.tool_mount is the spindle's pose in the flange frame (URDF's
+    roll, pitch, yaw): pitched a quarter turn, the tool points along the
+    flange's +x, from the mount's offset."""
+    xyz = [0.01, -0.02, 0.03]
+    mounted = _arm6(
+        tool_length=0.12,
+        tool_mount=ToolMountConfig(xyz=xyz, rpy=[0.0, np.pi / 2, 0.0]),
+    )
+    plant = make_robot_model(mounted)
+    context = plant.CreateDefaultContext()
+    X_WF = plant.GetFrameByName("flange").CalcPoseInWorld(context)
+    X_WT = plant.GetFrameByName("tool_tip").CalcPoseInWorld(context)
+    R_WF = X_WF.rotation().matrix()
+    np.testing.assert_allclose(
+        X_WT.translation(),
+        X_WF.translation() + R_WF @ (np.array(xyz) + [0.12, 0.0, 0.0]),
+        atol=1e-12,
+    )
+    np.testing.assert_allclose(
+        X_WT.rotation().matrix()[:, 2], -R_WF[:, 0], atol=1e-12
+    )
+
+
+def test_a_tool_mount_on_a_model_holding_its_own_tool_is_one_line():
+    with pytest.raises(ConfigError, match=r"^robot.tool_mount = .*flange"):
+        RobotConfig(
+            model="arm5", tool_mount=ToolMountConfig(rpy=[0.0, 1.0, 0.0])
+        ).validate()
+    with pytest.raises(ConfigError, match=r"robot.tool_mount.rpy\[1\]"):
+        _arm6(tool_mount=ToolMountConfig(rpy=[0.0, np.nan, 0.0])).validate()
 
 
 def test_loop_numbers_give_the_gravity_error_and_the_sampled_rate():

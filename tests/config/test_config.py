@@ -165,3 +165,149 @@ def test_probe_fit_radius_only_on_a_circle(name):
     ):
         load_scenario(name, text=text)
     load_scenario("paper", text=text)
+
+
+def _file(tmp_path, text, name="cell.yaml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return str(path)
+
+
+def test_a_base_file_inherits_every_section_it_does_not_set(tmp_path):
+    pocket = load_scenario("pocket")
+    loaded = load_scenario(
+        _file(
+            tmp_path,
+            "name: my_pocket\nbase: pocket\n"
+            "edge: {vertices: [[-0.02, -0.02], [0.02, -0.02], [0.02, 0.02],"
+            " [-0.02, 0.02]]}\n"
+            "process: {burrs: [{center_fraction: 0.3, length: 0.006, "
+            "height: 0.0008, thickness: 0.002}]}\n"
+            "task: {desired_chamfering_force: 8.0}\n",
+        )
+    )
+    assert loaded.robot == pocket.robot and loaded.robot.model == "arm5"
+    assert loaded.controller == pocket.controller
+    # A section set in part keeps the base's other fields.
+    assert loaded.edge.kind == "profile" and loaded.edge.side == "inner"
+    assert loaded.edge.fillet_radius == pocket.edge.fillet_radius
+    assert loaded.task.desired_depth == pocket.task.desired_depth
+    assert loaded.task.desired_chamfering_force == 8.0
+    assert loaded.process.cutting_coefficient == (
+        pocket.process.cutting_coefficient
+    )
+    assert len(loaded.process.burrs) == 1
+
+
+def test_a_base_files_robot_merges_unless_it_names_its_model(tmp_path):
+    same_arm = load_scenario(
+        _file(
+            tmp_path, "base: pocket\nrobot: {friction_smoothing_speed: 0.002}"
+        )
+    )
+    pocket = load_scenario("pocket").robot
+    assert same_arm.robot.model == "arm5"
+    assert same_arm.robot.joint_coulomb_friction == (
+        pocket.joint_coulomb_friction
+    )
+    assert same_arm.robot.friction_smoothing_speed == 0.002
+    # Naming the model describes the arm whole: the base's friction list
+    # (five joints of arm5) is not carried to it.
+    other = load_scenario(
+        _file(
+            tmp_path,
+            "base: pocket\nrobot: {model: arm6, flange_frame: flange}\n"
+            "tube: {position: [0.95, 0.0, 0.45]}",
+            "other.yaml",
+        )
+    )
+    assert other.robot.joint_coulomb_friction == []
+    assert other.robot.model == "arm6"
+
+
+def test_a_base_files_relative_robot_model_is_relative_to_the_base(
+    tmp_path,
+):
+    from deburr_drake.config import scenario_path
+
+    folder = tmp_path / "cells"
+    folder.mkdir()
+    sdf = (
+        scenario_path("paper").parents[2] / "models" / "arm6.sdf"
+    ).read_text()
+    (folder / "my_arm.sdf").write_text(sdf)
+    _file(
+        folder,
+        "base: paper_6dof\nrobot: {model: my_arm.sdf, flange_frame: flange}",
+        "base.yaml",
+    )
+    child = load_scenario(
+        _file(tmp_path, "base: cells/base.yaml\ntask: {desired_depth: 4e-4}")
+    )
+    assert child.robot.model == str((folder / "my_arm.sdf").resolve())
+
+
+@pytest.mark.parametrize(
+    "burr, field, allowed",
+    [
+        # Written in mm: each size a thousand times too large.
+        ("{length: 8, height: 0.001, thickness: 0.002}", "length", "(0, "),
+        ("{length: 0.008, height: 1.5, thickness: 0.002}", "height", "[0, "),
+        ("{length: 0.008, height: 0.001, thickness: 2}", "thickness", "[0, "),
+        ("{length: 8, height: 1.5, thickness: 2}", "length", "m, not mm"),
+        # Longer than the bore's path (2 pi 27 mm), taller than the cutter
+        # above the edge (18 mm), thicker than the wall (5 mm).
+        ("{length: 0.2}", "length", "0.169646] m"),
+        ("{height: 0.019}", "height", "0.018] m"),
+        ("{thickness: 0.006}", "thickness", "0.005] m"),
+    ],
+)
+def test_a_burr_larger_than_the_part_or_the_tool_is_one_line(
+    burr, field, allowed
+):
+    with pytest.raises(ConfigError) as e:
+        load_scenario("paper", text=f"process: {{burrs: [{burr}]}}")
+    message = str(e.value)
+    assert message.startswith(f"process.burrs[0].{field} = ")
+    assert "\n" not in message and allowed in message
+
+
+def test_a_burr_as_long_as_a_straight_edge_fits_and_longer_does_not():
+    text = "edge: {kind: straight, length: 0.05}\nprocess: {burrs: [%s]}"
+    load_scenario("paper", text=text % "{center_fraction: 0.5, length: 0.05}")
+    with pytest.raises(ConfigError, match=r"burrs\[0\].length = 0.051"):
+        load_scenario("paper", text=text % "{length: 0.051}")
+
+
+@pytest.mark.parametrize(
+    "text, field",
+    [
+        ("edge: {start_vertex: 0}", "edge.start_vertex = 0"),
+        ("edge: {start_fraction: 0.5}", "edge.start_fraction = 0.5"),
+    ],
+)
+def test_a_start_by_vertex_or_fraction_is_a_profiles_only(text, field):
+    with pytest.raises(ConfigError, match=field):
+        load_scenario("paper", text=text)
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("edge: {start_vertex: 4}", "edge.start_vertex = 4 is invalid"),
+        ("edge: {start_fraction: 1.0}", "edge.start_fraction = 1.0"),
+        (
+            "edge: {start_vertex: 1, start_fraction: 0.2}",
+            r"edge.start_fraction = 0.2 is invalid: allowed -1 while",
+        ),
+        (
+            "edge: {start_vertex: 1, start_angle: 0.5}",
+            "edge.start_angle = 0.5 is invalid: allowed 0 while "
+            "edge.start_vertex",
+        ),
+    ],
+)
+def test_one_start_of_a_profile(text, message):
+    with pytest.raises(ConfigError, match=message):
+        load_scenario("pocket", text=text)
+    load_scenario("pocket", text="edge: {start_vertex: 3}")

@@ -625,3 +625,68 @@ def test_removal_scale_is_the_swept_band_per_metre_of_centre_travel():
     band = ((rho - r) ** 2 - (rho - r - d) ** 2) / 2
     assert removal_scale(-1 / rho, d, r) * d == pytest.approx(band / (rho - d))
     assert removal_scale(-1 / rho, d, r) < 1 < removal_scale(1 / 0.005, d, r)
+
+
+# An L-shaped pocket whose origin is its inner (reflex) corner, vertex 3.
+L_POCKET = [
+    [-0.03, -0.03],
+    [0.03, -0.03],
+    [0.03, 0.0],
+    [0.0, 0.0],
+    [0.0, 0.03],
+    [-0.03, 0.03],
+]
+
+
+def test_an_l_pocket_with_its_origin_on_a_vertex_starts_at_the_vertex():
+    center = [0.4, 0.0, Z]
+    with pytest.raises(ValueError, match="start_vertex or start_fraction"):
+        ProfileContour(L_POCKET, 0.006, offset=0.003, center=center)
+    path = ProfileContour(
+        L_POCKET, 0.006, offset=0.003, center=center, start_vertex=3
+    )
+    # The middle of the reflex corner's fillet: the arc of radius 6 + 3 mm
+    # about the fillet's centre (6, 6) mm, on the diagonal to the vertex.
+    d = 0.009 - 0.006 * math.sqrt(2)
+    np.testing.assert_allclose(
+        path.point_at(0.0),
+        [0.4 - d / math.sqrt(2), -d / math.sqrt(2), Z],
+        atol=1e-12,
+    )
+    # The same point whatever the direction; the offset path keeps it.
+    back = ProfileContour(
+        L_POCKET,
+        0.006,
+        offset=0.003,
+        center=center,
+        start_vertex=3,
+        direction=-1,
+    )
+    np.testing.assert_allclose(back.point_at(0.0), path.point_at(0.0))
+    np.testing.assert_allclose(
+        path.with_offset(0.0).point_at(0.0)[:2],
+        np.array(center[:2]) + 0.006 * (1 - 1 / math.sqrt(2)) * np.ones(2),
+        atol=1e-12,
+    )
+
+
+def test_start_fraction_counts_from_vertex_0_counter_clockwise():
+    at_0 = prof(start_vertex=0)
+    for f in (0.0, 0.3, 0.75):
+        path = prof(start_fraction=f)
+        np.testing.assert_allclose(
+            path.point_at(0.0), at_0.point_at(f * at_0.length), atol=1e-12
+        )
+    # Vertex 2 of the rectangle is half the (symmetric) path from vertex 0.
+    np.testing.assert_allclose(
+        prof(start_fraction=0.5).point_at(0.0),
+        prof(start_vertex=2).point_at(0.0),
+        atol=1e-12,
+    )
+    for bad, match in (
+        (dict(start_vertex=4), "start_vertex must be a vertex index"),
+        (dict(start_fraction=1.0), r"start_fraction must be in \[0, 1\)"),
+        (dict(start_vertex=0, start_fraction=0.1), "not both"),
+    ):
+        with pytest.raises(ValueError, match=match):
+            prof(**bad)
