@@ -45,7 +45,7 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 
 #: The guides a user follows: each at most MAX_LINES lines.
-GUIDES = ["getting-started.md", "python-api.md"]
+GUIDES = ["getting-started.md", "python-api.md", "localisation.md"]
 MAX_LINES = 250
 
 
@@ -121,7 +121,7 @@ def test_every_guide_is_short_and_shows_commands_that_run():
         assert len(text.splitlines()) <= MAX_LINES, name
         assert not re.search(r"\bissue \d+|\bcommit [0-9a-f]{7}", text), name
     runnable = {p.name for p in pages_with_console()}
-    assert {"getting-started.md"} <= runnable
+    assert {"getting-started.md", "localisation.md"} <= runnable
 
 
 @pytest.mark.slow
