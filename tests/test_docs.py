@@ -91,3 +91,17 @@ def test_the_metrics_reference_describes_every_metric_of_a_run():
         assert f"| `{name}` |" in page
     for name, doc in METRICS.items():
         assert doc.unit and doc.meaning and doc.how, name
+
+
+def test_readme_lists_every_shipped_scenario():
+    shipped = sorted(
+        p.stem for p in (ROOT / "deburr_drake" / "scenarios").glob("*.yaml")
+    )
+    text = (ROOT / "README.md").read_text()
+    assert [name for name in shipped if f"`{name}`" not in text] == []
+
+
+def test_pytest_names_the_reason_of_each_skip():
+    """The README promises the skipped tests' reasons: -rs prints them."""
+    config = (ROOT / "pyproject.toml").read_text()
+    assert re.search(r'^addopts = ".*-rs', config, re.M)
