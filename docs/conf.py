@@ -2,11 +2,13 @@
 
 Build it (warnings are errors, internal links checked) with the command in the
 README: ``python -m sphinx -W --keep-going -n -b html docs docs/_build/html``
-(``.ci/run`` runs it). Two pages are generated here at every build, never
+(``.ci/run`` runs it). Three pages are generated here at every build, never
 written by hand: ``scenario-reference.md`` from the config dataclasses
-(``deburr_drake.config.reference``) and ``api/*.md``, one page per module of the
-package (autodoc), so a module or a field added later is documented without
-touching the docs.
+(``deburr_drake.config.reference``), ``metrics-reference.md`` from the
+metrics' descriptions next to their code
+(``deburr_drake.runs.metrics_reference``) and ``api/*.md``, one page per module
+of the package (autodoc), so a module, a field or a metric added later is
+documented without touching the docs.
 """
 
 from pathlib import Path
@@ -18,6 +20,7 @@ sys.path.insert(0, str(DOCS.parent))
 
 import deburr_drake  # noqa: E402
 from deburr_drake.config.reference import write_scenario_reference  # noqa
+from deburr_drake.runs.metrics_reference import write_metrics_reference  # noqa
 
 project = "deburr_drake"
 author = "the deburr_drake developers"
@@ -176,4 +179,5 @@ def setup(app):
 
 
 write_scenario_reference(DOCS / "scenario-reference.md")
+write_metrics_reference(DOCS / "metrics-reference.md")
 write_api_pages()

@@ -7,6 +7,8 @@ import importlib.util
 from pathlib import Path
 import re
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 
@@ -53,3 +55,53 @@ def test_every_page_is_in_the_site():
     pages.add("tutorial")
     missing = [p for p in sorted(pages) if f"\n{p}\n" not in index]
     assert missing == []
+
+
+@pytest.mark.slow
+def test_the_metrics_reference_describes_every_metric_of_a_run():
+    """A short run with localisation gives every metric (null where it is
+    too short); metrics.json holds them and how the run ended. Each is
+    described next to its code, and nothing described is gone."""
+    import deburr_drake as dd
+    from deburr_drake.runs.metrics_reference import (
+        metrics_reference_markdown,
+    )
+    from deburr_drake.runs.pass_metrics import (
+        METRICS,
+        force_at_desired_depth,
+        pass_metrics,
+    )
+    from deburr_drake.runs.report import SUMMARY_FIELDS, run_summary
+
+    scenario = dd.load_scenario("paper_localised")
+    log = dd.run(scenario, 0.5)
+    values = pass_metrics(
+        log, true_force_at_desired_depth=force_at_desired_depth(scenario)
+    )
+    assert set(values) <= set(METRICS)
+    assert set(run_summary(log, values)) <= set(METRICS) | set(SUMMARY_FIELDS)
+    # Given only when probing finished: the code computes it still.
+    assert set(METRICS) - set(values) == {"probe_registration_error_mm"}
+    code = (ROOT / "deburr_drake" / "runs" / "pass_metrics.py").read_text()
+    described = code.index("METRICS: Dict")
+    code = code[:described] + code[code.index("\n}\n", described) :]
+    assert '"probe_registration_error_mm"' in code
+    page = metrics_reference_markdown()
+    for name in set(METRICS) | set(SUMMARY_FIELDS):
+        assert f"| `{name}` |" in page
+    for name, doc in METRICS.items():
+        assert doc.unit and doc.meaning and doc.how, name
+
+
+def test_readme_lists_every_shipped_scenario():
+    shipped = sorted(
+        p.stem for p in (ROOT / "deburr_drake" / "scenarios").glob("*.yaml")
+    )
+    text = (ROOT / "README.md").read_text()
+    assert [name for name in shipped if f"`{name}`" not in text] == []
+
+
+def test_pytest_names_the_reason_of_each_skip():
+    """The README promises the skipped tests' reasons: -rs prints them."""
+    config = (ROOT / "pyproject.toml").read_text()
+    assert re.search(r'^addopts = ".*-rs', config, re.M)

@@ -55,6 +55,8 @@ __all__ = [
     "force_at_desired_depth",
     "TRANSIENT",
     "CONTACT_FORCE",
+    "MetricDoc",
+    "METRICS",
 ]
 
 #: Excluded after contact is established (s): the contact transient is not
@@ -62,6 +64,340 @@ __all__ = [
 TRANSIENT = 2.0
 #: Contact is established when ||f_n|| exceeds this (N).
 CONTACT_FORCE = 1.0
+
+
+@dataclass(frozen=True)
+class MetricDoc:
+    """What a metric is, for the generated metrics reference
+    (``deburr_drake.runs.metrics_reference``): its family (the function
+    that computes it), unit (``-``: a ratio, a count or a flag), meaning
+    and how it is computed."""
+
+    family: str
+    unit: str
+    meaning: str
+    how: str
+
+
+def _docs(family, rows):
+    return {
+        name: MetricDoc(family, unit, meaning, how)
+        for name, unit, meaning, how in rows
+    }
+
+
+_AFTER = "after the transient (contact, then ``TRANSIENT`` s)"
+
+#: Every metric :func:`pass_metrics` gives, by name. Kept next to the code
+#: that computes them: a test checks that a real run's metrics are all
+#: here and that every name here is still computed.
+METRICS: Dict[str, MetricDoc] = {
+    **_docs(
+        "pass_metrics",
+        [
+            (
+                "contact_time_s",
+                "s",
+                "when contact was first established",
+                "the first chamfer sample whose normal force ||f_n|| "
+                "exceeds ``CONTACT_FORCE`` (1 N); the transient starts "
+                "here",
+            ),
+        ],
+    ),
+    **_docs(
+        "finish_metrics",
+        [
+            (
+                "chamfer_depth_mean_error_mm",
+                "mm",
+                "mean error of the chamfer depth left on the edge (Fig. 8)",
+                "over the edge bins cut " + _AFTER + ": achieved depth "
+                "minus ``task.desired_depth``; with ``only_cut`` (a run "
+                "shorter than a pass) only the bins the tool reached",
+            ),
+            (
+                "chamfer_depth_rms_error_mm",
+                "mm",
+                "RMS error of the chamfer depth left on the edge",
+                "RMS over the same bins as the mean error",
+            ),
+            (
+                "chamfer_depth_max_error_mm",
+                "mm",
+                "largest absolute error of the chamfer depth on the edge",
+                "max |depth - desired depth| over the same bins",
+            ),
+            (
+                "edge_coverage",
+                "-",
+                "fraction of the edge the tool cut",
+                "the fraction of the edge's bins with a depth above 0 "
+                "(1: the whole edge)",
+            ),
+            (
+                "burr_remaining_max_mm",
+                "mm",
+                "the tallest burr left on the edge",
+                "the largest remaining burr height over the edge's bins "
+                "at the end of the run",
+            ),
+        ],
+    ),
+    **_docs(
+        "force_metrics",
+        [
+            (
+                "chamfering_force_rms_error_N",
+                "N",
+                "RMS error of the chamfering force (Fig. 10)",
+                "||f_t|| - ``task.desired_chamfering_force`` over the "
+                "process's samples " + _AFTER,
+            ),
+            (
+                "normal_force_rms_error_N",
+                "N",
+                "RMS of the normal-force error e_f (Fig. 9)",
+                "the controller's e_f over its samples " + _AFTER,
+            ),
+            (
+                "depth_tracking_rms_error_mm",
+                "mm",
+                "RMS of the depth tracking error delta - delta_d (Fig. 9)",
+                "the measured depth delta, interpolated at the controller's "
+                "samples, minus its desired depth delta_d, " + _AFTER,
+            ),
+        ],
+    ),
+    **_docs(
+        "feed_metrics",
+        [
+            (
+                "feed_mean_on_burrs_mm_s",
+                "mm/s",
+                "mean speed along the edge while the tool is on a burr",
+                "|xdot_p . n2| " + _AFTER + " while the cutter's front "
+                "(arc position + cutter radius) is within a burr's span; "
+                "null when the tool never reached a burr",
+            ),
+            (
+                "feed_mean_off_burrs_mm_s",
+                "mm/s",
+                "mean speed along the edge off the burrs",
+                "the same speed where the cutter's front is on no burr",
+            ),
+            (
+                "feed_at_max_fraction",
+                "-",
+                "fraction of the time the feed command sat at its clamp",
+                "the fraction of the outer loop's samples whose commanded "
+                "feed is at ``command.max_feed``",
+            ),
+        ],
+    ),
+    **_docs(
+        "estimate_metrics",
+        [
+            (
+                "predicted_force_at_desired_depth_N",
+                "N",
+                "the contact estimator's normal force at the desired depth",
+                "c0 hat + c1 hat delta* from the last estimate logged while "
+                "the cutter was wholly on the part",
+            ),
+            (
+                "true_force_at_desired_depth_N",
+                "N",
+                "the plant's normal force at the desired depth",
+                "``cell.truth.contact_truth`` of the scenario (the "
+                "hydroelastic contact and the cutting law at delta*)",
+            ),
+            (
+                "force_prediction_error_rel",
+                "-",
+                "relative error of the estimator's prediction",
+                "|predicted - true| / true, of the two metrics above",
+            ),
+        ],
+    ),
+    **_docs(
+        "smoothness_metrics",
+        [
+            (
+                "torque_total_variation",
+                "N m",
+                "how much the commanded joint torques move",
+                "total variation (sum over samples and joints of "
+                "|tau[k+1] - tau[k]|) of the actuation " + _AFTER,
+            ),
+            (
+                "fuzzy_term_total_variation",
+                "N",
+                "how much the fuzzy compensator's output u_f moves",
+                "total variation of u_f on the fuzzy axes "
+                "(``controller.fuzzy.axes``) " + _AFTER + "; what the "
+                "m = 0 and m = 2 rule bases differ in",
+            ),
+            (
+                "control_surface_roughness_N",
+                "N",
+                "how far the learned surface u_f(y0, s) departs from a plane",
+                "RMS residual of a plane fitted to the final rule weights' "
+                "surface over the y0 = ||x_p|| and s ranges visited "
+                + _AFTER
+                + " (``math.metrics.surface_roughness``), the "
+                "largest over the fuzzy axes",
+            ),
+            (
+                "sliding_variable_p01_mm_s",
+                "mm/s",
+                "1st percentile of the sliding variable s",
+                "of s on the fuzzy axes " + _AFTER + "; against the dead "
+                "zone Delta_k it says whether the adaptation was active",
+            ),
+            (
+                "sliding_variable_p99_mm_s",
+                "mm/s",
+                "99th percentile of the sliding variable s",
+                "as the 1st percentile",
+            ),
+        ],
+    ),
+    **_docs(
+        "status_metrics",
+        [
+            (
+                "sim_time_s",
+                "s",
+                "simulated time the run reached",
+                "the simulator's time at the end",
+            ),
+            (
+                "wall_time_s",
+                "s",
+                "wall-clock time of the simulation",
+                "measured around the simulation loop (no start-up, "
+                "pre-flight or metrics); varies from run to run",
+            ),
+            (
+                "completed_pass",
+                "-",
+                "1 if the tool went once round the edge, else 0",
+                "the run stopped on ``pass_complete``",
+            ),
+            (
+                "nan_detected",
+                "-",
+                "1 if any logged signal holds a NaN, else 0",
+                "the run stopped on NaN, or a NaN in any logged array",
+            ),
+        ],
+    ),
+    **_docs(
+        "localisation_metrics",
+        [
+            (
+                "probing_time_s",
+                "s",
+                "time spent touch probing (with ``localisation.probe``)",
+                "when the probing sequence handed over to the pass",
+            ),
+            (
+                "pass_time_s",
+                "s",
+                "time from the end of probing to the end of the run",
+                "stop time minus ``probing_time_s``",
+            ),
+            (
+                "cycle_time_s",
+                "s",
+                "probing and the pass, when the pass completed",
+                "the stop time of a run that completed its pass",
+            ),
+            (
+                "probe_touches",
+                "-",
+                "touches the probe made",
+                "the probing sequence's count",
+            ),
+            (
+                "probe_touches_kept",
+                "-",
+                "touches the fit kept",
+                "the largest set that agrees within "
+                "``localisation.probe.max_residual`` (a burr under the "
+                "others)",
+            ),
+            (
+                "probe_fit_rms_mm",
+                "mm",
+                "RMS residual of the kept touches about the fit",
+                "the fit's residual RMS",
+            ),
+            (
+                "probe_offset_x_mm",
+                "mm",
+                "x of the registration the probe found (real minus believed)",
+                "the fit's dx",
+            ),
+            (
+                "probe_offset_y_mm",
+                "mm",
+                "y of the registration the probe found (real minus believed)",
+                "the fit's dy",
+            ),
+            (
+                "probe_yaw_rad",
+                "rad",
+                "turn of the registration the probe found",
+                "the fit's dyaw about the contour's pivot",
+            ),
+            (
+                "probe_radius_mm",
+                "mm",
+                "radius change the probe found (a circle with "
+                "``fit_radius``; else 0)",
+                "the fit's dradius",
+            ),
+            (
+                "probe_registration_error_mm",
+                "mm",
+                "how far the probe's registration leaves the believed edge "
+                "from the real one",
+                "the largest distance along the real edge's normal between "
+                "the believed zero-depth path moved by the registration and "
+                "the real one (``registration_error``)",
+            ),
+            (
+                "online_offset_x_mm",
+                "mm",
+                "x of the final correction while cutting "
+                "(``localisation.online``)",
+                "the online registration's last state",
+            ),
+            (
+                "online_offset_y_mm",
+                "mm",
+                "y of the final correction while cutting",
+                "the online registration's last state",
+            ),
+            (
+                "online_yaw_rad",
+                "rad",
+                "turn of the final correction while cutting",
+                "the online registration's last state",
+            ),
+            (
+                "online_registration_error_mm",
+                "mm",
+                "the error of the final registration (the probe's and the "
+                "correction while cutting)",
+                "as ``probe_registration_error_mm``, with both moves added",
+            ),
+        ],
+    ),
+}
+
 
 _FINISH = (
     "chamfer_depth_mean_error_mm",

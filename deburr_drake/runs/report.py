@@ -16,7 +16,33 @@ import numpy as np
 
 from deburr_drake.runs.simulation import RunLog
 
-__all__ = ["run_summary", "write_run", "log_arrays"]
+__all__ = ["run_summary", "write_run", "log_arrays", "SUMMARY_FIELDS"]
+
+#: What metrics.json holds besides the metrics (:func:`run_summary`), for
+#: the generated metrics reference: name -> (unit, meaning).
+SUMMARY_FIELDS: Dict[str, tuple] = {
+    "scenario": ("-", "the scenario's name"),
+    "completed_pass": (
+        "-",
+        "true if the tool went once round the edge (a boolean here, 1 or 0 "
+        "among the printed metrics)",
+    ),
+    "stop_reason": (
+        "-",
+        "what ended the run: one of ``simulation.STOP_REASONS`` "
+        "(``pass_complete``, ``duration``, ``guard:<name>``, ...)",
+    ),
+    "stop_time_s": ("s", "the simulated time the run stopped at"),
+    "stop_detail": (
+        "-",
+        "a guard's values at the trip, an exception's message, a signal's "
+        "name; empty otherwise",
+    ),
+    "unavailable": (
+        "-",
+        "for each metric that is null, why this run cannot give it",
+    ),
+}
 
 
 def _json_value(value):

@@ -1,0 +1,148 @@
+"""The guides' commands run, and print what the guides show.
+
+A guide shows a command and its output in a ```console block:
+
+    ```console
+    $ deburr-drake simulate --duration 3 --out out/first
+    pre-flight: the sampled loop at the start pose is stable, rho = ... (... s)
+    ...
+    stopped at t = 3.000 s: duration
+    ```
+
+Every ``$ `` line is a command; the lines under it, up to the next ``$ ``
+line or the end of the block, are what it prints on stdout (stderr is not
+compared: Drake's and the package's warnings go there; a command that
+shows them redirects them itself, ``2>&1``). Two placeholders stand for
+what varies from run to run or from machine to machine:
+
+- ``...`` inside a line stands for any text on that line (wall times,
+  timings);
+- a line that is only ``...`` stands for any number of lines, none
+  included (the lines a guide leaves out).
+
+Everything else must match exactly, trailing blanks aside: the simulation
+is deterministic, so a metric a guide shows is what the command prints.
+The commands of a page run in order in one fresh directory (a later
+command may read what an earlier one wrote), with ``deburr-drake`` and
+``python`` this interpreter's (``python -m deburr_drake.cli``); the
+repository's ``scripts``, ``examples`` and ``studies`` are linked into it.
+
+A command too long for the tests (a full pass, a sweep) is shown in a
+```sh block instead, which is not run; the guide says it is shown, not
+run. The guides keep their console commands to a few simulated seconds.
+"""
+
+import os
+from pathlib import Path
+import re
+import shlex
+import subprocess
+import sys
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+
+#: The guides a user follows: each at most MAX_LINES lines.
+GUIDES = ["getting-started.md", "python-api.md", "localisation.md"]
+MAX_LINES = 250
+
+
+def console_blocks(text):
+    """The ```console blocks of a Markdown page, in order."""
+    return re.findall(r"^```console\n(.*?)^```", text, re.S | re.M)
+
+
+def commands(block):
+    """[(command, expected lines)] of a console block."""
+    out = []
+    for line in block.splitlines():
+        if line.startswith("$ "):
+            out.append((line[2:], []))
+        elif out:
+            out[-1][1].append(line.rstrip())
+        else:
+            raise ValueError(f"output before any command: {line!r}")
+    return out
+
+
+def expected_pattern(lines):
+    """A regex matching the output ``lines`` show (the placeholders
+    above)."""
+    parts = []
+    for line in lines:
+        if line.strip() == "...":
+            parts.append(r"(?:[^\n]*\n)*?")
+        else:
+            pieces = [re.escape(p) for p in line.split("...")]
+            parts.append("[^\n]*".join(pieces) + r"\n")
+    return "".join(parts)
+
+
+def matches(expected, printed):
+    """Whether ``printed`` (text) is what the ``expected`` lines show."""
+    text = "".join(line.rstrip() + "\n" for line in printed.splitlines())
+    return re.fullmatch(expected_pattern(expected), text) is not None
+
+
+def _shell_command(command):
+    """The guide's command with this interpreter's deburr-drake and
+    python."""
+    words = shlex.split(command)
+    python = shlex.quote(sys.executable)
+    if words[0] == "deburr-drake":
+        return f"{python} -m deburr_drake.cli" + command[len("deburr-drake") :]
+    if words[0] in ("python", "python3"):
+        return python + command[len(words[0]) :]
+    return command
+
+
+def pages_with_console():
+    return [
+        p
+        for p in [ROOT / "README.md"] + sorted(DOCS.glob("*.md"))
+        if console_blocks(p.read_text())
+    ]
+
+
+def test_the_placeholders():
+    shown = ["a ... b", "...", "end"]
+    assert matches(shown, "a 1.0 s b\nend\n")
+    assert matches(shown, "a  b\nx\ny\nend")
+    assert not matches(shown, "a b\nend\n")  # "a ... b" keeps its blanks
+    assert not matches(shown, "a 1 b\nend\nmore\n")
+    assert not matches(["x 1"], "x 2\n")
+
+
+def test_every_guide_is_short_and_shows_commands_that_run():
+    for name in GUIDES:
+        text = (DOCS / name).read_text()
+        assert len(text.splitlines()) <= MAX_LINES, name
+        assert not re.search(r"\bissue \d+|\bcommit [0-9a-f]{7}", text), name
+    runnable = {p.name for p in pages_with_console()}
+    assert {"getting-started.md", "localisation.md"} <= runnable
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", pages_with_console(), ids=lambda p: p.name)
+def test_console_output_is_what_the_command_prints(page, tmp_path):
+    for name in ("scripts", "examples", "studies"):
+        (tmp_path / name).symlink_to(ROOT / name)
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    for block in console_blocks(page.read_text()):
+        for command, expected in commands(block):
+            result = subprocess.run(
+                _shell_command(command),
+                shell=True,
+                cwd=tmp_path,
+                capture_output=True,
+                text=True,
+                timeout=600,
+                env=env,
+            )
+            assert matches(expected, result.stdout), (
+                f"{page.name}: `{command}` printed\n{result.stdout}\n"
+                f"(stderr: {result.stderr[-2000:]})\nthe page shows\n"
+                + "\n".join(expected)
+            )
