@@ -289,7 +289,7 @@ def convergence_markdown(study: Convergence) -> str:
                 "n/a"
                 if not np.isfinite(v)
                 else f"{v:.4g}"
-                + ("" if not np.isfinite(c) else f" ({100 * c:+.1f} %)")
+                + ("" if not np.isfinite(c) else f" ({100 * c:.1f} %)")
             )
         lines.append(f"| {key} | " + " | ".join(cells) + " |")
     lines.append(
