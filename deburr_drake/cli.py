@@ -35,16 +35,18 @@ EXIT_CODES = {
     # 2: bad input (nothing run or written)
     "guard": 3,  # a runtime guard stopped the run (outputs written)
     "nan": 4,  # Drake detected a NaN (outputs written)
+    "diverged": 5,  # the numerical sanity check ended it (outputs written)
     "interrupted": 130,  # SIGINT (Ctrl-C); SIGTERM gives 143
 }
 _EXIT_HELP = (
     "exit codes: 0 the pass completed or the duration was reached; "
     "1 error during the run; 2 bad input (nothing run or written); "
-    "3 a guard stopped the run; 4 NaN detected; 130 interrupted "
+    "3 a guard stopped the run; 4 NaN detected; 5 the run diverged "
+    "(numerical sanity, guards or not); 130 interrupted "
     "(SIGINT), 143 terminated (SIGTERM). Every ending after the "
     "start writes logs.npz and metrics.json (stop_reason: "
-    "pass_complete, duration, interrupted, guard:<name>, nan, "
-    "error)."
+    "pass_complete, duration, interrupted, guard:<name>, diverged, "
+    "nan, error)."
 )
 #: What ``simulate`` writes into its output directory.
 _OUTPUTS = ("logs.npz", "metrics.json")
@@ -827,6 +829,42 @@ def _analyze(args) -> int:
     return 0
 
 
+#: What ``converge`` writes into its output directory.
+_CONVERGENCE_OUTPUTS = ("convergence.json", "convergence.md")
+
+
+def _converge(args) -> int:
+    from pathlib import Path
+
+    from deburr_drake.runs.convergence import converge, write_convergence
+
+    scenario = _load(args)
+    if args.duration is not None:
+        _check_duration(args.duration)
+    out = Path(args.out or f"out/{scenario.name}/convergence")
+    _check_writable_target(
+        out, "--out", args.force, is_dir=True, names=_CONVERGENCE_OUTPUTS
+    )
+    print(
+        f"deburr-drake converge: scenario '{scenario.name}', "
+        f"{args.duration or scenario.simulation.duration:g} s per run, up "
+        f"to {args.steps} halving(s) of the step, output {out}/",
+        flush=True,
+    )
+    study = converge(
+        scenario,
+        duration=args.duration,
+        max_halvings=args.steps,
+        tolerance=args.tolerance,
+        progress=lambda line: print(f"  {line}", flush=True),
+    )
+    files = write_convergence(study, out)
+    print()
+    print(files["markdown"].read_text())
+    print("wrote " + ", ".join(str(p) for p in files.values()))
+    return 0
+
+
 def _scenario_arguments(parser, default: str, duration_help: str):
     parser.add_argument(
         "--scenario",
@@ -1090,6 +1128,43 @@ def _add_analyze_parser(subparsers):
     p.set_defaults(func=_analyze)
 
 
+def _add_converge_parser(subparsers):
+    p = subparsers.add_parser(
+        "converge",
+        help="does the run's answer hold when the step is refined? the "
+        "scenario at its step and at the step halved, until the metrics "
+        "stop changing",
+    )
+    _scenario_arguments(
+        p, "paper", "simulated seconds per run (default: the scenario's)"
+    )
+    p.add_argument(
+        "--steps",
+        type=int,
+        default=3,
+        help="halvings of simulation.max_step at most (default 3: down "
+        "to an eighth of it)",
+    )
+    p.add_argument(
+        "--tolerance",
+        type=float,
+        default=0.05,
+        help="relative change of every compared metric under which a "
+        "halving changed nothing (default 0.05)",
+    )
+    p.add_argument(
+        "--out",
+        default=None,
+        help="output directory (default out/<scenario>/convergence)",
+    )
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="overwrite an existing convergence.json / .md in --out",
+    )
+    p.set_defaults(func=_converge)
+
+
 def _operating_point_arguments(parser):
     """analyze's options of the operating point and what is done there
     (--lyapunov runs on its own)."""
@@ -1184,6 +1259,7 @@ def main(argv=None) -> int:
     _add_diagram_parser(subparsers)
     _add_sweep_parser(subparsers)
     _add_analyze_parser(subparsers)
+    _add_converge_parser(subparsers)
     args = parser.parse_args(argv)
     from deburr_drake.config import ConfigError
 

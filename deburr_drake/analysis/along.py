@@ -35,6 +35,7 @@ from typing import Callable, Dict, List, Optional
 
 import numpy as np
 from pydrake.common import RandomGenerator
+from pydrake.systems.framework import EventStatus
 
 from deburr_drake.analysis.operating_point import (
     CONTACT_FORCE,
@@ -55,7 +56,14 @@ from deburr_drake.analysis.settled import (
 from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import ConfigError, Scenario
 from deburr_drake.control.layout import CHAMFER_STATE
-from deburr_drake.runs.simulation import _collect, logger_names, make_simulator
+from deburr_drake.runs.simulation import (
+    DIVERGED,
+    NumericalSanity,
+    PassProgress,
+    _collect,
+    logger_names,
+    make_simulator,
+)
 
 __all__ = [
     "RhoPoint",
@@ -133,7 +141,7 @@ class AnalysisRun:
     signals: RunSignals
     contact_time: float
     end_time: float
-    stop_reason: str  # duration, pass_complete, nan, error
+    stop_reason: str  # duration, pass_complete, diverged, nan, error
     stop_detail: str = ""
     op: Optional[OperatingPoint] = None
     op_note: str = ""
@@ -192,6 +200,9 @@ def analysis_run(
         )
     except ConfigError:
         raise
+    except _Diverged as e:
+        walk.result.stop_reason = DIVERGED
+        walk.result.stop_detail = str(e)
     except Exception as e:
         walk.result.stop_reason = "nan" if "NaN" in str(e) else "error"
         walk.result.stop_detail = f"{type(e).__name__}: {e}"
@@ -230,6 +241,11 @@ def _void_unsteady_maps(result: AnalysisRun):
             p.rho_oscillatory = None
 
 
+class _Diverged(Exception):
+    """The run diverged (:class:`NumericalSanity`); the message says how
+    and when."""
+
+
 class _Walk:
     """The simulation :func:`analysis_run` steps through, the operating
     point and the maps taken from its Context on the way, into
@@ -241,17 +257,25 @@ class _Walk:
         self.period = run.controller.control_period or run.sensor.sample_period
         self.outer = run.command.period
         self.diagram = make_deburring_diagram(scenario=run)
-        self.simulator = make_simulator(self.diagram, run)
+        # The numerical sanity check ends a diverging run before Drake's
+        # contact solver fails on its state (an abort would lose it).
+        sanity = NumericalSanity(self.diagram, run)
+        self.simulator = make_simulator(
+            self.diagram,
+            run,
+            monitor=lambda root: (
+                sanity.monitor_status(root, self.diagram)
+                or EventStatus.Succeeded()
+            ),
+        )
         self.context = self.simulator.get_mutable_context()
         self.diagram.SetRandomContext(
             self.context, RandomGenerator(run.sensor.noise_seed)
         )
         self.generator = self.diagram.GetSubsystemByName("command_generator")
         self.gen_context = self.generator.GetMyContextFromRoot(self.context)
-        self.passes = run.simulation.stop_after_passes
-        self.pass_end = (
-            self.generator.start_arc_position
-            + self.passes * self.generator.contour.length
+        self.progress = PassProgress(
+            self.diagram, run.simulation.stop_after_passes
         )
         self.frozen = FrozenMap(scenario) if maps else None
         self.wall0 = time.perf_counter()
@@ -275,7 +299,9 @@ class _Walk:
         self.simulator.Initialize()
 
     def advance(self, t):
-        self.simulator.AdvanceTo(min(t, self.duration))
+        status = self.simulator.AdvanceTo(min(t, self.duration))
+        if status.reason() == status.ReturnReason.kReachedTerminationCondition:
+            raise _Diverged(status.message().split(":", 1)[1].strip())
         return self.context.get_time()
 
     def to_contact(self):
@@ -307,11 +333,7 @@ class _Walk:
                     + [self.op_time if pending_op else np.inf, t + _CHUNK]
                 )
             )
-            if (
-                self.passes > 0
-                and self.generator.arc_progress(self.gen_context)
-                >= self.pass_end
-            ):
+            if self.progress.done(self.context):
                 self.result.stop_reason = "pass_complete"
                 break
             s = _signals(self.diagram, self.context)

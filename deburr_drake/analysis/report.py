@@ -252,6 +252,9 @@ def _run_header(scenario, run, overrides, tol) -> Dict:
             "end_time": run.end_time,
             "stop_reason": run.stop_reason,
             "stop_detail": run.stop_detail,
+            "divergence_time": run.end_time
+            if run.stop_reason == "diverged"
+            else None,
             "guards": "off in the run; the first one that would have "
             "tripped is named",
         },
@@ -287,6 +290,16 @@ def _run_verdict(run, check, guard, tol) -> Dict:
     final) oscillation; empty while the run is steady throughout (the
     maps along it decide)."""
     sig, op = run.signals, run.op
+    if run.stop_reason == "diverged":
+        osc = describe_oscillation(sig, run.contact_time + 0.5, tol)
+        return {
+            "oscillation": osc,
+            "verdict": "unstable",
+            "verdict_reason": (
+                f"the run diverged at t = {run.end_time:.3f} s "
+                f"({run.stop_detail}); " + _oscillation_reason(osc, guard)
+            ),
+        }
     final = settle_check(sig, run.end_time, tol)
     if check.settled:
         late = scan_run(sig, op.time, run.end_time, tol)

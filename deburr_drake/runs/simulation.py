@@ -27,6 +27,7 @@ from pydrake.systems.framework import Diagram, EventStatus
 from pydrake.systems.primitives import VectorLogSink
 
 from deburr_drake.cell.gains import resolve_design, resolve_gains
+from deburr_drake.cell.guards import effort_limits
 from deburr_drake.cell.process import PROCESS_STATE
 from deburr_drake.config import ConfigError, Scenario
 from deburr_drake.control.layout import (
@@ -34,6 +35,7 @@ from deburr_drake.control.layout import (
     COMMAND_STATE,
     CONTROLLER_DIAGNOSTICS,
 )
+from deburr_drake.math import metrics
 
 __all__ = [
     "RunLog",
@@ -41,18 +43,25 @@ __all__ = [
     "make_simulator",
     "logger_names",
     "STOP_REASONS",
+    "DIVERGED",
+    "NumericalSanity",
+    "PassProgress",
 ]
 
 #: Why a run ended (``RunLog.stop_reason``). ``guard:<name>`` names the
-#: guard that tripped (deburr_drake.cell.guards).
+#: guard that tripped (deburr_drake.cell.guards); ``diverged``: the
+#: numerical sanity check (:class:`NumericalSanity`) ended it.
 STOP_REASONS = (
     "pass_complete",
     "duration",
     "interrupted",
     "guard:<name>",
+    "diverged",
     "nan",
     "error",
 )
+#: The stop reason of a run :class:`NumericalSanity` ended.
+DIVERGED = "diverged"
 
 _LAYOUTS = {
     "chamfer": CHAMFER_STATE,
@@ -143,6 +152,171 @@ def set_monitor(
         )
 
     simulator.set_monitor(monitored)
+
+
+class NumericalSanity:
+    """Has the integration itself diverged? ``check(root_context)`` gives
+    what is beyond its bounds (a message) or None, from states alone:
+
+    - every continuous state of the diagram finite (the plant's q and v,
+      the controller's delta_d and theta, the estimator's c-hat, ...);
+    - every joint speed within ``SPEED_FACTOR`` x its velocity limit from
+      the robot model; a joint without one (the Cartesian tool's slides)
+      within ``UNLIMITED_SPEED_FEEDS`` x ``command.default_feed``;
+    - every commanded joint torque within ``TORQUE_FACTOR`` x its effort
+      limit (the drives clamp at the limit: a command a thousand times
+      beyond it is the controller's arithmetic running away).
+
+    Not a guard (those are the user's limits, ``guards:``, and can be
+    off): bounds no healthy run approaches, which end a run before
+    Drake's contact solver fails on the state (an abort that loses the
+    run). Measured on paper_6dof at sliding gain 8000: the joint speeds
+    stay below 0.9 x the limits for 23.8 s, through 10 s of limit cycle,
+    then one step throws them to 4e5 x; the ICF solver asserts a few
+    steps later. The check reads states and held outputs (no
+    computation) after every step: a few microseconds."""
+
+    SPEED_FACTOR = 10.0
+    UNLIMITED_SPEED_FEEDS = 1.0e4
+    TORQUE_FACTOR = 1.0e3
+    #: The bound on |x| that makes an infinity fail (a NaN fails any).
+    _FINITE = 1e300
+
+    def __init__(self, diagram: Diagram, scenario: Scenario):
+        self._plant = self._controller = None
+        self._size = diagram.num_continuous_states()
+        bounds = [np.full(self._size, self._FINITE)]
+        if diagram.HasSubsystemNamed("plant"):
+            self._plant = diagram.GetSubsystemByName("plant")
+            limits = np.abs(self._plant.GetVelocityUpperLimits())
+            self._speed = np.where(
+                np.isfinite(limits),
+                self.SPEED_FACTOR * limits,
+                self.UNLIMITED_SPEED_FEEDS * scenario.command.default_feed,
+            )
+            self._speed_why = [
+                f"{self.SPEED_FACTOR:g} x its velocity limit"
+                if np.isfinite(limit)
+                else f"{self.UNLIMITED_SPEED_FEEDS:g} x the default feed"
+                for limit in limits
+            ]
+            self._speed_names = self._plant.GetVelocityNames()
+            bounds.append(self._speed)
+            names, efforts = effort_limits(self._plant)
+            if diagram.HasSubsystemNamed("controller"):
+                controller = diagram.GetSubsystemByName("controller")
+                self._actuation = controller.GetOutputPort("actuation")
+                if self._actuation.size() == efforts.size:
+                    self._controller = controller
+                    self._torque = np.minimum(
+                        self.TORQUE_FACTOR * efforts, self._FINITE
+                    )
+                    self._torque_names = names
+                    bounds.append(self._torque)
+        # One compare of every checked value with its bound.
+        self._bound = np.concatenate(bounds)
+
+    def check(self, root_context) -> Optional[str]:
+        """None, or what diverged (the first of the checks that fails)."""
+        values = [root_context.get_continuous_state_vector().CopyToVector()]
+        if self._plant is not None:
+            values.append(
+                self._plant.GetVelocities(
+                    self._plant.GetMyContextFromRoot(root_context)
+                )
+            )
+        if self._controller is not None:
+            values.append(
+                self._actuation.Eval(
+                    self._controller.GetMyContextFromRoot(root_context)
+                )
+            )
+        if (np.abs(np.concatenate(values)) <= self._bound).all():
+            return None
+        return self._diagnose(*values)
+
+    def _diagnose(self, x, v=None, tau=None) -> str:
+        """What failed (the slow path)."""
+        if not np.isfinite(x).all():
+            bad = np.flatnonzero(~np.isfinite(x))
+            return (
+                f"a non-finite continuous state (elements "
+                f"{bad[:8].tolist()} of {x.size})"
+            )
+        if v is not None and not (np.abs(v) <= self._speed).all():
+            k = int(np.argmax(np.abs(v) / self._speed))
+            return (
+                f"{self._speed_names[k]} = {v[k]:.4g} (SI) beyond "
+                f"{self._speed[k]:.4g}, {self._speed_why[k]}"
+            )
+        k = int(np.argmax(np.abs(tau) / self._torque))
+        return (
+            f"commanded {self._torque_names[k]} torque {tau[k]:.4g} "
+            f"beyond {self._torque[k]:.4g} ({self.TORQUE_FACTOR:g} x its "
+            "effort limit)"
+        )
+
+    def monitor_status(self, root_context, reporter):
+        """``EventStatus.ReachedTermination(reporter, "diverged: ...")``
+        or None."""
+        found = self.check(root_context)
+        if found is None:
+            return None
+        return EventStatus.ReachedTermination(
+            reporter,
+            f"{DIVERGED}: {found} at t = {root_context.get_time():.4f} s",
+        )
+
+
+class PassProgress:
+    """Has the run done its ``simulation.stop_after_passes`` edge
+    lengths? The command generator's arc progress has gone that far
+    *and* the tool has cut at least ``COVERAGE`` of the edge's finish
+    bins over that span. The arc progress alone is the projection of
+    the tool on the edge: a runaway tool, thrown across the part, moves
+    it half an edge length in one period; a pass the tool cut leaves
+    only the few millimetres it lags behind its command uncut (the paper
+    pass: all bins)."""
+
+    COVERAGE = 0.5
+
+    def __init__(self, diagram: Diagram, passes: float):
+        self.passes = passes
+        self._generator = diagram.GetSubsystemByName("command_generator")
+        contour = self._generator.contour
+        start = self._generator.start_arc_position
+        self.end = start + passes * contour.length
+        self._process = (
+            diagram.GetSubsystemByName("cutting_process")
+            if diagram.HasSubsystemNamed("cutting_process")
+            else None
+        )
+        if self._process is not None:
+            self._span = metrics.arc_span_mask(
+                self._process.bins.centers,
+                start,
+                max(self.end, start),
+                contour.length,
+                contour.closed,
+            )
+
+    def done(self, root_context) -> bool:
+        if not self.passes > 0:
+            return False
+        context = self._generator.GetMyContextFromRoot(root_context)
+        if self._generator.arc_progress(context) < self.end:
+            return False
+        return self.coverage(root_context) >= self.COVERAGE
+
+    def coverage(self, root_context) -> float:
+        """The fraction of the span's finish bins cut (1 without a
+        cutting process)."""
+        if self._process is None or not self._span.any():
+            return 1.0
+        depth = self._process.GetOutputPort("finish_depth").Eval(
+            self._process.GetMyContextFromRoot(root_context)
+        )
+        return float(np.mean(depth[self._span] > 0.0))
 
 
 def make_simulator(
@@ -237,6 +411,8 @@ def _stop_of(status, diagram) -> tuple:
         return f"guard:{message.split(':', 1)[0]}", message
     if name == "command_generator":
         return "pass_complete", message
+    if message.startswith(f"{DIVERGED}:"):
+        return DIVERGED, message.split(":", 1)[1].strip()
     return message or "interrupted", ""
 
 
@@ -244,17 +420,19 @@ def _is_nan_error(error: BaseException) -> bool:
     return re.search(r"\bNaN\b", str(error)) is not None
 
 
-def _stop_monitor(diagram, generator, generator_context, passes, should_stop):
-    """The monitor that ends the run once ``passes`` edge lengths are done
-    or ``should_stop()`` gives a reason; None if neither is asked.
-    ``generator_context``: the command generator's in the simulator's
-    context, which every call of the monitor is given."""
-    if not (passes > 0 or should_stop is not None):
-        return None
-    end = generator.start_arc_position + passes * generator.contour.length
+def _stop_monitor(diagram, scenario, passes, should_stop):
+    """The monitor that ends the run when :class:`NumericalSanity` finds
+    it diverged, once ``passes`` edge lengths are done
+    (:class:`PassProgress`) or when ``should_stop()`` gives a reason."""
+    sanity = NumericalSanity(diagram, scenario)
+    progress = PassProgress(diagram, passes)
+    generator = diagram.GetSubsystemByName("command_generator")
 
     def monitor(root_context):
-        if passes > 0 and generator.arc_progress(generator_context) >= end:
+        diverged = sanity.monitor_status(root_context, diagram)
+        if diverged is not None:
+            return diverged
+        if progress.done(root_context):
             return EventStatus.ReachedTermination(
                 generator, "completed the pass"
             )
@@ -321,8 +499,10 @@ def simulate(
 
     Every ending returns what was logged so far, with ``stop_reason`` (one
     of :data:`STOP_REASONS`), ``stop_time`` and ``stop_detail``: the pass
-    completed, the duration reached, a guard of the diagram tripped (its
-    event requested termination), ``should_stop()`` returned a reason
+    completed (:class:`PassProgress`), the duration reached, a guard of
+    the diagram tripped (its event requested termination), the run
+    diverged (:class:`NumericalSanity`, checked after every step, guards
+    or not: "diverged"), ``should_stop()`` returned a reason
     (checked after every step by the simulator's monitor, e.g. a signal
     handler's flag: "interrupted"), Drake detected a NaN ("nan"), or
     another exception ("error"; the detail holds its message).
@@ -337,18 +517,18 @@ def simulate(
             "invalid: allowed a finite number > 0"
         )
     scenario = resolve_design(scenario)
-    simulator = make_simulator(diagram, scenario)
+    simulator = make_simulator(
+        diagram,
+        scenario,
+        monitor=_stop_monitor(
+            diagram,
+            scenario,
+            scenario.simulation.stop_after_passes,
+            should_stop,
+        ),
+    )
     context = simulator.get_mutable_context()
     generator = diagram.GetSubsystemByName("command_generator")
-    monitor = _stop_monitor(
-        diagram,
-        generator,
-        generator.GetMyContextFromRoot(context),
-        scenario.simulation.stop_after_passes,
-        should_stop,
-    )
-    if monitor is not None:
-        set_monitor(simulator, diagram, scenario.simulation.integrator, monitor)
     diagram.SetRandomContext(
         context, RandomGenerator(scenario.sensor.noise_seed)
     )

@@ -93,3 +93,21 @@ def test_a_run_that_never_reaches_steady_cutting_says_what_stopped_it(
     assert guard["guard"] == "joint_torque" and guard["time"] < 2.0
     assert guard["value"] > guard["limit"]
     assert "joint_torque" in result["verdict_reason"]
+
+
+def test_a_diverging_run_is_unstable_with_its_divergence_time():
+    """analyze's run (guards off) ends at the numerical sanity check: the
+    verdict is unstable and analysis.json has when it diverged."""
+    from deburr_drake.config import load_scenario
+
+    scenario = load_scenario(
+        "paper", text="{estimator: {gains: [2000.0, 2.0e9, 0.0]}}"
+    )
+    result = analysis.analyze(scenario, robust=False)
+    assert result["verdict"] == "unstable"
+    assert result["run"]["stop_reason"] == "diverged"
+    assert result["run"]["divergence_time"] == pytest.approx(
+        result["run"]["end_time"]
+    )
+    assert result["run"]["divergence_time"] < 0.1
+    assert "diverged at t = " in result["verdict_reason"]

@@ -168,3 +168,83 @@ def test_an_exception_during_the_run_keeps_the_logs(
     json.dumps(summary, allow_nan=False)
     assert summary["stop_reason"] == reason
     assert summary["nan_detected"] == (1.0 if reason == "nan" else 0.0)
+
+
+#: The estimator gains that run away within a few periods (c-hat to
+#: 1e25 in 0.1 s), guards off: no user limit stops the run.
+RUNAWAY = "{estimator: {gains: [2000.0, 2.0e9, 0.0]}, guards: {enabled: false}}"
+
+
+def test_a_diverging_run_ends_diverged_with_its_results(tmp_path):
+    """The numerical sanity check is not a guard: with guards off the
+    runaway ends ``diverged`` (exit 5) at its first absurd command, its
+    logs and metrics written, and never ``pass_complete``."""
+    out = tmp_path / "d"
+    code = cli.main(
+        [
+            "simulate",
+            "--no-preflight",
+            "--duration",
+            "2",
+            "--out",
+            str(out),
+            "--scenario-text",
+            RUNAWAY,
+        ]
+    )
+    assert code == 5
+    metrics = _strict_json(out / "metrics.json")
+    assert metrics["stop_reason"] == "diverged"
+    assert metrics["completed_pass"] is False
+    assert metrics["stop_time_s"] < 0.1
+    assert "effort limit" in metrics["stop_detail"]
+    with np.load(out / "logs.npz") as logs:
+        assert logs["chamfer.t"][-1] == pytest.approx(
+            metrics["stop_time_s"], abs=0.003
+        )
+
+
+def test_a_pass_is_complete_only_when_the_tool_cut_the_edge(monkeypatch):
+    """Without the sanity check the runaway tool, thrown across the part,
+    jumps the command's arc progress past a full edge length within a
+    second while cutting almost nothing: the run goes on (here to its
+    duration), not ``pass_complete``."""
+    from deburr_drake.runs import simulation
+
+    monkeypatch.setattr(simulation.NumericalSanity, "SPEED_FACTOR", np.inf)
+    monkeypatch.setattr(simulation.NumericalSanity, "TORQUE_FACTOR", np.inf)
+    scenario = load_scenario("paper", text=RUNAWAY)
+    diagram = make_deburring_diagram(scenario=scenario)
+    log = simulate(diagram, scenario, duration=1.5)
+    end = simulation.PassProgress(diagram, 1.0).end
+    assert np.max(log["command"]["arc_position"]) > end
+    assert log.stop_reason == "duration"
+    assert np.mean(log["finish"]["depth"] > 0) < 0.05
+
+
+def test_the_sanity_check_names_what_diverged():
+    from deburr_drake.runs.simulation import NumericalSanity, make_simulator
+
+    scenario = load_scenario("paper")
+    diagram = make_deburring_diagram(scenario=scenario)
+    simulator = make_simulator(diagram, scenario)
+    simulator.Initialize()
+    context = simulator.get_mutable_context()
+    sanity = NumericalSanity(diagram, scenario)
+    assert sanity.check(context) is None
+    plant = diagram.GetSubsystemByName("plant")
+    plant_context = plant.GetMyMutableContextFromRoot(context)
+    v = plant.GetVelocities(plant_context)
+    limits = plant.GetVelocityUpperLimits()
+    v[1] = 9.0 * limits[1]  # within 10 x its limit: fast, not diverged
+    plant.SetVelocities(plant_context, v)
+    assert sanity.check(context) is None
+    v[1] = 11.0 * limits[1]
+    plant.SetVelocities(plant_context, v)
+    assert "velocity limit" in sanity.check(context)
+    assert plant.GetVelocityNames()[1] in sanity.check(context)
+    v[1] = 0.0
+    plant.SetVelocities(plant_context, v)
+    x = context.get_mutable_continuous_state_vector()
+    x.SetAtIndex(x.size() - 1, np.nan)
+    assert "non-finite" in sanity.check(context)
