@@ -27,6 +27,16 @@ command may read what an earlier one wrote), with ``deburr-drake`` and
 ``python`` this interpreter's (``python -m deburr_drake.cli``); the
 repository's ``scripts``, ``examples`` and ``studies`` are linked into it.
 
+A file a command reads is shown in a code block captioned with its name,
+which the tests write into that directory before the commands below it
+run:
+
+    ```{code-block} yaml
+    :caption: my_part.yaml
+
+    base: pocket
+    ```
+
 A command too long for the tests (a full pass, a sweep) is shown in a
 ```sh block instead, which is not run; the guide says it is shown, not
 run. The guides keep their console commands to a few simulated seconds.
@@ -45,13 +55,35 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 
 #: The guides a user follows: each at most MAX_LINES lines.
-GUIDES = ["getting-started.md", "python-api.md", "localisation.md"]
+GUIDES = [
+    "getting-started.md",
+    "python-api.md",
+    "localisation.md",
+    "own-part.md",
+]
 MAX_LINES = 250
 
 
 def console_blocks(text):
     """The ```console blocks of a Markdown page, in order."""
     return re.findall(r"^```console\n(.*?)^```", text, re.S | re.M)
+
+
+def page_steps(text):
+    """[("run", console block) or ("write", file name, text)] of a page,
+    in order: its console blocks and its code blocks captioned with a file
+    name."""
+    steps = []
+    blocks = r"^```(console|\{code-block\}[^\n]*)\n(.*?)^```"
+    for kind, body in re.findall(blocks, text, re.S | re.M):
+        if kind == "console":
+            steps.append(("run", body))
+            continue
+        options = re.match(r"((?::\w+:[^\n]*\n)*)\n?", body)
+        name = re.search(r"^:caption: ([\w.-]+\.\w+)$", options[1], re.M)
+        if name:
+            steps.append(("write", name[1], body[options.end() :]))
+    return steps
 
 
 def commands(block):
@@ -115,13 +147,25 @@ def test_the_placeholders():
     assert not matches(["x 1"], "x 2\n")
 
 
+def test_a_captioned_code_block_is_a_file_the_commands_read():
+    page = (
+        "```{code-block} yaml\n:caption: a.yaml\n\nbase: pocket\n```\n"
+        "```{code-block} yaml\n:caption: not a file\n\nx: 1\n```\n"
+        "```console\n$ cat a.yaml\nbase: pocket\n```\n"
+    )
+    assert page_steps(page) == [
+        ("write", "a.yaml", "base: pocket\n"),
+        ("run", "$ cat a.yaml\nbase: pocket\n"),
+    ]
+
+
 def test_every_guide_is_short_and_shows_commands_that_run():
     for name in GUIDES:
         text = (DOCS / name).read_text()
         assert len(text.splitlines()) <= MAX_LINES, name
         assert not re.search(r"\bissue \d+|\bcommit [0-9a-f]{7}", text), name
     runnable = {p.name for p in pages_with_console()}
-    assert {"getting-started.md", "localisation.md"} <= runnable
+    assert set(GUIDES) - {"python-api.md"} <= runnable
 
 
 @pytest.mark.slow
@@ -130,8 +174,11 @@ def test_console_output_is_what_the_command_prints(page, tmp_path):
     for name in ("scripts", "examples", "studies"):
         (tmp_path / name).symlink_to(ROOT / name)
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    for block in console_blocks(page.read_text()):
-        for command, expected in commands(block):
+    for step in page_steps(page.read_text()):
+        if step[0] == "write":
+            (tmp_path / step[1]).write_text(step[2])
+            continue
+        for command, expected in commands(step[1]):
             result = subprocess.run(
                 _shell_command(command),
                 shell=True,
