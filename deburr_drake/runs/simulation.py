@@ -501,11 +501,10 @@ def simulate(
     of :data:`STOP_REASONS`), ``stop_time`` and ``stop_detail``: the pass
     completed (:class:`PassProgress`), the duration reached, a guard of
     the diagram tripped (its event requested termination), the run
-    diverged (:class:`NumericalSanity`, checked after every step, guards
-    or not: "diverged"), ``should_stop()`` returned a reason
-    (checked after every step by the simulator's monitor, e.g. a signal
-    handler's flag: "interrupted"), Drake detected a NaN ("nan"), or
-    another exception ("error"; the detail holds its message).
+    diverged (:class:`NumericalSanity`, guards or not: "diverged"),
+    ``should_stop()`` returned a reason (both checked after every step,
+    e.g. a signal handler's flag: "interrupted"), Drake detected a NaN
+    ("nan"), or another exception ("error"; the detail holds its message).
 
     ``initial_state(diagram, context)``, if given, sets states of the root
     context before the run starts (after the random context: e.g. the
