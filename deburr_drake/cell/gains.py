@@ -82,6 +82,10 @@ SLOPE_RATE = 0.4
 #: ... and at most arm5's (3.9 N over 4 mm/s, rounded), N s/m.
 SLOPE_MAX = 1000.0
 MIN_DELTA_K = 0.004  # m/s, paper.yaml's
+#: N/m: K lambda on the fuzzy axes, the rule's 400 x 100 ...
+FEED_STIFFNESS = 4.0e4
+#: ... with lambda at most this (1/s).
+MAX_LAMBDA = 1000.0
 #: g_max h / (lightest task mass) the integration step allows.
 STEP_RATE = 2.5
 
@@ -233,6 +237,25 @@ def _within_sampled_rate(rates, K, K_o):
     return (K, K_o, *rates(K, K_o))
 
 
+def _feed_loop_lambda(K, lam, axes):
+    """lambda on the fuzzy axes raised so that K lambda keeps the rule's
+    400 x 100 N/m where the sampled rate lowered K (at most
+    :data:`MAX_LAMBDA`); the other axes as they are.
+
+    Between two outer-loop samples the position error along the edge is
+    the feed's lag, e = T_c (v - v_t) (the command starts from x_p), so
+    K lambda T_c is the outer loop's proportional gain on the feed error;
+    it is what damps the feed/force loop against the tool's mass and the
+    mass the sensor filter's lag adds to the cancelled cutting force
+    (:func:`feed_loop_damping`)."""
+    lam = list(lam)
+    for a in axes:
+        lam[a] = min(
+            MAX_LAMBDA, max(lam[a], _ceil_to(FEED_STIFFNESS / K[a], 10.0))
+        )
+    return lam
+
+
 def _null_space_gains(rates, K, K_o):
     """(k_n, d_n, rate) of more than 6 joints: the null-space posture PD
     (200 N m/rad, 10 N m s/rad: stiffness over damping 20 1/s) within
@@ -308,6 +331,7 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
 
     K, lam, K_o, lam_o = _rule_gains(f)
     K, K_o, rate_v, rate_w, rate = _within_sampled_rate(rates, K, K_o)
+    lam = _feed_loop_lambda(K, lam, c.fuzzy.axes)
     k_n, d_n = c.null_space_stiffness, c.null_space_damping
     if len(q) > 6 and period > 0:
         k_n, d_n, rate = _null_space_gains(rates, K, K_o)
