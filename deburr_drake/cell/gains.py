@@ -70,6 +70,7 @@ __all__ = [
     "VERTICAL_ERROR",
     "SAMPLED_RATE",
     "SLOPE_RATE",
+    "feed_loop_damping",
 ]
 
 #: m: the vertical error x3's PD may leave under the gravity error.
@@ -256,6 +257,54 @@ def _feed_loop_lambda(K, lam, axes):
     return lam
 
 
+def feed_loop_damping(scenario: Scenario, *, mass: float) -> float:
+    """The feed/force loop's damping ratio along the edge on a fuzzy axis,
+    linearised at the desired force (``scenario``'s gains as written):
+
+        M s^2 + k_p s + k_i = 0,  zeta = k_p / (2 sqrt(k_i M)),
+
+    - k_p = K lambda T_c c: the command starts each outer period T_c from
+      x_p, so the position error is the feed's lag T_c (v - v_t) and
+      K lambda e a force on the speed error; c = f_td / (f_td - P'_th)
+      is the feed law's slope at the desired force;
+    - k_i = r |nu|^2 lambda T_c c: the fuzzy term integrates s at the
+      adaptation gain r times the active rules' |nu|^2 (at s = 0, the
+      tool's distance y0);
+    - M = ``mass`` (kg, the tool's task mass) + g tau: -f cancels the
+      cutting damping g = k_c delta* b through the sensor's filter
+      (tau = 1 / (2 pi f_c)), which leaves the mass g tau.
+
+    nan for a controller without fuzzy axes."""
+    from deburr_drake.cell.edge import believed_contour, start_position
+    from deburr_drake.control.controller import make_rule_bases
+
+    c = scenario.controller
+    if c.kind != "fuzzy" or not c.fuzzy.axes:
+        return float("nan")
+    task, cmd = scenario.task, scenario.command
+    slope = task.desired_chamfering_force / (
+        task.desired_chamfering_force - cmd.threshold_power_force
+    )
+    y0 = float(
+        np.linalg.norm(start_position(scenario, believed_contour(scenario)))
+    )
+    rb = make_rule_bases(c)[0]
+    _, nu = rb.active_rules(y0, 0.0)
+    g = (
+        scenario.process.cutting_coefficient
+        * task.desired_depth
+        * scenario.tool.engagement
+    )
+    M = mass + g / (2 * math.pi * scenario.sensor.cutoff_frequency)
+    zetas = []
+    for a in c.fuzzy.axes:
+        gain = c.sliding_lambda[a] * cmd.period * slope
+        k_p = c.sliding_gain[a] * gain
+        k_i = c.fuzzy.adaptation_gain * float(np.dot(nu, nu)) * gain
+        zetas.append(k_p / (2 * math.sqrt(k_i * M)))
+    return float(min(zetas))
+
+
 def _null_space_gains(rates, K, K_o):
     """(k_n, d_n, rate) of more than 6 joints: the null-space posture PD
     (200 N m/rad, 10 N m s/rad: stiffness over damping 20 1/s) within
@@ -357,7 +406,7 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
         "fuzzy_slope_Ns_per_m": float(learned / delta_k),
         "tool_distance_m": x_p,
     }
-    return GainDesign(
+    design = GainDesign(
         K,
         lam,
         K_o,
@@ -369,6 +418,10 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
         d_n,
         numbers,
     )
+    numbers["feed_loop_damping"] = feed_loop_damping(
+        apply_gains(scenario, design), mass=mass
+    )
+    return design
 
 
 def _write_gains(scenario: Scenario, design: GainDesign):
