@@ -17,6 +17,10 @@ file gives or ``robot.reflected_inertia``):
   the translational and orientation gains are scaled down, each part to
   half the limit (the rate is linear in the gains), then both up together
   to the limit (never above the rule's values);
+- lambda on the fuzzy axes: where the sampled rate lowered K, raised so
+  that K lambda keeps the rule's 4e4 N/m (:data:`FEED_STIFFNESS`, at most
+  :data:`MAX_LAMBDA`): K lambda T_c is the feed/force loop's gain, and
+  without it that loop rings (:func:`feed_loop_damping`);
 - Delta_k (``fuzzy.sliding_scales`` x ``width_fraction``): the learned
   surface's slope, about f / Delta_k for a learned force f (the gravity
   error along x1, x2), must stay below :data:`SLOPE_RATE` (0.4) of the
