@@ -481,6 +481,9 @@ def _design_lines(result: Preflight, c) -> List[str]:
         f"mm/s), fuzzy.position_scale {design.position_scale:g} m",
         f"  predicted rho {result.rho:.5f} at the start pose, {margin} with "
         f"K and K_o x {GAIN_MARGIN:g}",
+        f"  feed/force loop damping ratio "
+        f"{n.get('feed_loop_damping', float('nan')):.2f} (linearised at "
+        f"the desired force, cell.gains.feed_loop_damping)",
     ]
 
 

@@ -17,6 +17,10 @@ file gives or ``robot.reflected_inertia``):
   the translational and orientation gains are scaled down, each part to
   half the limit (the rate is linear in the gains), then both up together
   to the limit (never above the rule's values);
+- lambda on the fuzzy axes: where the sampled rate lowered K, raised so
+  that K lambda keeps the rule's 4e4 N/m (:data:`FEED_STIFFNESS`, at most
+  :data:`MAX_LAMBDA`): K lambda T_c is the feed/force loop's gain, and
+  without it that loop rings (:func:`feed_loop_damping`);
 - Delta_k (``fuzzy.sliding_scales`` x ``width_fraction``): the learned
   surface's slope, about f / Delta_k for a learned force f (the gravity
   error along x1, x2), must stay below :data:`SLOPE_RATE` (0.4) of the
@@ -70,6 +74,7 @@ __all__ = [
     "VERTICAL_ERROR",
     "SAMPLED_RATE",
     "SLOPE_RATE",
+    "feed_loop_damping",
 ]
 
 #: m: the vertical error x3's PD may leave under the gravity error.
@@ -82,6 +87,10 @@ SLOPE_RATE = 0.4
 #: ... and at most arm5's (3.9 N over 4 mm/s, rounded), N s/m.
 SLOPE_MAX = 1000.0
 MIN_DELTA_K = 0.004  # m/s, paper.yaml's
+#: N/m: K lambda on the fuzzy axes, the rule's 400 x 100 ...
+FEED_STIFFNESS = 4.0e4
+#: ... with lambda at most this (1/s).
+MAX_LAMBDA = 1000.0
 #: g_max h / (lightest task mass) the integration step allows.
 STEP_RATE = 2.5
 
@@ -233,6 +242,73 @@ def _within_sampled_rate(rates, K, K_o):
     return (K, K_o, *rates(K, K_o))
 
 
+def _feed_loop_lambda(K, lam, axes):
+    """lambda on the fuzzy axes raised so that K lambda keeps the rule's
+    400 x 100 N/m where the sampled rate lowered K (at most
+    :data:`MAX_LAMBDA`); the other axes as they are.
+
+    Between two outer-loop samples the position error along the edge is
+    the feed's lag, e = T_c (v - v_t) (the command starts from x_p), so
+    K lambda T_c is the outer loop's proportional gain on the feed error;
+    it is what damps the feed/force loop against the tool's mass and the
+    mass the sensor filter's lag adds to the cancelled cutting force
+    (:func:`feed_loop_damping`)."""
+    lam = list(lam)
+    for a in axes:
+        lam[a] = min(
+            MAX_LAMBDA, max(lam[a], _ceil_to(FEED_STIFFNESS / K[a], 10.0))
+        )
+    return lam
+
+
+def feed_loop_damping(scenario: Scenario, *, mass: float) -> float:
+    """The feed/force loop's damping ratio along the edge on a fuzzy axis,
+    linearised at the desired force (``scenario``'s gains as written):
+
+        M s^2 + k_p s + k_i = 0,  zeta = k_p / (2 sqrt(k_i M)),
+
+    - k_p = K lambda T_c c: the command starts each outer period T_c from
+      x_p, so the position error is the feed's lag T_c (v - v_t) and
+      K lambda e a force on the speed error; c = f_td / (f_td - P'_th)
+      is the feed law's slope at the desired force;
+    - k_i = r |nu|^2 lambda T_c c: the fuzzy term integrates s at the
+      adaptation gain r times the active rules' |nu|^2 (at s = 0, the
+      tool's distance y0);
+    - M = ``mass`` (kg, the tool's task mass) + g tau: -f cancels the
+      cutting damping g = k_c delta* b through the sensor's filter
+      (tau = 1 / (2 pi f_c)), which leaves the mass g tau.
+
+    nan for a controller without fuzzy axes."""
+    from deburr_drake.cell.edge import believed_contour, start_position
+    from deburr_drake.control.controller import make_rule_bases
+
+    c = scenario.controller
+    if c.kind != "fuzzy" or not c.fuzzy.axes:
+        return float("nan")
+    task, cmd = scenario.task, scenario.command
+    slope = task.desired_chamfering_force / (
+        task.desired_chamfering_force - cmd.threshold_power_force
+    )
+    y0 = float(
+        np.linalg.norm(start_position(scenario, believed_contour(scenario)))
+    )
+    rb = make_rule_bases(c)[0]
+    _, nu = rb.active_rules(y0, 0.0)
+    g = (
+        scenario.process.cutting_coefficient
+        * task.desired_depth
+        * scenario.tool.engagement
+    )
+    M = mass + g / (2 * math.pi * scenario.sensor.cutoff_frequency)
+    zetas = []
+    for a in c.fuzzy.axes:
+        gain = c.sliding_lambda[a] * cmd.period * slope
+        k_p = c.sliding_gain[a] * gain
+        k_i = c.fuzzy.adaptation_gain * float(np.dot(nu, nu)) * gain
+        zetas.append(k_p / (2 * math.sqrt(k_i * M)))
+    return float(min(zetas))
+
+
 def _null_space_gains(rates, K, K_o):
     """(k_n, d_n, rate) of more than 6 joints: the null-space posture PD
     (200 N m/rad, 10 N m s/rad: stiffness over damping 20 1/s) within
@@ -308,6 +384,7 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
 
     K, lam, K_o, lam_o = _rule_gains(f)
     K, K_o, rate_v, rate_w, rate = _within_sampled_rate(rates, K, K_o)
+    lam = _feed_loop_lambda(K, lam, c.fuzzy.axes)
     k_n, d_n = c.null_space_stiffness, c.null_space_damping
     if len(q) > 6 and period > 0:
         k_n, d_n, rate = _null_space_gains(rates, K, K_o)
@@ -333,7 +410,7 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
         "fuzzy_slope_Ns_per_m": float(learned / delta_k),
         "tool_distance_m": x_p,
     }
-    return GainDesign(
+    design = GainDesign(
         K,
         lam,
         K_o,
@@ -345,6 +422,10 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
         d_n,
         numbers,
     )
+    numbers["feed_loop_damping"] = feed_loop_damping(
+        apply_gains(scenario, design), mass=mass
+    )
+    return design
 
 
 def _write_gains(scenario: Scenario, design: GainDesign):

@@ -53,7 +53,10 @@ __all__ = [
     "registration_error",
     "first_edge_error",
     "force_at_desired_depth",
+    "force_settling_metrics",
     "TRANSIENT",
+    "SETTLE_TIME",
+    "SETTLE_BAND",
     "CONTACT_FORCE",
     "MetricDoc",
     "METRICS",
@@ -398,6 +401,11 @@ METRICS: Dict[str, MetricDoc] = {
     ),
 }
 
+#: The chamfering force is judged settled from this long after the first
+#: full contact (s) ...
+SETTLE_TIME = 3.0
+#: ... within this band about the desired force (N).
+SETTLE_BAND = 1.0
 
 _FINISH = (
     "chamfer_depth_mean_error_mm",
@@ -605,6 +613,54 @@ def feed_metrics(log: RunLog, window: PassWindow) -> PassMetrics:
         )
     else:
         out.unavailable("feed_at_max_fraction", "no command sample")
+    return out
+
+
+def force_settling_metrics(
+    log: RunLog, *, after: float = SETTLE_TIME, band: float = SETTLE_BAND
+) -> PassMetrics:
+    """How the chamfering force settles: ``full_contact_time_s``, the first
+    time the cutter is wholly on the part at the desired depth (process
+    engagement 1, depth >= delta*), and
+    ``chamfering_force_settled_fraction``, the fraction of the process's
+    samples from ``after`` s later on, off the burrs, whose f_t lies within
+    ``band`` N of ``task.desired_chamfering_force``. Off the burrs: no
+    part of the cutter (arc +- cutter radius) on a burr's span, where the
+    feed law's slow-down moves the force by design."""
+    out = PassMetrics()
+    sc = log.scenario
+    proc = log["process"]
+    t = proc["t"]
+    full = metrics.first_time(
+        t,
+        (proc["engagement"] >= 1.0 - 1e-9)
+        & (proc["delta"] >= sc.task.desired_depth),
+    )
+    if not np.isfinite(full):
+        reason = "the cutter never reached the desired depth on the part"
+        out.unavailable("full_contact_time_s", reason)
+        out.unavailable("chamfering_force_settled_fraction", reason)
+        return out
+    out["full_contact_time_s"] = full
+    contour = make_contour(sc)
+    L, closed = contour.length, contour.closed
+    arc = proc["arc_position"]
+    on = np.zeros(arc.shape, bool)
+    for center, half in _burr_spans(sc, L):
+        reach = half + sc.tool.cutter_radius
+        on |= np.abs(metrics.arc_distance(arc, center, L, closed)) < reach
+    judged = metrics.window(t, full + after) & ~on
+    if not np.any(judged):
+        out.unavailable(
+            "chamfering_force_settled_fraction",
+            f"no sample off the burrs from {full + after:.3f} s on "
+            f"(the run stopped at {log.sim_time:.3f} s)",
+        )
+        return out
+    error = proc["f_t"][judged] - sc.task.desired_chamfering_force
+    out["chamfering_force_settled_fraction"] = float(
+        np.mean(np.abs(error) <= band)
+    )
     return out
 
 

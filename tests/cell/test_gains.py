@@ -3,7 +3,9 @@ written gains come out of the rules; arm5's differ on x3 only, by the
 numbers; a light arm gets gains its sampled loop holds."""
 
 import copy
+import math
 
+import numpy as np
 import pytest
 
 from deburr_drake.cell.gains import (
@@ -12,6 +14,7 @@ from deburr_drake.cell.gains import (
     VERTICAL_ERROR,
     apply_gains,
     design_gains,
+    feed_loop_damping,
     resolve_design,
     resolve_gains,
     resolve_slope_bound,
@@ -142,3 +145,52 @@ def test_the_step_is_lowered_only_for_eq3_between_samples():
     mass = design.numbers["lightest_task_mass_kg"]
     assert g_max * design.max_step / mass < STEP_RATE
     assert g_max * 0.0025 / mass > STEP_RATE
+
+
+def test_feed_loop_damping_of_arm6_by_hand():
+    """paper_6dof: K lambda T_c c = 400 x 100 x 0.025 x 10 / 8 = 1250 N s/m,
+    k_i = 5000 |nu|^2 x 3.125, M = 1 kg + g tau with g = 3e9 x 0.5 mm x
+    2 mm = 3000 N s/m and tau = 1 / (2 pi 10 Hz)."""
+    from deburr_drake.cell.edge import believed_contour, start_position
+    from deburr_drake.control.controller import make_rule_bases
+
+    scenario = load_scenario("paper_6dof")
+    y0 = np.linalg.norm(start_position(scenario, believed_contour(scenario)))
+    _, nu = make_rule_bases(scenario.controller)[0].active_rules(y0, 0.0)
+    M = 1.0 + 3000.0 / (2 * math.pi * 10.0)
+    expected = 1250.0 / (2 * math.sqrt(5000.0 * (nu @ nu) * 3.125 * M))
+    assert feed_loop_damping(scenario, mass=1.0) == pytest.approx(expected)
+    assert expected == pytest.approx(1.28, abs=0.01)
+
+
+def test_a_lowered_k_gets_lambda_for_the_feed_loop():
+    """Where the sampled rate lowers K on a fuzzy axis, lambda rises so
+    that K lambda stays 4e4 N/m (the feed loop's gain K lambda T_c), and
+    the design states the loop's damping; arm6's gains are not lowered
+    and keep lambda 100."""
+    scenario = load_scenario(
+        "paper_6dof", text="robot: {reflected_inertia: [0, 0, 0, 0, 0, 0]}"
+    )
+    design = design_gains(scenario)
+    for a in scenario.controller.fuzzy.axes:
+        assert design.sliding_gain[a] < 400.0
+        K_lambda = design.sliding_gain[a] * design.sliding_lambda[a]
+        assert 4.0e4 <= K_lambda < 4.0e4 + 10.0 * design.sliding_gain[a]
+    assert design.sliding_lambda[2] == 100.0
+    before = feed_loop_damping(
+        apply_gains(
+            scenario,
+            design_with_lambda(design, 100.0),
+        ),
+        mass=design.numbers["lightest_task_mass_kg"],
+    )
+    assert design.numbers["feed_loop_damping"] > before
+    assert (
+        design_gains(load_scenario("paper_6dof")).sliding_lambda == [100.0] * 3
+    )
+
+
+def design_with_lambda(design, lam):
+    d = copy.deepcopy(design)
+    d.sliding_lambda = [lam] * 3
+    return d
