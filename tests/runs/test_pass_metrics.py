@@ -16,6 +16,7 @@ from deburr_drake.runs.pass_metrics import (
     feed_metrics,
     finish_metrics,
     force_metrics,
+    force_settling_metrics,
     pass_metrics,
     pass_window,
     smoothness_metrics,
@@ -225,3 +226,43 @@ def test_registration_error_of_the_true_registration_is_zero(name):
     assert registration_error(scenario, truth) < 1e-9
     # None: the offset and the turn at the far corners.
     assert registration_error(scenario, np.zeros(4)) > 6e-4
+
+
+def test_force_settling_judges_off_the_burrs_from_full_contact_on():
+    sc = load_scenario("paper")
+    d_star, f_d = sc.task.desired_depth, sc.task.desired_chamfering_force
+    L = make_contour(sc).length
+    t = np.arange(0.0, 20.0, 0.01)
+    arc = np.linspace(0.0, 0.25 * L, len(t))
+    full = 2.0  # s: engagement 1 at the desired depth from here
+    engaged = t >= full
+    on_burr = np.zeros(len(t), bool)
+    for b in sc.process.burrs:
+        half = b.length / 2 + sc.tool.cutter_radius
+        on_burr |= np.abs(arc - b.center_fraction * L) < half
+    assert on_burr[t >= full + 3.0].any()
+    # Off the burrs from full + 3 s: 9 of 10 samples within the band, one
+    # 2 N off; on the burrs 30 N, which must not count; before, 50 N.
+    f_t = np.where(np.arange(len(t)) % 10 == 0, f_d + 2.0, f_d + 0.5)
+    f_t = np.where(on_burr, 30.0, f_t)
+    f_t = np.where(t < full + 3.0, 50.0, f_t)
+    log = RunLog(
+        scenario=sc,
+        signals={
+            "process": {
+                "t": t,
+                "f_t": f_t,
+                "arc_position": arc,
+                "engagement": np.where(engaged, 1.0, 0.5),
+                "delta": np.where(engaged, d_star, 0.5 * d_star),
+            }
+        },
+        wall_time=1.0,
+        sim_time=20.0,
+    )
+    found = force_settling_metrics(log)
+    assert found["full_contact_time_s"] == pytest.approx(full)
+    judged = (t >= full + 3.0) & ~on_burr
+    expected = np.mean(np.abs(f_t[judged] - f_d) <= 1.0)
+    assert expected == pytest.approx(0.9, abs=0.01)
+    assert found["chamfering_force_settled_fraction"] == pytest.approx(expected)
