@@ -62,6 +62,7 @@ FROZEN = (
 SUMMARY_KEYS = (
     "verdict",
     "verdict_reason",
+    "numerics",
     "rho_along_run",
     "robust",
     "eigenvalues",
@@ -122,6 +123,7 @@ def analyze(
     until: Optional[float] = None,
     spacing: float = DEFAULT_SPACING,
     robust: bool = True,
+    numerics: str = "refined",
     progress: Optional[Callable[[str], None]] = None,
 ) -> Dict:
     """The verdict on the run the user will run and, only if it settles
@@ -138,14 +140,21 @@ def analyze(
     without oscillating; otherwise "stable"; ``verdict_reason`` says why.
     ``overrides`` (scenario fields by dotted name) apply at the operating
     point only: a what-if on the run as given (the verdict is the
-    run's)."""
+    run's).
+
+    ``numerics`` ("refined", the default, or "shipped";
+    :func:`deburr_drake.analysis.along.at_numerics`) is how the run, the
+    maps along it and the operating point's models are integrated;
+    ``numerics`` in the result says which step and treatment they used
+    and the run's wall time."""
     overrides = dict(overrides or {})
     say = progress or (lambda message: None)
     tol = SettleTolerances()
-    # The run as the user will run it (guards off), mapped along the way.
+    # The run as the user will run it (guards off), at the verdict's
+    # numerics, mapped along the way.
     say(
-        "the run: simulating the scenario (guards off), with the 2.5 ms "
-        "map at points along it"
+        f"the run: simulating the scenario (guards off) at the {numerics} "
+        "numerics, with the one-period map at points along it"
     )
     run = analysis_run(
         scenario,
@@ -153,8 +162,11 @@ def analyze(
         after_contact=after_contact,
         until=until,
         spacing=spacing,
+        numerics=numerics,
         progress=say,
     )
+    # From here on the scenario as run: at the verdict's numerics.
+    scenario = run.analysed
     timings = {
         "run_s": run.wall_time_s - run.map_time_s,
         "maps_along_run_s": run.map_time_s,
@@ -257,6 +269,10 @@ def _run_header(scenario, run, overrides, tol) -> Dict:
             else None,
             "guards": "off in the run; the first one that would have "
             "tripped is named",
+        },
+        "numerics": {
+            **run.numerics,
+            "run_wall_time_s": run.wall_time_s,
         },
         "settle_tolerances": dataclasses.asdict(tol),
     }
@@ -548,6 +564,7 @@ def summary_text(result: Dict) -> str:
         f"deburr-drake analyze: scenario '{result['scenario']}', run "
         f"to {result['run']['end_time']:.2f} s "
         f"({result['run']['stop_reason']}, guards off)",
+        _numerics_line(result["numerics"]),
     ]
     if result.get("eigenvalues") is None:
         return "\n".join(lines + _unsettled_lines(result))
@@ -572,6 +589,27 @@ def summary_text(result: Dict) -> str:
     if "boundaries" in result:
         lines += _boundary_lines(result["boundaries"])
     return "\n".join(lines)
+
+
+def _numerics_line(n: Dict) -> str:
+    """Which step and treatment the verdict's run and its maps used, and
+    what the run cost."""
+
+    def treatment(step, sample_mean):
+        held = "held mean" if sample_mean else "eq. (3)"
+        return f"{step * 1e3:.4g} ms steps, {held} between samples"
+
+    line = (
+        f"numerics ({n['name']}): the run at "
+        f"{treatment(n['max_step_s'], n['sample_mean'])}"
+        + (" (error control)" if n["error_control"] else "")
+        + f" (shipped {n['shipped_max_step_s'] * 1e3:.4g} ms)"
+    )
+    if n.get("maps_max_step_s") is not None:
+        line += "; the maps at " + treatment(
+            n["maps_max_step_s"], n["maps_sample_mean"]
+        )
+    return line + f"; {n['run_wall_time_s']:.1f} s of wall time"
 
 
 def _unsettled_lines(result: Dict) -> list:

@@ -511,3 +511,52 @@ def test_fast_map_matches_the_full_map(paper_op):
     far = {fields[0]: 60.0, fields[1]: 5000.0}
     full = analysis.sampled_loop(paper_op, **far).spectral_radius
     assert full > 1.0 and rho_of(**far) == pytest.approx(full, rel=0.1)
+
+
+def test_the_verdicts_numerics_refine_the_step_and_follow_eq3():
+    from deburr_drake.analysis.along import at_numerics
+
+    paper = load_scenario("paper")
+    refined = at_numerics(paper)
+    assert refined.simulation.max_step == pytest.approx(
+        paper.simulation.max_step / 4
+    )
+    assert not refined.process.sample_mean and paper.process.sample_mean
+    assert at_numerics(paper, "shipped") is paper
+    with pytest.raises(ConfigError, match="--numerics"):
+        at_numerics(paper, "finer")
+
+
+@pytest.mark.slow
+def test_analyze_states_the_numerics_of_its_verdict(tmp_path, capsys):
+    code = main(
+        [
+            "analyze",
+            "--scenario",
+            "point_mass",
+            "--after-contact",
+            "0.5",
+            "--until",
+            "1.0",
+            "--no-robust",
+            "--out",
+            str(tmp_path),
+        ]
+    )
+    assert code == 0
+    data = json.loads((tmp_path / "analysis.json").read_text())
+    numerics = data["numerics"]
+    shipped = load_scenario("point_mass")
+    assert numerics["name"] == "refined"
+    assert numerics["shipped_max_step_s"] == shipped.simulation.max_step
+    assert numerics["max_step_s"] == pytest.approx(
+        shipped.simulation.max_step / 4
+    )
+    assert numerics["sample_mean"] is False
+    # the maps integrate their period as the run does, at most one step
+    # per period (the analysis's fixed steps replace error control)
+    assert numerics["maps_sample_mean"] is False
+    assert 0 < numerics["maps_max_step_s"] <= 0.0025 + 1e-12
+    assert numerics["run_wall_time_s"] > 0
+    out = capsys.readouterr().out
+    assert "numerics (refined): the run at 2.5 ms steps, eq. (3)" in out
