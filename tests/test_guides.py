@@ -60,6 +60,8 @@ GUIDES = [
     "python-api.md",
     "localisation.md",
     "own-part.md",
+    "own-robot.md",
+    "stability.md",
 ]
 MAX_LINES = 250
 

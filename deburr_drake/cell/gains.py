@@ -1,9 +1,10 @@
 """Gains designed from the robot model (``controller.design: auto``).
 
-The rules docs/own-robot.md states ("Gains designed from the model"), made
-code, from the numbers :func:`deburr_drake.cell.robot.loop_numbers` gives
-at the start pose (the robot model's masses, with the rotor inertia the
-file gives or ``robot.reflected_inertia``):
+The rules docs/own-robot-measurements.md states ("Gains designed from the
+model"), made code, from the numbers
+:func:`deburr_drake.cell.robot.loop_numbers` gives at the start pose (the
+robot model's masses, with the rotor inertia the file gives or
+``robot.reflected_inertia``):
 
 - x1, x2 (the fuzzy axes): the paper's K = 400 N s/m and lambda = 100 1/s;
 - x3 (a PD axis, R9): K lambda large enough that the gravity error the
@@ -476,8 +477,8 @@ def slope_bound(scenario: Scenario) -> Optional[float]:
     The sampled loop's limit on the total gain on s_k is about 2 m / T (a
     mass under a sampled damper: the per-sample factor 1 - K T / m
     reaches -1); the fraction leaves the learned slope room below it.
-    docs/stability.md compares the bound with arm5's measured limit and
-    with what its paper pass learns."""
+    docs/stability-measurements.md compares the bound with arm5's measured
+    limit and with what its paper pass learns."""
     c = scenario.controller
     f = c.fuzzy
     if f.max_slope != 0 or c.kind != "fuzzy" or not c.control_period > 0:

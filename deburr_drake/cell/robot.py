@@ -493,8 +493,8 @@ def start_pose(scenario):
 
 
 def loop_numbers(scenario, q=None) -> dict:
-    """The numbers that set a robot's gains (docs/own-robot.md, "Gains
-    designed from the model"),
+    """The numbers that set a robot's gains
+    (docs/own-robot-measurements.md, "Gains designed from the model"),
     at joint angles ``q`` (default :func:`start_pose`), from the robot
     model alone:
 
