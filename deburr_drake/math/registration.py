@@ -164,6 +164,22 @@ def _phi(contour: Contour, p) -> np.ndarray:
     return np.array([float(contour.phi(np.array([x, y, z]))) for x, y in p])
 
 
+def _amplification(contour: Contour, p, *, level: bool) -> float:
+    """The largest standard deviation of (dx, dy, L dyaw) (and, ``level``,
+    a level common to the points) per unit noise of a fit through the
+    planar points ``p`` (N, 2); inf when they do not fix it."""
+    if len(p) < 3 + level:
+        return math.inf
+    pivot = pivot_of(contour)[:2]
+    J = _turn_terms(contour, p, pivot)
+    L = float(np.sqrt(np.mean(np.sum((p - pivot) ** 2, axis=1))))
+    J[:, 2] /= max(L, 1e-12)
+    if level:
+        J = np.column_stack([J, -np.ones(len(p))])
+    smallest = np.linalg.svd(J, compute_uv=False)[-1]
+    return math.inf if smallest <= 1e-9 else float(1.0 / smallest)
+
+
 def rigid_fit_amplification(contour: Contour, points) -> float:
     """How much a rigid fit (dx, dy, dyaw) of ``contour`` through
     ``points`` ((N, 2 or 3), m, on or near the edge) amplifies touch noise:
@@ -171,14 +187,7 @@ def rigid_fit_amplification(contour: Contour, points) -> float:
     the points' RMS distance from the pivot (inf when they do not fix the
     move: fewer than 3, or all on one straight piece)."""
     p = np.asarray(points, float)[:, :2]
-    if len(p) < 3:
-        return math.inf
-    pivot = pivot_of(contour)[:2]
-    J = _turn_terms(contour, p, pivot)
-    L = float(np.sqrt(np.mean(np.sum((p - pivot) ** 2, axis=1))))
-    J[:, 2] /= max(L, 1e-12)
-    smallest = np.linalg.svd(J, compute_uv=False)[-1]
-    return math.inf if smallest <= 1e-9 else float(1.0 / smallest)
+    return _amplification(contour, p, level=False)
 
 
 def size_amplification(contour: Contour, points) -> float:
@@ -186,17 +195,9 @@ def size_amplification(contour: Contour, points) -> float:
     every touch (its size) through ``points`` amplifies touch noise, as
     :func:`rigid_fit_amplification` with the level as a fourth unknown
     (inf when the touches cannot tell the size from the move: fewer than
-    4, or no two of them on sides facing apart)."""
+    4, or none of them on sides facing apart)."""
     p = np.asarray(points, float)[:, :2]
-    if len(p) < 4:
-        return math.inf
-    pivot = pivot_of(contour)[:2]
-    J = _turn_terms(contour, p, pivot)
-    L = float(np.sqrt(np.mean(np.sum((p - pivot) ** 2, axis=1))))
-    J[:, 2] /= max(L, 1e-12)
-    J = np.column_stack([J, -np.ones(len(p))])
-    smallest = np.linalg.svd(J, compute_uv=False)[-1]
-    return math.inf if smallest <= 1e-9 else float(1.0 / smallest)
+    return _amplification(contour, p, level=True)
 
 
 def _rigid_fit(
