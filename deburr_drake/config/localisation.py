@@ -14,10 +14,10 @@ __all__ = ["ProbeConfig", "OnlineRegistrationConfig", "LocalisationConfig"]
 class ProbeConfig:
     """Touch probing with the spindle off: guarded moves along the believed
     normal n1 at ``points`` places of the edge, contact detected on the
-    force sensor, a circle (centre, optionally radius), a straight edge
-    (offset, heading) or a profile (move and turn) fitted, touches on a
-    burr dropped (they come early), and the believed part corrected before
-    the pass."""
+    force sensor, a circle (centre and radius), a straight edge (offset,
+    heading) or a profile (move, turn and, where the touches tell it,
+    size) fitted, touches on a burr dropped (they come early), and the
+    believed part corrected before the pass."""
 
     enabled: bool = False  # -, touch probing before the pass
     points: int = 8  # -, number of touches
@@ -43,8 +43,17 @@ class ProbeConfig:
     # N/m, the contact stiffness the detection bias is modelled with
     # (threshold / stiffness of penetration at the threshold).
     contact_stiffness: float = 5.0e3
-    # -, circle: fit the radius too (else the drawing's); only a circle
-    fit_radius: bool = False
+    # -, fit the part's size where the touches can tell it: a circle's
+    # radius (touches over more than a half circle), a profile's uniform
+    # growth (5 or more touches on sides facing apart); a straight edge
+    # has no size. false: the drawing's size (math/registration.py
+    # registration_from_points).
+    fit_radius: bool = True
+    # m, how far past the zero-depth path along n1 a touch still lies
+    # once the modelled detection depth is taken off: the probe's
+    # qualification on a ring of known radius (fitted minus true radius,
+    # runs/probe_study.py probe_qualification); taken off every touch.
+    detection_bias: float = 4.9e-6
     # m, a touch off the circle, line or profile most touches agree on by
     # more is dropped: a burr under it (math.fits.fit_consensus)
     max_residual: float = (
@@ -88,6 +97,14 @@ class ProbeConfig:
         ):
             _positive(o, name, getattr(self, name))
         _non_negative(o, "settle_time", self.settle_time)
+        _require(
+            isinstance(self.detection_bias, (int, float))
+            and abs(self.detection_bias) < self.search_distance,
+            f"{o}.detection_bias",
+            self.detection_bias,
+            f"a number of magnitude < {o}.search_distance "
+            f"({self.search_distance}) m",
+        )
         _non_negative(o, "fuzzy_ramp_time", self.fuzzy_ramp_time)
         _non_negative(o, "entry_dwell", self.entry_dwell)
         _require(

@@ -4,9 +4,11 @@ off, as Drake systems.
 - :class:`ProbingSequence`: a state machine in the Context's discrete state
   that commands guarded moves along the believed normal n1 at N points of
   the edge, detects each contact on the force sensor, compensates the
-  detection bias (:func:`detection_depth`), fits the circle, straight
-  edge or profile (deburr_drake.math.registration, touches that came
-  early on a burr dropped), outputs the registration that corrects the
+  detection bias (:func:`detection_depth` and the calibrated
+  ``detection_bias``), fits the circle, straight edge or profile and,
+  ``fit_radius``, its size where the touches tell it
+  (deburr_drake.math.registration, touches that came early on a burr
+  dropped), outputs the registration that corrects the
   believed part, and brings the tool to the pass's start on the corrected
   part; then it hands the command over to the command generator.
 - :class:`ProbeGate`: while probing, the estimator, the force loop and the
@@ -277,9 +279,10 @@ class ProbingSequence(LeafSystem):
     ``standoff`` before the believed zero-depth path along -n1, settle,
     tare the force, move along n1 at ``approach_speed`` until
     -(f - tare).n1 exceeds ``force_threshold`` (or ``search_distance``: a
-    miss), record x_p minus the :func:`detection_depth` along n1, retract
-    by ``retract``. Then the fit, a travel (along the corrected edge) to
-    the corrected start's standoff and an entry at the approach speed to
+    miss), record x_p minus the :func:`detection_depth` and the
+    calibrated ``detection_bias`` along n1, retract by ``retract``. Then
+    the fit, a travel (along the corrected edge) to the corrected start's
+    standoff and an entry at the approach speed to
     ``start`` on the corrected part (the tool point the pass starts from);
     the command generator takes over from there.
     """
@@ -531,8 +534,13 @@ class ProbingSequence(LeafSystem):
             chamfer = self._chamfer_port.Eval(step.context)
             x_p = CHAMFER_STATE.get(chamfer, "x_p")
             speed = float(CHAMFER_STATE.get(chamfer, "xdot_p") @ n)
-            touch = x_p - n * detection_depth(
-                speed, c.force_threshold, c.contact_stiffness, self._timing
+            # The modelled depth at detection, and what the probe's
+            # qualification found the model leaves.
+            touch = x_p - n * (
+                detection_depth(
+                    speed, c.force_threshold, c.contact_stiffness, self._timing
+                )
+                + c.detection_bias
             )
             i = int(round(float(PROBE_STATE.get(x, "index"))))
             step.touches[4 * i : 4 * i + 4] = [*touch, 1.0]

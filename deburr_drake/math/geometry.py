@@ -885,6 +885,16 @@ class ProfileContour(_ClosedAboutCenter):
             start_fraction=self._start_fraction,
         )
 
+    def grown(self, growth) -> "ProfileContour":
+        """The same profile with its edge grown outward by ``growth`` (m:
+        a pocket larger, a boss larger), the path's offset from it
+        unchanged."""
+        growth = _finite_scalar(growth, "growth")
+        pocket = self._material == "outside"
+        return self.with_offset(
+            self._offset - growth if pocket else self._offset + growth
+        )
+
     @property
     def vertices(self) -> np.ndarray:
         """(N, 2) m, the polygon's corners about ``center``."""

@@ -4,17 +4,18 @@ onto the real one, the contour it gives, and ``r`` from probed points.
 
 - :func:`moved_contour`: the believed contour turned by dyaw about its
   pivot (:func:`pivot_of`) and moved by (dx, dy); a circle also with a
-  radius dradius larger. Circle, straight edge and profile
+  radius dradius larger, a profile grown outward by dradius
   (``ProfileContour``: its vertices turn and move, the fillets are
-  unchanged; dradius must be 0). The pivot moves with (dx, dy), so two
-  registrations compose by adding them.
-- :func:`registration_from_points`: the rigid move (and, a circle, the
-  radius) that puts the contour through touch points on the real edge's
-  zero-depth path: the circle and straight-edge fits of
-  deburr_drake.math.fits in closed form, any other contour (a profile) by
-  Gauss-Newton on the signed distances; the touches kept are those the
-  fit most of them agree on within ``max_residual``
-  (deburr_drake.math.fits.fit_consensus: a touch on a burr is left out).
+  unchanged; a straight edge has no size: dradius must be 0). The pivot
+  moves with (dx, dy), so two registrations compose by adding them.
+- :func:`registration_from_points`: the rigid move and the size (a
+  circle's radius, a profile's growth, where the touches tell it) that
+  put the contour through touch points on the real edge's zero-depth
+  path: the circle and straight-edge fits of deburr_drake.math.fits in
+  closed form, any other contour (a profile) by Gauss-Newton on the
+  signed distances; the touches kept are those the fit most of them agree
+  on within ``max_residual`` (deburr_drake.math.fits.fit_consensus: a
+  touch on a burr is left out).
 - while cutting (:func:`contact_regressor`, :func:`rls_update`,
   :func:`registration_of`): the contact force against the depth on a
   reference contour, ||f_n|| = c0 + c1 (delta_0 - d), shows how far the
@@ -27,6 +28,7 @@ onto the real one, the contour it gives, and ``r`` from probed points.
 from __future__ import annotations
 
 from dataclasses import dataclass
+import functools
 import math
 
 import numpy as np
@@ -46,6 +48,7 @@ __all__ = [
     "ProbeFit",
     "registration_from_points",
     "rigid_fit_amplification",
+    "size_amplification",
     "MAX_AMPLIFICATION",
     "ONLINE_PARAMETERS",
     "contact_regressor",
@@ -92,8 +95,9 @@ def pivot_of(contour: Contour) -> np.ndarray:
 def moved_contour(contour: Contour, registration) -> Contour:
     """``contour`` turned by dyaw (rad, counter-clockwise) about
     :func:`pivot_of` and moved by (dx, dy) (m); a circle's radius grows by
-    dradius (m). ValueError for a nonzero dradius on a straight edge or a
-    profile (their size is the drawing's)."""
+    dradius (m), a profile's edge grows outward by it (a pocket or a boss
+    larger). ValueError for a nonzero dradius on a straight edge (it has
+    no size)."""
     dx, dy, dyaw, dradius = (float(v) for v in registration)
     if not any((dx, dy, dyaw, dradius)):
         return contour
@@ -105,13 +109,10 @@ def moved_contour(contour: Contour, registration) -> Contour:
             start_angle=contour.start_angle + dyaw,
             direction=contour.direction,
         )
-    if dradius != 0.0 and isinstance(
-        contour, (StraightContour, ProfileContour)
-    ):
+    if dradius != 0.0 and isinstance(contour, StraightContour):
         raise ValueError(
-            f"dradius = {dradius!r} m on a "
-            f"{type(contour).__name__}: only a circle's radius "
-            "is registered"
+            f"dradius = {dradius!r} m on a StraightContour: a straight "
+            "edge has no size to register"
         )
     pivot = pivot_of(contour)
     if isinstance(contour, StraightContour):
@@ -124,11 +125,22 @@ def moved_contour(contour: Contour, registration) -> Contour:
         n[:2] = R @ n[:2]
         return StraightContour(start, t, n, length=contour.length)
     if isinstance(contour, ProfileContour):
+        if dradius != 0.0:
+            contour = _grown(contour, dradius)
         return contour.moved((dx, dy), dyaw, pivot[:2])
     raise TypeError(
         f"registration of a {type(contour).__name__} is not "
         "supported: a circle, a straight edge or a profile"
     )
+
+
+@functools.lru_cache(maxsize=16)
+def _grown(contour: ProfileContour, growth: float) -> ProfileContour:
+    """``contour`` grown by ``growth`` (m), memoised: the probe's growth
+    is one value for the whole pass while the online correction moves the
+    grown profile every sample, and building a profile checks its whole
+    path."""
+    return contour.grown(growth)
 
 
 def _turn_terms(contour: Contour, p, pivot) -> np.ndarray:
@@ -152,6 +164,22 @@ def _phi(contour: Contour, p) -> np.ndarray:
     return np.array([float(contour.phi(np.array([x, y, z]))) for x, y in p])
 
 
+def _amplification(contour: Contour, p, *, level: bool) -> float:
+    """The largest standard deviation of (dx, dy, L dyaw) (and, ``level``,
+    a level common to the points) per unit noise of a fit through the
+    planar points ``p`` (N, 2); inf when they do not fix it."""
+    if len(p) < 3 + level:
+        return math.inf
+    pivot = pivot_of(contour)[:2]
+    J = _turn_terms(contour, p, pivot)
+    L = float(np.sqrt(np.mean(np.sum((p - pivot) ** 2, axis=1))))
+    J[:, 2] /= max(L, 1e-12)
+    if level:
+        J = np.column_stack([J, -np.ones(len(p))])
+    smallest = np.linalg.svd(J, compute_uv=False)[-1]
+    return math.inf if smallest <= 1e-9 else float(1.0 / smallest)
+
+
 def rigid_fit_amplification(contour: Contour, points) -> float:
     """How much a rigid fit (dx, dy, dyaw) of ``contour`` through
     ``points`` ((N, 2 or 3), m, on or near the edge) amplifies touch noise:
@@ -159,14 +187,17 @@ def rigid_fit_amplification(contour: Contour, points) -> float:
     the points' RMS distance from the pivot (inf when they do not fix the
     move: fewer than 3, or all on one straight piece)."""
     p = np.asarray(points, float)[:, :2]
-    if len(p) < 3:
-        return math.inf
-    pivot = pivot_of(contour)[:2]
-    J = _turn_terms(contour, p, pivot)
-    L = float(np.sqrt(np.mean(np.sum((p - pivot) ** 2, axis=1))))
-    J[:, 2] /= max(L, 1e-12)
-    smallest = np.linalg.svd(J, compute_uv=False)[-1]
-    return math.inf if smallest <= 1e-9 else float(1.0 / smallest)
+    return _amplification(contour, p, level=False)
+
+
+def size_amplification(contour: Contour, points) -> float:
+    """How much a fit of ``contour``'s rigid move and a level common to
+    every touch (its size) through ``points`` amplifies touch noise, as
+    :func:`rigid_fit_amplification` with the level as a fourth unknown
+    (inf when the touches cannot tell the size from the move: fewer than
+    4, or none of them on sides facing apart)."""
+    p = np.asarray(points, float)[:, :2]
+    return _amplification(contour, p, level=True)
 
 
 def _rigid_fit(
@@ -206,9 +237,10 @@ class ProbeFit:
         np.ndarray
     )  # (N,) m, phi of every point on the fit - level: > 0 early
     rms: float  # m, of the kept points' residuals
-    # m, a profile's level common to the kept touches (> 0: early on
-    # average: the contact stiffer than modelled or the edge further out
-    # than drawn); 0 on a circle or a straight edge
+    # m, the level common to the kept touches that the registration does
+    # not apply (> 0: early on average): a circle's fitted radius less the
+    # drawing's, or a profile's level, when the size is held; 0 when the
+    # size is registered and on a straight edge
     level: float = 0.0
 
 
@@ -281,19 +313,19 @@ def _circle_registration(contour, p, max_residual, fit_radius):
         )
     else:
         kept = np.ones(len(p), bool)
-    spread = _spread_around(p[kept], contour.center[:2])
-    free = fit_radius or spread > math.pi
+    # Touches within a half circle know the radius poorly: the drawing's
+    # is held then, and the centre fitted with it.
+    free = _spread_around(p[kept], contour.center[:2]) > math.pi
     fit = fit_circle(
         p[kept],
         radius=None if free else contour.radius,
         seed=None if free else contour.center[:2],
     )
     d = fit.center - contour.center[:2]
-    reg = np.array(
-        [d[0], d[1], 0.0, fit.radius - contour.radius if fit_radius else 0.0]
-    )
-    level = 0.0 if fit_radius else -(fit.radius - contour.radius)
-    return reg, kept, level
+    dradius = fit.radius - contour.radius
+    sized = fit_radius and free
+    reg = np.array([d[0], d[1], 0.0, dradius if sized else 0.0])
+    return reg, kept, 0.0 if sized else -dradius
 
 
 def _line_registration(contour, p, max_residual):
@@ -318,10 +350,20 @@ def _line_registration(contour, p, max_residual):
     return np.array([shift[0], shift[1], dyaw, 0.0]), kept, 0.0
 
 
-def _rigid_registration(contour, p, max_residual):
+def _growth_of_level(contour: ProfileContour, level: float) -> float:
+    """m, the growth (outward, :meth:`ProfileContour.grown`) that puts
+    touches ``level`` early on average back on the edge: a pocket's edge
+    lies along n1 from its free side, a boss's against it."""
+    pocket = float(contour.phi(contour.vertex_centroid)) > 0.0
+    return -level if pocket else level
+
+
+def _rigid_registration(contour, p, max_residual, fit_size):
     """(registration, kept, level) of any other contour through the points
     ``p`` ((N, 2), m): its rigid move, and with 5 or more touches a common
-    level."""
+    level; that level is the profile's growth (``fit_size``) when the kept
+    touches tell it from the move (:func:`size_amplification` at most
+    ``MAX_AMPLIFICATION``)."""
     pivot_of(contour)  # TypeError for a contour that cannot be moved
     gain = rigid_fit_amplification(contour, p)
     if gain > MAX_AMPLIFICATION:
@@ -347,8 +389,17 @@ def _rigid_registration(contour, p, max_residual):
         raise ValueError(
             "the touches kept do not fix the part's position and turn"
         )
-    found = _rigid(contour, level=free and kept.sum() >= 5)(p[kept])
-    return np.array([*found.move, 0.0]), kept, found.level
+    levelled = free and kept.sum() >= 5
+    found = _rigid(contour, level=levelled)(p[kept])
+    if not (
+        fit_size
+        and levelled
+        and isinstance(contour, ProfileContour)
+        and size_amplification(contour, p[kept]) <= MAX_AMPLIFICATION
+    ):
+        return np.array([*found.move, 0.0]), kept, found.level
+    growth = _growth_of_level(contour, found.level)
+    return np.array([*found.move, growth]), kept, 0.0
 
 
 def registration_from_points(
@@ -361,7 +412,7 @@ def registration_from_points(
     (:func:`~deburr_drake.math.fits.fit_consensus`: a touch on a burr
     cannot pull the first fit towards itself).
 
-    - A circle: its centre (and, ``fit_radius``, its radius), at least 3
+    - A circle: its centre and, ``fit_radius``, its radius, at least 3
       points (4 to find an outlier). The touches are found agreeing with
       one circle of free radius, so that a bias common to every touch
       (the detection's depth, which the stiffness of the contact sets)
@@ -370,28 +421,28 @@ def registration_from_points(
       moves the centre whenever the kept touches are not symmetric (one
       dropped on a burr: 0.14 mm of common bias puts the centre 50 um
       off). The drawing's radius is held only when the kept touches
-      lie within a half circle (the radius is then poorly known).
-      ``fit_radius``: the fitted radius is applied too (else the
-      drawing's is kept: a probe cannot tell a radius error from its own
-      detection bias).
+      lie within a half circle (the radius is then poorly known, and
+      the size is not registered). ``fit_radius``: the fitted radius is
+      applied too (else the drawing's is kept); the touches must then
+      be free of the probe's own detection bias (calibrated on a ring of
+      known size: a probe alone cannot tell a radius error from it).
     - A straight edge: its offset and heading (total least squares), at
-      least 2 points (3 to find an outlier).
+      least 2 points (3 to find an outlier). It has no size:
+      ``fit_radius`` changes nothing.
     - Any other contour (a profile): its rigid move (dx, dy, dyaw) by
       Gauss-Newton on the signed distances phi, at least 3 points that fix
       it (:func:`rigid_fit_amplification` at most ``MAX_AMPLIFICATION``;
       4 to find an outlier). With 5 or more a level common to every touch
-      is fitted too (``ProbeFit.level``), as a circle's radius: a
-      detection bias common to the touches is neither taken for burrs nor,
-      when a burr touch leaves the rest unbalanced, for a move.
+      is fitted too, as a circle's radius: a detection bias common to the
+      touches is neither taken for burrs nor, when a burr touch leaves the
+      rest unbalanced, for a move. ``fit_radius``: that level is the
+      profile's growth (dradius, a uniform offset of its edge) when the
+      kept touches tell it from the move (:func:`size_amplification` at
+      most ``MAX_AMPLIFICATION``: touches on sides facing apart), else
+      the drawing's size is kept and the level is ``ProbeFit.level``.
 
-    ``fit_radius`` on anything but a circle is a ValueError; so are
-    points that cannot fix the registration."""
+    Points that cannot fix the registration are a ValueError."""
     p = np.asarray(points, float)[:, :2]
-    if fit_radius and not isinstance(contour, CircularContour):
-        raise ValueError(
-            f"fit_radius on a {type(contour).__name__}: only "
-            "a circle's radius is fitted"
-        )
     if isinstance(contour, CircularContour):
         reg, kept, level = _circle_registration(
             contour, p, max_residual, fit_radius
@@ -399,9 +450,11 @@ def registration_from_points(
     elif isinstance(contour, StraightContour):
         reg, kept, level = _line_registration(contour, p, max_residual)
     else:
-        reg, kept, level = _rigid_registration(contour, p, max_residual)
+        reg, kept, level = _rigid_registration(
+            contour, p, max_residual, fit_radius
+        )
     # Residuals: phi of every touch on the fitted contour less the level
-    # (a circle's: its fitted radius less the drawing's): > 0 early.
+    # the registration leaves out: > 0 early.
     residuals = _phi(moved_contour(contour, reg), p) - level
     rms = float(np.sqrt(np.mean(residuals[kept] ** 2)))
     return ProbeFit(reg, kept, residuals, rms, float(level))

@@ -7,8 +7,9 @@ not cut: the run stops once the sequence is done):
   and the sensor's noise, part errors drawn within a disc;
 - :func:`probe_qualification`: in the spirit of ISO 10360-5, the same
   reference ring probed ``repeats`` times (noise seeds differ), centre and
-  radius fitted: the errors of both (the radius error is the detection
-  bias the model leaves).
+  radius fitted: the errors of both. With ``detection_bias`` 0 (the
+  default here) the mean radius error is the detection bias the model
+  leaves: the value ``localisation.probe.detection_bias`` calibrates.
 
 ``scripts/probe_study.py`` runs them and prints the tables.
 """
@@ -49,6 +50,7 @@ class ProbeResult:
     kept: int
     fit_rms: float  # m
     probing_time: float  # s, nan when it did not finish
+    radius_offset: float = 0.0  # m, part_error.radius (believed - real)
 
     @property
     def centre_error(self) -> np.ndarray:
@@ -59,8 +61,8 @@ class ProbeResult:
     @property
     def radius_error(self) -> float:
         """m: the fitted radius minus the real one (with the radius
-        fitted; part_error.radius is zero here)."""
-        return float(self.registration[3])
+        fitted; 0 when it was held)."""
+        return float(self.registration[3] + self.radius_offset)
 
 
 def probing_duration(scenario: Scenario) -> float:
@@ -130,6 +132,9 @@ def probe_once(scenario: Scenario) -> ProbeResult:
         kept=int(PROBE_STATE.get(last, "kept")),
         fit_rms=float(PROBE_STATE.get(last, "fit_rms")),
         probing_time=done if done >= 0 else float("nan"),
+        radius_offset=float(s.part_error.radius)
+        if s.localisation.probe.fit_radius
+        else 0.0,
     )
 
 
@@ -170,16 +175,26 @@ def probe_accuracy(
 
 
 def probe_qualification(
-    scenario: Scenario, *, repeats: int = 25, seed: int = 0
+    scenario: Scenario,
+    *,
+    repeats: int = 25,
+    seed: int = 0,
+    detection_bias: float = 0.0,
 ) -> List[ProbeResult]:
     """The reference ring (no part error) probed ``repeats`` times with
-    the radius fitted, each with its own noise seed."""
+    the radius fitted, each with its own noise seed, every touch
+    corrected by ``detection_bias`` (m; 0: the raw probe, whose mean
+    radius error is the bias to calibrate; the configured one: what the
+    calibration leaves)."""
     rng = np.random.default_rng(seed)
     out = []
     for _ in range(repeats):
         s = copy.deepcopy(scenario)
         s.part_error.offset = [0.0, 0.0, 0.0]
+        s.part_error.yaw = 0.0
+        s.part_error.radius = 0.0
         s.localisation.probe.fit_radius = True
+        s.localisation.probe.detection_bias = float(detection_bias)
         s.sensor.noise_seed = int(rng.integers(1, 1_000_000))
         out.append(probe_once(s))
     return out

@@ -155,16 +155,26 @@ def test_shipped_profile_scenarios():
         assert len(scenario.edge.vertices) == 4
 
 
-@pytest.mark.parametrize("name", ["boss", "pocket"])
-def test_probe_fit_radius_only_on_a_circle(name):
-    text = "localisation: {probe: {enabled: true, fit_radius: true}}"
+@pytest.mark.parametrize("name", ["paper", "boss", "pocket"])
+def test_probe_fits_the_size_by_default_with_the_calibrated_bias(name):
+    probe = load_scenario(
+        name, text="localisation: {probe: {enabled: true}}"
+    ).localisation.probe
+    assert probe.fit_radius is True
+    # The qualification's mean radius error on the reference ring
+    # (docs/localisation.md, The part's real size).
+    assert probe.detection_bias == pytest.approx(4.9e-6)
+    assert load_scenario("paper_localised").localisation.probe.fit_radius
+
+
+def test_probe_detection_bias_within_the_search():
     with pytest.raises(
-        ConfigError,
-        match=r"^localisation\.probe\.fit_radius"
-        r" = True is invalid: allowed false on a profile",
+        ConfigError, match=r"^localisation\.probe\.detection_bias = 0\.01"
     ):
-        load_scenario(name, text=text)
-    load_scenario("paper", text=text)
+        load_scenario(
+            "paper",
+            text="localisation: {probe: {enabled: true, detection_bias: 0.01}}",
+        )
 
 
 def _file(tmp_path, text, name="cell.yaml"):

@@ -107,10 +107,15 @@ class _Run:
         return self.probe.GetOutputPort("command").Eval(self.context)
 
 
-def test_sequence_touches_compensates_the_bias_and_drops_a_burr():
+@pytest.mark.parametrize("left", [0.0, 2e-5])
+def test_sequence_touches_compensates_the_bias_and_drops_a_burr(left):
+    # ``left``: how far past the modelled detection depth contact really
+    # comes, the calibrated ``detection_bias``.
     believed = CircularContour([0.4, 0.0, 0.048], 0.027)
     real_center = np.array([0.4004, -0.0003])
-    cfg = ProbeConfig(points=6, settle_time=0.01, travel_speed=0.05)
+    cfg = ProbeConfig(
+        points=6, settle_time=0.01, travel_speed=0.05, detection_bias=left
+    )
     timing = sensor_timing(0.0025, 10.0)
     x0 = believed.point_at(0.0) - cfg.standoff * believed.n1(
         believed.point_at(0.0)
@@ -133,8 +138,11 @@ def test_sequence_touches_compensates_the_bias_and_drops_a_burr():
             d += 0.0008
         n = believed.n1(believed.point_at(probe.arcs[min(i, 5)]))
         v = cfg.approach_speed
-        bias = detection_depth(
-            v, cfg.force_threshold, cfg.contact_stiffness, timing
+        bias = (
+            detection_depth(
+                v, cfg.force_threshold, cfg.contact_stiffness, timing
+            )
+            + left
         )
         touching = run.phase() == "approach" and d >= bias
         run.force = -2.0 * cfg.force_threshold * n if touching else np.zeros(3)
@@ -156,6 +164,7 @@ def test_sequence_touches_compensates_the_bias_and_drops_a_burr():
             assert r == pytest.approx(believed.radius, abs=6e-6)
     reg = PROBE_STATE.get(x, "registration")
     np.testing.assert_allclose(reg[:2], real_center - [0.4, 0.0], atol=6e-6)
+    assert reg[3] == pytest.approx(0.0, abs=6e-6)  # the drawing's radius
     # Done: the spindle on, the generator's command passed through, the
     # tool brought to the corrected start.
     assert probe.GetOutputPort("spindle").Eval(run.context)[0] == 1.0
@@ -287,7 +296,9 @@ def test_travel_between_touches_stays_off_a_boss():
     # edge at the standoff. The tool follows the command; contact when it
     # is the modelled bias past the edge.
     boss = _square(center=[0.4, 0.0, 0.048])
-    cfg = ProbeConfig(points=8, settle_time=0.01, travel_speed=0.05)
+    cfg = ProbeConfig(
+        points=8, settle_time=0.01, travel_speed=0.05, detection_bias=0.0
+    )
     timing = sensor_timing(0.0025, 10.0)
     x0 = boss.point_at(0.0) - cfg.standoff * boss.n1(boss.point_at(0.0))
     probe = ProbingSequence(

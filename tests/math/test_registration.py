@@ -18,6 +18,7 @@ from deburr_drake.math.registration import (
     pivot_of,
     registration_from_points,
     rigid_fit_amplification,
+    size_amplification,
 )
 
 
@@ -49,6 +50,33 @@ def test_circle_radius_fitted_when_asked():
     np.testing.assert_allclose(
         fit.registration, [1e-4, 2e-4, 0, 2e-4], atol=1e-9
     )
+
+
+@pytest.mark.parametrize("dradius", [-3e-4, 2.5e-4])
+def test_circle_radius_error_recovered_through_noise_and_a_burr(dradius):
+    believed = CircularContour([0.4, 0.0, 0.048], 0.027)
+    real = CircularContour([0.4005, -0.0006, 0.048], 0.027 + dradius)
+    pts = _touches(real, 8, 0.003)
+    pts[:, :2] += np.random.default_rng(5).normal(0.0, 3e-6, (8, 2))
+    pts[1] -= 8e-4 * real.n1(pts[1])  # a burr, 0.8 mm early
+    fit = registration_from_points(
+        believed, pts, max_residual=5e-5, fit_radius=True
+    )
+    assert list(np.flatnonzero(~fit.kept)) == [1]
+    assert fit.registration[3] == pytest.approx(dradius, abs=3e-6)
+    np.testing.assert_allclose(fit.registration[:2], [5e-4, -6e-4], atol=5e-6)
+
+
+def test_circle_radius_held_on_touches_within_a_half_circle():
+    believed = CircularContour([0.0, 0.0, 0.0], 0.030)
+    real = CircularContour([1e-4, 0.0, 0.0], 0.0302)
+    pts = np.array(
+        [real.point_at(s) for s in np.linspace(0.0, 0.4 * real.length, 5)]
+    )
+    fit = registration_from_points(
+        believed, pts, max_residual=1e-3, fit_radius=True
+    )
+    assert fit.registration[3] == 0.0
 
 
 @pytest.mark.parametrize("heading", [0.0, 0.7, -2.0])
@@ -281,19 +309,76 @@ def test_profile_moved_is_the_profile_built_moved(make):
         )
 
 
-def test_profile_has_no_radius_to_register():
-    with pytest.raises(ValueError, match="dradius"):
-        moved_contour(_pocket(), [0.0, 0.0, 0.0, 1e-4])
+def test_straight_edge_has_no_size_to_register():
     line = StraightContour([0, 0, 0], [1, 0, 0], [0, -1, 0], length=0.06)
     with pytest.raises(ValueError, match="dradius"):
         moved_contour(line, [1e-4, 0.0, 0.0, 1e-4])
-    with pytest.raises(ValueError, match="fit_radius"):
-        registration_from_points(
-            _pocket(),
-            _touches(_pocket(), 8),
-            max_residual=4e-5,
-            fit_radius=True,
+    real = moved_contour(line, [0.0, 3e-4, 0.0, 0.0])
+    pts = np.array([real.point_at(x) for x in np.linspace(0.005, 0.055, 5)])
+    fit = registration_from_points(
+        line, pts, max_residual=4e-5, fit_radius=True
+    )
+    np.testing.assert_allclose(fit.registration, [0, 3e-4, 0, 0], atol=1e-9)
+
+
+@pytest.mark.parametrize("make", [_pocket, _boss])
+def test_profile_grown_is_the_profile_built_larger(make):
+    believed = make(start_angle=0.3)
+    reg = [6e-4, -4e-4, 0.02, 2.5e-4]
+    moved = moved_contour(believed, reg)
+    built = moved_contour(believed.grown(2.5e-4), [*reg[:3], 0.0])
+    for s in np.linspace(0.0, moved.length, 40, endpoint=False):
+        np.testing.assert_allclose(
+            moved.point_at(s), built.point_at(s), atol=1e-12
         )
+    # Larger: the believed pocket's path inside the real one's (on its
+    # free side), the believed boss's inside the real material.
+    larger = moved_contour(believed, [0.0, 0.0, 0.0, 2.5e-4])
+    for s in np.linspace(0.0, believed.length, 40, endpoint=False):
+        assert larger.phi(believed.point_at(s)) == pytest.approx(
+            -2.5e-4 if make is _boss else 2.5e-4, abs=1e-9
+        )
+
+
+@pytest.mark.parametrize("growth", [-3e-4, 2.5e-4])
+@pytest.mark.parametrize("make", [_pocket, _boss])
+def test_profile_size_registered_where_the_touches_tell_it(make, growth):
+    believed = make()
+    truth = [5e-4, -3e-4, 0.01, growth]
+    real = moved_contour(believed, truth)
+    pts = _touches(real, 8, _FIRST[make.__name__])
+    rng = np.random.default_rng(3)
+    pts[:, :2] += rng.normal(0.0, 2e-6, (8, 2))
+    fit = registration_from_points(
+        believed, pts, max_residual=4e-5, fit_radius=True
+    )
+    np.testing.assert_allclose(fit.registration[:2], truth[:2], atol=5e-6)
+    assert fit.registration[3] == pytest.approx(growth, abs=3e-6)
+    assert fit.level == 0.0
+    # Held: the drawing's size, the growth left in the level.
+    held = registration_from_points(believed, pts, max_residual=4e-5)
+    assert held.registration[3] == 0.0
+    assert abs(held.level) == pytest.approx(abs(growth), abs=1e-5)
+
+
+def test_profile_size_held_when_the_touches_cannot_tell_it():
+    # Touches on the bottom and the right side only: a growth moves them
+    # as a move along (1, -1) would.
+    believed = _pocket()
+    real = moved_contour(believed, [2e-4, 1e-4, 0.0, 2e-4])
+    bottom = [[x, -0.023, 0.048] for x in (0.38, 0.39, 0.40, 0.41)]
+    right = [[0.433, y, 0.048] for y in (-0.005, 0.0, 0.005)]
+    pts = np.array(
+        [real.point_at(real.arc_position(np.array(p))) for p in bottom + right]
+    )
+    for p in pts:
+        assert real.phi(p) == pytest.approx(0.0, abs=1e-9)
+        assert real.curvature(p) == 0.0  # on the sides, not the fillets
+    assert size_amplification(believed, pts) == math.inf
+    fit = registration_from_points(
+        believed, pts, max_residual=4e-5, fit_radius=True
+    )
+    assert fit.registration[3] == 0.0
 
 
 @pytest.mark.parametrize("make", [_pocket, _boss])
