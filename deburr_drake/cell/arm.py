@@ -12,7 +12,11 @@ the wrist pitch; wrist_roll turns about the tool axis and does not move the tip.
 `solve_tool_pose`, `closest_tool_position` and `check_reach` work on any arm of
 n >= 5 joints (deburr_drake.cell.robot loads other models): the tool axis
 vertical, the rest of the posture (for n = 6 the tool's rotation about its axis)
-the one nearest the initial guess.
+the one nearest the initial guess among the postures away from a singular
+configuration (:data:`MIN_CONDITIONING`): at a singular posture (a UR's wrist
+with two axes in line) the task-space numbers the gains are designed from
+(J's pseudo-inverse, the task mass) and the controller's J^T law lose a
+direction.
 """
 
 from __future__ import annotations
@@ -36,6 +40,10 @@ __all__ = [
     "default_q_guess",
     "closest_tool_position",
     "check_reach",
+    "tool_conditioning",
+    "path_conditioning",
+    "SingularPose",
+    "MIN_CONDITIONING",
 ]
 
 ARM_URL = "package://deburr_drake_models/arm5.sdf"
@@ -57,6 +65,29 @@ Q_READY = np.array([0.0, 0.8393, 0.1015, -0.9408, 0.0])
 _AXIS_POINT = (
     0.10  # m, second point on the tool axis used for the verticality constraint
 )
+
+#: The least sigma_min / sigma_max of the tool frame's spatial velocity
+#: Jacobian (rad and m rows) a posture the IK gives may have. The arms the
+#: cell runs have 0.08-0.19 along their edges (a Z1, the smallest, 0.08); a
+#: UR wrist at 5 deg from two axes in line has about 0.01, and there the
+#: gravity error the design maps to the tool grows as 1 / sigma_min.
+MIN_CONDITIONING = 0.02
+
+#: Starts (seeded, within the joint limits) tried when the posture nearest
+#: the guess is singular.
+_NONSINGULAR_STARTS = 24
+
+
+class SingularPose(RuntimeError):
+    """The tool tip reaches ``point`` (m) with the tool vertical only in
+    postures whose conditioning (:func:`tool_conditioning`) is below
+    :data:`MIN_CONDITIONING`; ``conditioning`` is the best one found."""
+
+    def __init__(self, message, point, conditioning):
+        super().__init__(message)
+        self.point = np.asarray(point, float)
+        self.conditioning = float(conditioning)
+        self.index = None  # the path point's index (check_reach)
 
 
 def add_arm(plant, **cutter):
@@ -111,6 +142,88 @@ def _default_guess(plant, instance, arm_idx, p):
     return plant.GetDefaultPositions()[arm_idx]
 
 
+def _arm_velocities(plant, instance):
+    """Indices into the plant's v of the instance's joint velocities."""
+    starts = []
+    for index in plant.GetJointIndices(instance):
+        joint = plant.get_joint(index)
+        starts.extend(
+            range(
+                joint.velocity_start(),
+                joint.velocity_start() + joint.num_velocities(),
+            )
+        )
+    return np.array(sorted(starts), dtype=int)
+
+
+def _conditioning(plant, tip, q_full):
+    """sigma_min / sigma_max of frame ``tip``'s spatial velocity Jacobian
+    (world, the columns of its model instance's joints) at the plant's
+    positions q_full."""
+    from pydrake.multibody.tree import JacobianWrtVariable
+
+    context = plant.CreateDefaultContext()
+    plant.SetPositions(context, q_full)
+    J = plant.CalcJacobianSpatialVelocity(
+        context,
+        JacobianWrtVariable.kV,
+        tip,
+        np.zeros(3),
+        plant.world_frame(),
+        plant.world_frame(),
+    )
+    J = J[:, _arm_velocities(plant, tip.model_instance())]
+    sv = np.linalg.svd(J, compute_uv=False)
+    return float(sv[-1] / sv[0])
+
+
+def tool_conditioning(plant, q, *, instance=None, tool_frame="tool_tip"):
+    """How far the arm's joint angles q (rad, the instance's joints) are
+    from a singular configuration: sigma_min / sigma_max of the tool
+    frame's spatial velocity Jacobian (0 at a singularity; compare with
+    :data:`MIN_CONDITIONING`). Other models at the plant's defaults."""
+    instance = _arm_instance(plant, instance)
+    q_full = plant.GetDefaultPositions().copy()
+    q_full[_arm_positions(plant, instance)] = q
+    return _conditioning(
+        plant, plant.GetFrameByName(tool_frame, instance), q_full
+    )
+
+
+def path_conditioning(
+    plant, points, q_start, *, instance=None, tool_frame="tool_tip"
+):
+    """The conditioning (:func:`tool_conditioning`) at each point (m,
+    world, rows) of a path the arm follows from joint angles q_start
+    (rad, the first point's posture): each posture solved from the
+    previous one, singular or not, as the controller moves the arm
+    through them."""
+    q, out = np.asarray(q_start, float), []
+    for p in np.asarray(points, dtype=float):
+        # SNOPT can report failure when started at its own optimum (the
+        # first edge point is often the start): then from 1 mrad off it.
+        for nudge in (0.0, 1e-3):
+            try:
+                q = solve_tool_pose(
+                    plant,
+                    p,
+                    q_guess=q + nudge,
+                    instance=instance,
+                    tool_frame=tool_frame,
+                    min_conditioning=0.0,
+                )
+                break
+            except RuntimeError:
+                if nudge:
+                    raise
+        out.append(
+            tool_conditioning(
+                plant, q, instance=instance, tool_frame=tool_frame
+            )
+        )
+    return np.array(out)
+
+
 def solve_tool_pose(
     plant,
     p_W_tip,
@@ -119,6 +232,7 @@ def solve_tool_pose(
     instance=None,
     tolerance=1e-7,
     tool_frame="tool_tip",
+    min_conditioning=MIN_CONDITIONING,
 ):
     """Arm joint angles q (n,) (rad, the instance's joints in position order;
     arm5: ARM_JOINTS) with the tool tip at p_W_tip (m, world) and the tool axis
@@ -133,6 +247,11 @@ def solve_tool_pose(
     and to the plant's default positions on other arms. Raises RuntimeError
     naming the target if the solver fails or the result misses the target by
     more than `tolerance` (m; axis tilt times 0.1 m).
+
+    A posture whose conditioning (:func:`tool_conditioning`) is below
+    ``min_conditioning`` is solved again from seeded starts within the
+    joint limits, and the posture nearest q_guess among those above it
+    returned; SingularPose if none is.
     """
     if not plant.is_finalized():
         raise ValueError("plant must be finalized")
@@ -153,6 +272,53 @@ def solve_tool_pose(
         )
 
     tip = plant.GetFrameByName(tool_frame, instance)
+    q_sol = _solve_vertical(plant, tip, p, arm_idx, q_guess, tolerance)
+    conditioning = _conditioning(plant, tip, q_sol)
+    if conditioning >= min_conditioning:
+        return q_sol[arm_idx]
+    best = None
+    # The guess with one joint turned a quarter turn either way first (a
+    # wrist turned off its singular line), then starts anywhere.
+    turned = [
+        q_guess + sign * 0.5 * np.pi * np.eye(n)[j]
+        for j in range(n)
+        for sign in (1.0, -1.0)
+    ]
+    for start in turned + _starts(plant, arm_idx, _NONSINGULAR_STARTS):
+        try:
+            q_other = _solve_vertical(plant, tip, p, arm_idx, start, tolerance)
+        except RuntimeError:
+            continue
+        c = _conditioning(plant, tip, q_other)
+        conditioning = max(conditioning, c)
+        if c < min_conditioning:
+            continue
+        d = np.linalg.norm(q_other[arm_idx] - q_guess)
+        if best is None or d < best[0]:
+            best = (d, q_other)
+    if best is None:
+        raise SingularPose(
+            f"tool pose IK for tool tip target p_W_tip={p.tolist()} m "
+            "finds only postures near a singular configuration "
+            f"(conditioning {conditioning:.2g} < {min_conditioning:g})",
+            p,
+            conditioning,
+        )
+    return best[1][arm_idx]
+
+
+def _starts(plant, arm_idx, count):
+    """``count`` joint angle vectors (rad) drawn (seeded) within the joint
+    limits (at most +-pi)."""
+    lower = np.maximum(plant.GetPositionLowerLimits()[arm_idx], -np.pi)
+    upper = np.minimum(plant.GetPositionUpperLimits()[arm_idx], np.pi)
+    rng = np.random.default_rng(0)
+    return [rng.uniform(lower, upper) for _ in range(count)]
+
+
+def _solve_vertical(plant, tip, p, arm_idx, q_guess, tolerance):
+    """All the plant's positions with the tool tip at p and the tool axis
+    vertical, nearest q_guess (RuntimeError if not found)."""
     prog, q, q_full_guess = _tool_vertical_program(
         plant, tip, p, arm_idx, q_guess
     )
@@ -168,7 +334,7 @@ def solve_tool_pose(
             f"({result.get_solution_result()})"
         )
     _check_tool_pose(plant, tip, q_sol, p, tolerance)
-    return q_sol[arm_idx]
+    return q_sol
 
 
 def _tool_vertical_program(plant, tip, p, arm_idx, q_guess):
@@ -269,12 +435,9 @@ def _closest_of_many(plant, p, instance, guess, tool_frame, starts=8):
     position)."""
     instance = _arm_instance(plant, instance)
     arm_idx = _arm_positions(plant, instance)
-    lower = np.maximum(plant.GetPositionLowerLimits()[arm_idx], -np.pi)
-    upper = np.minimum(plant.GetPositionUpperLimits()[arm_idx], np.pi)
-    rng = np.random.default_rng(0)
-    guesses = [guess, plant.GetDefaultPositions()[arm_idx]] + [
-        rng.uniform(lower, upper) for _ in range(starts)
-    ]
+    guesses = [guess, plant.GetDefaultPositions()[arm_idx]] + _starts(
+        plant, arm_idx, starts
+    )
     best = None
     for g in guesses:
         reached, q = closest_tool_position(
@@ -306,11 +469,14 @@ def check_reach(
     from there is tried from the previous point's solution (the arm moves along
     the path), then from the nearest reachable position's posture. A point
     reached only from that last one gives distance 0 and the posture (rad) that
-    reaches it (the seed to give); otherwise the posture is None."""
+    reaches it (the seed to give); otherwise the posture is None. Raises
+    SingularPose (its ``index`` the point's) for a point the tool reaches
+    only in postures near a singular configuration."""
     previous = None
     for k, p in enumerate(np.asarray(points, dtype=float)):
         guess = None if q_guess is None else q_guess(p)
         guesses = [guess] + ([previous] if previous is not None else [])
+        singular = None
         for g in guesses:
             try:
                 previous = solve_tool_pose(
@@ -321,9 +487,14 @@ def check_reach(
                     tool_frame=tool_frame,
                 )
                 break
+            except SingularPose as e:
+                singular = e
             except RuntimeError:
                 continue
         else:
+            if singular is not None:
+                singular.index = k
+                raise singular
             reached, q_near = _closest_of_many(
                 plant, p, instance, guess, tool_frame
             )

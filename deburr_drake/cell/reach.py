@@ -8,7 +8,12 @@ import math
 
 import numpy as np
 
-from deburr_drake.cell.arm import check_reach
+from deburr_drake.cell.arm import (
+    MIN_CONDITIONING,
+    SingularPose,
+    check_reach,
+    path_conditioning,
+)
 from deburr_drake.cell.edge import believed_contour, start_position
 from deburr_drake.cell.robot import (
     check_robot,
@@ -54,13 +59,16 @@ def _reaches(robot, points):
     """Whether the arm with the tool frame of ``robot`` reaches every
     point (some posture, the tool vertical, the joint limits)."""
     model = make_robot_model(robot)
-    miss = check_reach(
-        model,
-        points,
-        instance=model.GetFrameByName(robot.tool_frame).model_instance(),
-        q_guess=lambda p: ik_seed(robot, p),
-        tool_frame=robot.tool_frame,
-    )
+    try:
+        miss = check_reach(
+            model,
+            points,
+            instance=model.GetFrameByName(robot.tool_frame).model_instance(),
+            q_guess=lambda p: ik_seed(robot, p),
+            tool_frame=robot.tool_frame,
+        )
+    except SingularPose:
+        return False
     return miss is None or miss[2] == 0.0
 
 
@@ -118,6 +126,52 @@ def _axis_error(robot, where, p, distance, points):
     )
 
 
+def _singular_error(robot, scenario, where, e: SingularPose):
+    """The ConfigError for a path point the tool reaches only near a
+    singular posture: the part's position (or the tool's mount) is what
+    to change."""
+    return ConfigError(
+        f"tube.position = {list(scenario.tube.position)} is invalid: "
+        f"{where}, tool tip at {np.round(e.point, 4).tolist()} m, is "
+        "reached with the tool vertical only near a singular posture of "
+        f"the arm (Jacobian conditioning {e.conditioning:.2g} < "
+        f"{MIN_CONDITIONING:g}: the designed gains and the J^T law lose a "
+        "direction there): allowed a part position (or a robot.tool_mount "
+        f"= {_shown_mount(robot.tool_mount)} turned) whose edge the arm "
+        "reaches away from its singular postures"
+    )
+
+
+def _check_path_conditioning(model, instance, robot, points, place):
+    """ConfigError naming robot.ik_seed when the arm, moving along the
+    path from the start pose the seed gives, passes near a singular
+    posture."""
+    from deburr_drake.cell.arm import solve_tool_pose
+
+    q0 = solve_tool_pose(
+        model,
+        points[0],
+        instance=instance,
+        q_guess=ik_seed(robot, points[0]),
+        tool_frame=robot.tool_frame,
+    )
+    conditioning = path_conditioning(
+        model, points, q0, instance=instance, tool_frame=robot.tool_frame
+    )
+    k = int(np.argmin(conditioning))
+    if conditioning[k] >= MIN_CONDITIONING:
+        return
+    raise ConfigError(
+        f"robot.ik_seed = {list(robot.ik_seed)} is invalid: from the start "
+        f"pose it gives ({np.round(q0, 3).tolist()} rad) the arm passes "
+        f"near a singular posture at {place(k)}, tool tip at "
+        f"{np.round(points[k], 4).tolist()} m (Jacobian conditioning "
+        f"{conditioning[k]:.2g} < {MIN_CONDITIONING:g}): allowed a seed "
+        "whose posture stays away from it along the edge (or a "
+        "tube.position that keeps the edge there)"
+    )
+
+
 #: Scenarios already checked (the robot, part and tool as text): a diagram
 #: built again for the same cell (the analysis builds many) checks once.
 _REACHED = set()
@@ -160,24 +214,32 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
         contour.point_at(s) for s in arcs
     ]
     instance = model.GetFrameByName(robot.tool_frame).model_instance()
-    miss = check_reach(
-        model,
-        points,
-        instance=instance,
-        q_guess=lambda p: ik_seed(robot, p),
-        tool_frame=robot.tool_frame,
-    )
+
+    def place(k):
+        return (
+            "the start point"
+            if k == 0
+            else f"the edge point at arc {arcs[k - 1] * 1e3:.1f} mm"
+        )
+
+    try:
+        miss = check_reach(
+            model,
+            points,
+            instance=instance,
+            q_guess=lambda p: ik_seed(robot, p),
+            tool_frame=robot.tool_frame,
+        )
+    except SingularPose as e:
+        raise _singular_error(robot, scenario, place(e.index), e) from None
     if miss is None:
+        _check_path_conditioning(model, instance, robot, points, place)
         if key is not None:
             _REACHED.add(key)
         return
     if miss is not None:
         k, p, distance, q_other = miss
-        where = (
-            "the start point"
-            if k == 0
-            else f"the edge point at arc {arcs[k - 1] * 1e3:.1f} mm"
-        )
+        where = place(k)
         if q_other is not None:
             raise ConfigError(
                 f"robot.ik_seed = {list(robot.ik_seed)} is invalid: {where},"

@@ -228,3 +228,57 @@ def test_check_reach_follows_the_edge_and_names_another_seed(monkeypatch):
     monkeypatch.setattr(arm, "solve_tool_pose", real)
     k, p, distance, q = arm.check_reach(plant, [far])
     assert k == 0 and q is None and distance > 1.0
+
+
+def test_a_pose_below_the_conditioning_bound_is_refused(plant):
+    """solve_tool_pose returns postures above MIN_CONDITIONING; asked for
+    more than any posture has, it raises SingularPose with the best one
+    it found."""
+    from deburr_drake.cell.arm import (
+        MIN_CONDITIONING,
+        SingularPose,
+        tool_conditioning,
+    )
+
+    p = _circle(0.030)[0]
+    c = tool_conditioning(plant, solve_tool_pose(plant, p))
+    assert MIN_CONDITIONING < c < 1.0
+    with pytest.raises(SingularPose, match="singular") as e:
+        solve_tool_pose(plant, p, min_conditioning=0.9)
+    assert MIN_CONDITIONING < e.value.conditioning < 0.9
+    np.testing.assert_allclose(e.value.point, p)
+
+
+def test_a_singular_path_point_names_the_tube_and_where(monkeypatch):
+    """A path point reached only near a singular posture is refused
+    before the run: one line naming tube.position and the point."""
+    from deburr_drake.cell import reach
+    from deburr_drake.cell.arm import SingularPose
+    from deburr_drake.config import ConfigError, load_scenario
+
+    def singular(*args, **kw):
+        e = SingularPose("singular", [0.4, 0.03, 0.048], 0.004)
+        e.index = 3
+        raise e
+
+    monkeypatch.setattr(reach, "check_reach", singular)
+    with pytest.raises(ConfigError) as e:
+        reach.check_part_in_reach(load_scenario("paper"))
+    message = str(e.value)
+    assert message.startswith("tube.position = ") and "\n" not in message
+    assert "the edge point at arc" in message and "0.004 < 0.02" in message
+
+
+def test_a_path_through_a_singular_posture_names_the_seed(monkeypatch):
+    """The arm followed from the start pose along the edge: a posture
+    below the bound (here the bound raised above arm5's 0.09) names
+    robot.ik_seed and where along the edge."""
+    from deburr_drake.cell import reach
+    from deburr_drake.config import ConfigError, load_scenario
+
+    monkeypatch.setattr(reach, "MIN_CONDITIONING", 0.5)
+    with pytest.raises(ConfigError) as e:
+        reach.check_part_in_reach(load_scenario("paper"))
+    message = str(e.value)
+    assert message.startswith("robot.ik_seed = ") and "\n" not in message
+    assert "near a singular posture at the" in message

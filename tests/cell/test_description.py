@@ -4,6 +4,7 @@ converted, collision geometry left out, drives for joints without a
 transmission, joints past the flange welded."""
 
 from importlib import metadata
+from pathlib import Path
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -378,3 +379,38 @@ def test_a_flange_along_x_with_its_tool_mount_cuts(tmp_path):
     assert t_contact < 0.5
     late = metrics.window(ch["t"], 2.0)
     assert np.max(np.abs(ch["delta"][late] - 5e-4)) < 3e-5
+
+
+@needs_erd
+def test_a_tool_turned_onto_a_wrist_singularity_starts_away_from_it():
+    """The UR5 with its tool along the flange's x: the posture nearest the
+    seed puts two wrist axes in line (conditioning 4e-9, a gravity error
+    of 5.6e7 N at the tool); the start pose is the nearest one away from
+    it, and the design's numbers are the arm's."""
+    from deburr_drake.cell.arm import MIN_CONDITIONING, tool_conditioning
+    from deburr_drake.cell.reach import check_part_in_reach
+    from deburr_drake.cell.robot import (
+        loop_numbers,
+        make_robot_model,
+        start_pose,
+    )
+
+    example = Path(__file__).parents[2] / "examples" / "ur5_cell.yaml"
+    scenario = load_scenario(
+        str(example),
+        text="robot: {tool_mount: {rpy: [0, 1.5707963, 0]}}",
+    )
+    check_part_in_reach(scenario)
+    q = start_pose(scenario)
+    plant = make_robot_model(scenario.robot)
+    frame = plant.GetFrameByName(scenario.robot.tool_frame)
+    c = tool_conditioning(
+        plant,
+        q,
+        instance=frame.model_instance(),
+        tool_frame=scenario.robot.tool_frame,
+    )
+    assert c > MIN_CONDITIONING
+    numbers = loop_numbers(scenario, q)
+    assert np.linalg.norm(numbers["gravity_error_force"]) < 100.0
+    assert numbers["lightest_task_mass"] > 0.5
