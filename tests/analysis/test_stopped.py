@@ -109,5 +109,7 @@ def test_a_diverging_run_is_unstable_with_its_divergence_time():
     assert result["run"]["divergence_time"] == pytest.approx(
         result["run"]["end_time"]
     )
-    assert result["run"]["divergence_time"] < 0.1
+    # Within the first tenths of a second: at the refined numerics the
+    # verdict runs at (a quarter step) the runaway takes about 0.15 s.
+    assert result["run"]["divergence_time"] < 0.5
     assert "diverged at t = " in result["verdict_reason"]

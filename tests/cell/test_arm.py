@@ -262,6 +262,8 @@ def test_a_singular_path_point_names_the_tube_and_where(monkeypatch):
         raise e
 
     monkeypatch.setattr(reach, "check_reach", singular)
+    # A cell checked earlier in the session is remembered as reachable.
+    monkeypatch.setattr(reach, "_REACHED", set())
     with pytest.raises(ConfigError) as e:
         reach.check_part_in_reach(load_scenario("paper"))
     message = str(e.value)
@@ -277,6 +279,7 @@ def test_a_path_through_a_singular_posture_names_the_seed(monkeypatch):
     from deburr_drake.config import ConfigError, load_scenario
 
     monkeypatch.setattr(reach, "MIN_CONDITIONING", 0.5)
+    monkeypatch.setattr(reach, "_REACHED", set())
     with pytest.raises(ConfigError) as e:
         reach.check_part_in_reach(load_scenario("paper"))
     message = str(e.value)

@@ -11,4 +11,4 @@ def test_study_text_overrides_the_study_fields(tmp_path):
         "paper_localised",
         50.0,
     )
-    assert study.sample.count == 200 and len(study.sample.fields) == 16
+    assert study.sample.count == 200 and len(study.sample.fields) == 17
