@@ -113,8 +113,14 @@ def test_sequence_touches_compensates_the_bias_and_drops_a_burr(left):
     # comes, the calibrated ``detection_bias``.
     believed = CircularContour([0.4, 0.0, 0.048], 0.027)
     real_center = np.array([0.4004, -0.0003])
+    # The force steps at contact: the configured stiffness, no second
+    # threshold.
     cfg = ProbeConfig(
-        points=6, settle_time=0.01, travel_speed=0.05, detection_bias=left
+        points=6,
+        settle_time=0.01,
+        travel_speed=0.05,
+        detection_bias=left,
+        stiffness_threshold=0.0,
     )
     timing = sensor_timing(0.0025, 10.0)
     x0 = believed.point_at(0.0) - cfg.standoff * believed.n1(
@@ -297,7 +303,11 @@ def test_travel_between_touches_stays_off_a_boss():
     # is the modelled bias past the edge.
     boss = _square(center=[0.4, 0.0, 0.048])
     cfg = ProbeConfig(
-        points=8, settle_time=0.01, travel_speed=0.05, detection_bias=0.0
+        points=8,
+        settle_time=0.01,
+        travel_speed=0.05,
+        detection_bias=0.0,
+        stiffness_threshold=0.0,
     )
     timing = sensor_timing(0.0025, 10.0)
     x0 = boss.point_at(0.0) - cfg.standoff * boss.n1(boss.point_at(0.0))
