@@ -177,6 +177,24 @@ def test_probe_detection_bias_within_the_search():
         )
 
 
+@pytest.mark.parametrize("value", [0.5, -1.0, float("nan")])
+def test_probe_stiffness_threshold_past_the_contact_threshold(value):
+    # The stiffness is taken on the way from force_threshold (1 N) on.
+    with pytest.raises(
+        ConfigError, match=r"^localisation\.probe\.stiffness_threshold = "
+    ):
+        load_scenario(
+            "paper",
+            text="localisation: {probe: {enabled: true, "
+            f"stiffness_threshold: {value}}}}}",
+        )
+    probe = load_scenario(
+        "paper",
+        text="localisation: {probe: {enabled: true, stiffness_threshold: 0}}",
+    ).localisation.probe
+    assert probe.stiffness_threshold == 0
+
+
 def _file(tmp_path, text, name="cell.yaml"):
     path = tmp_path / name
     path.write_text(text)
