@@ -63,7 +63,7 @@ class ProbeConfig:
     # once the modelled detection depth is taken off: the probe's
     # qualification on a ring of known radius (fitted minus true radius,
     # runs/probe_study.py probe_qualification); taken off every touch.
-    detection_bias: float = 4.9e-6
+    detection_bias: float = -4.6e-6
     # m, a touch off the circle, line or profile most touches agree on by
     # more is dropped: a burr under it (math.fits.fit_consensus)
     max_residual: float = (
