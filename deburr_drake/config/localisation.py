@@ -4,6 +4,7 @@
 scenario turns both on. SI units; each field's comment gives its unit."""
 
 from dataclasses import dataclass, field
+import math
 
 from deburr_drake.config.checks import _non_negative, _positive, _require
 
@@ -40,8 +41,17 @@ class ProbeConfig:
     settle_time: float = (
         0.15  # s, held at the standoff before each guarded move
     )
-    # N/m, the contact stiffness the detection bias is modelled with
-    # (threshold / stiffness of penetration at the threshold).
+    # N, the guarded move goes on past force_threshold to this force; the
+    # way between the two gives the stiffness of the contact touched
+    # (control/probe.py measured_stiffness), the depth at detection is
+    # modelled with it. 0: stop at force_threshold, contact_stiffness.
+    stiffness_threshold: float = 3.0
+    # -, n of the contact's F = c depth^n between the two thresholds
+    # (1: linear; the hydroelastic ring under the cutter: 1.38,
+    # cell/part.py measure_normal_force from 0.2 to 0.4 mm).
+    contact_exponent: float = 1.38
+    # N/m, the contact stiffness (threshold / depth at the threshold) the
+    # detection depth is modelled with when the touches measured none.
     contact_stiffness: float = 5.0e3
     # -, fit the part's size where the touches can tell it: a circle's
     # radius (touches over more than a half circle), a profile's uniform
@@ -53,7 +63,7 @@ class ProbeConfig:
     # once the modelled detection depth is taken off: the probe's
     # qualification on a ring of known radius (fitted minus true radius,
     # runs/probe_study.py probe_qualification); taken off every touch.
-    detection_bias: float = 4.9e-6
+    detection_bias: float = -4.6e-6
     # m, a touch off the circle, line or profile most touches agree on by
     # more is dropped: a burr under it (math.fits.fit_consensus)
     max_residual: float = (
@@ -93,10 +103,22 @@ class ProbeConfig:
             "search_distance",
             "retract",
             "contact_stiffness",
+            "contact_exponent",
             "max_residual",
         ):
             _positive(o, name, getattr(self, name))
         _non_negative(o, "settle_time", self.settle_time)
+        _require(
+            isinstance(self.stiffness_threshold, (int, float))
+            and math.isfinite(self.stiffness_threshold)
+            and (
+                self.stiffness_threshold == 0
+                or self.stiffness_threshold > self.force_threshold
+            ),
+            f"{o}.stiffness_threshold",
+            self.stiffness_threshold,
+            f"0 or > {o}.force_threshold ({self.force_threshold}) N",
+        )
         _require(
             isinstance(self.detection_bias, (int, float))
             and abs(self.detection_bias) < self.search_distance,

@@ -3,8 +3,10 @@ off, as Drake systems.
 
 - :class:`ProbingSequence`: a state machine in the Context's discrete state
   that commands guarded moves along the believed normal n1 at N points of
-  the edge, detects each contact on the force sensor, compensates the
-  detection bias (:func:`detection_depth` and the calibrated
+  the edge, detects each contact on the force sensor, measures the
+  contact's stiffness on the way to a second threshold
+  (:func:`measured_stiffness`), compensates the detection bias
+  (:func:`detection_depth` with it and the calibrated
   ``detection_bias``), fits the circle, straight edge or profile and,
   ``fit_radius``, its size where the touches tell it
   (deburr_drake.math.registration, touches that came early on a burr
@@ -15,7 +17,7 @@ off, as Drake systems.
   guards see no contact (the touches are not chamfering).
 
 :func:`probe_arcs` places the touches; :func:`detection_depth` is the bias
-model.
+model, :func:`measured_stiffness` the stiffness it is given.
 """
 
 from __future__ import annotations
@@ -46,6 +48,7 @@ __all__ = [
     "probe_arcs",
     "check_probe_layout",
     "detection_depth",
+    "measured_stiffness",
     "filter_latency",
     "sensor_timing",
     "SensorTiming",
@@ -83,6 +86,9 @@ PROBE_STATE = VectorLayout(
         ("touches", 1),  # touches made (contact detected)
         ("kept", 1),  # touches the fit used
         ("fit_rms", 1),  # m, the fit's residual RMS
+        # N/m, the contact's stiffness at force_threshold the touches
+        # measured (their median; contact_stiffness when none did).
+        ("stiffness", 1),
     ],
 )
 
@@ -218,10 +224,28 @@ def check_probe_layout(
         )
 
 
+#: Per touch, the crossings of the guarded move: x, y, z (m) and the
+#: speed along n1 (m/s) at the first threshold, the way (m) on to the
+#: second (0: not reached).
+_CROSSING = 5
+
+
+def measured_stiffness(
+    span: float, threshold: float, second: float, exponent: float
+) -> float:
+    """N/m: the stiffness F / delta at ``threshold`` (N) of a contact
+    F = c delta^exponent that took ``span`` (m) more depth to reach
+    ``second`` (N): delta = span / ((second / threshold)^(1 / exponent)
+    - 1) at the threshold (linear: the slope (second - threshold) /
+    span)."""
+    ratio = (second / threshold) ** (1.0 / exponent) - 1.0
+    return threshold * ratio / span
+
+
 class _Step(NamedTuple):
-    """One sample of the sequence: its context, the state x and the touch
-    points being written, the time, the command and whether the move
-    under way has finished."""
+    """One sample of the sequence: its context, the state x, the touch
+    points and crossings being written, the time, the command and
+    whether the move under way has finished."""
 
     context: object
     x: np.ndarray
@@ -229,6 +253,7 @@ class _Step(NamedTuple):
     command: np.ndarray
     finished: bool
     touches: np.ndarray
+    crossings: np.ndarray
 
 
 class ProbingSequence(LeafSystem):
@@ -271,18 +296,22 @@ class ProbingSequence(LeafSystem):
       correction of the believed part, zero until the fit.
     - ``probe_state`` (PROBE_STATE layout), ``touch_points`` (N x 4: x, y,
       z of each compensated touch (m), 1 if contact was detected).
-    - Discrete state: the two outputs above, updated every
-      ``sample_period`` (the sensor's).
+    - Discrete state: the two outputs above and each touch's crossings
+      (N x 5: x, y, z (m) and speed along n1 (m/s) at ``force_threshold``,
+      the way on to ``stiffness_threshold`` (m, 0: not reached)), updated
+      every ``sample_period`` (the sensor's).
 
     Each touch: travel (smooth, along the believed edge at the standoff:
     a straight move would cut a convex corner) to the standoff point
     ``standoff`` before the believed zero-depth path along -n1, settle,
     tare the force, move along n1 at ``approach_speed`` until
     -(f - tare).n1 exceeds ``force_threshold`` (or ``search_distance``: a
-    miss), record x_p minus the :func:`detection_depth` and the
-    calibrated ``detection_bias`` along n1, retract by ``retract``. Then
-    the fit, a travel (along the corrected edge) to the corrected start's
-    standoff and an entry at the approach speed to
+    miss), record x_p, go on until it exceeds ``stiffness_threshold`` (the
+    way between the two crossings gives the contact's stiffness), retract
+    by ``retract``. Then every touch less the :func:`detection_depth` on
+    the touches' median stiffness and the calibrated ``detection_bias``
+    along n1, the fit, a travel (along the corrected edge) to the
+    corrected start's standoff and an entry at the approach speed to
     ``start`` on the corrected part (the tool point the pass starts from);
     the command generator takes over from there.
     """
@@ -312,9 +341,12 @@ class ProbingSequence(LeafSystem):
         check_probe_layout(contour, config, self._arcs)
         # State: the sequence (PROBE_STATE) and the touch points.
         self._state = self.DeclareDiscreteState(
-            self._initial_state(np.asarray(initial_position, float))
+            self._initial_state(np.asarray(initial_position, float), config)
         )
         self._touch_state = self.DeclareDiscreteState(np.zeros(4 * self._n))
+        self._crossing_state = self.DeclareDiscreteState(
+            np.zeros(_CROSSING * self._n)
+        )
         # Inputs, and the sequence stepped at the sensor's samples.
         self._chamfer_port = self.DeclareVectorInputPort(
             "chamfer_state", CHAMFER_STATE.size
@@ -326,7 +358,7 @@ class ProbingSequence(LeafSystem):
         )
         self._declare_outputs()
 
-    def _initial_state(self, x0):
+    def _initial_state(self, x0, config):
         """PROBE_STATE at the start: travelling from x0 to the first
         touch's standoff."""
         initial = PROBE_STATE.pack(
@@ -348,6 +380,7 @@ class ProbingSequence(LeafSystem):
             touches=0.0,
             kept=0.0,
             fit_rms=0.0,
+            stiffness=config.contact_stiffness,
         )
         self._edge_segment(
             initial, 0.0, "travel", x0, self._contour, self._arcs[0]
@@ -473,13 +506,15 @@ class ProbingSequence(LeafSystem):
         x = x.copy()
         command, finished = self._along(x, t)
         x[PROBE_STATE.slice("command")] = command
-        touches = (
-            context.get_discrete_state(self._touch_state).get_value().copy()
+        touches, crossings = (
+            context.get_discrete_state(k).get_value().copy()
+            for k in (self._touch_state, self._crossing_state)
         )
-        step = _Step(context, x, t, command, finished, touches)
+        step = _Step(context, x, t, command, finished, touches, crossings)
         self._PHASE_STEPS[phase](self, step)
         discrete_state.set_value(self._state, x)
         discrete_state.set_value(self._touch_state, touches)
+        discrete_state.set_value(self._crossing_state, crossings)
 
     def _watch_entry(self, context, x, t, discrete_state):
         """Every sample of the pass: the time the entry's cut is
@@ -525,39 +560,58 @@ class ProbingSequence(LeafSystem):
         )
 
     def _approach(self, step):
-        c, x, command = self._config, step.x, step.command
+        c, x = self._config, step.x
         a = PROBE_STATE.get(x, "segment_start")
         n = PROBE_STATE.get(x, "segment_end") - a
         n /= np.linalg.norm(n)
         f = self._force_port.Eval(step.context) - PROBE_STATE.get(x, "tare")
-        if -float(f @ n) >= c.force_threshold:
-            chamfer = self._chamfer_port.Eval(step.context)
-            x_p = CHAMFER_STATE.get(chamfer, "x_p")
+        pushed = -float(f @ n)
+        chamfer = self._chamfer_port.Eval(step.context)
+        x_p = CHAMFER_STATE.get(chamfer, "x_p")
+        i = int(round(float(PROBE_STATE.get(x, "index"))))
+        row = slice(_CROSSING * i, _CROSSING * i + _CROSSING)
+        touched = step.touches[4 * i + 3] > 0.5
+        if not touched and pushed >= c.force_threshold:
+            # The touch, compensated with the configured stiffness until
+            # the fit has the measured one.
             speed = float(CHAMFER_STATE.get(chamfer, "xdot_p") @ n)
-            # The modelled depth at detection, and what the probe's
-            # qualification found the model leaves.
-            touch = x_p - n * (
-                detection_depth(
-                    speed, c.force_threshold, c.contact_stiffness, self._timing
-                )
-                + c.detection_bias
-            )
-            i = int(round(float(PROBE_STATE.get(x, "index"))))
-            step.touches[4 * i : 4 * i + 4] = [*touch, 1.0]
+            step.crossings[row] = [*x_p, speed, 0.0]
+            step.touches[4 * i : 4 * i + 4] = [
+                *self._touch(x_p, n, speed, c.contact_stiffness),
+                1.0,
+            ]
             x[PROBE_STATE.slice("touches")] += 1.0
-            back = x_p - c.retract * n
-        elif step.finished:  # a miss: nothing within the search distance
-            back = a
-        else:
+            if c.stiffness_threshold > 0:
+                return  # on to the second threshold
+        elif touched and pushed >= c.stiffness_threshold:
+            # The way between the two thresholds: the filter delays both
+            # crossings alike, so it is the contact's.
+            step.crossings[row.stop - 1] = float(
+                (x_p - step.crossings[row][:3]) @ n
+            )
+        elif not step.finished:
             return
+        # Back from the touch, or from the search's end on a miss.
+        back = x_p - c.retract * n if step.touches[4 * i + 3] > 0.5 else a
         self._segment(
             x,
             step.t,
             "retract",
-            command,
+            step.command,
             back,
-            self._travel_time(command, back),
+            self._travel_time(step.command, back),
             False,
+        )
+
+    def _touch(self, x_p, n, speed, stiffness):
+        """The touch on the zero-depth path: the crossing at ``x_p`` (m)
+        moving at ``speed`` (m/s) along ``n`` less the modelled depth at
+        detection on a contact of ``stiffness`` (N/m) and the depth the
+        probe's qualification found the model leaves."""
+        c = self._config
+        return x_p - n * (
+            detection_depth(speed, c.force_threshold, stiffness, self._timing)
+            + c.detection_bias
         )
 
     def _retract(self, step):
@@ -571,6 +625,7 @@ class ProbingSequence(LeafSystem):
                 x, step.t, "travel", step.command, self._contour, self._arcs[i]
             )
         else:
+            self._compensate(x, step.touches, step.crossings)
             self._fit(x, step.touches)
             self._edge_segment(
                 x, step.t, "return", step.command, self._registered(x), 0.0
@@ -610,6 +665,34 @@ class ProbingSequence(LeafSystem):
 
     def _registered(self, x) -> Contour:
         return moved_contour(self._contour, PROBE_STATE.get(x, "registration"))
+
+    def _compensate(self, x, touches, crossings):
+        """Every touch compensated with the stiffness the touches measured
+        (their median: a touch on a burr measures the burr's)."""
+        c = self._config
+        rows = crossings.reshape(self._n, _CROSSING)
+        spans = rows[:, 4][(touches[3::4] > 0.5) & (rows[:, 4] > 0)]
+        if not len(spans):
+            return  # the configured stiffness stays
+        k = float(
+            np.median(
+                [
+                    measured_stiffness(
+                        span,
+                        c.force_threshold,
+                        c.stiffness_threshold,
+                        c.contact_exponent,
+                    )
+                    for span in spans
+                ]
+            )
+        )
+        x[PROBE_STATE.slice("stiffness")] = k
+        for i in np.flatnonzero(touches[3::4] > 0.5):
+            n = self._contour.n1(self._contour.point_at(self._arcs[i]))
+            touches[4 * i : 4 * i + 3] = self._touch(
+                rows[i, :3], n, rows[i, 3], k
+            )
 
     def _fit(self, x, touches):
         t = touches.reshape(self._n, 4)

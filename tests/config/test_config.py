@@ -163,7 +163,7 @@ def test_probe_fits_the_size_by_default_with_the_calibrated_bias(name):
     assert probe.fit_radius is True
     # The qualification's mean radius error on the reference ring
     # (docs/localisation.md, The part's real size).
-    assert probe.detection_bias == pytest.approx(4.9e-6)
+    assert probe.detection_bias == pytest.approx(-4.6e-6)
     assert load_scenario("paper_localised").localisation.probe.fit_radius
 
 
@@ -175,6 +175,24 @@ def test_probe_detection_bias_within_the_search():
             "paper",
             text="localisation: {probe: {enabled: true, detection_bias: 0.01}}",
         )
+
+
+@pytest.mark.parametrize("value", [0.5, -1.0, float("nan")])
+def test_probe_stiffness_threshold_past_the_contact_threshold(value):
+    # The stiffness is taken on the way from force_threshold (1 N) on.
+    with pytest.raises(
+        ConfigError, match=r"^localisation\.probe\.stiffness_threshold = "
+    ):
+        load_scenario(
+            "paper",
+            text="localisation: {probe: {enabled: true, "
+            f"stiffness_threshold: {value}}}}}",
+        )
+    probe = load_scenario(
+        "paper",
+        text="localisation: {probe: {enabled: true, stiffness_threshold: 0}}",
+    ).localisation.probe
+    assert probe.stiffness_threshold == 0
 
 
 def _file(tmp_path, text, name="cell.yaml"):

@@ -113,8 +113,14 @@ def test_sequence_touches_compensates_the_bias_and_drops_a_burr(left):
     # comes, the calibrated ``detection_bias``.
     believed = CircularContour([0.4, 0.0, 0.048], 0.027)
     real_center = np.array([0.4004, -0.0003])
+    # The force steps at contact: the configured stiffness, no second
+    # threshold.
     cfg = ProbeConfig(
-        points=6, settle_time=0.01, travel_speed=0.05, detection_bias=left
+        points=6,
+        settle_time=0.01,
+        travel_speed=0.05,
+        detection_bias=left,
+        stiffness_threshold=0.0,
     )
     timing = sensor_timing(0.0025, 10.0)
     x0 = believed.point_at(0.0) - cfg.standoff * believed.n1(
@@ -297,7 +303,11 @@ def test_travel_between_touches_stays_off_a_boss():
     # is the modelled bias past the edge.
     boss = _square(center=[0.4, 0.0, 0.048])
     cfg = ProbeConfig(
-        points=8, settle_time=0.01, travel_speed=0.05, detection_bias=0.0
+        points=8,
+        settle_time=0.01,
+        travel_speed=0.05,
+        detection_bias=0.0,
+        stiffness_threshold=0.0,
     )
     timing = sensor_timing(0.0025, 10.0)
     x0 = boss.point_at(0.0) - cfg.standoff * boss.n1(boss.point_at(0.0))
@@ -335,3 +345,50 @@ def test_travel_between_touches_stays_off_a_boss():
     np.testing.assert_allclose(
         PROBE_STATE.get(x, "registration"), 0.0, atol=2e-5
     )
+
+
+@pytest.mark.parametrize("scale", [0.5, 1.0, 1.5])
+def test_the_touches_measure_the_stiffness_they_touch(scale):
+    # A bore 0.2 mm larger than drawn whose contact is the ring's
+    # F = c delta^1.38 (3.72 N at 0.5 mm on the paper cell's modulus)
+    # times ``scale`` (the modulus x0.5, x1, x1.5), read through the
+    # sensor's filter one sample late; the tool follows the command. The
+    # configured contact_stiffness is the paper cell's: the measured one
+    # finds the radius within 10 um on every modulus.
+    believed = CircularContour([0.4, 0.0, 0.048], 0.027)
+    real = 0.027 + 2e-4
+    cfg = ProbeConfig(
+        points=6, settle_time=0.01, travel_speed=0.05, detection_bias=0.0
+    )
+    T, fc, p = 0.0025, 10.0, cfg.contact_exponent
+    timing = sensor_timing(T, fc)
+    a = 1 - math.exp(-2 * math.pi * fc * T)
+    c = scale * 3.72 / 5e-4**p
+    x0 = believed.point_at(0.0) - cfg.standoff * believed.n1(
+        believed.point_at(0.0)
+    )
+    probe = ProbingSequence(
+        believed, cfg, sample_period=T, timing=timing, initial_position=x0
+    )
+    run = _Run(probe, x0)
+    filtered = 0.0
+    for _ in range(40000):
+        if run.phase() == "done":
+            break
+        run.x_p = run.command().copy()
+        d = np.linalg.norm(run.x_p[:2] - [0.4, 0.0]) - real
+        n = (run.x_p[:2] - [0.4, 0.0]) / np.linalg.norm(run.x_p[:2] - [0.4, 0])
+        run.force = -filtered * np.r_[n, 0.0]
+        filtered += a * (c * max(d, 0.0) ** p - filtered)
+        approach = run.phase() == "approach"
+        run.fix(speed=cfg.approach_speed * np.r_[n, 0.0] if approach else 0)
+        run.step()
+    assert run.phase() == "done"
+    x = run.state()
+    assert PROBE_STATE.get(x, "kept") == 6
+    # F / delta at 1 N: (c / F)^(1/p) F.
+    k = cfg.force_threshold * (c / cfg.force_threshold) ** (1 / p)
+    assert PROBE_STATE.get(x, "stiffness") == pytest.approx(k, rel=0.05)
+    reg = PROBE_STATE.get(x, "registration")
+    assert reg[3] == pytest.approx(2e-4, abs=1e-5)
+    np.testing.assert_allclose(reg[:2], 0.0, atol=5e-6)
