@@ -17,6 +17,7 @@ from deburr_drake.analysis.validation import (
     PARAMETERS,
     Parameter,
     predicted_boundary,
+    simulated_boundary,
 )
 from deburr_drake.config import load_scenario
 
@@ -38,6 +39,15 @@ def main(argv=None):
         "--numerics", choices=("refined", "shipped"), default="refined"
     )
     p.add_argument("--until", type=float, default=6.0)
+    p.add_argument(
+        "--at", type=float, default=None, help="operating point time (s)"
+    )
+    p.add_argument(
+        "--frozen-runs",
+        action="store_true",
+        help="also the limit of 1 s kicked runs from the operating point "
+        "(adaptation frozen, outer loop live: simulated_boundary)",
+    )
     p.add_argument("--tolerance", type=float, default=0.01)
     p.add_argument(
         "--only", nargs="+", default=None, help="sliding orientation cutoff"
@@ -47,7 +57,11 @@ def main(argv=None):
     scenario = load_scenario(args.scenario, text=args.text)
     t0 = time.perf_counter()
     result = analyze(
-        scenario, until=args.until, robust=False, numerics=args.numerics
+        scenario,
+        at=args.at,
+        until=args.until,
+        robust=False,
+        numerics=args.numerics,
     )
     op = result["_objects"]["op"]
     print(
@@ -77,6 +91,17 @@ def main(argv=None):
             f"{hi:g}] ({time.perf_counter() - t1:.0f} s)",
             flush=True,
         )
+        if args.frozen_runs:
+            t1 = time.perf_counter()
+            frozen = simulated_boundary(
+                op, par, lo=lo, hi=hi, rel_tol=args.tolerance
+            )
+            rows[key]["frozen_runs_limit"] = frozen
+            print(
+                f"{par.name}: frozen runs' limit {frozen} {par.unit} "
+                f"({time.perf_counter() - t1:.0f} s)",
+                flush=True,
+            )
     if args.json:
         with open(args.json, "w") as f:
             json.dump(rows, f, indent=2)
