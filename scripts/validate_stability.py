@@ -7,7 +7,7 @@ the sensor's cutoff frequency, the sliding gain on the fuzzy axes and the
 fuzzy surface's slope.
 
     python scripts/validate_stability.py verdicts [--rows 0 1 ...]
-        [--duration 20] [--json OUT.json]
+        [--duration 20] [--numerics refined|shipped] [--json OUT.json]
     python scripts/validate_stability.py boundaries
         [--scenario point_mass paper] [--duration 1.0]
         [--tolerance 0.02] [--json OUT.json]
@@ -44,7 +44,9 @@ def _verdicts(args):
     )
     for i in picked:
         label, base, text = VERDICT_SCENARIOS[i]
-        r = verdict_row(label, base, text, duration=args.duration)
+        r = verdict_row(
+            label, base, text, duration=args.duration, numerics=args.numerics
+        )
         r["index"] = i
         rows.append(r)
         sim = r["simulation"]
@@ -121,6 +123,12 @@ def main(argv=None) -> int:
         help="indices into VERDICT_SCENARIOS (default all)",
     )
     p.add_argument("--duration", type=float, default=20.0)
+    p.add_argument(
+        "--numerics",
+        choices=("refined", "shipped"),
+        default="refined",
+        help="of analyze's run and of the reference simulation",
+    )
     p.add_argument("--json", default=None)
     p = sub.add_parser("boundaries")
     p.add_argument("--scenario", nargs="+", default=["point_mass", "paper"])

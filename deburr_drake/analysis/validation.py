@@ -40,6 +40,7 @@ from typing import Callable, Dict, List, Optional, Tuple
 import numpy as np
 from pydrake.systems.analysis import InitializeParams
 
+from deburr_drake.analysis.along import at_numerics, without_guards
 from deburr_drake.analysis.operating_point import (
     OperatingPoint,
     frozen_scenario,
@@ -60,6 +61,7 @@ __all__ = [
     "validate_boundaries",
     "VERDICT_SCENARIOS",
     "simulated_verdict",
+    "truth_scenario",
     "verdict_row",
 ]
 
@@ -463,12 +465,27 @@ def simulated_verdict(
     return out
 
 
+def truth_scenario(scenario, numerics: str = "refined"):
+    """The scenario of the reference simulation: ``scenario`` at the
+    verdict's ``numerics`` (:func:`~deburr_drake.analysis.along.at_numerics`:
+    a truth at the shipped step would judge the step, not the loop) with
+    its guards off."""
+    return without_guards(at_numerics(scenario, numerics))
+
+
 def verdict_row(
-    label: str, base: str, text: str, *, duration: float = 20.0, progress=None
+    label: str,
+    base: str,
+    text: str,
+    *,
+    duration: float = 20.0,
+    numerics: str = "refined",
+    progress=None,
 ) -> Dict:
     """analyze's verdict on the scenario's run to ``duration`` against a
     ``duration`` s simulation with the guards off judged by
-    :func:`simulated_verdict`."""
+    :func:`simulated_verdict`, both at ``numerics``
+    (:func:`truth_scenario`)."""
     import time
 
     from deburr_drake.analysis.report import analyze
@@ -477,11 +494,15 @@ def verdict_row(
 
     scenario = load_scenario(base, text=text or None)
     t0 = time.perf_counter()
-    result = analyze(scenario, until=duration, robust=False, progress=progress)
+    result = analyze(
+        scenario,
+        until=duration,
+        robust=False,
+        numerics=numerics,
+        progress=progress,
+    )
     wall_analyze = time.perf_counter() - t0
-    from deburr_drake.analysis.along import without_guards
-
-    sim_scenario = without_guards(scenario)
+    sim_scenario = truth_scenario(scenario, numerics)
     t1 = time.perf_counter()
     log = simulate(
         make_deburring_diagram(scenario=sim_scenario),
@@ -505,6 +526,8 @@ def verdict_row(
         "guard_time_s": guard.get("time"),
         "simulation": reference,
         "agree": result["verdict"] == reference["verdict"],
+        "numerics": numerics,
+        "truth_max_step_s": sim_scenario.simulation.max_step,
         "wall_analyze_s": wall_analyze,
         "wall_simulation_s": time.perf_counter() - t1,
     }

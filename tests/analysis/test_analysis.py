@@ -560,3 +560,19 @@ def test_analyze_states_the_numerics_of_its_verdict(tmp_path, capsys):
     assert numerics["run_wall_time_s"] > 0
     out = capsys.readouterr().out
     assert "numerics (refined): the run at 2.5 ms steps, eq. (3)" in out
+
+
+def test_the_verdict_tables_truth_runs_at_the_verdicts_numerics():
+    from deburr_drake.analysis.along import at_numerics
+    from deburr_drake.analysis.validation import truth_scenario
+
+    paper = load_scenario("paper")
+    truth = truth_scenario(paper)
+    verdict = at_numerics(paper)
+    assert truth.simulation.max_step == verdict.simulation.max_step
+    assert truth.simulation.max_step < paper.simulation.max_step
+    assert truth.process.sample_mean is False
+    assert truth.guards.enabled is False
+    shipped = truth_scenario(paper, "shipped")
+    assert shipped.simulation.max_step == paper.simulation.max_step
+    assert shipped.guards.enabled is False and paper.guards.enabled
