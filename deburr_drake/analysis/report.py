@@ -127,26 +127,19 @@ def analyze(
     progress: Optional[Callable[[str], None]] = None,
 ) -> Dict:
     """The verdict on the run the user will run and, only if it settles
-    into steady cutting, the analysis at its operating point: continuous
-    linearization (modes, eq. (8) check), sampled one-period map (rho),
-    normal-force loop margins; rho along the run; the robust margin.
-    Returns the dict of analysis.json (SI units) with the live objects
-    under ``"_objects"`` (for figures; not written).
+    into steady cutting, the analysis at its operating point (modes and
+    eq. (8), the one-period map's rho, the normal-force loop's margins),
+    rho along the run and the robust margin: the dict of analysis.json (SI
+    units), the live objects under ``"_objects"`` (for figures).
 
-    ``verdict`` is "unstable" when the run oscillates at ``at`` or later
-    (:mod:`deburr_drake.analysis.settled`; ``oscillation`` describes it,
-    with the guard that would have stopped it) or when rho >= 1 at a
-    steady point along it; "not settled" when it is out of contact
-    without oscillating; otherwise "stable"; ``verdict_reason`` says why.
-    ``overrides`` (scenario fields by dotted name) apply at the operating
-    point only: a what-if on the run as given (the verdict is the
-    run's).
-
-    ``numerics`` ("refined", the default, or "shipped";
-    :func:`deburr_drake.analysis.along.at_numerics`) is how the run, the
-    maps along it and the operating point's models are integrated;
-    ``numerics`` in the result says which step and treatment they used
-    and the run's wall time."""
+    ``verdict``: "unstable" when the run oscillates at ``at`` or later
+    (:mod:`deburr_drake.analysis.settled`) or rho >= 1 at a steady point
+    along it; "not settled" out of contact without oscillating; else
+    "stable"; ``verdict_reason`` says why. ``overrides`` (dotted fields)
+    apply at the operating point only (a what-if; the verdict is the
+    run's). ``numerics`` ("refined" or "shipped",
+    :func:`deburr_drake.analysis.along.at_numerics`) is how the run, its
+    maps and the models are integrated; the result says which."""
     overrides = dict(overrides or {})
     say = progress or (lambda message: None)
     tol = SettleTolerances()
@@ -182,12 +175,7 @@ def analyze(
     result.update(_run_verdict(run, check, guard, tol))
     # A limit cycle is not an operating point: nothing to linearize.
     if not check.settled:
-        result.update(_unsettled_keys(run), timings_s=timings)
-        say(
-            "not steady at the analysed time: no linearization (a limit "
-            "cycle is not an operating point)"
-        )
-        return result
+        return _not_settled(result, run, timings, say)
     # In steady cutting: the operating point's linear models, rho along
     # the run and the robust margin.
     keys, models = _steady_analysis(
@@ -202,6 +190,17 @@ def analyze(
     )
     result.update(keys, timings_s=timings)
     result["_objects"].update(models)
+    return result
+
+
+def _not_settled(result, run, timings, say) -> Dict:
+    """``result`` of a run not steady at the analysed time: a limit cycle
+    is not an operating point, so nothing is linearized."""
+    result.update(_unsettled_keys(run), timings_s=timings)
+    say(
+        "not steady at the analysed time: no linearization (a limit "
+        "cycle is not an operating point)"
+    )
     return result
 
 

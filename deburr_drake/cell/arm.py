@@ -121,19 +121,22 @@ def _arm_instance(plant, instance):
     return plant.GetModelInstanceByName(ARM_MODEL_NAME)
 
 
+def _joint_indices(plant, instance, span):
+    """Sorted indices of the instance's joints in the plant's q or v:
+    ``span(joint)`` is (start, count) in that vector."""
+    starts = []
+    for index in plant.GetJointIndices(instance):
+        start, count = span(plant.get_joint(index))
+        starts.extend(range(start, start + count))
+    return np.array(sorted(starts), dtype=int)
+
+
 def _arm_positions(plant, instance):
     """Indices into the plant's q of the instance's joint positions, in joint
     position order."""
-    starts = []
-    for index in plant.GetJointIndices(instance):
-        joint = plant.get_joint(index)
-        starts.extend(
-            range(
-                joint.position_start(),
-                joint.position_start() + joint.num_positions(),
-            )
-        )
-    return np.array(sorted(starts), dtype=int)
+    return _joint_indices(
+        plant, instance, lambda j: (j.position_start(), j.num_positions())
+    )
 
 
 def _default_guess(plant, instance, arm_idx, p):
@@ -144,16 +147,9 @@ def _default_guess(plant, instance, arm_idx, p):
 
 def _arm_velocities(plant, instance):
     """Indices into the plant's v of the instance's joint velocities."""
-    starts = []
-    for index in plant.GetJointIndices(instance):
-        joint = plant.get_joint(index)
-        starts.extend(
-            range(
-                joint.velocity_start(),
-                joint.velocity_start() + joint.num_velocities(),
-            )
-        )
-    return np.array(sorted(starts), dtype=int)
+    return _joint_indices(
+        plant, instance, lambda j: (j.velocity_start(), j.num_velocities())
+    )
 
 
 def _conditioning(plant, tip, q_full):
@@ -276,9 +272,28 @@ def solve_tool_pose(
     conditioning = _conditioning(plant, tip, q_sol)
     if conditioning >= min_conditioning:
         return q_sol[arm_idx]
-    best = None
-    # The guess with one joint turned a quarter turn either way first (a
-    # wrist turned off its singular line), then starts anywhere.
+    return _nonsingular_pose(
+        plant,
+        tip,
+        p,
+        arm_idx,
+        q_guess,
+        tolerance,
+        min_conditioning,
+        conditioning,
+    )[arm_idx]
+
+
+def _nonsingular_pose(
+    plant, tip, p, arm_idx, q_guess, tolerance, min_conditioning, found
+):
+    """The posture nearest ``q_guess`` with the tool tip at ``p`` whose
+    conditioning is at least ``min_conditioning``, solved from the guess
+    with one joint turned a quarter turn either way (a wrist turned off its
+    singular line), then from starts anywhere; SingularPose (with the best
+    conditioning found, at least ``found``) if none is."""
+    n = len(arm_idx)
+    best, conditioning = None, found
     turned = [
         q_guess + sign * 0.5 * np.pi * np.eye(n)[j]
         for j in range(n)
@@ -304,7 +319,7 @@ def solve_tool_pose(
             p,
             conditioning,
         )
-    return best[1][arm_idx]
+    return best[1]
 
 
 def _starts(plant, arm_idx, count):

@@ -177,6 +177,22 @@ def _check_path_conditioning(model, instance, robot, points, place):
 _REACHED = set()
 
 
+def _reach_key(scenario: Scenario, samples: int) -> str:
+    """What a reach check depends on: a cell checked once is remembered."""
+    robot = scenario.robot
+    return repr(
+        (
+            robot,
+            _mtime(robot),
+            scenario.tube,
+            scenario.edge,
+            scenario.part_error,
+            scenario.tool,
+            samples,
+        )
+    )
+
+
 def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
     """Raises ConfigError if the robot cannot serve the cell
     (deburr_drake.cell.robot.check_robot: the model file, its frames, its
@@ -186,21 +202,7 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
     another axis of the flange frame (the spindle's mount) reaches it, the
     error names ``robot.tool_mount`` and that axis instead."""
     robot = scenario.robot
-    key = (
-        repr(
-            (
-                robot,
-                _mtime(robot),
-                scenario.tube,
-                scenario.edge,
-                scenario.part_error,
-                scenario.tool,
-                samples,
-            )
-        )
-        if contour is None
-        else None
-    )
+    key = _reach_key(scenario, samples) if contour is None else None
     if key is not None and key in _REACHED:
         return
     model = check_robot(robot)
