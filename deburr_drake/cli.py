@@ -1016,15 +1016,8 @@ def _add_compare_parser(subparsers):
     p.add_argument(
         "--workers", type=int, default=1, help="parallel processes (default 1)"
     )
-    p.add_argument(
-        "--out",
-        default=None,
-        help="output directory (default out/<scenario>_comparison)",
-    )
-    p.add_argument(
-        "--force",
-        action="store_true",
-        help="overwrite an existing comparison in --out",
+    _output_arguments(
+        p, "out/<scenario>_comparison", "an existing comparison in --out"
     )
     _preflight_argument(p)
     p.set_defaults(func=_compare)
@@ -1116,15 +1109,8 @@ def _add_analyze_parser(subparsers):
     _scenario_arguments(p, "paper", None)
     _operating_point_arguments(p)
     _analyzed_run_arguments(p)
-    p.add_argument(
-        "--out",
-        default=None,
-        help="output directory (default out/<scenario>/analysis)",
-    )
-    p.add_argument(
-        "--force",
-        action="store_true",
-        help="overwrite an existing analysis in --out",
+    _output_arguments(
+        p, "out/<scenario>/analysis", "an existing analysis in --out"
     )
     p.set_defaults(func=_analyze)
 
@@ -1153,17 +1139,24 @@ def _add_converge_parser(subparsers):
         help="relative change of every compared metric under which a "
         "halving changed nothing (default 0.05)",
     )
-    p.add_argument(
-        "--out",
-        default=None,
-        help="output directory (default out/<scenario>/convergence)",
-    )
-    p.add_argument(
-        "--force",
-        action="store_true",
-        help="overwrite an existing convergence.json / .md in --out",
+    _output_arguments(
+        p,
+        "out/<scenario>/convergence",
+        "an existing convergence.json / .md in --out",
     )
     p.set_defaults(func=_converge)
+
+
+def _output_arguments(parser, default, overwritten):
+    """--out (``default`` when not given) and --force, which overwrites
+    ``overwritten``: every command refuses its own outputs in --out
+    without it."""
+    parser.add_argument(
+        "--out", default=None, help=f"output directory (default {default})"
+    )
+    parser.add_argument(
+        "--force", action="store_true", help=f"overwrite {overwritten}"
+    )
 
 
 def _operating_point_arguments(parser):

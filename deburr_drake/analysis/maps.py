@@ -158,52 +158,6 @@ def _affine_coordinate(scenario: Scenario, field: str):
     return None
 
 
-def _prepared(op: OperatingPoint, overrides):
-    """(diagram, context, map entries) of ``op``'s frozen scenario with
-    ``overrides``, at ``op``'s state."""
-    from deburr_drake.analysis.operating_point import transfer_state
-    from deburr_drake.analysis.sampled import cell_map_entries
-    from deburr_drake.cell.diagram import make_deburring_diagram
-
-    scenario = frozen_scenario(op.scenario, **overrides)
-    diagram = make_deburring_diagram(scenario=scenario)
-    context = diagram.CreateDefaultContext()
-    transfer_state(op.diagram, op.context, diagram, context)
-    return diagram, context, cell_map_entries(diagram)
-
-
-def _rest_of_period_map(diagram, context, entries, delta, period, config):
-    """The map of the integration from t_k + delta to the period's end,
-    taken at the state just after the sample."""
-    from deburr_drake.analysis.sampled import (
-        _one_period,
-        _read,
-        _write,
-        period_map,
-    )
-
-    after = context.Clone()
-    _write(
-        entries,
-        diagram,
-        after,
-        _one_period(
-            diagram,
-            context,
-            entries,
-            _read(entries, diagram, context),
-            delta,
-            config,
-        ),
-    )
-    # _one_period moved only the entries; the rest of the state (FOH,
-    # adaptation: frozen or slow) is the operating point's.
-    after.SetTime(context.get_time() + delta)
-    return period_map(
-        diagram, after, entries, period=period - delta, config=config
-    )
-
-
 def fast_rho(op: OperatingPoint, fields: Sequence[str], *, delta: float = 1e-9):
     """``rho_of(**overrides)`` for :func:`stability_map` that reuses what
     does not change between grid points, or None when a field is not one
@@ -221,7 +175,9 @@ def fast_rho(op: OperatingPoint, fields: Sequence[str], *, delta: float = 1e-9):
     contact (less steady) it gives 1.50 against 1.42 at 60 Hz and
     5000 N s/m."""
     from deburr_drake.analysis.sampled import (
+        frozen_cell,
         period_map,
+        rest_of_period_map,
         simulator_config,
         spectral_radius,
     )
@@ -236,16 +192,16 @@ def fast_rho(op: OperatingPoint, fields: Sequence[str], *, delta: float = 1e-9):
     period = base.controller.control_period
     config = simulator_config(base)
 
-    diagram, context, entries = _prepared(op, {})
+    diagram, context, entries = frozen_cell(op, {})
     sample0 = period_map(diagram, context, entries, period=delta, config=config)
-    integrate = _rest_of_period_map(
+    integrate = rest_of_period_map(
         diagram, context, entries, delta, period, config
     )
     slopes = []
     for field, coord in zip(fields, coords):
         v0 = float(get_field(op.scenario, field))
         v1 = v0 * 1.5 if v0 else 1.0
-        d, c, e = _prepared(op, {field: v1})
+        d, c, e = frozen_cell(op, {field: v1})
         sample = period_map(d, c, e, period=delta, config=config)
         slopes.append(
             (

@@ -42,14 +42,11 @@ from deburr_drake.analysis.operating_point import (
     _next_analysis_time,
     _signals,
     frozen_scenario,
-    transfer_state,
 )
 from deburr_drake.analysis.sampled import (
-    _one_period,
-    _read,
-    _write,
-    cell_map_entries,
+    frozen_cell,
     period_map,
+    rest_of_period_map,
     simulator_config,
     spectral_radius,
 )
@@ -139,27 +136,8 @@ class GainMaps:
         self.sample0 = period_map(
             diagram, context, entries, period=_SPLIT, config=self.config
         )
-        after = context.Clone()
-        _write(
-            entries,
-            diagram,
-            after,
-            _one_period(
-                diagram,
-                context,
-                entries,
-                _read(entries, diagram, context),
-                _SPLIT,
-                self.config,
-            ),
-        )
-        after.SetTime(context.get_time() + _SPLIT)
-        self.integrate = period_map(
-            diagram,
-            after,
-            entries,
-            period=self.period - _SPLIT,
-            config=self.config,
+        self.integrate = rest_of_period_map(
+            diagram, context, entries, _SPLIT, self.period, self.config
         )
         self.full = period_map(
             diagram, context, entries, period=self.period, config=self.config
@@ -167,11 +145,7 @@ class GainMaps:
         self.slopes: Dict[str, np.ndarray] = {}
 
     def _prepared(self, overrides):
-        scenario = frozen_scenario(self.op.scenario, **overrides)
-        diagram = make_deburring_diagram(scenario=scenario)
-        context = diagram.CreateDefaultContext()
-        transfer_state(self.op.diagram, self.op.context, diagram, context)
-        return diagram, context, cell_map_entries(diagram)
+        return frozen_cell(self.op, overrides)
 
     def add_path(self, name: str, overrides_at: Callable[[float], dict]):
         """A path through the gains: ``overrides_at(c)`` the scenario

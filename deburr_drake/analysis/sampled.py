@@ -349,3 +349,38 @@ def sampled_loop(
         diagram=diagram,
         context=context,
     )
+
+
+def frozen_cell(op: OperatingPoint, overrides):
+    """(diagram, context, map entries) of ``op``'s frozen scenario with
+    ``overrides``, at ``op``'s state."""
+    scenario = frozen_scenario(op.scenario, **overrides)
+    diagram = make_deburring_diagram(scenario=scenario)
+    context = diagram.CreateDefaultContext()
+    transfer_state(op.diagram, op.context, diagram, context)
+    return diagram, context, cell_map_entries(diagram)
+
+
+def rest_of_period_map(diagram, context, entries, delta, period, config):
+    """The map of the integration from t_k + delta to the period's end,
+    taken at the state just after the sample."""
+    after = context.Clone()
+    _write(
+        entries,
+        diagram,
+        after,
+        _one_period(
+            diagram,
+            context,
+            entries,
+            _read(entries, diagram, context),
+            delta,
+            config,
+        ),
+    )
+    # _one_period moved only the entries; the rest of the state (FOH,
+    # adaptation: frozen or slow) is the operating point's.
+    after.SetTime(context.get_time() + delta)
+    return period_map(
+        diagram, after, entries, period=period - delta, config=config
+    )

@@ -68,6 +68,23 @@ CALIBRATED_HYDROELASTIC_MODULUS = 4.5e6  # Pa
 CALIBRATED_FORCE_AT_HALF_MM = 3.72  # N
 
 
+def _compliant_properties(resolution_hint, modulus, dissipation):
+    """The part's compliant hydroelastic proximity properties: no friction,
+    since the tangential force is the cutting process's."""
+    props = ProximityProperties()
+    AddCompliantHydroelasticProperties(
+        resolution_hint=resolution_hint,
+        hydroelastic_modulus=modulus,
+        properties=props,
+    )
+    AddContactMaterial(
+        dissipation=dissipation,
+        friction=CoulombFriction(0.0, 0.0),
+        properties=props,
+    )
+    return props
+
+
 def _check_positive(name, value):
     if not (
         isinstance(value, (int, float, np.floating, np.integer))
@@ -125,18 +142,12 @@ def register_compliant_ring(
         inner_radius, outer_radius, z_bottom, z_top, n_theta, n_radial, n_z
     )
     mesh = Mesh(str(path))
-    props = ProximityProperties()
-    # The resolution hint is ignored for a Mesh (its tetrahedra are used as they
-    # are).
-    AddCompliantHydroelasticProperties(
-        resolution_hint=outer_radius - inner_radius,
-        hydroelastic_modulus=hydroelastic_modulus,
-        properties=props,
-    )
-    AddContactMaterial(
-        dissipation=hunt_crossley_dissipation,
-        friction=CoulombFriction(0.0, 0.0),
-        properties=props,
+    # The resolution hint is ignored for a Mesh (its tetrahedra are used as
+    # they are).
+    props = _compliant_properties(
+        outer_radius - inner_radius,
+        hydroelastic_modulus,
+        hunt_crossley_dissipation,
     )
     world = plant.world_body()
     X_WG = RigidTransform([float(center_xy[0]), float(center_xy[1]), 0.0])
@@ -190,16 +201,8 @@ def register_compliant_wall(
     )
     top = np.asarray(mid, float) + 0.5 * thickness * normal
     X_layer = RigidTransform(R, top - [0.0, 0.0, 0.5 * layer_height])
-    props = ProximityProperties()
-    AddCompliantHydroelasticProperties(
-        resolution_hint=thickness,
-        hydroelastic_modulus=hydroelastic_modulus,
-        properties=props,
-    )
-    AddContactMaterial(
-        dissipation=hunt_crossley_dissipation,
-        friction=CoulombFriction(0.0, 0.0),
-        properties=props,
+    props = _compliant_properties(
+        thickness, hydroelastic_modulus, hunt_crossley_dissipation
     )
     shape = Box(length + 2 * margin, thickness, layer_height)
     world = plant.world_body()
@@ -266,16 +269,8 @@ def register_compliant_profile(
         n_z,
         visual_z_bottom=visual_z_bottom,
     )
-    props = ProximityProperties()
-    AddCompliantHydroelasticProperties(
-        resolution_hint=wall_thickness,
-        hydroelastic_modulus=hydroelastic_modulus,
-        properties=props,
-    )
-    AddContactMaterial(
-        dissipation=hunt_crossley_dissipation,
-        friction=CoulombFriction(0.0, 0.0),
-        properties=props,
+    props = _compliant_properties(
+        wall_thickness, hydroelastic_modulus, hunt_crossley_dissipation
     )
     world = plant.world_body()
     center = edge.center
