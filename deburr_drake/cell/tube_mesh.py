@@ -11,6 +11,14 @@ The ring is the n_theta-gon annulus: vertices at angles 2*pi*i/n_theta on
 circles of radius inner_radius .. outer_radius, so its faces are planar and its
 volume is exactly ``0.5 * n_theta * sin(2*pi/n_theta) * (R_o**2 - R_i**2) *
 (z_top - z_bottom)``.
+
+The same cross-section and split sweep along a planar profile
+(:func:`make_swept_volume_mesh`) and along a 3-D edge with a moving frame
+(:func:`make_framed_swept_volume_mesh`: the cross-section in the plane of
+n1, into the material, and the tool axis); the ring is the framed band of a
+horizontal circle. Every tet is oriented from its place in the sweep, so a
+band that folds where the edge turns is refused rather than turned inside
+out.
 """
 
 from __future__ import annotations
@@ -34,6 +42,11 @@ __all__ = [
     "make_swept_volume_mesh",
     "make_swept_surface_mesh",
     "profile_mesh_paths",
+    "make_framed_swept_volume_mesh",
+    "band_width_limit",
+    "edge_band_mesh_path",
+    "mesh_obj_path",
+    "tet_volumes",
 ]
 
 
@@ -198,11 +211,17 @@ def make_ring_volume_mesh(
     return vertices, _sweep_tets(vertices, n_theta, n_radial, n_z)
 
 
-def _sweep_tets(vertices, n_stations, n_radial, n_z):
-    """Tets (6 n_stations n_radial n_z, 4) of a closed sweep of a
+def _sweep_tets(vertices, n_stations, n_radial, n_z, closed=True):
+    """Tets (6 (n_stations - 1 + closed) n_radial n_z, 4) of a sweep of a
     (n_radial x n_z)-cell cross-section through n_stations stations, the
-    vertex of station i, radial index j, height index k at
-    (i*(n_radial+1) + j)*(n_z+1) + k; positively oriented."""
+    vertex of station i, cell-corner (j, k) at (i*(n_radial+1) + j)*(n_z+1)
+    + k; closed sweeps join the last station to the first.
+
+    Each tet is oriented by its shape in the sweep's parameter space
+    (station, j, k) and the handedness of the stations' frames, not by its
+    own volume: a folded sweep then shows as negative volumes instead of
+    being hidden by flipped tets. Raises ValueError naming the first
+    station whose frame has the other handedness."""
     # Global vertex order: interior vertices first, then by index.
     J, K = np.meshgrid(
         np.arange(n_radial + 1), np.arange(n_z + 1), indexing="ij"
@@ -216,21 +235,62 @@ def _sweep_tets(vertices, n_stations, n_radial, n_z):
     tris = _cross_section_triangles(n_radial, n_z)  # (T, 3, 2)
     local = tris[..., 0] * (n_z + 1) + tris[..., 1]  # (T, 3)
     stride = (n_radial + 1) * (n_z + 1)
-    i = np.arange(n_stations)[:, None, None]
-    bottom = i * stride + local[None]  # (n_stations, T, 3)
+    n_prisms = n_stations if closed else n_stations - 1
+    i = np.arange(n_prisms)[:, None, None]
+    bottom = i * stride + local[None]  # (n_prisms, T, 3)
     top = ((i + 1) % n_stations) * stride + local[None]
     prisms = np.concatenate([bottom, top], axis=2).reshape(-1, 6)
     tets = _split_prisms(prisms, rank)
 
-    p = vertices[tets]
-    signed = np.einsum(
-        "ij,ij->i",
-        np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]),
-        p[:, 3] - p[:, 0],
+    # Parameter-space coordinates (station, j, k) of each tet's vertices;
+    # a closed sweep's last prism reaches station n_stations, not 0.
+    first = np.repeat(np.arange(n_prisms), 3 * len(tris))[:, None]
+    station = tets // stride
+    station = np.where(station == first, first, first + 1)
+    within = tets % stride
+    ref = np.stack([station, within // (n_z + 1), within % (n_z + 1)], -1)
+    e = ref[:, 1:] - ref[:, :1]
+    ref_sign = np.sign(
+        np.einsum("ij,ij->i", np.cross(e[:, 0], e[:, 1]), e[:, 2])
     )
-    negative = signed < 0
-    tets[negative] = tets[negative][:, [0, 2, 1, 3]]
+    handed = _station_handedness(vertices, n_stations, n_radial, n_z, closed)
+    flip = ref_sign * handed[first[:, 0]] < 0
+    tets[flip] = tets[flip][:, [0, 2, 1, 3]]
     return tets
+
+
+def _station_handedness(vertices, n_stations, n_radial, n_z, closed):
+    """+1 or -1: the sign of t . (w x h) at every station, t along the sweep,
+    w and h the cross-section's j and k directions. Raises ValueError at the
+    first station whose sign differs from the first's."""
+    grid = np.asarray(vertices, float).reshape(
+        n_stations, n_radial + 1, n_z + 1, 3
+    )
+    origin = grid[:, 0, 0]
+    w = grid[:, -1, 0] - origin
+    h = grid[:, 0, -1] - origin
+    if closed:
+        t = np.roll(origin, -1, axis=0) - np.roll(origin, 1, axis=0)
+    else:
+        t = np.gradient(origin, axis=0)
+    sign = np.sign(np.einsum("ij,ij->i", t, np.cross(w, h)))
+    bad = np.flatnonzero(sign != sign[0])
+    if sign[0] == 0 or len(bad):
+        raise _TurnedOver(0 if sign[0] == 0 else int(bad[0]))
+    return sign
+
+
+class _TurnedOver(ValueError):
+    """A swept cross-section whose frame has the other handedness than the
+    first station's (``station`` its index)."""
+
+    def __init__(self, station):
+        super().__init__(
+            f"the swept cross-section turns over at station {station}: its "
+            "frame is not the first station's (n1 x axis against the "
+            "traversal)"
+        )
+        self.station = station
 
 
 def make_swept_volume_mesh(
@@ -273,6 +333,143 @@ def make_swept_volume_mesh(
     if np.any(tet_volumes(vertices, tets) <= 0):
         raise ValueError("the swept mesh has flat or inverted tetrahedra")
     return vertices, tets
+
+
+def _unit_rows(name, a, n):
+    a = np.asarray(a, float)
+    if a.shape != (n, 3) or not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be a finite array of shape ({n}, 3)")
+    if not np.allclose(np.linalg.norm(a, axis=1), 1.0, atol=1e-6):
+        raise ValueError(f"{name} must hold unit vectors")
+    return a
+
+
+def _band_arrays(points, n1, axis, width, height, closed, s):
+    """The stations as checked arrays: (points, n1, axis, width (n,), s)."""
+    points = np.asarray(points, float)
+    n = len(points)
+    if points.shape != (n, 3) or not np.all(np.isfinite(points)):
+        raise ValueError("points must be a finite array of shape (N, 3)")
+    if n < (3 if closed else 2):
+        raise ValueError(
+            f"a {'closed' if closed else 'open'} band needs at least "
+            f"{3 if closed else 2} stations, got {n}"
+        )
+    n1 = _unit_rows("n1", n1, n)
+    axis = _unit_rows("axis", axis, n)
+    if np.abs(np.einsum("ij,ij->i", n1, axis)).max() > 1e-6:
+        raise ValueError("n1 must be perpendicular to axis at every station")
+    width = np.broadcast_to(np.asarray(width, float), (n,))
+    if not np.all(np.isfinite(width) & (width > 0)):
+        raise ValueError("width must be finite and > 0 (m)")
+    _check_positive_finite("height", height)
+    if s is None:
+        step = np.linalg.norm(np.diff(points, axis=0), axis=1)
+        s = np.concatenate([[0.0], np.cumsum(step)])
+    return points, n1, axis, width, np.asarray(s, float)
+
+
+def _prism_pairs(n, closed):
+    lo = np.arange(n if closed else n - 1)
+    return lo, (lo + 1) % n
+
+
+def band_width_limit(points, n1, axis, height, *, closed):
+    """The widest band (m) the stations can carry with ``height`` (m): the
+    width at which a far corner of some cross-section stops advancing along
+    the edge (where the edge turns towards the material, at about its
+    radius of curvature there); inf where it never does. Raises ValueError
+    if the height alone already folds the band."""
+    points, n1, axis, _, s = _band_arrays(
+        points, n1, axis, 1.0, height, closed, None
+    )
+    lo, hi = _prism_pairs(len(points), closed)
+    t = points[hi] - points[lo]
+    limit = np.inf
+    for h in (0.0, height):
+        near = np.einsum("ij,ij->i", t - h * (axis[hi] - axis[lo]), t)
+        if np.any(near <= 0):
+            at = s[lo[np.argmax(near <= 0)]]
+            raise ValueError(
+                f"the band folds at s = {at:.4g} m: the edge turns along "
+                f"the tool axis faster than a height of {height:.4g} m allows"
+            )
+        turn = np.einsum("ij,ij->i", n1[hi] - n1[lo], t)
+        inner = turn < 0
+        if np.any(inner):
+            limit = min(limit, float(np.min(near[inner] / -turn[inner])))
+    return limit
+
+
+def make_framed_swept_volume_mesh(
+    points, n1, axis, width, height, *, closed, n_radial=2, n_z=2, s=None
+):
+    """Tetrahedral band along a 3-D edge with a moving frame: at station i
+    (``points`` (N, 3), m, on the edge) the cross-section is the rectangle
+    [0, width] along ``n1`` (N, 3, unit, into the material) by [0, height]
+    below the edge along -``axis`` (N, 3, unit, the tool axis, n1 . axis =
+    0), swept through the stations in order (``closed``: the last joined to
+    the first). ``width`` (m) is a number or one per station. The ring's
+    cross-section and tet split (:func:`make_ring_volume_mesh`), so a
+    horizontal circle with axis +z and n1 radial gives the ring's mesh.
+
+    Returns (vertices (N (n_radial+1) (n_z+1), 3), tets (M, 4)) with vertex
+    (i*(n_radial+1) + j)*(n_z+1) + k at points[i] + j/n_radial width n1 -
+    (1 - k/n_z) height axis. Raises ValueError, naming the arc length
+    (``s`` (N,), m; default the chord length from the first station), where
+    the frame turns over or the band folds (the edge turning towards the
+    material with a radius smaller than the width: see
+    :func:`band_width_limit`)."""
+    _check_int("n_radial", n_radial, 2)
+    _check_int("n_z", n_z, 2)
+    points, n1, axis, width, s = _band_arrays(
+        points, n1, axis, width, height, closed, s
+    )
+    n = len(points)
+    frac = np.arange(n_radial + 1) / n_radial
+    below = (1.0 - np.arange(n_z + 1) / n_z) * height
+    vertices = (
+        points[:, None, None, :]
+        + (frac[None, :, None] * width[:, None, None])[..., None]
+        * n1[:, None, None, :]
+        - below[None, None, :, None] * axis[:, None, None, :]
+    ).reshape(-1, 3)
+    try:
+        tets = _sweep_tets(vertices, n, n_radial, n_z, closed)
+    except _TurnedOver as error:
+        raise ValueError(
+            f"the band's frame turns over at s = {s[error.station]:.4g} m: "
+            "n1 x axis points against the traversal there, not as at the "
+            "start"
+        ) from None
+    _check_band_advances(vertices, n, n_radial, n_z, closed, s, width, height)
+    volumes = tet_volumes(vertices, tets)
+    if np.any(volumes <= 0):
+        first = int(np.argmax(volumes <= 0)) // (6 * n_radial * n_z)
+        raise ValueError(
+            f"the band's tetrahedra invert at s = {s[first]:.4g} m: the "
+            "frame turns too much between two stations (place them closer)"
+        )
+    return vertices, tets
+
+
+def _check_band_advances(vertices, n, n_radial, n_z, closed, s, width, height):
+    """Every corner of the cross-section moves forward along the edge from
+    one station to the next: otherwise the band folds over itself."""
+    grid = vertices.reshape(n, n_radial + 1, n_z + 1, 3)
+    corners = grid[:, [0, 0, -1, -1], [0, -1, 0, -1]]  # (n, 4, 3)
+    lo, hi = _prism_pairs(n, closed)
+    t = grid[hi, 0, -1] - grid[lo, 0, -1]
+    advance = np.einsum("ijk,ik->ij", corners[hi] - corners[lo], t)
+    bad = np.flatnonzero(np.any(advance <= 0, axis=1))
+    if len(bad):
+        i = lo[bad[0]]
+        raise ValueError(
+            f"the band folds at s = {s[i]:.4g} m: the edge turns towards "
+            f"the material with a radius below the band's width "
+            f"({width[i]:.4g} m) or height ({height:.4g} m) there; "
+            "make the band narrower (band_width_limit)"
+        )
 
 
 def tet_volumes(vertices, tets):
@@ -584,3 +781,66 @@ def profile_mesh_paths(
             ),
         )
     return volume, surface, body
+
+
+def edge_band_mesh_path(
+    points,
+    n1,
+    axis,
+    width,
+    height,
+    *,
+    closed,
+    n_radial=2,
+    n_z=2,
+    cache_dir=None,
+):
+    """Path of the cached .vtk of :func:`make_framed_swept_volume_mesh`
+    for these stations, cached like :func:`ring_mesh_path` by a SHA-256 of
+    the arrays and arguments."""
+    arrays = [
+        np.ascontiguousarray(a, dtype=float)
+        for a in (points, n1, axis, np.broadcast_to(width, (len(points),)))
+    ]
+    digest = hashlib.sha256(
+        b"".join(a.tobytes() for a in arrays)
+        + repr((float(height), bool(closed), int(n_radial), int(n_z))).encode()
+    ).hexdigest()[:16]
+    return _cached(
+        cache_dir,
+        f"edge_{len(arrays[0])}x{int(n_radial)}x{int(n_z)}_{digest}.vtk",
+        lambda: _vtk_text(
+            *make_framed_swept_volume_mesh(
+                *arrays[:3],
+                arrays[3],
+                height,
+                closed=closed,
+                n_radial=n_radial,
+                n_z=n_z,
+            )
+        ),
+    )
+
+
+def mesh_obj_path(vertices, faces, *, name="part", cache_dir=None):
+    """Path of a cached Wavefront OBJ of a triangle (or polygon) mesh
+    (vertices (N, 3), m; faces (M, k) 0-based), named by a SHA-256 of the
+    arrays and written like :func:`ring_mesh_path`."""
+    vertices = np.ascontiguousarray(vertices, dtype=float)
+    faces = np.ascontiguousarray(faces, dtype=np.int64)
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise ValueError(
+            f"vertices must have shape (N, 3), got {vertices.shape}"
+        )
+    if faces.ndim != 2 or faces.size == 0:
+        raise ValueError("faces must be a non-empty (M, k) array")
+    if faces.min() < 0 or faces.max() >= len(vertices):
+        raise ValueError(
+            f"faces must index vertices in [0, {len(vertices) - 1}]"
+        )
+    digest = hashlib.sha256(vertices.tobytes() + faces.tobytes()).hexdigest()
+    return _cached(
+        cache_dir,
+        f"{name}_{digest[:16]}.obj",
+        lambda: _obj_text(vertices, faces),
+    )

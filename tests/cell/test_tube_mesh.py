@@ -7,7 +7,11 @@ import numpy as np
 import pytest
 
 from deburr_drake.cell.tube_mesh import (
+    band_width_limit,
+    edge_band_mesh_path,
+    make_framed_swept_volume_mesh,
     make_ring_volume_mesh,
+    mesh_obj_path,
     polygonal_ring_volume,
     ring_mesh_path,
     tet_volumes,
@@ -270,3 +274,162 @@ def test_profile_mesh_is_cached(tmp_path):
     )
     assert first == again and all(p.is_file() for p in first)
     assert first[0].read_text().startswith("# vtk DataFile")
+
+
+# -- the framed band along a 3-D edge -----------------------------------------
+
+
+def _circle_stations(n, radius=0.030, z=0.050, rotation=np.eye(3), inner=True):
+    """Stations of a horizontal circle (the bore's top inner edge when
+    ``inner``: n1 radially out; a boss's outer edge otherwise), axis +z,
+    turned by ``rotation`` about the origin."""
+    theta = 2 * np.pi * np.arange(n) / n
+    radial = np.stack([np.cos(theta), np.sin(theta), 0 * theta], axis=1)
+    points = radius * radial + [0.0, 0.0, z]
+    n1 = radial if inner else -radial
+    axis = np.tile([0.0, 0.0, 1.0], (n, 1))
+    return points @ rotation.T, n1 @ rotation.T, axis @ rotation.T
+
+
+def test_framed_band_of_a_horizontal_circle_is_the_ring():
+    points, n1, axis = _circle_stations(120)
+    v, t = make_framed_swept_volume_mesh(
+        points, n1, axis, 0.005, 0.006, closed=True
+    )
+    rv, rt = make_ring_volume_mesh(0.030, 0.035, 0.044, 0.050, 120)
+    np.testing.assert_allclose(v, rv, atol=1e-15)
+    np.testing.assert_array_equal(t, rt)
+
+
+def test_planar_sweep_is_the_framed_band_with_a_vertical_axis():
+    edge = ProfileContour(L_SHAPE, 0.004, material="inside")
+    points, normals, depths = edge.material_band(
+        0.005, segments_per_turn=120, max_step=0.005
+    )
+    v, t = make_swept_volume_mesh(points, normals, depths, 0.044, 0.050)
+    n = len(points)
+    fv, ft = make_framed_swept_volume_mesh(
+        np.column_stack([points, np.full(n, 0.050)]),
+        np.column_stack([normals, np.zeros(n)]),
+        np.tile([0.0, 0.0, 1.0], (n, 1)),
+        depths,
+        0.006,
+        closed=True,
+    )
+    np.testing.assert_allclose(fv, v, atol=1e-15)
+    np.testing.assert_array_equal(ft, t)
+
+
+def _rx(angle):
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[1.0, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def test_inclined_circle_band_is_the_ring_turned():
+    R = _rx(np.radians(30.0))
+    v, t = make_framed_swept_volume_mesh(
+        *_circle_stations(120, rotation=R), 0.005, 0.006, closed=True
+    )
+    rv, rt = make_ring_volume_mesh(0.030, 0.035, 0.044, 0.050, 120)
+    np.testing.assert_allclose(v, rv @ R.T, atol=1e-15)
+    np.testing.assert_array_equal(t, rt)
+
+
+def test_twisted_open_band_has_positive_tets_and_its_volume():
+    # A straight 40 mm edge whose frame turns 90 degrees about it: every
+    # cross-section is W x H, so the volume is W H L.
+    n, L, W, H = 81, 0.040, 0.005, 0.006
+    x = np.linspace(0.0, L, n)
+    beta = np.linspace(0.0, np.pi / 2, n)
+    points = np.column_stack([x, 0 * x, 0 * x])
+    n1 = np.column_stack([0 * x, np.cos(beta), np.sin(beta)])
+    axis = np.column_stack([0 * x, -np.sin(beta), np.cos(beta)])
+    v, t = make_framed_swept_volume_mesh(points, n1, axis, W, H, closed=False)
+    assert t.shape == (6 * 4 * (n - 1), 4)
+    vol = tet_volumes(v, t)
+    assert vol.min() > 0
+    np.testing.assert_allclose(vol.sum(), W * H * L, rtol=1e-3)
+    faces = _faces(t)
+    assert max(faces.values()) == 2
+
+
+def test_band_turning_with_the_edge_on_a_saddle():
+    # The rim of a hole of radius r drilled along y into a tube of radius
+    # R about z: points on the cylinder x^2 + y^2 = R^2, axis its outward
+    # normal, n1 away from the hole's axis (into the material) and
+    # perpendicular to the axis.
+    r, R, n = 0.008, 0.030, 160
+    theta = 2 * np.pi * np.arange(n) / n
+    x, z = r * np.cos(theta), r * np.sin(theta)
+    y = np.sqrt(R**2 - x**2)
+    points = np.column_stack([x, y, z])
+    axis = np.column_stack([x, y, 0 * x]) / R
+    radial = np.column_stack([x, 0 * x, z]) / r
+    n1 = radial - np.einsum("ij,ij->i", radial, axis)[:, None] * axis
+    n1 /= np.linalg.norm(n1, axis=1)[:, None]
+    v, t = make_framed_swept_volume_mesh(
+        points, n1, axis, 0.005, 0.006, closed=True
+    )
+    assert tet_volumes(v, t).min() > 0
+    assert max(_faces(t).values()) == 2
+
+
+def test_band_wider_than_the_inner_radius_is_refused():
+    points, n1, axis = _circle_stations(120, radius=0.004, inner=False)
+    limit = band_width_limit(points, n1, axis, 0.006, closed=True)
+    assert 0.0039 < limit < 0.0041
+    v, t = make_framed_swept_volume_mesh(
+        points, n1, axis, 0.5 * limit, 0.006, closed=True
+    )
+    assert tet_volumes(v, t).min() > 0
+    with pytest.raises(ValueError, match=r"folds at s = .* narrower"):
+        make_framed_swept_volume_mesh(
+            points, n1, axis, 0.005, 0.006, closed=True
+        )
+    assert band_width_limit(*_circle_stations(120), 0.006, closed=True) == (
+        np.inf
+    )
+
+
+def test_band_whose_frame_turns_over_is_refused():
+    points, n1, axis = _circle_stations(120)
+    n1[60:] *= -1
+    with pytest.raises(ValueError, match=r"turns over at s = 0.09"):
+        make_framed_swept_volume_mesh(
+            points, n1, axis, 0.005, 0.006, closed=True
+        )
+
+
+@pytest.mark.parametrize(
+    "change, match",
+    [
+        (dict(width=0.0), "width"),
+        (dict(height=-1.0), "height"),
+        (dict(n1=np.ones((120, 3))), "unit"),
+        (dict(axis=None), "axis"),
+        (dict(points=np.zeros((2, 3))), "at least 3"),
+    ],
+)
+def test_band_bad_arguments(change, match):
+    points, n1, axis = _circle_stations(120)
+    args = dict(points=points, n1=n1, axis=axis, width=0.005, height=0.006)
+    if "axis" in change and change["axis"] is None:
+        change = dict(axis=n1)  # not perpendicular to n1
+    args.update(change)
+    with pytest.raises(ValueError, match=match):
+        make_framed_swept_volume_mesh(**args, closed=True)
+
+
+def test_edge_band_and_obj_are_cached(tmp_path):
+    stations = _circle_stations(60)
+    first = edge_band_mesh_path(
+        *stations, 0.005, 0.006, closed=True, cache_dir=tmp_path
+    )
+    again = edge_band_mesh_path(
+        *stations, 0.005, 0.006, closed=True, cache_dir=tmp_path
+    )
+    assert first == again and first.read_text().startswith("# vtk DataFile")
+    obj = mesh_obj_path(
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0.0]], [[0, 1, 2]], cache_dir=tmp_path
+    )
+    assert obj.read_text().splitlines()[-1] == "f 1 2 3"
