@@ -30,10 +30,13 @@ from pydrake.multibody.plant import (
     ContactModel,
     CoulombFriction,
 )
+from pydrake.multibody.tree import SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 
 from deburr_drake.cell.models import POINT_MASS_URL, make_parser
 from deburr_drake.cell.tube_mesh import (
+    edge_band_mesh_path,
+    mesh_obj_path,
     profile_mesh_paths,
     ring_mesh_path,
     ring_surface_path,
@@ -46,11 +49,14 @@ __all__ = [
     "register_compliant_ring",
     "register_compliant_wall",
     "register_compliant_profile",
+    "register_compliant_edge",
+    "register_part_visual",
     "register_tube_visual",
     "register_cutter",
     "add_tool_robot",
     "add_cartesian_tool",
     "RingContactProbe",
+    "EdgeContactProbe",
     "measure_normal_force",
     "local_stiffness",
     "power_law_exponent",
@@ -94,6 +100,18 @@ def _check_positive(name, value):
         raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
 
 
+def _check_dissipation(value):
+    if not (
+        isinstance(value, (int, float, np.floating, np.integer))
+        and math.isfinite(value)
+        and value >= 0
+    ):
+        raise ValueError(
+            "hunt_crossley_dissipation must be a finite number >= 0, "
+            f"got {value!r}"
+        )
+
+
 def register_compliant_ring(
     plant,
     *,
@@ -127,17 +145,7 @@ def register_compliant_ring(
             "(register the ring before Finalize())"
         )
     _check_positive("hydroelastic_modulus", hydroelastic_modulus)
-    if not (
-        isinstance(
-            hunt_crossley_dissipation, (int, float, np.floating, np.integer)
-        )
-        and math.isfinite(hunt_crossley_dissipation)
-        and hunt_crossley_dissipation >= 0
-    ):
-        raise ValueError(
-            "hunt_crossley_dissipation must be a finite number >= 0, "
-            f"got {hunt_crossley_dissipation!r}"
-        )
+    _check_dissipation(hunt_crossley_dissipation)
     path = ring_mesh_path(
         inner_radius, outer_radius, z_bottom, z_top, n_theta, n_radial, n_z
     )
@@ -289,6 +297,70 @@ def register_compliant_profile(
             )
             plant.RegisterVisualGeometry(world, visual)
     return geometry_id
+
+
+def register_compliant_edge(
+    plant,
+    stations,
+    *,
+    width,
+    height,
+    hydroelastic_modulus,
+    hunt_crossley_dissipation,
+    closed,
+    n_radial=2,
+    n_z=2,
+    name="part_edge",
+):
+    """The material along a 3-D edge as a compliant hydroelastic band on
+    the world body: at each of the ``stations`` (s (N,), edge points (N, 3),
+    n1 (N, 3), tool axis (N, 3), face angle (N,); m, world) the rectangle
+    ``width`` (m) into the material along n1 by ``height`` (m) below the
+    edge along -axis, swept with the moving frame
+    (tube_mesh.edge_band_mesh_path; ``closed`` joins the last station to
+    the first), modulus (Pa), Hunt-Crossley dissipation (s/m), frictionless
+    as the ring. No visual: the part's own mesh is drawn
+    (:func:`register_part_visual`). Call before Finalize. Returns the
+    collision GeometryId."""
+    if plant.is_finalized():
+        raise ValueError(
+            "plant must not be finalized yet "
+            "(register the edge before Finalize())"
+        )
+    _check_positive("hydroelastic_modulus", hydroelastic_modulus)
+    _check_dissipation(hunt_crossley_dissipation)
+    s, points, n1, axis, _ = stations
+    path = edge_band_mesh_path(
+        points,
+        n1,
+        axis,
+        width,
+        height,
+        closed=closed,
+        n_radial=n_radial,
+        n_z=n_z,
+    )
+    props = _compliant_properties(
+        width, hydroelastic_modulus, hunt_crossley_dissipation
+    )
+    return plant.RegisterCollisionGeometry(
+        plant.world_body(), RigidTransform(), Mesh(str(path)), name, props
+    )
+
+
+def register_part_visual(plant, mesh_part, *, name="part_visual"):
+    """The part's own mesh (a math.mesh_part.MeshPart: triangles in the
+    world, m) as a rigid visual on the world body, written as an OBJ to the
+    mesh cache (tube_mesh.mesh_obj_path); illustration only, no collision
+    (the tool touches the compliant edge band). Call before Finalize."""
+    path = mesh_obj_path(
+        mesh_part.mesh.vertices, mesh_part.mesh.faces, name="part"
+    )
+    visual = GeometryInstance(RigidTransform(), Mesh(str(path)), name)
+    visual.set_illustration_properties(
+        MakePhongIllustrationProperties(np.array([0.6, 0.6, 0.65, 1.0]))
+    )
+    plant.RegisterVisualGeometry(plant.world_body(), visual)
 
 
 def register_tube_visual(
@@ -481,6 +553,72 @@ class RingContactProbe:
             rho * e_r + np.array([0.0, 0.0, self.z_top - engagement])
         )
         return abs(float(f @ e_r))
+
+
+def _axis_rotation(axis):
+    """The minimal rotation taking +z onto the unit vector ``axis``."""
+    a = np.asarray(axis, float)
+    v, c = np.cross([0.0, 0.0, 1.0], a), float(a[2])
+    if c < -1.0 + 1e-12:
+        return RotationMatrix(np.diag([1.0, -1.0, -1.0]))
+    K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return RotationMatrix(np.eye(3) + K + K @ K / (1.0 + c))
+
+
+class EdgeContactProbe:
+    """A continuous plant with a free cutter and the compliant band of
+    :func:`register_compliant_edge` along ``stations``, to evaluate the
+    contact force statically with the tool held along any axis (contact
+    model hydroelastic_with_fallback, time_step 0). Keyword arguments go to
+    register_compliant_edge (``closed``, ``width``, ``height``,
+    ``hydroelastic_modulus`` required) and, for ``cutter_radius``,
+    ``cutter_length`` and ``resolution_hint``, to register_cutter."""
+
+    def __init__(self, stations, **kwargs):
+        cutter = {
+            k: kwargs.pop(k)
+            for k in ("cutter_radius", "cutter_length", "resolution_hint")
+            if k in kwargs
+        }
+        kwargs.setdefault("hunt_crossley_dissipation", 0.0)
+        builder = DiagramBuilder()
+        plant, _ = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
+        plant.set_contact_model(ContactModel.kHydroelasticWithFallback)
+        self._tool = plant.AddRigidBody(
+            "tool", SpatialInertia.SolidBoxWithMass(0.1, 0.01, 0.01, 0.01)
+        )
+        self.cutter_id = register_cutter(plant, self._tool, **cutter)
+        self.edge_id = register_compliant_edge(plant, stations, **kwargs)
+        plant.Finalize()
+        self.plant = plant
+        self.diagram = builder.Build()
+        self.context = self.diagram.CreateDefaultContext()
+        self.plant_context = plant.GetMyMutableContextFromRoot(self.context)
+        self.cutter_radius = cutter.get("cutter_radius", 0.003)
+
+    def contact_force_on_tool(self, p_WT, axis):
+        """Sum of the contact forces ON the tool (N, world), its tip at
+        p_WT (m, world) and its axis (from the tip to the holder) along the
+        unit vector ``axis``, turned from vertical by the minimal
+        rotation."""
+        X_WT = RigidTransform(_axis_rotation(axis), np.asarray(p_WT, float))
+        self.plant.SetFreeBodyPose(self.plant_context, self._tool, X_WT)
+        results = self.plant.get_contact_results_output_port().Eval(
+            self.plant_context
+        )
+        return contact_force_on_body(
+            results, self.cutter_id, self._tool.index()
+        )
+
+    def normal_force(self, point, n1, axis, depth, *, engagement=0.002):
+        """The normal force (N, along -n1 on the tool) with the cutter's
+        side ``depth`` (m) into the material past the edge point ``point``
+        along ``n1``, its tip ``engagement`` (m) below the edge along
+        -``axis``: the planar contours' tool point, z = point - r n1 - e
+        axis, moved by depth n1."""
+        point, n1, axis = (np.asarray(x, float) for x in (point, n1, axis))
+        tip = point + (depth - self.cutter_radius) * n1 - engagement * axis
+        return -float(self.contact_force_on_tool(tip, axis) @ n1)
 
 
 def measure_normal_force(

@@ -7,10 +7,13 @@ import pytest
 from deburr_drake.cell.part import (
     CALIBRATED_FORCE_AT_HALF_MM,
     CALIBRATED_HYDROELASTIC_MODULUS,
+    EdgeContactProbe,
     RingContactProbe,
     add_cartesian_tool,
     measure_normal_force,
+    register_compliant_edge,
     register_compliant_ring,
+    register_part_visual,
 )
 
 E = CALIBRATED_HYDROELASTIC_MODULUS
@@ -152,3 +155,130 @@ def test_a_profile_part_is_a_compliant_mesh_with_visuals():
     for visual in ("profile_edge_visual", "profile_edge_body"):
         assert inspector.GetIllustrationProperties(names[visual]) is not None
     assert "tube_edge" not in names
+
+
+# -- the compliant band along a 3-D edge --------------------------------------
+
+DEPTHS = np.array([3e-4, 5e-4, 7e-4])
+BAND = dict(width=0.005, height=0.006, closed=True, hydroelastic_modulus=E)
+
+
+def _rx(angle):
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[1.0, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def _circle_stations(spacing, rotation=np.eye(3), radius=0.030, z=0.050):
+    """The bore's top inner edge (n1 radially out, axis +z) as stations
+    about ``spacing`` (m) apart, turned by ``rotation`` about the origin."""
+    n = round(2 * np.pi * radius / spacing)
+    theta = 2 * np.pi * np.arange(n) / n
+    radial = np.stack([np.cos(theta), np.sin(theta), 0 * theta], axis=1)
+    points = (radius * radial + [0.0, 0.0, z]) @ rotation.T
+    axis = np.tile([0.0, 0.0, 1.0], (n, 1)) @ rotation.T
+    return (
+        radius * theta,
+        points,
+        radial @ rotation.T,
+        axis,
+        np.full(n, np.pi / 2),
+    )
+
+
+def _band_forces(probe, angles, rotation=np.eye(3)):
+    """Normal forces (len(angles), len(DEPTHS)) on the bore's edge at these
+    azimuths (rad) of the circle turned by ``rotation``."""
+    rows = []
+    for angle in angles:
+        radial = np.array([np.cos(angle), np.sin(angle), 0.0])
+        point = rotation @ (0.030 * radial + [0.0, 0.0, 0.050])
+        rows.append(
+            [
+                probe.normal_force(
+                    point, rotation @ radial, rotation[:, 2], depth
+                )
+                for depth in DEPTHS
+            ]
+        )
+    return np.array(rows)
+
+
+# On a station, between two and at a quarter of the way round.
+ANGLES = [0.0, 0.011, 0.7, np.pi / 2 + 0.004]
+
+
+@pytest.fixture(scope="module")
+def horizontal_probe():
+    # stations 1.5 mm apart: not the ring's angles
+    return EdgeContactProbe(_circle_stations(1.5e-3), **BAND)
+
+
+@pytest.fixture(scope="module")
+def horizontal_band_forces(horizontal_probe):
+    return _band_forces(horizontal_probe, ANGLES)
+
+
+def test_framed_band_of_the_bore_has_the_rings_force_law(
+    horizontal_band_forces,
+):
+    # The paper's ring: the scenario's 120 segments, 2 pi 30 mm / 120 =
+    # 1.57 mm apart.
+    ring = measure_normal_force(DEPTHS, hydroelastic_modulus=E, n_theta=120)
+    np.testing.assert_allclose(
+        horizontal_band_forces, np.tile(ring, (len(ANGLES), 1)), rtol=0.02
+    )
+
+
+def test_band_of_a_circle_in_an_inclined_plane_is_the_same_law(
+    horizontal_probe, horizontal_band_forces
+):
+    R = _rx(np.radians(30.0))
+    probe = EdgeContactProbe(_circle_stations(1.5e-3, R), **BAND)
+    np.testing.assert_allclose(
+        _band_forces(probe, ANGLES, R), horizontal_band_forces, rtol=0.02
+    )
+    # the whole force turns with the band (the layer's top face pushes the
+    # tool along its axis, as the ring's does)
+    tip = np.array([0.030 - 0.003 + 5e-4, 0.0, 0.048])
+    f = horizontal_probe.contact_force_on_tool(tip, [0.0, 0.0, 1.0])
+    np.testing.assert_allclose(
+        probe.contact_force_on_tool(R @ tip, R[:, 2]),
+        R @ f,
+        atol=0.02 * np.linalg.norm(f),
+    )
+
+
+def test_register_compliant_edge_and_part_visual_roles(tmp_path):
+    from pydrake.geometry import Role
+    from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
+    from pydrake.systems.framework import DiagramBuilder
+    import trimesh
+
+    from deburr_drake.math.mesh_part import MeshPart
+
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
+    stations = _circle_stations(3e-3)
+    band = dict(BAND, hunt_crossley_dissipation=5.0)
+    with pytest.raises(ValueError, match="hunt_crossley_dissipation"):
+        register_compliant_edge(
+            plant, stations, **dict(band, hunt_crossley_dissipation=-1.0)
+        )
+    gid = register_compliant_edge(plant, stations, **band)
+    box = trimesh.creation.box(extents=[0.1, 0.1, 0.05])
+    register_part_visual(
+        plant, MeshPart(box, None, np.eye(3), np.zeros(3)), name="part"
+    )
+    inspector = scene_graph.model_inspector()
+    props = inspector.GetProximityProperties(gid)
+    assert type(inspector.GetShape(gid)).__name__ == "Mesh"
+    assert props.GetProperty("hydroelastic", "hydroelastic_modulus") == E
+    assert props.GetProperty("material", "hunt_crossley_dissipation") == 5.0
+    world = inspector.world_frame_id()
+    (visual,) = inspector.GetGeometries(world, Role.kIllustration)
+    assert inspector.GetName(visual) == "part"
+    assert inspector.GetProximityProperties(visual) is None
+    assert inspector.GetIllustrationProperties(gid) is None
+    plant.Finalize()
+    with pytest.raises(ValueError, match="Finalize"):
+        register_compliant_edge(plant, stations, **band)
