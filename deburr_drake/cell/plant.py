@@ -3,19 +3,25 @@ friction, and the compliant hydroelastic part its edge belongs to."""
 
 from __future__ import annotations
 
+import math
+
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.systems.framework import DiagramBuilder
 
 from deburr_drake.cell.edge import make_contour, straight_frame
 from deburr_drake.cell.friction import add_joint_friction
 from deburr_drake.cell.part import (
+    register_compliant_edge,
     register_compliant_profile,
     register_compliant_ring,
     register_compliant_wall,
+    register_part_visual,
     register_tube_visual,
 )
 from deburr_drake.cell.robot import add_robot, finalize
+from deburr_drake.cell.tube_mesh import band_width_limit, sag_spacing
 from deburr_drake.config import Scenario
+from deburr_drake.math.mesh_part import load_part
 
 __all__ = ["add_cell_plant"]
 
@@ -45,6 +51,8 @@ def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
         _add_wall(plant, scenario)
     elif scenario.edge.kind == "profile":
         _add_profile(plant, scenario)
+    elif scenario.edge.kind == "mesh":
+        _add_mesh_edge(plant, scenario)
     else:
         _add_ring(plant, scenario)
     finalize(plant)
@@ -117,4 +125,55 @@ def _add_ring(plant, scenario: Scenario):
         z_top=z_top - tube.compliant_layer_height,
         center_xy=tube.position[:2],
         n_theta=tube.mesh_segments,
+    )
+
+
+# m: the first sampling of a mesh edge, to find where it curves most
+_CURVATURE_SPACING = 2.5e-4
+# -, of the widest band that does not fold: its far side keeps at least
+# half the near side's station spacing
+_BAND_FIT = 0.5
+
+
+def _add_mesh_edge(plant, scenario: Scenario):
+    """A CAD part's edge: a compliant band along it (the tube's wall
+    thickness wide where it fits, its compliant layer high), stations no
+    coarser than the tube's ring would be and, where the edge curves
+    more, close enough for the ring's sag; the part's mesh drawn."""
+    tube, edge = scenario.tube, scenario.edge
+    contour = make_contour(scenario)
+    ring_spacing = 2.0 * math.pi * tube.inner_radius / tube.mesh_segments
+    ring_sag = tube.inner_radius * (
+        1.0 - math.cos(math.pi / tube.mesh_segments)
+    )
+    fine = contour.stations(_CURVATURE_SPACING)
+    spacing = min(
+        ring_spacing,
+        sag_spacing(fine.points, closed=contour.closed, sag=ring_sag),
+    )
+    stations = contour.stations(spacing)
+    height = tube.compliant_layer_height
+    fits = band_width_limit(
+        stations.points,
+        stations.n1,
+        stations.axis,
+        height,
+        closed=contour.closed,
+    )
+    register_compliant_edge(
+        plant,
+        stations,
+        width=min(tube.wall_thickness, _BAND_FIT * fits),
+        height=height,
+        hydroelastic_modulus=tube.hydroelastic_modulus,
+        hunt_crossley_dissipation=tube.hunt_crossley_dissipation,
+        closed=contour.closed,
+        n_radial=tube.mesh_radial_cells,
+        n_z=tube.mesh_height_cells,
+    )
+    register_part_visual(
+        plant,
+        load_part(
+            edge.file, units=edge.units, xyz=edge.pose.xyz, rpy=edge.pose.rpy
+        ),
     )

@@ -44,6 +44,7 @@ __all__ = [
     "profile_mesh_paths",
     "make_framed_swept_volume_mesh",
     "band_width_limit",
+    "sag_spacing",
     "edge_band_mesh_path",
     "mesh_obj_path",
     "tet_volumes",
@@ -399,6 +400,31 @@ def band_width_limit(points, n1, axis, height, *, closed):
         if np.any(inner):
             limit = min(limit, float(np.min(near[inner] / -turn[inner])))
     return limit
+
+
+def sag_spacing(points, *, closed, sag):
+    """The station spacing (m) at which a chord of the curve through
+    ``points`` (N, 3, m, dense) strays at most ``sag`` (m) from it where it
+    is most curved: sqrt(8 rho sag), rho the least radius of the circles
+    through three consecutive points; inf on a straight curve."""
+    _check_positive_finite("sag", sag)
+    p = np.asarray(points, float)
+    if closed:
+        a, b, c = np.roll(p, 1, axis=0), p, np.roll(p, -1, axis=0)
+    else:
+        a, b, c = p[:-2], p[1:-1], p[2:]
+    # circumradius |ab| |bc| |ca| / (2 |ab x bc|)
+    twice_area = np.linalg.norm(np.cross(b - a, c - b), axis=1)
+    sides = (
+        np.linalg.norm(b - a, axis=1)
+        * np.linalg.norm(c - b, axis=1)
+        * np.linalg.norm(a - c, axis=1)
+    )
+    curved = twice_area > 1e-12 * sides ** (2.0 / 3.0)
+    if not np.any(curved):
+        return math.inf
+    rho = float(np.min(sides[curved] / (2.0 * twice_area[curved])))
+    return math.sqrt(8.0 * rho * sag)
 
 
 def make_framed_swept_volume_mesh(

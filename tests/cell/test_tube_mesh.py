@@ -14,6 +14,7 @@ from deburr_drake.cell.tube_mesh import (
     mesh_obj_path,
     polygonal_ring_volume,
     ring_mesh_path,
+    sag_spacing,
     tet_volumes,
     write_vtk,
 )
@@ -433,3 +434,15 @@ def test_edge_band_and_obj_are_cached(tmp_path):
         [[0, 0, 0], [1, 0, 0], [0, 1, 0.0]], [[0, 1, 2]], cache_dir=tmp_path
     )
     assert obj.read_text().splitlines()[-1] == "f 1 2 3"
+
+
+def test_sag_spacing_of_a_circle_and_a_line():
+    points, _, _ = _circle_stations(2000, radius=0.008)
+    sag = 0.030 * (1 - np.cos(np.pi / 120))  # the paper's ring's
+    np.testing.assert_allclose(
+        sag_spacing(points, closed=True, sag=sag),
+        np.sqrt(8 * 0.008 * sag),
+        rtol=1e-5,
+    )
+    line = np.outer(np.linspace(0, 0.05, 20), [1.0, 2.0, 0.5])
+    assert sag_spacing(line, closed=False, sag=sag) == np.inf
