@@ -22,8 +22,10 @@ direction.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple, Optional
 
 import numpy as np
+from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.inverse_kinematics import InverseKinematics
 from pydrake.solvers import SnoptSolver, Solve, SolverOptions
 
@@ -229,18 +231,21 @@ def solve_tool_pose(
     tolerance=1e-7,
     tool_frame="tool_tip",
     min_conditioning=MIN_CONDITIONING,
+    tool_axis=None,
 ):
     """Arm joint angles q (n,) (rad, the instance's joints in position order;
     arm5: ARM_JOINTS) with the tool tip at p_W_tip (m, world) and the tool axis
-    vertical (tool +z = world +z), within the joint limits.
+    vertical (tool +z = world +z; along the unit vector ``tool_axis``, world,
+    when given), within the joint limits.
 
     Drake InverseKinematics (SNOPT) on the finalized `plant`, which may hold
     other models: their positions stay at the plant's defaults. Constraints:
-    frame `tool_frame` at p_W_tip; the axis point 0.1 m up the tool axis has the
-    tip's x, y and lies above the tip. Cost: |q - q_guess|^2 (fixes what the
-    constraints leave free: arm5's wrist_roll, a 6-DOF arm's rotation about the
-    tool axis). q_guess defaults to default_q_guess(p_W_tip) (elbow up) on arm5
-    and to the plant's default positions on other arms. Raises RuntimeError
+    frame `tool_frame` at p_W_tip; the axis point 0.1 m up the tool axis lies
+    on the line through the tip along the axis, on its positive side. Cost:
+    |q - q_guess|^2 (fixes what the constraints leave free: arm5's wrist_roll,
+    a 6-DOF arm's rotation about the tool axis). q_guess defaults to
+    default_q_guess(p_W_tip) (elbow up) on arm5 and to the plant's default
+    positions on other arms. Raises RuntimeError
     naming the target if the solver fails or the result misses the target by
     more than `tolerance` (m; axis tilt times 0.1 m).
 
@@ -268,14 +273,15 @@ def solve_tool_pose(
         )
 
     tip = plant.GetFrameByName(tool_frame, instance)
-    q_sol = _solve_vertical(plant, tip, p, arm_idx, q_guess, tolerance)
+    target = _ToolTarget(p, _unit_axis(tool_axis))
+    q_sol = _solve_pose(plant, tip, target, arm_idx, q_guess, tolerance)
     conditioning = _conditioning(plant, tip, q_sol)
     if conditioning >= min_conditioning:
         return q_sol[arm_idx]
     return _nonsingular_pose(
         plant,
         tip,
-        p,
+        target,
         arm_idx,
         q_guess,
         tolerance,
@@ -285,7 +291,7 @@ def solve_tool_pose(
 
 
 def _nonsingular_pose(
-    plant, tip, p, arm_idx, q_guess, tolerance, min_conditioning, found
+    plant, tip, target, arm_idx, q_guess, tolerance, min_conditioning, found
 ):
     """The posture nearest ``q_guess`` with the tool tip at ``p`` whose
     conditioning is at least ``min_conditioning``, solved from the guess
@@ -301,7 +307,7 @@ def _nonsingular_pose(
     ]
     for start in turned + _starts(plant, arm_idx, _NONSINGULAR_STARTS):
         try:
-            q_other = _solve_vertical(plant, tip, p, arm_idx, start, tolerance)
+            q_other = _solve_pose(plant, tip, target, arm_idx, start, tolerance)
         except RuntimeError:
             continue
         c = _conditioning(plant, tip, q_other)
@@ -312,6 +318,7 @@ def _nonsingular_pose(
         if best is None or d < best[0]:
             best = (d, q_other)
     if best is None:
+        p = target.p
         raise SingularPose(
             f"tool pose IK for tool tip target p_W_tip={p.tolist()} m "
             "finds only postures near a singular configuration "
@@ -331,11 +338,35 @@ def _starts(plant, arm_idx, count):
     return [rng.uniform(lower, upper) for _ in range(count)]
 
 
-def _solve_vertical(plant, tip, p, arm_idx, q_guess, tolerance):
-    """All the plant's positions with the tool tip at p and the tool axis
-    vertical, nearest q_guess (RuntimeError if not found)."""
-    prog, q, q_full_guess = _tool_vertical_program(
-        plant, tip, p, arm_idx, q_guess
+class _ToolTarget(NamedTuple):
+    """Where the tool goes: the tip at ``p`` (m, world), its +z along
+    ``axis`` (unit, world; None: vertical)."""
+
+    p: np.ndarray
+    axis: Optional[np.ndarray] = None
+
+
+def _unit_axis(tool_axis):
+    """``tool_axis`` as a unit vector (None stays None: vertical)."""
+    if tool_axis is None:
+        return None
+    a = np.asarray(tool_axis, dtype=float).reshape(-1)
+    norm = np.linalg.norm(a) if a.shape == (3,) else 0.0
+    if not (np.all(np.isfinite(a)) and norm > 1e-9):
+        raise ValueError(
+            f"tool_axis must be 3 finite numbers, not all 0, got {tool_axis!r}"
+        )
+    return a / norm
+
+
+def _solve_pose(
+    plant, tip, target, arm_idx, q_guess, tolerance, with_joint_limits=True
+):
+    """All the plant's positions with the tool tip and axis at ``target``
+    (a _ToolTarget), nearest q_guess (RuntimeError if not found)."""
+    p = target.p
+    prog, q, q_full_guess = _tool_pose_program(
+        plant, tip, target, arm_idx, q_guess, with_joint_limits
     )
     options = SolverOptions()
     snopt = SnoptSolver().solver_id()
@@ -348,28 +379,45 @@ def _solve_vertical(plant, tip, p, arm_idx, q_guess, tolerance):
             f"tool pose IK failed for tool tip target p_W_tip={p.tolist()} m "
             f"({result.get_solution_result()})"
         )
-    _check_tool_pose(plant, tip, q_sol, p, tolerance)
+    _check_tool_pose(plant, tip, q_sol, target, tolerance)
     return q_sol
 
 
-def _tool_vertical_program(plant, tip, p, arm_idx, q_guess):
-    """(program, q, initial guess of all positions): the tool tip at p with
-    the tool axis vertical, the other models' positions at the plant's
-    defaults, the cost |q_arm - q_guess|^2."""
+def _tool_pose_program(
+    plant, tip, target, arm_idx, q_guess, with_joint_limits=True
+):
+    """(program, q, initial guess of all positions): the tool tip and axis
+    at ``target``, the other models' positions at the plant's defaults, the
+    cost |q_arm - q_guess|^2."""
+    p = target.p
     world = plant.world_frame()
-    ik = InverseKinematics(plant, with_joint_limits=True)
+    ik = InverseKinematics(plant, with_joint_limits=with_joint_limits)
     q = ik.q()
     prog = ik.get_mutable_prog()
     ik.AddPositionConstraint(tip, np.zeros(3), world, p, p)
     up = np.array([0.0, 0.0, _AXIS_POINT])
     inf = np.inf
-    ik.AddPositionConstraint(
-        tip,
-        up,
-        world,
-        np.array([p[0], p[1], p[2] + 0.5 * _AXIS_POINT]),
-        np.array([p[0], p[1], inf]),
-    )
+    if target.axis is None:
+        ik.AddPositionConstraint(
+            tip,
+            up,
+            world,
+            np.array([p[0], p[1], p[2] + 0.5 * _AXIS_POINT]),
+            np.array([p[0], p[1], inf]),
+        )
+    else:
+        # The same box in a frame at the tip whose z is the axis.
+        X_WA = RigidTransform(
+            RotationMatrix.MakeFromOneVector(target.axis, 2), p
+        )
+        ik.AddPositionConstraint(
+            tip,
+            up,
+            world,
+            X_WA,
+            np.array([0.0, 0.0, 0.5 * _AXIS_POINT]),
+            np.array([0.0, 0.0, inf]),
+        )
 
     q0 = plant.GetDefaultPositions()
     q_full_guess = q0.copy()
@@ -383,14 +431,18 @@ def _tool_vertical_program(plant, tip, p, arm_idx, q_guess):
     return prog, q, q_full_guess
 
 
-def _check_tool_pose(plant, tip, q_sol, p, tolerance):
-    """RuntimeError when the positions q_sol miss the tip target p or tilt
-    the tool axis by more than ``tolerance`` (m; tilt times 0.1 m)."""
+def _check_tool_pose(plant, tip, q_sol, target, tolerance):
+    """RuntimeError when the positions q_sol miss the tip target or tilt
+    the tool axis off the target's by more than ``tolerance`` (m; tilt
+    times 0.1 m)."""
+    p = target.p
     context = plant.CreateDefaultContext()
     plant.SetPositions(context, q_sol)
     X_WT = tip.CalcPoseInWorld(context)
     pos_err = np.linalg.norm(X_WT.translation() - p)
-    axis_err = _AXIS_POINT * np.linalg.norm(X_WT.rotation().matrix()[:2, 2])
+    z = X_WT.rotation().matrix()[:, 2]
+    a = np.array([0.0, 0.0, 1.0]) if target.axis is None else target.axis
+    axis_err = _AXIS_POINT * math.atan2(np.linalg.norm(np.cross(z, a)), z @ a)
     if pos_err > tolerance or axis_err > tolerance:
         raise RuntimeError(
             f"tool pose IK missed tool tip target p_W_tip={p.tolist()} m: "
@@ -407,11 +459,13 @@ def closest_tool_position(
     q_guess=None,
     tool_frame="tool_tip",
     return_positions=False,
+    tool_axis=None,
 ):
     """The tool tip position (m, world) nearest to p_W_tip that the arm reaches
-    with the tool axis vertical within its joint limits: how far out of reach a
-    target is. With ``return_positions`` also the arm's joint angles there
-    (rad)."""
+    with the tool axis vertical (along ``tool_axis`` when given) within its
+    joint limits: how far out of reach a target is. With ``return_positions``
+    also the arm's joint angles there (rad)."""
+    axis = _unit_axis(tool_axis)
     p = np.asarray(p_W_tip, dtype=float).reshape(3)
     instance = _arm_instance(plant, instance)
     tip = plant.GetFrameByName(tool_frame, instance)
@@ -419,12 +473,12 @@ def closest_tool_position(
     ik = InverseKinematics(plant, with_joint_limits=True)
     q = ik.q()
     ik.AddPositionCost(world, p, tip, np.zeros(3), np.eye(3))
-    # The tool axis vertical, as solve_tool_pose keeps it.
+    # The tool axis as solve_tool_pose keeps it.
     ik.AddAngleBetweenVectorsConstraint(
         tip,
         np.array([0.0, 0.0, 1.0]),
         world,
-        np.array([0.0, 0.0, 1.0]),
+        np.array([0.0, 0.0, 1.0]) if axis is None else axis,
         0.0,
         1e-6,
     )
@@ -443,7 +497,9 @@ def closest_tool_position(
     return (reached, q_sol[arm_idx]) if return_positions else reached
 
 
-def _closest_of_many(plant, p, instance, guess, tool_frame, starts=8):
+def _closest_of_many(
+    plant, p, instance, guess, tool_frame, starts=8, tool_axis=None
+):
     """closest_tool_position from the guess, the model's default posture and
     ``starts`` postures drawn (seeded) within the joint limits: the nearest
     of them (one local solve can stop far from the nearest reachable
@@ -462,6 +518,7 @@ def _closest_of_many(plant, p, instance, guess, tool_frame, starts=8):
             q_guess=g,
             tool_frame=tool_frame,
             return_positions=True,
+            tool_axis=tool_axis,
         )
         d = np.linalg.norm(reached - p)
         if best is None or d < best[0]:
@@ -475,9 +532,16 @@ REACHED = 1e-5
 
 
 def check_reach(
-    plant, points, *, instance=None, q_guess=None, tool_frame="tool_tip"
+    plant,
+    points,
+    *,
+    instance=None,
+    q_guess=None,
+    tool_frame="tool_tip",
+    tool_axes=None,
 ):
-    """None if the tool reaches every point (m, world, rows) vertically;
+    """None if the tool reaches every point (m, world, rows) vertically
+    (along ``tool_axes``' row for the point, unit vectors, when given);
     otherwise (index, point, distance (m) to the nearest reachable tool
     position, joint angles) of the first one it does not reach. `q_guess` (a
     function of the point, or None) seeds each solve; a point it does not reach
@@ -488,7 +552,9 @@ def check_reach(
     SingularPose (its ``index`` the point's) for a point the tool reaches
     only in postures near a singular configuration."""
     previous = None
-    for k, p in enumerate(np.asarray(points, dtype=float)):
+    points = np.asarray(points, dtype=float)
+    axes = [None] * len(points) if tool_axes is None else tool_axes
+    for k, (p, axis) in enumerate(zip(points, axes)):
         guess = None if q_guess is None else q_guess(p)
         guesses = [guess] + ([previous] if previous is not None else [])
         singular = None
@@ -500,6 +566,7 @@ def check_reach(
                     instance=instance,
                     q_guess=g,
                     tool_frame=tool_frame,
+                    tool_axis=axis,
                 )
                 break
             except SingularPose as e:
@@ -511,7 +578,7 @@ def check_reach(
                 singular.index = k
                 raise singular
             reached, q_near = _closest_of_many(
-                plant, p, instance, guess, tool_frame
+                plant, p, instance, guess, tool_frame, tool_axis=axis
             )
             distance = float(np.linalg.norm(reached - p))
             if distance < REACHED:
@@ -522,6 +589,7 @@ def check_reach(
                         instance=instance,
                         q_guess=q_near,
                         tool_frame=tool_frame,
+                        tool_axis=axis,
                     )
                     return k, p, 0.0, q_other
                 except RuntimeError:

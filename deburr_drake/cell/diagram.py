@@ -110,7 +110,9 @@ class _PlantSide(NamedTuple):
     reading: OutputPort  # what the controller side reads (after faults)
 
 
-def _initial_positions(plant, scenario: Scenario, x0) -> np.ndarray:
+def _initial_positions(
+    plant, scenario: Scenario, x0, tool_axis=None
+) -> np.ndarray:
     robot = scenario.robot
     if robot.model == "cartesian_tool":
         # World-aligned prismatic joints, tip at the origin for q = 0.
@@ -122,6 +124,7 @@ def _initial_positions(plant, scenario: Scenario, x0) -> np.ndarray:
         instance=frame.model_instance(),
         q_guess=ik_seed(robot, x0),
         tool_frame=robot.tool_frame,
+        tool_axis=tool_axis,
     )
 
 
@@ -135,10 +138,16 @@ def _start(scenario: Scenario, plant, model, belief) -> _Start:
         x0 = x0 - (
             c.simulation.initial_depth + c.localisation.probe.standoff
         ) * belief.n1(x0)
-    q0 = _initial_positions(plant, c, x0)
+    # The tool vertical; along a 3-D edge, along its axis there.
+    axis = (
+        belief.tool_axis_at(belief.arc_position(x0))
+        if belief.varying_frame
+        else None
+    )
+    q0 = _initial_positions(plant, c, x0, axis)
     model_context = model.CreateDefaultContext()
     model.SetPositions(model_context, q0)
-    # The tool axis vertical; on a 6-DOF arm also its rotation about it.
+    # The tool's axis; on a 6-DOF arm also its rotation about it.
     rotation = (
         model.GetFrameByName(c.robot.tool_frame)
         .CalcPoseInWorld(model_context)

@@ -13,8 +13,10 @@ from deburr_drake.cell.arm import (
     SingularPose,
     check_reach,
     path_conditioning,
+    solve_tool_pose,
 )
 from deburr_drake.cell.edge import believed_contour, start_position
+from deburr_drake.cell.joint_path import PathBreak, joint_path
 from deburr_drake.cell.robot import (
     check_robot,
     ik_seed,
@@ -172,6 +174,60 @@ def _check_path_conditioning(model, instance, robot, points, place):
     )
 
 
+#: Stations of the joint path along a 3-D edge (m apart at most), and the
+#: fewest.
+_STATION_SPACING = 0.002
+_MIN_STATIONS = 24
+
+
+def _check_edge_path(scenario: Scenario, model, contour):
+    """ConfigError in one line naming the arc length (mm) and the joint
+    where the arm, from the start pose ``robot.ik_seed`` gives, does not
+    follow the edge continuously with the tool along its axis
+    (deburr_drake.cell.joint_path)."""
+    robot = scenario.robot
+    instance = model.GetFrameByName(robot.tool_frame).model_instance()
+    start = start_position(scenario, contour)
+    s0 = float(contour.arc_position(start))
+    end = s0 + contour.length if contour.closed else contour.length
+    count = max(_MIN_STATIONS, int(np.ceil((end - s0) / _STATION_SPACING)))
+    arcs = np.linspace(s0, end, count + 1)
+    wrapped = np.mod(arcs, contour.length) if contour.closed else arcs
+    axes = [contour.tool_axis_at(s) for s in wrapped]
+    points = [start] + [contour.point_at(s) for s in wrapped]
+    try:
+        q0 = solve_tool_pose(
+            model,
+            start,
+            instance=instance,
+            q_guess=ik_seed(robot, start),
+            tool_frame=robot.tool_frame,
+            tool_axis=contour.tool_axis_at(s0),
+        )
+        joint_path(
+            model,
+            points,
+            [axes[0]] + axes,
+            np.concatenate([[s0], arcs]) - s0,
+            q0,
+            instance=instance,
+            tool_frame=robot.tool_frame,
+        )
+    except PathBreak as e:
+        raise ConfigError(
+            f"edge is not followed by the arm: {e} (from the start pose "
+            f"robot.ik_seed = {list(robot.ik_seed)} gives): allowed a part "
+            "pose, tool rule or seed with which the arm follows the whole "
+            "edge"
+        ) from None
+    except RuntimeError as e:
+        raise ConfigError(
+            f"edge is out of the arm's reach at its start (arc 0.0 mm): "
+            f"{e}: allowed a part pose or robot.ik_seed from which the arm "
+            "reaches it with the tool along the edge's axis"
+        ) from None
+
+
 #: Scenarios already checked (the robot, part and tool as text): a diagram
 #: built again for the same cell (the analysis builds many) checks once.
 _REACHED = set()
@@ -200,7 +256,11 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
     ``samples`` points along the edge) the arm cannot reach with the tool
     vertical, and how far out of reach it is; when the tool turned along
     another axis of the flange frame (the spindle's mount) reaches it, the
-    error names ``robot.tool_mount`` and that axis instead."""
+    error names ``robot.tool_mount`` and that axis instead. Along a 3-D
+    edge (``contour.varying_frame``) the tool follows the edge's axis and
+    the arm's whole joint path is checked instead (continuous, within the
+    joint limits, away from singular postures; the error names the arc
+    length and the joint)."""
     robot = scenario.robot
     key = _reach_key(scenario, samples) if contour is None else None
     if key is not None and key in _REACHED:
@@ -209,6 +269,11 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
     if robot.model == "cartesian_tool":
         return  # the Cartesian tool reaches everywhere
     contour = contour or believed_contour(scenario)
+    if contour.varying_frame:
+        _check_edge_path(scenario, model, contour)
+        if key is not None:
+            _REACHED.add(key)
+        return
     arcs = np.linspace(
         0.0, contour.length, samples, endpoint=not contour.closed
     )

@@ -88,7 +88,9 @@ def HybridController_(T):
           ``model_mass_scale``: deliberately imperfect; the ideal law: the
           true model's inverse dynamics). s_o = lambda_o e_o - omega, e_o
           the rotation vector of R_d R^T, R_d = ``desired_rotation``
-          (identity by default). With 5 joints J_w^T passes two of the
+          (identity by default; along a ``contour`` whose frame turns,
+          ``contour.axis_turn(s) @ desired_rotation`` at the tool point's
+          arc position s). With 5 joints J_w^T passes two of the
           three orientation axes, with 6 all three; with more than 6 (and
           a ``posture``) tau also gets (I - J^T J^T+) (k_n (q_posture - q)
           - d_n v), a posture PD in J's null space.
@@ -138,6 +140,15 @@ def HybridController_(T):
           frame on ``plant`` whose kinematics and gravity forces the law
           reuses (e.g. shared with the observer, which has evaluated them at
           the same state); the AutoDiffXd system computes its own.
+        - ``contour`` (optional): the contour the chamfer state is of.
+          When ``contour.varying_frame`` (a 3-D edge) the desired
+          rotation turns with the tool axis, R_d(s) =
+          ``contour.axis_turn(s)`` R_start, s the chamfer state's
+          ``arc_position`` (the tool point's: the observer has projected
+          it already, where the command's arc position would need a port
+          or a projection per sample; it trails the command's by about
+          one feed step, a turn of the axis far below the orientation
+          loop's lag). Otherwise R_d is ``desired_rotation`` throughout.
         - ``nominal_depth`` (m): delta* of the constant-feed laws;
           ``true_plant``: the plant's own model, for the ideal law.
         """
@@ -155,6 +166,7 @@ def HybridController_(T):
             true_plant=None,
             posture=None,
             fuzzy_weight_input=False,
+            contour=None,
         ):
             LeafSystem_[T].__init__(self, converter)
             config.validate()
@@ -171,6 +183,7 @@ def HybridController_(T):
                 true_plant=true_plant,
                 posture=posture,
                 fuzzy_weight_input=fuzzy_weight_input,
+                contour=contour,
             )
             # The controller's model of the robot.
             self._set_model(plant, tool_frame_name, tool_point)
@@ -191,7 +204,7 @@ def HybridController_(T):
             )
             # The sliding variables, orientation and posture every law
             # shares.
-            self._set_shared_gains(desired_rotation, posture)
+            self._set_shared_gains(desired_rotation, posture, contour)
             # State [delta_d, theta], the inputs, the outputs.
             n_states = 1 + len(self._axes) * self._n_rules
             self.DeclareContinuousState(n_states)
@@ -227,13 +240,19 @@ def HybridController_(T):
             self._nq = plant.num_positions()
             self._B_T = plant.MakeActuationMatrix().T  # nu x nv
 
-        def _set_shared_gains(self, desired_rotation, posture):
+        def _set_shared_gains(self, desired_rotation, posture, contour):
             c = self._config
             self._lambda = np.asarray(c.sliding_lambda, float)
             self._desired_rotation = (
                 np.eye(3)
                 if desired_rotation is None
                 else np.asarray(desired_rotation, float)
+            )
+            # Chosen once: a planar contour's R_d is a constant.
+            self._axis_turn = (
+                contour.axis_turn
+                if contour is not None and contour.varying_frame
+                else None
             )
             self._lambda_o = np.asarray(c.orientation_lambda, float)
             self._K_o = np.asarray(c.orientation_gain, float)
@@ -369,7 +388,12 @@ def HybridController_(T):
                 rates,
             )
             # Joint torques.
-            tau = self._joint_torque(p["plant_state"], force.f_tau, edot)
+            tau = self._joint_torque(
+                p["plant_state"],
+                force.f_tau,
+                edot,
+                self._rotation_at(chamfer),
+            )
             return (
                 self._B_T @ tau,
                 rates,
@@ -386,14 +410,29 @@ def HybridController_(T):
                 ),
             )
 
-        def _joint_torque(self, state, f_tau, edot):
-            """J_v^T f_tau, the orientation PD, the null-space posture and
-            the law's model terms (nv)."""
+        def _rotation_at(self, chamfer):
+            """R_d where the chamfer state's tool point is."""
+            if self._axis_turn is None:
+                return self._desired_rotation
+            # The turn from the value: a constant of the AutoDiffXd law.
+            s = CHAMFER_STATE.get(chamfer, "arc_position")
+            s = s.value() if isinstance(s, AutoDiffXd) else float(s)
+            return self._axis_turn(s) @ self._desired_rotation
+
+        def desired_rotation(self, context):
+            """R_d (3 x 3) at the ``chamfer_state`` input's arc
+            position."""
+            return self._rotation_at(self._ports["chamfer_state"].Eval(context))
+
+        def _joint_torque(self, state, f_tau, edot, desired_rotation):
+            """J_v^T f_tau, the orientation PD towards
+            ``desired_rotation``, the null-space posture and the law's
+            model terms (nv)."""
             J, R, tau_g = self._kinematics(state)
             tau = J[3:].T @ f_tau
             omega = J[:3] @ state[self._nq :]
             if self._orientation_control:
-                E = self._desired_rotation @ R.T
+                E = desired_rotation @ R.T
                 # Rotation vector of R_d R^T to first order (exact axis).
                 e_o = 0.5 * np.array(
                     [E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]]

@@ -178,6 +178,7 @@ def _add_loops(
             true_plant=passed["true_plant"],
             posture=passed["posture"],
             fuzzy_weight_input=probing,
+            contour=contour,
         ),
     )
     return DeburringController(
@@ -379,7 +380,8 @@ def add_deburring_controller(
     controller believes in; see :mod:`deburr_drake.math.geometry`), ``start``
     the tool point where the command starts (m, world; the contour's start
     by default). ``desired_rotation`` (3 x 3) is the tool orientation the
-    controller holds (identity by default); ``tool_point``,
+    controller holds (identity by default), turned by
+    ``contour.axis_turn(s)`` when ``contour.varying_frame``; ``tool_point``,
     ``contour_step``, ``true_plant`` and ``posture`` are passed through to
     the systems (shared kinematics, a part that moves, the ``ideal`` law's
     true plant, the joint posture an arm with more than six joints holds in

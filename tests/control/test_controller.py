@@ -369,3 +369,70 @@ def test_slope_rate_autodiff_matches_float():
         [r.value() if hasattr(r, "value") else r for r in rate],
         rb.slope_rate(theta, 1000.0, 80.0),
     )
+
+
+def test_desired_rotation_turns_with_a_3d_edge(tilted_circle):
+    """Along a contour whose tool axis turns, the controller holds
+    R_d(s) = axis_turn(s) R_start at the chamfer state's arc position: its
+    actuation is that of a controller holding that rotation fixed, and
+    R_d(s) carries the start's tool axis onto a(s). A planar contour
+    changes nothing."""
+    from deburr_drake.cell.arm import ARM_URL
+    from deburr_drake.control.kinematics import ToolPoint
+    from deburr_drake.control.layout import CHAMFER_STATE
+
+    arm = make_kinematic_model(ARM_URL)
+    tool_point = ToolPoint(arm, arm.GetFrameByName("tool_tip"))
+    config = ControllerConfig(
+        control_period=0.0,
+        orientation_lambda=[20.0] * 3,
+        orientation_gain=[20.0] * 3,
+    )
+    edge = tilted_circle([0.4, 0.0, 0.05], 0.01, np.radians(30.0), 0.4)
+    state = np.array([0.1, 0.6, -1.2, 0.5, 0.2, 0.01, -0.02, 0.03, 0.0, 0.1])
+    R_start = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+    x_p, v = tool_point(state)
+    _, _, force, x_c, v_c, _ = _scenario_point()
+    inputs = _inputs(
+        x_p, v, force, x_c + x_p - CONTOUR.point_at(0.01), v_c, 6.0
+    )
+    inputs["plant_state"] = state
+
+    def actuation(controller, s):
+        chamfer = inputs["chamfer_state"].copy()
+        chamfer[CHAMFER_STATE.slice("arc_position")] = s
+        context = _context(controller, dict(inputs, chamfer_state=chamfer), 0)
+        return (
+            controller.GetOutputPort("actuation").Eval(context),
+            controller.desired_rotation(context),
+        )
+
+    turning = HybridController(arm, "tool_tip", config, R_start, contour=edge)
+    for s in (0.0, 0.25 * edge.length, 0.6 * edge.length):
+        R_d = edge.axis_turn(s) @ R_start
+        held = HybridController(arm, "tool_tip", config, R_d)
+        tau, rotation = actuation(turning, s)
+        np.testing.assert_allclose(rotation, R_d, atol=1e-12)
+        np.testing.assert_allclose(
+            R_d @ R_start.T @ edge.tool_axis_at(0.0),
+            edge.tool_axis_at(s),
+            atol=1e-12,
+        )
+        np.testing.assert_allclose(tau, actuation(held, s)[0], atol=1e-12)
+    # The axis turns by 2 x 0.4 rad half-way round: so does R_d.
+    fixed = HybridController(arm, "tool_tip", config, R_start)
+    half = 0.5 * edge.length
+    angle = np.arccos(
+        (np.trace(actuation(turning, half)[1] @ R_start.T) - 1) / 2
+    )
+    assert angle == pytest.approx(0.8, abs=1e-9)
+    assert (
+        np.linalg.norm(actuation(turning, half)[0] - actuation(fixed, half)[0])
+        > 0.1
+    )
+    assert turning.ToAutoDiffXd() is not None
+    planar = HybridController(arm, "tool_tip", config, R_start, contour=CONTOUR)
+    np.testing.assert_array_equal(
+        actuation(planar, half)[0], actuation(fixed, half)[0]
+    )
+    np.testing.assert_array_equal(actuation(planar, half)[1], R_start)

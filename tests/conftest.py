@@ -1,0 +1,98 @@
+"""Fixtures the test folders share."""
+
+import math
+
+import numpy as np
+import pytest
+
+from deburr_drake.math.geometry import Contour
+
+
+def _min_rotation(a, b):
+    """The minimal rotation (3 x 3) taking unit vector a onto b."""
+    v, c = np.cross(a, b), float(a @ b)
+    vx = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    return np.eye(3) + vx + vx @ vx / (1.0 + c)
+
+
+class TiltedCircle(Contour):
+    """A tool path round a circle of ``radius`` about ``center`` (m) in a
+    plane turned ``incline`` (rad) about world x, material outside (a bore
+    in an inclined face); the tool axis the plane's normal tilted ``tilt``
+    (rad) outwards, so with a tilt it turns along the circle. A closed form
+    of a 3-D edge's frame for the tests (float only)."""
+
+    varying_frame = True
+
+    def __init__(self, center, radius, incline, tilt=0.0):
+        self._c = np.asarray(center, float)
+        self._r = float(radius)
+        ci, si = math.cos(incline), math.sin(incline)
+        self._normal = np.array([0.0, -si, ci])
+        self._e1 = np.array([1.0, 0.0, 0.0])
+        self._e2 = np.cross(self._normal, self._e1)
+        self._tilt = float(tilt)
+
+    def _angle(self, p):
+        d = np.asarray(p, float) - self._c
+        return math.atan2(d @ self._e2, d @ self._e1) % (2.0 * math.pi)
+
+    def _radial(self, angle):
+        return math.cos(angle) * self._e1 + math.sin(angle) * self._e2
+
+    @property
+    def length(self):
+        return 2.0 * math.pi * self._r
+
+    @property
+    def closed(self):
+        return True
+
+    @property
+    def height(self):
+        return float(self.point_at(0.0)[2])
+
+    def phi(self, p):
+        d = np.asarray(p, float) - self._c
+        d = d - (d @ self._normal) * self._normal
+        return self._r - float(np.linalg.norm(d))
+
+    def grad_phi(self, p):
+        return -self._radial(self._angle(p))
+
+    def tangent(self, p):
+        angle = self._angle(p)
+        return -math.sin(angle) * self._e1 + math.cos(angle) * self._e2
+
+    def curvature(self, p):
+        return 1.0 / self._r
+
+    def n1_rate(self, p, v):
+        n1 = -self._radial(self._angle(p))
+        v = np.asarray(v, float)
+        v = v - (v @ self._normal) * self._normal
+        return (v - (n1 @ v) * n1) / self._r
+
+    def project(self, p):
+        return self.point_at(self.arc_position(p))
+
+    def arc_position(self, p):
+        return self._r * self._angle(p)
+
+    def point_at(self, s):
+        return self._c + self._r * self._radial(s / self._r)
+
+    def tool_axis_at(self, s):
+        radial = self._radial(s / self._r)
+        return (
+            math.cos(self._tilt) * self._normal + math.sin(self._tilt) * radial
+        )
+
+    def axis_turn(self, s):
+        return _min_rotation(self.tool_axis_at(0.0), self.tool_axis_at(s))
+
+
+@pytest.fixture
+def tilted_circle():
+    """The TiltedCircle class (a Contour whose tool axis turns)."""
+    return TiltedCircle
