@@ -140,6 +140,17 @@ class Contour(abc.ABC):
     def height(self) -> float:
         """z of the contour plane [m]."""
 
+    varying_frame = False
+    """True when the tool axis turns along the contour (a 3-D edge)."""
+
+    def tool_axis_at(self, s):
+        """The tool axis a(s) (unit, world) at arc position s: vertical."""
+        return np.array([0.0, 0.0, 1.0])
+
+    def axis_turn(self, s):
+        """Rot_min(a(0) -> a(s)), the tool axis's turn (3 x 3): none."""
+        return np.eye(3)
+
     @abc.abstractmethod
     def phi(self, p):
         """Signed planar distance: > 0 free side, < 0 material (T-generic)."""
