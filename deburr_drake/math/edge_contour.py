@@ -27,7 +27,9 @@ arc length u.
 
 from __future__ import annotations
 
+import functools
 import math
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -39,9 +41,15 @@ from deburr_drake.math.geometry import (
     _vec3,
     _vec3_float,
 )
-from deburr_drake.math.mesh_part import EdgeCurve
+from deburr_drake.math.mesh_part import (
+    EdgeCurve,
+    MeshPart,
+    choose_edge,
+    load_part,
+    sharp_edges,
+)
 
-__all__ = ["EdgeContour", "Stations"]
+__all__ = ["EdgeContour", "Stations", "load_edge"]
 
 _RULES = ("left", "right")
 # rad: how far the side plane may turn into a face before it is a gouge
@@ -514,3 +522,42 @@ class EdgeContour(Contour):
             s[0] = 0.0
         f, n1, axis = self._geometry(self._curve._u(u))
         return Stations(s, f.point, n1, axis, f.face_angle)
+
+
+@functools.lru_cache(maxsize=8)
+def _part(path, mtime, units, xyz, rpy):
+    return load_part(path, units=units, xyz=xyz, rpy=rpy)
+
+
+@functools.lru_cache(maxsize=16)
+def _edge(path, mtime, units, xyz, rpy, sharp_angle, near):
+    part = _part(path, mtime, units, xyz, rpy)
+    chains = sharp_edges(part, min_angle=sharp_angle)
+    if not chains:
+        raise ValueError(
+            f"{path}: no edge sharper than {sharp_angle:g} rad on the part"
+        )
+    world = part.to_world(near)
+    chain = choose_edge(chains, near=world)
+    return part, EdgeCurve(chain), chain.distance(world)
+
+
+def load_edge(
+    path, *, units="m", xyz=(0, 0, 0), rpy=(0, 0, 0), sharp_angle, near
+) -> tuple[MeshPart, EdgeCurve, float]:
+    """The part in ``path`` placed by ``xyz`` (m) and ``rpy`` (rad) as
+    ``load_part`` places it, the ``EdgeCurve`` of its edge (dihedral over
+    ``sharp_angle``, rad) nearest the point ``near`` (m, in the part
+    frame), and that edge's distance from ``near`` (m). Each part and edge
+    is read once per file version (the file's modification time)."""
+    path = Path(path)
+    mtime = path.stat().st_mtime_ns if path.is_file() else 0
+    return _edge(
+        str(path),
+        mtime,
+        units,
+        tuple(float(x) for x in xyz),
+        tuple(float(x) for x in rpy),
+        float(sharp_angle),
+        tuple(float(x) for x in near),
+    )
