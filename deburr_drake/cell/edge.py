@@ -47,8 +47,11 @@ def profile_center(scenario: Scenario) -> np.ndarray:
 def make_contour(scenario: Scenario, *, grow: float = 0.0) -> Contour:
     """The zero-depth path of the tool tip: the part's edge offset by the
     cutter radius, at the height where the cutter tip runs. ``grow`` (m):
-    a profile grown outward by it (the believed part's radius error)."""
+    a profile grown outward by it (the believed part's radius error). A
+    mesh edge: its ``EdgeContour`` (the part read once per file)."""
     tube, tool, edge = scenario.tube, scenario.tool, scenario.edge
+    if edge.kind == "mesh":
+        return edge.mesh_path(tool)
     if edge.kind == "profile":
         return edge.profile_path(
             profile_center(scenario), tool.cutter_radius, grow=grow
@@ -94,7 +97,8 @@ def believed_scenario(scenario: Scenario) -> Scenario:
 
 def believed_contour(scenario: Scenario) -> Contour:
     """The zero-depth path on the part the controller believes in (a
-    profile: moved, turned and grown by ``part_error``)."""
+    profile: moved, turned and grown by ``part_error``; a mesh edge: the
+    real one, as validation refuses a part error on it)."""
     grow = (
         scenario.part_error.radius if scenario.edge.kind == "profile" else 0.0
     )
@@ -126,6 +130,8 @@ def edge_points(scenario: Scenario, arc) -> np.ndarray:
     """Points (m, world) on the part's top edge at contour arc positions
     ``arc`` (m): where the chamfer is cut, for drawing."""
     contour = make_contour(scenario)
+    if scenario.edge.kind == "mesh":
+        return np.array([contour.edge_point(s) for s in np.asarray(arc)])
     tube, tool = scenario.tube, scenario.tool
     top = tube.position[2] + tube.height
     points = []

@@ -5,6 +5,7 @@ unit."""
 
 from dataclasses import dataclass, field
 import math
+import os
 from pathlib import Path
 from typing import Dict, List
 
@@ -16,13 +17,16 @@ from deburr_drake.config.checks import (
     _require,
     _vector,
 )
+from deburr_drake.math.edge_contour import EdgeContour, load_edge
 from deburr_drake.math.geometry import ProfileContour
+from deburr_drake.math.mesh_part import UNITS
 
 __all__ = [
     "package_folder",
     "PIP_PREFIX",
     "TubeConfig",
     "ToolConfig",
+    "PoseConfig",
     "EdgeConfig",
     "SensorConfig",
     "BurrConfig",
@@ -135,6 +139,33 @@ class ToolConfig:
 
 
 @dataclass
+class PoseConfig:
+    """A frame in the world: moved by ``xyz`` after turning by ``rpy``
+    (R = Rz(yaw) Ry(pitch) Rx(roll), Drake's RollPitchYaw)."""
+
+    xyz: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0]
+    )  # m, the frame's origin in the world
+    rpy: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0]
+    )  # rad, roll, pitch and yaw
+
+    def validate(self, owner: str):
+        _vector(owner, "xyz", self.xyz, 3, _finite)
+        _vector(owner, "rpy", self.rpy, 3, _finite)
+
+
+def parts_folder() -> Path:
+    """``models/parts/``: the shipped part files ($DEBURR_DRAKE_MODELS, else
+    the models/ beside the package)."""
+    env = os.environ.get("DEBURR_DRAKE_MODELS")
+    models = (
+        Path(env) if env else Path(__file__).resolve().parents[2] / "models"
+    )
+    return models / "parts"
+
+
+@dataclass
 class EdgeConfig:
     """Which edge, and where and which way the tool runs along it.
 
@@ -152,9 +183,23 @@ class EdgeConfig:
     path (the crossing nearest to ``tube.position``), or at the middle of
     vertex ``start_vertex``'s fillet, or ``start_fraction`` of the path
     counter-clockwise from there for vertex 0 (one of the three), and runs
-    in ``direction``."""
+    in ``direction``.
 
-    kind: str = "circle"  # -, circle, straight or profile
+    ``mesh``: an edge of the part in ``file`` (STL, OBJ or STEP; a relative
+    path is relative to the scenario file, a bare name may also be one of
+    models/parts/), its coordinates in ``units``, placed in the world by
+    ``pose``: the sharp edge (faces' normals more than ``sharp_angle``
+    apart) nearest the point ``near`` of the part frame. The tool's axis
+    follows the outward normal of the face ``tool_rule`` names (left or
+    right of the edge's own direction; a loop runs counter-clockwise seen
+    from outside), turned by ``tilt`` about the edge and leaned by ``lead``
+    towards the travel; the cutter cuts with its side, ``tool.engagement``
+    below the edge along the axis. ``direction`` +1 runs the edge its own
+    way, -1 the other; the pass starts ``start_fraction`` of the edge from
+    its start (-1: at the start; an open edge run backwards: at its
+    end)."""
+
+    kind: str = "circle"  # -, circle, straight, profile or mesh
     start_angle: float = 0.0  # rad, polar angle of the contour start
     direction: int = 1  # -, +1 counter-clockwise seen from +z, -1 clockwise
     length: float = 0.1  # m, straight edge only
@@ -170,8 +215,25 @@ class EdgeConfig:
     # -, profile: the start this fraction of the path counter-clockwise
     # from vertex 0's fillet; -1: by start_angle
     start_fraction: float = -1.0
+    # -, mesh: the part's STL, OBJ or STEP file (relative to the scenario
+    # file, or a name in models/parts/)
+    file: str = ""
+    units: str = "m"  # -, mesh: the file's length unit (m, mm, cm or in)
+    # m, mesh: a point in the part frame; the pass cuts the edge nearest it
+    near: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    pose: PoseConfig = field(default_factory=PoseConfig)  # -, mesh: the part
+    # -, mesh: the tool axis along the left or right face's outward normal
+    tool_rule: str = "left"
+    tilt: float = 0.0  # rad, mesh: the tool axis turned about the edge
+    lead: float = 0.0  # rad, mesh: the tool axis leaned towards the travel
+    # rad, mesh: an edge where the faces' normals differ by more
+    sharp_angle: float = 0.5236
 
-    KINDS = ("circle", "straight", "profile")
+    KINDS = ("circle", "straight", "profile", "mesh")
+    TOOL_RULES = ("left", "right")
+    # the nearest edge farther from ``near`` than this share of the part's
+    # size is no edge near it (a point given in mm, or in the world frame)
+    NEAR_SHARE = 0.25
     SIDES = ("inner", "outer")
 
     def profile_path(self, center, offset, *, grow=0.0) -> ProfileContour:
@@ -199,9 +261,82 @@ class EdgeConfig:
         and ``center_fraction`` are measured on."""
         if self.kind == "profile":
             return self.profile_path([0.0, 0.0, 0.0], tool.cutter_radius).length
+        if self.kind == "mesh":
+            return self.mesh_path(tool).length
         if self.kind == "straight":
             return self.length
         return 2 * math.pi * (tube.inner_radius - tool.cutter_radius)
+
+    def mesh_file(self) -> Path:
+        """The part's file: ``file`` as given (the scenario loader makes a
+        relative one relative to the scenario file), else the shipped part
+        of that name."""
+        path = Path(self.file)
+        if path.is_file() or path.is_absolute() or len(path.parts) != 1:
+            return path
+        shipped = parts_folder() / path
+        return shipped if shipped.is_file() else path
+
+    def mesh_edge(self):
+        """(part, EdgeCurve, the edge's distance from ``near`` (m)): the
+        edge nearest ``near``, read once per file (ValueError: a bad file
+        or mesh)."""
+        return load_edge(
+            self.mesh_file(),
+            units=self.units,
+            xyz=self.pose.xyz,
+            rpy=self.pose.rpy,
+            sharp_angle=self.sharp_angle,
+            near=self.near,
+        )
+
+    def mesh_path(self, tool) -> EdgeContour:
+        """The cutter tip's path along the mesh edge (ValueError: see
+        ``EdgeContour``)."""
+        _, curve, _ = self.mesh_edge()
+        return EdgeContour(
+            curve,
+            cutter_radius=tool.cutter_radius,
+            engagement=tool.engagement,
+            rule=self.tool_rule,
+            tilt=self.tilt,
+            lead=self.lead,
+            direction=self.direction,
+            start_fraction=(
+                self.start_fraction if self.start_fraction >= 0 else None
+            ),
+        )
+
+    def check_mesh(self, tool):
+        """One ConfigError naming the field if the part's file, its edge
+        near ``near`` or the cutter's path along it cannot be built."""
+        try:
+            part, _, distance = self.mesh_edge()
+        except ValueError as e:
+            field = "edge.units" if "unknown units" in str(e) else "edge.file"
+            value = self.units if field == "edge.units" else self.file
+            raise ConfigError(f"{field} = {value!r} is invalid: {e}") from None
+        size = float(part.mesh.scale)
+        _require(
+            distance <= self.NEAR_SHARE * size,
+            "edge.near",
+            self.near,
+            f"a point (m, part frame) near an edge of the part: the nearest "
+            f"is {distance:.4g} m away, the part {size:.4g} m across (near "
+            "is in metres, in the part's frame, not the world's)",
+        )
+        try:
+            self.mesh_path(tool)
+        except ValueError as e:
+            message = str(e)
+            field, value = "edge.tilt", self.tilt
+            if "lead" in message:
+                field, value = "edge.lead", self.lead
+            elif "pass is empty" in message:
+                field, value = "edge.start_fraction", self.start_fraction
+            raise ConfigError(
+                f"{field} = {value!r} is invalid: {message}"
+            ) from None
 
     def check_profile(self, tube, tool, part_error):
         """One ConfigError naming the field if the profile, the cutter's
@@ -257,10 +392,10 @@ class EdgeConfig:
         _require(
             isinstance(fraction, (int, float))
             and (fraction == -1 or 0 <= fraction < 1)
-            and (fraction == -1 or self.kind == "profile"),
+            and (fraction == -1 or self.kind in ("profile", "mesh")),
             "edge.start_fraction",
             fraction,
-            "-1 or a number in [0, 1) (a profile edge only)",
+            "-1 or a number in [0, 1) (a profile or mesh edge only)",
         )
         _require(
             vertex == -1 or fraction == -1,
@@ -276,6 +411,56 @@ class EdgeConfig:
             self.start_angle,
             f"0 while edge.{placed} places the start (one of start_angle, "
             "start_vertex, start_fraction)",
+        )
+
+    def _check_mesh_fields(self):
+        """The mesh edge's fields (numbers checked whatever the kind)."""
+        _vector("edge", "near", self.near, 3, _finite)
+        self.pose.validate("edge.pose")
+        for name in ("tilt", "lead"):
+            v = getattr(self, name)
+            _require(
+                isinstance(v, (int, float))
+                and math.isfinite(v)
+                and abs(v) < 0.5 * math.pi,
+                f"edge.{name}",
+                v,
+                "a number in (-pi/2, pi/2) rad",
+            )
+        _require(
+            isinstance(self.sharp_angle, (int, float))
+            and 0.0 < self.sharp_angle < math.pi,
+            "edge.sharp_angle",
+            self.sharp_angle,
+            "a number in (0, pi) rad",
+        )
+        if self.kind != "mesh":
+            return
+        _require(
+            self.units in UNITS,
+            "edge.units",
+            self.units,
+            f"one of {', '.join(UNITS)}",
+        )
+        _require(
+            self.tool_rule in self.TOOL_RULES,
+            "edge.tool_rule",
+            self.tool_rule,
+            "left or right (the bisector leaves n1 undefined: the cutter's "
+            "side would face neither face)",
+        )
+        _require(
+            self.start_angle == 0,
+            "edge.start_angle",
+            self.start_angle,
+            "0 for a mesh edge (edge.start_fraction places its start)",
+        )
+        _require(
+            isinstance(self.file, str) and self.mesh_file().is_file(),
+            "edge.file",
+            self.file,
+            "an STL, OBJ or STEP file relative to the scenario file, or "
+            f"the name of one in {parts_folder()}: no such file",
         )
 
     def validate(self):
@@ -310,6 +495,7 @@ class EdgeConfig:
             f"one of {self.SIDES}",
         )
         self._check_start()
+        self._check_mesh_fields()
         if self.kind != "profile":
             return
         _require(

@@ -192,7 +192,24 @@ class Scenario:
         )
         if self.edge.kind == "profile":
             self.edge.check_profile(self.tube, self.tool, self.part_error)
+        if self.edge.kind == "mesh":
+            self._check_mesh_edge()
         self._check_burrs()
+
+    def _check_mesh_edge(self):
+        """A mesh edge's part and path; what it does not support yet."""
+        e = self.part_error
+        later = "0 with edge.kind mesh (not supported yet)"
+        _require(not any(e.offset), "part_error.offset", e.offset, later)
+        _require(e.yaw == 0.0, "part_error.yaw", e.yaw, later)
+        _require(e.radius == 0.0, "part_error.radius", e.radius, later)
+        step = self.faults.part_step
+        _require(not step.active(), "faults.part_step.time", step.time, later)
+        off = "false with edge.kind mesh (not supported yet)"
+        for name in ("probe", "online"):
+            enabled = getattr(self.localisation, name).enabled
+            _require(not enabled, f"localisation.{name}.enabled", enabled, off)
+        self.edge.check_mesh(self.tool)
 
     def _check_burrs(self):
         """Each burr fits on the edge, under the cutter and on the wall (a
@@ -581,6 +598,16 @@ def _resolve_robot_model(robot: RobotConfig, directory: Path):
     robot.packages = {k: resolved(v) for k, v in robot.packages.items()}
 
 
+def _resolve_edge_file(edge: EdgeConfig, directory: Path):
+    """A relative part file in a scenario file is relative to that file (a
+    bare name not found there may be a shipped part: EdgeConfig looks)."""
+    if not edge.file or Path(edge.file).is_absolute():
+        return
+    candidate = directory / edge.file
+    if candidate.is_file():
+        edge.file = str(candidate.resolve())
+
+
 def _base_of(source: str, path: Path, depth: int = 0) -> Scenario:
     """The defaults a scenario file starts from: its ``base`` scenario
     (a shipped name or a file relative to it), or the dataclasses'
@@ -609,6 +636,7 @@ def _base_of(source: str, path: Path, depth: int = 0) -> Scenario:
         filename=str(base_path), defaults=_base_of(text, base_path, depth + 1)
     )
     _resolve_robot_model(scenario.robot, base_path.parent)
+    _resolve_edge_file(scenario.edge, base_path.parent)
     robot = data.get("robot")
     if isinstance(robot, dict) and "model" in robot:
         # A robot section that names its model describes that arm whole:
@@ -640,6 +668,7 @@ def load_scenario(
             scenario = _base_of(source, path)
             scenario = yaml_load_typed(filename=str(path), defaults=scenario)
             _resolve_robot_model(scenario.robot, path.parent)
+            _resolve_edge_file(scenario.edge, path.parent)
         if text:
             _check_yaml(text, "--scenario-text")
             scenario = yaml_load_typed(data=text, defaults=scenario)

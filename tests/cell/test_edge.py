@@ -51,3 +51,34 @@ def test_believed_profile_moved_turned_and_grown():
     assert believed_contour(boss).length - make_contour(
         boss
     ).length == pytest.approx(2 * math.pi * 0.0005)
+
+
+def test_the_papers_tube_as_a_mesh_edge_is_the_papers_circle():
+    """tube.stl (the paper's bore, mm) at the paper's tube.position, the
+    tool along the top face's normal, the pass started half its loop on
+    (the loop starts at polar angle pi): the paper's contour."""
+    paper = load_scenario("paper")
+    sc = load_scenario(
+        "paper",
+        text="edge: {kind: mesh, file: tube.stl, units: mm, "
+        "near: [0.03, 0.0, 0.05], pose: {xyz: [0.4, 0.0, 0.0]}, "
+        "tool_rule: right, start_fraction: 0.5}",
+    )
+    mesh, circle = make_contour(sc), make_contour(paper)
+    assert mesh.varying_frame and not circle.varying_frame
+    assert mesh.length == pytest.approx(circle.length, rel=1e-6)
+    arc = np.linspace(0.0, circle.length, 24, endpoint=False)
+    for s in arc:
+        np.testing.assert_allclose(
+            mesh.point_at(s), circle.point_at(s), atol=2e-6
+        )
+    np.testing.assert_allclose(
+        start_position(sc), start_position(paper), atol=2e-6
+    )
+    np.testing.assert_allclose(
+        edge_points(sc, arc), edge_points(paper, arc), atol=2e-6
+    )
+    believed = believed_contour(sc)
+    np.testing.assert_allclose(
+        believed.point_at(0.3), mesh.point_at(0.3), atol=0
+    )

@@ -1,0 +1,563 @@
+"""The tool's path along a 3-D edge of a part (pure numpy/scipy).
+
+An ``EdgeContour`` is the ``Contour`` of an ``EdgeCurve``: the zero-depth
+path of the cutter tip's centre as the planar contours' path is, but in 3-D
+with a frame that turns along it. The cutter is a cylinder that cuts with
+its side, its axis a(u) (unit, from the tip towards the holder) set by a
+rule on the edge's faces (``EdgeCurve.tool_axis``). Along the edge c(u):
+
+  * n1(u): unit, perpendicular to a(u) and to the edge's tangent, into the
+    material (on the side of the faces' bisector); the chamfer depth is
+    measured along it;
+  * n2 = the edge's tangent in the traversal direction;
+  * the tool path z(u) = c(u) - r n1(u) - e a(u), r the cutter's radius and
+    e its engagement (the tip that far below the edge along the axis).
+
+For the paper's bore (the tool along the top face's normal) this is the
+circle of radius R - r at height top - e. The cutter's side plane (through
+the edge, containing a and the tangent) must be a supporting plane of the
+part there: a plane that cuts into either face would gouge it, so such a
+rule is refused with the tilt that clears it.
+
+The contour's arc position s is the arc length of the tool path z from the
+start of the pass, in the traversal direction; z, n1, n2 and a are cubic
+splines in s on knots about ``spacing`` apart, and s maps back to the edge's
+arc length u.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from deburr_drake.math.geometry import (
+    Contour,
+    _finite_scalar,
+    _vec3,
+    _vec3_float,
+)
+from deburr_drake.math.mesh_part import (
+    EdgeCurve,
+    MeshPart,
+    choose_edge,
+    load_part,
+    sharp_edges,
+)
+
+__all__ = ["EdgeContour", "Stations", "load_edge"]
+
+_RULES = ("left", "right")
+# rad: how far the side plane may turn into a face before it is a gouge
+# (a faceted mesh's smoothed normals on a 90-degree edge scatter by less)
+_GOUGE_TOLERANCE = 0.02
+# columns of the splines in s: tool point z, n1, n2, axis a, and q (the
+# edge's arc length u less its mean rate, periodic on a loop)
+_Z, _N1, _T, _A, _Q = (
+    slice(0, 3),
+    slice(3, 6),
+    slice(6, 9),
+    slice(9, 12),
+    slice(12, 13),
+)
+
+
+class Stations(NamedTuple):
+    """The edge sampled for the contact mesher: arc positions ``s`` (m, the
+    tool path's), the edge's points (m, world), n1 and the tool axis
+    (unit) and the faces' angle through the material (rad) there."""
+
+    s: np.ndarray
+    points: np.ndarray
+    n1: np.ndarray
+    axis: np.ndarray
+    face_angle: np.ndarray
+
+
+def _unit(v):
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _dot(a, b):
+    return np.einsum("ij,ij->i", a, b)
+
+
+class EdgeContour(Contour):
+    """The path of the tool along the edge ``curve`` (an ``EdgeCurve`` in
+    the world frame, m).
+
+    ``rule`` (left or right: the face whose outward normal the tool axis
+    follows, left and right of the chain's own direction, which for a loop
+    runs counter-clockwise seen from outside), ``tilt`` (rad, about the
+    chain's tangent) and ``lead`` (rad, towards the traversal direction)
+    set the tool axis as ``EdgeCurve.tool_axis`` does. ``direction`` +1
+    runs the chain's own way, -1 the other. The pass starts at
+    ``start_fraction`` of the chain's length from the chain's start, or at
+    the point of the edge nearest ``start_near`` (m); by default at the
+    chain's start (an open chain run backwards: at its end) and, on an
+    open chain, runs to its end.
+
+    ValueError in one line: the bisector rule (n1 undefined: the axis lies
+    in the faces' bisecting plane), a side plane that cuts into a face
+    (naming the arc position and the tilt that clears it), an empty pass.
+    """
+
+    varying_frame = True
+
+    def __init__(
+        self,
+        curve: EdgeCurve,
+        *,
+        cutter_radius: float,
+        engagement: float,
+        rule: str = "left",
+        tilt: float = 0.0,
+        lead: float = 0.0,
+        direction: int = 1,
+        start_fraction: float | None = None,
+        start_near=None,
+        spacing: float = 2.5e-4,
+    ):
+        self._check_arguments(rule, lead, direction, start_fraction)
+        self._curve = curve
+        self._r = _finite_scalar(cutter_radius, "cutter_radius")
+        self._e = _finite_scalar(engagement, "engagement")
+        self._rule, self._tilt, self._lead = rule, float(tilt), float(lead)
+        self._d = int(direction)
+        self._edge_length = curve.length
+        self._closed = curve.closed
+        self._tabulate_path(spacing)
+        self._u0 = self._start_u(start_fraction, start_near)
+        self._check_side_plane()
+        self._fit(spacing)
+
+    # ----- construction -----
+    @staticmethod
+    def _check_arguments(rule, lead, direction, start_fraction):
+        if rule == "bisector":
+            raise ValueError(
+                "the bisector rule leaves n1 undefined (the tool axis lies "
+                "in the faces' bisecting plane, so the cutter's side faces "
+                "neither face): use left or right, with a tilt"
+            )
+        if rule not in _RULES:
+            raise ValueError(
+                f"unknown tool rule {rule!r}: one of {', '.join(_RULES)}"
+            )
+        if not abs(_finite_scalar(lead, "lead")) < 0.5 * math.pi:
+            raise ValueError(f"lead must be within (-pi/2, pi/2), got {lead}")
+        if direction not in (1, -1):
+            raise ValueError(f"direction must be +1 or -1, got {direction}")
+        if start_fraction is not None and not 0.0 <= start_fraction <= 1.0:
+            raise ValueError(
+                f"start_fraction must be in [0, 1], got {start_fraction}"
+            )
+
+    def _geometry(self, u):
+        """At edge arc lengths u (n,): the edge point, the chain's tangent,
+        n1, the axis, the faces' bisector into the material, the faces'
+        left and right outward normals and the faces' angle."""
+        curve = self._curve
+        f = curve.frame(u)
+        axis = curve.tool_axis(u, rule=self._rule, tilt=self._tilt)
+        axis = (
+            math.cos(self._lead) * axis + math.sin(self._lead) * self._d * f.n2
+        )
+        side = _unit(np.cross(f.n2, axis))
+        n1 = side * np.where(_dot(side, f.n1) >= 0.0, 1.0, -1.0)[:, None]
+        return f, n1, axis
+
+    def _tool_points(self, u):
+        f, n1, axis = self._geometry(u)
+        return f.point - self._r * n1 - self._e * axis
+
+    def _tabulate_path(self, spacing):
+        """S(u): the tool path's arc length from u = 0, on a grid of u."""
+        L = self._edge_length
+        n = max(64, math.ceil(L / spacing))
+        u = np.linspace(0.0, L, n + 1)
+        z = self._tool_points(u)
+        if self._closed:
+            z[-1] = z[0]
+        path = CubicSpline(
+            u, z, bc_type="periodic" if self._closed else "not-a-knot"
+        )
+        velocity = path.derivative()
+        g, w = np.polynomial.legendre.leggauss(5)
+        h = np.diff(u)
+        nodes = u[:-1, None] + 0.5 * h[:, None] * (g[None, :] + 1.0)
+        speed = np.linalg.norm(velocity(nodes.ravel()), axis=1)
+        pieces = 0.5 * h * (speed.reshape(nodes.shape) @ w)
+        self._grid_u = u
+        self._grid_S = np.concatenate([[0.0], np.cumsum(pieces)])
+        self._path_u = path
+        self._S = CubicSpline(u, self._grid_S)
+
+    def _S_of(self, u):
+        """The tool path's arc length from u = 0 at unwrapped u (a loop's
+        u beyond its length adds whole turns)."""
+        u = np.asarray(u, float)
+        L, total = self._edge_length, self._grid_S[-1]
+        if not self._closed:
+            return self._S(np.clip(u, 0.0, L))
+        turns = np.floor(u / L)
+        return self._S(u - turns * L) + turns * total
+
+    def _u_of(self, S):
+        """The inverse of ``_S_of``: unwrapped u at path arc lengths S."""
+        S = np.asarray(S, float)
+        L, total = self._edge_length, self._grid_S[-1]
+        turns = np.floor(S / total) if self._closed else 0.0
+        rest = S - turns * total
+        u = np.interp(rest, self._grid_S, self._grid_u)
+        velocity = self._path_u.derivative()
+        for _ in range(3):  # Newton on S(u) = rest, dS/du = |z'(u)|
+            speed = np.linalg.norm(velocity(u), axis=-1)
+            u = np.clip(u - (self._S(u) - rest) / speed, 0.0, L)
+        return u + turns * L
+
+    def _start_u(self, fraction, near):
+        if near is not None:
+            if fraction is not None:
+                raise ValueError(
+                    "start the pass at start_fraction or start_near, not both"
+                )
+            return self._curve.project(_vec3_float(near, "start_near"))
+        if fraction is None:
+            fraction = 1.0 if (self._d < 0 and not self._closed) else 0.0
+        return fraction * self._edge_length
+
+    def _pass_length(self):
+        if self._closed:
+            return float(self._grid_S[-1])
+        S0 = float(self._S_of(self._u0))
+        return self._grid_S[-1] - S0 if self._d > 0 else S0
+
+    def _check_side_plane(self):
+        """The side plane (through the edge, containing the axis and the
+        tangent, its normal n1) is a supporting plane where n1 lies within
+        (pi - face angle) / 2 of the faces' bisector, turning about the
+        tangent: both faces then lie on n1's side of it."""
+        n = max(256, math.ceil(self._edge_length / 2.5e-4))
+        u = np.linspace(0.0, self._edge_length, n, endpoint=self._closed)
+        f, n1, _ = self._geometry(u)
+        off = np.arctan2(
+            _dot(f.n2, np.cross(f.n1, n1)), np.clip(_dot(f.n1, n1), -1, 1)
+        )
+        half = 0.5 * (math.pi - f.face_angle)
+        bad = np.abs(off) > half + _GOUGE_TOLERANCE
+        if not bad.any():
+            return
+        k = int(np.flatnonzero(bad)[0])
+        where = self._d * (self._S_of(u[k]) - self._S_of(self._u0))
+        if self._closed:
+            where %= self._grid_S[-1]
+        angle = math.degrees(f.face_angle[k])
+        into = math.degrees(abs(off[k]) - half[k])
+        lo = float(np.max(-half - off))
+        hi = float(np.min(half - off))
+        if lo > hi:
+            cure = (
+                "no tilt clears it along the whole edge (the faces' angle "
+                f"goes from {math.degrees(f.face_angle.min()):.1f} to "
+                f"{math.degrees(f.face_angle.max()):.1f} deg)"
+            )
+        else:
+            turn = lo if lo > 0.0 else hi
+            tilt = round(self._tilt + turn, 4) + 0.0  # no "-0.0000"
+            cure = (
+                f"a tilt of {tilt:.4f} rad ({math.degrees(tilt):.1f} deg) "
+                "clears it"
+            )
+        raise ValueError(
+            f"the cutter's side plane (tool rule {self._rule}, tilt "
+            f"{self._tilt:g} rad) cuts {into:.1f} deg into a face at arc "
+            f"position {where * 1e3:.2f} mm, where the faces meet at "
+            f"{angle:.1f} deg: {cure}"
+        )
+
+    def _fit(self, spacing):
+        """Splines in s of z, n1, n2, a and q = u - (L_edge / L) d s."""
+        L = self._pass_length()
+        if L <= 1e-9:
+            raise ValueError(
+                "the pass is empty: an open edge run backwards from its start "
+                "(or forwards from its end)"
+            )
+        n = max(16, math.ceil(L / spacing))
+        s = np.linspace(0.0, L, n + 1)
+        u = self._u_of(self._S_of(self._u0) + self._d * s)
+        f, n1, axis = self._geometry(u)
+        z = f.point - self._r * n1 - self._e * axis
+        rate = self._d * self._edge_length / L if self._closed else 0.0
+        data = np.column_stack([z, n1, self._d * f.n2, axis, u - rate * s])
+        if self._closed:
+            data[-1] = data[0]
+        spline = CubicSpline(
+            s, data, bc_type="periodic" if self._closed else "not-a-knot"
+        )
+        self._length = float(L)
+        self._rate = rate
+        self._n = n
+        self._h = L / n
+        self._C = np.ascontiguousarray(np.moveaxis(spline.c, 1, 0))  # n,4,13
+        self._rows = self._C[:, :, _Z].reshape(n, 12).tolist()
+        self._samples = z[:-1] if self._closed else z
+        self._sample_s = s[:-1] if self._closed else s
+        # within this distance of the path its nearest point is the local
+        # one Newton finds from a nearby s (half the least radius)
+        bend = np.linalg.norm(spline(s, 2)[:, _Z], axis=1).max()
+        self._reach = 0.5 / max(bend, 1e-9)
+        self._a0 = axis[0]
+        self._last_s = 0.0
+
+    # ----- evaluation -----
+    def _clamp(self, s):
+        L = self._length
+        if self._closed:
+            s %= L
+            return 0.0 if s >= L else s
+        return min(max(s, 0.0), L)
+
+    def _piece(self, s):
+        k = int(s / self._h)
+        k = min(max(k, 0), self._n - 1)
+        return self._C[k], s - k * self._h
+
+    def _values(self, s):
+        """All 13 columns at a float s (already wrapped or clamped)."""
+        c, x = self._piece(s)
+        return np.dot((x * x * x, x * x, x, 1.0), c)
+
+    def _newton(self, p, s, iterations=12):
+        """s of the path's point nearest p by Newton from s, and the
+        squared distance to it (inf: Newton did not converge).
+        Plain floats: a handful of 3-vectors costs less than numpy calls."""
+        px, py, pz = float(p[0]), float(p[1]), float(p[2])
+        rows, h, last = self._rows, self._h, self._n - 1
+        for _ in range(iterations):
+            k = min(max(int(s / h), 0), last)
+            x = s - k * h
+            ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz = rows[k]
+            rx = ((ax * x + bx) * x + cx) * x + dx - px
+            ry = ((ay * x + by) * x + cy) * x + dy - py
+            rz = ((az * x + bz) * x + cz) * x + dz - pz
+            ux = (3.0 * ax * x + 2.0 * bx) * x + cx
+            uy = (3.0 * ay * x + 2.0 * by) * x + cy
+            uz = (3.0 * az * x + 2.0 * bz) * x + cz
+            g = rx * ux + ry * uy + rz * uz
+            curvature = (
+                ux * ux
+                + uy * uy
+                + uz * uz
+                + rx * (6.0 * ax * x + 2.0 * bx)
+                + ry * (6.0 * ay * x + 2.0 * by)
+                + rz * (6.0 * az * x + 2.0 * bz)
+            )
+            if curvature <= 0.0:
+                return s, math.inf
+            step = g / curvature
+            s_new = self._clamp(s - step)
+            if abs(s_new - s) < 1e-10 or abs(step) < 1e-10:
+                return s_new, rx * rx + ry * ry + rz * rz
+            s = s_new
+        return s, math.inf
+
+    def _locate(self, p):
+        """Arc position of the path's point nearest the float point p:
+        Newton from the last answer when p is within reach of the path
+        there, else from the nearest sample."""
+        s, distance2 = self._newton(p, self._last_s, iterations=6)
+        if distance2 < self._reach * self._reach:
+            self._last_s = s
+            return s
+        d = self._samples - p
+        k = int(np.argmin(np.einsum("ij,ij->i", d, d)))
+        s, _ = self._newton(p, float(self._sample_s[k]))
+        self._last_s = s
+        return s
+
+    def _at(self, p):
+        """(s*, the 13 columns at s*) for a point p (AutoDiff: its value)."""
+        s = self._locate(_vec3_float(p, "p"))
+        return s, self._values(s)
+
+    # ----- Contour -----
+    @property
+    def length(self):
+        return self._length
+
+    @property
+    def closed(self):
+        return self._closed
+
+    @property
+    def height(self):
+        """z of the pass's start (m): a 3-D path has no one height."""
+        return float(self._values(0.0)[2])
+
+    @property
+    def curve(self) -> EdgeCurve:
+        return self._curve
+
+    @property
+    def direction(self) -> int:
+        return self._d
+
+    def phi(self, p):
+        _, v = self._at(p)
+        p = _vec3(p, "p")
+        z, n1 = v[_Z], v[_N1]
+        return -(
+            n1[0] * (p[0] - z[0])
+            + n1[1] * (p[1] - z[1])
+            + n1[2] * (p[2] - z[2])
+        )
+
+    def grad_phi(self, p):
+        _, v = self._at(p)
+        zero = 0.0 * _vec3(p, "p")[0]
+        return zero - v[_N1]
+
+    def n1(self, p):
+        _, v = self._at(p)
+        zero = 0.0 * _vec3(p, "p")[0]
+        return zero + v[_N1]
+
+    def tangent(self, p):
+        _, v = self._at(p)
+        zero = 0.0 * _vec3(p, "p")[0]
+        return zero + v[_T]
+
+    def frame(self, p):
+        p = _vec3_float(p, "p")
+        s = self._locate(p)
+        v = self._values(s)
+        n1 = v[_N1]
+        return n1, v[_T], float(n1 @ (p - v[_Z])), s
+
+    def curvature(self, p):
+        """-z''(s*) . n1: > 0 where the path bends away from the material."""
+        s, v = self._at(p)
+        c, x = self._piece(s)
+        d2 = 6.0 * c[0, _Z] * x + 2.0 * c[1, _Z]
+        return float(-(d2 @ v[_N1]))
+
+    def n1_rate(self, p, v):
+        """n1'(s*) ds*/dt, with ds*/dt = z' . v / (|z'|^2 - (p - z) . z'')
+        from differentiating (z(s*) - p) . z'(s*) = 0."""
+        p = _vec3_float(p, "p")
+        v = _vec3_float(v, "v")
+        s = self._locate(p)
+        c, x = self._piece(s)
+        value = ((c[0] * x + c[1]) * x + c[2]) * x + c[3]
+        d1 = (3.0 * c[0] * x + 2.0 * c[1]) * x + c[2]
+        d2 = 6.0 * c[0] * x + 2.0 * c[1]
+        r = p - value[_Z]
+        rate = (d1[_Z] @ v) / (d1[_Z] @ d1[_Z] - r @ d2[_Z])
+        return d1[_N1] * rate
+
+    def project(self, p):
+        return self._at(p)[1][_Z].copy()
+
+    def arc_position(self, p):
+        return self._at(p)[0]
+
+    def point_at(self, s):
+        s = self._clamp(_finite_scalar(s, "s"))
+        return self._values(s)[_Z].copy()
+
+    # ----- the turning frame -----
+    def tool_axis_at(self, s):
+        """a(s): the tool axis (unit, world) at arc position s."""
+        a = self._values(self._clamp(_finite_scalar(s, "s")))[_A]
+        return a / np.linalg.norm(a)
+
+    def axis_turn(self, s):
+        """Rot_min(a(0) -> a(s)) (3 x 3): the least rotation turning the
+        start's axis onto a(s), about their common normal."""
+        a0, a = self._a0, self.tool_axis_at(s)
+        w = np.cross(a0, a)
+        c = float(a0 @ a)
+        if c <= -1.0 + 1e-12:
+            raise ValueError("the tool axis turns over (a(s) = -a(0))")
+        K = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0]])
+        return np.eye(3) + K + (K @ K) / (1.0 + c)
+
+    def edge_u(self, s):
+        """The edge's arc length u (m, in [0, edge length)) at arc
+        position s."""
+        s = self._clamp(_finite_scalar(s, "s"))
+        u = float(self._values(s)[_Q][0]) + self._rate * s
+        return float(self._curve._u(u))
+
+    def edge_point(self, s):
+        """c(u(s)): the part's edge point (m, world) where the chamfer at
+        arc position s is cut."""
+        return self._curve.point(self.edge_u(s))
+
+    def stations(self, spacing) -> Stations:
+        """The pass's edge sampled about ``spacing`` (m) apart along the
+        edge, in the traversal direction (a loop: its last station is not
+        the first again)."""
+        spacing = _finite_scalar(spacing, "spacing")
+        if spacing <= 0.0:
+            raise ValueError(f"spacing must be > 0, got {spacing}")
+        L = self._edge_length
+        S0 = float(self._S_of(self._u0))
+        if self._closed:
+            n = max(8, round(L / spacing))
+            u = self._u0 + self._d * L * np.arange(n) / n
+        else:
+            end = L if self._d > 0 else 0.0
+            n = max(1, math.ceil(abs(end - self._u0) / spacing))
+            u = np.linspace(self._u0, end, n + 1)
+        s = self._d * (self._S_of(u) - S0)
+        if self._closed:
+            s = np.mod(s, self._length)
+            s[0] = 0.0
+        f, n1, axis = self._geometry(self._curve._u(u))
+        return Stations(s, f.point, n1, axis, f.face_angle)
+
+
+@functools.lru_cache(maxsize=8)
+def _part(path, mtime, units, xyz, rpy):
+    return load_part(path, units=units, xyz=xyz, rpy=rpy)
+
+
+@functools.lru_cache(maxsize=16)
+def _edge(path, mtime, units, xyz, rpy, sharp_angle, near):
+    part = _part(path, mtime, units, xyz, rpy)
+    chains = sharp_edges(part, min_angle=sharp_angle)
+    if not chains:
+        raise ValueError(
+            f"{path}: no edge sharper than {sharp_angle:g} rad on the part"
+        )
+    world = part.to_world(near)
+    chain = choose_edge(chains, near=world)
+    return part, EdgeCurve(chain), chain.distance(world)
+
+
+def load_edge(
+    path, *, units="m", xyz=(0, 0, 0), rpy=(0, 0, 0), sharp_angle, near
+) -> tuple[MeshPart, EdgeCurve, float]:
+    """The part in ``path`` placed by ``xyz`` (m) and ``rpy`` (rad) as
+    ``load_part`` places it, the ``EdgeCurve`` of its edge (dihedral over
+    ``sharp_angle``, rad) nearest the point ``near`` (m, in the part
+    frame), and that edge's distance from ``near`` (m). Each part and edge
+    is read once per file version (the file's modification time)."""
+    path = Path(path)
+    mtime = path.stat().st_mtime_ns if path.is_file() else 0
+    return _edge(
+        str(path),
+        mtime,
+        units,
+        tuple(float(x) for x in xyz),
+        tuple(float(x) for x in rpy),
+        float(sharp_angle),
+        tuple(float(x) for x in near),
+    )

@@ -1,0 +1,104 @@
+"""``edge.kind: mesh``: the part's file found relative to the scenario
+file, and one line naming the field for each thing that is wrong."""
+
+import math
+from pathlib import Path
+import shutil
+
+import pytest
+import trimesh
+
+from deburr_drake.config import ConfigError, load_scenario
+
+PARTS = Path(__file__).resolve().parents[2] / "models" / "parts"
+BORE = 2 * math.pi * (0.030 - 0.003)  # the paper's cutter path
+
+
+@pytest.fixture(scope="module")
+def scenario_file(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("job")
+    (folder / "parts").mkdir()
+    shutil.copy(PARTS / "tube.stl", folder / "parts" / "tube.stl")
+    path = folder / "tube.yaml"
+    path.write_text(
+        "base: paper\n"
+        "edge:\n"
+        "  kind: mesh\n"
+        "  file: parts/tube.stl\n"
+        "  units: mm\n"
+        "  near: [0.03, 0.0, 0.05]\n"
+        "  pose: {xyz: [0.0, 0.0, 0.0], rpy: [0.0, 0.0, 0.0]}\n"
+        "  tool_rule: right\n"
+    )
+    return path
+
+
+def test_the_file_is_found_beside_the_scenario(scenario_file, tmp_path):
+    scenario = load_scenario(scenario_file)
+    assert scenario.edge.file == str(scenario_file.parent / "parts/tube.stl")
+    length = scenario.edge.path_length(scenario.tube, scenario.tool)
+    assert length == pytest.approx(BORE, rel=1e-6)
+    # a scenario elsewhere that starts from it keeps the base's part
+    child = tmp_path / "child.yaml"
+    child.write_text(f"base: {scenario_file}\nedge: {{direction: -1}}\n")
+    assert load_scenario(child).edge.file == scenario.edge.file
+    # a bare name not beside the file: a shipped part
+    shipped = load_scenario(scenario_file, text="edge: {file: tube.stl}")
+    assert shipped.edge.mesh_file() == PARTS / "tube.stl"
+
+
+def _refusal(scenario_file, text):
+    with pytest.raises(ConfigError) as refused:
+        load_scenario(scenario_file, text=text)
+    message = str(refused.value)
+    assert "\n" not in message
+    return message
+
+
+@pytest.mark.parametrize(
+    "text,starts",
+    [
+        ("edge: {file: missing.stl}", "edge.file = 'missing.stl' is invalid"),
+        ("edge: {units: ft}", "edge.units = 'ft' is invalid"),
+        ("edge: {near: [30.0, 0.0, 50.0]}", "edge.near = [30.0, 0.0, 50.0]"),
+        ("edge: {tool_rule: bisector}", "edge.tool_rule = 'bisector'"),
+        ("edge: {pose: {xyz: [0, 0]}}", "edge.pose.xyz = [0.0, 0.0] is"),
+        ("edge: {start_angle: 0.5}", "edge.start_angle = 0.5 is invalid"),
+        ("part_error: {yaw: 0.01}", "part_error.yaw = 0.01 is invalid"),
+        ("part_error: {offset: [0.001, 0, 0]}", "part_error.offset = "),
+        (
+            "faults: {part_step: {time: 1.0, offset: [0.001, 0, 0]}}",
+            "faults.part_step.time = 1.0 is invalid",
+        ),
+        (
+            "localisation: {probe: {enabled: true}}",
+            "localisation.probe.enabled = True is invalid",
+        ),
+    ],
+)
+def test_one_line_naming_the_field(scenario_file, text, starts):
+    message = _refusal(scenario_file, text)
+    assert message.startswith(starts)
+    if "part_error" in text or "faults" in text or "localisation" in text:
+        assert "not supported yet" in message
+
+
+def test_an_open_mesh_is_refused(scenario_file, tmp_path):
+    box = trimesh.creation.box(extents=[0.1, 0.1, 0.1])
+    box.update_faces([True] * 11 + [False])
+    box.export(tmp_path / "open.stl")
+    message = _refusal(
+        scenario_file, f"edge: {{file: {tmp_path / 'open.stl'}, units: m}}"
+    )
+    assert message.startswith("edge.file = ")
+    assert "the mesh is open, not watertight" in message
+
+
+def test_the_wedge_needs_its_tilt(scenario_file):
+    wedge = "edge: {file: wedge.stl, near: [0.04, 0.03, 0.02], tool_rule: left"
+    message = _refusal(scenario_file, wedge + "}")
+    assert message.startswith("edge.tilt = 0.0 is invalid: the cutter's side")
+    assert "a tilt of -0.5236 rad (-30.0 deg) clears it" in message
+    scenario = load_scenario(scenario_file, text=wedge + ", tilt: -0.5236}")
+    length = scenario.edge.path_length(scenario.tube, scenario.tool)
+    assert length == pytest.approx(0.06, rel=1e-6)

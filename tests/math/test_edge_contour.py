@@ -1,0 +1,283 @@
+"""The tool's path along a 3-D edge against closed forms: the paper's bore
+(a CircularContour), a circle in an inclined plane, the 120-degree wedge."""
+
+import math
+from pathlib import Path
+import re
+
+import numpy as np
+import pytest
+import trimesh
+
+from deburr_drake.math.edge_contour import EdgeContour
+from deburr_drake.math.geometry import CircularContour
+from deburr_drake.math.mesh_part import (
+    EdgeCurve,
+    choose_edge,
+    load_part,
+    sharp_edges,
+)
+
+PARTS = Path(__file__).resolve().parents[2] / "models" / "parts"
+R, TOP, r, e = 0.030, 0.050, 0.003, 0.002  # the paper's bore and cutter
+INCLINE = math.radians(30.0)
+HOLE = 0.010
+
+
+def _unit(v):
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+@pytest.fixture(scope="module")
+def bore():
+    """The tube's top inner edge (its loop starts at (-R, 0, TOP) and runs
+    counter-clockwise seen from +z; its right face is the top face)."""
+    part = load_part(PARTS / "tube.stl", units="mm")
+    return EdgeCurve(choose_edge(sharp_edges(part), near=[R, 0.0, TOP]))
+
+
+@pytest.fixture(scope="module")
+def inclined(tmp_path_factory):
+    """A hole of radius 10 mm through a round plate whose top face is
+    tilted 30 degrees about x: the rim is a circle about the origin."""
+    plate = trimesh.creation.annulus(
+        r_min=10.0, r_max=40.0, height=20.0, sections=200
+    )
+    plate.apply_translation([0.0, 0.0, -10.0])
+    plate.apply_transform(
+        trimesh.transformations.rotation_matrix(INCLINE, [1, 0, 0])
+    )
+    path = tmp_path_factory.mktemp("parts") / "plate.stl"
+    plate.export(path)
+    part = load_part(path, units="mm")
+    return EdgeCurve(choose_edge(sharp_edges(part), near=[HOLE, 0.0, 0.0]))
+
+
+@pytest.fixture(scope="module")
+def wedge():
+    part = load_part(PARTS / "wedge.stl", units="mm")
+    return EdgeCurve(choose_edge(sharp_edges(part), near=[0.04, 0.03, 0.02]))
+
+
+def _bore_contour(curve, **kwargs):
+    return EdgeContour(
+        curve, cutter_radius=r, engagement=e, rule="right", **kwargs
+    )
+
+
+def _near_path(circle, rng, n=200):
+    """Points near the circle's path: off it by up to 0.5 mm in depth and
+    0.3 mm along the axis."""
+    s = rng.uniform(0.0, circle.length, n)
+    out = []
+    for si in s:
+        p = circle.point_at(si)
+        p = p + rng.uniform(-5e-4, 5e-4) * circle.n1(p)
+        out.append(p + [0.0, 0.0, rng.uniform(-3e-4, 3e-4)])
+    return out
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+def test_the_bore_is_the_papers_circle(bore, direction):
+    contour = _bore_contour(bore, direction=direction)
+    circle = CircularContour(
+        [0.0, 0.0, TOP - e], R - r, start_angle=math.pi, direction=direction
+    )
+    assert contour.closed and contour.varying_frame
+    assert contour.length == pytest.approx(circle.length, rel=1e-6)
+    assert contour.height == pytest.approx(TOP - e, abs=1e-9)
+    for s in np.linspace(0.0, circle.length, 37):
+        np.testing.assert_allclose(
+            contour.point_at(s), circle.point_at(s), atol=2e-6
+        )
+        np.testing.assert_allclose(
+            contour.tool_axis_at(s), [0, 0, 1], atol=1e-5
+        )
+        np.testing.assert_allclose(contour.axis_turn(s), np.eye(3), atol=1e-5)
+    for p in _near_path(circle, np.random.default_rng(3)):
+        n1, t, depth, s = contour.frame(p)
+        n1c, tc, depthc, sc = circle.frame(p)
+        np.testing.assert_allclose(n1, n1c, atol=1e-5)
+        np.testing.assert_allclose(t, tc, atol=1e-5)
+        assert depth == pytest.approx(depthc, abs=2e-6)
+        gap = (s - sc + 0.5 * circle.length) % circle.length
+        assert gap - 0.5 * circle.length == pytest.approx(0.0, abs=2e-6)
+        assert contour.phi(p) == pytest.approx(circle.phi(p), abs=2e-6)
+        assert contour.depth(p) == pytest.approx(depth, abs=1e-12)
+        np.testing.assert_allclose(contour.n1(p), n1, atol=1e-15)
+        np.testing.assert_allclose(
+            contour.project(p), circle.project(p), 0, 2e-6
+        )
+        assert contour.curvature(p) == pytest.approx(1 / (R - r), rel=1e-3)
+        v = np.array([0.01, -0.02, 0.003])
+        np.testing.assert_allclose(
+            contour.n1_rate(p, v), circle.n1_rate(p, v), atol=1e-3 * 1.0
+        )
+
+
+def test_the_bore_edge_points_and_stations(bore):
+    contour = _bore_contour(bore)
+    for s in np.linspace(0.0, contour.length, 13):
+        angle = math.pi + s / (R - r)
+        np.testing.assert_allclose(
+            contour.edge_point(s),
+            [R * math.cos(angle), R * math.sin(angle), TOP],
+            atol=2e-6,
+        )
+    st = contour.stations(1e-3)
+    n = len(st.s)
+    assert n == round(2 * math.pi * R / 1e-3)
+    assert st.s[0] == 0.0 and np.all(np.diff(st.s) > 0)
+    np.testing.assert_allclose(
+        st.s, np.arange(n) * contour.length / n, atol=2e-6
+    )
+    radial = _unit(st.points * [1, 1, 0])
+    np.testing.assert_allclose(np.hypot(*st.points[:, :2].T), R, atol=1e-6)
+    np.testing.assert_allclose(st.n1, radial, atol=1e-5)
+    np.testing.assert_allclose(st.axis, np.tile([0, 0, 1.0], (n, 1)), 0, 1e-5)
+    np.testing.assert_allclose(st.face_angle, math.pi / 2, atol=1e-6)
+
+
+def test_the_start_and_a_far_jump(bore):
+    quarter = _bore_contour(bore, start_fraction=0.25)
+    np.testing.assert_allclose(
+        quarter.point_at(0.0), [0.0, -(R - r), TOP - e], atol=2e-6
+    )
+    near = _bore_contour(bore, start_near=[0.0, R, TOP], direction=-1)
+    np.testing.assert_allclose(
+        near.point_at(0.0), [0.0, R - r, TOP - e], atol=2e-6
+    )
+    np.testing.assert_allclose(
+        near.point_at(0.5 * math.pi * (R - r)),
+        [R - r, 0.0, TOP - e],
+        atol=2e-6,
+    )
+    # after a point near the start, a point across the bore: the warm
+    # start must not keep it on the near side
+    contour = _bore_contour(bore)
+    contour.frame(np.array([-(R - r), 0.001, TOP - e]))
+    s = contour.arc_position(np.array([R - r, 0.001, TOP - e]))
+    assert s == pytest.approx(0.5 * contour.length + 0.001, abs=1e-5)
+
+
+@pytest.mark.parametrize("tilt", [0.0, 0.2])
+def test_a_circle_in_an_inclined_plane(inclined, tilt):
+    """The tool along the top face's normal N, tilted about the tangent:
+    a = cos N + sin rho_hat, n1 = cos rho_hat - sin N, so the path is the
+    circle of radius R - r cos - e sin about (r sin - e cos) N."""
+    contour = EdgeContour(
+        inclined, cutter_radius=r, engagement=e, rule="right", tilt=tilt
+    )
+    normal = np.array([0.0, -math.sin(INCLINE), math.cos(INCLINE)])
+    c, s_ = math.cos(tilt), math.sin(tilt)
+    radius = HOLE - r * c - e * s_
+    center = (r * s_ - e * c) * normal
+    assert contour.length == pytest.approx(2 * math.pi * radius, rel=1e-6)
+    st = contour.stations(5e-4)
+    rho = _unit(st.points)
+    np.testing.assert_allclose(st.axis, c * normal + s_ * rho, atol=2e-5)
+    np.testing.assert_allclose(st.n1, c * rho - s_ * normal, atol=2e-5)
+    a0 = contour.tool_axis_at(0.0)
+    for s in np.linspace(0.0, contour.length, 25):
+        z = contour.point_at(s)
+        assert (z - center) @ normal == pytest.approx(0.0, abs=1e-8)
+        assert np.linalg.norm(z - center) == pytest.approx(radius, abs=1e-7)
+        turn = contour.axis_turn(s)
+        np.testing.assert_allclose(turn @ turn.T, np.eye(3), atol=1e-12)
+        np.testing.assert_allclose(turn @ a0, contour.tool_axis_at(s), 0, 1e-12)
+        # the least rotation: about a normal of both axes
+        axis = np.cross(a0, contour.tool_axis_at(s))
+        np.testing.assert_allclose(turn @ axis, axis, atol=1e-12)
+        p = z + 3e-4 * contour.n1(z)
+        assert contour.depth(p) == pytest.approx(3e-4, abs=1e-9)
+        L = contour.length
+        gap = (contour.arc_position(p) - s + 0.5 * L) % L - 0.5 * L
+        assert gap == pytest.approx(0.0, abs=1e-7)
+
+
+def test_the_wedge_needs_the_tilt_the_refusal_names(wedge):
+    with pytest.raises(ValueError) as refused:
+        EdgeContour(wedge, cutter_radius=r, engagement=e, rule="left")
+    message = str(refused.value)
+    assert "\n" not in message
+    assert "cuts 30.0 deg into a face at arc position" in message
+    assert "the faces meet at 120.0 deg" in message
+    tilt = float(re.search(r"a tilt of (\S+) rad \((\S+) deg\)", message)[1])
+    assert abs(tilt) == pytest.approx(math.pi / 6, abs=1e-3)
+    contour = EdgeContour(
+        wedge, cutter_radius=r, engagement=e, rule="left", tilt=tilt
+    )
+    assert not contour.closed
+    assert contour.length == pytest.approx(0.06, rel=1e-6)
+    # the side plane now lies in the sloped face (n1 its inward normal)
+    # and the axis is 30 degrees off the top face's normal
+    slope = np.array([math.sin(math.pi / 3), 0.0, math.cos(math.pi / 3)])
+    st = contour.stations(1e-3)
+    np.testing.assert_allclose(st.n1 @ slope, -1.0, atol=1e-5)
+    np.testing.assert_allclose(st.axis[:, 2], math.cos(math.pi / 6), 0, 1e-3)
+    np.testing.assert_allclose(st.face_angle, 2 * math.pi / 3, atol=1e-6)
+    # an open edge: s runs from one end to the other, beyond them clamped
+    np.testing.assert_allclose(
+        contour.edge_point(0.0), [0.04, 0, 0.02], 0, 1e-9
+    )
+    np.testing.assert_allclose(
+        contour.point_at(-1.0), contour.point_at(0.0), atol=0
+    )
+    back = EdgeContour(
+        wedge,
+        cutter_radius=r,
+        engagement=e,
+        rule="left",
+        tilt=tilt,
+        direction=-1,
+    )
+    np.testing.assert_allclose(
+        back.edge_point(0.0), [0.04, 0.06, 0.02], 0, 1e-9
+    )
+    np.testing.assert_allclose(
+        back.tangent(back.point_at(0.01)), [0, -1, 0], 0, 1e-9
+    )
+
+
+def test_refusals_are_one_line(wedge, bore):
+    with pytest.raises(ValueError, match="bisector rule leaves n1 undefined"):
+        EdgeContour(bore, cutter_radius=r, engagement=e, rule="bisector")
+    with pytest.raises(ValueError, match="unknown tool rule"):
+        EdgeContour(bore, cutter_radius=r, engagement=e, rule="top")
+    with pytest.raises(ValueError, match="the pass is empty"):
+        EdgeContour(
+            wedge,
+            cutter_radius=r,
+            engagement=e,
+            rule="left",
+            tilt=-0.53,
+            start_fraction=1.0,
+        )
+    # the tool along the bore wall's normal (horizontal) cuts with its
+    # side in the top face's plane: tilted, it gouges the top face
+    with pytest.raises(ValueError, match=r"a tilt of 0\.0000 rad"):
+        EdgeContour(bore, cutter_radius=r, engagement=e, rule="left", tilt=0.5)
+
+
+def test_autodiff_inputs(bore):
+    ad = pytest.importorskip("pydrake.autodiffutils")
+    contour = _bore_contour(bore)
+    p0 = np.array([0.010, 0.025, TOP - e + 1e-4])
+    p = ad.InitializeAutoDiff(p0).reshape(-1)
+    d = contour.depth(p)
+    assert d.value() == pytest.approx(contour.depth(p0), abs=1e-15)
+    np.testing.assert_allclose(d.derivatives(), contour.n1(p0), atol=1e-15)
+    np.testing.assert_allclose(
+        ad.ExtractValue(contour.n1(p)).reshape(-1), contour.n1(p0)
+    )
+    np.testing.assert_allclose(
+        ad.ExtractValue(contour.grad_phi(p)).reshape(-1), -contour.n1(p0)
+    )
+    v = np.array([ad.AutoDiffXd(x) for x in (0.01, 0.0, 0.0)])
+    np.testing.assert_allclose(
+        ad.ExtractValue(contour.n2(p, v, 1e-6)).reshape(-1),
+        contour.n2(p0, ad.ExtractValue(v).reshape(-1), 1e-6),
+    )
+    assert contour.depth_rate(p, v).value() == pytest.approx(
+        contour.n1(p0)[0] * 0.01
+    )
