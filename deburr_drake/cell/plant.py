@@ -21,7 +21,6 @@ from deburr_drake.cell.part import (
 from deburr_drake.cell.robot import add_robot, finalize
 from deburr_drake.cell.tube_mesh import band_width_limit, sag_spacing
 from deburr_drake.config import Scenario
-from deburr_drake.math.mesh_part import load_part
 
 __all__ = ["add_cell_plant"]
 
@@ -171,9 +170,4 @@ def _add_mesh_edge(plant, scenario: Scenario):
         n_radial=tube.mesh_radial_cells,
         n_z=tube.mesh_height_cells,
     )
-    register_part_visual(
-        plant,
-        load_part(
-            edge.file, units=edge.units, xyz=edge.pose.xyz, rpy=edge.pose.rpy
-        ),
-    )
+    register_part_visual(plant, edge.mesh_edge()[0])
