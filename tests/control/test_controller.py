@@ -166,6 +166,14 @@ def test_integral_on_a_pd_axis(model):
     np.testing.assert_array_equal(
         controller.theta(context), base.theta(base_context)
     )
+    # fuzzy_weight 0 (touch probing) freezes theta, not the integral
+    weighted = HybridController(
+        model, "tool_tip", config, fuzzy_weight_input=True
+    )
+    ctx = _context(weighted, {**inputs, "fuzzy_weight": [0.0]}, 3e-4)
+    frozen = weighted.EvalTimeDerivatives(ctx).CopyToVector()
+    np.testing.assert_array_equal(frozen[1:n], 0.0)
+    assert frozen[n] == pytest.approx(s[2])
 
 
 def test_fuzzy_term_and_adaptation(model):
