@@ -286,6 +286,15 @@ class ControllerConfig:
     sliding_gain: List[float] = field(
         default_factory=lambda: [400.0, 400.0, 800.0]
     )  # N s/m, K
+    # On an axis without a fuzzy term (R9's PD axes, x3 by default),
+    # f_tau_k gets K_k lambda_I,k int s_k dt: K lambda e alone leaves a
+    # steady error of (the model's gravity error) / (K lambda) there, and
+    # on x3 that error is the cutter's engagement. 0: none (the paper's
+    # PD). Below lambda_k, so the integral is the slowest of the axis's
+    # modes.
+    integral_lambda: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0]
+    )  # 1/s, lambda_I
     depth_gain: float = 4.0e-4  # m/(N s), k_delta of (7)
     robust_gain: List[float] = field(
         default_factory=lambda: [2.0, 2.0]
@@ -361,6 +370,7 @@ class ControllerConfig:
         )
         _vector(o, "sliding_lambda", self.sliding_lambda, 3, _positive)
         _vector(o, "sliding_gain", self.sliding_gain, 3, _positive)
+        self._validate_integral(o)
         _non_negative(o, "control_period", self.control_period)
         _vector(o, "orientation_lambda", self.orientation_lambda, 3, _positive)
         _vector(o, "orientation_gain", self.orientation_gain, 3, _non_negative)
@@ -368,6 +378,25 @@ class ControllerConfig:
         _non_negative(o, "null_space_stiffness", self.null_space_stiffness)
         _non_negative(o, "null_space_damping", self.null_space_damping)
         self.fuzzy.validate_rule_base()
+
+    def _validate_integral(self, o):
+        _vector(o, "integral_lambda", self.integral_lambda, 3, _non_negative)
+        for k, (rate, lam) in enumerate(
+            zip(self.integral_lambda, self.sliding_lambda)
+        ):
+            _require(
+                rate == 0.0 or k not in self.fuzzy.axes,
+                f"{o}.integral_lambda[{k}]",
+                rate,
+                "0 on a fuzzy axis (its compensator learns the steady "
+                "force there)",
+            )
+            _require(
+                rate < lam,
+                f"{o}.integral_lambda[{k}]",
+                rate,
+                f"a number below sliding_lambda[{k}] = {lam}",
+            )
 
     def _validate_fuzzy(self):
         # robust_gain and robust_boundary_layer are R10's H_bar, the fuzzy

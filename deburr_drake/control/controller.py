@@ -128,7 +128,9 @@ def HybridController_(T):
         - Continuous state: delta_d (m), then theta_k ((2 Upsilon + 1)^2
           values, N) for each fuzzy axis, row-major in (i, j). Every law
           has them; only ``fuzzy`` adapts theta, and the constant-feed
-          laws leave delta_d alone.
+          laws leave delta_d alone; then int s_k dt (m) on each axis k
+          with ``integral_lambda`` > 0 (f_tau_k + K_k lambda_I,k int s_k,
+          after the law's f_tau).
         - With ``control_period`` T > 0 the law runs as the paper's digital
           inner loop: at t = kT (and at initialization) it is evaluated once
           from the inputs and a discrete state holds the actuation, the
@@ -205,8 +207,10 @@ def HybridController_(T):
             # The sliding variables, orientation and posture every law
             # shares.
             self._set_shared_gains(desired_rotation, posture, contour)
-            # State [delta_d, theta], the inputs, the outputs.
-            n_states = 1 + len(self._axes) * self._n_rules
+            # State [delta_d, theta, int s on the integral axes], the
+            # inputs, the outputs.
+            self._n_theta = len(self._axes) * self._n_rules
+            n_states = 1 + self._n_theta + len(self._integral_axes)
             self.DeclareContinuousState(n_states)
             self._ports = self._declare_inputs(fuzzy_weight_input)
             self._declare_outputs(n_states)
@@ -243,6 +247,13 @@ def HybridController_(T):
         def _set_shared_gains(self, desired_rotation, posture, contour):
             c = self._config
             self._lambda = np.asarray(c.sliding_lambda, float)
+            self._integral_axes = [
+                k for k, rate in enumerate(c.integral_lambda) if rate > 0
+            ]
+            self._K_integral = (
+                np.asarray(c.sliding_gain, float)
+                * np.asarray(c.integral_lambda, float)
+            )[self._integral_axes]
             self._desired_rotation = (
                 np.eye(3)
                 if desired_rotation is None
@@ -338,7 +349,12 @@ def HybridController_(T):
         def theta(self, context):
             """(n_fuzzy_axes, (2 Upsilon + 1)^2) array of the rule weights."""
             x = context.get_continuous_state_vector().CopyToVector()
-            return x[1:].reshape(len(self._axes), self._n_rules)
+            return self._theta_of(x)
+
+        def _theta_of(self, x):
+            return x[1 : 1 + self._n_theta].reshape(
+                len(self._axes), self._n_rules
+            )
 
         def depth_reference(self, context):
             """delta_d (m)."""
@@ -382,11 +398,12 @@ def HybridController_(T):
                     e=e,
                     edot=edot,
                     s=s,
-                    theta=x[1:].reshape(len(self._axes), self._n_rules),
+                    theta=self._theta_of(x),
                     fuzzy_weight=p.get("fuzzy_weight"),
                 ),
                 rates,
             )
+            force = self._with_integral(force, x, s, rates)
             # Joint torques.
             tau = self._joint_torque(
                 p["plant_state"],
@@ -409,6 +426,18 @@ def HybridController_(T):
                     zeta=force.zeta,
                 ),
             )
+
+        def _with_integral(self, force, x, s, rates):
+            """f_tau + K lambda_I int s on the integral axes, whose states
+            integrate s."""
+            axes = self._integral_axes
+            if not axes:
+                return force
+            start = 1 + self._n_theta
+            rates[start:] = s[axes]
+            f_tau = force.f_tau.copy()
+            f_tau[axes] = f_tau[axes] + self._K_integral * x[start:]
+            return force._replace(f_tau=f_tau)
 
         def _rotation_at(self, chamfer):
             """R_d where the chamfer state's tool point is."""

@@ -268,10 +268,11 @@ class FuzzyLaw(ControlLaw):
         """u_f and the rates (35) scaled by w; theta frozen while w <= 0
         (touch probing: the travel between touches is not the cutting the
         rules learn)."""
+        theta = slice(1, 1 + len(self._axes) * self._n_rules)
         if w <= 0.0:
-            rates[1:] = 0.0
+            rates[theta] = 0.0
         elif w < 1.0:
-            rates[1:] = w * rates[1:]
+            rates[theta] = w * rates[theta]
         for axis in self._axes:
             if zeta[axis] == 1.0:
                 u_fuzzy[axis] = w * u_fuzzy[axis]

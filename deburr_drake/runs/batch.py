@@ -95,7 +95,7 @@ class CarriedState:
         controller = diagram.GetSubsystemByName("controller")
         cc = controller.GetMyMutableContextFromRoot(context)
         x = cc.get_continuous_state_vector().CopyToVector()
-        x[1:] = self.theta.ravel()
+        x[1 : 1 + self.theta.size] = self.theta.ravel()
         cc.SetContinuousState(x)
 
 

@@ -127,6 +127,55 @@ def test_control_law_by_hand(model):
     assert derivatives[0] == pytest.approx(dd)
 
 
+def test_integral_on_a_pd_axis(model):
+    """integral_lambda on x3: one more state, int s_3 dt, whose rate is
+    s_3, and f_tau_3 + K_3 lambda_I int s_3; theta and the other axes as
+    without it."""
+    plain = ControllerConfig(control_period=0.0)
+    config = ControllerConfig(
+        control_period=0.0, integral_lambda=[0.0, 0.0, 2.0]
+    )
+    base = HybridController(model, "tool_tip", plain)
+    controller = HybridController(model, "tool_tip", config)
+    n = base.num_continuous_states()
+    assert controller.num_continuous_states() == n + 1
+    x_p, v, force, x_c, v_c, _ = _scenario_point()
+    inputs = _inputs(x_p, v, force, x_c, v_c, 6.0)
+    context = _context(controller, inputs, 3e-4)
+    x = context.get_continuous_state_vector().CopyToVector()
+    x[n] = 1e-4  # m, int s_3 dt
+    context.SetContinuousState(x)
+    base_context = _context(base, inputs, 3e-4)
+    expected = base.GetOutputPort("actuation").Eval(base_context).copy()
+    expected[2] += config.sliding_gain[2] * 2.0 * 1e-4
+    np.testing.assert_allclose(
+        controller.GetOutputPort("actuation").Eval(context),
+        expected,
+        rtol=1e-12,
+    )
+    s = CONTROLLER_DIAGNOSTICS.split(
+        controller.GetOutputPort("diagnostics").Eval(context)
+    )["s"]
+    rates = controller.EvalTimeDerivatives(context).CopyToVector()
+    assert rates[n] == pytest.approx(s[2])
+    np.testing.assert_allclose(
+        rates[:n],
+        base.EvalTimeDerivatives(base_context).CopyToVector(),
+        rtol=1e-12,
+    )
+    np.testing.assert_array_equal(
+        controller.theta(context), base.theta(base_context)
+    )
+    # fuzzy_weight 0 (touch probing) freezes theta, not the integral
+    weighted = HybridController(
+        model, "tool_tip", config, fuzzy_weight_input=True
+    )
+    ctx = _context(weighted, {**inputs, "fuzzy_weight": [0.0]}, 3e-4)
+    frozen = weighted.EvalTimeDerivatives(ctx).CopyToVector()
+    np.testing.assert_array_equal(frozen[1:n], 0.0)
+    assert frozen[n] == pytest.approx(s[2])
+
+
 def test_fuzzy_term_and_adaptation(model):
     """u_f = theta^T nu (30) on the fuzzy axes; theta' = r nu s_Delta (35)
     on the active rules only, zero inside the dead zone (R4)."""
@@ -261,6 +310,23 @@ def test_autodiff_matches_finite_difference(model):
         ),
         (("depth_gain",), -1.0, "controller.depth_gain"),
         (("sliding_gain",), [1.0, 1.0], "controller.sliding_gain"),
+        # a fuzzy axis learns its steady force: no integral there
+        (
+            ("integral_lambda",),
+            [1.0, 0.0, 0.0],
+            r"controller.integral_lambda\[0\]",
+        ),
+        # slower than the sliding surface
+        (
+            ("integral_lambda",),
+            [0.0, 0.0, 200.0],
+            r"controller.integral_lambda\[2\]",
+        ),
+        (
+            ("integral_lambda",),
+            [0.0, 0.0, -1.0],
+            r"controller.integral_lambda\[2\]",
+        ),
     ],
 )
 def test_invalid_config_names_the_field(model, path, value, match):
