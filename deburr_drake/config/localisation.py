@@ -46,10 +46,13 @@ class ProbeConfig:
     # (control/probe.py measured_stiffness), the depth at detection is
     # modelled with it. 0: stop at force_threshold, contact_stiffness.
     stiffness_threshold: float = 3.0
-    # -, n of the contact's F = c depth^n between the two thresholds
-    # (1: linear; the hydroelastic ring under the cutter: 1.38,
-    # cell/part.py measure_normal_force from 0.2 to 0.4 mm).
-    contact_exponent: float = 1.38
+    # The contact's law F = c depth^n exp(-b depth): its local exponent
+    # n - b depth falls with depth, so a soft part, touched deeper, is
+    # not read with the exponent of a stiff one. -, n (1, b 0: linear);
+    # 1/m, b. The hydroelastic ring under the cutter: 1.54 and 412,
+    # cell/part.py measure_normal_force from 0.1 to 0.9 mm within 0.2 %.
+    contact_exponent: float = 1.54
+    contact_exponent_slope: float = 412.0
     # N/m, the contact stiffness (threshold / depth at the threshold) the
     # detection depth is modelled with when the touches measured none.
     contact_stiffness: float = 5.0e3
@@ -63,7 +66,7 @@ class ProbeConfig:
     # once the modelled detection depth is taken off: the probe's
     # qualification on a ring of known radius (fitted minus true radius,
     # runs/probe_study.py probe_qualification); taken off every touch.
-    detection_bias: float = -4.6e-6
+    detection_bias: float = -10.3e-6
     # m, a touch off the circle, line or profile most touches agree on by
     # more is dropped: a burr under it (math.fits.fit_consensus)
     max_residual: float = (
@@ -108,6 +111,7 @@ class ProbeConfig:
         ):
             _positive(o, name, getattr(self, name))
         _non_negative(o, "settle_time", self.settle_time)
+        _non_negative(o, "contact_exponent_slope", self.contact_exponent_slope)
         _require(
             isinstance(self.stiffness_threshold, (int, float))
             and math.isfinite(self.stiffness_threshold)

@@ -231,14 +231,25 @@ _CROSSING = 5
 
 
 def measured_stiffness(
-    span: float, threshold: float, second: float, exponent: float
+    span: float,
+    threshold: float,
+    second: float,
+    exponent: float,
+    exponent_slope: float = 0.0,
 ) -> float:
     """N/m: the stiffness F / delta at ``threshold`` (N) of a contact
-    F = c delta^exponent that took ``span`` (m) more depth to reach
-    ``second`` (N): delta = span / ((second / threshold)^(1 / exponent)
-    - 1) at the threshold (linear: the slope (second - threshold) /
-    span)."""
-    ratio = (second / threshold) ** (1.0 / exponent) - 1.0
+    F = c delta^exponent exp(-exponent_slope delta), whose local
+    exponent d ln F / d ln delta = exponent - exponent_slope delta falls
+    with depth (1/m), that took ``span`` (m) more depth to reach
+    ``second`` (N). The depth delta at the threshold solves
+    exponent ln(1 + span / delta) - exponent_slope span = ln(second /
+    threshold); without the slope delta = span / ((second /
+    threshold)^(1 / exponent) - 1) (linear: the slope (second -
+    threshold) / span)."""
+    target = math.log(second / threshold) + exponent_slope * span
+    # ln(1 + span / delta) = target / exponent: one root, the left side
+    # falls from infinity to 0 as delta grows.
+    ratio = math.expm1(target / exponent)
     return threshold * ratio / span
 
 
@@ -682,6 +693,7 @@ class ProbingSequence(LeafSystem):
                         c.force_threshold,
                         c.stiffness_threshold,
                         c.contact_exponent,
+                        c.contact_exponent_slope,
                     )
                     for span in spans
                 ]

@@ -163,7 +163,7 @@ def test_probe_fits_the_size_by_default_with_the_calibrated_bias(name):
     assert probe.fit_radius is True
     # The qualification's mean radius error on the reference ring
     # (docs/localisation.md, The part's real size).
-    assert probe.detection_bias == pytest.approx(-4.6e-6)
+    assert probe.detection_bias == pytest.approx(-10.3e-6)
     assert load_scenario("paper_localised").localisation.probe.fit_radius
 
 

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from deburr_drake.config import ProbeConfig
 from deburr_drake.control.layout import CHAMFER_STATE
@@ -16,6 +17,7 @@ from deburr_drake.control.probe import (
     ProbeGate,
     ProbingSequence,
     detection_depth,
+    measured_stiffness,
     probe_arcs,
     sensor_timing,
 )
@@ -350,8 +352,9 @@ def test_travel_between_touches_stays_off_a_boss():
 @pytest.mark.parametrize("scale", [0.5, 1.0, 1.5])
 def test_the_touches_measure_the_stiffness_they_touch(scale):
     # A bore 0.2 mm larger than drawn whose contact is the ring's
-    # F = c delta^1.38 (3.72 N at 0.5 mm on the paper cell's modulus)
-    # times ``scale`` (the modulus x0.5, x1, x1.5), read through the
+    # F = c delta^p exp(-b delta) (3.72 N at 0.5 mm on the paper cell's
+    # modulus) times ``scale`` (the modulus x0.5, x1, x1.5: the softer
+    # part touched deeper, where the law is less steep), read through the
     # sensor's filter one sample late; the tool follows the command. The
     # configured contact_stiffness is the paper cell's: the measured one
     # finds the radius within 10 um on every modulus.
@@ -360,10 +363,15 @@ def test_the_touches_measure_the_stiffness_they_touch(scale):
     cfg = ProbeConfig(
         points=6, settle_time=0.01, travel_speed=0.05, detection_bias=0.0
     )
-    T, fc, p = 0.0025, 10.0, cfg.contact_exponent
+    T, fc = 0.0025, 10.0
+    p, b = cfg.contact_exponent, cfg.contact_exponent_slope
     timing = sensor_timing(T, fc)
     a = 1 - math.exp(-2 * math.pi * fc * T)
-    c = scale * 3.72 / 5e-4**p
+
+    def law(d):
+        return d**p * math.exp(-b * d)
+
+    c = scale * 3.72 / law(5e-4)
     x0 = believed.point_at(0.0) - cfg.standoff * believed.n1(
         believed.point_at(0.0)
     )
@@ -379,16 +387,40 @@ def test_the_touches_measure_the_stiffness_they_touch(scale):
         d = np.linalg.norm(run.x_p[:2] - [0.4, 0.0]) - real
         n = (run.x_p[:2] - [0.4, 0.0]) / np.linalg.norm(run.x_p[:2] - [0.4, 0])
         run.force = -filtered * np.r_[n, 0.0]
-        filtered += a * (c * max(d, 0.0) ** p - filtered)
+        filtered += a * (c * law(max(d, 0.0)) - filtered)
         approach = run.phase() == "approach"
         run.fix(speed=cfg.approach_speed * np.r_[n, 0.0] if approach else 0)
         run.step()
     assert run.phase() == "done"
     x = run.state()
     assert PROBE_STATE.get(x, "kept") == 6
-    # F / delta at 1 N: (c / F)^(1/p) F.
-    k = cfg.force_threshold * (c / cfg.force_threshold) ** (1 / p)
+    # F / delta at 1 N.
+    F = cfg.force_threshold
+    k = F / brentq(lambda d: c * law(d) - F, 1e-7, 2e-3, xtol=1e-12)
     assert PROBE_STATE.get(x, "stiffness") == pytest.approx(k, rel=0.05)
     reg = PROBE_STATE.get(x, "registration")
     assert reg[3] == pytest.approx(2e-4, abs=1e-5)
     np.testing.assert_allclose(reg[:2], 0.0, atol=5e-6)
+
+
+@pytest.mark.parametrize("exponent,slope", [(1.0, 0.0), (1.38, 0.0)])
+def test_measured_stiffness_of_a_power_law_is_the_closed_form(exponent, slope):
+    # F = c delta^n from 1 N at 0.3 mm to 3 N: the way between them.
+    d1 = 3e-4
+    d3 = d1 * 3.0 ** (1 / exponent)
+    k = measured_stiffness(d3 - d1, 1.0, 3.0, exponent, slope)
+    assert k == pytest.approx(1.0 / d1, rel=1e-9)
+
+
+@pytest.mark.parametrize("d1", [1.5e-4, 3e-4, 4e-4])
+def test_measured_stiffness_follows_the_exponent_falling_with_depth(d1):
+    # The ring's law: the depth at 1 N found from the way to 3 N, the
+    # touch shallow (stiff part) or deep (soft part).
+    n, b = 1.54, 412.0
+
+    def law(d):
+        return d**n * math.exp(-b * d)
+
+    d3 = brentq(lambda d: law(d) - 3.0 * law(d1), d1, 3e-3, xtol=1e-14)
+    k = measured_stiffness(d3 - d1, 1.0, 3.0, n, b)
+    assert k == pytest.approx(1.0 / d1, rel=1e-6)

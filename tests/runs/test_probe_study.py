@@ -55,11 +55,9 @@ def test_the_radius_is_found_on_a_softer_and_a_stiffer_part(scale, tolerance):
     # configured contact_stiffness and the detection bias were
     # calibrated), the real bore 0.2 mm larger than drawn: the touches
     # measure the stiffness they touch. The fixed stiffness would leave
-    # +120 um on the softer part. The ring's contact stiffens less with
-    # depth than the power law of contact_exponent (its local exponent
-    # falls from 1.43 at 0.1 mm to 1.24 at 0.8 mm): on the softer part,
-    # 0.3 to 0.7 mm deep between the thresholds, the depth at detection
-    # is overestimated and the radius found up to 50 um small.
+    # +120 um on the softer part; one power law (1.38) -48 um, its
+    # touches 0.3 to 0.8 mm deep where the ring's local exponent has
+    # fallen below 1.38 (contact_exponent_slope).
     scenario = load_scenario(
         "paper_localised",
         text="{part_error: {offset: [0.0002, 0.0001, 0.0], radius: -0.0002}, "
