@@ -46,12 +46,14 @@ class ProbeConfig:
     # (control/probe.py measured_stiffness), the depth at detection is
     # modelled with it. 0: stop at force_threshold, contact_stiffness.
     stiffness_threshold: float = 3.0
-    # The contact's law F = c depth^n exp(-b depth): its local exponent
-    # n - b depth falls with depth, so a soft part, touched deeper, is
-    # not read with the exponent of a stiff one. -, n (1, b 0: linear);
-    # 1/m, b. The hydroelastic ring under the cutter: 1.54 and 412,
-    # cell/part.py measure_normal_force from 0.1 to 0.9 mm within 0.2 %.
+    # -, n of the contact's law F = c depth^n exp(-b depth), whose local
+    # exponent n - b depth falls with depth, so a soft part, touched
+    # deeper, is not read with the exponent of a stiff one (1 with b 0: a
+    # linear contact). The hydroelastic ring under the cutter: 1.54 and
+    # 412 (cell/part.py measure_normal_force from 0.1 to 0.9 mm, within
+    # 0.2 %).
     contact_exponent: float = 1.54
+    # 1/m, b: how fast the local exponent falls with depth
     contact_exponent_slope: float = 412.0
     # N/m, the contact stiffness (threshold / depth at the threshold) the
     # detection depth is modelled with when the touches measured none.
