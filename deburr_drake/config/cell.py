@@ -198,8 +198,9 @@ class EdgeConfig:
     ``tilt`` about the edge and leaned by ``lead`` towards the travel; the
     cutter cuts with its side, ``tool.engagement`` below the edge along the
     axis. ``direction`` +1 runs the edge its own way, -1 the other; the
-    pass starts ``start_fraction`` of the edge from its start (-1: at the
-    start; an open edge run backwards: at its end)."""
+    pass starts at the edge's point nearest ``start_near`` (a point in the
+    part frame, m), or ``start_fraction`` of the edge from its start (-1:
+    at the start; an open edge run backwards: at its end)."""
 
     kind: str = "circle"  # -, circle, straight, profile or mesh
     start_angle: float = 0.0  # rad, polar angle of the contour start
@@ -230,6 +231,9 @@ class EdgeConfig:
     # -, mesh: a direction in the part frame: the tool stands on the face
     # whose outward normal is nearest it ([]: by tool_rule)
     tool_face: List[float] = field(default_factory=list)
+    # m, mesh: the pass starts at the edge's point nearest this point of
+    # the part frame ([]: by start_fraction)
+    start_near: List[float] = field(default_factory=list)
     tilt: float = 0.0  # rad, mesh: the tool axis turned about the edge
     lead: float = 0.0  # rad, mesh: the tool axis leaned towards the travel
     # rad, mesh: an edge where the faces' normals differ by more
@@ -313,6 +317,9 @@ class EdgeConfig:
             direction=self.direction,
             start_fraction=(
                 self.start_fraction if self.start_fraction >= 0 else None
+            ),
+            start_near=(
+                part.to_world(self.start_near) if self.start_near else None
             ),
         )
 
@@ -460,6 +467,14 @@ class EdgeConfig:
             "left or right (the bisector leaves n1 undefined: the cutter's "
             "side would face neither face)",
         )
+        if self.start_near:
+            _vector("edge", "start_near", self.start_near, 3, _finite)
+            _require(
+                self.start_fraction == -1,
+                "edge.start_fraction",
+                self.start_fraction,
+                "-1 while edge.start_near places the start (one of the two)",
+            )
         if self.tool_face:
             _vector("edge", "tool_face", self.tool_face, 3, _finite)
             _require(

@@ -1,7 +1,8 @@
 """``edge.tool_face``: the tool stands on the face whose outward normal is
 nearest a direction of the part frame, whichever way the edge's chain
 runs; one line when the direction names neither face or tool_rule also
-picks one."""
+picks one. ``edge.start_near``: the pass starts at the edge's point
+nearest a part-frame point."""
 
 import numpy as np
 import pytest
@@ -72,3 +73,17 @@ def test_one_line_naming_the_field(tube_file, text, starts):
     message = str(refused.value)
     assert "\n" not in message
     assert message.startswith(starts), message
+
+
+def test_the_pass_starts_at_the_point_nearest_start_near(tube_file):
+    scenario = load_scenario(
+        tube_file,
+        text="edge: {start_near: [0.0, 0.03, 0.05], tool_face: [0, 0, 1]}",
+    )
+    start = make_contour(scenario).point_at(0.0)
+    np.testing.assert_allclose(start, [0.4, 0.027, 0.048], atol=1e-6)
+    with pytest.raises(ConfigError, match=r"^edge.start_fraction = 0.2 is"):
+        load_scenario(
+            tube_file,
+            text="edge: {start_near: [0.0, 0.03, 0.05], start_fraction: 0.2}",
+        )
