@@ -292,7 +292,17 @@ def _add_meshcat(builder, meshcat, scenario, plant, scene_graph, process):
         scene_graph=scene_graph,
         process=process,
         edge_points=edge_points(scenario, process.bins.centers),
+        edge_axes=_edge_axes(scenario, process.bins.centers),
     )
+
+
+def _edge_axes(scenario, arc):
+    """The tool axis at arc positions ``arc`` along a turning (3-D) edge,
+    else None (vertical)."""
+    contour = make_contour(scenario)
+    if not contour.varying_frame:
+        return None
+    return np.array([contour.tool_axis_at(s) for s in arc])
 
 
 def make_deburring_diagram(

@@ -57,6 +57,7 @@ class EdgeVisualizer(LeafSystem):
         *,
         edge_points,
         burr_initial,
+        edge_axes=None,
         segments: int = 120,
         publish_period: float = 0.1,
         prefix: str = "deburring",
@@ -77,12 +78,13 @@ class EdgeVisualizer(LeafSystem):
         self._shown: Dict[str, bool] = {}
         points = np.asarray(edge_points, float)  # (n_bins, 3) on the edge
         burr_initial = np.asarray(burr_initial, float)
+        up = _edge_up(edge_axes, len(points))
         for k, g in enumerate(self._groups):
             a, b = points[g.start], points[g.stop - 1]
             mid = 0.5 * (a + b)
             along = b - a
             length = max(float(np.linalg.norm(along)), 2e-4)
-            X = _segment_pose(mid, along)
+            X = _segment_pose(mid, along, up[(g.start + g.stop - 1) // 2])
             for state, color in (("uncut", UNCUT), ("cut", CUT)):
                 path = f"{prefix}/edge/{state}/{k}"
                 meshcat.SetObject(path, Box(length, 0.0008, 0.0008), color)
@@ -118,11 +120,22 @@ class EdgeVisualizer(LeafSystem):
             )
 
 
-def _segment_pose(mid, along) -> RigidTransform:
+def _edge_up(edge_axes, n):
+    """The burrs' up direction per bin: the tool axis (out of the part)
+    along a 3-D edge, else vertical."""
+    if edge_axes is None:
+        return np.tile([0.0, 0.0, 1.0], (n, 1))
+    return np.asarray(edge_axes, float).reshape(n, 3)
+
+
+def _segment_pose(mid, along, up) -> RigidTransform:
+    """x along the segment, z the part's up (the burr's height) made
+    perpendicular to it."""
     x = np.asarray(along, float)
     x = x / max(np.linalg.norm(x), 1e-12)
-    z = np.array([0.0, 0.0, 1.0])
-    y = np.cross(z, x)
+    y = np.cross(np.asarray(up, float), x)
+    y = y / max(np.linalg.norm(y), 1e-12)
+    z = np.cross(x, y)
     return RigidTransform(RotationMatrix(np.column_stack([x, y, z])), mid)
 
 
@@ -134,12 +147,15 @@ def add_meshcat(
     scene_graph,
     process: CuttingProcess,
     edge_points,
+    edge_axes=None,
     publish_period: float = 0.1,
 ) -> None:
-    """Adds the illustration, contact-force arrows and the edge to
-    ``meshcat`` (named systems ``meshcat_visualizer``,
-    ``contact_visualizer``, ``edge_visualizer``), and points the camera at
-    the part from above and in front of the arm."""
+    """Adds the illustration (the part's own mesh along a CAD edge),
+    contact-force arrows and the edge to ``meshcat`` (named systems
+    ``meshcat_visualizer``, ``contact_visualizer``, ``edge_visualizer``),
+    and points the camera at the part from above and in front of the arm.
+    ``edge_axes`` (n_bins, 3): the tool axis at each bin, which way the
+    burrs stand along a 3-D edge (None: up)."""
     edge_points = np.asarray(edge_points, float)
     center = edge_points.mean(axis=0)
     meshcat.SetCameraPose(center + np.array([0.10, -0.16, 0.12]), center)
@@ -167,6 +183,7 @@ def add_meshcat(
             process,
             edge_points=edge_points,
             burr_initial=process.initial_burr_height(),
+            edge_axes=edge_axes,
             publish_period=publish_period,
         )
     )

@@ -22,7 +22,7 @@ from deburr_drake.cell.robot import add_robot, finalize
 from deburr_drake.cell.tube_mesh import band_width_limit, sag_spacing
 from deburr_drake.config import Scenario
 
-__all__ = ["add_cell_plant"]
+__all__ = ["add_cell_plant", "mesh_edge_band"]
 
 
 def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
@@ -134,12 +134,13 @@ _CURVATURE_SPACING = 2.5e-4
 _BAND_FIT = 0.5
 
 
-def _add_mesh_edge(plant, scenario: Scenario):
-    """A CAD part's edge: a compliant band along it (the tube's wall
-    thickness wide where it fits, its compliant layer high), stations no
-    coarser than the tube's ring would be and, where the edge curves
-    more, close enough for the ring's sag; the part's mesh drawn."""
-    tube, edge = scenario.tube, scenario.edge
+def mesh_edge_band(scenario: Scenario):
+    """(stations, keyword arguments of register_compliant_edge but the
+    stations) of the compliant band along a CAD part's edge: the tube's
+    wall thickness wide where it fits, its compliant layer high, stations
+    no coarser than the tube's ring would be and, where the edge curves
+    more, close enough for the ring's sag."""
+    tube = scenario.tube
     contour = make_contour(scenario)
     ring_spacing = 2.0 * math.pi * tube.inner_radius / tube.mesh_segments
     ring_sag = tube.inner_radius * (
@@ -159,9 +160,7 @@ def _add_mesh_edge(plant, scenario: Scenario):
         height,
         closed=contour.closed,
     )
-    register_compliant_edge(
-        plant,
-        stations,
+    return stations, dict(
         width=min(tube.wall_thickness, _BAND_FIT * fits),
         height=height,
         hydroelastic_modulus=tube.hydroelastic_modulus,
@@ -170,4 +169,11 @@ def _add_mesh_edge(plant, scenario: Scenario):
         n_radial=tube.mesh_radial_cells,
         n_z=tube.mesh_height_cells,
     )
-    register_part_visual(plant, edge.mesh_edge()[0])
+
+
+def _add_mesh_edge(plant, scenario: Scenario):
+    """A CAD part's edge: the compliant band of ``mesh_edge_band`` along
+    it; the part's mesh drawn."""
+    stations, band = mesh_edge_band(scenario)
+    register_compliant_edge(plant, stations, **band)
+    register_part_visual(plant, scenario.edge.mesh_edge()[0])

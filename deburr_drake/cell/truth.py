@@ -13,8 +13,8 @@ import numpy as np
 from pydrake.systems.framework import DiagramBuilder
 
 from deburr_drake.cell.edge import make_contour
-from deburr_drake.cell.part import contact_force_on_body
-from deburr_drake.cell.plant import add_cell_plant
+from deburr_drake.cell.part import EdgeContactProbe, contact_force_on_body
+from deburr_drake.cell.plant import add_cell_plant, mesh_edge_band
 from deburr_drake.config import RobotConfig, Scenario
 
 __all__ = [
@@ -29,13 +29,18 @@ def contact_normal_force(
     scenario: Scenario, depths, *, arc_fraction=0.5
 ) -> np.ndarray:
     """The hydroelastic normal force (N) on the scenario's cutter at each
-    depth (m) into its part, the tool vertical at ``arc_fraction`` of the
-    edge, at rest: the contact part of (4), measured on the same geometry
-    the cell simulates (a Cartesian tool holds the cutter). An array of
-    fractions gives one row of forces per fraction (one plant built)."""
-    fractions = np.asarray(arc_fraction, float)
-    forces = _normal_forces(scenario, depths, np.atleast_1d(fractions))
-    return forces if fractions.ndim else forces[0]
+    depth (m) into its part along n1, the tool along the contour's axis
+    there (vertical on a planar edge) at ``arc_fraction`` of the edge, at
+    rest: the contact part of (4), measured on the same geometry the cell
+    simulates (a Cartesian tool holds the cutter; along a mesh edge, whose
+    axis turns, a free cutter on the same band). An array of fractions
+    gives one row of forces per fraction (one plant built)."""
+    fractions = np.atleast_1d(np.asarray(arc_fraction, float))
+    measure = (
+        _edge_normal_forces if scenario.edge.kind == "mesh" else _normal_forces
+    )
+    forces = measure(scenario, depths, fractions)
+    return forces if np.ndim(arc_fraction) else forces[0]
 
 
 def truth_stations(scenario: Scenario) -> np.ndarray:
@@ -46,8 +51,9 @@ def truth_stations(scenario: Scenario) -> np.ndarray:
     closed pass ends: the estimator follows the local law within a few
     seconds (on the pocket c0 + c1 delta* goes from 5.1 N on the lines to
     5.9 N in each fillet and back), so its last estimate is that
-    place's."""
-    if scenario.edge.kind == "profile":
+    place's. A mesh edge's frame and faces' angle vary along it: the same
+    64 places."""
+    if scenario.edge.kind in ("profile", "mesh"):
         return np.arange(64) / 64.0
     return np.array([0.5])
 
@@ -78,6 +84,34 @@ def _normal_forces(scenario: Scenario, depths, fractions) -> np.ndarray:
     return np.array(rows)
 
 
+def _edge_normal_forces(scenario: Scenario, depths, fractions):
+    """The forces of :func:`contact_normal_force` along a mesh edge: a
+    free cutter, its axis the contour's at each place, on the band the
+    cell builds (``mesh_edge_band``)."""
+    tool = scenario.tool
+    stations, band = mesh_edge_band(scenario)
+    probe = EdgeContactProbe(
+        stations,
+        **band,
+        cutter_radius=tool.cutter_radius,
+        cutter_length=tool.cutter_length,
+        resolution_hint=tool.resolution_hint,
+    )
+    contour = make_contour(scenario)
+    rows = []
+    for fraction in fractions:
+        s = fraction * contour.length
+        p = contour.point_at(s)
+        n1, axis = contour.n1(p), contour.tool_axis_at(s)
+        rows.append(
+            [
+                -float(probe.contact_force_on_tool(p + depth * n1, axis) @ n1)
+                for depth in np.atleast_1d(np.asarray(depths, float))
+            ]
+        )
+    return np.array(rows)
+
+
 @dataclass
 class ContactTruth:
     """The plant's normal-force law near the desired depth, measured on
@@ -96,9 +130,10 @@ class ContactTruth:
 
 def contact_truth(scenario: Scenario, *, step: float = 2e-5) -> ContactTruth:
     """The normal-force law at ``task.desired_depth`` on the part the cell
-    builds for the scenario's edge (ring, wall or profile), by central
-    differences of :func:`contact_normal_force` over +-``step`` (m), at
-    the first of :func:`truth_stations` (``force_range`` over all)."""
+    builds for the scenario's edge (ring, wall, profile or mesh band), by
+    central differences of :func:`contact_normal_force` over +-``step``
+    (m), at the first of :func:`truth_stations` (``force_range`` over
+    all)."""
     tube, d = scenario.tube, scenario.task.desired_depth
     rows = contact_normal_force(
         scenario, [d - step, d, d + step], arc_fraction=truth_stations(scenario)

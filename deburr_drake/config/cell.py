@@ -17,7 +17,7 @@ from deburr_drake.config.checks import (
     _require,
     _vector,
 )
-from deburr_drake.math.edge_contour import EdgeContour, load_edge
+from deburr_drake.math.edge_contour import EdgeContour, face_rule, load_edge
 from deburr_drake.math.geometry import ProfileContour
 from deburr_drake.math.mesh_part import UNITS
 
@@ -190,14 +190,17 @@ class EdgeConfig:
     models/parts/), its coordinates in ``units``, placed in the world by
     ``pose``: the sharp edge (faces' normals more than ``sharp_angle``
     apart) nearest the point ``near`` of the part frame. The tool's axis
-    follows the outward normal of the face ``tool_rule`` names (left or
-    right of the edge's own direction; a loop runs counter-clockwise seen
-    from outside), turned by ``tilt`` about the edge and leaned by ``lead``
-    towards the travel; the cutter cuts with its side, ``tool.engagement``
-    below the edge along the axis. ``direction`` +1 runs the edge its own
-    way, -1 the other; the pass starts ``start_fraction`` of the edge from
-    its start (-1: at the start; an open edge run backwards: at its
-    end)."""
+    follows the outward normal of the face the tool stands on: the one
+    whose normal is nearest ``tool_face`` (a direction in the part frame,
+    e.g. [0, 0, 1]: the face looking up), or the one ``tool_rule`` names
+    (left or right of the edge's own direction; a loop runs
+    counter-clockwise seen from outside; neither given: left), turned by
+    ``tilt`` about the edge and leaned by ``lead`` towards the travel; the
+    cutter cuts with its side, ``tool.engagement`` below the edge along the
+    axis. ``direction`` +1 runs the edge its own way, -1 the other; the
+    pass starts at the edge's point nearest ``start_near`` (a point in the
+    part frame, m), or ``start_fraction`` of the edge from its start (-1:
+    at the start; an open edge run backwards: at its end)."""
 
     kind: str = "circle"  # -, circle, straight, profile or mesh
     start_angle: float = 0.0  # rad, polar angle of the contour start
@@ -223,7 +226,14 @@ class EdgeConfig:
     near: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
     pose: PoseConfig = field(default_factory=PoseConfig)  # -, mesh: the part
     # -, mesh: the tool axis along the left or right face's outward normal
-    tool_rule: str = "left"
+    # ("": by tool_face, else left)
+    tool_rule: str = ""
+    # -, mesh: a direction in the part frame: the tool stands on the face
+    # whose outward normal is nearest it ([]: by tool_rule)
+    tool_face: List[float] = field(default_factory=list)
+    # m, mesh: the pass starts at the edge's point nearest this point of
+    # the part frame ([]: by start_fraction)
+    start_near: List[float] = field(default_factory=list)
     tilt: float = 0.0  # rad, mesh: the tool axis turned about the edge
     lead: float = 0.0  # rad, mesh: the tool axis leaned towards the travel
     # rad, mesh: an edge where the faces' normals differ by more
@@ -293,17 +303,23 @@ class EdgeConfig:
     def mesh_path(self, tool) -> EdgeContour:
         """The cutter tip's path along the mesh edge (ValueError: see
         ``EdgeContour``)."""
-        _, curve, _ = self.mesh_edge()
+        part, curve, _ = self.mesh_edge()
+        rule = self.tool_rule or "left"
+        if self.tool_face:
+            rule = face_rule(curve, part.rotation @ self.tool_face)
         return EdgeContour(
             curve,
             cutter_radius=tool.cutter_radius,
             engagement=tool.engagement,
-            rule=self.tool_rule,
+            rule=rule,
             tilt=self.tilt,
             lead=self.lead,
             direction=self.direction,
             start_fraction=(
                 self.start_fraction if self.start_fraction >= 0 else None
+            ),
+            start_near=(
+                part.to_world(self.start_near) if self.start_near else None
             ),
         )
 
@@ -330,7 +346,9 @@ class EdgeConfig:
         except ValueError as e:
             message = str(e)
             field, value = "edge.tilt", self.tilt
-            if "lead" in message:
+            if "outward normals" in message:
+                field, value = "edge.tool_face", self.tool_face
+            elif "lead" in message:
                 field, value = "edge.lead", self.lead
             elif "pass is empty" in message:
                 field, value = "edge.start_fraction", self.start_fraction
@@ -443,12 +461,34 @@ class EdgeConfig:
             f"one of {', '.join(UNITS)}",
         )
         _require(
-            self.tool_rule in self.TOOL_RULES,
+            self.tool_rule in ("", *self.TOOL_RULES),
             "edge.tool_rule",
             self.tool_rule,
             "left or right (the bisector leaves n1 undefined: the cutter's "
             "side would face neither face)",
         )
+        if self.start_near:
+            _vector("edge", "start_near", self.start_near, 3, _finite)
+            _require(
+                self.start_fraction == -1,
+                "edge.start_fraction",
+                self.start_fraction,
+                "-1 while edge.start_near places the start (one of the two)",
+            )
+        if self.tool_face:
+            _vector("edge", "tool_face", self.tool_face, 3, _finite)
+            _require(
+                any(x != 0 for x in self.tool_face),
+                "edge.tool_face",
+                self.tool_face,
+                "a non-zero direction (part frame)",
+            )
+            _require(
+                not self.tool_rule,
+                "edge.tool_rule",
+                self.tool_rule,
+                "unset while edge.tool_face picks the face (one of the two)",
+            )
         _require(
             self.start_angle == 0,
             "edge.start_angle",

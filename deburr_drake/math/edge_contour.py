@@ -49,9 +49,12 @@ from deburr_drake.math.mesh_part import (
     sharp_edges,
 )
 
-__all__ = ["EdgeContour", "Stations", "load_edge"]
+__all__ = ["EdgeContour", "Stations", "face_rule", "load_edge"]
 
 _RULES = ("left", "right")
+# -, the least difference of the two faces' mean cosines to a direction
+# that names one of them (a direction halfway between names neither)
+_FACE_MARGIN = 0.05
 # rad: how far the side plane may turn into a face before it is a gouge
 # (a faceted mesh's smoothed normals on a 90-degree edge scatter by less)
 _GOUGE_TOLERANCE = 0.02
@@ -522,6 +525,30 @@ class EdgeContour(Contour):
             s[0] = 0.0
         f, n1, axis = self._geometry(self._curve._u(u))
         return Stations(s, f.point, n1, axis, f.face_angle)
+
+
+def face_rule(curve: EdgeCurve, direction) -> str:
+    """``left`` or ``right``: the face of ``curve`` whose outward normal
+    is nearest the (world) ``direction`` on average along the edge, so a
+    tool rule reads as "stand on the face facing up" whichever way the
+    chain runs. ValueError in one line when the direction is about as
+    near both faces."""
+    d = _vec3_float(direction, "direction")
+    norm = float(np.linalg.norm(d))
+    if not norm > 0.0:
+        raise ValueError("the tool face's direction must not be zero")
+    n = max(64, math.ceil(curve.length / 1e-3))
+    u = np.linspace(0.0, curve.length, n, endpoint=not curve.closed)
+    left, right = curve.face_normals(u)
+    near_left = float(np.mean(left @ d)) / norm
+    near_right = float(np.mean(right @ d)) / norm
+    if abs(near_left - near_right) < _FACE_MARGIN:
+        raise ValueError(
+            "the direction is about as near both faces' outward normals "
+            f"(mean cosines {near_left:.2f} and {near_right:.2f}): name "
+            "the face the tool stands on more nearly"
+        )
+    return "left" if near_left > near_right else "right"
 
 
 @functools.lru_cache(maxsize=8)
