@@ -17,9 +17,8 @@ from deburr_drake.config.checks import (
     _require,
     _vector,
 )
-from deburr_drake.math.edge_contour import EdgeContour, face_rule, load_edge
 from deburr_drake.math.geometry import ProfileContour
-from deburr_drake.math.mesh_part import UNITS
+from deburr_drake.math.units import UNITS
 
 __all__ = [
     "package_folder",
@@ -291,6 +290,9 @@ class EdgeConfig:
         """(part, EdgeCurve, the edge's distance from ``near`` (m)): the
         edge nearest ``near``, read once per file (ValueError: a bad file
         or mesh)."""
+        # Imported here: the mesh libraries load only for a mesh edge.
+        from deburr_drake.math.edge_contour import load_edge
+
         return load_edge(
             self.mesh_file(),
             units=self.units,
@@ -300,9 +302,11 @@ class EdgeConfig:
             near=self.near,
         )
 
-    def mesh_path(self, tool) -> EdgeContour:
-        """The cutter tip's path along the mesh edge (ValueError: see
-        ``EdgeContour``)."""
+    def mesh_path(self, tool):
+        """The cutter tip's path along the mesh edge, an ``EdgeContour``
+        (ValueError: see it)."""
+        from deburr_drake.math.edge_contour import EdgeContour, face_rule
+
         part, curve, _ = self.mesh_edge()
         rule = self.tool_rule or "left"
         if self.tool_face:
@@ -452,6 +456,9 @@ class EdgeConfig:
             self.sharp_angle,
             "a number in (0, pi) rad",
         )
+        for name in ("start_near", "tool_face"):
+            if getattr(self, name):
+                _vector("edge", name, getattr(self, name), 3, _finite)
         if self.kind != "mesh":
             return
         _require(
@@ -468,7 +475,6 @@ class EdgeConfig:
             "side would face neither face)",
         )
         if self.start_near:
-            _vector("edge", "start_near", self.start_near, 3, _finite)
             _require(
                 self.start_fraction == -1,
                 "edge.start_fraction",
@@ -476,7 +482,6 @@ class EdgeConfig:
                 "-1 while edge.start_near places the start (one of the two)",
             )
         if self.tool_face:
-            _vector("edge", "tool_face", self.tool_face, 3, _finite)
             _require(
                 any(x != 0 for x in self.tool_face),
                 "edge.tool_face",

@@ -33,6 +33,8 @@ from scipy.interpolate import BSpline, CubicSpline
 from scipy.spatial.transform import Rotation
 import trimesh
 
+from deburr_drake.math.units import UNITS
+
 __all__ = [
     "UNITS",
     "MeshPart",
@@ -44,8 +46,6 @@ __all__ = [
     "choose_edge",
 ]
 
-# metres per file unit
-UNITS = {"m": 1.0, "mm": 1.0e-3, "cm": 1.0e-2, "in": 0.0254}
 
 _MESH_TYPES = {".stl": "stl", ".obj": "obj"}
 _STEP_TYPES = {".step", ".stp"}
