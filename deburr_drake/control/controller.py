@@ -151,6 +151,14 @@ def HybridController_(T):
           or a projection per sample; it trails the command's by about
           one feed step, a turn of the axis far below the orientation
           loop's lag). Otherwise R_d is ``desired_rotation`` throughout.
+        - Task axes: the law's x1, x2, x3 (the fuzzy axes, K, lambda and
+          the integral per axis) are the world's on a planar contour (the
+          tool vertical). When ``contour.varying_frame`` they are
+          ``contour.task_frame(s)`` (columns, world; x3 the tool axis,
+          turning with R_d): e, edot, f and n1 are rotated onto them, f_tau
+          back, so the stiff, integrating x3 stays along the tool however
+          it is tilted, and the fuzzy terms act across it. ``diagnostics``
+          e, s, f_tau, u_fuzzy and zeta are on the task axes, x_pd world.
         - ``nominal_depth`` (m): delta* of the constant-feed laws;
           ``true_plant``: the plant's own model, for the ideal law.
         """
@@ -259,12 +267,11 @@ def HybridController_(T):
                 if desired_rotation is None
                 else np.asarray(desired_rotation, float)
             )
-            # Chosen once: a planar contour's R_d is a constant.
-            self._axis_turn = (
-                contour.axis_turn
-                if contour is not None and contour.varying_frame
-                else None
-            )
+            # Chosen once: a planar contour's R_d is a constant and its
+            # task axes are the world's.
+            varying = contour is not None and contour.varying_frame
+            self._axis_turn = contour.axis_turn if varying else None
+            self._task_frame = contour.task_frame if varying else None
             self._lambda_o = np.asarray(c.orientation_lambda, float)
             self._K_o = np.asarray(c.orientation_gain, float)
             self._orientation_control = bool(np.any(self._K_o > 0))
@@ -386,15 +393,27 @@ def HybridController_(T):
                 + delta_d_dot * n1
                 + delta_d * CHAMFER_STATE.get(chamfer, "n1_rate")
             )
-            e = x_pd - x_p
-            edot = xdot_pd - CHAMFER_STATE.get(chamfer, "xdot_p")
+            e_world = x_pd - x_p
+            edot_world = xdot_pd - CHAMFER_STATE.get(chamfer, "xdot_p")
+            # The law works on the task axes (x3 along the tool axis).
+            to_task = self._task_axes(chamfer)
+            e, edot, n1_task, f = (
+                (e_world, edot_world, n1, p["measured_force"])
+                if to_task is None
+                else (
+                    to_task.T @ e_world,
+                    to_task.T @ edot_world,
+                    to_task.T @ n1,
+                    to_task.T @ p["measured_force"],
+                )
+            )
             s = edot + self._lambda * e
             # The law's task-space force.
             force = self._law.task_force(
                 TaskTerms(
                     x_p=x_p,
-                    n1=n1,
-                    f=p["measured_force"],
+                    n1=n1_task,
+                    f=f,
                     e=e,
                     edot=edot,
                     s=s,
@@ -407,8 +426,8 @@ def HybridController_(T):
             # Joint torques.
             tau = self._joint_torque(
                 p["plant_state"],
-                force.f_tau,
-                edot,
+                force.f_tau if to_task is None else to_task @ force.f_tau,
+                edot_world,
                 self._rotation_at(chamfer),
             )
             return (
@@ -439,14 +458,27 @@ def HybridController_(T):
             f_tau[axes] = f_tau[axes] + self._K_integral * x[start:]
             return force._replace(f_tau=f_tau)
 
+        @staticmethod
+        def _arc_value(chamfer):
+            """The chamfer state's arc position as a float (the frames
+            from it are constants of the AutoDiffXd law)."""
+            s = CHAMFER_STATE.get(chamfer, "arc_position")
+            return s.value() if isinstance(s, AutoDiffXd) else float(s)
+
         def _rotation_at(self, chamfer):
             """R_d where the chamfer state's tool point is."""
             if self._axis_turn is None:
                 return self._desired_rotation
-            # The turn from the value: a constant of the AutoDiffXd law.
-            s = CHAMFER_STATE.get(chamfer, "arc_position")
-            s = s.value() if isinstance(s, AutoDiffXd) else float(s)
-            return self._axis_turn(s) @ self._desired_rotation
+            return self._axis_turn(self._arc_value(chamfer)) @ (
+                self._desired_rotation
+            )
+
+        def _task_axes(self, chamfer):
+            """The task axes (columns, world) where the chamfer state's
+            tool point is; None: the world's."""
+            if self._task_frame is None:
+                return None
+            return self._task_frame(self._arc_value(chamfer))
 
         def desired_rotation(self, context):
             """R_d (3 x 3) at the ``chamfer_state`` input's arc

@@ -117,6 +117,8 @@ CONTROLLER_DIAGNOSTICS = VectorLayout(
     "controller_diagnostics",
     [
         ("x_pd", 3),  # m, (9)
+        # e, s, f_tau, u_fuzzy, zeta: on the controller's task axes (the
+        # world's unless the contour's frame turns)
         ("e", 3),  # m, x_pd - x_p
         ("s", 3),  # m/s, edot + lambda e
         ("delta_d", 1),  # m, (7)

@@ -89,6 +89,17 @@ def _dot(a, b):
     return np.einsum("ij,ij->i", a, b)
 
 
+def minimal_rotation(a, b):
+    """Rot_min(a -> b) (3 x 3): the least rotation turning the unit vector
+    a onto the unit vector b, about their common normal."""
+    w = np.cross(a, b)
+    c = float(np.dot(a, b))
+    if c <= -1.0 + 1e-12:
+        raise ValueError("the tool axis turns over (a(s) = -a(0))")
+    K = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0]])
+    return np.eye(3) + K + (K @ K) / (1.0 + c)
+
+
 class EdgeContour(Contour):
     """The path of the tool along the edge ``curve`` (an ``EdgeCurve`` in
     the world frame, m).
@@ -308,14 +319,23 @@ class EdgeContour(Contour):
         self._n = n
         self._h = L / n
         self._C = np.ascontiguousarray(np.moveaxis(spline.c, 1, 0))  # n,4,13
-        self._rows = self._C[:, :, _Z].reshape(n, 12).tolist()
+        # per piece: the cubic's coefficients of z, then of t
+        self._rows = np.concatenate(
+            [
+                self._C[:, :, _Z].reshape(n, 12),
+                self._C[:, :, _T].reshape(n, 12),
+            ],
+            axis=1,
+        ).tolist()
         self._samples = z[:-1] if self._closed else z
         self._sample_s = s[:-1] if self._closed else s
         # within this distance of the path its nearest point is the local
         # one Newton finds from a nearby s (half the least radius)
         bend = np.linalg.norm(spline(s, 2)[:, _Z], axis=1).max()
         self._reach = 0.5 / max(bend, 1e-9)
-        self._a0 = axis[0]
+        self._a0 = axis[0] / np.linalg.norm(axis[0])
+        # world z onto the start's axis: the task frame at the start
+        self._task0 = minimal_rotation(np.array([0.0, 0.0, 1.0]), self._a0)
         self._last_s = 0.0
 
     # ----- evaluation -----
@@ -337,33 +357,43 @@ class EdgeContour(Contour):
         return np.dot((x * x * x, x * x, x, 1.0), c)
 
     def _newton(self, p, s, iterations=12):
-        """s of the path's point nearest p by Newton from s, and the
-        squared distance to it (inf: Newton did not converge).
+        """s where the chamfer's cross-section plane (normal to the edge
+        tangent t(s)) passes through p, by Newton from s, and the squared
+        distance from p to z(s) (inf: Newton did not converge).
+
+        The root of g(s) = (z(s) - p) . t(s), not the path's nearest point:
+        where the tool axis tilts along the edge the path's tangent z' leans
+        off t, and the nearest point of a tool pressed delta along n1 would
+        trail or lead the cross-section by about delta (n1 . z') / |z'|.
         Plain floats: a handful of 3-vectors costs less than numpy calls."""
         px, py, pz = float(p[0]), float(p[1]), float(p[2])
         rows, h, last = self._rows, self._h, self._n - 1
         for _ in range(iterations):
             k = min(max(int(s / h), 0), last)
             x = s - k * h
-            ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz = rows[k]
+            (ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz) = rows[k][:12]
+            (Ax, Ay, Az, Bx, By, Bz, Cx, Cy, Cz, Dx, Dy, Dz) = rows[k][12:]
             rx = ((ax * x + bx) * x + cx) * x + dx - px
             ry = ((ay * x + by) * x + cy) * x + dy - py
             rz = ((az * x + bz) * x + cz) * x + dz - pz
             ux = (3.0 * ax * x + 2.0 * bx) * x + cx
             uy = (3.0 * ay * x + 2.0 * by) * x + cy
             uz = (3.0 * az * x + 2.0 * bz) * x + cz
-            g = rx * ux + ry * uy + rz * uz
-            curvature = (
-                ux * ux
-                + uy * uy
-                + uz * uz
-                + rx * (6.0 * ax * x + 2.0 * bx)
-                + ry * (6.0 * ay * x + 2.0 * by)
-                + rz * (6.0 * az * x + 2.0 * bz)
+            tx = ((Ax * x + Bx) * x + Cx) * x + Dx
+            ty = ((Ay * x + By) * x + Cy) * x + Dy
+            tz = ((Az * x + Bz) * x + Cz) * x + Dz
+            g = rx * tx + ry * ty + rz * tz
+            slope = (
+                ux * tx
+                + uy * ty
+                + uz * tz
+                + rx * ((3.0 * Ax * x + 2.0 * Bx) * x + Cx)
+                + ry * ((3.0 * Ay * x + 2.0 * By) * x + Cy)
+                + rz * ((3.0 * Az * x + 2.0 * Bz) * x + Cz)
             )
-            if curvature <= 0.0:
+            if slope <= 0.0:
                 return s, math.inf
-            step = g / curvature
+            step = g / slope
             s_new = self._clamp(s - step)
             if abs(s_new - s) < 1e-10 or abs(step) < 1e-10:
                 return s_new, rx * rx + ry * ry + rz * rz
@@ -451,17 +481,16 @@ class EdgeContour(Contour):
         return float(-(d2 @ v[_N1]))
 
     def n1_rate(self, p, v):
-        """n1'(s*) ds*/dt, with ds*/dt = z' . v / (|z'|^2 - (p - z) . z'')
-        from differentiating (z(s*) - p) . z'(s*) = 0."""
+        """n1'(s*) ds*/dt, with ds*/dt = t . v / (z' . t - (p - z) . t')
+        from differentiating (z(s*) - p) . t(s*) = 0."""
         p = _vec3_float(p, "p")
         v = _vec3_float(v, "v")
         s = self._locate(p)
         c, x = self._piece(s)
         value = ((c[0] * x + c[1]) * x + c[2]) * x + c[3]
         d1 = (3.0 * c[0] * x + 2.0 * c[1]) * x + c[2]
-        d2 = 6.0 * c[0] * x + 2.0 * c[1]
         r = p - value[_Z]
-        rate = (d1[_Z] @ v) / (d1[_Z] @ d1[_Z] - r @ d2[_Z])
+        rate = (value[_T] @ v) / (d1[_Z] @ value[_T] - r @ d1[_T])
         return d1[_N1] * rate
 
     def project(self, p):
@@ -483,13 +512,13 @@ class EdgeContour(Contour):
     def axis_turn(self, s):
         """Rot_min(a(0) -> a(s)) (3 x 3): the least rotation turning the
         start's axis onto a(s), about their common normal."""
-        a0, a = self._a0, self.tool_axis_at(s)
-        w = np.cross(a0, a)
-        c = float(a0 @ a)
-        if c <= -1.0 + 1e-12:
-            raise ValueError("the tool axis turns over (a(s) = -a(0))")
-        K = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0]])
-        return np.eye(3) + K + (K @ K) / (1.0 + c)
+        return minimal_rotation(self._a0, self.tool_axis_at(s))
+
+    def task_frame(self, s):
+        """The controller's task axes at arc position s (columns, world):
+        Rot_min(a(0) -> a(s)) Rot_min(z -> a(0)), so x3 is the tool axis
+        a(s) and the frame turns with the desired tool rotation."""
+        return self.axis_turn(s) @ self._task0
 
     def edge_u(self, s):
         """The edge's arc length u (m, in [0, edge length)) at arc

@@ -151,6 +151,12 @@ class Contour(abc.ABC):
         """Rot_min(a(0) -> a(s)), the tool axis's turn (3 x 3): none."""
         return np.eye(3)
 
+    def task_frame(self, s):
+        """The controller's task axes x1, x2, x3 (columns, world) at arc
+        position s: x3 along the tool axis, x1 and x2 across it. The
+        world's axes here (the tool vertical)."""
+        return np.eye(3)
+
     @abc.abstractmethod
     def phi(self, p):
         """Signed planar distance: > 0 free side, < 0 material (T-generic)."""

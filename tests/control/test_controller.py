@@ -502,3 +502,87 @@ def test_desired_rotation_turns_with_a_3d_edge(tilted_circle):
         actuation(planar, half)[0], actuation(fixed, half)[0]
     )
     np.testing.assert_array_equal(actuation(planar, half)[1], R_start)
+
+
+def test_the_law_works_on_the_task_axes(model, tilted_circle):
+    """Along a contour with task axes Q (x3 the tilted tool axis), the
+    controller is the world-axes controller seen in Q: fed every vector
+    rotated by Q^T, the world controller logs the same e, s, f_tau,
+    u_fuzzy and adapts theta alike (the gains differ per axis: K3 is the
+    tool axis's, the fuzzy terms are across it, the integral along it);
+    the actuation is Q f_tau (the point mass: J_v = I)."""
+    from deburr_drake.control.layout import CHAMFER_STATE
+
+    tilt = np.radians(30.0)
+    c, s_ = np.cos(tilt), np.sin(tilt)
+    Q = np.array([[1.0, 0.0, 0.0], [0.0, c, -s_], [0.0, s_, c]])
+
+    class Framed(tilted_circle):
+        def task_frame(self, s):
+            return Q
+
+    edge = Framed([0.0, 0.0, 0.048], 0.027, 0.0)
+    config = ControllerConfig(
+        control_period=0.0,
+        sliding_gain=[400.0, 400.0, 4000.0],
+        integral_lambda=[0.0, 0.0, 2.0],
+        gravity_compensation=False,
+    )
+    framed = HybridController(model, "tool_tip", config, contour=edge)
+    world = HybridController(model, "tool_tip", config)
+    x_p, v, force, x_c, v_c, _ = _scenario_point()
+    inputs = _inputs(x_p, v, force, x_c, v_c, 6.0)
+    rotated = {
+        "plant_state": np.concatenate([Q.T @ x_p, Q.T @ v]),
+        "measured_force": Q.T @ force,
+        "commanded_position": Q.T @ x_c,
+        "commanded_velocity": Q.T @ v_c,
+        "desired_normal_force": inputs["desired_normal_force"],
+    }
+    chamfer = inputs["chamfer_state"].copy()
+    for name in ("x_p", "xdot_p", "n1", "n2", "n1_rate"):
+        chamfer[CHAMFER_STATE.slice(name)] = (
+            Q.T @ chamfer[CHAMFER_STATE.slice(name)]
+        )
+    rotated["chamfer_state"] = chamfer
+    theta = np.random.default_rng(3).uniform(
+        -5.0, 5.0, (2, make_rule_bases(config)[0].n_rules)
+    )
+    contexts = []
+    for controller, values in ((framed, inputs), (world, rotated)):
+        context = _context(controller, values, 4e-4)
+        # delta_d, theta, int s_3 dt (m)
+        context.SetContinuousState(
+            np.concatenate([[4e-4], theta.ravel(), [2e-5]])
+        )
+        contexts.append(context)
+
+    def out(controller, context, port):
+        return controller.GetOutputPort(port).Eval(context)
+
+    d_f, d_w = (
+        out(ctl, ctx, "diagnostics")
+        for ctl, ctx in zip((framed, world), contexts)
+    )
+    for name in ("e", "s", "f_tau", "u_fuzzy", "zeta", "delta_d", "e_f"):
+        np.testing.assert_allclose(
+            CONTROLLER_DIAGNOSTICS.get(d_f, name),
+            CONTROLLER_DIAGNOSTICS.get(d_w, name),
+            rtol=1e-9,
+            atol=1e-12,
+        )
+    np.testing.assert_allclose(
+        CONTROLLER_DIAGNOSTICS.get(d_f, "x_pd"),
+        Q @ CONTROLLER_DIAGNOSTICS.get(d_w, "x_pd"),
+        atol=1e-12,
+    )
+    rates = [
+        ctl.EvalTimeDerivatives(ctx).CopyToVector()
+        for ctl, ctx in zip((framed, world), contexts)
+    ]
+    np.testing.assert_allclose(rates[0], rates[1], rtol=1e-9, atol=1e-12)
+    f_tau = CONTROLLER_DIAGNOSTICS.get(d_w, "f_tau")
+    np.testing.assert_allclose(
+        out(framed, contexts[0], "actuation"), Q @ f_tau, atol=1e-9
+    )
+    assert np.linalg.norm(Q @ f_tau - f_tau) > 1.0

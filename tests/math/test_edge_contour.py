@@ -281,3 +281,73 @@ def test_autodiff_inputs(bore):
     assert contour.depth_rate(p, v).value() == pytest.approx(
         contour.n1(p0)[0] * 0.01
     )
+
+
+@pytest.fixture(scope="module")
+def cross_hole():
+    """The rim of a radial hole in a tube: the tool axis (the tube's outer
+    face normal) turns towards and away from n1 along it."""
+    part = load_part(PARTS / "cross_hole.stl", units="mm")
+    return EdgeCurve(choose_edge(sharp_edges(part), near=[0.03, 0.0, 0.048]))
+
+
+def test_the_cross_section_through_a_tool_pressed_in(cross_hole):
+    """A tool point delta along n1 and eps along a from z(s) lies in the
+    cross-section at s (normal to n2): its arc position is s and its depth
+    delta, though the path's own tangent leans off n2 where the axis
+    tilts (the nearest point of the path would be off by tens of um)."""
+    contour = EdgeContour(
+        cross_hole, cutter_radius=r, engagement=e, rule="right"
+    )
+    L = contour.length
+    lean = []
+    for s in np.linspace(0.0, L, 40, endpoint=False):
+        z = contour.point_at(s)
+        n1, t = contour.n1(z), contour.tangent(z)
+        a = contour.tool_axis_at(s)
+        step = 1e-6
+        dz = (contour.point_at(s + step) - contour.point_at(s - step)) / (
+            2 * step
+        )
+        lean.append(abs(n1 @ dz) / np.linalg.norm(dz))
+        for delta, eps in [(5e-4, 0.0), (3e-4, -2e-5), (-2e-4, 1e-4)]:
+            p = z + delta * n1 + eps * a
+            gap = (contour.arc_position(p) - s + 0.5 * L) % L - 0.5 * L
+            assert gap == pytest.approx(0.0, abs=1e-8)
+            assert contour.depth(p) == pytest.approx(delta, abs=1e-8)
+        # n1' ds*/dt: a tool moving along n2 at 1 m/s
+        p = z + 5e-4 * n1
+        rate = contour.n1_rate(p, t)
+        ahead, behind = p + 1e-5 * t, p - 1e-5 * t
+        slope = (contour.n1(ahead) - contour.n1(behind)) / 2e-5
+        np.testing.assert_allclose(
+            rate, slope, atol=1e-3 * np.linalg.norm(slope)
+        )
+    assert max(lean) > 0.02  # the case the cross-section is needed for
+
+
+def test_the_task_frame_turns_with_the_tool(cross_hole):
+    """x3 of the task frame is the tool axis; the frame is fixed in the
+    desired tool rotation (it turns by axis_turn); world z maps onto the
+    start's axis by the least rotation."""
+    contour = EdgeContour(
+        cross_hole, cutter_radius=r, engagement=e, rule="right"
+    )
+    T0 = contour.task_frame(0.0)
+    a0 = contour.tool_axis_at(0.0)
+    np.testing.assert_allclose(T0[:, 2], a0, atol=1e-12)
+    np.testing.assert_allclose(
+        T0 @ np.cross([0.0, 0.0, 1.0], a0),
+        np.cross([0.0, 0.0, 1.0], a0),
+        atol=1e-12,
+    )
+    for s in np.linspace(0.0, contour.length, 13):
+        T = contour.task_frame(s)
+        np.testing.assert_allclose(T.T @ T, np.eye(3), atol=1e-12)
+        np.testing.assert_allclose(T[:, 2], contour.tool_axis_at(s), atol=1e-12)
+        np.testing.assert_allclose(T, contour.axis_turn(s) @ T0, atol=1e-12)
+
+
+def test_a_planar_contours_task_frame_is_the_world():
+    circle = CircularContour((0.0, 0.0, 0.05), 0.027)
+    np.testing.assert_array_equal(circle.task_frame(0.01), np.eye(3))
