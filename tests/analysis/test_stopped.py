@@ -3,6 +3,7 @@ scenario that never reaches steady cutting: the verdict, the oscillation
 and the guard that would have stopped the run."""
 
 import json
+import math
 import time
 
 import pytest
@@ -113,3 +114,39 @@ def test_a_diverging_run_is_unstable_with_its_divergence_time():
     # verdict runs at (a quarter step) the runaway takes about 0.15 s.
     assert result["run"]["divergence_time"] < 0.5
     assert "diverged at t = " in result["verdict_reason"]
+
+
+def test_a_frozen_mode_the_rest_of_the_run_refutes_does_not_decide():
+    # rho 1.00046 at 2.5 ms grows x 280 over 30 s: a run steady for those
+    # 30 s refutes it; 1 s before the end it would grow x 1.2, unseen.
+    from types import SimpleNamespace
+
+    from deburr_drake.analysis.along import RhoPoint
+    from deburr_drake.analysis.report import _steady_verdict
+    from deburr_drake.analysis.settled import SettleTolerances
+
+    rate = -math.log(1.00046) / 0.0025
+
+    def point(t, rho):
+        return RhoPoint(
+            t=t,
+            arc_position=0.01,
+            kind="burr 1",
+            rho=rho,
+            frequency_hz=0.0,
+            decay_rate=-math.log(rho) / 0.0025,
+        )
+
+    run = SimpleNamespace(
+        end_time=40.0, stop_reason="duration", op=SimpleNamespace(time=5.0)
+    )
+    tol = SettleTolerances()
+    early = _steady_verdict(run, [point(9.5, 1.00046), point(20, 0.999)], tol)
+    assert early["verdict"] == "stable"
+    grown = math.exp(-rate * 30.5)  # the growth by the run's end
+    assert f"growth x {grown:.3g} by the run's end" in early["verdict_reason"]
+    assert round(grown) == 273
+    late = _steady_verdict(run, [point(39.0, 1.00046), point(20, 0.999)], tol)
+    assert late["verdict"] == "unstable"
+    assert "t = 39.00 s" in late["verdict_reason"]
+    assert _steady_verdict(run, [point(20, 0.999)], tol)["verdict"] == "stable"
