@@ -95,6 +95,7 @@ def main(argv=None):
 
     if args.check_ends and (unstable(lo) or not unstable(hi)):
         print("the ends do not bracket a limit")
+        _write(args.json, {"lo": lo, "hi": hi, "bracket": False, "runs": runs})
         return 1
     while hi - lo > args.tolerance * hi:
         mid = 0.5 * (lo + hi)
@@ -106,10 +107,14 @@ def main(argv=None):
         f"limit between {lo:.1f} (stable) and {hi:.1f} (unstable): "
         f"{0.5 * (lo + hi):.1f} ({args.numerics}, {args.duration:g} s runs)"
     )
-    if args.json:
-        with open(args.json, "w") as f:
-            json.dump({"lo": lo, "hi": hi, "runs": runs}, f, indent=2)
+    _write(args.json, {"lo": lo, "hi": hi, "bracket": True, "runs": runs})
     return 0
+
+
+def _write(path, out):
+    if path:
+        with open(path, "w") as f:
+            json.dump(out, f, indent=2)
 
 
 if __name__ == "__main__":

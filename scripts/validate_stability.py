@@ -63,6 +63,8 @@ def _verdicts(args):
             f"{guard:>13s} {'yes' if r['agree'] else 'NO':>5s}",
             flush=True,
         )
+        if args.json:  # row by row: a long table survives an interruption
+            _write(args.json, rows)
     agree = sum(r["agree"] for r in rows)
     print(
         f"\n{agree}/{len(rows)} agree (simulation: {args.duration:g} s, "
@@ -73,6 +75,11 @@ def _verdicts(args):
     for r in rows:
         print(f"  {r['index']:2d} {r['label']}: {r['verdict_reason']}")
     return rows
+
+
+def _write(path, out):
+    with open(path, "w") as f:
+        json.dump(out, f, indent=2, default=str)
 
 
 def _boundaries(args):
@@ -155,8 +162,7 @@ def main(argv=None) -> int:
         print(f"validate_stability: error: {e}", file=sys.stderr)
         return 2
     if args.json:
-        with open(args.json, "w") as f:
-            json.dump(out, f, indent=2, default=str)
+        _write(args.json, out)
     return 0
 
 

@@ -420,6 +420,16 @@ VERDICT_SCENARIOS = (
         "paper_6dof",
         "controller: {sliding_gain: [6000.0, 6000.0, 4000.0]}",
     ),
+    (
+        "orientation gain 300",
+        "paper",
+        "controller: {orientation_gain: [300.0, 300.0, 300.0]}",
+    ),
+    (
+        "orientation gain 600",
+        "paper",
+        "controller: {orientation_gain: [600.0, 600.0, 600.0]}",
+    ),
 )
 
 
