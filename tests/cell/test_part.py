@@ -284,47 +284,16 @@ def test_register_compliant_edge_and_part_visual_roles(tmp_path):
         register_compliant_edge(plant, stations, **band)
 
 
-def test_a_mesh_edge_is_a_compliant_band_and_the_parts_mesh(
-    tmp_path, monkeypatch
-):
-    import copy
-    import types
-    from typing import NamedTuple
+def test_a_mesh_edge_is_a_compliant_band_and_the_parts_mesh():
+    from pathlib import Path
 
     from pydrake.systems.framework import DiagramBuilder
-    import trimesh
 
     import deburr_drake.cell.plant as cell_plant
     from deburr_drake.config import load_scenario
 
-    class Stations(NamedTuple):
-        s: np.ndarray
-        points: np.ndarray
-        n1: np.ndarray
-        axis: np.ndarray
-        face_angle: np.ndarray
-
-    class BoreEdge:
-        """The bore's top inner edge as a mesh edge's contour would give
-        its stations."""
-
-        closed = True
-        asked = []
-
-        def stations(self, spacing):
-            self.asked.append(spacing)
-            return Stations(*_circle_stations(spacing))
-
-    stl = tmp_path / "part.stl"
-    trimesh.creation.box(extents=[0.1, 0.1, 0.05]).export(stl)
-    scenario = copy.deepcopy(load_scenario("paper"))
-    scenario.edge = types.SimpleNamespace(
-        kind="mesh",
-        file=str(stl),
-        units="m",
-        pose=types.SimpleNamespace(xyz=[0.0, 0.0, 0.0], rpy=[0.0, 0.0, 0.0]),
-    )
-    monkeypatch.setattr(cell_plant, "make_contour", lambda _: BoreEdge())
+    example = Path(__file__).parents[2] / "examples" / "tube_stl.yaml"
+    scenario = load_scenario(str(example))
     builder = DiagramBuilder()
     plant, scene_graph = cell_plant.add_cell_plant(builder, scenario)
     inspector = scene_graph.model_inspector()
@@ -335,7 +304,8 @@ def test_a_mesh_edge_is_a_compliant_band_and_the_parts_mesh(
     assert props.GetProperty("hydroelastic", "hydroelastic_modulus") == 4.5e6
     assert inspector.GetIllustrationProperties(names["part_visual"])
     assert "tube_edge" not in names
-    # the bore's curvature asks for the ring's own spacing
-    np.testing.assert_allclose(
-        BoreEdge.asked[-1], 2 * np.pi * 0.030 / 120, rtol=1e-4
-    )
+    # the bore's curvature asks for no finer stations than the ring's
+    stations, band = cell_plant.mesh_edge_band(scenario)
+    spacing = np.diff(stations.s)
+    np.testing.assert_allclose(spacing, 2 * np.pi * 0.027 / 120, rtol=0.02)
+    assert band["width"] == scenario.tube.wall_thickness
