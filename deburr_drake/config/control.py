@@ -58,8 +58,30 @@ class CommandConfig:
     # The clamp sits above the steady feeds (f_td - P'_th) / g of the
     # scenarios' ranges.
     max_feed: float = 0.02
+    # -, the feed law (FEED_LAWS). paper: v scales the tool's measured
+    # speed, and x_c starts v T ahead of x_p every period (R6). A steady
+    # lag e of the tool behind x_c then costs e / T of feed, and the law,
+    # proportional in the force error, leaves that loss as a steady force
+    # error: a lag the fuzzy terms leave where the load along the edge
+    # turns faster than they learn it (a 3-D edge's turning tool axis and
+    # tight curves). integrating: while cutting, v scales the last
+    # commanded feed instead (v_{k+1} = v_k (f_td - P'_th) / (f_t -
+    # P'_th)), so the law integrates the force error and no lag leaves
+    # one; below the cutting threshold the default feed advances x_c from
+    # the last command, not from x_p, so a tool held back at the entry by
+    # joint friction and the model's gravity error meets a growing
+    # position error instead of one capped at v0 T.
+    feed_law: str = "paper"
+
+    FEED_LAWS = ("paper", "integrating")
 
     def validate(self):
+        _require(
+            self.feed_law in self.FEED_LAWS,
+            "command.feed_law",
+            self.feed_law,
+            "one of " + ", ".join(self.FEED_LAWS),
+        )
         for name in (
             "period",
             "default_feed",

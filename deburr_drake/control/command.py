@@ -79,6 +79,10 @@ class CommandGenerator(LeafSystem):
     - Discrete state (COMMAND_STATE layout): x_c (m), feed (m/s), arc
       position of x_c (m, unwrapped, counts progress past one revolution).
 
+    With ``config.feed_law`` integrating the law scales the last commanded
+    feed while cutting, and below the cutting threshold x_c advances from
+    the last command (CommandConfig.feed_law says why).
+
     With ``constant_feed`` v (m/s) there is no feedrate law and no
     feedback: x_c((k+1)T) lies v T of arc ahead of x_c(kT) whatever the
     tool does (a timed path, what the constant-feed baselines of
@@ -199,9 +203,19 @@ class CommandGenerator(LeafSystem):
         x_p = CHAMFER_STATE.get(chamfer, "x_p")
         xdot_p = CHAMFER_STATE.get(chamfer, "xdot_p")
         n2 = CHAMFER_STATE.get(chamfer, "n2")
+        f_t = CHAMFER_STATE.get(chamfer, "f_t")
+        previous = context.get_discrete_state(self._state_index).get_value()
+        integrating = c.feed_law == "integrating"
+        cutting = f_t - c.threshold_power_force > c.force_offset
+        # The speed the law scales (CommandConfig.feed_law).
+        speed = (
+            COMMAND_STATE.get(previous, "feed")
+            if integrating
+            else float(n2 @ xdot_p)
+        )
         v = feedrate(
-            float(n2 @ xdot_p),
-            CHAMFER_STATE.get(chamfer, "f_t"),
+            speed,
+            f_t,
             desired_force=self._task.desired_chamfering_force,
             threshold_force=c.threshold_power_force,
             force_offset=c.force_offset,
@@ -210,11 +224,17 @@ class CommandGenerator(LeafSystem):
         )
         ds = v * self._period
         contour = self._contour_now(context)
+        s_previous = COMMAND_STATE.get(previous, "arc_position")
+        if integrating and not cutting:
+            x_c = contour.advance(COMMAND_STATE.get(previous, "x_c"), ds)
+            discrete_state.set_value(
+                self._state_index,
+                COMMAND_STATE.pack(
+                    x_c=x_c, feed=v, arc_position=s_previous + ds
+                ),
+            )
+            return
         x_c = contour.advance(x_p, ds)
-        s_previous = COMMAND_STATE.get(
-            context.get_discrete_state(self._state_index).get_value(),
-            "arc_position",
-        )
         s_p = contour.unwrapped_arc_position(x_p, s_previous)
         discrete_state.set_value(
             self._state_index,

@@ -130,7 +130,8 @@ def HybridController_(T):
           has them; only ``fuzzy`` adapts theta, and the constant-feed
           laws leave delta_d alone; then int s_k dt (m) on each axis k
           with ``integral_lambda`` > 0 (f_tau_k + K_k lambda_I,k int s_k,
-          after the law's f_tau).
+          after the law's f_tau); when ``contour.varying_frame``, instead
+          three states, the integral's force as a world vector (N).
         - With ``control_period`` T > 0 the law runs as the paper's digital
           inner loop: at t = kT (and at initialization) it is evaluated once
           from the inputs and a discrete state holds the actuation, the
@@ -218,7 +219,7 @@ def HybridController_(T):
             # State [delta_d, theta, int s on the integral axes], the
             # inputs, the outputs.
             self._n_theta = len(self._axes) * self._n_rules
-            n_states = 1 + self._n_theta + len(self._integral_axes)
+            n_states = 1 + self._n_theta + self._n_integral
             self.DeclareContinuousState(n_states)
             self._ports = self._declare_inputs(fuzzy_weight_input)
             self._declare_outputs(n_states)
@@ -270,6 +271,13 @@ def HybridController_(T):
             # Chosen once: a planar contour's R_d is a constant and its
             # task axes are the world's.
             varying = contour is not None and contour.varying_frame
+            # Along a 3-D edge int s is held as a world vector (see
+            # _with_integral); on the task axes otherwise.
+            self._n_integral = (
+                3
+                if varying and self._integral_axes
+                else len(self._integral_axes)
+            )
             self._axis_turn = contour.axis_turn if varying else None
             self._task_frame = contour.task_frame if varying else None
             self._lambda_o = np.asarray(c.orientation_lambda, float)
@@ -422,7 +430,7 @@ def HybridController_(T):
                 ),
                 rates,
             )
-            force = self._with_integral(force, x, s, rates)
+            force = self._with_integral(force, x, s, rates, to_task)
             # Joint torques.
             tau = self._joint_torque(
                 p["plant_state"],
@@ -446,16 +454,30 @@ def HybridController_(T):
                 ),
             )
 
-        def _with_integral(self, force, x, s, rates):
+        def _with_integral(self, force, x, s, rates, to_task):
             """f_tau + K lambda_I int s on the integral axes, whose states
-            integrate s."""
+            integrate s.
+
+            With turning task axes (``to_task``, columns world) the states
+            are a world force, int R K lambda_I s dt over the integral
+            axes' columns of R = ``to_task``, and it acts on every task
+            axis: what the integral takes out is a force fixed
+            in the world (the model's gravity error), so what it learned
+            along the tool axis stays put when the axis turns, and the part
+            now across the axis reaches the fuzzy axes at once instead of
+            being learned again by their adaptation."""
             axes = self._integral_axes
             if not axes:
                 return force
             start = 1 + self._n_theta
-            rates[start:] = s[axes]
             f_tau = force.f_tau.copy()
-            f_tau[axes] = f_tau[axes] + self._K_integral * x[start:]
+            if to_task is None:
+                rates[start:] = s[axes]
+                f_tau[axes] = f_tau[axes] + self._K_integral * x[start:]
+                return force._replace(f_tau=f_tau)
+            rates[start:] = to_task[:, axes] @ (self._K_integral * s[axes])
+            f_world = x[start:]
+            f_tau = f_tau + to_task.T @ f_world
             return force._replace(f_tau=f_tau)
 
         @staticmethod

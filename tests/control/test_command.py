@@ -94,6 +94,47 @@ def test_command_advances_on_contour(f_t, speed, expected):
     )
 
 
+def _step_from(generator, previous, chamfer):
+    context = generator.CreateDefaultContext()
+    context.SetDiscreteState(previous)
+    generator.GetInputPort("chamfer_state").FixValue(context, chamfer)
+    xd = generator.EvalUniquePeriodicDiscreteUpdate(context).get_vector(0)
+    return COMMAND_STATE.split(xd.CopyToVector())
+
+
+def test_integrating_feed_law():
+    """feed_law integrating: cutting, v scales the last commanded feed
+    (not the tool's speed) and x_c starts from x_p (R6); below the
+    cutting threshold the default feed advances x_c from the last
+    command, so a tool that does not follow meets a growing error."""
+    config = CommandConfig(feed_law="integrating")
+    task = TaskConfig()
+    x0 = CONTOUR.point_at(0.01)
+    generator = CommandGenerator(config, task, CONTOUR, x0)
+    x_p = x0 + 0.0005 * CONTOUR.n1(x0)
+    # The tool lags: 1 mm/s against a 2 mm/s command, f_t 6 N.
+    previous = COMMAND_STATE.pack(
+        x_c=CONTOUR.point_at(0.0101), feed=0.002, arc_position=0.0101
+    )
+    out = _step_from(
+        generator, previous, _chamfer(x_p, 0.001 * CONTOUR.tangent(x0), 6.0)
+    )
+    v = 0.002 * 8.0 / 4.0
+    assert out["feed"] == pytest.approx(v, rel=1e-9)
+    assert CONTOUR.arc_position(out["x_c"]) == pytest.approx(
+        0.01 + v * config.period, abs=1e-12
+    )
+    # Not cutting (f_t 1 N), the tool standing: the command moves on
+    # from where it was, v0 T further.
+    out = _step_from(generator, previous, _chamfer(x_p, np.zeros(3), 1.0))
+    assert out["feed"] == pytest.approx(config.default_feed, rel=1e-12)
+    s = 0.0101 + config.default_feed * config.period
+    assert CONTOUR.arc_position(out["x_c"]) == pytest.approx(s, abs=1e-12)
+    assert out["arc_position"] == pytest.approx(s, abs=1e-12)
+    with pytest.raises(ConfigError, match="command.feed_law"):
+        CommandConfig(feed_law="fast").validate()
+
+
 def test_command_counts_arc_past_one_revolution():
     config, task = CommandConfig(), TaskConfig()
     L = CONTOUR.length

@@ -548,12 +548,17 @@ def test_the_law_works_on_the_task_axes(model, tilted_circle):
     theta = np.random.default_rng(3).uniform(
         -5.0, 5.0, (2, make_rule_bases(config)[0].n_rules)
     )
+    # delta_d, theta, then the integral: int s_3 dt (m) on the world
+    # controller's x3, the same as a world force (N) on the framed one's.
+    K_I = config.sliding_gain[2] * config.integral_lambda[2]
     contexts = []
-    for controller, values in ((framed, inputs), (world, rotated)):
+    for controller, values, integral in (
+        (framed, inputs, K_I * 2e-5 * Q[:, 2]),
+        (world, rotated, [2e-5]),
+    ):
         context = _context(controller, values, 4e-4)
-        # delta_d, theta, int s_3 dt (m)
         context.SetContinuousState(
-            np.concatenate([[4e-4], theta.ravel(), [2e-5]])
+            np.concatenate([[4e-4], theta.ravel(), integral])
         )
         contexts.append(context)
 
@@ -580,9 +585,84 @@ def test_the_law_works_on_the_task_axes(model, tilted_circle):
         ctl.EvalTimeDerivatives(ctx).CopyToVector()
         for ctl, ctx in zip((framed, world), contexts)
     ]
-    np.testing.assert_allclose(rates[0], rates[1], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(
+        rates[0][:-3], rates[1][:-1], rtol=1e-9, atol=1e-12
+    )
+    np.testing.assert_allclose(
+        rates[0][-3:], K_I * rates[1][-1] * Q[:, 2], rtol=1e-9, atol=1e-12
+    )
     f_tau = CONTROLLER_DIAGNOSTICS.get(d_w, "f_tau")
     np.testing.assert_allclose(
         out(framed, contexts[0], "actuation"), Q @ f_tau, atol=1e-9
     )
     assert np.linalg.norm(Q @ f_tau - f_tau) > 1.0
+
+
+def test_the_integral_holds_a_world_force_along_a_turning_axis(
+    model, tilted_circle
+):
+    """Along a 3-D edge the integral is a world force (3 states, N): its
+    rate is K_3 lambda_I s_3 along the tool axis, and where the task axes
+    have turned it acts on every task axis as the same world force (what
+    it learned along the old tool axis now partly across the new one)."""
+    tilt = np.radians(15.0)
+    c, s_ = np.cos(tilt), np.sin(tilt)
+    turned = np.array([[1.0, 0.0, 0.0], [0.0, c, -s_], [0.0, s_, c]])
+    frames = {"Q": np.eye(3)}
+
+    class Framed(tilted_circle):
+        def task_frame(self, s):
+            return frames["Q"]
+
+    edge = Framed([0.0, 0.0, 0.048], 0.027, 0.0)
+    config = ControllerConfig(
+        control_period=0.0,
+        sliding_gain=[400.0, 400.0, 4000.0],
+        integral_lambda=[0.0, 0.0, 2.0],
+        gravity_compensation=False,
+    )
+    controller = HybridController(model, "tool_tip", config, contour=edge)
+    base = HybridController(
+        model,
+        "tool_tip",
+        ControllerConfig(
+            control_period=0.0,
+            sliding_gain=[400.0, 400.0, 4000.0],
+            gravity_compensation=False,
+        ),
+        contour=edge,
+    )
+    n = base.num_continuous_states()
+    assert controller.num_continuous_states() == n + 3
+    x_p, v, force, x_c, v_c, _ = _scenario_point()
+    inputs = _inputs(x_p, v, force, x_c, v_c, 6.0)
+    learned = np.array([0.0, 0.0, -60.0])  # N, world
+    for Q in (np.eye(3), turned):
+        frames["Q"] = Q
+        context = _context(controller, inputs, 3e-4)
+        x = context.get_continuous_state_vector().CopyToVector()
+        x[n:] = learned
+        context.SetContinuousState(x)
+        base_context = _context(base, inputs, 3e-4)
+
+        def f_tau(ctl, ctx):
+            return CONTROLLER_DIAGNOSTICS.get(
+                ctl.GetOutputPort("diagnostics").Eval(ctx), "f_tau"
+            )
+
+        np.testing.assert_allclose(
+            f_tau(controller, context),
+            f_tau(base, base_context) + Q.T @ learned,
+            rtol=1e-12,
+            atol=1e-9,
+        )
+        s3 = CONTROLLER_DIAGNOSTICS.get(
+            controller.GetOutputPort("diagnostics").Eval(context), "s"
+        )[2]
+        np.testing.assert_allclose(
+            controller.EvalTimeDerivatives(context).CopyToVector()[n:],
+            4000.0 * 2.0 * s3 * Q[:, 2],
+            rtol=1e-12,
+        )
+    # Turned 15 deg, -60 N along the old axis is -60 sin 15 deg across.
+    assert (turned.T @ learned)[1] == pytest.approx(-60.0 * np.sin(tilt))
