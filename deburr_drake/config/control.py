@@ -70,10 +70,12 @@ class CommandConfig:
     # one; below the cutting threshold the default feed advances x_c from
     # the last command, not from x_p, so a tool held back at the entry by
     # joint friction and the model's gravity error meets a growing
-    # position error instead of one capped at v0 T.
-    feed_law: str = "paper"
+    # position error instead of one capped at v0 T. auto: the paper's law
+    # on a planar edge (the paper's experiment as published), integrating
+    # along a CAD part's 3-D edge, where the tool axis and the load turn.
+    feed_law: str = "auto"
 
-    FEED_LAWS = ("paper", "integrating")
+    FEED_LAWS = ("auto", "paper", "integrating")
 
     def validate(self):
         _require(

@@ -123,6 +123,10 @@ class CommandGenerator(LeafSystem):
                 "is invalid: allowed a finite number > 0"
             )
         self._constant_feed = constant_feed
+        # The feed law, chosen once (CommandConfig.feed_law).
+        self._integrating = config.feed_law == "integrating" or (
+            config.feed_law == "auto" and contour.varying_frame
+        )
         start = contour.project(np.asarray(initial_position, float))
         s0 = contour.arc_position(start)
         self._state_index = self.DeclareDiscreteState(
@@ -205,7 +209,7 @@ class CommandGenerator(LeafSystem):
         n2 = CHAMFER_STATE.get(chamfer, "n2")
         f_t = CHAMFER_STATE.get(chamfer, "f_t")
         previous = context.get_discrete_state(self._state_index).get_value()
-        integrating = c.feed_law == "integrating"
+        integrating = self._integrating
         cutting = f_t - c.threshold_power_force > c.force_offset
         # The speed the law scales (CommandConfig.feed_law).
         speed = (

@@ -135,6 +135,29 @@ def test_integrating_feed_law():
         CommandConfig(feed_law="fast").validate()
 
 
+def test_auto_feed_law_planar_paper_3d_integrating():
+    """feed_law auto (the default): a planar contour keeps the paper's
+    law (v scales the tool's speed), a contour whose tool frame turns
+    gets the integrating one (v scales the last commanded feed)."""
+    import copy
+
+    turning = copy.copy(CONTOUR)
+    turning.varying_frame = True
+    x0 = CONTOUR.point_at(0.01)
+    x_p = x0 + 0.0005 * CONTOUR.n1(x0)
+    previous = COMMAND_STATE.pack(
+        x_c=CONTOUR.point_at(0.0101), feed=0.002, arc_position=0.0101
+    )
+    chamfer = _chamfer(x_p, 0.001 * CONTOUR.tangent(x0), 6.0)
+    feeds = []
+    for contour in (CONTOUR, turning):
+        generator = CommandGenerator(CommandConfig(), TaskConfig(), contour, x0)
+        feeds.append(_step_from(generator, previous, chamfer)["feed"])
+    assert CommandConfig().feed_law == "auto"
+    assert feeds[0] == pytest.approx(0.001 * 8.0 / 4.0, rel=1e-9)
+    assert feeds[1] == pytest.approx(0.002 * 8.0 / 4.0, rel=1e-9)
+
+
 def test_command_counts_arc_past_one_revolution():
     config, task = CommandConfig(), TaskConfig()
     L = CONTOUR.length
