@@ -49,7 +49,13 @@ from deburr_drake.math.mesh_part import (
     sharp_edges,
 )
 
-__all__ = ["EdgeContour", "Stations", "face_rule", "load_edge"]
+__all__ = [
+    "EdgeContour",
+    "Stations",
+    "chamfer_area_ratio",
+    "face_rule",
+    "load_edge",
+]
 
 _RULES = ("left", "right")
 # -, the least difference of the two faces' mean cosines to a direction
@@ -58,14 +64,16 @@ _FACE_MARGIN = 0.05
 # rad: how far the side plane may turn into a face before it is a gouge
 # (a faceted mesh's smoothed normals on a 90-degree edge scatter by less)
 _GOUGE_TOLERANCE = 0.02
-# columns of the splines in s: tool point z, n1, n2, axis a, and q (the
-# edge's arc length u less its mean rate, periodic on a loop)
-_Z, _N1, _T, _A, _Q = (
+# columns of the splines in s: tool point z, n1, n2, axis a, q (the
+# edge's arc length u less its mean rate, periodic on a loop) and the two
+# faces' outward normals' components along n1 and a (left, then right)
+_Z, _N1, _T, _A, _Q, _F = (
     slice(0, 3),
     slice(3, 6),
     slice(6, 9),
     slice(9, 12),
     slice(12, 13),
+    slice(13, 17),
 )
 
 
@@ -308,7 +316,17 @@ class EdgeContour(Contour):
         f, n1, axis = self._geometry(u)
         z = f.point - self._r * n1 - self._e * axis
         rate = self._d * self._edge_length / L if self._closed else 0.0
-        data = np.column_stack([z, n1, self._d * f.n2, axis, u - rate * s])
+        faces = np.column_stack(
+            [
+                _dot(f.left_normal, n1),
+                _dot(f.left_normal, axis),
+                _dot(f.right_normal, n1),
+                _dot(f.right_normal, axis),
+            ]
+        )
+        data = np.column_stack(
+            [z, n1, self._d * f.n2, axis, u - rate * s, faces]
+        )
         if self._closed:
             data[-1] = data[0]
         spline = CubicSpline(
@@ -318,7 +336,7 @@ class EdgeContour(Contour):
         self._rate = rate
         self._n = n
         self._h = L / n
-        self._C = np.ascontiguousarray(np.moveaxis(spline.c, 1, 0))  # n,4,13
+        self._C = np.ascontiguousarray(np.moveaxis(spline.c, 1, 0))  # n,4,17
         # per piece: the cubic's coefficients of z, then of t
         self._rows = np.concatenate(
             [
@@ -352,7 +370,7 @@ class EdgeContour(Contour):
         return self._C[k], s - k * self._h
 
     def _values(self, s):
-        """All 13 columns at a float s (already wrapped or clamped)."""
+        """All the columns at a float s (already wrapped or clamped)."""
         c, x = self._piece(s)
         return np.dot((x * x * x, x * x, x, 1.0), c)
 
@@ -415,7 +433,7 @@ class EdgeContour(Contour):
         return s
 
     def _at(self, p):
-        """(s*, the 13 columns at s*) for a point p (AutoDiff: its value)."""
+        """(s*, the columns at s*) for a point p (AutoDiff: its value)."""
         s = self._locate(_vec3_float(p, "p"))
         return s, self._values(s)
 
@@ -520,6 +538,19 @@ class EdgeContour(Contour):
         a(s) and the frame turns with the desired tool rotation."""
         return self.axis_turn(s) @ self._task0
 
+    def chamfer_scale(self, s, delta, height):
+        """The chamfer's cross-section at arc position s over delta *
+        ``height`` (m): the part of the faces' wedge within delta of the
+        cutter's side plane and above its tip (``height`` below the edge
+        along the axis), in the (n1, a) plane through the edge point
+        (``chamfer_area_ratio``); 1 where one face runs along -a and the
+        other along n1."""
+        s = self._clamp(_finite_scalar(s, "s"))
+        left_n1, left_a, right_n1, right_a = self._values(s)[_F]
+        return chamfer_area_ratio(
+            ((left_n1, left_a), (right_n1, right_a)), delta, height
+        )
+
     def edge_u(self, s):
         """The edge's arc length u (m, in [0, edge length)) at arc
         position s."""
@@ -554,6 +585,58 @@ class EdgeContour(Contour):
             s[0] = 0.0
         f, n1, axis = self._geometry(self._curve._u(u))
         return Stations(s, f.point, n1, axis, f.face_angle)
+
+
+def _clipped_integral(slope, offset, x0, x1):
+    """The integral of max(0, slope x + offset) over [x0, x1] (x0 <= x1)."""
+    if x1 <= x0:
+        return 0.0
+    h0, h1 = slope * x0 + offset, slope * x1 + offset
+    if h0 >= 0.0 and h1 >= 0.0:
+        return offset * (x1 - x0) + 0.5 * slope * (x1 * x1 - x0 * x0)
+    if h0 <= 0.0 and h1 <= 0.0:
+        return 0.0
+    root = -offset / slope  # inside (x0, x1): h changes sign there
+    return 0.5 * (h0 * (root - x0) if h0 > 0.0 else h1 * (x1 - root))
+
+
+def chamfer_area_ratio(faces, delta, height):
+    """The chamfer's cross-section over delta * ``height`` on a convex edge.
+
+    In the plane through the edge point spanned by n1 (x, into the
+    material) and the tool axis a (y, towards the holder), the material
+    is the wedge {x n_x + y n_y <= 0 for both faces}, ``faces`` the two
+    faces' outward normals as (n_x, n_y) = (n . n1, n . a). The cutter
+    removes the part of it with 0 <= x <= delta (its side plane at x = 0
+    supports the part) and y >= -height (its tip). A face with n_y > 0
+    bounds the wedge above by y = k x, k = -n_x / n_y, one with n_y < 0
+    below; with x >= 0 the lower of the upper lines (k_u) and the higher
+    of the lower ones (k_l) bound it, so the section's height at x is
+    k_u x - max(-height, k_l x), clipped at zero. Exactly 1 for the faces
+    (0, 1) and (-1, 0) (one face along n1, the other along -a: the planar
+    contours' rectangle). delta <= 0: 1 (no cut; the area is zero either
+    way)."""
+    if not delta > 0.0:
+        return 1.0
+    upper, lower = math.inf, -math.inf
+    for n_x, n_y in faces:
+        if n_y > 0.0:
+            upper = min(upper, -n_x / n_y)
+        elif n_y < 0.0:
+            lower = max(lower, -n_x / n_y)
+        elif n_x > 0.0:  # a face along a: no material at x > 0
+            return 0.0
+    if upper == math.inf:
+        raise ValueError(
+            "no face bounds the chamfer towards the tool's holder: the "
+            "tool axis points into the part"
+        )
+    # below x_break the lower face bounds the section, beyond it the tip
+    x_break = min(delta, height / -lower) if lower < 0.0 else delta
+    area = _clipped_integral(
+        upper - lower, 0.0, 0.0, x_break
+    ) + _clipped_integral(upper, height, x_break, delta)
+    return area / (delta * height)
 
 
 def face_rule(curve: EdgeCurve, direction) -> str:

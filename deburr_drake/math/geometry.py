@@ -157,6 +157,12 @@ class Contour(abc.ABC):
         world's axes here (the tool vertical)."""
         return np.eye(3)
 
+    def chamfer_scale(self, s, delta, height):
+        """The chamfer's cross-section at arc position s over delta *
+        ``height`` (the cut's depth and height, m): 1, a vertical tool
+        cutting a vertical wall under a horizontal top face."""
+        return 1.0
+
     @abc.abstractmethod
     def phi(self, p):
         """Signed planar distance: > 0 free side, < 0 material (T-generic)."""

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from deburr_drake.math.edge_contour import EdgeContour
+from deburr_drake.math.edge_contour import EdgeContour, chamfer_area_ratio
 from deburr_drake.math.geometry import CircularContour
 from deburr_drake.math.mesh_part import (
     EdgeCurve,
@@ -351,3 +351,92 @@ def test_the_task_frame_turns_with_the_tool(cross_hole):
 def test_a_planar_contours_task_frame_is_the_world():
     circle = CircularContour((0.0, 0.0, 0.05), 0.027)
     np.testing.assert_array_equal(circle.task_frame(0.01), np.eye(3))
+
+
+def test_the_chamfer_area_of_a_planar_edge_is_delta_times_height():
+    """A face along n1 (normal a) and one along -a (normal -n1): the
+    rectangle delta x height, exactly; nothing cut, nothing to scale."""
+    faces = ((0.0, 1.0), (-1.0, 0.0))
+    for delta in (1e-5, 3e-4, 2.5e-3):
+        assert chamfer_area_ratio(faces, delta, e) == 1.0
+    assert chamfer_area_ratio(faces, 0.0, e) == 1.0
+    circle = CircularContour([0.0, 0.0, TOP - e], R - r)
+    assert circle.chamfer_scale(0.0, 3e-4, e) == 1.0
+
+
+def test_the_wedges_chamfer_with_the_tool_along_its_sloped_face(wedge):
+    """120 deg between the faces, the side plane in the sloped face: the
+    top face rises 30 deg off n1 from the edge, so the section is the
+    rectangle delta x e plus the triangle delta^2 tan(30 deg) / 2."""
+    contour = EdgeContour(
+        wedge, cutter_radius=r, engagement=e, rule="left", tilt=-math.pi / 6
+    )
+    for delta in (1e-4, 5e-4, 1.5e-3):
+        area = delta * e + 0.5 * delta**2 * math.tan(math.pi / 6)
+        for s in np.linspace(0.0, contour.length, 7):
+            assert contour.chamfer_scale(s, delta, e) == pytest.approx(
+                area / (delta * e), rel=1e-6
+            )
+
+
+@pytest.mark.parametrize("delta", [2e-4, 5e-4, 1.5e-3])
+def test_the_chamfer_under_a_tilted_tool(inclined, delta):
+    """A 90-degree rim, the tool tilted theta from the top face's normal
+    towards the material: the top face rises as y = x tan(theta), the
+    wall falls as y = -x cot(theta) until the tip's y = -e (at x = e
+    tan(theta)), so the section is delta^2 (tan + cot) / 2 before that
+    and delta^2 tan / 2 + e delta - e^2 tan / 2 beyond it."""
+    theta = 0.2
+    contour = EdgeContour(
+        inclined, cutter_radius=r, engagement=e, rule="right", tilt=theta
+    )
+    tan = math.tan(theta)
+    if delta < e * tan:
+        area = 0.5 * delta**2 * (tan + 1.0 / tan)
+    else:
+        area = 0.5 * delta**2 * tan + e * delta - 0.5 * e**2 * tan
+    for s in np.linspace(0.0, contour.length, 9):
+        assert contour.chamfer_scale(s, delta, e) == pytest.approx(
+            area / (delta * e), rel=2e-4
+        )
+    upright = EdgeContour(inclined, cutter_radius=r, engagement=e, rule="right")
+    for s in np.linspace(0.0, upright.length, 9):
+        assert upright.chamfer_scale(s, delta, e) == pytest.approx(1, abs=1e-4)
+
+
+def test_the_chamfer_area_by_a_polygon():
+    """Against the wedge clipped by the strip and the tip as a polygon
+    (shoelace), for random convex wedges the side plane supports."""
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        # the faces' rays at angles from -a (the lower) and from n1
+        lo = rng.uniform(-0.5 * math.pi, 0.4)
+        hi = rng.uniform(max(lo + 0.3, -0.3), 0.5 * math.pi)
+        rays = [(math.cos(lo), math.sin(lo)), (math.cos(hi), math.sin(hi))]
+        # outward normals: the lower ray's turned clockwise, the upper's
+        # counter-clockwise (the wedge between the rays is the material)
+        faces = ((rays[0][1], -rays[0][0]), (-rays[1][1], rays[1][0]))
+        delta = rng.uniform(1e-4, 3e-3)
+        box = [(0.0, -e), (delta, -e), (delta, 1.0), (0.0, 1.0)]
+        for n_x, n_y in faces:
+            out = []
+            for k, p in enumerate(box):
+                q = box[(k + 1) % len(box)]
+                dp, dq = p[0] * n_x + p[1] * n_y, q[0] * n_x + q[1] * n_y
+                if dp <= 0.0:
+                    out.append(p)
+                if dp * dq < 0.0:
+                    w = dp / (dp - dq)
+                    out.append(
+                        (p[0] + w * (q[0] - p[0]), p[1] + w * (q[1] - p[1]))
+                    )
+            box = out
+        area = 0.5 * abs(
+            sum(
+                box[k][0] * box[k - 1][1] - box[k - 1][0] * box[k][1]
+                for k in range(len(box))
+            )
+        )
+        assert chamfer_area_ratio(faces, delta, e) * delta * e == (
+            pytest.approx(area, rel=1e-9, abs=1e-15)
+        )
