@@ -121,7 +121,8 @@ def cutting_force(
     """(force on the tool (3, N, world), PROCESS_STATE vector).
 
     ||f_t|| = g |v_t| + h |v_n| + P'_th (3), g = k_c s (chamfer area + burr
-    area), chamfer area = delta * cut_height, s the material removed per
+    area), chamfer area = delta * cut_height times the contour's
+    ``chamfer_scale`` (1 on a planar edge), s the material removed per
     metre of the cutter centre's travel on the edge's curvature against a
     straight edge (math.geometry.removal_scale, with ``cutter_radius``;
     None: 1, the straight-edge law), v_t the speed along the edge
@@ -137,6 +138,7 @@ def cutting_force(
         if cutter_radius is None
         else removal_scale(contour.curvature(x_p), delta, cutter_radius)
     )
+    chamfer = contour.chamfer_scale(arc, delta, cut_height)
     return _force(
         config,
         n1,
@@ -148,6 +150,7 @@ def cutting_force(
         burr_area,
         overlap,
         removal,
+        chamfer,
     )
 
 
@@ -176,14 +179,15 @@ def _engagement(
     burr_area,
     overlap=1.0,
     removal=1.0,
+    chamfer=1.0,
 ):
-    """(engagement 0..1, g of (3) in N s/m)."""
+    """(engagement 0..1, g of (3) in N s/m). ``chamfer``: the chamfer
+    area over delta * cut_height (the contour's ``chamfer_scale``)."""
     on = _smoothstep(delta / config.threshold_depth) * overlap
-    g = (
-        config.cutting_coefficient
-        * removal
-        * (max(delta, 0.0) * cut_height + burr_area)
-    )
+    area = max(delta, 0.0) * cut_height
+    if chamfer != 1.0:  # a planar edge's force is not rounded differently
+        area *= chamfer
+    g = config.cutting_coefficient * removal * (area + burr_area)
     return on, g
 
 
@@ -198,10 +202,13 @@ def _force(
     burr_area,
     overlap=1.0,
     removal=1.0,
+    chamfer=1.0,
 ):
     v_n = float(n1 @ xdot_p)
     v_along = float(tangent @ xdot_p)
-    on, g = _engagement(config, delta, cut_height, burr_area, overlap, removal)
+    on, g = _engagement(
+        config, delta, cut_height, burr_area, overlap, removal, chamfer
+    )
     along = on * (
         g * v_along
         + (config.threshold_power_force + config.plunge_coefficient * abs(v_n))
@@ -253,6 +260,7 @@ def force_law_terms(
     burr_area: float = 0.0,
     overlap: float = 1.0,
     removal: float = 1.0,
+    chamfer: float = 1.0,
     v=None,
     inertia=None,
     nu: int | None = None,
@@ -273,7 +281,8 @@ def force_law_terms(
     4 nv + 9 + nu + 1, :func:`force_law_terms_size`). The place on the
     edge (tangent, n1, g, the engagement) and the plunge speed v_n are the
     sample's; u and s follow the velocities. ``removal``: the edge's
-    curvature factor on g (:func:`cutting_force`).
+    curvature factor on g, ``chamfer`` its cross-section's factor on the
+    chamfer area (:func:`cutting_force`).
 
     ``held`` (``process.sample_mean``, needs ``v``): A = 0, S = 0, and
     the force along the edge is instead held over the sample at its exact
@@ -311,6 +320,7 @@ def force_law_terms(
         burr_area,
         overlap,
         removal,
+        chamfer,
         None if v is None else np.asarray(v, float),
         None if inertia is None else np.asarray(inertia, float),
         J.shape[1] if nu is None else nu,
@@ -357,6 +367,7 @@ def _sample(
     burr_area,
     overlap,
     removal,
+    chamfer,
     v,
     inertia,
     nu,
@@ -364,7 +375,9 @@ def _sample(
 ):
     """(PROCESS_STATE vector, :func:`force_law_terms`) at one sample: one
     pass over the engagement, speeds and directions (float arrays in)."""
-    on, g = _engagement(config, delta, cut_height, burr_area, overlap, removal)
+    on, g = _engagement(
+        config, delta, cut_height, burr_area, overlap, removal, chamfer
+    )
     v_n = float(n1 @ xdot_p)
     v_along = float(tangent @ xdot_p)
     power = config.threshold_power_force + config.plunge_coefficient * abs(v_n)
@@ -745,6 +758,8 @@ class CuttingProcess(LeafSystem):
         overlap = material_overlap(
             self._contour, arc, delta, self._cutter_radius
         )
+        # the faces' wedge cut (1 on a planar edge: not multiplied in)
+        chamfer = self._contour.chamfer_scale(arc, delta, self._cut_height)
         if delta > 0.0 and overlap > 0.0:
             finish = discrete_state.get_mutable_value(self._finish_index)
             k = self._bins.index(arc)
@@ -779,6 +794,7 @@ class CuttingProcess(LeafSystem):
             area,
             overlap,
             removal,
+            chamfer,
             v,
             inertia,
             self._nu,

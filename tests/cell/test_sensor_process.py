@@ -244,3 +244,38 @@ def test_chamfering_force_on_fillets_follows_the_material_removed():
     assert g["boss", "fillet"] / g["boss", "line"] == pytest.approx(
         (0.010 - delta / 2) / (0.013 - delta)
     )
+
+
+def test_chamfering_force_along_a_cad_edge_cuts_the_faces_wedge():
+    """Along the 120-degree wedge (the tool along its sloped face) the
+    chamfer is delta h plus the triangle the rising top face adds:
+    g = k_c (delta h + delta^2 tan(30 deg) / 2)."""
+    import math
+    from pathlib import Path
+
+    from deburr_drake.cell.process import PROCESS_STATE, cutting_force
+    from deburr_drake.math.edge_contour import EdgeContour
+    from deburr_drake.math.mesh_part import (
+        EdgeCurve,
+        choose_edge,
+        load_part,
+        sharp_edges,
+    )
+
+    part = load_part(
+        Path(__file__).resolve().parents[2] / "models/parts/wedge.stl",
+        units="mm",
+    )
+    curve = EdgeCurve(choose_edge(sharp_edges(part), near=[0.04, 0.03, 0.02]))
+    h, delta = 0.002, 5e-4
+    c = EdgeContour(
+        curve, cutter_radius=0.003, engagement=h, rule="left", tilt=-math.pi / 6
+    )
+    config = ProcessConfig(cutting_coefficient=3.0e9)
+    p = c.point_at(0.5 * c.length)
+    x = p + delta * c.n1(p)
+    _, state = cutting_force(config, c, x, 2e-3 * c.tangent(x), cut_height=h)
+    area = delta * h + 0.5 * delta**2 * math.tan(math.pi / 6)
+    assert PROCESS_STATE.get(state, "g") == pytest.approx(
+        3.0e9 * area, rel=1e-5
+    )
