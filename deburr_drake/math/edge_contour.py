@@ -78,11 +78,11 @@ _Z, _N1, _T, _A, _Q, _F = (
 
 
 class Stations(NamedTuple):
-    """The edge sampled for the contact mesher: arc positions ``s`` (m, the
-    tool path's), the edge's points (m, world), n1 and the tool axis
+    """The edge sampled for the contact mesher: arc positions ``arc`` (m,
+    the tool path's), the edge's points (m, world), n1 and the tool axis
     (unit) and the faces' angle through the material (rad) there."""
 
-    s: np.ndarray
+    arc: np.ndarray
     points: np.ndarray
     n1: np.ndarray
     axis: np.ndarray

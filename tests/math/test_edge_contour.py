@@ -125,11 +125,11 @@ def test_the_bore_edge_points_and_stations(bore):
             atol=2e-6,
         )
     st = contour.stations(1e-3)
-    n = len(st.s)
+    n = len(st.arc)
     assert n == round(2 * math.pi * R / 1e-3)
-    assert st.s[0] == 0.0 and np.all(np.diff(st.s) > 0)
+    assert st.arc[0] == 0.0 and np.all(np.diff(st.arc) > 0)
     np.testing.assert_allclose(
-        st.s, np.arange(n) * contour.length / n, atol=2e-6
+        st.arc, np.arange(n) * contour.length / n, atol=2e-6
     )
     radial = _unit(st.points * [1, 1, 0])
     np.testing.assert_allclose(np.hypot(*st.points[:, :2].T), R, atol=1e-6)
