@@ -154,10 +154,10 @@ def _arm_velocities(plant, instance):
     )
 
 
-def _conditioning(plant, tip, q_full):
-    """sigma_min / sigma_max of frame ``tip``'s spatial velocity Jacobian
-    (world, the columns of its model instance's joints) at the plant's
-    positions q_full."""
+def tip_jacobian(plant, tip, q_full):
+    """Frame ``tip``'s spatial velocity Jacobian (world, 6 x n: the
+    columns of its model instance's joints) at the plant's positions
+    q_full."""
     from pydrake.multibody.tree import JacobianWrtVariable
 
     context = plant.CreateDefaultContext()
@@ -170,8 +170,12 @@ def _conditioning(plant, tip, q_full):
         plant.world_frame(),
         plant.world_frame(),
     )
-    J = J[:, _arm_velocities(plant, tip.model_instance())]
-    sv = np.linalg.svd(J, compute_uv=False)
+    return J[:, _arm_velocities(plant, tip.model_instance())]
+
+
+def _conditioning(plant, tip, q_full):
+    """sigma_min / sigma_max of :func:`tip_jacobian` at q_full."""
+    sv = np.linalg.svd(tip_jacobian(plant, tip, q_full), compute_uv=False)
     return float(sv[-1] / sv[0])
 
 

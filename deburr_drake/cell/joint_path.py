@@ -20,10 +20,10 @@ from deburr_drake.cell.arm import (
     MIN_CONDITIONING,
     _arm_instance,
     _arm_positions,
-    _arm_velocities,
     _solve_pose,
     _ToolTarget,
     _unit_axis,
+    tip_jacobian,
 )
 
 __all__ = ["MAX_JOINT_STEP", "PathBreak", "joint_path", "joint_names"]
@@ -175,19 +175,8 @@ def _lost_direction(plant, tip, instance, q):
     """(sigma_min / sigma_max of the tool frame's spatial velocity
     Jacobian at q, the index of the joint with the largest share of the
     joint motion along the smallest singular direction)."""
-    from pydrake.multibody.tree import JacobianWrtVariable
-
     arm_idx = _arm_positions(plant, instance)
-    context = plant.CreateDefaultContext()
-    plant.SetPositions(context, _full(plant, arm_idx, q))
-    J = plant.CalcJacobianSpatialVelocity(
-        context,
-        JacobianWrtVariable.kV,
-        tip,
-        np.zeros(3),
-        plant.world_frame(),
-        plant.world_frame(),
-    )[:, _arm_velocities(plant, instance)]
+    J = tip_jacobian(plant, tip, _full(plant, arm_idx, q))
     _, sv, vt = np.linalg.svd(J)
     lost = vt[len(sv) - 1]  # past it (n > 6): J's null space
     return float(sv[-1] / sv[0]), int(np.argmax(np.abs(lost)))
