@@ -73,7 +73,8 @@ _MODULES = {
     "control.observer": ("ChamferObserver",),
     "cell.sensor": ("ForceSensor",),
     "cell.process": ("CuttingProcess",),
-    "math.geometry": ("CircularContour", "StraightContour", "ProfileContour"),
+    "math.geometry": ("CircularContour", "StraightContour"),
+    "math.profile": ("ProfileContour",),
     "control.layout": (
         "CHAMFER_STATE",
         "CONTROLLER_DIAGNOSTICS",

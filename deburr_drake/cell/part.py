@@ -250,7 +250,7 @@ def register_compliant_profile(
     name="profile_edge",
 ):
     """The material along a closed profile's edge (`edge`: a
-    math.geometry.ProfileContour with offset 0, its centre's x, y in the world):
+    math.profile.ProfileContour with offset 0, its centre's x, y in the world):
     `wall_thickness` deep into the material (a pocket's plate around it, a
     boss's outer wall; thinner only inside fillets whose centre is in the
     material, ProfileContour.material_band), z_bottom <= z <= z_top, as a

@@ -17,7 +17,7 @@ from deburr_drake.config.checks import (
     _require,
     _vector,
 )
-from deburr_drake.math.geometry import ProfileContour
+from deburr_drake.math.profile import ProfileContour
 from deburr_drake.math.units import UNITS
 
 __all__ = [

@@ -37,9 +37,9 @@ from deburr_drake.math.fits import fit_circle, fit_consensus, fit_line
 from deburr_drake.math.geometry import (
     CircularContour,
     Contour,
-    ProfileContour,
     StraightContour,
 )
+from deburr_drake.math.profile import ProfileContour
 
 __all__ = [
     "REGISTRATION_SIZE",

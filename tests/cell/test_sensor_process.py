@@ -211,7 +211,8 @@ def test_chamfering_force_on_fillets_follows_the_material_removed():
     than the edge: more chamfer per metre of feed, a larger g; on a boss's
     (convex) fillet less. g = k_c s (delta h + burr), s = removal_scale."""
     from deburr_drake.cell.process import PROCESS_STATE, cutting_force
-    from deburr_drake.math.geometry import ProfileContour, removal_scale
+    from deburr_drake.math.geometry import removal_scale
+    from deburr_drake.math.profile import ProfileContour
 
     config = ProcessConfig(cutting_coefficient=3.0e9)
     r, delta, h = 0.003, 5e-4, 0.002

@@ -179,7 +179,7 @@ from deburr_drake.cell.tube_mesh import (  # noqa: E402
     make_swept_volume_mesh,
     profile_mesh_paths,
 )
-from deburr_drake.math.geometry import ProfileContour  # noqa: E402
+from deburr_drake.math.profile import ProfileContour  # noqa: E402
 
 L_SHAPE = [
     [-0.03, -0.03],

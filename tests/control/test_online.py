@@ -76,7 +76,7 @@ def test_profile_offset_found_with_stiffer_fillets_left_out():
     # A pocket whose fillets are 1.5 times as stiff as its sides (as in
     # the simulated cell: the cutter in a concave corner): the model
     # learns on the sides only and finds the move and the turn.
-    from deburr_drake.math.geometry import ProfileContour
+    from deburr_drake.math.profile import ProfileContour
 
     believed = ProfileContour(
         [[-0.03, -0.02], [0.03, -0.02], [0.03, 0.02], [-0.03, 0.02]],

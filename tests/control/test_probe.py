@@ -260,7 +260,7 @@ def test_gate_hides_contact_while_probing():
 
 
 def _square(**kw):
-    from deburr_drake.math.geometry import ProfileContour
+    from deburr_drake.math.profile import ProfileContour
 
     return ProfileContour(
         [[-0.025, -0.025], [0.025, -0.025], [0.025, 0.025], [-0.025, 0.025]],

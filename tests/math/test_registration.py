@@ -8,11 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from deburr_drake.math.geometry import (
-    CircularContour,
-    ProfileContour,
-    StraightContour,
-)
+from deburr_drake.math.geometry import CircularContour, StraightContour
+from deburr_drake.math.profile import ProfileContour
 from deburr_drake.math.registration import (
     moved_contour,
     pivot_of,
