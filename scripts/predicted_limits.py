@@ -12,7 +12,7 @@ import argparse
 import json
 import time
 
-from deburr_drake.analysis.report import analyze
+from deburr_drake.analysis.analyze_run import analyze
 from deburr_drake.analysis.validation import (
     PARAMETERS,
     Parameter,

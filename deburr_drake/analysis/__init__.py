@@ -18,6 +18,7 @@ from deburr_drake.analysis.along import (
     rho_of_map,
     without_guards,
 )
+from deburr_drake.analysis.analyze_run import SUMMARY_KEYS, analyze
 from deburr_drake.analysis.frequency import (
     NormalForceLoop,
     frequency_response,
@@ -69,8 +70,6 @@ from deburr_drake.analysis.preflight import (
     start_operating_point,
 )
 from deburr_drake.analysis.report import (
-    SUMMARY_KEYS,
-    analyze,
     plot_poles,
     summary_text,
     write_analysis,

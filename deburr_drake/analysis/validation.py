@@ -498,7 +498,7 @@ def verdict_row(
     (:func:`truth_scenario`)."""
     import time
 
-    from deburr_drake.analysis.report import analyze
+    from deburr_drake.analysis.analyze_run import analyze
     from deburr_drake.config import load_scenario
     from deburr_drake.runs.simulation import simulate
 

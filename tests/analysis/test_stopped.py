@@ -122,7 +122,7 @@ def test_a_frozen_mode_the_rest_of_the_run_refutes_does_not_decide():
     from types import SimpleNamespace
 
     from deburr_drake.analysis.along import RhoPoint
-    from deburr_drake.analysis.report import _steady_verdict
+    from deburr_drake.analysis.analyze_run import _steady_verdict
     from deburr_drake.analysis.settled import SettleTolerances
 
     rate = -math.log(1.00046) / 0.0025
