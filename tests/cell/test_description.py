@@ -12,7 +12,7 @@ from pydrake.geometry import Role
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.systems.framework import DiagramBuilder
 import pytest
-from test_robot_model import _urdf_of_arm6
+from test_robot import _urdf_of_arm6
 import trimesh
 
 from deburr_drake.cell.description import convert_mesh
