@@ -23,6 +23,8 @@ from deburr_drake.cell.description import (
     convert_mesh,
     model_path,
 )
+from deburr_drake.cell.edge import make_contour
+from deburr_drake.cell.reach import check_part_in_reach
 from deburr_drake.cell.robot import add_robot, check_robot, robot_joints
 from deburr_drake.config import ConfigError, RobotConfig, load_scenario
 
@@ -532,3 +534,12 @@ def test_an_arm_cut_from_a_whole_robots_file_parses_after_preparation(capsys):
         == 1
     )
     assert not any("WARNING:drake" in line and "mimic" in line for line in err)
+
+
+@needs_erd
+def test_the_talos_arm_example_reaches_its_whole_edge():
+    """examples/talos_arm_cell.yaml: the tool mounted along the gripper
+    reaches every point of the edge with the tool vertical."""
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    scenario = load_scenario(str(examples / "talos_arm_cell.yaml"))
+    check_part_in_reach(scenario, make_contour(scenario))
