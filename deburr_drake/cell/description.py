@@ -525,8 +525,14 @@ def _add_drives(root, welded, notes):
             root.remove(t)
             absent[t.get("name")] = sorted(set(names) - joints)
         elif kind and "SimpleTransmission" not in kind:
+            # Older types name their joints in other tags (PR2's
+            # WristTransmission: <flexJoint>, <rollJoint>).
+            named = [e.get("name") for e in t.iter() if e is not t]
+            replaced[t.get("name")] = (
+                kind.rpartition("/")[2],
+                [name for name in named if name in joints],
+            )
             root.remove(t)
-            replaced[t.get("name")] = (kind.rpartition("/")[2], names)
         else:
             transmitted |= set(names)
     if absent:
@@ -534,12 +540,12 @@ def _add_drives(root, welded, notes):
             "transmission(s) naming joints the file does not have removed "
             f"(they drive nothing in it): {absent}"
         )
-    for name, (kind, names) in replaced.items():
+    if replaced:
         notes.append(
-            f"transmission {name!r} ({kind}, which Drake does not model: "
-            f"it would leave {names} undriven) replaced by a drive per "
-            "joint at its URDF effort limit (the coupling of its motors' "
-            "limits is not modelled)"
+            f"{len(replaced)} transmission(s) of a type Drake does not "
+            "model, which would leave their joints undriven, replaced by a "
+            "drive per joint at its URDF effort limit (the coupling of "
+            f"their motors' limits is not modelled): {replaced}"
         )
     driven = []
     for joint in root.findall("joint"):
