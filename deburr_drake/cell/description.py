@@ -28,6 +28,22 @@ the text Drake's parser reads:
   it) are welded at their default position (0, or the nearest limit), their
   ``<mimic>`` and transmissions removed.
 
+What ROS tools read and Drake's parser refuses, repaired (URDF):
+
+- **a material defined twice** at the robot level (two files composed by
+  xacro): the first definition kept. Drake refuses the repeat whatever its
+  colour; ROS's Python reader (urdf_parser_py) reads it; urdfdom refuses a
+  robot-level repeat but keeps the first definition of a name a link's
+  visual defines again, the rule followed here;
+- **a ``<mimic>`` on a fixed joint** (a gripper's passive links written
+  fixed): removed; a fixed joint has no coordinate to couple;
+- **a transmission naming a joint the file does not have** (an arm cut
+  from a whole robot's file): removed; it drives nothing here;
+- **a transmission of a type Drake does not model** (a wrist's
+  ``DifferentialTransmission``, which Drake skips and leaves its joints
+  undriven): removed, and its joints get a drive each as joints without a
+  transmission do.
+
 Every change is said once per process in one line on stderr.
 """
 
@@ -405,16 +421,132 @@ def _weld_past_flange(root, urdf, config, notes):
     return set(welded)
 
 
+def _rgba(text):
+    try:
+        return tuple(_numbers(text, ()))
+    except ValueError:
+        return text  # left for Drake to refuse
+
+
+def _definition(material):
+    """(rgba, texture) a material element defines; None if it only names
+    one."""
+    colour, texture = material.find("color"), material.find("texture")
+    if colour is None and texture is None:
+        return None
+    return (
+        _rgba(colour.get("rgba", "")) if colour is not None else None,
+        texture.get("filename") if texture is not None else None,
+    )
+
+
+def _said_definition(definition) -> str:
+    rgba, texture = definition
+    words = []
+    if rgba is not None:
+        numbers = isinstance(rgba, tuple)
+        words.append(
+            "rgba " + (" ".join(f"{v:g}" for v in rgba) if numbers else rgba)
+        )
+    if texture is not None:
+        words.append(f"texture {texture}")
+    return ", ".join(words)
+
+
+def _one_definition_per_material(root, notes):
+    """The robot-level materials defined more than once: the first
+    definition kept, the later ones removed."""
+    first, later = {}, {}
+    for material in root.findall("material"):
+        name = material.get("name")
+        if name not in first:
+            first[name] = material
+            continue
+        root.remove(material)
+        later.setdefault(name, []).append(_definition(material))
+    times = {1: "twice", 2: "three times"}
+    for name, repeats in later.items():
+        kept = _definition(first[name])
+        others = [d for d in repeats if d is not None and d != kept]
+        count = times.get(len(repeats), f"{len(repeats) + 1} times")
+        if not others or kept is None:
+            what = "same colour"
+        else:
+            dropped = "; ".join(dict.fromkeys(map(_said_definition, others)))
+            what = (
+                f"different colours: {_said_definition(kept)} kept, "
+                f"{dropped} dropped, as urdfdom does for a name a visual "
+                "defines again"
+            )
+        notes.append(
+            f"material {name!r} defined {count} ({what}): kept the first"
+        )
+
+
+def _unmimic_fixed_joints(root, notes):
+    """``<mimic>`` removed from fixed joints: nothing to couple."""
+    fixed = [
+        j
+        for j in root.findall("joint")
+        if j.get("type") == "fixed" and j.find("mimic") is not None
+    ]
+    for joint in fixed:
+        for mimic in joint.findall("mimic"):
+            joint.remove(mimic)
+    if fixed:
+        notes.append(
+            f"<mimic> removed from {len(fixed)} fixed joint(s), which have "
+            f"no coordinate to couple: {[j.get('name') for j in fixed]}"
+        )
+
+
+def _transmission_type(transmission) -> str:
+    """A transmission's type, as a child ``<type>`` or (older files) an
+    attribute; Drake drives joints through SimpleTransmissions only."""
+    child = transmission.find("type")
+    if child is not None:
+        return (child.text or "").strip()
+    return transmission.get("type", "")
+
+
 def _add_drives(root, welded, notes):
     """A transmission for every URDF joint that moves, has an effort limit
-    and none; transmissions of welded joints removed."""
-    transmitted = set()
+    and none. Removed: transmissions of welded joints, those naming a joint
+    the file does not have and those of a type Drake skips (their joints
+    then get a drive each)."""
+    joints = {j.get("name") for j in root.findall("joint")}
+    transmitted, absent, replaced = set(), {}, {}
     for t in list(root.findall("transmission")):
-        names = {j.get("name") for j in t.findall("joint")}
-        if names & welded:
+        names = [j.get("name") for j in t.findall("joint")]
+        kind = _transmission_type(t)
+        if set(names) & welded:
             root.remove(t)
-            continue
-        transmitted |= names
+        elif set(names) - joints:
+            root.remove(t)
+            absent[t.get("name")] = sorted(set(names) - joints)
+        elif kind and "SimpleTransmission" not in kind:
+            # Older types name their joints in other tags (PR2's
+            # WristTransmission: <flexJoint>, <rollJoint>).
+            named = [e.get("name") for e in t.iter() if e is not t]
+            replaced[t.get("name")] = (
+                kind.rpartition("/")[2],
+                [name for name in named if name in joints],
+            )
+            root.remove(t)
+        else:
+            transmitted |= set(names)
+    if absent:
+        notes.append(
+            "transmission(s) naming joints the file does not have removed "
+            f"(they drive nothing in it): {absent}"
+        )
+    if replaced:
+        notes.append(
+            f"{len(replaced)} transmission(s) of a type Drake does not "
+            "model, which would leave their joints undriven, replaced by a "
+            "drive per joint at its URDF effort limit (the coupling of "
+            f"their motors' limits is not modelled): {replaced}"
+        )
     driven = []
     for joint in root.findall("joint"):
         name, limit = joint.get("name"), joint.find("limit")
@@ -523,6 +655,9 @@ def prepared_model(package_map, config: RobotConfig):
             f"its joint friction {friction} (N m) is not modelled: "
             "give it in robot.joint_coulomb_friction"
         )
+    if urdf:
+        _one_definition_per_material(root, notes)
+        _unmimic_fixed_joints(root, notes)
     collisions = _strip_collisions(root)
     if collisions:
         notes.append(

@@ -1,7 +1,9 @@
 """A robot description package as the cell reads it
 (deburr_drake.cell.description): packages by folder name, visual meshes
 converted, collision geometry left out, drives for joints without a
-transmission, joints past the flange welded."""
+transmission, joints past the flange welded, and what ROS tools read but
+Drake refuses repaired (a material defined twice, a mimic on a fixed joint,
+transmissions Drake cannot use)."""
 
 from importlib import metadata
 from pathlib import Path
@@ -9,13 +11,20 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 from pydrake.geometry import Role
-from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
 from pydrake.systems.framework import DiagramBuilder
 import pytest
 from test_robot import _urdf_of_arm6
 import trimesh
 
-from deburr_drake.cell.description import convert_mesh
+from deburr_drake.cell.description import (
+    add_packages,
+    convert_mesh,
+    model_path,
+)
+from deburr_drake.cell.edge import make_contour
+from deburr_drake.cell.reach import check_part_in_reach
 from deburr_drake.cell.robot import add_robot, check_robot, robot_joints
 from deburr_drake.config import ConfigError, RobotConfig, load_scenario
 
@@ -414,3 +423,126 @@ def test_a_tool_turned_onto_a_wrist_singularity_starts_away_from_it():
     numbers = loop_numbers(scenario, q)
     assert np.linalg.norm(numbers["gravity_error_force"]) < 100.0
     assert numbers["lightest_task_mass"] > 0.5
+
+
+def _diffuse(inspector, geometry):
+    props = inspector.GetProperties(geometry, Role.kIllustration)
+    return list(props.GetProperty("phong", "diffuse").rgba)
+
+
+def test_a_material_defined_twice_keeps_its_first_definition(tmp_path, capsys):
+    """Two robot-level definitions of a name (same colour, then different
+    colours), as two xacro files composed give: Drake refuses the file, the
+    prepared copy keeps each name's first definition and says so."""
+    path = _urdf_of_arm6(tmp_path / "materials_twice.urdf")
+    grey = '<material name="grey"><color rgba="0.5 0.5 0.5 1"/></material>'
+    red = '<material name="red"><color rgba="{}"/></material>'
+    box = '<visual><geometry><box size="0.05 0.05 0.05"/></geometry>'
+    text = (
+        path.read_text()
+        .replace(
+            '<link name="link3">',
+            f'<link name="link3">{box}<material name="red"/></visual>',
+        )
+        .replace(
+            '<link name="link5">',
+            f'<link name="link5">{box}<material name="grey"/></visual>',
+        )
+    )
+    materials = grey + red.format("0.8 0 0 1") + grey + red.format(".2 .2 .9 1")
+    text = text.replace(
+        'xmlns:drake="http://drake.mit.edu">',
+        'xmlns:drake="http://drake.mit.edu">' + materials,
+        1,
+    )
+    path.write_text(text)
+    plant = MultibodyPlant(0.0)
+    with pytest.raises(RuntimeError, match="previously defined"):
+        Parser(plant).AddModels(str(path))
+
+    _, inspector, roles = _geometries(
+        RobotConfig(model=str(path), flange_frame="flange")
+    )
+    colours = {
+        inspector.GetName(inspector.GetFrameId(g)).split("::")[-1]: _diffuse(
+            inspector, g
+        )
+        for g in roles[Role.kIllustration]
+        if inspector.GetShape(g).__class__.__name__ == "Box"
+    }
+    np.testing.assert_allclose(colours["link3"], [0.8, 0.0, 0.0, 1.0])
+    np.testing.assert_allclose(colours["link5"], [0.5, 0.5, 0.5, 1.0])
+    lines = [
+        line
+        for line in capsys.readouterr().err.splitlines()
+        if "materials_twice.urdf" in line and "material " in line
+    ]
+    assert lines == [
+        "deburr-drake: robot.model materials_twice.urdf: material 'grey' "
+        "defined twice (same colour): kept the first",
+        "deburr-drake: robot.model materials_twice.urdf: material 'red' "
+        "defined twice (different colours: rgba 0.8 0 0 1 kept, rgba 0.2 "
+        "0.2 0.9 1 dropped, as urdfdom does for a name a visual defines "
+        "again): kept the first",
+    ]
+
+
+_TALOS_ARM = (
+    "package://example-robot-data/robots/talos_data/robots/talos_left_arm.urdf"
+)
+
+
+@needs_erd
+def test_an_arm_cut_from_a_whole_robots_file_parses_after_preparation(capsys):
+    """Talos's left arm: fixed gripper joints with a <mimic>, a transmission
+    of the shoulder joint the file does not have and a differential wrist
+    transmission. Drake refuses the file as shipped."""
+    config = RobotConfig(
+        model=_TALOS_ARM,
+        package_paths=["pip:example-robot-data/cmeel.prefix/share"],
+        flange_frame="wrist_left_ft_tool_link",
+    )
+    plant = MultibodyPlant(0.0)
+    parser = Parser(plant)
+    add_packages(parser.package_map(), config)
+    with pytest.raises(RuntimeError, match="cannot mimic"):
+        parser.AddModels(str(model_path(parser.package_map(), config)))
+
+    plant = check_robot(config)
+    joints = [j.name() for j in robot_joints(plant)]
+    assert joints == [f"arm_left_{k}_joint" for k in range(2, 8)]
+    driven = {
+        plant.get_joint_actuator(i).joint().name(): plant.get_joint_actuator(
+            i
+        ).effort_limit()
+        for i in plant.GetJointActuatorIndices()
+    }
+    assert set(driven) == set(joints)
+    assert driven["arm_left_6_joint"] == driven["arm_left_7_joint"] == 6.6
+    err = capsys.readouterr().err.splitlines()
+    said = [line for line in err if "talos_left_arm.urdf" in line]
+    assert sum("<mimic> removed from 6 fixed joint(s)" in s for s in said) == 1
+    assert (
+        sum("{'arm_left_1_trans': ['arm_left_1_joint']}" in s for s in said)
+        == 1
+    )
+    assert (
+        sum(
+            "1 transmission(s) of a type Drake does not model" in s
+            and "{'wrist_left_trans': ('DifferentialTransmission', "
+            "['arm_left_6_joint', 'arm_left_7_joint'])}"
+            in s
+            for s in said
+        )
+        == 1
+    )
+    assert not any("WARNING:drake" in line and "mimic" in line for line in err)
+
+
+@needs_erd
+def test_the_talos_arm_example_reaches_its_whole_edge():
+    """examples/talos_arm_cell.yaml: the tool mounted along the gripper
+    reaches every point of the edge with the tool vertical."""
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    scenario = load_scenario(str(examples / "talos_arm_cell.yaml"))
+    check_part_in_reach(scenario, make_contour(scenario))
