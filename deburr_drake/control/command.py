@@ -5,21 +5,32 @@ Use: ``CommandGenerator(scenario.command, scenario.task, contour, x0)``
 and ``FirstOrderHold(scenario.command.period, contour.project(x0))``,
 the generator's ``command`` into the hold's ``sampled``;
 :func:`feedrate_law` is the outer-loop law of a scenario
-(math.feedrate.FeedrateLaw)."""
+(math.feedrate.FeedrateLaw), :func:`edge_steady_feed` the feed it settles
+at on the scenario's edge."""
 
 from __future__ import annotations
 
 import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
-from deburr_drake.config import CommandConfig, ConfigError, TaskConfig
+from deburr_drake.config import (
+    CommandConfig,
+    ConfigError,
+    Scenario,
+    TaskConfig,
+)
 from deburr_drake.control.layout import CHAMFER_STATE, COMMAND_STATE
 from deburr_drake.control.observer import RegisteredContour
-from deburr_drake.math.feedrate import FeedrateLaw
-from deburr_drake.math.geometry import Contour, contour_at
+from deburr_drake.math.feedrate import FeedrateLaw, cutting_damping
+from deburr_drake.math.geometry import Contour, contour_at, removal_scale
 from deburr_drake.math.registration import REGISTRATION_SIZE
 
-__all__ = ["CommandGenerator", "FirstOrderHold", "feedrate_law"]
+__all__ = [
+    "CommandGenerator",
+    "FirstOrderHold",
+    "edge_steady_feed",
+    "feedrate_law",
+]
 
 
 def feedrate_law(
@@ -37,6 +48,26 @@ def feedrate_law(
         max_feed=config.max_feed,
         integrating=config.feed_law == "integrating"
         or (config.feed_law == "auto" and varying_frame),
+    )
+
+
+def edge_steady_feed(
+    scenario: Scenario, *, curvature: float = 0.0, burr_area: float = 0.0
+) -> float:
+    """The feed (m/s) ``scenario``'s law settles at in steady cutting at
+    the desired depth where the zero-depth path has ``curvature`` (1/m) and
+    the cut a burr of ``burr_area`` (m^2): FeedrateLaw.steady_feed on g =
+    k_c s (delta* h + burr area), s the edge's removal_scale, the
+    process's P'_th."""
+    d = scenario.task.desired_depth
+    g = cutting_damping(
+        scenario.process.cutting_coefficient
+        * removal_scale(curvature, d, scenario.tool.cutter_radius),
+        d * scenario.tool.engagement,
+        burr_area,
+    )
+    return feedrate_law(scenario.command, scenario.task).steady_feed(
+        g, scenario.process.threshold_power_force
     )
 
 

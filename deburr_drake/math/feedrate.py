@@ -75,20 +75,22 @@ class FeedrateLaw:
         ||f_t|| - P'_th > v_eps (bool or bool array)."""
         return chamfering_force - self.threshold_force > self.force_offset
 
-    def steady_feed(self, cutting_damping):
+    def steady_feed(self, cutting_damping, threshold_force=None):
         """The feed (m/s) the law settles at in steady cutting on a cut of
         g = ``cutting_damping`` (N s/m, :func:`cutting_damping`), scalar
-        or array.
+        or array; ``threshold_force`` is the process's P'_th (N), what the
+        true ||f_t|| carries beyond g v (default: the law's own).
 
         With ||f_t|| = P'_th + g v (eq. (3) at steady feed, no plunge) the
         law's fixed point v = v (||f_td|| - P'_th) / (||f_t|| - P'_th) is
         ||f_t|| = ||f_td||, v = (||f_td|| - P'_th) / g, whichever speed it
-        scales; at most ``max_feed``. Where that force is not on the
-        cutting branch (||f_td|| - P'_th <= v_eps) or nothing is cut
-        (g <= 0) the law runs at v0."""
-        excess = self.desired_force - self.threshold_force
+        scales; at most ``max_feed``. Where that force is not on the law's
+        cutting branch (||f_td|| minus the law's P'_th within v_eps) or
+        nothing is cut (g <= 0) the law runs at v0."""
+        p = self.threshold_force if threshold_force is None else threshold_force
+        excess = max(self.desired_force - p, 0.0)
         g = np.asarray(cutting_damping, float)
-        cutting = (g > 0.0) & (excess > self.force_offset)
+        cutting = (g > 0.0) & self.cutting(self.desired_force)
         v = np.where(
             cutting,
             np.minimum(excess / np.where(cutting, g, 1.0), self.max_feed),

@@ -41,9 +41,8 @@ from typing import Callable, Dict, Iterable, List, Optional
 import numpy as np
 
 from deburr_drake.config import ConfigError
-from deburr_drake.control.command import feedrate_law
+from deburr_drake.control.command import edge_steady_feed, feedrate_law
 from deburr_drake.math import metrics
-from deburr_drake.math.feedrate import cutting_damping
 from deburr_drake.runs.pass_metrics import TRANSIENT
 
 __all__ = [
@@ -124,12 +123,12 @@ def _cutting_coefficient(scenario) -> float:
 
 def off_burr_feed(scenario) -> float:
     """v_off (m/s): the feed law's steady feed off the burrs at the edge's
-    start (FeedrateLaw.steady_feed on g = k_c s delta* h)."""
-    return feedrate_law(scenario.command, scenario.task).steady_feed(
-        cutting_damping(
-            _cutting_coefficient(scenario),
-            scenario.task.desired_depth * scenario.tool.engagement,
-        )
+    start (control.command.edge_steady_feed)."""
+    from deburr_drake.cell.edge import make_contour
+
+    contour = make_contour(scenario)
+    return edge_steady_feed(
+        scenario, curvature=contour.curvature(contour.point_at(0.0))
     )
 
 

@@ -30,9 +30,7 @@ from typing import Dict, Iterable, List, Optional
 
 import numpy as np
 
-from deburr_drake.control.command import feedrate_law
-from deburr_drake.math.feedrate import cutting_damping
-from deburr_drake.math.geometry import removal_scale
+from deburr_drake.control.command import edge_steady_feed
 from deburr_drake.runs.pass_metrics import TRANSIENT, pass_metrics
 
 __all__ = [
@@ -140,18 +138,12 @@ def fillet_scenario(base, cell: FilletCell, *, max_duration: float = 90.0):
 
 def law_feeds(scenario, curvature: float):
     """(line, fillet) steady feeds (m/s) of the feed law
-    (FeedrateLaw.steady_feed), the fillet's of ``curvature`` (1/m): g =
-    k_c delta* h on the line, times the fillet's removal_scale in it."""
-    d = scenario.task.desired_depth
-    scales = np.array(
-        [1.0, removal_scale(curvature, d, scenario.tool.cutter_radius)]
+    (control.command.edge_steady_feed), the fillet's of ``curvature``
+    (1/m)."""
+    return (
+        edge_steady_feed(scenario),
+        edge_steady_feed(scenario, curvature=curvature),
     )
-    g = cutting_damping(
-        scenario.process.cutting_coefficient * scales,
-        d * scenario.tool.engagement,
-    )
-    line, fillet = feedrate_law(scenario.command, scenario.task).steady_feed(g)
-    return float(line), float(fillet)
 
 
 def fillet_metrics(log, scenario) -> Dict[str, float]:

@@ -13,6 +13,7 @@ from deburr_drake.config import CommandConfig, ConfigError, TaskConfig
 from deburr_drake.control.command import (
     CommandGenerator,
     FirstOrderHold,
+    edge_steady_feed,
     feedrate_law,
 )
 from deburr_drake.control.layout import COMMAND_STATE
@@ -63,6 +64,20 @@ def test_feedrate_law_of_the_configuration():
         c = CommandConfig(feed_law=kind)
         assert feedrate_law(c, task).integrating == planar
         assert feedrate_law(c, task, varying_frame=True).integrating == turning
+
+
+def test_edge_steady_feed_by_hand():
+    from deburr_drake.config import load_scenario
+
+    sc = load_scenario("paper", text="process: {threshold_power_force: 3.0}")
+    # g = 3e9 N s/m^3 x 0.5 mm x 2 mm = 3000 N s/m on a line; the cut
+    # carries the process's 3 N: v = (10 - 3) N / g.
+    assert sc.process.cutting_coefficient == 3.0e9
+    assert edge_steady_feed(sc) == pytest.approx(7.0 / 3000.0)
+    # A 1 mm x 2 mm burr: g = 9000 N s/m. A path radius of 5 mm round a
+    # pocket (3 mm cutter): removal scale (1 + 3.25 / 5) / (1 + 0.5 / 5).
+    assert edge_steady_feed(sc, burr_area=2e-6) == pytest.approx(7.0 / 9000.0)
+    assert edge_steady_feed(sc, curvature=200.0) == pytest.approx(7.0 / 4500.0)
 
 
 def test_command_generator_clamps_the_feed():

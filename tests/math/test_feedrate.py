@@ -109,6 +109,17 @@ def test_steady_feed_branches_and_arrays():
     assert isinstance(LAW.steady_feed(3000.0), float)
 
 
+def test_steady_feed_on_the_process_threshold():
+    # The controller believes P'_th = 2 N, the cut carries 3 N: the force
+    # settles at f_td all the same, v = (10 - 3) N / g.
+    assert LAW.steady_feed(3000.0, 3.0) == pytest.approx(7.0 / 3000.0)
+    assert LAW(7.0 / 3000.0, 3.0 + 7.0) == pytest.approx(7.0 / 3000.0)
+    # The branch is the law's: f_td - 2 N > v_eps whatever the process's.
+    assert LAW.steady_feed(3000.0, 9.8) == pytest.approx(0.2 / 3000.0)
+    # A threshold above f_td leaves no feed that reaches it.
+    assert LAW.steady_feed(3000.0, 12.0) == 0.0
+
+
 def test_slope_is_the_laws_elasticity_at_the_desired_force():
     # f_td / (f_td - P'_th) = 10 / 8.
     assert LAW.slope == pytest.approx(1.25)
