@@ -230,14 +230,21 @@ class CommandGenerator(LeafSystem):
         x_p = CHAMFER_STATE.get(chamfer, "x_p")
         xdot_p = CHAMFER_STATE.get(chamfer, "xdot_p")
         n2 = CHAMFER_STATE.get(chamfer, "n2")
-        f_t = CHAMFER_STATE.get(chamfer, "f_t")
+        # Floats keep the law on its scalar path (a layout's scalar block
+        # is a 0-d array); only what the law's variant reads.
+        f_t = float(CHAMFER_STATE.get(chamfer, "f_t"))
         previous = context.get_discrete_state(self._state_index).get_value()
         law = self._law
-        v = law(float(n2 @ xdot_p), f_t, COMMAND_STATE.get(previous, "feed"))
+        integrating = law.integrating
+        v = law(
+            None if integrating else float(n2 @ xdot_p),
+            f_t,
+            float(COMMAND_STATE.get(previous, "feed")) if integrating else None,
+        )
         ds = v * self._period
         contour = self._contour_now(context)
         s_previous = COMMAND_STATE.get(previous, "arc_position")
-        if law.integrating and not law.cutting(f_t):
+        if integrating and not law.cutting(f_t):
             x_c = contour.advance(COMMAND_STATE.get(previous, "x_c"), ds)
             discrete_state.set_value(
                 self._state_index,

@@ -47,20 +47,20 @@ class FeedrateLaw:
 
     def __call__(self, tangential_speed, chamfering_force, last_feed=None):
         """v (m/s) from the tangential speed n2^T xdot_p (m/s, either
-        sign), ||f_t|| (N) and the last commanded feed (m/s; read only when
-        ``integrating``): floats give a float, arrays an array."""
+        sign; read only by the paper's law), ||f_t|| (N) and the last
+        commanded feed (m/s; read only when ``integrating``): floats give a
+        float, numpy arrays an array."""
         speed = last_feed if self.integrating else tangential_speed
         excess = chamfering_force - self.threshold_force
         # The command generator's per-sample call: plain float arithmetic,
-        # no array round trip (np.float64 is a float).
+        # no array round trip (np.float64 is a float too).
         if isinstance(excess, float) and isinstance(speed, float):
             if excess > self.force_offset:
                 v = abs(speed) * (self.desired_force - self.threshold_force)
                 v /= excess
                 return self.max_feed if v > self.max_feed else v
             return self.default_feed
-        excess = np.asarray(excess, float)
-        cutting = excess > self.force_offset
+        cutting = np.asarray(excess) > self.force_offset
         v = (
             np.abs(speed)
             * (self.desired_force - self.threshold_force)

@@ -71,8 +71,12 @@ def test_arrays_agree_with_the_scalars(integrating):
     ]
     np.testing.assert_allclose(v, expected, rtol=1e-15)
     np.testing.assert_array_equal(law.cutting(force), force - 2.0 > 0.5)
-    # np.float64 samples (what a Drake port gives) take the scalar path.
+    # np.float64 samples take the scalar path; 0-d arrays the array path,
+    # to the same value.
     assert isinstance(law(np.float64(0.002), np.float64(6.0), 0.003), float)
+    assert float(law(np.array(0.002), np.array(6.0), np.array(0.003))) == (
+        law(0.002, 6.0, 0.003)
+    )
 
 
 def test_steady_feed_is_the_fixed_point():
