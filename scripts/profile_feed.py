@@ -2,7 +2,8 @@
 edge on the lines and in each kind of fillet (concave: a pocket's corner,
 convex: a boss's), off the burrs and after the contact transient, against
 the feed law's steady values (f_d - P'_th) / (k_c s delta* h), s the
-removal scale of the edge's curvature. Usage:
+removal scale of the edge's curvature (control.command.edge_steady_feed).
+Usage:
 
     python scripts/profile_feed.py OUT_DIR SCENARIO [--scenario-text YAML]
 
@@ -17,7 +18,7 @@ import numpy as np
 
 from deburr_drake.cell.edge import make_contour
 from deburr_drake.config import load_scenario
-from deburr_drake.math.geometry import removal_scale
+from deburr_drake.control.command import edge_steady_feed
 from deburr_drake.runs.pass_metrics import TRANSIENT
 
 
@@ -36,17 +37,10 @@ def main(argv=None) -> int:
     contact = ct[np.argmax(fn > 1.0)]
     kappa = np.array([contour.curvature(contour.point_at(s)) for s in arc])
     keep = (t >= contact + TRANSIENT) & (burr == 0.0)
-    d, r = sc.task.desired_depth, sc.tool.cutter_radius
-    excess = sc.task.desired_chamfering_force - sc.process.threshold_power_force
     print(f"{'where':>24s} {'samples':>8s} {'feed mm/s':>10s} {'law mm/s':>9s}")
     for k in np.unique(np.round(kappa[keep], 6)):
         on = keep & np.isclose(kappa, k)
-        law = excess / (
-            sc.process.cutting_coefficient
-            * d
-            * sc.tool.engagement
-            * removal_scale(k, d, r)
-        )
+        law = edge_steady_feed(sc, curvature=k)
         name = (
             "line"
             if k == 0
@@ -55,7 +49,7 @@ def main(argv=None) -> int:
         )
         print(
             f"{name:>24s} {int(on.sum()):8d} {np.mean(v[on]) * 1e3:10.3f} "
-            f"{max(law, sc.command.default_feed) * 1e3:9.3f}"
+            f"{law * 1e3:9.3f}"
         )
     return 0
 

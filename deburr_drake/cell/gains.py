@@ -61,6 +61,8 @@ from typing import Dict, Optional
 import numpy as np
 
 from deburr_drake.config import Scenario
+from deburr_drake.control.command import feedrate_law
+from deburr_drake.math.feedrate import cutting_damping
 
 __all__ = [
     "GainDesign",
@@ -271,7 +273,7 @@ def feed_loop_damping(scenario: Scenario, *, mass: float) -> float:
     - k_p = K lambda T_c c: the command starts each outer period T_c from
       x_p, so the position error is the feed's lag T_c (v - v_t) and
       K lambda e a force on the speed error; c = f_td / (f_td - P'_th)
-      is the feed law's slope at the desired force;
+      is the feed law's slope at the desired force (FeedrateLaw.slope);
     - k_i = r |nu|^2 lambda T_c c: the fuzzy term integrates s at the
       adaptation gain r times the active rules' |nu|^2 (at s = 0, the
       tool's distance y0);
@@ -287,18 +289,15 @@ def feed_loop_damping(scenario: Scenario, *, mass: float) -> float:
     if c.kind != "fuzzy" or not c.fuzzy.axes:
         return float("nan")
     task, cmd = scenario.task, scenario.command
-    slope = task.desired_chamfering_force / (
-        task.desired_chamfering_force - cmd.threshold_power_force
-    )
+    slope = feedrate_law(cmd, task).slope
     y0 = float(
         np.linalg.norm(start_position(scenario, believed_contour(scenario)))
     )
     rb = make_rule_bases(c)[0]
     _, nu = rb.active_rules(y0, 0.0)
-    g = (
-        scenario.process.cutting_coefficient
-        * task.desired_depth
-        * scenario.tool.engagement
+    g = cutting_damping(
+        scenario.process.cutting_coefficient,
+        task.desired_depth * scenario.tool.engagement,
     )
     M = mass + g / (2 * math.pi * scenario.sensor.cutoff_frequency)
     zetas = []
@@ -344,9 +343,10 @@ def _max_step(scenario: Scenario, period: float, mass: float):
     :data:`STEP_RATE`; the step is only ever lowered, to a whole fraction
     of T."""
     p = scenario.process
-    g_max = p.cutting_coefficient * (
-        scenario.task.desired_depth * scenario.tool.engagement
-        + max([b.height * b.thickness for b in p.burrs], default=0.0)
+    g_max = cutting_damping(
+        p.cutting_coefficient,
+        scenario.task.desired_depth * scenario.tool.engagement,
+        max([b.height * b.thickness for b in p.burrs], default=0.0),
     )
     max_step = scenario.simulation.max_step
     # With process.sample_mean the damping is exact at any step.

@@ -4,55 +4,80 @@ between it and the inner loop (paper Section III.A, eq. (5), R2, R5, R6).
 Use: ``CommandGenerator(scenario.command, scenario.task, contour, x0)``
 and ``FirstOrderHold(scenario.command.period, contour.project(x0))``,
 the generator's ``command`` into the hold's ``sampled``;
-:func:`feedrate` is the outer-loop law as a pure function."""
+:func:`feedrate_law` is the outer-loop law of a scenario
+(math.feedrate.FeedrateLaw), :func:`edge_steady_feed` the feed it settles
+at on the scenario's edge."""
 
 from __future__ import annotations
 
 import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
-from deburr_drake.config import CommandConfig, ConfigError, TaskConfig
+from deburr_drake.config import (
+    CommandConfig,
+    ConfigError,
+    Scenario,
+    TaskConfig,
+)
 from deburr_drake.control.layout import CHAMFER_STATE, COMMAND_STATE
 from deburr_drake.control.observer import RegisteredContour
-from deburr_drake.math.geometry import Contour, contour_at
+from deburr_drake.math.feedrate import FeedrateLaw, cutting_damping
+from deburr_drake.math.geometry import Contour, contour_at, removal_scale
 from deburr_drake.math.registration import REGISTRATION_SIZE
 
-__all__ = ["CommandGenerator", "FirstOrderHold", "feedrate"]
+__all__ = [
+    "CommandGenerator",
+    "FirstOrderHold",
+    "edge_steady_feed",
+    "feedrate_law",
+]
 
 
-def feedrate(
-    tangential_speed: float,
-    chamfering_force: float,
-    *,
-    desired_force: float,
-    threshold_force: float,
-    force_offset: float,
-    default_feed: float,
-    max_feed: float = float("inf"),
+def feedrate_law(
+    config: CommandConfig, task: TaskConfig, *, varying_frame: bool = False
+) -> FeedrateLaw:
+    """The outer loop's feedrate law of ``config`` and ``task``: the
+    integrating variant where ``config.feed_law`` asks for it, or on
+    ``auto`` along an edge whose frame turns (``varying_frame``, a CAD
+    part's 3-D edge; CommandConfig.feed_law says why)."""
+    return FeedrateLaw(
+        desired_force=task.desired_chamfering_force,
+        threshold_force=config.threshold_power_force,
+        force_offset=config.force_offset,
+        default_feed=config.default_feed,
+        max_feed=config.max_feed,
+        integrating=config.feed_law == "integrating"
+        or (config.feed_law == "auto" and varying_frame),
+    )
+
+
+def edge_steady_feed(
+    scenario: Scenario, *, curvature: float = 0.0, burr_area: float = 0.0
 ) -> float:
-    """The feed speed v (m/s) of the outer-loop law before eq. (5):
-
-    v = |n2^T xdot_p| (||f_td|| - P'_th) / (||f_t|| - P'_th)
-        if ||f_t|| - P'_th > v_eps, else v0;
-
-    at most ``max_feed`` (the paper is silent; see CommandConfig.max_feed).
-    """
-    excess = chamfering_force - threshold_force
-    if excess > force_offset:
-        return min(
-            abs(tangential_speed) * (desired_force - threshold_force) / excess,
-            max_feed,
-        )
-    return default_feed
+    """The feed (m/s) ``scenario``'s law settles at in steady cutting at
+    the desired depth where the zero-depth path has ``curvature`` (1/m) and
+    the cut a burr of ``burr_area`` (m^2): FeedrateLaw.steady_feed on g =
+    k_c s (delta* h + burr area), s the edge's removal_scale, the
+    process's P'_th."""
+    d = scenario.task.desired_depth
+    g = cutting_damping(
+        scenario.process.cutting_coefficient
+        * removal_scale(curvature, d, scenario.tool.cutter_radius),
+        d * scenario.tool.engagement,
+        burr_area,
+    )
+    return feedrate_law(scenario.command, scenario.task).steady_feed(
+        g, scenario.process.threshold_power_force
+    )
 
 
 class CommandGenerator(LeafSystem):
     """Discrete outer-loop command generator, period T.
 
     At t = kT it reads the chamfer state, computes the feed speed v with
-    :func:`feedrate` and outputs the point x_c(kT) that lies on the zero-depth
-    contour a distance v T ahead of the projection of x_p (R6: the command is
-    the paper's x_s, so (9) adds the depth only once).
+    the law of :func:`feedrate_law` and outputs the point x_c(kT) that lies
+    on the zero-depth contour a distance v T ahead of the projection of x_p
+    (R6: the command is the paper's x_s, so (9) adds the depth only once).
 
     .. pydrake_system::
 
@@ -112,7 +137,6 @@ class CommandGenerator(LeafSystem):
             )
         self.set_name("command_generator")
         self._config = config
-        self._task = task
         self._contour = contour
         # (time, contour): the part as the controller sees it from then on.
         self._contour_step = contour_step
@@ -124,8 +148,8 @@ class CommandGenerator(LeafSystem):
             )
         self._constant_feed = constant_feed
         # The feed law, chosen once (CommandConfig.feed_law).
-        self._integrating = config.feed_law == "integrating" or (
-            config.feed_law == "auto" and contour.varying_frame
+        self._law = feedrate_law(
+            config, task, varying_frame=contour.varying_frame
         )
         start = contour.project(np.asarray(initial_position, float))
         s0 = contour.arc_position(start)
@@ -202,34 +226,25 @@ class CommandGenerator(LeafSystem):
         if self._constant_feed is not None:
             self._advance_timed(context, discrete_state)
             return
-        c = self._config
         chamfer = self._chamfer_port.Eval(context)
         x_p = CHAMFER_STATE.get(chamfer, "x_p")
         xdot_p = CHAMFER_STATE.get(chamfer, "xdot_p")
         n2 = CHAMFER_STATE.get(chamfer, "n2")
-        f_t = CHAMFER_STATE.get(chamfer, "f_t")
+        # Floats keep the law on its scalar path (a layout's scalar block
+        # is a 0-d array); only what the law's variant reads.
+        f_t = float(CHAMFER_STATE.get(chamfer, "f_t"))
         previous = context.get_discrete_state(self._state_index).get_value()
-        integrating = self._integrating
-        cutting = f_t - c.threshold_power_force > c.force_offset
-        # The speed the law scales (CommandConfig.feed_law).
-        speed = (
-            COMMAND_STATE.get(previous, "feed")
-            if integrating
-            else float(n2 @ xdot_p)
-        )
-        v = feedrate(
-            speed,
+        law = self._law
+        integrating = law.integrating
+        v = law(
+            None if integrating else float(n2 @ xdot_p),
             f_t,
-            desired_force=self._task.desired_chamfering_force,
-            threshold_force=c.threshold_power_force,
-            force_offset=c.force_offset,
-            default_feed=c.default_feed,
-            max_feed=c.max_feed,
+            float(COMMAND_STATE.get(previous, "feed")) if integrating else None,
         )
         ds = v * self._period
         contour = self._contour_now(context)
         s_previous = COMMAND_STATE.get(previous, "arc_position")
-        if integrating and not cutting:
+        if integrating and not law.cutting(f_t):
             x_c = contour.advance(COMMAND_STATE.get(previous, "x_c"), ds)
             discrete_state.set_value(
                 self._state_index,

@@ -14,8 +14,10 @@ from typing import Dict
 import numpy as np
 
 from deburr_drake.cell.diagram import make_deburring_diagram
+from deburr_drake.cell.edge import believed_contour
 from deburr_drake.cell.truth import ContactTruth
 from deburr_drake.config import Scenario
+from deburr_drake.control.command import feedrate_law
 from deburr_drake.control.controller import make_rule_bases
 from deburr_drake.math import metrics
 from deburr_drake.runs.simulation import RunLog, simulate
@@ -74,9 +76,9 @@ def summarize(
     )
 
     # Feed: the command's arc speed against the feedrate law evaluated on
-    # the logged tangential speed and chamfering force.
+    # the logged tangential speed and chamfering force (and, integrating,
+    # the feed commanded before each sample).
     cmd = log["command"]
-    c = sc.command
     cmd_late = metrics.window(cmd["t"], SETTLE_TIME)
     out["command_speed"] = metrics.mean_speed(
         cmd["t"][cmd_late], cmd["arc_position"][cmd_late]
@@ -84,14 +86,12 @@ def summarize(
     out["commanded_feed_mean"] = float(np.mean(cmd["feed"][cmd_late]))
     v_t = np.einsum("ij,ij->i", ch["n2"], ch["xdot_p"])[late]
     f_t = ch["f_t"][late]
-    excess = f_t - c.threshold_power_force
-    law = np.where(
-        excess > c.force_offset,
-        np.abs(v_t)
-        * (sc.task.desired_chamfering_force - c.threshold_power_force)
-        / excess,
-        c.default_feed,
-    )
+    before = np.searchsorted(cmd["t"], ch["t"][late], side="left") - 1
+    law = feedrate_law(
+        sc.command,
+        sc.task,
+        varying_frame=believed_contour(sc).varying_frame,
+    )(v_t, f_t, cmd["feed"][np.maximum(before, 0)])
     out["feedrate_law_mean"] = float(np.mean(law))
     out["chamfering_force_mean"] = float(np.mean(f_t))
 

@@ -12,7 +12,8 @@ engagement), the desired depth delta*, a burr of cross-section A_b
 (height x thickness):
 
 - the feed the outer loop's law gives off the burr, in steady cutting:
-  v_off = max(v0, (f_d - P'_th) / (k_c delta* h));
+  v_off = (f_d - P'_th) / (k_c delta* h), at most max_feed, v0 where f_d -
+  P'_th is within v_eps (math.feedrate.FeedrateLaw.steady_feed);
 - the true chamfering force stays below 2 f_d + k_c A_b v_off: twice the
   desired force, plus what the burr would cut at the feed the tool had
   before the law saw the burr;
@@ -40,6 +41,7 @@ from typing import Callable, Dict, Iterable, List, Optional
 import numpy as np
 
 from deburr_drake.config import ConfigError
+from deburr_drake.control.command import edge_steady_feed, feedrate_law
 from deburr_drake.math import metrics
 from deburr_drake.runs.pass_metrics import TRANSIENT
 
@@ -121,15 +123,13 @@ def _cutting_coefficient(scenario) -> float:
 
 def off_burr_feed(scenario) -> float:
     """v_off (m/s): the feed law's steady feed off the burrs at the edge's
-    start, or v0."""
-    p, c = scenario.process, scenario.command
-    g = (
-        _cutting_coefficient(scenario)
-        * scenario.task.desired_depth
-        * scenario.tool.engagement
+    start (control.command.edge_steady_feed)."""
+    from deburr_drake.cell.edge import make_contour
+
+    contour = make_contour(scenario)
+    return edge_steady_feed(
+        scenario, curvature=contour.curvature(contour.point_at(0.0))
     )
-    excess = scenario.task.desired_chamfering_force - p.threshold_power_force
-    return max(c.default_feed, excess / g if g > 0 else math.inf)
 
 
 def burr_bounds(scenario, cell: BurrCell) -> Dict[str, float]:
@@ -198,8 +198,9 @@ def burr_metrics(
     - ``depth_rms_error_on_burr_m``: true depth minus delta* while the
       cutter's front is on the burr (burr area at the front > 0);
     - ``feed_on_burr_m_s``: the mean speed along the edge there, and
-      ``feed_law_on_burr_m_s``, the feed law's steady value there, (f_d -
-      P'_th) / g with the true g of (3) (v0 where that is below v_eps);
+      ``feed_law_on_burr_m_s``, the feed law's steady value there
+      (FeedrateLaw.steady_feed on the true g of (3); ``scenario``'s f_d,
+      which :func:`burr_scenario` sets to the cell's);
     - ``burr_reached``: 1.0 when the front reached the burr;
     - ``nan``: 1.0 when any logged signal holds a NaN;
     - ``passed``: 1.0 when every bound of :func:`burr_bounds` holds and the
@@ -209,12 +210,7 @@ def burr_metrics(
     t_contact = metrics.first_time(ch["t"], ch["f_n"] > 1.0)
     after = metrics.window(proc["t"], t_contact + TRANSIENT)
     on = metrics.window(proc["t"], t_contact) & (proc["burr_area"] > 0.0)
-    c = scenario.command
-    law = np.where(
-        proc["g"] > 0.0,
-        (cell.force - c.threshold_power_force) / np.maximum(proc["g"], 1e-12),
-        c.default_feed,
-    )
+    law = feedrate_law(scenario.command, scenario.task).steady_feed(proc["g"])
     nan = metrics.any_nan(
         *[v for blocks in signals.values() for v in blocks.values()]
     )

@@ -30,7 +30,7 @@ from typing import Dict, Iterable, List, Optional
 
 import numpy as np
 
-from deburr_drake.math.geometry import removal_scale
+from deburr_drake.control.command import edge_steady_feed
 from deburr_drake.runs.pass_metrics import TRANSIENT, pass_metrics
 
 __all__ = [
@@ -136,28 +136,13 @@ def fillet_scenario(base, cell: FilletCell, *, max_duration: float = 90.0):
     return sc.validate()
 
 
-def _law_feed(scenario, scale: float) -> float:
-    """The feed law's steady feed (m/s) where g is ``scale`` times the
-    line's: (f_d - P'_th) / g (control.command.feedrate's fixed point), v0
-    when f_d - P'_th is within v_eps."""
-    p, c = scenario.process, scenario.command
-    g = (
-        p.cutting_coefficient
-        * scale
-        * scenario.task.desired_depth
-        * scenario.tool.engagement
-    )
-    excess = scenario.task.desired_chamfering_force - p.threshold_power_force
-    return excess / g if excess > c.force_offset else c.default_feed
-
-
 def law_feeds(scenario, curvature: float):
-    """(line, fillet) steady feeds (m/s) of the feed law, the fillet's of
-    ``curvature`` (1/m)."""
-    d, r = scenario.task.desired_depth, scenario.tool.cutter_radius
+    """(line, fillet) steady feeds (m/s) of the feed law
+    (control.command.edge_steady_feed), the fillet's of ``curvature``
+    (1/m)."""
     return (
-        _law_feed(scenario, 1.0),
-        _law_feed(scenario, removal_scale(curvature, d, r)),
+        edge_steady_feed(scenario),
+        edge_steady_feed(scenario, curvature=curvature),
     )
 
 

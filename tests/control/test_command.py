@@ -13,7 +13,8 @@ from deburr_drake.config import CommandConfig, ConfigError, TaskConfig
 from deburr_drake.control.command import (
     CommandGenerator,
     FirstOrderHold,
-    feedrate,
+    edge_steady_feed,
+    feedrate_law,
 )
 from deburr_drake.control.layout import COMMAND_STATE
 from deburr_drake.control.observer import chamfer_quantities
@@ -37,22 +38,46 @@ def _step(system, chamfer):
     return COMMAND_STATE.split(xd.CopyToVector())
 
 
-def test_feedrate_law_branches():
-    kw = dict(
-        desired_force=10.0,
-        threshold_force=2.0,
-        force_offset=0.5,
-        default_feed=0.001,
+def test_feedrate_law_of_the_configuration():
+    config, task = CommandConfig(), TaskConfig(desired_chamfering_force=10.0)
+    law = feedrate_law(config, task)
+    assert (
+        law.desired_force,
+        law.threshold_force,
+        law.force_offset,
+        law.default_feed,
+        law.max_feed,
+    ) == (
+        10.0,
+        config.threshold_power_force,
+        config.force_offset,
+        config.default_feed,
+        config.max_feed,
     )
-    # ||f_t|| - P' = 4 > v_eps: v = |v_t| * 8 / 4.
-    assert feedrate(0.002, 6.0, **kw) == pytest.approx(0.004)
-    assert feedrate(-0.002, 6.0, **kw) == pytest.approx(0.004)
-    # ||f_t|| - P' = 0.4 <= v_eps: the default feed v0.
-    assert feedrate(0.002, 2.4, **kw) == pytest.approx(0.001)
-    assert feedrate(0.0, 0.0, **kw) == pytest.approx(0.001)
-    # ||f_t|| - P' = 0.51 on a vanishing chamfer: 16 x the speed, clamped.
-    assert feedrate(0.002, 2.51, **kw) == pytest.approx(0.002 * 8 / 0.51)
-    assert feedrate(0.002, 2.51, max_feed=0.02, **kw) == 0.02
+    # auto: the paper's law on a planar edge, integrating where it turns.
+    assert not law.integrating
+    assert feedrate_law(config, task, varying_frame=True).integrating
+    for kind, planar, turning in (
+        ("paper", False, False),
+        ("integrating", True, True),
+    ):
+        c = CommandConfig(feed_law=kind)
+        assert feedrate_law(c, task).integrating == planar
+        assert feedrate_law(c, task, varying_frame=True).integrating == turning
+
+
+def test_edge_steady_feed_by_hand():
+    from deburr_drake.config import load_scenario
+
+    sc = load_scenario("paper", text="process: {threshold_power_force: 3.0}")
+    # g = 3e9 N s/m^3 x 0.5 mm x 2 mm = 3000 N s/m on a line; the cut
+    # carries the process's 3 N: v = (10 - 3) N / g.
+    assert sc.process.cutting_coefficient == 3.0e9
+    assert edge_steady_feed(sc) == pytest.approx(7.0 / 3000.0)
+    # A 1 mm x 2 mm burr: g = 9000 N s/m. A path radius of 5 mm round a
+    # pocket (3 mm cutter): removal scale (1 + 3.25 / 5) / (1 + 0.5 / 5).
+    assert edge_steady_feed(sc, burr_area=2e-6) == pytest.approx(7.0 / 9000.0)
+    assert edge_steady_feed(sc, curvature=200.0) == pytest.approx(7.0 / 4500.0)
 
 
 def test_command_generator_clamps_the_feed():

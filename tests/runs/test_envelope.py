@@ -33,6 +33,11 @@ def test_bounds_follow_the_feed_law(paper):
         20.0 + 3.3e9 * 0.002 * 0.002 * v_off
     )
     assert b["max_tool_speed_m_s"] == pytest.approx(1.5 * v_off)
+    # At 5 N the law settles below v0, at 3 N / 3300 N s/m = 0.91 mm/s:
+    # v0 is its branch below the cutting threshold, not a floor.
+    paper_5 = load_scenario("paper", text="task: {desired_chamfering_force: 5}")
+    assert paper_5.command.default_feed == 1e-3
+    assert envelope.off_burr_feed(paper_5) == pytest.approx(3.0 / 3300.0)
     # Below v_eps the law runs at v0: 2.5 N on the 1 mm/s default.
     low = envelope.BurrCell(height=0.001, length=0.008, force=2.5)
     paper_low = load_scenario(

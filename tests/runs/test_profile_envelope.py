@@ -38,7 +38,7 @@ def test_a_cell_runs_through_its_first_fillet(paper, fillet, side):
 
 def test_the_feed_law_slows_in_a_pocket_corner(paper):
     sc = pe.fillet_scenario(paper, pe.FilletCell(0.008, "inner", 10.0))
-    line = pe._law_feed(sc, 1.0)
-    assert line == pytest.approx(8.0 / (3.0e9 * 5e-4 * 0.002))
     # path radius 5 mm: (1 + (3.25 mm) / 5 mm) / (1 + 0.5 / 5) = 1.5
-    assert pe._law_feed(sc, 1.5) == pytest.approx(line / 1.5)
+    line, fillet = pe.law_feeds(sc, 1.0 / 0.005)
+    assert line == pytest.approx(8.0 / (3.0e9 * 5e-4 * 0.002))
+    assert fillet == pytest.approx(line / 1.5)
