@@ -246,18 +246,21 @@ class Scenario:
         """The believed part is one the cutter fits in."""
         edge = self.part.edge
         wall = edge.wall()
+        allowed = f"|radius| < part.edge.wall_thickness ({wall})"
+        fits = True
         if edge.kind == "circle":
-            believed = edge.inner_radius + self.part_error.radius
-            fits = self.tool.cutter_radius < believed
-        else:
-            fits = True
+            fits = self.tool.cutter_radius < (
+                edge.inner_radius + self.part_error.radius
+            )
+            allowed += (
+                " with the believed inner radius > tool.cutter_radius "
+                f"({self.tool.cutter_radius})"
+            )
         _require(
             fits and abs(self.part_error.radius) < wall,
             "part_error.radius",
             self.part_error.radius,
-            "|radius| < part.edge.wall_thickness "
-            f"({wall}) with the believed inner "
-            f"radius > tool.cutter_radius ({self.tool.cutter_radius})",
+            allowed,
         )
 
     def _check_periods(self):
