@@ -3,6 +3,7 @@ material, contact band and edge; ``part_error``), the tool, the robot, the
 cutting process and its burrs, the sensor, faults and guards. SI units;
 each field's comment gives its unit."""
 
+import copy
 from dataclasses import dataclass, field
 import math
 import os
@@ -298,6 +299,15 @@ class EdgeConfig:
                 self.start_fraction if self.start_fraction >= 0 else None
             ),
         )
+
+    def own_fields(self) -> "EdgeConfig":
+        """This edge with every field its kind does not read at its
+        default: what a base of another kind left in them is dropped, and
+        the scenario written back reads again."""
+        own = EdgeConfig(kind=self.kind)
+        for name in self.FIELDS.get(self.kind, ()):
+            setattr(own, name, copy.deepcopy(getattr(self, name)))
+        return own
 
     def wall(self) -> float:
         """The material's depth across the edge (m): the wall's thickness,

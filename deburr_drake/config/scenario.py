@@ -483,11 +483,19 @@ _OLD_SECTIONS = {
 }
 
 
-def _check_edge_field(kind: str, name: str, path: str, where: str = ""):
+def _check_edge_field(
+    kind: str, name: str, path: str, where: str = "", value=None
+):
     """ConfigError when the edge field ``name`` does not apply to an edge
-    of ``kind`` (one it would silently ignore)."""
+    of ``kind`` (one it would silently ignore). A field at its default
+    value changes nothing and passes: a scenario written back whole (the
+    run's scenario.yaml) gives every field."""
     fields = EdgeConfig.FIELDS.get(kind)
     if fields is None or name == "kind" or name in fields:
+        return
+    if name in EdgeConfig.__dataclass_fields__ and value == getattr(
+        EdgeConfig(), name
+    ):
         return
     raise ConfigError(
         f"{where}{path} does not apply to a {kind} edge: allowed with "
@@ -502,11 +510,13 @@ def _check_edge_fields(text: str, where: str, kind: str):
     import yaml
 
     root = yaml.compose(text, Loader=yaml.SafeLoader)
+    data = yaml.safe_load(text)
     for section in ("part", "edge"):
         if not isinstance(root, yaml.MappingNode):
             return
         root = next((v for k, v in root.value if k.value == section), None)
-    if not isinstance(root, yaml.MappingNode):
+        data = data.get(section) if isinstance(data, dict) else None
+    if not isinstance(root, yaml.MappingNode) or not isinstance(data, dict):
         return
     for key_node, _ in root.value:
         mark = key_node.start_mark
@@ -515,6 +525,7 @@ def _check_edge_fields(text: str, where: str, kind: str):
             key_node.value,
             f"part.edge.{key_node.value}",
             f"{where}:{mark.line + 1}:{mark.column + 1}: ",
+            data.get(key_node.value),
         )
 
 
@@ -777,4 +788,5 @@ def load_scenario(
     except (RuntimeError, ValueError, TypeError, AssertionError) as e:
         where = name_or_path if text is None else "--scenario-text"
         raise ConfigError(f"{where}: {e}") from None
+    scenario.part.edge = scenario.part.edge.own_fields()
     return scenario.validate()

@@ -342,7 +342,8 @@ def test_a_field_of_another_kind_is_refused_by_its_full_name(text, field):
 
 def test_a_kind_chosen_later_takes_its_own_fields():
     """A file's edge fields are checked against the kind that file gives:
-    a profile over the circle of its base, a mesh over a profile."""
+    a profile over the circle of its base takes a start vertex, and a
+    circle's radius over the pocket's profile is refused."""
     pocket = load_scenario(
         "paper",
         text="part: {edge: {kind: profile, side: inner, start_vertex: 1, "
@@ -351,7 +352,7 @@ def test_a_kind_chosen_later_takes_its_own_fields():
     )
     assert pocket.part.edge.start_vertex == 1
     with pytest.raises(ConfigError, match="inner_radius does not apply to a"):
-        load_scenario("pocket", text="part: {edge: {inner_radius: 0.03}}")
+        load_scenario("pocket", text="part: {edge: {inner_radius: 0.025}}")
 
 
 @pytest.mark.parametrize(
@@ -417,3 +418,27 @@ def test_one_start_of_a_profile(text, message):
     with pytest.raises(ConfigError, match=message):
         load_scenario("pocket", text=text)
     load_scenario("pocket", text="part: {edge: {start_vertex: 3}}")
+
+
+def test_a_scenario_written_back_whole_reads_again(tmp_path):
+    """The run's scenario.yaml gives every edge field: those of other
+    kinds at their defaults pass, and a base's circle radius under a mesh
+    edge is dropped on loading, not written back."""
+    from pydrake.common.yaml import yaml_dump_typed
+
+    for name in ("paper", "pocket"):
+        path = tmp_path / f"{name}.yaml"
+        path.write_text(yaml_dump_typed(load_scenario(name)))
+        assert load_scenario(path) == load_scenario(name)
+    mesh = load_scenario(
+        "paper",
+        text="part: {edge: {kind: mesh, file: tube.stl, units: mm, "
+        "near: [0.03, 0.0, 0.05]}}",
+    )
+    assert mesh.part.edge.inner_radius == 0.030  # paper's, now unused
+    with pytest.raises(ConfigError, match="inner_radius does not apply"):
+        load_scenario(
+            "paper",
+            text="part: {edge: {kind: mesh, file: tube.stl, units: mm, "
+            "near: [0.03, 0.0, 0.05], inner_radius: 0.02}}",
+        )

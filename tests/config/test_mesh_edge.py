@@ -84,6 +84,11 @@ def _refusal(scenario_file, text):
             "--scenario-text:1:15: part.edge.start_angle does not apply "
             "to a mesh edge",
         ),
+        (  # a tube's radius neither limits the cutter nor is silently kept
+            "part: {edge: {inner_radius: 0.001}}",
+            "--scenario-text:1:15: part.edge.inner_radius does not apply "
+            "to a mesh edge",
+        ),
         ("part_error: {yaw: 0.01}", "part_error.yaw = 0.01 is invalid"),
         ("part_error: {offset: [0.001, 0, 0]}", "part_error.offset = "),
         (
