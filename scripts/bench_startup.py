@@ -36,7 +36,9 @@ def main(argv):
 
     # A radius no run has used: its ring mesh is generated and cached.
     radius = 0.030 + random.randint(1, 10**6) * 1e-12
-    base = load_scenario("paper", text=f"tube: {{inner_radius: {radius!r}}}")
+    base = load_scenario(
+        "paper", text=f"part: {{edge: {{inner_radius: {radius!r}}}}}"
+    )
     base.simulation.duration = duration
     text = yaml_dump_typed(base)
     t = time.perf_counter()

@@ -29,7 +29,7 @@ def main():
     args = ap.parse_args()
     base = load_scenario(args.scenario)
     variants = [(240, 4e-4), (240, 6e-4), (120, 4e-4), (120, 6e-4)]
-    current = (base.tube.mesh_segments, base.tool.resolution_hint)
+    current = (base.part.band.mesh_segments, base.tool.resolution_hint)
     if current not in variants:
         variants.append(current)
     print(
@@ -38,7 +38,7 @@ def main():
     )
     for segments, hint in variants:
         scenario = copy.deepcopy(base)
-        scenario.tube.mesh_segments = segments
+        scenario.part.band.mesh_segments = segments
         scenario.tool.resolution_hint = hint
         forces = contact_normal_force(scenario, DEPTHS)
         # One ring segment is 1 / segments of the edge.

@@ -37,8 +37,8 @@ FAULTS = {
     # N s/m on it, beyond the envelope's 2 mm: scripts/envelope.py).
     "burr 3 mm x 8 mm (> engagement)": "process: {burrs: [{center_fraction: "
     "0.1, length: 0.008, height: 0.003, thickness: 0.002}]}",
-    "straight 10 mm edge, run off": "{edge: {kind: straight, length: 0.01}, "
-    "process: {burrs: []}, "
+    "straight 10 mm edge, run off": "{part: {edge: {kind: straight, "
+    "length: 0.01}}, process: {burrs: []}, "
     "simulation: {stop_after_passes: 0}}",
 }
 

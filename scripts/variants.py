@@ -20,9 +20,9 @@ BURRS_2MM = (
 
 #: name -> (YAML overrides of the paper scenario, simulated seconds at most)
 VARIANTS = {
-    "straight_edge": ("edge: {kind: straight, length: 0.1}", 60.0),
-    "radius_20mm": ("tube: {inner_radius: 0.02}", 40.0),
-    "radius_60mm": ("tube: {inner_radius: 0.06}", 40.0),
+    "straight_edge": ("part: {edge: {kind: straight, length: 0.1}}", 60.0),
+    "radius_20mm": ("part: {edge: {inner_radius: 0.02}}", 40.0),
+    "radius_60mm": ("part: {edge: {inner_radius: 0.06}}", 40.0),
     "burrs_2mm": (BURRS_2MM, 40.0),
     "no_burrs": ("process: {burrs: []}", 30.0),
     "depth_0.2mm": ("task: {desired_depth: 0.0002}", 30.0),

@@ -20,8 +20,8 @@ CASES = {
         ["bad.yaml:4:1: YAML syntax error", "flow sequence at 3:18"],
     ),
     "part out of reach": (
-        SIM + ["--scenario-text", "tube: {position: [0.8, 0.0, 0.0]}"],
-        ["tube.position", "out of the arm's reach", "start point", "mm beyond"],
+        SIM + ["--scenario-text", "part: {pose: {xyz: [0.8, 0.0, 0.0]}}"],
+        ["part.pose.xyz", "out of the arm's reach", "start point", "mm beyond"],
     ),
     "a directory named x.yaml": (
         SIM + ["--scenario", "{tmp}/x.yaml"],
@@ -61,23 +61,23 @@ CASES = {
     ),
     "depth beyond the wall": (
         SIM + ["--scenario-text", "task: {desired_depth: 0.006}"],
-        ["task.desired_depth = 0.006", "tube.wall_thickness"],
+        ["task.desired_depth = 0.006", "part.edge.wall_thickness"],
     ),
     "initial depth beyond the cutter radius": (
         SIM + ["--scenario-text", "simulation: {initial_depth: 0.004}"],
         ["simulation.initial_depth = 0.004", "tool.cutter_radius"],
     ),
     "unbounded start angle": (
-        SIM + ["--scenario-text", "edge: {start_angle: 1.0e6}"],
-        ["edge.start_angle = 1000000.0", "[-2 pi, 2 pi]"],
+        SIM + ["--scenario-text", "part: {edge: {start_angle: 1.0e6}}"],
+        ["part.edge.start_angle = 1000000.0", "[-2 pi, 2 pi]"],
     ),
     "depth not a number": (
         SIM + ["--scenario-text", "task: {desired_depth: abc}"],
         ["--scenario-text:1:23:", "task.desired_depth = 'abc'", "a number"],
     ),
     "position not a list": (
-        SIM + ["--scenario-text", "tube: {position: 0.4}"],
-        ["tube.position = '0.4'", "a list of numbers"],
+        SIM + ["--scenario-text", "part: {pose: {xyz: 0.4}}"],
+        ["part.pose.xyz = '0.4'", "a list of numbers"],
     ),
     "integer field given a fraction": (
         SIM + ["--scenario-text", "controller: {fuzzy: {order: 1.5}}"],
@@ -124,8 +124,12 @@ CASES = {
         ["--record", "already exists", "--force"],
     ),
     "absurd contact modulus": (
-        SIM + ["--scenario-text", "tube: {hydroelastic_modulus: 1.0e300}"],
-        ["tube.hydroelastic_modulus = 1e+300", "(0, 1e12] Pa"],
+        SIM
+        + [
+            "--scenario-text",
+            "part: {material: {hydroelastic_modulus: 1.0e300}}",
+        ],
+        ["part.material.hydroelastic_modulus = 1e+300", "(0, 1e12] Pa"],
     ),
     "a burr written in mm": (
         SIM
@@ -141,7 +145,7 @@ CASES = {
     ),
     "a burr thicker than the wall": (
         SIM + ["--scenario-text", "process: {burrs: [{thickness: 2}]}"],
-        ["process.burrs[0].thickness = 2.0", "tube.wall_thickness"],
+        ["process.burrs[0].thickness = 2.0", "part.edge.wall_thickness"],
     ),
     "a profile started by a vertex and a fraction": (
         SIM
@@ -149,13 +153,28 @@ CASES = {
             "--scenario",
             "pocket",
             "--scenario-text",
-            "edge: {start_vertex: 1, start_fraction: 0.5}",
+            "part: {edge: {start_vertex: 1, start_fraction: 0.5}}",
         ],
-        ["edge.start_fraction = 0.5", "edge.start_vertex (1)"],
+        ["part.edge.start_fraction = 0.5", "part.edge.start_vertex (1)"],
     ),
     "a vertex start on a circle": (
-        SIM + ["--scenario-text", "edge: {start_vertex: 0}"],
-        ["edge.start_vertex = 0", "only a profile edge"],
+        SIM + ["--scenario-text", "part: {edge: {start_vertex: 0}}"],
+        ["part.edge.start_vertex does not apply to a circle edge"],
+    ),
+    "a profile's vertices on a circle edge": (
+        SIM
+        + [
+            "--scenario-text",
+            "part: {edge: {kind: circle, vertices: [[0, 0], [1, 0], [0, 1]]}}",
+        ],
+        [
+            "part.edge.vertices does not apply to a circle edge",
+            "kind, inner_radius",
+        ],
+    ),
+    "a file in the tube-only form": (
+        SIM + ["--scenario-text", "tube: {inner_radius: 0.02}"],
+        ["tube is the tube-only form: write part: {pose: {xyz: "],
     ),
     "an L pocket's origin on its inner corner, started by a ray": (
         SIM
@@ -163,11 +182,11 @@ CASES = {
             "--scenario",
             "pocket",
             "--scenario-text",
-            "edge: {fillet_radius: 0.006, vertices: [[-0.03, -0.03], "
+            "part: {edge: {fillet_radius: 0.006, vertices: [[-0.03, -0.03], "
             "[0.03, -0.03], [0.03, 0.0], [0.0, 0.0], [0.0, 0.03], "
-            "[-0.03, 0.03]]}",
+            "[-0.03, 0.03]]}}",
         ],
-        ["edge.start_angle = 0.0 is invalid", "start_vertex"],
+        ["part.edge.start_angle = 0.0 is invalid", "start_vertex"],
     ),
     "a tool mount on a model holding its own tool": (
         SIM

@@ -58,7 +58,7 @@ class UncertainParameter:
 UNCERTAIN_PARAMETERS = (
     UncertainParameter(
         "contact stiffness (hydroelastic modulus)",
-        "tube.hydroelastic_modulus",
+        "part.material.hydroelastic_modulus",
         0.5,
         1.5,
         "Pa",

@@ -27,10 +27,10 @@ __all__ = [
 def straight_frame(scenario: Scenario):
     """(edge midpoint on the wall face at the top, travel direction,
     material normal) of a straight edge."""
-    edge = scenario.edge
-    tube = scenario.tube
-    mid = np.array(tube.position, float)
-    mid[2] += tube.height
+    part = scenario.part
+    edge = part.edge
+    mid = np.array(part.pose.xyz, float)
+    mid[2] += edge.height
     tangent = np.array([np.cos(edge.heading), np.sin(edge.heading), 0.0])
     normal = np.array([tangent[1], -tangent[0], 0.0])  # material on the right
     return mid, tangent, normal
@@ -38,9 +38,9 @@ def straight_frame(scenario: Scenario):
 
 def profile_center(scenario: Scenario) -> np.ndarray:
     """(x, y, z) of a profile's origin at the height the cutter tip runs."""
-    tube, tool = scenario.tube, scenario.tool
-    center = np.array(tube.position, float)
-    center[2] += tube.height - tool.engagement
+    part, tool = scenario.part, scenario.tool
+    center = np.array(part.pose.xyz, float)
+    center[2] += part.edge.height - tool.engagement
     return center
 
 
@@ -49,9 +49,10 @@ def make_contour(scenario: Scenario, *, grow: float = 0.0) -> Contour:
     cutter radius, at the height where the cutter tip runs. ``grow`` (m):
     a profile grown outward by it (the believed part's radius error). A
     mesh edge: its ``EdgeContour`` (the part read once per file)."""
-    tube, tool, edge = scenario.tube, scenario.tool, scenario.edge
+    part, tool = scenario.part, scenario.tool
+    edge = part.edge
     if edge.kind == "mesh":
-        return edge.mesh_path(tool)
+        return part.mesh_path(tool)
     if edge.kind == "profile":
         return edge.profile_path(
             profile_center(scenario), tool.cutter_radius, grow=grow
@@ -61,11 +62,11 @@ def make_contour(scenario: Scenario, *, grow: float = 0.0) -> Contour:
         start = mid - tool.cutter_radius * normal - 0.5 * edge.length * tangent
         start[2] -= tool.engagement
         return StraightContour(start, tangent, normal, length=edge.length)
-    center = np.array(tube.position, float)
-    center[2] += tube.height - tool.engagement
+    center = np.array(part.pose.xyz, float)
+    center[2] += edge.height - tool.engagement
     return CircularContour(
         center,
-        tube.inner_radius - tool.cutter_radius,
+        edge.inner_radius - tool.cutter_radius,
         start_angle=edge.start_angle,
         direction=edge.direction,
     )
@@ -73,24 +74,23 @@ def make_contour(scenario: Scenario, *, grow: float = 0.0) -> Contour:
 
 def believed_scenario(scenario: Scenario) -> Scenario:
     """The scenario with the part the controller believes in
-    (``part_error`` applied to ``tube`` and ``edge``); the scenario itself
+    (``part_error`` applied to ``part``); the scenario itself
     when there is no error."""
     e = scenario.part_error
     if not any(e.offset) and e.yaw == 0.0 and e.radius == 0.0:
         return scenario
     believed = copy.deepcopy(scenario)
-    believed.tube.position = [
-        p + d for p, d in zip(scenario.tube.position, e.offset)
-    ]
-    believed.tube.inner_radius += e.radius
-    if scenario.edge.kind == "straight":
-        believed.edge.heading += e.yaw
+    real, part = scenario.part, believed.part
+    part.pose.xyz = [p + d for p, d in zip(real.pose.xyz, e.offset)]
+    part.edge.inner_radius += e.radius
+    if real.edge.kind == "straight":
+        part.edge.heading += e.yaw
     else:
-        believed.edge.start_angle += e.yaw
-    if scenario.edge.kind == "profile":  # turned about tube.position
+        part.edge.start_angle += e.yaw
+    if real.edge.kind == "profile":  # turned about part.pose.xyz
         c, s = np.cos(e.yaw), np.sin(e.yaw)
-        believed.edge.vertices = [
-            [c * x - s * y, s * x + c * y] for x, y in scenario.edge.vertices
+        part.edge.vertices = [
+            [c * x - s * y, s * x + c * y] for x, y in real.edge.vertices
         ]
     return believed
 
@@ -100,7 +100,9 @@ def believed_contour(scenario: Scenario) -> Contour:
     profile: moved, turned and grown by ``part_error``; a mesh edge: the
     real one, as validation refuses a part error on it)."""
     grow = (
-        scenario.part_error.radius if scenario.edge.kind == "profile" else 0.0
+        scenario.part_error.radius
+        if scenario.part.edge.kind == "profile"
+        else 0.0
     )
     return make_contour(believed_scenario(scenario), grow=grow)
 
@@ -130,10 +132,10 @@ def edge_points(scenario: Scenario, arc) -> np.ndarray:
     """Points (m, world) on the part's top edge at contour arc positions
     ``arc`` (m): where the chamfer is cut, for drawing."""
     contour = make_contour(scenario)
-    if scenario.edge.kind == "mesh":
+    part, tool = scenario.part, scenario.tool
+    if part.edge.kind == "mesh":
         return np.array([contour.edge_point(s) for s in np.asarray(arc)])
-    tube, tool = scenario.tube, scenario.tool
-    top = tube.position[2] + tube.height
+    top = part.pose.xyz[2] + part.edge.height
     points = []
     for s in np.asarray(arc, float):
         p = contour.point_at(s)

@@ -68,7 +68,7 @@ __all__ = [
 # 2, the default geometry of measure_normal_force): with this modulus the local
 # stiffness dF/d(delta) at delta = 0.5 mm is about 10 N/mm; the force there is
 # as stated. The scenarios' coarser default (120 segments, 0.6 mm cutter mesh)
-# gives the same force within 0.3 % (TubeConfig.mesh_segments,
+# gives the same force within 0.3 % (docs/numerics.md,
 # scripts/contact_mesh.py).
 CALIBRATED_HYDROELASTIC_MODULUS = 4.5e6  # Pa
 CALIBRATED_FORCE_AT_HALF_MM = 3.72  # N

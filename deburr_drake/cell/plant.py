@@ -27,7 +27,7 @@ __all__ = ["add_cell_plant", "mesh_edge_band"]
 
 def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
     """(plant, scene_graph), finalized: the robot (``robot``), its
-    friction, and the part (``tube``, ``edge``)."""
+    friction, and the part (``part``)."""
     sim = scenario.simulation
     config = MultibodyPlantConfig(
         time_step=sim.plant_time_step,
@@ -46,11 +46,12 @@ def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
         ),
     )
     add_joint_friction(plant, scenario.robot)
-    if scenario.edge.kind == "straight":
+    kind = scenario.part.edge.kind
+    if kind == "straight":
         _add_wall(plant, scenario)
-    elif scenario.edge.kind == "profile":
+    elif kind == "profile":
         _add_profile(plant, scenario)
-    elif scenario.edge.kind == "mesh":
+    elif kind == "mesh":
         _add_mesh_edge(plant, scenario)
     else:
         _add_ring(plant, scenario)
@@ -60,19 +61,19 @@ def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
 
 def _add_wall(plant, scenario: Scenario):
     """A straight edge: a compliant wall as long as the edge."""
-    tube = scenario.tube
+    part = scenario.part
     mid, tangent, normal = straight_frame(scenario)
     register_compliant_wall(
         plant,
         mid=mid,
         tangent=tangent,
         normal=normal,
-        length=scenario.edge.length,
-        thickness=tube.wall_thickness,
-        height=tube.height,
-        layer_height=tube.compliant_layer_height,
-        hydroelastic_modulus=tube.hydroelastic_modulus,
-        hunt_crossley_dissipation=tube.hunt_crossley_dissipation,
+        length=part.edge.length,
+        thickness=part.edge.wall_thickness,
+        height=part.edge.height,
+        layer_height=part.band.height,
+        hydroelastic_modulus=part.material.hydroelastic_modulus,
+        hunt_crossley_dissipation=part.material.hunt_crossley_dissipation,
         # The wall is the edge: the process cuts only where it is
         # (process.material_overlap), and off its ends there is no
         # contact either.
@@ -82,53 +83,59 @@ def _add_wall(plant, scenario: Scenario):
 
 def _add_profile(plant, scenario: Scenario):
     """A profiled edge: a compliant layer along the contour."""
-    tube = scenario.tube
-    z_top = tube.position[2] + tube.height
+    part = scenario.part
+    band, material = part.band, part.material
+    z_top = part.pose.xyz[2] + part.edge.height
     register_compliant_profile(
         plant,
         make_contour(scenario).with_offset(0.0),
-        wall_thickness=tube.wall_thickness,
-        z_bottom=z_top - tube.compliant_layer_height,
+        wall_thickness=part.edge.wall_thickness,
+        z_bottom=z_top - band.height,
         z_top=z_top,
-        hydroelastic_modulus=tube.hydroelastic_modulus,
-        hunt_crossley_dissipation=tube.hunt_crossley_dissipation,
-        segments_per_turn=tube.mesh_segments,
-        n_radial=tube.mesh_radial_cells,
-        n_z=tube.mesh_height_cells,
-        visual_z_bottom=tube.position[2],
+        hydroelastic_modulus=material.hydroelastic_modulus,
+        hunt_crossley_dissipation=material.hunt_crossley_dissipation,
+        segments_per_turn=band.mesh_segments,
+        n_radial=band.mesh_radial_cells,
+        n_z=band.mesh_height_cells,
+        visual_z_bottom=part.pose.xyz[2],
     )
 
 
 def _add_ring(plant, scenario: Scenario):
     """The tube's inner edge: a compliant ring on a rigid tube's visual."""
-    tube = scenario.tube
-    z_top = tube.position[2] + tube.height
+    part = scenario.part
+    edge, band, material = part.edge, part.band, part.material
+    z_top = part.pose.xyz[2] + edge.height
     register_compliant_ring(
         plant,
-        inner_radius=tube.inner_radius,
-        outer_radius=tube.inner_radius + tube.wall_thickness,
-        z_bottom=z_top - tube.compliant_layer_height,
+        inner_radius=edge.inner_radius,
+        outer_radius=edge.inner_radius + edge.wall_thickness,
+        z_bottom=z_top - band.height,
         z_top=z_top,
-        center_xy=tube.position[:2],
-        hydroelastic_modulus=tube.hydroelastic_modulus,
-        hunt_crossley_dissipation=tube.hunt_crossley_dissipation,
-        n_theta=tube.mesh_segments,
-        n_radial=tube.mesh_radial_cells,
-        n_z=tube.mesh_height_cells,
+        center_xy=part.pose.xyz[:2],
+        hydroelastic_modulus=material.hydroelastic_modulus,
+        hunt_crossley_dissipation=material.hunt_crossley_dissipation,
+        n_theta=band.mesh_segments,
+        n_radial=band.mesh_radial_cells,
+        n_z=band.mesh_height_cells,
     )
     register_tube_visual(
         plant,
-        inner_radius=tube.inner_radius,
-        outer_radius=tube.inner_radius + tube.wall_thickness,
-        z_bottom=tube.position[2],
-        z_top=z_top - tube.compliant_layer_height,
-        center_xy=tube.position[:2],
-        n_theta=tube.mesh_segments,
+        inner_radius=edge.inner_radius,
+        outer_radius=edge.inner_radius + edge.wall_thickness,
+        z_bottom=part.pose.xyz[2],
+        z_top=z_top - band.height,
+        center_xy=part.pose.xyz[:2],
+        n_theta=band.mesh_segments,
     )
 
 
 # m: the first sampling of a mesh edge, to find where it curves most
 _CURVATURE_SPACING = 2.5e-4
+# m: a mesh edge's stations are no coarser than a ring of this radius in
+# part.band.mesh_segments would have (the default tube's), so a band's
+# resolution reads the same for every kind
+_RING_RADIUS = 0.030
 # -, of the widest band that does not fold: its far side keeps at least
 # half the near side's station spacing
 _BAND_FIT = 0.5
@@ -136,23 +143,22 @@ _BAND_FIT = 0.5
 
 def mesh_edge_band(scenario: Scenario):
     """(stations, keyword arguments of register_compliant_edge but the
-    stations) of the compliant band along a CAD part's edge: the tube's
-    wall thickness wide where it fits, its compliant layer high, stations
-    no coarser than the tube's ring would be and, where the edge curves
-    more, close enough for the ring's sag."""
-    tube = scenario.tube
+    stations) of the compliant band along a CAD part's edge:
+    ``part.edge.band_width`` wide where it fits, ``part.band.height``
+    high, stations no coarser than a ring's of ``_RING_RADIUS`` would be
+    and, where the edge curves more, close enough for the ring's sag."""
+    part = scenario.part
+    band, material = part.band, part.material
     contour = make_contour(scenario)
-    ring_spacing = 2.0 * math.pi * tube.inner_radius / tube.mesh_segments
-    ring_sag = tube.inner_radius * (
-        1.0 - math.cos(math.pi / tube.mesh_segments)
-    )
+    ring_spacing = 2.0 * math.pi * _RING_RADIUS / band.mesh_segments
+    ring_sag = _RING_RADIUS * (1.0 - math.cos(math.pi / band.mesh_segments))
     fine = contour.stations(_CURVATURE_SPACING)
     spacing = min(
         ring_spacing,
         sag_spacing(fine.points, closed=contour.closed, sag=ring_sag),
     )
     stations = contour.stations(spacing)
-    height = tube.compliant_layer_height
+    height = band.height
     fits = band_width_limit(
         stations.points,
         stations.n1,
@@ -161,13 +167,13 @@ def mesh_edge_band(scenario: Scenario):
         closed=contour.closed,
     )
     return stations, dict(
-        width=min(tube.wall_thickness, _BAND_FIT * fits),
+        width=min(part.edge.band_width, _BAND_FIT * fits),
         height=height,
-        hydroelastic_modulus=tube.hydroelastic_modulus,
-        hunt_crossley_dissipation=tube.hunt_crossley_dissipation,
+        hydroelastic_modulus=material.hydroelastic_modulus,
+        hunt_crossley_dissipation=material.hunt_crossley_dissipation,
         closed=contour.closed,
-        n_radial=tube.mesh_radial_cells,
-        n_z=tube.mesh_height_cells,
+        n_radial=band.mesh_radial_cells,
+        n_z=band.mesh_height_cells,
     )
 
 
@@ -176,4 +182,4 @@ def _add_mesh_edge(plant, scenario: Scenario):
     it; the part's mesh drawn."""
     stations, band = mesh_edge_band(scenario)
     register_compliant_edge(plant, stations, **band)
-    register_part_visual(plant, scenario.edge.mesh_edge()[0])
+    register_part_visual(plant, scenario.part.mesh_edge()[0])

@@ -133,7 +133,7 @@ def _singular_error(robot, scenario, where, e: SingularPose):
     singular posture: the part's position (or the tool's mount) is what
     to change."""
     return ConfigError(
-        f"tube.position = {list(scenario.tube.position)} is invalid: "
+        f"part.pose.xyz = {list(scenario.part.pose.xyz)} is invalid: "
         f"{where}, tool tip at {np.round(e.point, 4).tolist()} m, is "
         "reached with the tool vertical only near a singular posture of "
         f"the arm (Jacobian conditioning {e.conditioning:.2g} < "
@@ -170,7 +170,7 @@ def _check_path_conditioning(model, instance, robot, points, place):
         f"{np.round(points[k], 4).tolist()} m (Jacobian conditioning "
         f"{conditioning[k]:.2g} < {MIN_CONDITIONING:g}): allowed a seed "
         "whose posture stays away from it along the edge (or a "
-        "tube.position that keeps the edge there)"
+        "part.pose.xyz that keeps the edge there)"
     )
 
 
@@ -215,16 +215,16 @@ def _check_edge_path(scenario: Scenario, model, contour):
         )
     except PathBreak as e:
         raise ConfigError(
-            f"edge is not followed by the arm: {e} (from the start pose "
-            f"robot.ik_seed = {list(robot.ik_seed)} gives): allowed a part "
-            "pose, tool rule or seed with which the arm follows the whole "
-            "edge"
+            f"part.edge is not followed by the arm: {e} (from the start pose "
+            f"robot.ik_seed = {list(robot.ik_seed)} gives): allowed a "
+            "part.pose, part.edge.tool_rule or seed with which the arm "
+            "follows the whole edge"
         ) from None
     except RuntimeError as e:
         raise ConfigError(
-            f"edge is out of the arm's reach at its start (arc 0.0 mm): "
-            f"{e}: allowed a part pose or robot.ik_seed from which the arm "
-            "reaches it with the tool along the edge's axis"
+            f"part.edge is out of the arm's reach at its start (arc 0.0 "
+            f"mm): {e}: allowed a part.pose or robot.ik_seed from which the "
+            "arm reaches it with the tool along the edge's axis"
         ) from None
 
 
@@ -240,8 +240,7 @@ def _reach_key(scenario: Scenario, samples: int) -> str:
         (
             robot,
             _mtime(robot),
-            scenario.tube,
-            scenario.edge,
+            scenario.part,
             scenario.part_error,
             scenario.tool,
             samples,
@@ -320,7 +319,7 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
         if axis_error is not None:
             raise axis_error
         raise ConfigError(
-            f"tube.position = {list(scenario.tube.position)} is out of the "
+            f"part.pose.xyz = {list(scenario.part.pose.xyz)} is out of the "
             f"arm's reach: {where}, tool tip at {np.round(p, 4).tolist()} m, "
             f"is {_mm(distance)} mm beyond the nearest reachable tool "
             "position (tool vertical, joint limits): allowed a part whose "

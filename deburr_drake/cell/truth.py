@@ -37,7 +37,9 @@ def contact_normal_force(
     gives one row of forces per fraction (one plant built)."""
     fractions = np.atleast_1d(np.asarray(arc_fraction, float))
     measure = (
-        _edge_normal_forces if scenario.edge.kind == "mesh" else _normal_forces
+        _edge_normal_forces
+        if scenario.part.edge.kind == "mesh"
+        else _normal_forces
     )
     forces = measure(scenario, depths, fractions)
     return forces if np.ndim(arc_fraction) else forces[0]
@@ -53,7 +55,7 @@ def truth_stations(scenario: Scenario) -> np.ndarray:
     5.9 N in each fillet and back), so its last estimate is that
     place's. A mesh edge's frame and faces' angle vary along it: the same
     64 places."""
-    if scenario.edge.kind in ("profile", "mesh"):
+    if scenario.part.edge.kind in ("profile", "mesh"):
         return np.arange(64) / 64.0
     return np.array([0.5])
 
@@ -134,7 +136,7 @@ def contact_truth(scenario: Scenario, *, step: float = 2e-5) -> ContactTruth:
     central differences of :func:`contact_normal_force` over +-``step``
     (m), at the first of :func:`truth_stations` (``force_range`` over
     all)."""
-    tube, d = scenario.tube, scenario.task.desired_depth
+    material, d = scenario.part.material, scenario.task.desired_depth
     rows = contact_normal_force(
         scenario, [d - step, d, d + step], arc_fraction=truth_stations(scenario)
     )
@@ -145,7 +147,7 @@ def contact_truth(scenario: Scenario, *, step: float = 2e-5) -> ContactTruth:
         c0=c0,
         secant_stiffness=float(forces[1] / d),
         local_stiffness=float((forces[2] - forces[0]) / (2 * step)),
-        c2=float(tube.hunt_crossley_dissipation * forces[1]),
+        c2=float(material.hunt_crossley_dissipation * forces[1]),
         force_range=(
             float(rows[:, 1].min() + c0),
             float(rows[:, 1].max() + c0),

@@ -16,18 +16,21 @@ from here.
 
 from deburr_drake.config.cell import (
     BurrConfig,
+    ContactBandConfig,
     DropoutConfig,
     EdgeConfig,
     FaultsConfig,
     GuardsConfig,
+    MaterialConfig,
+    PartConfig,
     PartErrorConfig,
     PartStepConfig,
+    PoseConfig,
     ProcessConfig,
     RobotConfig,
     SensorConfig,
     ToolConfig,
     ToolMountConfig,
-    TubeConfig,
 )
 from deburr_drake.config.checks import ConfigError
 from deburr_drake.config.control import (
@@ -58,9 +61,12 @@ from deburr_drake.config.scenario import (
 
 __all__ = [
     "ConfigError",
-    "TubeConfig",
-    "ToolConfig",
+    "PartConfig",
+    "PoseConfig",
+    "MaterialConfig",
+    "ContactBandConfig",
     "EdgeConfig",
+    "ToolConfig",
     "TaskConfig",
     "CommandConfig",
     "EstimatorConfig",

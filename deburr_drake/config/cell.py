@@ -1,8 +1,9 @@
-"""Configuration of the simulated cell: the part (``tube``, ``edge``,
-``part_error``), the tool, the robot, the cutting process and its burrs,
-the sensor, faults and guards. SI units; each field's comment gives its
-unit."""
+"""Configuration of the simulated cell: the part (``part``: its pose,
+material, contact band and edge; ``part_error``), the tool, the robot, the
+cutting process and its burrs, the sensor, faults and guards. SI units;
+each field's comment gives its unit."""
 
+import copy
 from dataclasses import dataclass, field
 import math
 import os
@@ -23,10 +24,12 @@ from deburr_drake.math.units import UNITS
 __all__ = [
     "package_folder",
     "PIP_PREFIX",
-    "TubeConfig",
+    "MaterialConfig",
+    "ContactBandConfig",
     "ToolConfig",
     "PoseConfig",
     "EdgeConfig",
+    "PartConfig",
     "SensorConfig",
     "BurrConfig",
     "ProcessConfig",
@@ -41,64 +44,51 @@ __all__ = [
 
 
 @dataclass
-class TubeConfig:
-    """The part: a tube whose inner top edge is chamfered. Only the edge
-    region (the top ``compliant_layer_height`` of the wall) is modelled, as a
-    compliant hydroelastic volume mesh."""
+class MaterialConfig:
+    """What the part is made of, as the contact sees it: the compliant
+    band's hydroelastic modulus and Hunt-Crossley dissipation."""
 
-    inner_radius: float = 0.030  # m, the edge's radius: the inner wall
-    wall_thickness: float = 0.005  # m, radial thickness of the modelled wall
-    height: float = 0.050  # m, part spans 0 <= z <= height in its frame
-    position: List[float] = field(
-        default_factory=lambda: [0.0, 0.0, 0.0]
-    )  # m, world, bottom centre
-    compliant_layer_height: float = 0.006  # m, top part of the wall modelled
     hydroelastic_modulus: float = 4.5e6  # Pa, 10 N/mm at 0.5 mm
     hunt_crossley_dissipation: float = (
         5.0  # s/m, the contact's Hunt-Crossley dissipation
     )
-    # -, segments around the circumference. 120 (chord sag 10 um at 30 mm) with
-    # the cutter's 0.6 mm mesh gives within 0.3 % the normal force of 240 with a
-    # 0.4 mm cutter mesh (1.835/1.830, 3.695/3.700, 5.711/5.728 N at 0.3, 0.5,
-    # 0.7 mm), a ripple along the edge of +-0.006 N (against the sensor's 0.1 N
-    # noise) and a contact evaluation 38 % cheaper (188 against 301 us):
-    # scripts/contact_mesh.py.
-    mesh_segments: int = 120
-    mesh_radial_cells: int = 2  # -, mesh cells through the wall
-    mesh_height_cells: int = 2  # -, mesh cells through the modelled layer
 
-    def validate(self):
-        o = "tube"
-        for name in (
-            "inner_radius",
-            "wall_thickness",
-            "height",
-            "compliant_layer_height",
-            "hydroelastic_modulus",
-        ):
-            _positive(o, name, getattr(self, name))
+    def validate(self, owner="part.material"):
+        _positive(owner, "hydroelastic_modulus", self.hydroelastic_modulus)
         _non_negative(
-            o, "hunt_crossley_dissipation", self.hunt_crossley_dissipation
+            owner, "hunt_crossley_dissipation", self.hunt_crossley_dissipation
         )
-        _vector(o, "position", self.position, 3, _finite)
         # An absurd modulus (1e300 Pa) stops the process inside Drake's
         # contact solver, a C++ failure Python cannot catch, so nothing
         # would be written.
         _require(
             self.hydroelastic_modulus <= 1e12,
-            "tube.hydroelastic_modulus",
+            f"{owner}.hydroelastic_modulus",
             self.hydroelastic_modulus,
             "a number in (0, 1e12] Pa (steel's Young's modulus is 2e11)",
         )
-        _require(
-            self.compliant_layer_height <= self.height,
-            "tube.compliant_layer_height",
-            self.compliant_layer_height,
-            f"<= tube.height ({self.height})",
-        )
+
+
+@dataclass
+class ContactBandConfig:
+    """The part's contact band: only the material along the edge, the top
+    ``height`` below it, is modelled, as a compliant hydroelastic volume
+    mesh of this resolution (the rest of the part is drawn, not touched)."""
+
+    height: float = 0.006  # m, the band's depth below the edge
+    # -, segments around a full turn (circle, profile; a mesh edge's
+    # stations are no coarser than a 30 mm ring's of as many). The cutter's
+    # mesh (tool.resolution_hint) and the sensor's noise set it: finer
+    # changes the force less than the noise (docs/numerics.md).
+    mesh_segments: int = 120
+    mesh_radial_cells: int = 2  # -, mesh cells across the band
+    mesh_height_cells: int = 2  # -, mesh cells through the band's height
+
+    def validate(self, owner="part.band"):
+        _positive(owner, "height", self.height)
         _require(
             isinstance(self.mesh_segments, int) and self.mesh_segments >= 16,
-            "tube.mesh_segments",
+            f"{owner}.mesh_segments",
             self.mesh_segments,
             "an integer >= 16",
         )
@@ -106,7 +96,7 @@ class TubeConfig:
             v = getattr(self, name)
             _require(
                 isinstance(v, int) and v >= 2,
-                f"tube.{name}",
+                f"{owner}.{name}",
                 v,
                 "an integer >= 2 (the mesh needs interior vertices)",
             )
@@ -119,7 +109,7 @@ class ToolConfig:
     cutter_radius: float = 0.003  # m, of the cylindrical cutter
     cutter_length: float = 0.020  # m, along the tool axis
     engagement: float = 0.002  # m, cutter tip below the top edge
-    resolution_hint: float = 6.0e-4  # m, the cutter's mesh (TubeConfig)
+    resolution_hint: float = 6.0e-4  # m, the cutter's mesh (part.band)
 
     def validate(self):
         for name in (
@@ -166,33 +156,35 @@ def parts_folder() -> Path:
 
 @dataclass
 class EdgeConfig:
-    """Which edge, and where and which way the tool runs along it.
+    """Which edge of the part is cut, and where and which way the tool runs
+    along it; ``kind`` says which edge it is, and only that kind's fields
+    (``FIELDS``) may be given with it. The part frame is ``part.pose``.
 
-    ``circle``: the tube's inner top edge (``tube.*``), from ``start_angle``
-    in ``direction``. ``straight``: the top edge of a straight wall of the
-    ``tube``'s thickness, height and material, ``length`` long, its middle
-    above ``tube.position``; the tool runs along ``heading`` with the
-    material on its right. ``profile``: the top edge of a closed profile,
-    the polygon ``vertices`` about ``tube.position`` with every corner
-    rounded by ``fillet_radius``; ``side`` inner: a pocket's edge (the
+    ``circle``: the inner top edge of a tube of ``inner_radius``,
+    ``wall_thickness`` and ``height`` standing on the part frame's origin,
+    from ``start_angle`` in ``direction``. ``straight``: the top edge of a
+    straight wall ``wall_thickness`` thick, ``height`` high and ``length``
+    long, its middle above the part frame's origin; the tool runs along
+    ``heading`` with the material on its right. ``profile``: the top edge of
+    a closed profile ``height`` high, the polygon ``vertices`` about the
+    part frame's origin with every corner rounded by ``fillet_radius``, its
+    wall ``wall_thickness`` thick; ``side`` inner: a pocket's edge (the
     material outside, as the tube's bore), outer: a boss's edge (the
-    material inside); the tube's wall thickness, height, compliant layer
-    and modulus describe its material. The pass starts where the ray from
-    ``tube.position`` at polar angle ``start_angle`` meets the cutter's
-    path (the crossing nearest to ``tube.position``), or at the middle of
-    vertex ``start_vertex``'s fillet, or ``start_fraction`` of the path
-    counter-clockwise from there for vertex 0 (one of the three), and runs
-    in ``direction``.
+    material inside). The pass starts where the ray from the origin at
+    polar angle ``start_angle`` meets the cutter's path (the crossing
+    nearest the origin), or at the middle of vertex ``start_vertex``'s
+    fillet, or ``start_fraction`` of the path counter-clockwise from there
+    for vertex 0 (one of the three), and runs in ``direction``.
 
     ``mesh``: an edge of the part in ``file`` (STL, OBJ or STEP; a relative
     path is relative to the scenario file, a bare name may also be one of
-    models/parts/), its coordinates in ``units``, placed in the world by
-    ``pose``: the sharp edge (faces' normals more than ``sharp_angle``
-    apart) nearest the point ``near`` of the part frame. The tool's axis
-    follows the outward normal of the face the tool stands on: the one
-    whose normal is nearest ``tool_face`` (a direction in the part frame,
-    e.g. [0, 0, 1]: the face looking up), or the one ``tool_rule`` names
-    (left or right of the edge's own direction; a loop runs
+    models/parts/), its coordinates in ``units``: the sharp edge (faces'
+    normals more than ``sharp_angle`` apart) nearest the point ``near`` of
+    the part frame, its contact band ``band_width`` wide where it fits. The
+    tool's axis follows the outward normal of the face the tool stands on:
+    the one whose normal is nearest ``tool_face`` (a direction in the part
+    frame, e.g. [0, 0, 1]: the face looking up), or the one ``tool_rule``
+    names (left or right of the edge's own direction; a loop runs
     counter-clockwise seen from outside; neither given: left), turned by
     ``tilt`` about the edge and leaned by ``lead`` towards the travel; the
     cutter cuts with its side, ``tool.engagement`` below the edge along the
@@ -202,12 +194,17 @@ class EdgeConfig:
     at the start; an open edge run backwards: at its end)."""
 
     kind: str = "circle"  # -, circle, straight, profile or mesh
+    inner_radius: float = 0.030  # m, circle: the edge's radius, the bore's
+    # m, circle, straight, profile: the wall's thickness across the edge
+    wall_thickness: float = 0.005
+    # m, circle, straight, profile: the wall's top above the part frame
+    height: float = 0.050
     start_angle: float = 0.0  # rad, polar angle of the contour start
     direction: int = 1  # -, +1 counter-clockwise seen from +z, -1 clockwise
     length: float = 0.1  # m, straight edge only
     heading: float = 1.5707963267948966  # rad, straight: travel direction
-    # m, [x, y] about tube.position, counter-clockwise, at least 3, not
-    # self-intersecting (profile only)
+    # m, [x, y] about the part frame's origin, counter-clockwise, at least
+    # 3, not self-intersecting (profile only)
     vertices: list[list[float]] = field(default_factory=list)
     fillet_radius: float = 0.008  # m, every corner rounded (profile)
     side: str = "inner"  # -, profile: inner (pocket) or outer (boss)
@@ -215,7 +212,8 @@ class EdgeConfig:
     # start_angle
     start_vertex: int = -1
     # -, profile: the start this fraction of the path counter-clockwise
-    # from vertex 0's fillet; -1: by start_angle
+    # from vertex 0's fillet; mesh: of the edge from its start; -1: by
+    # start_angle (profile) or at the start (mesh)
     start_fraction: float = -1.0
     # -, mesh: the part's STL, OBJ or STEP file (relative to the scenario
     # file, or a name in models/parts/)
@@ -223,7 +221,8 @@ class EdgeConfig:
     units: str = "m"  # -, mesh: the file's length unit (m, mm, cm or in)
     # m, mesh: a point in the part frame; the pass cuts the edge nearest it
     near: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
-    pose: PoseConfig = field(default_factory=PoseConfig)  # -, mesh: the part
+    # m, mesh: the contact band's width into the material, where it fits
+    band_width: float = 0.005
     # -, mesh: the tool axis along the left or right face's outward normal
     # ("": by tool_face, else left)
     tool_rule: str = ""
@@ -238,6 +237,42 @@ class EdgeConfig:
     # rad, mesh: an edge where the faces' normals differ by more
     sharp_angle: float = 0.5236
 
+    #: The fields each kind reads (``kind`` itself goes with every kind).
+    FIELDS = {
+        "circle": (
+            "inner_radius",
+            "wall_thickness",
+            "height",
+            "start_angle",
+            "direction",
+        ),
+        "straight": ("wall_thickness", "height", "length", "heading"),
+        "profile": (
+            "wall_thickness",
+            "height",
+            "vertices",
+            "fillet_radius",
+            "side",
+            "start_angle",
+            "start_vertex",
+            "start_fraction",
+            "direction",
+        ),
+        "mesh": (
+            "file",
+            "units",
+            "near",
+            "band_width",
+            "tool_rule",
+            "tool_face",
+            "start_near",
+            "tilt",
+            "lead",
+            "sharp_angle",
+            "start_fraction",
+            "direction",
+        ),
+    }
     KINDS = ("circle", "straight", "profile", "mesh")
     TOOL_RULES = ("left", "right")
     # the nearest edge farther from ``near`` than this share of the part's
@@ -265,16 +300,19 @@ class EdgeConfig:
             ),
         )
 
-    def path_length(self, tube, tool) -> float:
-        """The cutter's path along the edge (m): the length a burr's arc
-        and ``center_fraction`` are measured on."""
-        if self.kind == "profile":
-            return self.profile_path([0.0, 0.0, 0.0], tool.cutter_radius).length
-        if self.kind == "mesh":
-            return self.mesh_path(tool).length
-        if self.kind == "straight":
-            return self.length
-        return 2 * math.pi * (tube.inner_radius - tool.cutter_radius)
+    def own_fields(self) -> "EdgeConfig":
+        """This edge with every field its kind does not read at its
+        default: what a base of another kind left in them is dropped, and
+        the scenario written back reads again."""
+        own = EdgeConfig(kind=self.kind)
+        for name in self.FIELDS.get(self.kind, ()):
+            setattr(own, name, copy.deepcopy(getattr(self, name)))
+        return own
+
+    def wall(self) -> float:
+        """The material's depth across the edge (m): the wall's thickness,
+        a mesh edge's band width; no cut or burr is deeper."""
+        return self.band_width if self.kind == "mesh" else self.wall_thickness
 
     def mesh_file(self) -> Path:
         """The part's file: ``file`` as given (the scenario loader makes a
@@ -286,28 +324,28 @@ class EdgeConfig:
         shipped = parts_folder() / path
         return shipped if shipped.is_file() else path
 
-    def mesh_edge(self):
+    def mesh_edge(self, pose: PoseConfig):
         """(part, EdgeCurve, the edge's distance from ``near`` (m)): the
-        edge nearest ``near``, read once per file (ValueError: a bad file
-        or mesh)."""
+        edge nearest ``near`` of the part placed at ``pose``, read once per
+        file (ValueError: a bad file or mesh)."""
         # Imported here: the mesh libraries load only for a mesh edge.
         from deburr_drake.math.edge_contour import load_edge
 
         return load_edge(
             self.mesh_file(),
             units=self.units,
-            xyz=self.pose.xyz,
-            rpy=self.pose.rpy,
+            xyz=pose.xyz,
+            rpy=pose.rpy,
             sharp_angle=self.sharp_angle,
             near=self.near,
         )
 
-    def mesh_path(self, tool):
-        """The cutter tip's path along the mesh edge, an ``EdgeContour``
-        (ValueError: see it)."""
+    def mesh_path(self, tool, pose: PoseConfig):
+        """The cutter tip's path along the mesh edge of the part at
+        ``pose``, an ``EdgeContour`` (ValueError: see it)."""
         from deburr_drake.math.edge_contour import EdgeContour, face_rule
 
-        part, curve, _ = self.mesh_edge()
+        part, curve, _ = self.mesh_edge(pose)
         rule = self.tool_rule or "left"
         if self.tool_face:
             rule = face_rule(curve, part.rotation @ self.tool_face)
@@ -327,52 +365,56 @@ class EdgeConfig:
             ),
         )
 
-    def check_mesh(self, tool):
+    def check_mesh(self, tool, pose: PoseConfig):
         """One ConfigError naming the field if the part's file, its edge
         near ``near`` or the cutter's path along it cannot be built."""
         try:
-            part, _, distance = self.mesh_edge()
+            part, _, distance = self.mesh_edge(pose)
         except ValueError as e:
-            field = "edge.units" if "unknown units" in str(e) else "edge.file"
-            value = self.units if field == "edge.units" else self.file
+            field = (
+                "part.edge.units"
+                if "unknown units" in str(e)
+                else "part.edge.file"
+            )
+            value = self.units if field == "part.edge.units" else self.file
             raise ConfigError(f"{field} = {value!r} is invalid: {e}") from None
         size = float(part.mesh.scale)
         _require(
             distance <= self.NEAR_SHARE * size,
-            "edge.near",
+            "part.edge.near",
             self.near,
             f"a point (m, part frame) near an edge of the part: the nearest "
             f"is {distance:.4g} m away, the part {size:.4g} m across (near "
             "is in metres, in the part's frame, not the world's)",
         )
         try:
-            self.mesh_path(tool)
+            self.mesh_path(tool, pose)
         except ValueError as e:
             message = str(e)
-            field, value = "edge.tilt", self.tilt
+            field, value = "part.edge.tilt", self.tilt
             if "outward normals" in message:
-                field, value = "edge.tool_face", self.tool_face
+                field, value = "part.edge.tool_face", self.tool_face
             elif "lead" in message:
-                field, value = "edge.lead", self.lead
+                field, value = "part.edge.lead", self.lead
             elif "pass is empty" in message:
-                field, value = "edge.start_fraction", self.start_fraction
+                field, value = "part.edge.start_fraction", self.start_fraction
             raise ConfigError(
                 f"{field} = {value!r} is invalid: {message}"
             ) from None
 
-    def check_profile(self, tube, tool, part_error):
+    def check_profile(self, pose, band, tool, part_error):
         """One ConfigError naming the field if the profile, the cutter's
-        path on it (real and believed), or the wall ``tube.wall_thickness``
+        path on it (real and believed), or the wall ``wall_thickness``
         deep along it cannot be built."""
-        center = list(tube.position[:2]) + [0.0]
-        field, value = "edge.vertices", self.vertices
+        center = list(pose.xyz[:2]) + [0.0]
+        field, value = "part.edge.vertices", self.vertices
         try:
             path = self.profile_path(center, tool.cutter_radius)
-            field, value = "tube.wall_thickness", tube.wall_thickness
+            field, value = "part.edge.wall_thickness", self.wall_thickness
             path.with_offset(0.0).material_band(
-                tube.wall_thickness,
-                segments_per_turn=tube.mesh_segments,
-                max_step=tube.wall_thickness,
+                self.wall_thickness,
+                segments_per_turn=band.mesh_segments,
+                max_step=self.wall_thickness,
             )
             field, value = "part_error.radius", part_error.radius
             self.profile_path(
@@ -382,8 +424,8 @@ class EdgeConfig:
             message = str(e)
             if "larger than the cutter" in message:
                 field, value = (
-                    ("edge.fillet_radius", self.fillet_radius)
-                    if field == "edge.vertices"
+                    ("part.edge.fillet_radius", self.fillet_radius)
+                    if field == "part.edge.vertices"
                     else (field, value)
                 )
                 message = (
@@ -392,7 +434,7 @@ class EdgeConfig:
                     f"({tool.cutter_radius}): {message}"
                 )
             elif "start_angle" in message:
-                field, value = "edge.start_angle", self.start_angle
+                field, value = "part.edge.start_angle", self.start_angle
             raise ConfigError(
                 f"{field} = {value!r} is invalid: {message}"
             ) from None
@@ -405,9 +447,10 @@ class EdgeConfig:
             isinstance(vertex, int)
             and not isinstance(vertex, bool)
             and -1 <= vertex < max(len(self.vertices), 0),
-            "edge.start_vertex",
+            "part.edge.start_vertex",
             vertex,
-            f"-1 or an index into edge.vertices (0 to {len(self.vertices) - 1})"
+            f"-1 or an index into part.edge.vertices (0 to "
+            f"{len(self.vertices) - 1})"
             if self.kind == "profile"
             else "-1 (only a profile edge starts at a vertex)",
         )
@@ -415,61 +458,60 @@ class EdgeConfig:
             isinstance(fraction, (int, float))
             and (fraction == -1 or 0 <= fraction < 1)
             and (fraction == -1 or self.kind in ("profile", "mesh")),
-            "edge.start_fraction",
+            "part.edge.start_fraction",
             fraction,
             "-1 or a number in [0, 1) (a profile or mesh edge only)",
         )
         _require(
             vertex == -1 or fraction == -1,
-            "edge.start_fraction",
+            "part.edge.start_fraction",
             fraction,
-            f"-1 while edge.start_vertex ({vertex}) places the start (one "
+            f"-1 while part.edge.start_vertex ({vertex}) places the start (one "
             "of start_angle, start_vertex, start_fraction)",
         )
         placed = "start_vertex" if vertex != -1 else "start_fraction"
         _require(
             (vertex == -1 and fraction == -1) or self.start_angle == 0,
-            "edge.start_angle",
+            "part.edge.start_angle",
             self.start_angle,
-            f"0 while edge.{placed} places the start (one of start_angle, "
+            f"0 while part.edge.{placed} places the start (one of start_angle, "
             "start_vertex, start_fraction)",
         )
 
     def _check_mesh_fields(self):
         """The mesh edge's fields (numbers checked whatever the kind)."""
-        _vector("edge", "near", self.near, 3, _finite)
-        self.pose.validate("edge.pose")
+        _vector("part.edge", "near", self.near, 3, _finite)
         for name in ("tilt", "lead"):
             v = getattr(self, name)
             _require(
                 isinstance(v, (int, float))
                 and math.isfinite(v)
                 and abs(v) < 0.5 * math.pi,
-                f"edge.{name}",
+                f"part.edge.{name}",
                 v,
                 "a number in (-pi/2, pi/2) rad",
             )
         _require(
             isinstance(self.sharp_angle, (int, float))
             and 0.0 < self.sharp_angle < math.pi,
-            "edge.sharp_angle",
+            "part.edge.sharp_angle",
             self.sharp_angle,
             "a number in (0, pi) rad",
         )
         for name in ("start_near", "tool_face"):
             if getattr(self, name):
-                _vector("edge", name, getattr(self, name), 3, _finite)
+                _vector("part.edge", name, getattr(self, name), 3, _finite)
         if self.kind != "mesh":
             return
         _require(
             self.units in UNITS,
-            "edge.units",
+            "part.edge.units",
             self.units,
             f"one of {', '.join(UNITS)}",
         )
         _require(
             self.tool_rule in ("", *self.TOOL_RULES),
-            "edge.tool_rule",
+            "part.edge.tool_rule",
             self.tool_rule,
             "left or right (the bisector leaves n1 undefined: the cutter's "
             "side would face neither face)",
@@ -477,32 +519,34 @@ class EdgeConfig:
         if self.start_near:
             _require(
                 self.start_fraction == -1,
-                "edge.start_fraction",
+                "part.edge.start_fraction",
                 self.start_fraction,
-                "-1 while edge.start_near places the start (one of the two)",
+                "-1 while part.edge.start_near places the start (one of the "
+                "two)",
             )
         if self.tool_face:
             _require(
                 any(x != 0 for x in self.tool_face),
-                "edge.tool_face",
+                "part.edge.tool_face",
                 self.tool_face,
                 "a non-zero direction (part frame)",
             )
             _require(
                 not self.tool_rule,
-                "edge.tool_rule",
+                "part.edge.tool_rule",
                 self.tool_rule,
-                "unset while edge.tool_face picks the face (one of the two)",
+                "unset while part.edge.tool_face picks the face (one of the "
+                "two)",
             )
         _require(
             self.start_angle == 0,
-            "edge.start_angle",
+            "part.edge.start_angle",
             self.start_angle,
-            "0 for a mesh edge (edge.start_fraction places its start)",
+            "0 for a mesh edge (part.edge.start_fraction places its start)",
         )
         _require(
             isinstance(self.file, str) and self.mesh_file().is_file(),
-            "edge.file",
+            "part.edge.file",
             self.file,
             "an STL, OBJ or STEP file relative to the scenario file, or "
             f"the name of one in {parts_folder()}: no such file",
@@ -511,7 +555,7 @@ class EdgeConfig:
     def validate(self):
         _require(
             self.kind in self.KINDS,
-            "edge.kind",
+            "part.edge.kind",
             self.kind,
             f"one of {self.KINDS}",
         )
@@ -521,21 +565,28 @@ class EdgeConfig:
                 isinstance(v, (int, float))
                 and math.isfinite(v)
                 and abs(v) <= 2 * math.pi,
-                f"edge.{name}",
+                f"part.edge.{name}",
                 v,
                 "a number in [-2 pi, 2 pi] rad",
             )
         _require(
             self.direction in (1, -1),
-            "edge.direction",
+            "part.edge.direction",
             self.direction,
             "1 or -1",
         )
-        _positive("edge", "length", self.length)
-        _positive("edge", "fillet_radius", self.fillet_radius)
+        for name in (
+            "inner_radius",
+            "wall_thickness",
+            "height",
+            "length",
+            "fillet_radius",
+            "band_width",
+        ):
+            _positive("part.edge", name, getattr(self, name))
         _require(
             self.side in self.SIDES,
-            "edge.side",
+            "part.edge.side",
             self.side,
             f"one of {self.SIDES}",
         )
@@ -545,12 +596,76 @@ class EdgeConfig:
             return
         _require(
             len(self.vertices) >= 3,
-            "edge.vertices",
+            "part.edge.vertices",
             self.vertices,
             "at least 3 points [x, y] (m) for a profile edge",
         )
         for i, v in enumerate(self.vertices):
-            _vector("edge", f"vertices[{i}]", v, 2, _finite)
+            _vector("part.edge", f"vertices[{i}]", v, 2, _finite)
+
+
+@dataclass
+class PartConfig:
+    """The part: where it is (``pose``, its frame in the world), what it is
+    made of (``material``), how much of it the contact models (``band``)
+    and the edge the tool cuts on it (``edge``, one of its kinds)."""
+
+    pose: PoseConfig = field(default_factory=PoseConfig)
+    material: MaterialConfig = field(default_factory=MaterialConfig)
+    band: ContactBandConfig = field(default_factory=ContactBandConfig)
+    edge: EdgeConfig = field(default_factory=EdgeConfig)
+
+    def validate(self):
+        self.pose.validate("part.pose")
+        self.material.validate()
+        self.band.validate()
+        self.edge.validate()
+        if self.edge.kind != "mesh":
+            # Only a mesh part is read in a frame of its own; the walls
+            # are built upright about the pose's origin.
+            _require(
+                not any(self.pose.rpy),
+                "part.pose.rpy",
+                self.pose.rpy,
+                f"[0, 0, 0] for a {self.edge.kind} edge (only a mesh part "
+                "turns)",
+            )
+            _require(
+                self.band.height <= self.edge.height,
+                "part.band.height",
+                self.band.height,
+                f"<= part.edge.height ({self.edge.height})",
+            )
+
+    def mesh_edge(self):
+        """A mesh edge's (part, EdgeCurve, distance from ``near``) at
+        ``pose`` (EdgeConfig.mesh_edge)."""
+        return self.edge.mesh_edge(self.pose)
+
+    def mesh_path(self, tool):
+        """A mesh edge's cutter path (EdgeConfig.mesh_path)."""
+        return self.edge.mesh_path(tool, self.pose)
+
+    def path_length(self, tool) -> float:
+        """The cutter's path along the edge (m): the length a burr's arc
+        and ``center_fraction`` are measured on."""
+        edge = self.edge
+        if edge.kind == "profile":
+            return edge.profile_path([0.0, 0.0, 0.0], tool.cutter_radius).length
+        if edge.kind == "mesh":
+            return self.mesh_path(tool).length
+        if edge.kind == "straight":
+            return edge.length
+        return 2 * math.pi * (edge.inner_radius - tool.cutter_radius)
+
+    def check(self, tool, part_error):
+        """One ConfigError naming the field if the edge's path cannot be
+        built with this cutter (a profile's, real and believed; a mesh
+        part's file, edge and path)."""
+        if self.edge.kind == "profile":
+            self.edge.check_profile(self.pose, self.band, tool, part_error)
+        if self.edge.kind == "mesh":
+            self.edge.check_mesh(tool, self.pose)
 
 
 @dataclass
@@ -560,8 +675,8 @@ class SensorConfig:
     sample_period: float = 0.0025  # s, the reading is sampled this often
     # Hz, first-order low-pass. The controller cancels the measured force
     # (-f in (36)), which holds the process damping g of (3) through the
-    # sampled sensor: on the light point-mass testbed that loop is unstable
-    # at 50 Hz and stable at 20 (docs/numerics.md).
+    # sampled sensor: on the light point-mass testbed a wide band makes
+    # that loop unstable (docs/numerics.md).
     cutoff_frequency: float = 20.0
     noise_std: float = 0.0  # N, white noise per axis before the filter
     noise_seed: int = 0  # -, seeds the noise (RandomSource)
@@ -621,11 +736,9 @@ class ProcessConfig:
     threshold_depth: float = 2.0e-5  # m, c0 ramps in over this depth
     # m/s: the direction of the threshold force P'_th is sat(v_t / this).
     # The integrator treats a sign flip beyond this band explicitly, so the
-    # band must exceed the speed one 2.5 ms step can give it (P'_th h / m:
-    # 3 mm/s on the 1.8 kg point mass): at 0.05 mm/s the point mass chattered
-    # at 200 Hz after a 2 mm/s kick, at 0.5 mm/s it does not
-    # (tests/runs/test_closed_loop.py). No operating point is this slow
-    # (v0 = 1 mm/s).
+    # band must exceed the speed one sample's step can give it (P'_th h /
+    # m), or the light point mass chatters (docs/numerics.md). No operating
+    # point is this slow.
     smoothing_speed: float = 5.0e-4
     burrs: List[BurrConfig] = field(default_factory=list)
     finish_bin_length: float = 2.0e-4  # m, of arc per surface-finish bin
@@ -643,8 +756,8 @@ class ProcessConfig:
     # the applied forces' d tau / dv implicitly, then holds the tallest
     # burr at one step per 2.5 ms sample without moving the loop's limits.
     # False: eq. (3) follows the velocities between samples (then the
-    # off-diagonal of g a a^T is explicit in cenic: two steps per sample
-    # for burrs above about 1.2 mm on the paper arm).
+    # off-diagonal of g a a^T is explicit in cenic, and tall burrs need
+    # more steps per sample: docs/numerics.md).
     sample_mean: bool = True
     # -; true (with sample_mean false): the force law adds S (v - v0),
     # zero at each sample's joint velocities v0, that makes its derivative
@@ -652,10 +765,9 @@ class ProcessConfig:
     # which treats only that diagonal implicitly, holds any g of (3) at one
     # step per sample. The term
     # is a discretization device: within a step it adds h (D - g a a^T) of
-    # inertia across the cut, which moves the sampled loop's limits: the
-    # point mass's sliding-gain limit 1548 -> 3579 N s/m (1548 at 0.625 ms
-    # without it), and on the paper arm it hid the 200 Hz limit cycle at
-    # K = 5656-6000 N s/m. No shipped scenario turns it on.
+    # inertia across the cut, which moves the sampled loop's limits (it
+    # raises the sliding-gain limit and hides the loop's limit cycle:
+    # docs/numerics.md). No shipped scenario turns it on.
     implicit_damping: bool = False
     # N/m: with the spindle off (touch probing) a burr is not cut: it
     # pushes the tool back along -n1 where the tool reaches into it.
@@ -917,13 +1029,13 @@ def _dist_hint(entry) -> str:
 @dataclass
 class PartErrorConfig:
     """How the part the controller believes in differs from the real one.
-    ``tube`` and ``edge`` describe the real part (the plant, the contact,
-    the cutting process and the metrics use it); the command generator,
-    the first-order hold, the observer and the start pose use the believed
+    ``part`` describes the real part (the plant, the contact, the cutting
+    process and the metrics use it); the command generator, the
+    first-order hold, the observer and the start pose use the believed
     part: the real one moved by ``offset``, turned by ``yaw`` about its
     vertical axis (circle: the start angle; straight: the heading about
-    ``tube.position``; profile: its vertices and start angle about
-    ``tube.position``) and with an inner radius ``radius`` larger (profile:
+    ``part.pose.xyz``; profile: its vertices and start angle about
+    ``part.pose.xyz``) and with an inner radius ``radius`` larger (profile:
     grown outward by ``radius``, a pocket's or a boss's)."""
 
     offset: List[float] = field(
@@ -1037,10 +1149,9 @@ class GuardsConfig:
     contact_force: float = 1.0  # N, ||f_n|| above it is contact
     nan: bool = True  # -, any NaN or infinity in a logged signal
     # s; all guards are checked this often, the joint torque also at every
-    # inner-loop sample. A multiple of the 2.5 ms inner loop adds no
-    # integrator steps. On a paper run all guards every 2.5 ms cost about
-    # 5 % of the CPU time, every 10 ms with the torque every 2.5 ms about 3 %
-    # (scripts/bench_guards.py).
+    # inner-loop sample. A multiple of the inner loop's period adds no
+    # integrator steps; checking every guard at every sample costs CPU time
+    # the torque alone does not (docs/numerics.md).
     check_period: float = 0.02
     # -; the drives clamp the commanded torque at the effort limits, as real
     # ones do: a guard sees a torque one sample after it is commanded, so

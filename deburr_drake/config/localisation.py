@@ -49,9 +49,9 @@ class ProbeConfig:
     # -, n of the contact's law F = c depth^n exp(-b depth), whose local
     # exponent n - b depth falls with depth, so a soft part, touched
     # deeper, is not read with the exponent of a stiff one (1 with b 0: a
-    # linear contact). The hydroelastic ring under the cutter: 1.54 and
-    # 412 (cell/part.py measure_normal_force from 0.1 to 0.9 mm, within
-    # 0.2 %).
+    # linear contact). The defaults are the hydroelastic ring's under the
+    # cutter, fitted to cell/part.py measure_normal_force
+    # (docs/numerics.md).
     contact_exponent: float = 1.54
     # 1/m, b: how fast the local exponent falls with depth
     contact_exponent_slope: float = 412.0

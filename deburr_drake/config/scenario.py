@@ -16,12 +16,12 @@ from deburr_drake.config.cell import (
     EdgeConfig,
     FaultsConfig,
     GuardsConfig,
+    PartConfig,
     PartErrorConfig,
     ProcessConfig,
     RobotConfig,
     SensorConfig,
     ToolConfig,
-    TubeConfig,
 )
 from deburr_drake.config.checks import (
     ConfigError,
@@ -59,18 +59,17 @@ class SimulationConfig:
     # s. cenic treats only the diagonal of the applied forces' d tau / dv
     # implicitly; the cutting force's g a a^T (a = J^T n2) is off-diagonal
     # on an arm, and process.sample_mean holds it over each sample at its
-    # exact mean, so the paper scenarios take one step per 2.5 ms sample
+    # exact mean, so the paper scenarios take one step per sample
     # (paper_6dof two, for its depth's accuracy; docs/numerics.md).
     max_step: float = 0.01
-    # -; false: fixed steps of max_step (accuracy unused). With the 2.5 ms
-    # sampled loop every step ends at a sample anyway; on 12 s of the paper
-    # run cenic's error control at 1e-4 takes 14 % more steps and 19 % more
-    # wall time for means within 1.5e-4 (scripts/integrator_check.py).
+    # -; false: fixed steps of max_step (accuracy unused). With the sampled
+    # loop every step ends at a sample anyway, and error control only adds
+    # steps the means do not need (docs/numerics.md).
     error_control: bool = True
-    # s; the control period: no extra integrator stops (an unaligned 4 ms
-    # log cost 50 % more steps), and a limit cycle at the loop's Nyquist
-    # frequency shows as sample-to-sample alternation instead of aliasing to
-    # a constant as a 5 ms log did.
+    # s; the control period: no extra integrator stops (an unaligned log
+    # adds steps), and a limit cycle at the loop's Nyquist frequency shows
+    # as sample-to-sample alternation instead of aliasing to a constant
+    # (docs/numerics.md).
     log_period: float = 0.0025
     initial_depth: float = 0.0  # m, tool starts at this depth (in contact)
     # -, stop when the command has run this many edge lengths (0: run for the
@@ -120,9 +119,8 @@ class Scenario:
     # own arm's).
     base: str = ""  # -, a shipped scenario or YAML file this one starts from
     robot: RobotConfig = field(default_factory=RobotConfig)
-    tube: TubeConfig = field(default_factory=TubeConfig)
+    part: PartConfig = field(default_factory=PartConfig)
     tool: ToolConfig = field(default_factory=ToolConfig)
-    edge: EdgeConfig = field(default_factory=EdgeConfig)
     task: TaskConfig = field(default_factory=TaskConfig)
     command: CommandConfig = field(default_factory=CommandConfig)
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
@@ -157,25 +155,32 @@ class Scenario:
 
     def _check_tool_on_part(self):
         """The depth, the cutter and the part fit one another."""
+        edge = self.part.edge
+        wall = edge.wall()
+        wall_name = (
+            "part.edge.band_width"
+            if edge.kind == "mesh"
+            else "part.edge.wall_thickness"
+        )
         _require(
-            self.task.desired_depth < self.tube.wall_thickness,
+            self.task.desired_depth < wall,
             "task.desired_depth",
             self.task.desired_depth,
-            f"< tube.wall_thickness ({self.tube.wall_thickness})",
+            f"< {wall_name} ({wall})",
         )
         _require(
-            self.tool.engagement < self.tube.compliant_layer_height,
+            self.tool.engagement < self.part.band.height,
             "tool.engagement",
             self.tool.engagement,
-            "< tube.compliant_layer_height "
-            f"({self.tube.compliant_layer_height})",
+            f"< part.band.height ({self.part.band.height})",
         )
-        _require(
-            self.tool.cutter_radius < self.tube.inner_radius,
-            "tool.cutter_radius",
-            self.tool.cutter_radius,
-            f"< tube.inner_radius ({self.tube.inner_radius})",
-        )
+        if edge.kind == "circle":
+            _require(
+                self.tool.cutter_radius < edge.inner_radius,
+                "tool.cutter_radius",
+                self.tool.cutter_radius,
+                f"< part.edge.inner_radius ({edge.inner_radius})",
+            )
         _require(
             self.task.desired_depth < self.tool.cutter_radius,
             "task.desired_depth",
@@ -183,40 +188,36 @@ class Scenario:
             f"< tool.cutter_radius ({self.tool.cutter_radius})",
         )
         _require(
-            self.simulation.initial_depth
-            < min(self.tool.cutter_radius, self.tube.wall_thickness),
+            self.simulation.initial_depth < min(self.tool.cutter_radius, wall),
             "simulation.initial_depth",
             self.simulation.initial_depth,
-            "< tool.cutter_radius and tube.wall_thickness "
-            f"({min(self.tool.cutter_radius, self.tube.wall_thickness)})",
+            f"< tool.cutter_radius and {wall_name} "
+            f"({min(self.tool.cutter_radius, wall)})",
         )
-        if self.edge.kind == "profile":
-            self.edge.check_profile(self.tube, self.tool, self.part_error)
-        if self.edge.kind == "mesh":
+        if edge.kind == "mesh":
             self._check_mesh_edge()
-        self._check_burrs()
+        self.part.check(self.tool, self.part_error)
+        self._check_burrs(wall, wall_name)
 
     def _check_mesh_edge(self):
-        """A mesh edge's part and path; what it does not support yet."""
+        """What a mesh edge does not support yet."""
         e = self.part_error
-        later = "0 with edge.kind mesh (not supported yet)"
+        later = "0 with part.edge.kind mesh (not supported yet)"
         _require(not any(e.offset), "part_error.offset", e.offset, later)
         _require(e.yaw == 0.0, "part_error.yaw", e.yaw, later)
         _require(e.radius == 0.0, "part_error.radius", e.radius, later)
         step = self.faults.part_step
         _require(not step.active(), "faults.part_step.time", step.time, later)
-        off = "false with edge.kind mesh (not supported yet)"
+        off = "false with part.edge.kind mesh (not supported yet)"
         for name in ("probe", "online"):
             enabled = getattr(self.localisation, name).enabled
             _require(not enabled, f"localisation.{name}.enabled", enabled, off)
-        self.edge.check_mesh(self.tool)
 
-    def _check_burrs(self):
+    def _check_burrs(self, wall: float, wall_name: str):
         """Each burr fits on the edge, under the cutter and on the wall (a
         size written in mm is a thousand times too large for all three)."""
-        edge = self.edge.path_length(self.tube, self.tool)
+        edge = self.part.path_length(self.tool)
         above = self.tool.cutter_length - self.tool.engagement
-        wall = self.tube.wall_thickness
         for k, burr in enumerate(self.process.burrs):
             name = f"process.burrs[{k}]"
             _require(
@@ -237,21 +238,29 @@ class Scenario:
                 burr.thickness <= wall,
                 f"{name}.thickness",
                 burr.thickness,
-                f"a number in [0, {wall:.6g}] m (tube.wall_thickness: "
+                f"a number in [0, {wall:.6g}] m ({wall_name}: "
                 "the burr stands on the wall; m, not mm)",
             )
 
     def _check_localisation(self):
         """The believed part is one the cutter fits in."""
-        believed = self.tube.inner_radius + self.part_error.radius
+        edge = self.part.edge
+        wall = edge.wall()
+        allowed = f"|radius| < part.edge.wall_thickness ({wall})"
+        fits = True
+        if edge.kind == "circle":
+            fits = self.tool.cutter_radius < (
+                edge.inner_radius + self.part_error.radius
+            )
+            allowed += (
+                " with the believed inner radius > tool.cutter_radius "
+                f"({self.tool.cutter_radius})"
+            )
         _require(
-            self.tool.cutter_radius < believed
-            and abs(self.part_error.radius) < self.tube.wall_thickness,
+            fits and abs(self.part_error.radius) < wall,
             "part_error.radius",
             self.part_error.radius,
-            "|radius| < tube.wall_thickness "
-            f"({self.tube.wall_thickness}) with the believed inner "
-            f"radius > tool.cutter_radius ({self.tool.cutter_radius})",
+            allowed,
         )
 
     def _check_periods(self):
@@ -293,6 +302,36 @@ def _parse_path(path: str):
     return parts
 
 
+#: Where the fields of the tube-only form went: old dotted prefix -> new.
+_OLD_PATHS = {
+    "tube.position": "part.pose.xyz",
+    "tube.inner_radius": "part.edge.inner_radius",
+    "tube.wall_thickness": "part.edge.wall_thickness",
+    "tube.height": "part.edge.height",
+    "tube.compliant_layer_height": "part.band.height",
+    "tube.hydroelastic_modulus": "part.material.hydroelastic_modulus",
+    "tube.hunt_crossley_dissipation": (
+        "part.material.hunt_crossley_dissipation"
+    ),
+    "tube.mesh_": "part.band.mesh_",
+    "tube": "part",
+    "edge.pose": "part.pose",
+    "edge": "part.edge",
+}
+
+
+def _old_path(path: str) -> Optional[str]:
+    """The new dotted name of a field of the tube-only form, else None."""
+    for old, new in _OLD_PATHS.items():
+        if path == old or path.startswith(
+            old if old.endswith("_") else old + "."
+        ):
+            return new + path[len(old) :]
+        if path.startswith(old + "["):
+            return new + path[len(old) :]
+    return None
+
+
 def get_field(scenario, path: str):
     obj = scenario
     for name, index in _parse_path(path):
@@ -300,6 +339,11 @@ def get_field(scenario, path: str):
             not hasattr(obj, "__dataclass_fields__")
             or name not in obj.__dataclass_fields__
         ):
+            new = _old_path(path) if obj is scenario else None
+            if new is not None:
+                raise ConfigError(
+                    f"{path!r} is the tube-only form's field: write {new!r}"
+                )
             raise ConfigError(
                 f"{path!r} is not a scenario field ({name!r} unknown)"
             )
@@ -313,9 +357,12 @@ def get_field(scenario, path: str):
 
 def set_field(scenario, path: str, value):
     """Sets a scenario field by dotted name (``sensor.cutoff_frequency``,
-    ``controller.sliding_gain[0]``); ConfigError names an unknown one."""
+    ``controller.sliding_gain[0]``); ConfigError names an unknown one, or
+    an edge field that does not apply to the edge's kind."""
     get_field(scenario, path)  # validates the path
     parts = _parse_path(path)
+    if len(parts) == 3 and path.startswith("part.edge."):
+        _check_edge_field(scenario.part.edge.kind, parts[2][0], path)
     obj = scenario
     for name, index in parts[:-1]:
         obj = getattr(obj, name)
@@ -412,6 +459,8 @@ def _check_dataclass_node(where: str, node, schema, path: str):
         key = key_node.value
         name = f"{path}.{key}" if path else key
         _check_once(where, key_node, seen, name)
+        if not path and key in _OLD_SECTIONS:
+            _schema_error(where, key_node, _OLD_SECTIONS[key])
         if key not in known:
             _schema_error(
                 where,
@@ -420,6 +469,64 @@ def _check_dataclass_node(where: str, node, schema, path: str):
                 f"{path or 'the scenario'}: {sorted(known)}",
             )
         _check_node(where, value_node, hints[key], name)
+
+
+#: The tube-only form's sections, refused with what to write instead.
+_OLD_SECTIONS = {
+    "tube": "tube is the tube-only form: write part: {pose: {xyz: "
+    "<tube.position>}, material: {hydroelastic_modulus, "
+    "hunt_crossley_dissipation}, band: {height: <compliant_layer_height>, "
+    "mesh_segments, mesh_radial_cells, mesh_height_cells}, edge: {kind: "
+    "circle, inner_radius, wall_thickness, height}} instead",
+    "edge": "edge is the tube-only form: write it as part: {edge: {...}} "
+    "(and edge.pose as part.pose) instead",
+}
+
+
+def _check_edge_field(
+    kind: str, name: str, path: str, where: str = "", value=None
+):
+    """ConfigError when the edge field ``name`` does not apply to an edge
+    of ``kind`` (one it would silently ignore). A field at its default
+    value changes nothing and passes: a scenario written back whole (the
+    run's scenario.yaml) gives every field."""
+    fields = EdgeConfig.FIELDS.get(kind)
+    if fields is None or name == "kind" or name in fields:
+        return
+    if name in EdgeConfig.__dataclass_fields__ and value == getattr(
+        EdgeConfig(), name
+    ):
+        return
+    raise ConfigError(
+        f"{where}{path} does not apply to a {kind} edge: allowed with "
+        f"part.edge.kind {kind}: kind, {', '.join(fields)}"
+    )
+
+
+def _check_edge_fields(text: str, where: str, kind: str):
+    """Every ``part.edge`` field the YAML ``text`` sets applies to the edge
+    of ``kind`` it loads into (file:line:column of the first that does
+    not)."""
+    import yaml
+
+    root = yaml.compose(text, Loader=yaml.SafeLoader)
+    data = yaml.safe_load(text)
+    for section in ("part", "edge"):
+        if not isinstance(root, yaml.MappingNode):
+            return
+        root = next((v for k, v in root.value if k.value == section), None)
+        data = data.get(section) if isinstance(data, dict) else None
+    if not isinstance(root, yaml.MappingNode) or not isinstance(data, dict):
+        return
+    for key_node, _ in root.value:
+        mark = key_node.start_mark
+        _check_edge_field(
+            kind,
+            key_node.value,
+            f"part.edge.{key_node.value}",
+            f"{where}:{mark.line + 1}:{mark.column + 1}: ",
+            data.get(key_node.value),
+        )
 
 
 def _check_once(where: str, key_node, seen: dict, name: str):
@@ -598,9 +705,10 @@ def _resolve_robot_model(robot: RobotConfig, directory: Path):
     robot.packages = {k: resolved(v) for k, v in robot.packages.items()}
 
 
-def _resolve_edge_file(edge: EdgeConfig, directory: Path):
+def _resolve_edge_file(part: PartConfig, directory: Path):
     """A relative part file in a scenario file is relative to that file (a
     bare name not found there may be a shipped part: EdgeConfig looks)."""
+    edge = part.edge
     if not edge.file or Path(edge.file).is_absolute():
         return
     candidate = directory / edge.file
@@ -635,8 +743,9 @@ def _base_of(source: str, path: Path, depth: int = 0) -> Scenario:
     scenario = yaml_load_typed(
         filename=str(base_path), defaults=_base_of(text, base_path, depth + 1)
     )
+    _check_edge_fields(text, str(base_path), scenario.part.edge.kind)
     _resolve_robot_model(scenario.robot, base_path.parent)
-    _resolve_edge_file(scenario.edge, base_path.parent)
+    _resolve_edge_file(scenario.part, base_path.parent)
     robot = data.get("robot")
     if isinstance(robot, dict) and "model" in robot:
         # A robot section that names its model describes that arm whole:
@@ -667,14 +776,17 @@ def load_scenario(
             _check_yaml(source, str(path))
             scenario = _base_of(source, path)
             scenario = yaml_load_typed(filename=str(path), defaults=scenario)
+            _check_edge_fields(source, str(path), scenario.part.edge.kind)
             _resolve_robot_model(scenario.robot, path.parent)
-            _resolve_edge_file(scenario.edge, path.parent)
+            _resolve_edge_file(scenario.part, path.parent)
         if text:
             _check_yaml(text, "--scenario-text")
             scenario = yaml_load_typed(data=text, defaults=scenario)
+            _check_edge_fields(text, "--scenario-text", scenario.part.edge.kind)
     except ConfigError:
         raise
     except (RuntimeError, ValueError, TypeError, AssertionError) as e:
         where = name_or_path if text is None else "--scenario-text"
         raise ConfigError(f"{where}: {e}") from None
+    scenario.part.edge = scenario.part.edge.own_fields()
     return scenario.validate()

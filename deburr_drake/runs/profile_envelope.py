@@ -114,18 +114,18 @@ def fillet_scenario(base, cell: FilletCell, *, max_duration: float = 90.0):
 
     sc = copy.deepcopy(base)
     h, r = HALF_SIDE, cell.fillet
-    sc.edge.kind = "profile"
-    sc.edge.vertices = [[-h, -h], [h, -h], [h, h], [-h, h]]
-    sc.edge.fillet_radius = r
-    sc.edge.side = cell.side
-    sc.edge.direction = 1
+    sc.part.edge.kind = "profile"
+    sc.part.edge.vertices = [[-h, -h], [h, -h], [h, h], [-h, h]]
+    sc.part.edge.fillet_radius = r
+    sc.part.edge.side = cell.side
+    sc.part.edge.direction = 1
     # the right side's path runs at x = h -+ cutter radius up to y = h - r
     x = (
         h - sc.tool.cutter_radius
         if cell.side == "inner"
         else h + sc.tool.cutter_radius
     )
-    sc.edge.start_angle = math.atan2(max(0.0, h - r - LEAD), x)
+    sc.part.edge.start_angle = math.atan2(max(0.0, h - r - LEAD), x)
     sc.task.desired_chamfering_force = cell.force
     sc.process.burrs = []
     contour = make_contour(sc)

@@ -3,7 +3,7 @@ or Monte Carlo samples of them, the run duration, the metrics to collect
 and a pass/fail rule per metric. Loaded with ``yaml_load_typed`` and
 expanded, before any run starts, into full scenarios (YAML text) that are
 each validated; a bad study is one :class:`ConfigError` line naming the
-study field by its full dotted path (``study.sample.fields.tube.position``).
+study field by its full dotted path (``study.sample.fields.part.pose.xyz``).
 """
 
 import copy
@@ -232,7 +232,7 @@ def _check_field(scenario: Scenario, name: str, where: str):
         raise ConfigError(
             f"{where}: the field is of type {shown}: allowed "
             "a number field (a list's element by index, "
-            "e.g. tube.position[0])"
+            "e.g. part.pose.xyz[0])"
         )
     return kind
 

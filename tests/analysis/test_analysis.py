@@ -368,7 +368,7 @@ def test_field_units_come_from_the_config_comments():
     assert analysis.field_unit(sc, "sensor.cutoff_frequency") == "Hz"
     assert analysis.field_unit(sc, "controller.sliding_gain[0]") == "N s/m"
     assert analysis.field_unit(sc, "controller.depth_gain") == "m/(N s)"
-    assert analysis.field_unit(sc, "tube.hydroelastic_modulus") == "Pa"
+    assert analysis.field_unit(sc, "part.material.hydroelastic_modulus") == "Pa"
     assert analysis.field_unit(sc, "controller.model_mass_scale") == ""
 
 
@@ -499,7 +499,7 @@ def test_lyapunov_v1_starts_at_the_estimate_error():
 def test_fast_map_matches_the_full_map(paper_op):
     fields = ["sensor.cutoff_frequency", "controller.sliding_gain[0]"]
     rho_of = analysis.fast_rho(paper_op, fields)
-    assert analysis.fast_rho(paper_op, ["tube.inner_radius"]) is None
+    assert analysis.fast_rho(paper_op, ["part.edge.inner_radius"]) is None
     # At the scenario's own parameters the split is exact; elsewhere the
     # integration is linearized along the base trajectory (first order in
     # the change of held actuation: 5 % here, 1 s after contact; 2e-5 at

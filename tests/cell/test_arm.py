@@ -251,7 +251,7 @@ def test_a_pose_below_the_conditioning_bound_is_refused(plant):
 
 def test_a_singular_path_point_names_the_tube_and_where(monkeypatch):
     """A path point reached only near a singular posture is refused
-    before the run: one line naming tube.position and the point."""
+    before the run: one line naming part.pose.xyz and the point."""
     from deburr_drake.cell import reach
     from deburr_drake.cell.arm import SingularPose
     from deburr_drake.config import ConfigError, load_scenario
@@ -267,7 +267,7 @@ def test_a_singular_path_point_names_the_tube_and_where(monkeypatch):
     with pytest.raises(ConfigError) as e:
         reach.check_part_in_reach(load_scenario("paper"))
     message = str(e.value)
-    assert message.startswith("tube.position = ") and "\n" not in message
+    assert message.startswith("part.pose.xyz = ") and "\n" not in message
     assert "the edge point at arc" in message and "0.004 < 0.02" in message
 
 

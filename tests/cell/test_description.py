@@ -298,7 +298,7 @@ def test_pip_package_folders_and_a_missing_distribution(tmp_path):
     loaded = load_scenario(str(scenario))
     assert loaded.robot.package_paths == [str((tmp_path / "pkgs").resolve())]
     # base: the part and the task of paper_6dof, the robot's own section.
-    assert loaded.tube.position == [0.95, 0.0, 0.45]
+    assert loaded.part.pose.xyz == [0.95, 0.0, 0.45]
     assert loaded.robot.joint_coulomb_friction == []
 
 
@@ -343,7 +343,7 @@ robot:
   package_paths: ["pip:example-robot-data/cmeel.prefix/share"]
   flange_frame: link06
 controller: {design: auto}
-tube: {position: [0.35, 0.0, 0.0]}
+part: {pose: {xyz: [0.35, 0.0, 0.0]}}
 """
 
 #: Unitree Z1's link06 points its tool along +x: the mount that says so.

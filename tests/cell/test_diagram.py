@@ -165,7 +165,7 @@ def test_straight_edge_cell():
     from deburr_drake.cell.truth import contact_normal_force
     from deburr_drake.math.geometry import StraightContour
 
-    scenario = load_scenario("paper", text="edge: {kind: straight}")
+    scenario = load_scenario("paper", text="part: {edge: {kind: straight}}")
     contour = make_contour(scenario)
     assert isinstance(contour, StraightContour)
     assert contour.length == pytest.approx(0.1)

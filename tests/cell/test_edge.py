@@ -54,15 +54,15 @@ def test_believed_profile_moved_turned_and_grown():
 
 
 def test_the_papers_tube_as_a_mesh_edge_is_the_papers_circle():
-    """tube.stl (the paper's bore, mm) at the paper's tube.position, the
+    """tube.stl (the paper's bore, mm) at the paper's part.pose.xyz, the
     tool along the top face's normal, the pass started half its loop on
     (the loop starts at polar angle pi): the paper's contour."""
     paper = load_scenario("paper")
     sc = load_scenario(
         "paper",
-        text="edge: {kind: mesh, file: tube.stl, units: mm, "
-        "near: [0.03, 0.0, 0.05], pose: {xyz: [0.4, 0.0, 0.0]}, "
-        "tool_rule: right, start_fraction: 0.5}",
+        text="part: {edge: {kind: mesh, file: tube.stl, units: mm, "
+        "near: [0.03, 0.0, 0.05], tool_rule: right, start_fraction: 0.5}, "
+        "pose: {xyz: [0.4, 0.0, 0.0]}}",
     )
     mesh, circle = make_contour(sc), make_contour(paper)
     assert mesh.varying_frame and not circle.varying_frame

@@ -308,4 +308,4 @@ def test_a_mesh_edge_is_a_compliant_band_and_the_parts_mesh():
     stations, band = cell_plant.mesh_edge_band(scenario)
     spacing = np.diff(stations.arc)
     np.testing.assert_allclose(spacing, 2 * np.pi * 0.027 / 120, rtol=0.02)
-    assert band["width"] == scenario.tube.wall_thickness
+    assert band["width"] == scenario.part.edge.wall_thickness

@@ -420,10 +420,10 @@ def test_fewer_than_five_actuated_joints_is_one_line(tmp_path):
 
 def test_a_part_out_of_reach_is_one_line():
     scenario = load_scenario(
-        "paper_6dof", text="tube: {position: [2.5, 0.0, 0.45]}"
+        "paper_6dof", text="part: {pose: {xyz: [2.5, 0.0, 0.45]}}"
     )
     message = _one_line_error(
-        lambda: check_part_in_reach(scenario), "tube.position"
+        lambda: check_part_in_reach(scenario), "part.pose.xyz"
     )
     assert "beyond the nearest reachable" in message
 

@@ -57,7 +57,7 @@ def test_running_off_a_straight_edge_cuts_nothing_and_stops():
     scenario = load_scenario(
         "paper",
         text="""
-edge: {kind: straight, length: 0.01}
+part: {edge: {kind: straight, length: 0.01}}
 process: {burrs: []}
 simulation: {stop_after_passes: 0}
 guards: {joint_torque_fraction: 1000.0}
@@ -98,7 +98,7 @@ def test_the_believed_part_is_the_real_one_moved_turned_and_resized():
     np.testing.assert_allclose(
         believed.center - truth.center, [1e-3, 0.0, 0.0], atol=1e-12
     )
-    assert wrong.tube.position == [0.4, 0.0, 0.0]  # the real part stays
+    assert wrong.part.pose.xyz == [0.4, 0.0, 0.0]  # the real part stays
 
 
 @pytest.mark.slow
@@ -123,8 +123,8 @@ def test_the_metrics_measure_depth_on_the_real_part():
 
 
 SQUARE_2R = (
-    "edge: {kind: profile, vertices: [[-0.03, -0.03], [0.03, -0.03], "
-    "[0.03, 0.03], [-0.03, 0.03]], fillet_radius: 0.03}"
+    "part: {edge: {kind: profile, vertices: [[-0.03, -0.03], [0.03, -0.03], "
+    "[0.03, 0.03], [-0.03, 0.03]], fillet_radius: 0.03}}"
 )
 
 

@@ -31,7 +31,7 @@ def test_the_stl_tube_reads_the_rings_law_at_every_station():
 
 def test_a_tilted_edge_is_measured_along_its_tool_axis():
     tilted = load_scenario(
-        TUBE, text="edge: {pose: {xyz: [0.4, 0, 0], rpy: [0.35, 0, 0]}}"
+        TUBE, text="part: {pose: {xyz: [0.4, 0, 0], rpy: [0.35, 0, 0]}}"
     )
     fractions = np.array([0.0, 0.25, 0.5, 0.75])
     forces = contact_normal_force(tilted, [DEPTH], arc_fraction=fractions)

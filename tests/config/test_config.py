@@ -7,6 +7,7 @@ from deburr_drake.config import (
     Scenario,
     load_scenario,
     scenario_names,
+    set_field,
 )
 
 
@@ -54,8 +55,8 @@ task: {desired_depth: 0.0008}
         ),
         ("sensor: {cutoff_frequency: 300.0}", "sensor.cutoff_frequency"),
         ("simulation: {integrator: euler}", "simulation.integrator"),
-        ("edge: {direction: 2}", "edge.direction"),
-        ("tube: {inner_radius: 0.002}", "tool.cutter_radius"),
+        ("part: {edge: {direction: 2}}", "part.edge.direction"),
+        ("part: {edge: {inner_radius: 0.002}}", "tool.cutter_radius"),
         ("process: {implicit_damping: 3}", "process.implicit_damping"),
     ],
 )
@@ -83,55 +84,62 @@ def test_wrong_type_is_an_error():
     "text, field, words",
     [
         (
-            "edge: {fillet_radius: 0.002}",
-            "edge.fillet_radius",
+            "part: {edge: {fillet_radius: 0.002}}",
+            "part.edge.fillet_radius",
             "larger than tool.cutter_radius",
         ),
         (
-            "edge: {vertices: [[0, 0], [0.03, 0.03], [0.03, 0], [0, 0.03]]}",
-            "edge.vertices",
+            "part: {edge: {vertices: [[0, 0], [0.03, 0.03], [0.03, 0], [0, "
+            "0.03]]}}",
+            "part.edge.vertices",
             "intersects itself|counter-clockwise",
         ),
         (
-            "edge: {vertices: [[0, 0], [0.03, 0], [0.03, 0], [0, 0.03]]}",
-            "edge.vertices",
+            "part: {edge: {vertices: [[0, 0], [0.03, 0], [0.03, 0], [0, "
+            "0.03]]}}",
+            "part.edge.vertices",
             "coincide",
         ),
         (
-            "edge: {vertices: [[-0.03, 0.02], [0.03, 0.02], [0.03, -0.02], "
-            "[-0.03, -0.02]]}",
-            "edge.vertices",
+            "part: {edge: {vertices: [[-0.03, 0.02], [0.03, 0.02], "
+            "[0.03, -0.02], [-0.03, -0.02]]}}",
+            "part.edge.vertices",
             "counter-clockwise",
         ),
         (
-            "edge: {vertices: [[0, 0], [0.03, 0]]}",
-            "edge.vertices",
+            "part: {edge: {vertices: [[0, 0], [0.03, 0]]}}",
+            "part.edge.vertices",
             "at least 3",
         ),
         (
-            "edge: {vertices: [[0, 0], [0.03, 0, 1], [0, 0.03]]}",
-            "edge.vertices[1]",
+            "part: {edge: {vertices: [[0, 0], [0.03, 0, 1], [0, 0.03]]}}",
+            "part.edge.vertices[1]",
             "2 numbers",
         ),
-        ("edge: {fillet_radius: 0.03}", "edge.vertices", "do not fit"),
-        ("edge: {side: left}", "edge.side", "inner"),
         (
-            "edge: {start_angle: 0.0, vertices: [[0.01, 0.01], [0.05, 0.01], "
-            "[0.05, 0.05], [0.01, 0.05]]}",
-            "edge.start_angle",
+            "part: {edge: {fillet_radius: 0.03}}",
+            "part.edge.vertices",
+            "do not fit",
+        ),
+        ("part: {edge: {side: left}}", "part.edge.side", "inner"),
+        (
+            "part: {edge: {start_angle: 0.0, vertices: [[0.01, 0.01], "
+            "[0.05, 0.01], [0.05, 0.05], [0.01, 0.05]]}}",
+            "part.edge.start_angle",
             "meets no point",
         ),
         # a U-shaped pocket around a tongue 8 mm wide: the 5 mm walls on its
         # two sides would overlap
         (
-            "edge: {vertices: [[-0.04, -0.02], [0.04, -0.02], [0.04, 0.02], "
-            "[0.004, 0.02], [0.004, -0.005], [-0.004, -0.005], [-0.004, 0.02], "
-            "[-0.04, 0.02]], fillet_radius: 0.0035}",
-            "tube.wall_thickness",
+            "part: {edge: {vertices: [[-0.04, -0.02], [0.04, -0.02], "
+            "[0.04, 0.02], [0.004, 0.02], [0.004, -0.005], [-0.004, -0.005], "
+            "[-0.004, 0.02], [-0.04, 0.02]], fillet_radius: 0.0035}}",
+            "part.edge.wall_thickness",
             "overlaps itself",
         ),
         (
-            "{edge: {fillet_radius: 0.0035}, part_error: {radius: -0.001}}",
+            "{part: {edge: {fillet_radius: 0.0035}}, part_error: {radius: "
+            "-0.001}}",
             "part_error.radius",
             "larger than the cutter",
         ),
@@ -151,8 +159,8 @@ def test_bad_profiles_name_the_field(text, field, words):
 def test_shipped_profile_scenarios():
     for name in ("pocket", "boss"):
         scenario = load_scenario(name)
-        assert scenario.edge.kind == "profile"
-        assert len(scenario.edge.vertices) == 4
+        assert scenario.part.edge.kind == "profile"
+        assert len(scenario.part.edge.vertices) == 4
 
 
 @pytest.mark.parametrize("name", ["paper", "boss", "pocket"])
@@ -207,8 +215,8 @@ def test_a_base_file_inherits_every_section_it_does_not_set(tmp_path):
         _file(
             tmp_path,
             "name: my_pocket\nbase: pocket\n"
-            "edge: {vertices: [[-0.02, -0.02], [0.02, -0.02], [0.02, 0.02],"
-            " [-0.02, 0.02]]}\n"
+            "part: {edge: {vertices: [[-0.02, -0.02], [0.02, -0.02], "
+            "[0.02, 0.02], [-0.02, 0.02]]}}\n"
             "process: {burrs: [{center_fraction: 0.3, length: 0.006, "
             "height: 0.0008, thickness: 0.002}]}\n"
             "task: {desired_chamfering_force: 8.0}\n",
@@ -217,8 +225,10 @@ def test_a_base_file_inherits_every_section_it_does_not_set(tmp_path):
     assert loaded.robot == pocket.robot and loaded.robot.model == "arm5"
     assert loaded.controller == pocket.controller
     # A section set in part keeps the base's other fields.
-    assert loaded.edge.kind == "profile" and loaded.edge.side == "inner"
-    assert loaded.edge.fillet_radius == pocket.edge.fillet_radius
+    assert (
+        loaded.part.edge.kind == "profile" and loaded.part.edge.side == "inner"
+    )
+    assert loaded.part.edge.fillet_radius == pocket.part.edge.fillet_radius
     assert loaded.task.desired_depth == pocket.task.desired_depth
     assert loaded.task.desired_chamfering_force == 8.0
     assert loaded.process.cutting_coefficient == (
@@ -245,7 +255,7 @@ def test_a_base_files_robot_merges_unless_it_names_its_model(tmp_path):
         _file(
             tmp_path,
             "base: pocket\nrobot: {model: arm6, flange_frame: flange}\n"
-            "tube: {position: [0.95, 0.0, 0.45]}",
+            "part: {pose: {xyz: [0.95, 0.0, 0.45]}}",
             "other.yaml",
         )
     )
@@ -301,7 +311,9 @@ def test_a_burr_larger_than_the_part_or_the_tool_is_one_line(
 
 
 def test_a_burr_as_long_as_a_straight_edge_fits_and_longer_does_not():
-    text = "edge: {kind: straight, length: 0.05}\nprocess: {burrs: [%s]}"
+    text = (
+        "part: {edge: {kind: straight, length: 0.05}}\nprocess: {burrs: [%s]}"
+    )
     load_scenario("paper", text=text % "{center_fraction: 0.5, length: 0.05}")
     with pytest.raises(ConfigError, match=r"burrs\[0\].length = 0.051"):
         load_scenario("paper", text=text % "{length: 0.051}")
@@ -310,32 +322,123 @@ def test_a_burr_as_long_as_a_straight_edge_fits_and_longer_does_not():
 @pytest.mark.parametrize(
     "text, field",
     [
-        ("edge: {start_vertex: 0}", "edge.start_vertex = 0"),
-        ("edge: {start_fraction: 0.5}", "edge.start_fraction = 0.5"),
+        ("part: {edge: {start_vertex: 0}}", "part.edge.start_vertex"),
+        ("part: {edge: {start_fraction: 0.5}}", "part.edge.start_fraction"),
+        ("part: {edge: {vertices: [[0, 0], [1, 0], [0, 1]]}}", "vertices"),
+        ("part: {edge: {kind: circle, file: tube.stl}}", "part.edge.file"),
     ],
 )
-def test_a_start_by_vertex_or_fraction_is_a_profiles_only(text, field):
-    with pytest.raises(ConfigError, match=field):
+def test_a_field_of_another_kind_is_refused_by_its_full_name(text, field):
+    """A field the circle edge would ignore: one line naming it with its
+    place in the text, and what a circle edge takes."""
+    with pytest.raises(ConfigError) as e:
         load_scenario("paper", text=text)
+    message = str(e.value)
+    assert f"{field.split('.')[-1]} does not apply to a circle edge" in message
+    assert message.startswith("--scenario-text:1:")
+    assert "part.edge.kind circle: kind, inner_radius" in message
+    assert "\n" not in message
+
+
+def test_a_kind_chosen_later_takes_its_own_fields():
+    """A file's edge fields are checked against the kind that file gives:
+    a profile over the circle of its base takes a start vertex, and a
+    circle's radius over the pocket's profile is refused."""
+    pocket = load_scenario(
+        "paper",
+        text="part: {edge: {kind: profile, side: inner, start_vertex: 1, "
+        "vertices: [[-0.03, -0.02], [0.03, -0.02], [0.03, 0.02], "
+        "[-0.03, 0.02]]}}",
+    )
+    assert pocket.part.edge.start_vertex == 1
+    with pytest.raises(ConfigError, match="inner_radius does not apply to a"):
+        load_scenario("pocket", text="part: {edge: {inner_radius: 0.025}}")
+
+
+@pytest.mark.parametrize(
+    "text, replacement",
+    [
+        ("tube: {inner_radius: 0.02}", "write part: {pose: {xyz: "),
+        ("edge: {start_angle: 0.1}", "write it as part: {edge: {...}}"),
+        ("edge: {pose: {xyz: [0, 0, 0]}}", "edge.pose as part.pose"),
+    ],
+)
+def test_the_tube_only_form_is_refused_naming_the_new_one(
+    tmp_path, text, replacement
+):
+    """A file in the tube-only form (top-level tube:, edge:) is refused,
+    one line saying what to write, before anything is built."""
+    path = tmp_path / "old.yaml"
+    path.write_text("base: paper\n" + text + "\n")
+    with pytest.raises(ConfigError) as e:
+        load_scenario(path)
+    message = str(e.value)
+    assert message.startswith(f"{path}:2:1: ")
+    assert "is the tube-only form" in message and replacement in message
+    assert "\n" not in message
+
+
+def test_set_field_takes_the_part_paths_and_names_the_old_ones():
+    scenario = load_scenario("paper")
+    set_field(scenario, "part.edge.inner_radius", 0.025)
+    set_field(scenario, "part.pose.xyz[1]", 0.01)
+    set_field(scenario, "part.material.hydroelastic_modulus", 5e6)
+    assert scenario.part.edge.inner_radius == 0.025
+    assert scenario.part.pose.xyz == [0.4, 0.01, 0.0]
+    assert scenario.part.material.hydroelastic_modulus == 5e6
+    with pytest.raises(ConfigError, match="write 'part.pose.xyz\\[0\\]'"):
+        set_field(scenario, "tube.position[0]", 0.3)
+    with pytest.raises(ConfigError, match="vertices does not apply to a c"):
+        set_field(scenario, "part.edge.vertices", [[0, 0], [1, 0], [0, 1]])
 
 
 @pytest.mark.parametrize(
     "text, message",
     [
-        ("edge: {start_vertex: 4}", "edge.start_vertex = 4 is invalid"),
-        ("edge: {start_fraction: 1.0}", "edge.start_fraction = 1.0"),
         (
-            "edge: {start_vertex: 1, start_fraction: 0.2}",
-            r"edge.start_fraction = 0.2 is invalid: allowed -1 while",
+            "part: {edge: {start_vertex: 4}}",
+            "part.edge.start_vertex = 4 is invalid",
         ),
         (
-            "edge: {start_vertex: 1, start_angle: 0.5}",
-            "edge.start_angle = 0.5 is invalid: allowed 0 while "
-            "edge.start_vertex",
+            "part: {edge: {start_fraction: 1.0}}",
+            "part.edge.start_fraction = 1.0",
+        ),
+        (
+            "part: {edge: {start_vertex: 1, start_fraction: 0.2}}",
+            r"part.edge.start_fraction = 0.2 is invalid: allowed -1 while",
+        ),
+        (
+            "part: {edge: {start_vertex: 1, start_angle: 0.5}}",
+            "part.edge.start_angle = 0.5 is invalid: allowed 0 while "
+            "part.edge.start_vertex",
         ),
     ],
 )
 def test_one_start_of_a_profile(text, message):
     with pytest.raises(ConfigError, match=message):
         load_scenario("pocket", text=text)
-    load_scenario("pocket", text="edge: {start_vertex: 3}")
+    load_scenario("pocket", text="part: {edge: {start_vertex: 3}}")
+
+
+def test_a_scenario_written_back_whole_reads_again(tmp_path):
+    """The run's scenario.yaml gives every edge field: those of other
+    kinds at their defaults pass, and a base's circle radius under a mesh
+    edge is dropped on loading, not written back."""
+    from pydrake.common.yaml import yaml_dump_typed
+
+    for name in ("paper", "pocket"):
+        path = tmp_path / f"{name}.yaml"
+        path.write_text(yaml_dump_typed(load_scenario(name)))
+        assert load_scenario(path) == load_scenario(name)
+    mesh = load_scenario(
+        "paper",
+        text="part: {edge: {kind: mesh, file: tube.stl, units: mm, "
+        "near: [0.03, 0.0, 0.05]}}",
+    )
+    assert mesh.part.edge.inner_radius == 0.030  # paper's, now unused
+    with pytest.raises(ConfigError, match="inner_radius does not apply"):
+        load_scenario(
+            "paper",
+            text="part: {edge: {kind: mesh, file: tube.stl, units: mm, "
+            "near: [0.03, 0.0, 0.05], inner_radius: 0.02}}",
+        )

@@ -1,4 +1,4 @@
-"""``edge.kind: mesh``: the part's file found relative to the scenario
+"""``part.edge.kind: mesh``: the part's file found relative to the scenario
 file, and one line naming the field for each thing that is wrong."""
 
 import math
@@ -22,29 +22,36 @@ def scenario_file(tmp_path_factory):
     path = folder / "tube.yaml"
     path.write_text(
         "base: paper\n"
-        "edge:\n"
-        "  kind: mesh\n"
-        "  file: parts/tube.stl\n"
-        "  units: mm\n"
-        "  near: [0.03, 0.0, 0.05]\n"
+        "part:\n"
         "  pose: {xyz: [0.0, 0.0, 0.0], rpy: [0.0, 0.0, 0.0]}\n"
-        "  tool_rule: right\n"
+        "  edge:\n"
+        "    kind: mesh\n"
+        "    file: parts/tube.stl\n"
+        "    units: mm\n"
+        "    near: [0.03, 0.0, 0.05]\n"
+        "    tool_rule: right\n"
     )
     return path
 
 
 def test_the_file_is_found_beside_the_scenario(scenario_file, tmp_path):
     scenario = load_scenario(scenario_file)
-    assert scenario.edge.file == str(scenario_file.parent / "parts/tube.stl")
-    length = scenario.edge.path_length(scenario.tube, scenario.tool)
+    assert scenario.part.edge.file == str(
+        scenario_file.parent / "parts/tube.stl"
+    )
+    length = scenario.part.path_length(scenario.tool)
     assert length == pytest.approx(BORE, rel=1e-6)
     # a scenario elsewhere that starts from it keeps the base's part
     child = tmp_path / "child.yaml"
-    child.write_text(f"base: {scenario_file}\nedge: {{direction: -1}}\n")
-    assert load_scenario(child).edge.file == scenario.edge.file
+    child.write_text(
+        f"base: {scenario_file}\npart: {{edge: {{direction: -1}}}}\n"
+    )
+    assert load_scenario(child).part.edge.file == scenario.part.edge.file
     # a bare name not beside the file: a shipped part
-    shipped = load_scenario(scenario_file, text="edge: {file: tube.stl}")
-    assert shipped.edge.mesh_file() == PARTS / "tube.stl"
+    shipped = load_scenario(
+        scenario_file, text="part: {edge: {file: tube.stl}}"
+    )
+    assert shipped.part.edge.mesh_file() == PARTS / "tube.stl"
 
 
 def _refusal(scenario_file, text):
@@ -58,12 +65,30 @@ def _refusal(scenario_file, text):
 @pytest.mark.parametrize(
     "text,starts",
     [
-        ("edge: {file: missing.stl}", "edge.file = 'missing.stl' is invalid"),
-        ("edge: {units: ft}", "edge.units = 'ft' is invalid"),
-        ("edge: {near: [30.0, 0.0, 50.0]}", "edge.near = [30.0, 0.0, 50.0]"),
-        ("edge: {tool_rule: bisector}", "edge.tool_rule = 'bisector'"),
-        ("edge: {pose: {xyz: [0, 0]}}", "edge.pose.xyz = [0.0, 0.0] is"),
-        ("edge: {start_angle: 0.5}", "edge.start_angle = 0.5 is invalid"),
+        (
+            "part: {edge: {file: missing.stl}}",
+            "part.edge.file = 'missing.stl' is invalid",
+        ),
+        ("part: {edge: {units: ft}}", "part.edge.units = 'ft' is invalid"),
+        (
+            "part: {edge: {near: [30.0, 0.0, 50.0]}}",
+            "part.edge.near = [30.0, 0.0, 50.0]",
+        ),
+        (
+            "part: {edge: {tool_rule: bisector}}",
+            "part.edge.tool_rule = 'bisector'",
+        ),
+        ("part: {pose: {xyz: [0, 0]}}", "part.pose.xyz = [0.0, 0.0] is"),
+        (
+            "part: {edge: {start_angle: 0.5}}",
+            "--scenario-text:1:15: part.edge.start_angle does not apply "
+            "to a mesh edge",
+        ),
+        (  # a tube's radius neither limits the cutter nor is silently kept
+            "part: {edge: {inner_radius: 0.001}}",
+            "--scenario-text:1:15: part.edge.inner_radius does not apply "
+            "to a mesh edge",
+        ),
         ("part_error: {yaw: 0.01}", "part_error.yaw = 0.01 is invalid"),
         ("part_error: {offset: [0.001, 0, 0]}", "part_error.offset = "),
         (
@@ -88,17 +113,23 @@ def test_an_open_mesh_is_refused(scenario_file, tmp_path):
     box.update_faces([True] * 11 + [False])
     box.export(tmp_path / "open.stl")
     message = _refusal(
-        scenario_file, f"edge: {{file: {tmp_path / 'open.stl'}, units: m}}"
+        scenario_file,
+        f"part: {{edge: {{file: {tmp_path / 'open.stl'}, units: m}}}}",
     )
-    assert message.startswith("edge.file = ")
+    assert message.startswith("part.edge.file = ")
     assert "the mesh is open, not watertight" in message
 
 
 def test_the_wedge_needs_its_tilt(scenario_file):
-    wedge = "edge: {file: wedge.stl, near: [0.04, 0.03, 0.02], tool_rule: left"
-    message = _refusal(scenario_file, wedge + "}")
-    assert message.startswith("edge.tilt = 0.0 is invalid: the cutter's side")
+    wedge = (
+        "part: {edge: {file: wedge.stl, near: [0.04, 0.03, 0.02], "
+        "tool_rule: left"
+    )
+    message = _refusal(scenario_file, wedge + "}}")
+    assert message.startswith(
+        "part.edge.tilt = 0.0 is invalid: the cutter's side"
+    )
     assert "a tilt of -0.5236 rad (-30.0 deg) clears it" in message
-    scenario = load_scenario(scenario_file, text=wedge + ", tilt: -0.5236}")
-    length = scenario.edge.path_length(scenario.tube, scenario.tool)
+    scenario = load_scenario(scenario_file, text=wedge + ", tilt: -0.5236}}")
+    length = scenario.part.path_length(scenario.tool)
     assert length == pytest.approx(0.06, rel=1e-6)

@@ -153,7 +153,7 @@ def test_defaults_types_and_ranges(fields):
     # Every check validate() makes on the field, cross-field ones too.
     depth = by["task.desired_depth"].allowed
     assert "a finite number > 0" in depth
-    assert "< tube.wall_thickness" in depth
+    assert "< part.edge.wall_thickness" in depth
     assert by["controller.kind"].allowed == (
         "one of fuzzy, robust, ideal, impedance, position"
     )

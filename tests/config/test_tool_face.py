@@ -1,7 +1,7 @@
-"""``edge.tool_face``: the tool stands on the face whose outward normal is
+"""``part.edge.tool_face``: the tool stands on the face whose outward normal is
 nearest a direction of the part frame, whichever way the edge's chain
 runs; one line when the direction names neither face or tool_rule also
-picks one. ``edge.start_near``: the pass starts at the edge's point
+picks one. ``part.edge.start_near``: the pass starts at the edge's point
 nearest a part-frame point."""
 
 import numpy as np
@@ -12,12 +12,13 @@ from deburr_drake.config import ConfigError, load_scenario
 
 TUBE = (
     "base: paper\n"
-    "edge:\n"
-    "  kind: mesh\n"
-    "  file: tube.stl\n"
-    "  units: mm\n"
-    "  near: [0.03, 0.0, 0.05]\n"
+    "part:\n"
     "  pose: {xyz: [0.4, 0.0, 0.0], rpy: [0.0, 0.0, 0.0]}\n"
+    "  edge:\n"
+    "    kind: mesh\n"
+    "    file: tube.stl\n"
+    "    units: mm\n"
+    "    near: [0.03, 0.0, 0.05]\n"
 )
 
 
@@ -37,20 +38,23 @@ def test_the_face_looking_up_is_the_top_face_either_way(tube_file):
     for direction in (1, -1):
         scenario = load_scenario(
             tube_file,
-            text=f"edge: {{tool_face: [0, 0, 1], direction: {direction}}}",
+            text=(
+                f"part: {{edge: {{tool_face: [0, 0, 1], direction: "
+                f"{direction}}}}}"
+            ),
         )
         np.testing.assert_allclose(_axis(scenario), [0, 0, 1], atol=1e-6)
     # the part turned on its side: the face is named in the part's frame
     turned = load_scenario(
         tube_file,
-        text="edge: {tool_face: [0, 0, 1], pose: {xyz: [0.4, 0, 0.1], "
+        text="part: {edge: {tool_face: [0, 0, 1]}, pose: {xyz: [0.4, 0, 0.1], "
         "rpy: [1.5707963, 0, 0]}}",
     )
     np.testing.assert_allclose(_axis(turned), [0, -1, 0], atol=1e-6)
 
 
 def test_left_and_right_still_pick_by_the_chains_direction(tube_file):
-    right = load_scenario(tube_file, text="edge: {tool_rule: right}")
+    right = load_scenario(tube_file, text="part: {edge: {tool_rule: right}}")
     np.testing.assert_allclose(_axis(right), [0, 0, 1], atol=1e-6)
     assert _axis(load_scenario(tube_file))[2] < 0.5  # default: left
 
@@ -58,12 +62,21 @@ def test_left_and_right_still_pick_by_the_chains_direction(tube_file):
 @pytest.mark.parametrize(
     "text,starts",
     [
-        ("edge: {tool_face: [1, 0, 0]}", "edge.tool_face = [1.0, 0.0, 0.0] is"),
-        ("edge: {tool_face: [0, 0, 0]}", "edge.tool_face = [0.0, 0.0, 0.0] is"),
-        ("edge: {tool_face: [0, 1]}", "edge.tool_face = [0.0, 1.0] is"),
         (
-            "edge: {tool_face: [0, 0, 1], tool_rule: right}",
-            "edge.tool_rule = 'right' is invalid",
+            "part: {edge: {tool_face: [1, 0, 0]}}",
+            "part.edge.tool_face = [1.0, 0.0, 0.0] is",
+        ),
+        (
+            "part: {edge: {tool_face: [0, 0, 0]}}",
+            "part.edge.tool_face = [0.0, 0.0, 0.0] is",
+        ),
+        (
+            "part: {edge: {tool_face: [0, 1]}}",
+            "part.edge.tool_face = [0.0, 1.0] is",
+        ),
+        (
+            "part: {edge: {tool_face: [0, 0, 1], tool_rule: right}}",
+            "part.edge.tool_rule = 'right' is invalid",
         ),
     ],
 )
@@ -78,12 +91,20 @@ def test_one_line_naming_the_field(tube_file, text, starts):
 def test_the_pass_starts_at_the_point_nearest_start_near(tube_file):
     scenario = load_scenario(
         tube_file,
-        text="edge: {start_near: [0.0, 0.03, 0.05], tool_face: [0, 0, 1]}",
+        text=(
+            "part: {edge: {start_near: [0.0, 0.03, 0.05], tool_face: [0, 0, "
+            "1]}}"
+        ),
     )
     start = make_contour(scenario).point_at(0.0)
     np.testing.assert_allclose(start, [0.4, 0.027, 0.048], atol=1e-6)
-    with pytest.raises(ConfigError, match=r"^edge.start_fraction = 0.2 is"):
+    with pytest.raises(
+        ConfigError, match=r"^part.edge.start_fraction = 0.2 is"
+    ):
         load_scenario(
             tube_file,
-            text="edge: {start_near: [0.0, 0.03, 0.05], start_fraction: 0.2}",
+            text=(
+                "part: {edge: {start_near: [0.0, 0.03, 0.05], "
+                "start_fraction: 0.2}}"
+            ),
         )

@@ -22,7 +22,7 @@ TUBE = Path(__file__).resolve().parents[2] / "examples" / "tube_stl.yaml"
 @pytest.fixture(scope="module")
 def log():
     scenario = load_scenario(TUBE)
-    assert scenario.edge.kind == "mesh"
+    assert scenario.part.edge.kind == "mesh"
     return simulate(
         make_deburring_diagram(scenario=scenario), scenario, duration=4.0
     )

@@ -219,7 +219,7 @@ def test_registration_error_of_the_true_registration_is_zero(name):
     scenario = load_scenario(
         name, text=("part_error: {offset: [0.0006, -0.0004, 0.0], yaw: 0.01}")
     )
-    # Believed minus real is (offset, yaw), turned about tube.position
+    # Believed minus real is (offset, yaw), turned about part.pose.xyz
     # (the vertices' centroid and the circle's centre here): the real
     # part is the believed one turned back and moved back.
     truth = [-0.0006, 0.0004, -0.01, 0.0]

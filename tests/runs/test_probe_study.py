@@ -61,7 +61,7 @@ def test_the_radius_is_found_on_a_softer_and_a_stiffer_part(scale, tolerance):
     scenario = load_scenario(
         "paper_localised",
         text="{part_error: {offset: [0.0002, 0.0001, 0.0], radius: -0.0002}, "
-        f"tube: {{hydroelastic_modulus: {4.5e6 * scale}}}, "
+        f"part: {{material: {{hydroelastic_modulus: {4.5e6 * scale}}}}}, "
         "localisation: {probe: {points: 4}}}",
     )
     found = probe_once(scenario)

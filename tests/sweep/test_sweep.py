@@ -40,7 +40,7 @@ sample:
   seed: 3
   count: 6
   fields:
-    tube.inner_radius: {{distribution: uniform, low: 0.02, high: 0.06}}
+    part.edge.inner_radius: {{distribution: uniform, low: 0.02, high: 0.06}}
     sensor.noise_std: {{distribution: log_uniform, low: 0.05, high: 0.3}}
     sensor.noise_seed: {{distribution: uniform, low: 1, high: 9}}
     process.burrs[0].height:
@@ -67,8 +67,8 @@ def test_monte_carlo_runs_are_full_validated_scenarios_and_reproducible(
     for run in runs:
         sc = sweep.scenario_from_text(run.scenario_text)
         assert sc.simulation.duration == 1.0  # the study's, not base_text's
-        assert 0.02 <= sc.tube.inner_radius <= 0.06
-        assert sc.tube.inner_radius == run.params["tube.inner_radius"]
+        assert 0.02 <= sc.part.edge.inner_radius <= 0.06
+        assert sc.part.edge.inner_radius == run.params["part.edge.inner_radius"]
         assert 0.05 <= sc.sensor.noise_std <= 0.3
         assert isinstance(sc.sensor.noise_seed, int)
         assert 1 <= sc.sensor.noise_seed <= 9
@@ -85,7 +85,7 @@ def test_grid_is_every_combination(tmp_path):
             """\
         base: point_mass
         grid:
-          tube.inner_radius: [0.02, 0.03, 0.045]
+          part.edge.inner_radius: [0.02, 0.03, 0.045]
           task.desired_depth: [0.0004, 0.0006]
         """,
         )
@@ -102,8 +102,9 @@ BAD = {
         "study.sample.fields.tube.inner_radiu",
     ),
     "empty range": (
-        "tube.inner_radius: {distribution: uniform, low: 0.06, high: 0.02}",
-        "study.sample.fields.tube.inner_radius: empty range",
+        "part.edge.inner_radius: {distribution: uniform, low: 0.06, high: "
+        "0.02}",
+        "study.sample.fields.part.edge.inner_radius: empty range",
     ),
     "normal on an integer field": (
         "sensor.noise_seed: {distribution: normal, mean: 3, std: 1}",
@@ -111,28 +112,29 @@ BAD = {
         "take a normal distribution",
     ),
     "a list field without an index": (
-        "tube.position: {distribution: uniform, low: 0, high: 1}",
-        "study.sample.fields.tube.position: the field is of type",
+        "part.pose.xyz: {distribution: uniform, low: 0, high: 1}",
+        "study.sample.fields.part.pose.xyz: the field is of type",
     ),
     "a string field": (
         "robot.model: {distribution: uniform, low: 0, high: 1}",
         "study.sample.fields.robot.model: the field is of type str",
     ),
     "unknown distribution": (
-        "tube.inner_radius: {distribution: beta, low: 0.02, high: 0.06}",
-        "study.sample.fields.tube.inner_radius: distribution = 'beta'",
+        "part.edge.inner_radius: {distribution: beta, low: 0.02, high: 0.06}",
+        "study.sample.fields.part.edge.inner_radius: distribution = 'beta'",
     ),
     "log-uniform from zero": (
         "sensor.noise_std: {distribution: log_uniform, low: 0, high: 1}",
         "study.sample.fields.sensor.noise_std: log_uniform needs low > 0",
     ),
     "unknown key of a distribution": (
-        "tube.inner_radius: {distribution: uniform, lo: 0.02}",
-        "study.sample.fields.tube.inner_radius.lo is unknown",
+        "part.edge.inner_radius: {distribution: uniform, lo: 0.02}",
+        "study.sample.fields.part.edge.inner_radius.lo is unknown",
     ),
     "a value the scenario rejects": (
-        "tube.inner_radius: {distribution: uniform, low: 0.001, high: 0.002}",
-        "study.sample.fields: run 0 (tube.inner_radius = ",
+        "part.edge.inner_radius: {distribution: uniform, low: 0.001, high: "
+        "0.002}",
+        "study.sample.fields: run 0 (part.edge.inner_radius = ",
     ),
 }
 
@@ -168,25 +170,26 @@ def test_bad_study_is_one_line_naming_the_field_before_any_run(
             "study.duration = 0",
         ),
         (
-            "grid:\n  tube.inner_radius: []\n",
-            "study.grid.tube.inner_radius: empty list",
+            "grid:\n  part.edge.inner_radius: []\n",
+            "study.grid.part.edge.inner_radius: empty list",
         ),
         (
-            "grid:\n  tube.inner_radius: [a]\n",
-            "study.grid.tube.inner_radius[0] = 'a' is invalid",
+            "grid:\n  part.edge.inner_radius: [a]\n",
+            "study.grid.part.edge.inner_radius[0] = 'a' is invalid",
         ),
         (
-            "grid: {tube.inner_radius: [0.03]}\nrules: ['depth < 1']\n",
+            "grid: {part.edge.inner_radius: [0.03]}\nrules: ['depth < 1']\n",
             "study.rules[0]: metric 'depth' is unknown",
         ),
         (
-            "grid: {tube.inner_radius: [0.03]}\nrules: ['edge_coverage ~ 1']\n",
+            "grid: {part.edge.inner_radius: [0.03]}\nrules: ['edge_coverage "
+            "~ 1']\n",
             "study.rules[0] = 'edge_coverage ~ 1' is invalid",
         ),
         (
-            "grid: {tube.inner_radius: [0.03]}\n"
-            "base_text: 'tube: {radius: 1}'\n",
-            "study.base: --scenario-text:1:8: tube.radius is unknown",
+            "grid: {part.edge.inner_radius: [0.03]}\n"
+            "base_text: 'part: {edge: {radius: 1}}'\n",
+            "study.base: --scenario-text:1:15: part.edge.radius is unknown",
         ),
         ("name: x\n", "study: give grid"),
     ],
@@ -326,10 +329,10 @@ def test_sweep_against_a_distributed_scheduler(tmp_path, capsys):
 
 def test_a_run_that_raises_is_recorded_with_its_reason(tmp_path):
     result = sweep.run_scenario(
-        "tube: {inner_radius: -1}", str(tmp_path / "run"), "k"
+        "part: {edge: {inner_radius: -1}}", str(tmp_path / "run"), "k"
     )
     assert result["stop_reason"] == "error"
-    assert "tube.inner_radius" in result["stop_detail"]
+    assert "part.edge.inner_radius" in result["stop_detail"]
     assert result["run_failed"] == 1.0
     assert (
         json.loads((tmp_path / "run" / "result.json").read_text())[
@@ -355,9 +358,9 @@ def test_a_crashed_or_failed_run_fails_every_rule_and_is_a_row():
     from deburr_drake.sweep.runner import failed_result
 
     runs = [
-        sweep.RunSpec(0, {"tube.inner_radius": 0.03}, "a", 1.0),
-        sweep.RunSpec(1, {"tube.inner_radius": 0.04}, "b", 1.0),
-        sweep.RunSpec(2, {"tube.inner_radius": 0.05}, "c", 1.0),
+        sweep.RunSpec(0, {"part.edge.inner_radius": 0.03}, "a", 1.0),
+        sweep.RunSpec(1, {"part.edge.inner_radius": 0.04}, "b", 1.0),
+        sweep.RunSpec(2, {"part.edge.inner_radius": 0.05}, "c", 1.0),
     ]
     rule = sweep.parse_rule("guard_tripped == 0", "r")
     results = {
