@@ -135,25 +135,38 @@ def _print_metrics(values: dict):
         print(f"  n/a: {reason}: {', '.join(keys)}")
 
 
-def _preflight(args, scenario):
-    """The designed gains (controller.design auto) and the sampled loop's
-    check at the start pose (deburr_drake.analysis.preflight), unless
-    --no-preflight; ConfigError (exit 2) if predicted unstable. Returns
-    what it found, or None."""
+def _preflight(args, plan, diagram=None):
+    """The designed gains (controller.design auto) proven and the sampled
+    loop's check at the start pose (deburr_drake.analysis.preflight), on
+    ``diagram`` (the run's) if given, unless --no-preflight; ConfigError
+    (exit 2) if predicted unstable. Returns what it found, or None."""
     from deburr_drake.analysis.preflight import preflight
 
     if getattr(args, "no_preflight", False):
         print("pre-flight skipped (--no-preflight)", flush=True)
         return None
-    return preflight(scenario, say=lambda line: print(line, flush=True))
+    return preflight(
+        plan, diagram=diagram, say=lambda line: print(line, flush=True)
+    )
 
 
-def _as_run(scenario, found):
-    """The scenario as it will run: the pre-flight's (its design written)
-    if there was one, every designed value resolved."""
-    from deburr_drake.cell.gains import resolve_design
+def _planned(args, scenario, diagram=None, meshcat=None):
+    """(plan, diagram, found): the scenario planned (the reach checked),
+    its pre-flight (None with --no-preflight) on ``diagram`` if given;
+    where the pre-flight scaled the design down, the plan it checked and,
+    if a diagram was given, one built from it."""
+    from deburr_drake.cell.diagram import make_deburring_diagram
+    from deburr_drake.cell.plan import plan_cell
 
-    return resolve_design(found.scenario if found is not None else scenario)
+    plan = plan_cell(scenario)
+    if diagram is not None:
+        diagram = diagram(plan)
+    found = _preflight(args, plan, diagram)
+    if found is not None and found.plan is not plan:
+        plan = found.plan
+        if diagram is not None:
+            diagram = make_deburring_diagram(plan, meshcat=meshcat)
+    return plan, diagram, found
 
 
 def _write_resolved(out, scenario, found):
@@ -176,7 +189,7 @@ def _simulate(args) -> int:
     from pathlib import Path
     import signal
 
-    from deburr_drake.cell.reach import check_part_in_reach
+    from deburr_drake.cell.diagram import make_deburring_diagram
 
     scenario = _load(args)
     if args.duration is not None:
@@ -196,9 +209,15 @@ def _simulate(args) -> int:
         _check_writable_target(
             args.record, "--record", args.force, is_dir=False
         )
-    check_part_in_reach(scenario)
-    found = _preflight(args, scenario)
-    scenario = _as_run(scenario, found)
+    # One plan and one diagram: the pre-flight runs on the run's.
+    meshcat = _meshcat(args)
+    plan, diagram, found = _planned(
+        args,
+        scenario,
+        lambda plan: make_deburring_diagram(plan, meshcat=meshcat),
+        meshcat,
+    )
+    scenario = plan.scenario
     passes = scenario.simulation.stop_after_passes
     print(
         f"deburr-drake simulate: scenario '{scenario.name}' "
@@ -223,23 +242,50 @@ def _simulate(args) -> int:
         n: signal.signal(n, on_signal) for n in (signal.SIGINT, signal.SIGTERM)
     }
     try:
-        return _run_and_write(args, scenario, out, received, running, found)
+        return _run_and_write(
+            args, plan, diagram, meshcat, out, (received, running), found
+        )
     finally:
         for number, handler in previous.items():
             signal.signal(number, handler)
 
 
-def _run_and_write(args, scenario, out, received, running, found) -> int:
+def _meshcat(args):
+    """A Meshcat with --meshcat (its URL printed) or --record, else
+    None."""
+    if not (args.meshcat or args.record):
+        return None
+    from pydrake.geometry import Meshcat
+
+    meshcat = Meshcat()
+    if args.meshcat:
+        print(f"Meshcat: {meshcat.web_url()}", flush=True)
+    return meshcat
+
+
+def _run_and_write(args, plan, diagram, meshcat, out, flags, found) -> int:
     import signal
 
     from deburr_drake.runs import report
-    from deburr_drake.runs.pass_metrics import pass_metrics
+    from deburr_drake.runs.passes import run_pass
 
-    # The run; a signal in ``received`` stops it after the current step.
+    received, running = flags
+    # The run and its metrics; a signal in ``received`` stops it after the
+    # current step. A run that stopped before the pass was done: the finish
+    # over the bins the tool reached.
+    if args.record:
+        meshcat.StartRecording(frames_per_second=10.0)
     try:
-        log, meshcat = _run(args, scenario, received)
+        result = run_pass(
+            plan,
+            diagram=diagram,
+            progress=_progress,
+            progress_interval=args.progress_interval,
+            should_stop=lambda: "interrupted" if received else None,
+        )
     finally:
         running[0] = False
+    log, values = result.log, result.metrics
     signal_number = received[0] if received else None
     if signal_number is not None and log.stop_reason == "interrupted":
         log.stop_detail = signal.Signals(signal_number).name
@@ -248,20 +294,18 @@ def _run_and_write(args, scenario, out, received, running, found) -> int:
         + (f" ({log.stop_detail})" if log.stop_detail else ""),
         flush=True,
     )
+    if result.no_truth:
+        print(
+            f"deburr-drake: no contact truth: {result.no_truth}",
+            file=sys.stderr,
+        )
     # The replay, however the run ended.
     if args.record:
         _write_replay(meshcat, args.record)
-    # A run that stopped before the pass was done: the finish over the
-    # bins the tool reached.
-    values = pass_metrics(
-        log,
-        true_force_at_desired_depth=_contact_truth_force(scenario),
-        only_cut=not log.completed_pass,
-    )
     # logs.npz, metrics.json, the scenario as run and the figures.
     files = report.write_run(log, out, values)
-    _write_resolved(out, scenario, found)
-    pngs = _figures(files["logs"], out, scenario)
+    _write_resolved(out, plan.scenario, found)
+    pngs = _figures(files["logs"], out, plan.scenario)
     # The metrics and what was written.
     print()
     _print_metrics(values)
@@ -277,32 +321,6 @@ def _run_and_write(args, scenario, out, received, running, found) -> int:
     return _exit_code(log, signal_number)
 
 
-def _run(args, scenario, received):
-    """The diagram built (drawn in Meshcat with --meshcat or --record) and
-    simulated; returns the log and the Meshcat (or None)."""
-    from deburr_drake.cell.diagram import make_deburring_diagram
-    from deburr_drake.runs.simulation import simulate
-
-    meshcat = None
-    if args.meshcat or args.record:
-        from pydrake.geometry import Meshcat
-
-        meshcat = Meshcat()
-        if args.meshcat:
-            print(f"Meshcat: {meshcat.web_url()}", flush=True)
-    diagram = make_deburring_diagram(scenario=scenario, meshcat=meshcat)
-    if args.record:
-        meshcat.StartRecording(frames_per_second=10.0)
-    log = simulate(
-        diagram,
-        scenario,
-        progress=_progress,
-        progress_interval=args.progress_interval,
-        should_stop=lambda: "interrupted" if received else None,
-    )
-    return log, meshcat
-
-
 def _write_replay(meshcat, path):
     """The HTML replay; a failure is said, not raised (the run's outputs
     still get written)."""
@@ -316,21 +334,6 @@ def _write_replay(meshcat, path):
             f"deburr-drake: could not write the replay: {e}",
             file=sys.stderr,
         )
-
-
-def _contact_truth_force(scenario):
-    """||f_n|| at the desired depth from the contact model, or None (the
-    metrics then leave out what needs it, with why)."""
-    from deburr_drake.cell.truth import contact_truth
-
-    try:
-        return contact_truth(scenario).force_at_desired_depth
-    except Exception as e:
-        print(
-            f"deburr-drake: no contact truth: {type(e).__name__}: {e}",
-            file=sys.stderr,
-        )
-        return None
 
 
 def _figures(logs_path, out, scenario):
@@ -406,6 +409,7 @@ _DEMO_ROWS = (
 def _demo(args) -> int:
     from deburr_drake.cell.truth import contact_truth
     from deburr_drake.runs import demo
+    from deburr_drake.runs.passes import run
 
     scenario = _load(args)
     if args.duration is not None:
@@ -428,13 +432,13 @@ def _demo(args) -> int:
         f"local stiffness {truth.local_stiffness / 1e3:.2f} N/mm"
     )
     print("run 1/2: adaptation off, estimates at the truth (eq. 8)")
-    frozen = demo.run(
+    frozen = run(
         demo.frozen_adaptation(scenario, truth),
         min(duration, 3.0),
         progress=_progress,
     )
     print("run 2/2: adaptive (estimator and fuzzy rules on)")
-    log = demo.run(scenario, duration, progress=_progress)
+    log = run(scenario, duration, progress=_progress)
     summary = demo.summarize(log, truth, frozen)
     print()
     for label, key, scale, unit in _DEMO_ROWS:
@@ -467,7 +471,6 @@ def _diagram(args) -> int:
 def _compare(args) -> int:
     from pathlib import Path
 
-    from deburr_drake.cell.reach import check_part_in_reach
     from deburr_drake.runs import compare as cmp
 
     scenario = _load(args)
@@ -493,9 +496,8 @@ def _compare(args) -> int:
         is_dir=True,
         names=("comparison.json", "comparison.md"),
     )
-    check_part_in_reach(scenario)
-    found = _preflight(args, scenario)
-    scenario = _as_run(scenario, found)
+    plan, _, found = _planned(args, scenario)
+    scenario = plan.scenario
     print(
         f"deburr-drake compare: scenario '{scenario.name}', "
         f"{', '.join(controllers)}, "

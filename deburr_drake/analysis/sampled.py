@@ -111,21 +111,42 @@ def _write(entries, diagram, context, z):
         k += n
 
 
+class _OnePeriod:
+    """Simulations of one period from ``context0`` with the entries set
+    to z, each from a fresh simulator (cenic carries its state from one
+    run to the next) on one working context, reset from ``context0``
+    (cloning the context per column costs as much as the period's
+    integration)."""
+
+    def __init__(self, diagram, context0, entries, period, config):
+        self.diagram, self.context0 = diagram, context0
+        self.entries, self.period = entries, period
+        self.context = context0.Clone()
+        self.config = copy.copy(config)
+        # ApplySimulatorConfig sets the context's time to start_time.
+        self.config.start_time = context0.get_time()
+
+    def __call__(self, z):
+        context, config = self.context, self.config
+        context.SetTimeStateAndParametersFrom(self.context0)
+        _write(self.entries, self.diagram, context, z)
+        simulator = Simulator(self.diagram, context)
+        ApplySimulatorConfig(config, simulator)
+        if config.use_error_control:
+            simulator.get_mutable_integrator().set_target_accuracy(
+                config.accuracy
+            )
+        # (with cenic, the plant's cache fresh after each step, as in a run)
+        set_monitor(simulator, self.diagram, config.integration_scheme)
+        simulator.Initialize(
+            InitializeParams(suppress_initialization_events=True)
+        )
+        simulator.AdvanceTo(self.context0.get_time() + self.period)
+        return _read(self.entries, self.diagram, context)
+
+
 def _one_period(diagram, context0, entries, z, period, config):
-    context = context0.Clone()
-    _write(entries, diagram, context, z)
-    simulator = Simulator(diagram, context)
-    config = copy.copy(config)
-    # ApplySimulatorConfig sets the context's time to start_time.
-    config.start_time = context0.get_time()
-    ApplySimulatorConfig(config, simulator)
-    if config.use_error_control:
-        simulator.get_mutable_integrator().set_target_accuracy(config.accuracy)
-    # (with cenic, the plant's cache fresh after each step, as in a run)
-    set_monitor(simulator, diagram, config.integration_scheme)
-    simulator.Initialize(InitializeParams(suppress_initialization_events=True))
-    simulator.AdvanceTo(context0.get_time() + period)
-    return _read(entries, diagram, context)
+    return _OnePeriod(diagram, context0, entries, period, config)(z)
 
 
 def period_map(
@@ -144,12 +165,13 @@ def period_map(
     steps = np.concatenate(
         [np.full(e.get(diagram, context).size, e.step) for e in entries]
     )
+    one_period = _OnePeriod(diagram, context, entries, period, config)
     columns = []
     for i in range(z0.size):
         dz = np.zeros_like(z0)
         dz[i] = steps[i]
-        plus = _one_period(diagram, context, entries, z0 + dz, period, config)
-        minus = _one_period(diagram, context, entries, z0 - dz, period, config)
+        plus = one_period(z0 + dz)
+        minus = one_period(z0 - dz)
         columns.append((plus - minus) / (2 * steps[i]))
     return np.array(columns).T
 
@@ -246,11 +268,13 @@ class SampledLoop:
 
 class FrozenMap:
     """The frozen variant of a scenario (with ``overrides`` by dotted
-    name), built once, whose one-period map can be taken at any state of a
-    run of the scenario's own diagram (:meth:`at`): the maps along a run
+    name; ``plan``: the scenario's, if planned), built once, whose
+    one-period map can be taken at any state of a run of the scenario's
+    own diagram (:meth:`at`): the maps along a run
     reuse one diagram."""
 
-    def __init__(self, scenario: Scenario, **overrides):
+    def __init__(self, scenario: Scenario, *, plan=None, **overrides):
+        from deburr_drake.cell.plan import plan_cell
         from deburr_drake.config import ConfigError
 
         self.scenario = frozen_scenario(scenario, **overrides)
@@ -269,7 +293,12 @@ class FrozenMap:
             )
         self.period = period
         self.config = simulator_config(self.scenario)
-        self.diagram = make_deburring_diagram(scenario=self.scenario)
+        # ``plan``: the scenario's own, whose cell the variant shares.
+        self.diagram = make_deburring_diagram(
+            plan_cell(self.scenario)
+            if plan is None
+            else plan.varied(self.scenario)
+        )
         self.entries = cell_map_entries(self.diagram)
 
     def context_from(
@@ -312,7 +341,7 @@ def sampled_loop(
     gain and below 1 for one whose run oscillates.)"""
     from deburr_drake.control.layout import CHAMFER_STATE
 
-    frozen = FrozenMap(op.scenario, **overrides)
+    frozen = FrozenMap(op.scenario, plan=op.plan, **overrides)
     scenario, diagram, entries = frozen.scenario, frozen.diagram, frozen.entries
     context = frozen.context_from(op.diagram, op.context, modify)
     Phi = period_map(
@@ -355,7 +384,7 @@ def frozen_cell(op: OperatingPoint, overrides):
     """(diagram, context, map entries) of ``op``'s frozen scenario with
     ``overrides``, at ``op``'s state."""
     scenario = frozen_scenario(op.scenario, **overrides)
-    diagram = make_deburring_diagram(scenario=scenario)
+    diagram = make_deburring_diagram(op.variant(scenario))
     context = diagram.CreateDefaultContext()
     transfer_state(op.diagram, op.context, diagram, context)
     return diagram, context, cell_map_entries(diagram)

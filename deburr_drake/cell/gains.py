@@ -358,9 +358,11 @@ def _max_step(scenario: Scenario, period: float, mass: float):
     return g_max, max_step
 
 
-def design_gains(scenario: Scenario, q=None) -> GainDesign:
+def design_gains(scenario: Scenario, q=None, *, model=None) -> GainDesign:
     """The gains the rules of the module docstring give for ``scenario``'s
-    robot at joint angles ``q`` (default: the start pose)."""
+    robot at joint angles ``q`` (default: the start pose, tool vertical;
+    deburr_drake.cell.plan designs at the pose the run starts from).
+    ``model``: the robot's model if the caller holds it."""
     from deburr_drake.cell.edge import believed_contour, start_position
     from deburr_drake.cell.robot import (
         loop_numbers,
@@ -372,10 +374,10 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
     period = c.control_period
     if q is None:
         q = start_pose(scenario)
-    numbers = loop_numbers(scenario, q)
+    plant = make_robot_model(scenario.robot) if model is None else model
+    numbers = loop_numbers(scenario, q, model=plant)
     f = numbers["gravity_error_force"]
     mass = numbers["lightest_task_mass"]
-    plant = make_robot_model(scenario.robot)
     frame = scenario.robot.tool_frame
 
     def rates(K, K_o, d_n=0.0):
