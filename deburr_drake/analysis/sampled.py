@@ -114,30 +114,47 @@ def _write(entries, diagram, context, z):
 class _OnePeriod:
     """Simulations of one period from ``context0`` with the entries set
     to z, each from a fresh simulator (cenic carries its state from one
-    run to the next) on one working context, reset from ``context0``
-    (cloning the context per column costs as much as the period's
-    integration)."""
+    run to the next) on one working context, its state reset from
+    ``context0``."""
 
     def __init__(self, diagram, context0, entries, period, config):
         self.diagram, self.context0 = diagram, context0
         self.entries, self.period = entries, period
-        self.context = context0.Clone()
         self.config = copy.copy(config)
         # ApplySimulatorConfig sets the context's time to start_time.
         self.config.start_time = context0.get_time()
+        self.simulator = Simulator(diagram, context0.Clone())
+        # (with cenic, the plant's cache fresh after each step, as in a run)
+        set_monitor(self.simulator, diagram, config.integration_scheme)
+
+    def _reset(self, context):
+        """``context0``'s time and state into ``context`` (the parameters,
+        which a period does not change, are cloned once: copying the
+        plant's costs more than the integration)."""
+        source = self.context0
+        context.SetTime(source.get_time())
+        context.get_mutable_continuous_state().SetFrom(
+            source.get_continuous_state()
+        )
+        context.get_mutable_discrete_state().SetFrom(
+            source.get_discrete_state()
+        )
+        context.get_mutable_abstract_state().SetFrom(
+            source.get_abstract_state()
+        )
 
     def __call__(self, z):
-        context, config = self.context, self.config
-        context.SetTimeStateAndParametersFrom(self.context0)
+        simulator, config = self.simulator, self.config
+        context = simulator.get_mutable_context()
+        self._reset(context)
         _write(self.entries, self.diagram, context, z)
-        simulator = Simulator(self.diagram, context)
+        # A new integrator per run: cenic carries its state from one run
+        # to the next.
         ApplySimulatorConfig(config, simulator)
         if config.use_error_control:
             simulator.get_mutable_integrator().set_target_accuracy(
                 config.accuracy
             )
-        # (with cenic, the plant's cache fresh after each step, as in a run)
-        set_monitor(simulator, self.diagram, config.integration_scheme)
         simulator.Initialize(
             InitializeParams(suppress_initialization_events=True)
         )
