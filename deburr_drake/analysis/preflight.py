@@ -46,6 +46,7 @@ from deburr_drake.analysis.operating_point import (
 )
 from deburr_drake.analysis.sampled import (
     frozen_cell,
+    frozen_in_place,
     period_map,
     rest_of_period_map,
     simulator_config,
@@ -152,7 +153,8 @@ class GainMaps:
         self.base = frozen_scenario(op.scenario)
         self.config = simulator_config(self.base)
         self.period = self.base.controller.control_period
-        self._frozen = frozen_cell(op, {})
+        # The run's own diagram as the frozen cell (sampled.frozen_in_place).
+        self._frozen = frozen_in_place(op)
         diagram, context, entries = self._prepared({})
         self.sample0 = period_map(
             diagram, context, entries, period=_SPLIT, config=self.config

@@ -158,7 +158,12 @@ class _OnePeriod:
         simulator.Initialize(
             InitializeParams(suppress_initialization_events=True)
         )
-        simulator.AdvanceTo(self.context0.get_time() + self.period)
+        status = simulator.AdvanceTo(self.context0.get_time() + self.period)
+        if status.reason() != status.ReturnReason.kReachedBoundaryTime:
+            raise RuntimeError(
+                "a one-period map's simulation ended early at t = "
+                f"{context.get_time():.6f} s: {status.FormatMessage()}"
+            )
         return _read(self.entries, self.diagram, context)
 
 
@@ -404,6 +409,23 @@ def frozen_cell(op: OperatingPoint, overrides):
     diagram = make_deburring_diagram(op.variant(scenario))
     context = diagram.CreateDefaultContext()
     transfer_state(op.diagram, op.context, diagram, context)
+    return diagram, context, cell_map_entries(diagram)
+
+
+def frozen_in_place(op: OperatingPoint):
+    """(diagram, context, map entries) like :func:`frozen_cell`'s without
+    overrides, on ``op``'s own diagram (no build): a default context
+    holding ``op``'s state, the sensor noise off (its parameter). The
+    sampled loop's map does not see what else the frozen variant turns
+    off: the adaptation's states are not in the map and their rates are
+    held between samples, a guard that does not trip and a drive clamp
+    below the limits pass everything through bit for bit (a period a
+    guard ended is an error, :class:`_OnePeriod`)."""
+    diagram = op.diagram
+    context = diagram.CreateDefaultContext()
+    transfer_state(diagram, op.context, diagram, context)
+    sensor = diagram.GetSubsystemByName("force_sensor")
+    sensor.set_noise_std(sensor.GetMyMutableContextFromRoot(context), 0.0)
     return diagram, context, cell_map_entries(diagram)
 
 
