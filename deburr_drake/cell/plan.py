@@ -89,8 +89,9 @@ class CellPlan:
         """The plan with ``design``'s gains written into its source (and
         the slope bound resolved from them); the edges, the model and the
         start are this plan's."""
+        scenario = apply_gains(self.source, design)
         return self.varied(
-            resolve_slope_bound(apply_gains(self.source, design)),
+            resolve_slope_bound(scenario, self.start.q, model=self.model),
             design=design,
         )
 
@@ -158,7 +159,7 @@ def plan_cell(scenario: Scenario) -> CellPlan:
     checked against the part (reach, joint path), the edges and the start
     worked out, the gains designed at the start where
     ``controller.design`` resolves to auto, the fuzzy slope bound
-    resolved."""
+    resolved at the start too."""
     scenario.validate()
     check_part_in_reach(scenario)
     # Neither the edges, the model nor the start depend on the gains.
@@ -172,7 +173,7 @@ def plan_cell(scenario: Scenario) -> CellPlan:
         design = design_gains(scenario, start.q, model=model)
         resolved = apply_gains(scenario, design)
     return CellPlan(
-        scenario=resolve_slope_bound(resolved),
+        scenario=resolve_slope_bound(resolved, start.q, model=model),
         source=scenario,
         design=design,
         contour=contour,
