@@ -120,6 +120,11 @@ class _OnePeriod:
     def __init__(self, diagram, context0, entries, period, config):
         self.diagram, self.context0 = diagram, context0
         self.entries, self.period = entries, period
+        # Each entry's slice of z, found once.
+        sizes = [e.get(diagram, context0).size for e in entries]
+        self._slices = [
+            slice(end - n, end) for end, n in zip(np.cumsum(sizes), sizes)
+        ]
         self.config = copy.copy(config)
         # ApplySimulatorConfig sets the context's time to start_time.
         self.config.start_time = context0.get_time()
@@ -147,7 +152,8 @@ class _OnePeriod:
         simulator, config = self.simulator, self.config
         context = simulator.get_mutable_context()
         self._reset(context)
-        _write(self.entries, self.diagram, context, z)
+        for e, rows in zip(self.entries, self._slices):
+            e.set(self.diagram, context, z[rows])
         # A new integrator per run: cenic carries its state from one run
         # to the next.
         ApplySimulatorConfig(config, simulator)

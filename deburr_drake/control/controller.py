@@ -11,6 +11,8 @@ with the systems that feed it."""
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 from pydrake.autodiffutils import AutoDiffXd
 from pydrake.common.value import AbstractValue
@@ -58,7 +60,13 @@ def make_rule_bases(config: ControllerConfig):
     ]
 
 
-@TemplateSystem.define("HybridController_", T_list=[float, AutoDiffXd])
+# scope: the module by name; pydrake otherwise finds it by inspecting the
+# whole call stack, source lines included, at import.
+@TemplateSystem.define(
+    "HybridController_",
+    T_list=[float, AutoDiffXd],
+    scope=sys.modules[__name__],
+)
 def HybridController_(T):
 
     class Impl(LeafSystem_[T]):
