@@ -241,6 +241,22 @@ def _edge_axes(contour, arc):
     return np.array([contour.tool_axis_at(s) for s in arc])
 
 
+def _the_plan(plan, scenario) -> CellPlan:
+    """The plan given, or ``scenario``'s; TypeError for neither, both, or
+    a scenario passed as the plan."""
+    if (plan is None) == (scenario is None):
+        raise TypeError(
+            "make_deburring_diagram: pass a plan (plan_cell(scenario)) or "
+            "scenario=, not both"
+        )
+    if isinstance(plan, Scenario):
+        raise TypeError(
+            "make_deburring_diagram: got a Scenario as the plan: pass "
+            "plan_cell(scenario) or scenario=scenario"
+        )
+    return plan_cell(scenario) if plan is None else plan
+
+
 def make_deburring_diagram(
     plan: Optional[CellPlan] = None,
     *,
@@ -270,18 +286,7 @@ def make_deburring_diagram(
     signals, e.g. ``{"feed": ("command_generator", "feed")}``: loggers
     ``log_<name>`` that :func:`deburr_drake.runs.simulation.simulate`
     collects as ``log[name]`` (``t`` and ``value``)."""
-    if (plan is None) == (scenario is None):
-        raise TypeError(
-            "make_deburring_diagram: pass a plan (plan_cell(scenario)) or "
-            "scenario=, not both"
-        )
-    if isinstance(plan, Scenario):
-        raise TypeError(
-            "make_deburring_diagram: got a Scenario as the plan: pass "
-            "plan_cell(scenario) or scenario=scenario"
-        )
-    if plan is None:
-        plan = plan_cell(scenario)
+    plan = _the_plan(plan, scenario)
     count(DIAGRAMS)
     c = plan.scenario
     probing = c.localisation.probe.enabled
