@@ -35,7 +35,7 @@ from deburr_drake.cell.gains import (
     resolve_slope_bound,
 )
 from deburr_drake.cell.reach import check_part_in_reach
-from deburr_drake.cell.robot import ik_seed, make_robot_model
+from deburr_drake.cell.robot import check_robot, ik_seed
 from deburr_drake.config import Scenario
 from deburr_drake.math.geometry import Contour
 
@@ -161,10 +161,11 @@ def plan_cell(scenario: Scenario) -> CellPlan:
     ``controller.design`` resolves to auto, the fuzzy slope bound
     resolved at the start too."""
     scenario.validate()
-    check_part_in_reach(scenario)
+    # The controller's model of the robot, checked against the cell.
+    model = check_robot(scenario.robot)
+    check_part_in_reach(scenario, model=model)
     # Neither the edges, the model nor the start depend on the gains.
     contour, belief = make_contour(scenario), believed_contour(scenario)
-    model = make_robot_model(scenario.robot)
     start = _start(scenario, model, belief)
     design = None
     resolved = scenario
