@@ -258,6 +258,8 @@ class Preflight:
     # The plan checked: the caller's, or with the design scaled for the
     # gain margin a new plan of the same cell.
     plan: Optional[CellPlan] = None
+    # The plan's diagram the maps were taken on (None: no sampled loop).
+    diagram: Optional[Diagram] = None
     rho_at_margin: Optional[float] = None  # rho at GAIN_MARGIN x K, K_o
     margin_scale: float = 1.0  # the design's K, K_o scaled by this
     seconds: float = 0.0
@@ -414,7 +416,11 @@ def preflight(
     op = start_operating_point(plan, diagram=diagram)
     maps = GainMaps(op)
     result = Preflight(
-        rho=maps.rho_full, time=op.time, design=plan.design, plan=plan
+        rho=maps.rho_full,
+        time=op.time,
+        design=plan.design,
+        plan=plan,
+        diagram=op.diagram,
     )
     # A design must hold the gain margin: K and K_o scaled down till it
     # does.
@@ -471,7 +477,9 @@ def _hold_gain_margin(
         result.design, result.margin_scale = design, scale
         result.plan = plan
         scenario = plan.scenario
-        maps = GainMaps(start_operating_point(plan))
+        op = start_operating_point(plan)
+        result.diagram = op.diagram
+        maps = GainMaps(op)
         _both_paths(maps, scenario)
         result.rho = maps.rho_full
         result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)

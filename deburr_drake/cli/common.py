@@ -138,22 +138,26 @@ def _preflight(args, plan, diagram=None):
     )
 
 
-def _planned(args, scenario, diagram=None, meshcat=None):
+def _planned(args, scenario, build=None, meshcat=None):
     """(plan, diagram, found): the scenario planned (the reach checked),
-    its pre-flight (None with --no-preflight) on ``diagram`` if given;
-    where the pre-flight scaled the design down, the plan it checked and,
-    if a diagram was given, one built from it."""
+    its pre-flight (None with --no-preflight) on the diagram ``build(plan)``
+    builds, if given (else None); where the pre-flight scaled the design
+    down, the plan it checked and its diagram (built anew to draw in
+    ``meshcat``)."""
     from deburr_drake.cell.diagram import make_deburring_diagram
     from deburr_drake.cell.plan import plan_cell
 
     plan = plan_cell(scenario)
-    if diagram is not None:
-        diagram = diagram(plan)
+    diagram = None if build is None else build(plan)
     found = _preflight(args, plan, diagram)
     if found is not None and found.plan is not plan:
         plan = found.plan
         if diagram is not None:
-            diagram = make_deburring_diagram(plan, meshcat=meshcat)
+            diagram = (
+                found.diagram
+                if meshcat is None
+                else make_deburring_diagram(plan, meshcat=meshcat)
+            )
     return plan, diagram, found
 
 
