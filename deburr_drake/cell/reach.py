@@ -262,8 +262,7 @@ def check_part_in_reach(
     edge (``contour.varying_frame``) the tool follows the edge's axis and
     the arm's whole joint path is checked instead (continuous, within the
     joint limits, away from singular postures; the error names the arc
-    length and the joint). ``model``: the robot's model, checked already
-    (check_robot), if the caller holds it."""
+    length and the joint). ``model``: check_robot's, if the caller has it."""
     robot = scenario.robot
     key = _reach_key(scenario, samples) if contour is None else None
     if key is not None and key in _REACHED:
