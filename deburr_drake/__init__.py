@@ -8,8 +8,9 @@ The public Python API, importable from the package itself (docs/python-api.md;
 
     scenario = dd.load_scenario("paper", text="task: {desired_depth: 0.0006}")
     dd.set_field(scenario, "controller.fuzzy.order", 0)   # by dotted name
-    diagram = dd.make_deburring_diagram(scenario=scenario)
-    log = dd.simulate(diagram, scenario, duration=3.0)    # a RunLog
+    plan = dd.plan_cell(scenario)          # resolved once: gains, edges, start
+    diagram = dd.make_deburring_diagram(plan)
+    log = dd.simulate(diagram, plan.scenario, duration=3.0)  # a RunLog
     log["chamfer"]["f_n"]                                 # named arrays
     values = dd.pass_metrics(log, only_cut=True)          # metrics by name
     dd.make_figures(dd.log_arrays(log, values), "out/figs")
@@ -17,9 +18,11 @@ The public Python API, importable from the package itself (docs/python-api.md;
 - scenarios: :func:`load_scenario` (name or YAML file, plus YAML overrides),
   :func:`set_field` / :func:`get_field` (a field by dotted name),
   :class:`Scenario`, :class:`ConfigError`, :func:`scenario_names`;
-- the cell: :func:`make_deburring_diagram`, :data:`LOGGED` (logger name ->
+- the cell: :func:`plan_cell` (a :class:`CellPlan`: the scenario resolved
+  once), :func:`make_deburring_diagram`, :data:`LOGGED` (logger name ->
   system and port), :func:`make_contour`;
 - running: :func:`simulate`, :func:`run` (build and simulate),
+  :func:`run_pass` (build, simulate and the metrics, from a plan),
   :class:`RunLog`, :func:`make_simulator`;
 - results: :func:`pass_metrics`, :func:`log_arrays`, :func:`write_run`,
   :func:`make_figures`, :func:`compare_figures`, :func:`write_graphs`,
@@ -56,10 +59,11 @@ _MODULES = {
         "set_field",
         "get_field",
     ),
+    "cell.plan": ("plan_cell", "CellPlan"),
     "cell.diagram": ("make_deburring_diagram", "LOGGED"),
     "cell.edge": ("make_contour",),
     "runs.simulation": ("simulate", "RunLog", "make_simulator"),
-    "runs.demo": ("run",),
+    "runs.passes": ("run", "run_pass"),
     "cell.truth": ("contact_truth",),
     "runs.pass_metrics": ("pass_metrics",),
     "runs.report": ("log_arrays", "write_run"),

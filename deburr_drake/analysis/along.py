@@ -61,6 +61,7 @@ from deburr_drake.analysis.settled import (
     settle_check,
 )
 from deburr_drake.cell.diagram import make_deburring_diagram
+from deburr_drake.cell.plan import plan_cell
 from deburr_drake.config import ConfigError, Scenario
 from deburr_drake.control.layout import CHAMFER_STATE
 from deburr_drake.runs.convergence import refined
@@ -317,7 +318,10 @@ class _Walk:
         self.say = say
         self.period = run.controller.control_period or run.sensor.sample_period
         self.outer = run.command.period
-        self.diagram = make_deburring_diagram(scenario=run)
+        # Planned once: the run's diagram and the frozen variant whose
+        # maps are taken along it share the cell.
+        plan = plan_cell(run)
+        self.diagram = make_deburring_diagram(plan)
         # The numerical sanity check ends a diverging run before Drake's
         # contact solver fails on its state (an abort would lose it).
         sanity = NumericalSanity(self.diagram, run)
@@ -338,7 +342,7 @@ class _Walk:
         self.progress = PassProgress(
             self.diagram, run.simulation.stop_after_passes
         )
-        self.frozen = FrozenMap(scenario) if maps else None
+        self.frozen = FrozenMap(plan.scenario, plan=plan) if maps else None
         self.wall0 = time.perf_counter()
         self.map_time = 0.0
         self.result = AnalysisRun(

@@ -35,14 +35,14 @@ from __future__ import annotations
 
 import copy
 from dataclasses import dataclass, field
-from typing import Dict
+from typing import Dict, Optional
 
 import numpy as np
 from pydrake.common import RandomGenerator
 from pydrake.systems.framework import Context, Diagram
 
 from deburr_drake.cell.diagram import make_deburring_diagram
-from deburr_drake.cell.gains import resolve_design
+from deburr_drake.cell.plan import CellPlan, plan_cell
 from deburr_drake.cell.process import PROCESS_STATE
 from deburr_drake.config import (
     ConfigError,
@@ -88,6 +88,16 @@ class OperatingPoint:
     time: float  # s
     contact_time: float  # s, first contact
     signals: Dict[str, float] = field(default_factory=dict)
+    # The plan the diagram was built from: its frozen variants reuse its
+    # edges, robot model and start.
+    plan: Optional[CellPlan] = None
+
+    def variant(self, scenario: Scenario) -> CellPlan:
+        """The plan of ``scenario``, a variant of the operating point's
+        (frozen, other gains): this plan's cell, or planned anew."""
+        if self.plan is None:
+            return plan_cell(scenario)
+        return self.plan.varied(scenario)
 
     def summary(self) -> Dict[str, float]:
         """time, depth, feed, forces (SI) for reports."""
@@ -257,10 +267,12 @@ def find_operating_point(
         raise ConfigError(
             f"after_contact = {after_contact!r} is invalid: allowed >= 0 s"
         )
-    # The designed values resolved once: the operating point's scenario is
-    # what its maps and frozen variants are built from.
-    scenario = resolve_design(scenario)
-    diagram = make_deburring_diagram(scenario=scenario)
+    # Planned once: the operating point's scenario (its designed values
+    # resolved) and cell are what its maps and frozen variants are built
+    # from.
+    plan = plan_cell(scenario)
+    scenario = plan.scenario
+    diagram = make_deburring_diagram(plan)
     simulator = make_simulator(diagram, scenario)
     context = simulator.get_mutable_context()
     diagram.SetRandomContext(
@@ -297,4 +309,5 @@ def find_operating_point(
         time=target,
         contact_time=contact,
         signals=signals,
+        plan=plan,
     )

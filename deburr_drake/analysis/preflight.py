@@ -33,9 +33,10 @@ from __future__ import annotations
 import copy
 from dataclasses import dataclass, field
 import time
-from typing import Callable, Dict, List, Optional
+from typing import Callable, Dict, List, Optional, Union
 
 import numpy as np
+from pydrake.systems.framework import Diagram
 
 from deburr_drake.analysis.operating_point import (
     OperatingPoint,
@@ -45,18 +46,15 @@ from deburr_drake.analysis.operating_point import (
 )
 from deburr_drake.analysis.sampled import (
     frozen_cell,
+    frozen_in_place,
     period_map,
     rest_of_period_map,
     simulator_config,
     spectral_radius,
 )
 from deburr_drake.cell.diagram import make_deburring_diagram
-from deburr_drake.cell.gains import (
-    GainDesign,
-    apply_gains,
-    design_gains,
-    resolve_gains,
-)
+from deburr_drake.cell.gains import GainDesign
+from deburr_drake.cell.plan import CellPlan, plan_cell
 from deburr_drake.config import ConfigError, Scenario, get_field
 from deburr_drake.runs.simulation import make_simulator
 
@@ -94,31 +92,54 @@ GAIN_FIELDS = (
 _SPLIT = 1e-9  # s: the sample's end within the period
 
 
-def start_operating_point(scenario: Scenario) -> OperatingPoint:
+def _planned(plan) -> CellPlan:
+    return plan_cell(plan) if isinstance(plan, Scenario) else plan
+
+
+def start_operating_point(
+    plan: Union[CellPlan, Scenario], *, diagram: Optional[Diagram] = None
+) -> OperatingPoint:
     """The cell at the first inner-loop sample after the start that is not
     an outer-loop sample (2.5 ms: the tool at the start of the edge), its
-    updates pending, as an :class:`OperatingPoint` of ``scenario``. The
-    first period is run with K and K_o at 1e-9 of theirs, so the state
-    does not depend on the gains checked (a gain far too high moves the
-    arm within one sample)."""
-    quiet = resolve_gains(scenario)
-    c = quiet.controller
-    c.sliding_gain = [1e-9 * k for k in c.sliding_gain]
-    c.orientation_gain = [1e-9 * k for k in c.orientation_gain]
-    diagram = make_deburring_diagram(scenario=quiet)
-    simulator = make_simulator(diagram, quiet)
+    updates pending, as an :class:`OperatingPoint` of the plan's scenario
+    (a scenario is planned first). ``diagram``: the plan's, if built
+    already (the run's: the pre-flight builds none of its own). The first
+    period is run with K and K_o (the controller's parameters) at 1e-9 of
+    theirs, so the state does not depend on the gains checked (a gain far
+    too high moves the arm within one sample); the operating point's
+    context holds them as the scenario has them."""
+    plan = _planned(plan)
+    scenario = plan.scenario
+    if diagram is None:
+        diagram = make_deburring_diagram(plan)
+    simulator = make_simulator(diagram, scenario)
+    context = simulator.get_mutable_context()
+    controller = diagram.GetSubsystemByName("controller")
+    K, K_o = controller.gains(controller.GetMyContextFromRoot(context))
+    controller.set_gains(
+        controller.GetMyMutableContextFromRoot(context),
+        sliding_gain=1e-9 * K,
+        orientation_gain=1e-9 * K_o,
+    )
     simulator.Initialize()
     inner = scenario.controller.control_period
     t = _next_analysis_time(0.5 * inner, inner, scenario.command.period)
     simulator.AdvanceTo(t)
-    context = simulator.get_context()
+    signals = _signals(diagram, context)
+    context = context.Clone()
+    controller.set_gains(
+        controller.GetMyMutableContextFromRoot(context),
+        sliding_gain=K,
+        orientation_gain=K_o,
+    )
     return OperatingPoint(
         scenario=scenario,
         diagram=diagram,
-        context=context.Clone(),
+        context=context,
         time=t,
         contact_time=0.0,
-        signals=_signals(diagram, context),
+        signals=signals,
+        plan=plan,
     )
 
 
@@ -129,9 +150,11 @@ class GainMaps:
 
     def __init__(self, op: OperatingPoint):
         self.op = op
-        base = frozen_scenario(op.scenario)
-        self.config = simulator_config(base)
-        self.period = base.controller.control_period
+        self.base = frozen_scenario(op.scenario)
+        self.config = simulator_config(self.base)
+        self.period = self.base.controller.control_period
+        # The run's own diagram as the frozen cell (sampled.frozen_in_place).
+        self._frozen = frozen_in_place(op)
         diagram, context, entries = self._prepared({})
         self.sample0 = period_map(
             diagram, context, entries, period=_SPLIT, config=self.config
@@ -139,13 +162,29 @@ class GainMaps:
         self.integrate = rest_of_period_map(
             diagram, context, entries, _SPLIT, self.period, self.config
         )
-        self.full = period_map(
-            diagram, context, entries, period=self.period, config=self.config
-        )
         self.slopes: Dict[str, np.ndarray] = {}
 
     def _prepared(self, overrides):
-        return frozen_cell(self.op, overrides)
+        """(diagram, context, entries) of the frozen cell with
+        ``overrides``: the one frozen diagram with K and K_o set in a
+        context (the controller's parameters) where only they change, a
+        diagram of its own otherwise."""
+        variant = frozen_scenario(self.op.scenario, **overrides)
+        c = variant.controller
+        same = copy.deepcopy(variant)
+        same.controller.sliding_gain = self.base.controller.sliding_gain
+        same.controller.orientation_gain = self.base.controller.orientation_gain
+        if same != self.base:
+            return frozen_cell(self.op, overrides)
+        diagram, context, entries = self._frozen
+        context = context.Clone()
+        controller = diagram.GetSubsystemByName("controller")
+        controller.set_gains(
+            controller.GetMyMutableContextFromRoot(context),
+            sliding_gain=c.sliding_gain,
+            orientation_gain=c.orientation_gain,
+        )
+        return diagram, context, entries
 
     def add_path(self, name: str, overrides_at: Callable[[float], dict]):
         """A path through the gains: ``overrides_at(c)`` the scenario
@@ -164,8 +203,19 @@ class GainMaps:
 
     @property
     def rho_full(self) -> float:
-        """rho of the whole period's map (not split)."""
-        return spectral_radius(self.full)
+        """rho of the whole period's map at the gains as written: the
+        integration after the sample. The period's map taken in one piece
+        (:meth:`full_map`) gives the same within the maps' resolution
+        (paper: 1.2e-10, a point mass 1e-7, below NEUTRAL_TOLERANCE) at
+        half again the cost."""
+        return self.rho()
+
+    def full_map(self) -> np.ndarray:
+        """The whole period's map, not split (a check of the split)."""
+        diagram, context, entries = self._prepared({})
+        return period_map(
+            diagram, context, entries, period=self.period, config=self.config
+        )
 
     def largest_stable(
         self, name: str, *, iterations: int = 20
@@ -205,13 +255,20 @@ class Preflight:
     rho: float  # the one-period map's spectral radius at the start pose
     time: float  # s, where it was taken
     design: Optional[GainDesign] = None  # when controller.design is auto
-    # The scenario checked: the caller's with the design written (the
-    # caller's own is left as it is).
-    scenario: Optional[Scenario] = None
+    # The plan checked: the caller's, or with the design scaled for the
+    # gain margin a new plan of the same cell.
+    plan: Optional[CellPlan] = None
+    # The plan's diagram the maps were taken on (None: no sampled loop).
+    diagram: Optional[Diagram] = None
     rho_at_margin: Optional[float] = None  # rho at GAIN_MARGIN x K, K_o
     margin_scale: float = 1.0  # the design's K, K_o scaled by this
     seconds: float = 0.0
     lines: List[str] = field(default_factory=list)
+
+    @property
+    def scenario(self) -> Optional[Scenario]:
+        """The scenario checked, as it will run (the design written)."""
+        return None if self.plan is None else self.plan.scenario
 
     def to_dict(self) -> dict:
         out = {
@@ -328,14 +385,21 @@ def _both_paths(maps: GainMaps, scenario: Scenario):
 
 
 def preflight(
-    scenario: Scenario, *, say: Callable[[str], None] = lambda line: None
+    plan: Union[CellPlan, Scenario],
+    *,
+    diagram: Optional[Diagram] = None,
+    say: Callable[[str], None] = lambda line: None,
 ) -> Preflight:
-    """Designs the gains if ``controller.design`` is auto and proves them,
-    then checks the sampled loop at the start pose; ConfigError (one line:
-    the gain, rho, its largest stable value) if it is predicted unstable.
-    Returns what it found, with ``scenario`` the one checked (the design
-    written in a copy: ``scenario`` is left as it is)."""
+    """Proves the gains the plan designed (``controller.design`` auto; a
+    scenario is planned first), then checks the sampled loop at the start
+    pose; ConfigError (one line: the gain, rho, its largest stable value)
+    if it is predicted unstable. ``diagram``: the plan's, if built
+    already (the run's): the operating point is taken on it. Returns what
+    it found, with ``plan`` the one checked (a new plan, the design
+    scaled, where the design did not hold the gain margin)."""
     t0 = time.perf_counter()
+    plan = _planned(plan)
+    scenario = plan.scenario
     c = scenario.controller
     if not c.control_period > 0:
         return Preflight(
@@ -346,22 +410,21 @@ def preflight(
                 "(a continuous controller): no sampled "
                 "loop to check"
             ],
-            scenario=resolve_gains(scenario),
+            plan=plan,
         )
-    # controller.design auto: the gains from the model, in a copy.
-    design = None
-    if c.resolved_design(scenario.robot) == "auto":
-        design = design_gains(scenario)
-        scenario = apply_gains(scenario, design)
     # The one-period map at the start pose.
-    op = start_operating_point(scenario)
+    op = start_operating_point(plan, diagram=diagram)
     maps = GainMaps(op)
     result = Preflight(
-        rho=maps.rho_full, time=op.time, design=design, scenario=scenario
+        rho=maps.rho_full,
+        time=op.time,
+        design=plan.design,
+        plan=plan,
+        diagram=op.diagram,
     )
     # A design must hold the gain margin: K and K_o scaled down till it
     # does.
-    if design is not None and not predicted_unstable(result.rho):
+    if plan.design is not None and not predicted_unstable(result.rho):
         maps = _hold_gain_margin(scenario, maps, result)
     scenario, rho = result.scenario, result.rho
     if result.design is not None:
@@ -393,8 +456,8 @@ def _hold_gain_margin(
     """rho at GAIN_MARGIN x the designed K and K_o into ``result``; where
     it is not stable, K and K_o scaled down by 0.7 at a time (to
     MIN_MARGIN_SCALE at most) until it is, the scaled design written into
-    ``result`` (and a copy of ``scenario`` in it) and the start pose's map
-    taken again.
+    ``result`` (and a plan of it: the slope bound follows the gains, so
+    its diagram is built anew) and the start pose's map taken again.
     Returns the maps of the gains kept."""
     _both_paths(maps, scenario)
     result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
@@ -410,10 +473,13 @@ def _hold_gain_margin(
         result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)
     elif scale < 1.0:
         design = result.design.scaled(scale)
-        scenario = apply_gains(scenario, design)
+        plan = result.plan.with_design(design)
         result.design, result.margin_scale = design, scale
-        result.scenario = scenario
-        maps = GainMaps(start_operating_point(scenario))
+        result.plan = plan
+        scenario = plan.scenario
+        op = start_operating_point(plan)
+        result.diagram = op.diagram
+        maps = GainMaps(op)
         _both_paths(maps, scenario)
         result.rho = maps.rho_full
         result.rho_at_margin = maps.rho(K=GAIN_MARGIN, K_o=GAIN_MARGIN)

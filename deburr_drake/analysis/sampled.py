@@ -111,21 +111,70 @@ def _write(entries, diagram, context, z):
         k += n
 
 
+class _OnePeriod:
+    """Simulations of one period from ``context0`` with the entries set
+    to z, each from a fresh simulator (cenic carries its state from one
+    run to the next) on one working context, its state reset from
+    ``context0``."""
+
+    def __init__(self, diagram, context0, entries, period, config):
+        self.diagram, self.context0 = diagram, context0
+        self.entries, self.period = entries, period
+        # Each entry's slice of z, found once.
+        sizes = [e.get(diagram, context0).size for e in entries]
+        self._slices = [
+            slice(end - n, end) for end, n in zip(np.cumsum(sizes), sizes)
+        ]
+        self.config = copy.copy(config)
+        # ApplySimulatorConfig sets the context's time to start_time.
+        self.config.start_time = context0.get_time()
+        self.simulator = Simulator(diagram, context0.Clone())
+        # (with cenic, the plant's cache fresh after each step, as in a run)
+        set_monitor(self.simulator, diagram, config.integration_scheme)
+
+    def _reset(self, context):
+        """``context0``'s time and state into ``context`` (the parameters,
+        which a period does not change, are cloned once: copying the
+        plant's costs more than the integration)."""
+        source = self.context0
+        context.SetTime(source.get_time())
+        context.get_mutable_continuous_state().SetFrom(
+            source.get_continuous_state()
+        )
+        context.get_mutable_discrete_state().SetFrom(
+            source.get_discrete_state()
+        )
+        context.get_mutable_abstract_state().SetFrom(
+            source.get_abstract_state()
+        )
+
+    def __call__(self, z):
+        simulator, config = self.simulator, self.config
+        context = simulator.get_mutable_context()
+        self._reset(context)
+        for e, rows in zip(self.entries, self._slices):
+            e.set(self.diagram, context, z[rows])
+        # A new integrator per run: cenic carries its state from one run
+        # to the next.
+        ApplySimulatorConfig(config, simulator)
+        if config.use_error_control:
+            simulator.get_mutable_integrator().set_target_accuracy(
+                config.accuracy
+            )
+        simulator.Initialize(
+            InitializeParams(suppress_initialization_events=True)
+        )
+        status = simulator.AdvanceTo(self.context0.get_time() + self.period)
+        if status.reason() != status.ReturnReason.kReachedBoundaryTime:
+            raise RuntimeError(
+                "a one-period map's simulation ended early at t = "
+                f"{context.get_time():.6f} s: {status.FormatMessage()}"
+            )
+        return _read(self.entries, self.diagram, context)
+
+
 def _one_period(diagram, context0, entries, z, period, config):
-    context = context0.Clone()
-    _write(entries, diagram, context, z)
-    simulator = Simulator(diagram, context)
-    config = copy.copy(config)
-    # ApplySimulatorConfig sets the context's time to start_time.
-    config.start_time = context0.get_time()
-    ApplySimulatorConfig(config, simulator)
-    if config.use_error_control:
-        simulator.get_mutable_integrator().set_target_accuracy(config.accuracy)
-    # (with cenic, the plant's cache fresh after each step, as in a run)
-    set_monitor(simulator, diagram, config.integration_scheme)
-    simulator.Initialize(InitializeParams(suppress_initialization_events=True))
-    simulator.AdvanceTo(context0.get_time() + period)
-    return _read(entries, diagram, context)
+    return _OnePeriod(diagram, context0, entries, period, config)(z)
 
 
 def period_map(
@@ -144,12 +193,13 @@ def period_map(
     steps = np.concatenate(
         [np.full(e.get(diagram, context).size, e.step) for e in entries]
     )
+    one_period = _OnePeriod(diagram, context, entries, period, config)
     columns = []
     for i in range(z0.size):
         dz = np.zeros_like(z0)
         dz[i] = steps[i]
-        plus = _one_period(diagram, context, entries, z0 + dz, period, config)
-        minus = _one_period(diagram, context, entries, z0 - dz, period, config)
+        plus = one_period(z0 + dz)
+        minus = one_period(z0 - dz)
         columns.append((plus - minus) / (2 * steps[i]))
     return np.array(columns).T
 
@@ -246,11 +296,13 @@ class SampledLoop:
 
 class FrozenMap:
     """The frozen variant of a scenario (with ``overrides`` by dotted
-    name), built once, whose one-period map can be taken at any state of a
-    run of the scenario's own diagram (:meth:`at`): the maps along a run
+    name; ``plan``: the scenario's, if planned), built once, whose
+    one-period map can be taken at any state of a run of the scenario's
+    own diagram (:meth:`at`): the maps along a run
     reuse one diagram."""
 
-    def __init__(self, scenario: Scenario, **overrides):
+    def __init__(self, scenario: Scenario, *, plan=None, **overrides):
+        from deburr_drake.cell.plan import plan_cell
         from deburr_drake.config import ConfigError
 
         self.scenario = frozen_scenario(scenario, **overrides)
@@ -269,7 +321,12 @@ class FrozenMap:
             )
         self.period = period
         self.config = simulator_config(self.scenario)
-        self.diagram = make_deburring_diagram(scenario=self.scenario)
+        # ``plan``: the scenario's own, whose cell the variant shares.
+        self.diagram = make_deburring_diagram(
+            plan_cell(self.scenario)
+            if plan is None
+            else plan.varied(self.scenario)
+        )
         self.entries = cell_map_entries(self.diagram)
 
     def context_from(
@@ -312,7 +369,7 @@ def sampled_loop(
     gain and below 1 for one whose run oscillates.)"""
     from deburr_drake.control.layout import CHAMFER_STATE
 
-    frozen = FrozenMap(op.scenario, **overrides)
+    frozen = FrozenMap(op.scenario, plan=op.plan, **overrides)
     scenario, diagram, entries = frozen.scenario, frozen.diagram, frozen.entries
     context = frozen.context_from(op.diagram, op.context, modify)
     Phi = period_map(
@@ -355,9 +412,26 @@ def frozen_cell(op: OperatingPoint, overrides):
     """(diagram, context, map entries) of ``op``'s frozen scenario with
     ``overrides``, at ``op``'s state."""
     scenario = frozen_scenario(op.scenario, **overrides)
-    diagram = make_deburring_diagram(scenario=scenario)
+    diagram = make_deburring_diagram(op.variant(scenario))
     context = diagram.CreateDefaultContext()
     transfer_state(op.diagram, op.context, diagram, context)
+    return diagram, context, cell_map_entries(diagram)
+
+
+def frozen_in_place(op: OperatingPoint):
+    """(diagram, context, map entries) like :func:`frozen_cell`'s without
+    overrides, on ``op``'s own diagram (no build): a default context
+    holding ``op``'s state, the sensor noise off (its parameter). The
+    sampled loop's map does not see what else the frozen variant turns
+    off: the adaptation's states are not in the map and their rates are
+    held between samples, a guard that does not trip and a drive clamp
+    below the limits pass everything through bit for bit (a period a
+    guard ended is an error, :class:`_OnePeriod`)."""
+    diagram = op.diagram
+    context = diagram.CreateDefaultContext()
+    transfer_state(diagram, op.context, diagram, context)
+    sensor = diagram.GetSubsystemByName("force_sensor")
+    sensor.set_noise_std(sensor.GetMyMutableContextFromRoot(context), 0.0)
     return diagram, context, cell_map_entries(diagram)
 
 

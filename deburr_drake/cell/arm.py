@@ -29,6 +29,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.inverse_kinematics import InverseKinematics
 from pydrake.solvers import SnoptSolver, Solve, SolverOptions
 
+from deburr_drake.cell.counts import IK_SOLVES, count
 from deburr_drake.cell.part import add_tool_robot
 
 __all__ = [
@@ -376,6 +377,7 @@ def _solve_pose(
     snopt = SnoptSolver().solver_id()
     options.SetOption(snopt, "Major feasibility tolerance", 1e-10)
     options.SetOption(snopt, "Major optimality tolerance", 1e-10)
+    count(IK_SOLVES)
     result = Solve(prog, q_full_guess, options)
     q_sol = result.GetSolution(q)
     if not result.is_success():
@@ -493,6 +495,7 @@ def closest_tool_position(
         if q_guess is None
         else q_guess
     )
+    count(IK_SOLVES)
     result = Solve(ik.get_mutable_prog(), q_full_guess)
     context = plant.CreateDefaultContext()
     q_sol = result.GetSolution(q)

@@ -6,7 +6,7 @@ command generator, first-order hold, contact estimator and hybrid
 controller, with the plant-side cutting process, joint friction and force
 sensor.
 
-Use: ``diagram = make_deburring_diagram(scenario=load_scenario("paper"))``,
+Use: ``diagram = make_deburring_diagram(plan_cell(load_scenario("paper")))``,
 then :func:`deburr_drake.runs.simulation.simulate`. Every system is named
 (:data:`SYSTEM_NAMES`), every logged output is in :data:`LOGGED` (logger
 ``log_<name>``); pass ``meshcat=`` to draw the cell (deburr_drake.cell.meshcat).
@@ -22,21 +22,13 @@ from pydrake.common import RandomDistribution
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 from pydrake.systems.primitives import LogVectorOutput, RandomSource
 
-from deburr_drake.cell.arm import solve_tool_pose
-from deburr_drake.cell.edge import (
-    believed_contour,
-    believed_contour_step,
-    edge_points,
-    make_contour,
-    start_position,
-)
+from deburr_drake.cell.counts import DIAGRAMS, count
+from deburr_drake.cell.edge import edge_points
 from deburr_drake.cell.faults import add_noise_scale, add_sensor_faults
-from deburr_drake.cell.gains import resolve_design
 from deburr_drake.cell.guards import add_effort_saturation, add_guards
+from deburr_drake.cell.plan import CellPlan, plan_cell
 from deburr_drake.cell.plant import add_cell_plant
 from deburr_drake.cell.process import CuttingProcess
-from deburr_drake.cell.reach import check_part_in_reach
-from deburr_drake.cell.robot import ik_seed, make_robot_model
 from deburr_drake.cell.sensor import ForceSensor
 from deburr_drake.config import ConfigError, RobotConfig, Scenario
 from deburr_drake.control.kinematics import ToolPoint
@@ -93,14 +85,6 @@ SYSTEM_NAMES = (
 )
 
 
-class _Start(NamedTuple):
-    """Where the pass starts."""
-
-    position: np.ndarray  # m, world: the tool tip
-    q: np.ndarray  # the plant's positions there
-    rotation: np.ndarray  # the tool's orientation there, held on the pass
-
-
 class _PlantSide(NamedTuple):
     """The systems between the plant and the controller side."""
 
@@ -108,53 +92,6 @@ class _PlantSide(NamedTuple):
     force_law: Diagram
     sensor: ForceSensor
     reading: OutputPort  # what the controller side reads (after faults)
-
-
-def _initial_positions(
-    plant, scenario: Scenario, x0, tool_axis=None
-) -> np.ndarray:
-    robot = scenario.robot
-    if robot.model == "cartesian_tool":
-        # World-aligned prismatic joints, tip at the origin for q = 0.
-        return np.asarray(x0, float)
-    frame = plant.GetFrameByName(robot.tool_frame)
-    return solve_tool_pose(
-        plant,
-        x0,
-        instance=frame.model_instance(),
-        q_guess=ik_seed(robot, x0),
-        tool_frame=robot.tool_frame,
-        tool_axis=tool_axis,
-    )
-
-
-def _start(scenario: Scenario, plant, model, belief) -> _Start:
-    """The tool at the believed contour's start, in contact (with touch
-    probing, the probe's standoff off the part before it), the arm posed
-    there by inverse kinematics."""
-    c = scenario
-    x0 = start_position(c, belief)
-    if c.localisation.probe.enabled:
-        x0 = x0 - (
-            c.simulation.initial_depth + c.localisation.probe.standoff
-        ) * belief.n1(x0)
-    # The tool vertical; along a 3-D edge, along its axis there.
-    axis = (
-        belief.tool_axis_at(belief.arc_position(x0))
-        if belief.varying_frame
-        else None
-    )
-    q0 = _initial_positions(plant, c, x0, axis)
-    model_context = model.CreateDefaultContext()
-    model.SetPositions(model_context, q0)
-    # The tool's axis; on a 6-DOF arm also its rotation about it.
-    rotation = (
-        model.GetFrameByName(c.robot.tool_frame)
-        .CalcPoseInWorld(model_context)
-        .rotation()
-        .matrix()
-    )
-    return _Start(x0, q0, rotation)
 
 
 def _add_plant_side(
@@ -281,7 +218,7 @@ def _add_loggers(builder, scenario: Scenario, logged, extra_logs):
         logger.set_name(f"log_{name}")
 
 
-def _add_meshcat(builder, meshcat, scenario, plant, scene_graph, process):
+def _add_meshcat(builder, meshcat, plan, plant, scene_graph, process):
     """The cell, its contact forces and the edge drawn in ``meshcat``."""
     from deburr_drake.cell.meshcat import add_meshcat
 
@@ -291,27 +228,44 @@ def _add_meshcat(builder, meshcat, scenario, plant, scene_graph, process):
         plant=plant,
         scene_graph=scene_graph,
         process=process,
-        edge_points=edge_points(scenario, process.bins.centers),
-        edge_axes=_edge_axes(scenario, process.bins.centers),
+        edge_points=edge_points(plan.scenario, process.bins.centers),
+        edge_axes=_edge_axes(plan.contour, process.bins.centers),
     )
 
 
-def _edge_axes(scenario, arc):
+def _edge_axes(contour, arc):
     """The tool axis at arc positions ``arc`` along a turning (3-D) edge,
     else None (vertical)."""
-    contour = make_contour(scenario)
     if not contour.varying_frame:
         return None
     return np.array([contour.tool_axis_at(s) for s in arc])
 
 
+def _the_plan(plan, scenario) -> CellPlan:
+    """The plan given, or ``scenario``'s; TypeError for neither, both, or
+    a scenario passed as the plan."""
+    if (plan is None) == (scenario is None):
+        raise TypeError(
+            "make_deburring_diagram: pass a plan (plan_cell(scenario)) or "
+            "scenario=, not both"
+        )
+    if isinstance(plan, Scenario):
+        raise TypeError(
+            "make_deburring_diagram: got a Scenario as the plan: pass "
+            "plan_cell(scenario) or scenario=scenario"
+        )
+    return plan_cell(scenario) if plan is None else plan
+
+
 def make_deburring_diagram(
+    plan: Optional[CellPlan] = None,
     *,
-    scenario: Scenario,
+    scenario: Optional[Scenario] = None,
     meshcat=None,
     extra_logs: Optional[Mapping[str, Tuple[str, str]]] = None,
 ) -> Diagram:
-    """The closed loop as a named Diagram ``deburr_<scenario name>``.
+    """The closed loop of ``plan`` (deburr_drake.cell.plan.plan_cell) as a
+    named Diagram ``deburr_<scenario name>``.
 
     Systems: :data:`SYSTEM_NAMES`, ``guards`` (deburr_drake.cell.guards,
     unless ``guards.enabled`` is false), ``drive_saturation`` (the drives
@@ -319,54 +273,51 @@ def make_deburring_diagram(
     ``guards.saturate_effort`` is false), ``sensor_faults`` and
     ``sensor_noise_scale`` with faults (deburr_drake.cell.faults), and a
     ``log_<name>`` VectorLogSink per entry of :data:`LOGGED`. The tool
-    starts at the contour start, in contact. With a ``meshcat``, the cell
+    starts at the plan's start, in contact. With a ``meshcat``, the cell
     is drawn there too (deburr_drake.cell.meshcat).
 
-    Built from ``scenario`` with its designed values resolved
-    (:func:`deburr_drake.cell.gains.resolve_design`: the gains where
-    ``controller.design`` resolves to auto, the fuzzy slope bound where it
-    is 0); ``scenario`` itself is left as it is. To report the values
-    built, resolve it first: ``scenario = resolve_design(scenario)``.
+    Built from ``plan.scenario`` (its designed values resolved), the
+    plan's edges, robot model and start: nothing is derived again from
+    the raw scenario. ``scenario=`` instead of a plan plans it first
+    (``plan_cell(scenario)``: a convenience; to build more than once, or
+    to report the values built, plan once and pass the plan).
 
     ``extra_logs`` ({name: (system name, output port name)}) logs more
     signals, e.g. ``{"feed": ("command_generator", "feed")}``: loggers
     ``log_<name>`` that :func:`deburr_drake.runs.simulation.simulate`
     collects as ``log[name]`` (``t`` and ``value``)."""
-    scenario.validate()
-    # The designed values resolved on a copy; the caller's scenario stays.
-    c = resolve_design(scenario)
-    check_part_in_reach(c)
+    plan = _the_plan(plan, scenario)
+    count(DIAGRAMS)
+    c = plan.scenario
     probing = c.localisation.probe.enabled
     builder = DiagramBuilder()
-    # The plant: the robot with its cutter and friction, the real part.
+    # The plant: the robot with its cutter and friction, the real part,
+    # posed at the start.
     plant, scene_graph = add_cell_plant(builder, c)
-    # The real edge (the plant's truth), the one the controller believes in.
-    contour, belief = make_contour(c), believed_contour(c)
-    # The controller's model of the robot, its pose at the start.
-    model = make_robot_model(c.robot)
-    start = _start(c, plant, model, belief)
-    plant.SetDefaultPositions(start.q)
+    plant.SetDefaultPositions(plan.start.q)
     # One kinematics memo for the process (truth), the sensor, the observer
     # and the controller: they read the same joint state.
+    model = plan.model
     tool_point = ToolPoint(model, model.GetFrameByName(c.robot.tool_frame))
-    # The plant side: the cutting process, its force law, the force sensor
-    # and its faults.
-    side = _add_plant_side(builder, c, plant, contour, tool_point)
-    # The paper's loops around the plant (deburr_drake.control.loop).
+    # The plant side: the cutting process on the real edge, its force law,
+    # the force sensor and its faults.
+    side = _add_plant_side(builder, c, plant, plan.contour, tool_point)
+    # The paper's loops around the plant (deburr_drake.control.loop), on
+    # the edge the controller believes in.
     loops = add_deburring_controller(
         builder,
         scenario=c,
         plant=model,
-        contour=belief,
+        contour=plan.belief,
         plant_state=plant.get_state_output_port(),
         measured_force=side.reading,
         tool_frame=c.robot.tool_frame,
-        start=start.position,
-        desired_rotation=start.rotation,
+        start=plan.start.position,
+        desired_rotation=plan.start.rotation,
         tool_point=tool_point,
-        contour_step=believed_contour_step(c),  # after the part moved
+        contour_step=plan.belief_step,  # after the part moved
         true_plant=plant,
-        posture=start.q,
+        posture=plan.start.q,
     )
     # Touch probing: the loops turn the spindle off and on.
     if probing:
@@ -375,10 +326,10 @@ def make_deburring_diagram(
     _connect_actuation(builder, c, plant, side, loops.actuation)
     # The cell drawn in Meshcat.
     if meshcat is not None:
-        _add_meshcat(builder, meshcat, c, plant, scene_graph, side.process)
+        _add_meshcat(builder, meshcat, plan, plant, scene_graph, side.process)
     # The guards read the standard signals, the loggers those and more.
     logged = _logged_signals(builder, loops, probing)
-    add_guards(builder, c, plant, contour, logged)
+    add_guards(builder, c, plant, plan.contour, logged)
     _add_loggers(builder, c, logged, extra_logs)
     diagram = builder.Build()
     diagram.set_name(f"deburr_{c.name}")

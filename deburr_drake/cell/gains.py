@@ -358,9 +358,11 @@ def _max_step(scenario: Scenario, period: float, mass: float):
     return g_max, max_step
 
 
-def design_gains(scenario: Scenario, q=None) -> GainDesign:
+def design_gains(scenario: Scenario, q=None, *, model=None) -> GainDesign:
     """The gains the rules of the module docstring give for ``scenario``'s
-    robot at joint angles ``q`` (default: the start pose)."""
+    robot at joint angles ``q`` (default: the start pose, tool vertical;
+    deburr_drake.cell.plan designs at the pose the run starts from).
+    ``model``: the robot's model if the caller holds it."""
     from deburr_drake.cell.edge import believed_contour, start_position
     from deburr_drake.cell.robot import (
         loop_numbers,
@@ -372,10 +374,10 @@ def design_gains(scenario: Scenario, q=None) -> GainDesign:
     period = c.control_period
     if q is None:
         q = start_pose(scenario)
-    numbers = loop_numbers(scenario, q)
+    plant = make_robot_model(scenario.robot) if model is None else model
+    numbers = loop_numbers(scenario, q, model=plant)
     f = numbers["gravity_error_force"]
     mass = numbers["lightest_task_mass"]
-    plant = make_robot_model(scenario.robot)
     frame = scenario.robot.tool_frame
 
     def rates(K, K_o, d_n=0.0):
@@ -467,12 +469,13 @@ SLOPE_LIMIT_FRACTION = 0.75
 MIN_SLOPE_BOUND = 1.0
 
 
-def slope_bound(scenario: Scenario) -> Optional[float]:
+def slope_bound(scenario: Scenario, q=None, *, model=None) -> Optional[float]:
     """The designed ``controller.fuzzy.max_slope`` (N s/m) of a fuzzy
     controller whose bound is 0 (designed), else None:
     SLOPE_LIMIT_FRACTION x 2 m / T - max K_k over the fuzzy axes, m the
-    lightest task mass at the start pose
-    (:func:`deburr_drake.cell.robot.loop_numbers`).
+    lightest task mass at joint angles ``q`` (default: the start pose,
+    tool vertical; :func:`deburr_drake.cell.robot.loop_numbers`, on
+    ``model`` if given).
 
     The sampled loop's limit on the total gain on s_k is about 2 m / T (a
     mass under a sampled damper: the per-sample factor 1 - K T / m
@@ -485,19 +488,19 @@ def slope_bound(scenario: Scenario) -> Optional[float]:
         return None  # (a continuous law, T = 0, has no sampled limit)
     from deburr_drake.cell.robot import loop_numbers
 
-    m = loop_numbers(scenario)["lightest_task_mass"]
+    m = loop_numbers(scenario, q, model=model)["lightest_task_mass"]
     K = max(c.sliding_gain[a] for a in f.axes)
     return max(
         SLOPE_LIMIT_FRACTION * 2.0 * m / c.control_period - K, MIN_SLOPE_BOUND
     )
 
 
-def resolve_slope_bound(scenario: Scenario) -> Scenario:
+def resolve_slope_bound(scenario: Scenario, q=None, *, model=None) -> Scenario:
     """A copy of ``scenario`` with ``controller.fuzzy.max_slope`` designed
-    (:func:`slope_bound`) where it is 0, else an equal copy; ``scenario``
-    is left as it is."""
+    (:func:`slope_bound`, at ``q`` on ``model``) where it is 0, else an
+    equal copy; ``scenario`` is left as it is."""
     resolved = copy.deepcopy(scenario)
-    bound = slope_bound(scenario)
+    bound = slope_bound(scenario, q, model=model)
     if bound is not None:
         resolved.controller.fuzzy.max_slope = bound
     return resolved

@@ -248,7 +248,9 @@ def _reach_key(scenario: Scenario, samples: int) -> str:
     )
 
 
-def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
+def check_part_in_reach(
+    scenario: Scenario, contour=None, *, samples=24, model=None
+):
     """Raises ConfigError if the robot cannot serve the cell
     (deburr_drake.cell.robot.check_robot: the model file, its frames, its
     joints), or naming the first point of the tool's path (the start, then
@@ -259,12 +261,12 @@ def check_part_in_reach(scenario: Scenario, contour=None, *, samples=24):
     edge (``contour.varying_frame``) the tool follows the edge's axis and
     the arm's whole joint path is checked instead (continuous, within the
     joint limits, away from singular postures; the error names the arc
-    length and the joint)."""
+    length and the joint). ``model``: check_robot's, if the caller has it."""
     robot = scenario.robot
     key = _reach_key(scenario, samples) if contour is None else None
     if key is not None and key in _REACHED:
         return
-    model = check_robot(robot)
+    model = check_robot(robot) if model is None else model
     if robot.model == "cartesian_tool":
         return  # the Cartesian tool reaches everywhere
     contour = contour or believed_contour(scenario)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import BasicVector, LeafSystem
 
 from deburr_drake.config import ConfigError, SensorConfig
 from deburr_drake.control.kinematics import ToolPoint
@@ -55,6 +55,7 @@ class ForceSensor(LeafSystem):
     - ``noise`` (3): unit-variance samples, scaled by ``noise_std`` (N).
     - ``measured_force`` (3, N): filtered force on the tool, world frame.
     - Discrete state (3, N): the filter, updated every ``sample_period``.
+    - Numeric parameter (1, N): ``noise_std`` (:meth:`set_noise_std`).
 
     A ``tool_point`` (a ToolPoint of a frame on the sensor's child body, on
     a model with the plant's joints) shares its kinematics for the reading's
@@ -95,7 +96,11 @@ class ForceSensor(LeafSystem):
         self._weight = tool.default_mass() * np.asarray(
             plant.gravity_field().gravity_vector()
         )
-        self._noise_std = config.noise_std
+        # noise_std is a numeric parameter: the analyses switch the noise
+        # off in a Context.
+        self._noise_std = self.DeclareNumericParameter(
+            BasicVector([config.noise_std])
+        )
         self._alpha = 1.0 - np.exp(
             -2.0 * np.pi * config.cutoff_frequency * config.sample_period
         )
@@ -113,6 +118,13 @@ class ForceSensor(LeafSystem):
             config.sample_period, 0.0, self._update
         )
         self.DeclareStateOutputPort("measured_force", self._state_index)
+
+    def set_noise_std(self, context, noise_std: float):
+        """The noise's standard deviation (N) in the sensor's
+        ``context``."""
+        context.get_mutable_numeric_parameter(self._noise_std).SetAtIndex(
+            0, noise_std
+        )
 
     def raw_force(self, context) -> np.ndarray:
         """The unfiltered, noise-free, weight-compensated reading (N,
@@ -135,7 +147,8 @@ class ForceSensor(LeafSystem):
 
     def _update(self, context, discrete_state):
         y = context.get_discrete_state(self._state_index).get_value()
-        raw = self.raw_force(context) + self._noise_std * self._noise_port.Eval(
+        noise_std = context.get_numeric_parameter(self._noise_std).GetAtIndex(0)
+        raw = self.raw_force(context) + noise_std * self._noise_port.Eval(
             context
         )
         discrete_state.set_value(self._state_index, y + self._alpha * (raw - y))

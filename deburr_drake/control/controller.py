@@ -11,6 +11,8 @@ with the systems that feed it."""
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 from pydrake.autodiffutils import AutoDiffXd
 from pydrake.common.value import AbstractValue
@@ -58,7 +60,13 @@ def make_rule_bases(config: ControllerConfig):
     ]
 
 
-@TemplateSystem.define("HybridController_", T_list=[float, AutoDiffXd])
+# scope: the module by name; pydrake otherwise finds it by inspecting the
+# whole call stack, source lines included, at import.
+@TemplateSystem.define(
+    "HybridController_",
+    T_list=[float, AutoDiffXd],
+    scope=sys.modules[__name__],
+)
 def HybridController_(T):
 
     class Impl(LeafSystem_[T]):
@@ -139,6 +147,11 @@ def HybridController_(T):
           sample, so the continuous states integrate the sampled rates
           exactly (theta((k+1)T) = theta(kT) + T theta'(kT)). With T = 0
           everything is continuous in time (for linearization).
+        - Numeric parameter: [K (3, N s/m), K_o (3, N m s/rad)], from
+          ``sliding_gain`` and ``orientation_gain``; :meth:`set_gains`
+          changes them in a Context (an orientation gain of zero in the
+          configuration leaves the orientation uncontrolled whatever the
+          parameter holds).
         - ``tool_point`` (optional, float only): a ToolPoint of the tool
           frame on ``plant`` whose kinematics and gravity forces the law
           reuses (e.g. shared with the observer, which has evaluated them at
@@ -259,10 +272,9 @@ def HybridController_(T):
             self._integral_axes = [
                 k for k, rate in enumerate(c.integral_lambda) if rate > 0
             ]
-            self._K_integral = (
-                np.asarray(c.sliding_gain, float)
-                * np.asarray(c.integral_lambda, float)
-            )[self._integral_axes]
+            self._integral_lambda = np.asarray(c.integral_lambda, float)[
+                self._integral_axes
+            ]
             self._desired_rotation = (
                 np.eye(3)
                 if desired_rotation is None
@@ -281,8 +293,17 @@ def HybridController_(T):
             self._axis_turn = contour.axis_turn if varying else None
             self._task_frame = contour.task_frame if varying else None
             self._lambda_o = np.asarray(c.orientation_lambda, float)
-            self._K_o = np.asarray(c.orientation_gain, float)
-            self._orientation_control = bool(np.any(self._K_o > 0))
+            K_o = np.asarray(c.orientation_gain, float)
+            # Chosen once: a gain of zero leaves the orientation free,
+            # whatever the parameter is set to later.
+            self._orientation_control = bool(np.any(K_o > 0))
+            # K and K_o are numeric parameters: an analysis that varies
+            # them changes a Context, not the Diagram.
+            self._gains = self.DeclareNumericParameter(
+                BasicVector_[T](
+                    np.concatenate([np.asarray(c.sliding_gain, float), K_o])
+                )
+            )
             # Redundant arms only: nothing else holds J's null space.
             self._posture = (
                 None
@@ -347,6 +368,23 @@ def HybridController_(T):
                     calc,
                     prerequisites_of_calc=deps,
                 )
+
+        def set_gains(
+            self, context, *, sliding_gain=None, orientation_gain=None
+        ):
+            """K and/or K_o (3 each) in the controller's ``context``."""
+            gains = context.get_mutable_numeric_parameter(self._gains)
+            value = gains.CopyToVector()
+            if sliding_gain is not None:
+                value[:3] = sliding_gain
+            if orientation_gain is not None:
+                value[3:] = orientation_gain
+            gains.SetFromVector(value)
+
+        def gains(self, context):
+            """(K, K_o) in the controller's ``context``."""
+            value = context.get_numeric_parameter(self._gains).CopyToVector()
+            return value[:3], value[3:]
 
         @property
         def rule_bases(self):
@@ -416,6 +454,8 @@ def HybridController_(T):
                 )
             )
             s = edot + self._lambda * e
+            gains = context.get_numeric_parameter(self._gains).CopyToVector()
+            K, K_o = gains[:3], gains[3:]
             # The law's task-space force.
             force = self._law.task_force(
                 TaskTerms(
@@ -427,16 +467,18 @@ def HybridController_(T):
                     s=s,
                     theta=self._theta_of(x),
                     fuzzy_weight=p.get("fuzzy_weight"),
+                    K=K,
                 ),
                 rates,
             )
-            force = self._with_integral(force, x, s, rates, to_task)
+            force = self._with_integral(force, x, s, rates, to_task, K)
             # Joint torques.
             tau = self._joint_torque(
                 p["plant_state"],
                 force.f_tau if to_task is None else to_task @ force.f_tau,
                 edot_world,
                 self._rotation_at(chamfer),
+                K_o,
             )
             return (
                 self._B_T @ tau,
@@ -454,7 +496,7 @@ def HybridController_(T):
                 ),
             )
 
-        def _with_integral(self, force, x, s, rates, to_task):
+        def _with_integral(self, force, x, s, rates, to_task, K):
             """f_tau + K lambda_I int s on the integral axes, whose states
             integrate s.
 
@@ -469,13 +511,14 @@ def HybridController_(T):
             axes = self._integral_axes
             if not axes:
                 return force
+            K_integral = K[axes] * self._integral_lambda
             start = 1 + self._n_theta
             f_tau = force.f_tau.copy()
             if to_task is None:
                 rates[start:] = s[axes]
-                f_tau[axes] = f_tau[axes] + self._K_integral * x[start:]
+                f_tau[axes] = f_tau[axes] + K_integral * x[start:]
                 return force._replace(f_tau=f_tau)
-            rates[start:] = to_task[:, axes] @ (self._K_integral * s[axes])
+            rates[start:] = to_task[:, axes] @ (K_integral * s[axes])
             f_world = x[start:]
             f_tau = f_tau + to_task.T @ f_world
             return force._replace(f_tau=f_tau)
@@ -507,7 +550,7 @@ def HybridController_(T):
             position."""
             return self._rotation_at(self._ports["chamfer_state"].Eval(context))
 
-        def _joint_torque(self, state, f_tau, edot, desired_rotation):
+        def _joint_torque(self, state, f_tau, edot, desired_rotation, K_o):
             """J_v^T f_tau, the orientation PD towards
             ``desired_rotation``, the null-space posture and the law's
             model terms (nv)."""
@@ -520,9 +563,7 @@ def HybridController_(T):
                 e_o = 0.5 * np.array(
                     [E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]]
                 )
-                tau = tau + J[:3].T @ (
-                    self._K_o * (self._lambda_o * e_o - omega)
-                )
+                tau = tau + J[:3].T @ (K_o * (self._lambda_o * e_o - omega))
             if self._posture is not None:
                 tau = tau + self._null_space_posture(state, J)
             return self._law.model_torque(tau, state, J, tau_g, edot, omega)

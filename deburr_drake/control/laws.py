@@ -158,6 +158,7 @@ class TaskTerms(NamedTuple):
     s: Any
     theta: Any
     fuzzy_weight: Any
+    K: Any  # N s/m per task axis: the sliding gain (a parameter)
 
 
 class TaskForce(NamedTuple):
@@ -186,7 +187,6 @@ class ControlLaw:
 
     def __init__(self, config: ControllerConfig, setting: LawSetting):
         self._depth_gain = config.depth_gain
-        self._K = np.asarray(config.sliding_gain, float)
         self._gravity_compensation = config.gravity_compensation
 
     def depth_reference(self, delta_d, e_f, rates):
@@ -199,7 +199,7 @@ class ControlLaw:
     def task_force(self, terms: TaskTerms, rates) -> TaskForce:
         """f_tau = K s - f + u (36) (N, world)."""
         u, zeta = self.compensator(terms, rates)
-        return TaskForce(self._K * terms.s - terms.f + u, u, zeta)
+        return TaskForce(terms.K * terms.s - terms.f + u, u, zeta)
 
     def compensator(self, terms: TaskTerms, rates):
         """(u, zeta) per task axis: none here."""
@@ -391,7 +391,7 @@ class ImpedanceLaw(_ConstantFeedLaw):
             terms.s,
             stiffness=self._stiffness,
             damping=self._damping,
-            gain=self._K,
+            gain=terms.K,
         )
         return TaskForce(f_tau, *self.compensator(terms, rates))
 

@@ -30,11 +30,11 @@ from typing import Callable, Dict, List, Optional
 
 import numpy as np
 
-from deburr_drake.cell.diagram import make_deburring_diagram
-from deburr_drake.cell.truth import contact_truth
+from deburr_drake.cell.plan import plan_cell
 from deburr_drake.config import ConfigError, Scenario
-from deburr_drake.runs.pass_metrics import first_edge_error, pass_metrics
-from deburr_drake.runs.simulation import RunLog, simulate
+from deburr_drake.runs.pass_metrics import first_edge_error
+from deburr_drake.runs.passes import run_pass
+from deburr_drake.runs.simulation import RunLog
 
 __all__ = [
     "BatchPart",
@@ -186,10 +186,8 @@ def run_batch(
         if use and carry in ("all", "estimates"):
             s = carried.apply(s)
         s.validate()
-        diagram = make_deburring_diagram(scenario=s)
-        log = simulate(
-            diagram,
-            s,
+        done = run_pass(
+            plan_cell(s),
             duration=duration,
             initial_state=(
                 carried.set_theta
@@ -197,15 +195,7 @@ def run_batch(
                 else None
             ),
         )
-        try:
-            truth = contact_truth(s).force_at_desired_depth
-        except Exception:  # the metrics then leave it out
-            truth = None
-        values = pass_metrics(
-            log,
-            true_force_at_desired_depth=truth,
-            only_cut=not log.completed_pass,
-        )
+        log, values = done.log, done.metrics
         metrics = {k2: float(v) for k2, v in values.items()}
         metrics["first_10pct_depth_rms_error_mm"] = first_edge_error(log)
         est = log.signals.get("estimates")

@@ -124,22 +124,17 @@ def run_controller(
     scenario's if None) and writes ``out_dir``/logs.npz, metrics.json;
     returns the metrics.json content plus the smoothness metrics and the
     normal force against the plant's true force at delta*."""
-    from deburr_drake.cell.diagram import make_deburring_diagram
+    from deburr_drake.cell.plan import plan_cell
     from deburr_drake.math import metrics
     from deburr_drake.runs import report
-    from deburr_drake.runs.pass_metrics import (
-        TRANSIENT,
-        force_at_desired_depth,
-        pass_metrics,
-    )
-    from deburr_drake.runs.simulation import simulate
+    from deburr_drake.runs.pass_metrics import TRANSIENT
+    from deburr_drake.runs.passes import run_pass, truth_force
 
     sc = configure(scenario, controller)
-    log = simulate(make_deburring_diagram(scenario=sc), sc, duration=duration)
-    truth = force_at_desired_depth(sc)
-    values = pass_metrics(
-        log, true_force_at_desired_depth=truth, only_cut=not log.completed_pass
-    )
+    plan = plan_cell(sc)
+    done = run_pass(plan, duration=duration)
+    log, values = done.log, done.metrics
+    truth = truth_force(plan)[0]
     t0 = values.get("contact_time_s", np.nan) + TRANSIENT
     for key, value in smoothness(log, t0).items():
         values[key] = value

@@ -21,17 +21,15 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 import json
 from pathlib import Path
-import time
 from typing import Callable, Dict, List, Optional, Sequence
 
 import numpy as np
 
-from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.cell.gains import resolve_design
-from deburr_drake.cell.truth import contact_truth
+from deburr_drake.cell.plan import CellPlan, plan_cell
 from deburr_drake.config import ConfigError, Scenario
-from deburr_drake.runs.pass_metrics import pass_metrics
-from deburr_drake.runs.simulation import RunLog, simulate
+from deburr_drake.runs.passes import run_pass, truth_force
+from deburr_drake.runs.simulation import RunLog
 
 __all__ = [
     "ConvergenceRun",
@@ -154,18 +152,11 @@ def relative_change(a: float, b: float) -> float:
     return 0.0 if scale == 0 else abs(a - b) / scale
 
 
-def _run_once(scenario: Scenario, duration, truth) -> ConvergenceRun:
-    diagram = make_deburring_diagram(scenario=scenario)
-    wall = time.perf_counter()
-    log = simulate(diagram, scenario, duration=duration)
-    wall = time.perf_counter() - wall
-    values = dict(
-        pass_metrics(
-            log,
-            true_force_at_desired_depth=truth,
-            only_cut=not log.completed_pass,
-        )
-    )
+def _run_once(plan: CellPlan, duration, truth) -> ConvergenceRun:
+    scenario = plan.scenario
+    done = run_pass(plan, duration=duration, truth=truth)
+    log, wall = done.log, done.log.wall_time
+    values = dict(done.metrics)
     values.update(
         force_stability(log, values.get("contact_time_s", float("nan")))
     )
@@ -210,13 +201,15 @@ def converge(
     scenario.validate()
     duration = scenario.simulation.duration if duration is None else duration
     study = Convergence(scenario.name, duration, tolerance)
-    try:
-        truth = contact_truth(scenario).force_at_desired_depth
-    except Exception as e:  # the metrics then leave out what needs it
-        truth = None
-        study.note = f"no contact truth: {type(e).__name__}: {e}"
+    # One plan: the refined runs change only the numerics.
+    plan = plan_cell(scenario)
+    truth, why = truth_force(plan)
+    if truth is None:  # the metrics then leave out what needs it
+        study.note = f"no contact truth: {why}"
     for halvings in range(max_halvings + 1):
-        run = _run_once(refined(scenario, halvings), duration, truth)
+        run = _run_once(
+            plan.varied(refined(plan.scenario, halvings)), duration, truth
+        )
         study.runs.append(run)
         say(
             f"max_step {run.max_step * 1e3:.4g} ms, sample_mean "

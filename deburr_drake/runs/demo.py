@@ -2,8 +2,7 @@
 controller promises there (depth convergence and eq. (8)'s time constant,
 estimator convergence, feedrate, dead zone, NaN).
 
-Also :func:`run` (build a scenario's cell and simulate it in one call). The
-plant's contact truth it compares with is
+The plant's contact truth it compares with is
 :func:`deburr_drake.cell.truth.contact_truth`."""
 
 from __future__ import annotations
@@ -13,16 +12,15 @@ from typing import Dict
 
 import numpy as np
 
-from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.cell.edge import believed_contour
 from deburr_drake.cell.truth import ContactTruth
 from deburr_drake.config import Scenario
 from deburr_drake.control.command import feedrate_law
 from deburr_drake.control.controller import make_rule_bases
 from deburr_drake.math import metrics
-from deburr_drake.runs.simulation import RunLog, simulate
+from deburr_drake.runs.simulation import RunLog
 
-__all__ = ["frozen_adaptation", "run", "summarize", "SETTLE_TIME"]
+__all__ = ["frozen_adaptation", "summarize", "SETTLE_TIME"]
 
 #: Samples before this time (s) are the transient.
 SETTLE_TIME = 2.0
@@ -40,17 +38,6 @@ def frozen_adaptation(scenario: Scenario, truth: ContactTruth) -> Scenario:
     ]
     frozen.controller.fuzzy.adapt = False
     return frozen
-
-
-def run(scenario: Scenario, duration: float, **kwargs) -> RunLog:
-    """Builds the scenario's cell (:func:`make_deburring_diagram`) and
-    simulates it for ``duration`` s; ``kwargs`` go to :func:`simulate`."""
-    return simulate(
-        make_deburring_diagram(scenario=scenario),
-        scenario,
-        duration=duration,
-        **kwargs,
-    )
 
 
 def summarize(

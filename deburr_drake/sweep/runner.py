@@ -101,31 +101,24 @@ def run_scenario(
     timing = {}
     try:
         from deburr_drake.cell.diagram import make_deburring_diagram
+        from deburr_drake.cell.plan import plan_cell
         from deburr_drake.runs import report
-        from deburr_drake.runs.pass_metrics import (
-            force_at_desired_depth,
-            pass_metrics,
-        )
-        from deburr_drake.runs.simulation import simulate
+        from deburr_drake.runs.passes import run_pass
         from deburr_drake.sweep.study import scenario_from_text
 
         scenario = scenario_from_text(scenario_text)
         (out / "scenario.yaml").write_text(scenario_text)
         t = time.perf_counter()
-        diagram = make_deburring_diagram(scenario=scenario)
+        plan = plan_cell(scenario)
+        diagram = make_deburring_diagram(plan)
         timing["build_s"] = time.perf_counter() - t
-        log = simulate(diagram, scenario)
+        done = run_pass(
+            plan,
+            diagram=diagram,
+            truth=any(m in _TRUTH_METRICS for m in metrics),
+        )
+        log, values = done.log, done.metrics
         timing["simulate_s"] = log.wall_time
-        truth = (
-            force_at_desired_depth(scenario)
-            if any(m in _TRUTH_METRICS for m in metrics)
-            else None
-        )
-        values = pass_metrics(
-            log,
-            true_force_at_desired_depth=truth,
-            only_cut=not log.completed_pass,
-        )
         if keep_logs:
             report.write_run(log, out, values)
         result = report.run_summary(log, values)

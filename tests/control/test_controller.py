@@ -666,3 +666,36 @@ def test_the_integral_holds_a_world_force_along_a_turning_axis(
         )
     # Turned 15 deg, -60 N along the old axis is -60 sin 15 deg across.
     assert (turned.T @ learned)[1] == pytest.approx(-60.0 * np.sin(tilt))
+
+
+def test_gains_are_parameters(model):
+    """K (with the integral's K lambda_I) set in a Context gives, bit for
+    bit, the controller built with that K."""
+    config = ControllerConfig(
+        control_period=0.0, integral_lambda=[0.0, 0.0, 2.0]
+    )
+    doubled = copy.deepcopy(config)
+    doubled.sliding_gain = [2.0 * k for k in config.sliding_gain]
+    controller = HybridController(model, "tool_tip", config)
+    built = HybridController(model, "tool_tip", doubled)
+    x_p, v, force, x_c, v_c, _ = _scenario_point()
+    inputs = _inputs(x_p, v, force, x_c, v_c, 6.0)
+    context = _context(controller, inputs, 3e-4)
+    x = context.get_continuous_state_vector().CopyToVector()
+    x[-1] = 1e-4  # m, int s_3 dt
+    context.SetContinuousState(x)
+    built_context = _context(built, inputs, 3e-4)
+    built_context.SetContinuousState(x)
+    before = controller.GetOutputPort("actuation").Eval(context).copy()
+    controller.set_gains(context, sliding_gain=doubled.sliding_gain)
+    K, _ = controller.gains(context)
+    np.testing.assert_array_equal(K, doubled.sliding_gain)
+    after = controller.GetOutputPort("actuation").Eval(context)
+    assert not np.allclose(after, before)
+    np.testing.assert_array_equal(
+        after, built.GetOutputPort("actuation").Eval(built_context)
+    )
+    np.testing.assert_array_equal(
+        controller.EvalTimeDerivatives(context).CopyToVector(),
+        built.EvalTimeDerivatives(built_context).CopyToVector(),
+    )

@@ -9,6 +9,7 @@ from deburr_drake.cell.truth import contact_truth
 from deburr_drake.config import load_scenario
 from deburr_drake.math import metrics
 from deburr_drake.runs import demo
+from deburr_drake.runs.passes import run
 
 pytestmark = pytest.mark.slow
 
@@ -25,12 +26,12 @@ def truth(scenario):
 
 @pytest.fixture(scope="module")
 def frozen_log(scenario, truth):
-    return demo.run(demo.frozen_adaptation(scenario, truth), 3.0)
+    return run(demo.frozen_adaptation(scenario, truth), 3.0)
 
 
 @pytest.fixture(scope="module")
 def log(scenario):
-    return demo.run(scenario, 5.0)
+    return run(scenario, 5.0)
 
 
 @pytest.fixture(scope="module")
