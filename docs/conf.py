@@ -61,7 +61,9 @@ def _modules():
     """Every module of the package, by layer (package order)."""
     names = []
     for info in pkgutil.walk_packages(deburr_drake.__path__, "deburr_drake."):
-        names.append(info.name)
+        # A package's __main__ runs its command when imported.
+        if not info.name.endswith(".__main__"):
+            names.append(info.name)
     return sorted(names)
 
 

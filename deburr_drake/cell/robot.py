@@ -509,8 +509,10 @@ def loop_numbers(scenario, q=None, *, model=None) -> dict:
     - ``sampled_rate``: max Re eig(M^-1 D) T, D = J_v^T K J_v + J_w^T K_o
       J_w, T the control period: the sampled loop's fastest decay per
       period (arm5 with paper.yaml: 0.30; its measured limit, at K = 5000
-      on x1, x2: about 1.6). ``model``: the robot's model
-    (:func:`make_robot_model`) if the caller holds it."""
+      on x1, x2: about 1.6).
+
+    ``model``: the robot's model (:func:`make_robot_model`) if the caller
+    holds it."""
     c = scenario.controller
     plant = make_robot_model(scenario.robot) if model is None else model
     if q is None:
