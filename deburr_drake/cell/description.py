@@ -590,36 +590,10 @@ def _declare_drake_namespace(text: str) -> str:
     return text
 
 
-_PREPARED: Dict[Tuple, Tuple[str, str, Path, List[str]]] = {}
-
-
-def prepared_model(package_map, config: RobotConfig):
-    """(text, "urdf" or "sdf", model file, notes): the model file of
-    ``robot.model`` as the cell reads it (module docstring), its
-    package:// URIs resolvable through ``package_map`` (filled by
-    :func:`add_packages`). Cached per process."""
-    path = model_path(package_map, config)
-    key = (
-        str(path),
-        path.stat().st_mtime_ns,
-        config.flange_frame,
-        tuple(sorted(config.packages.items())),
-        tuple(config.package_paths),
-    )
-    if key in _PREPARED:
-        return _PREPARED[key]
-    text = _declare_drake_namespace(path.read_text())
-    try:
-        root = ET.fromstring(text)
-    except ET.ParseError as e:
-        raise ConfigError(
-            f"robot.model = {config.model!r} is invalid: bad XML ({e})"
-        ) from None
-    urdf = root.tag == "robot"
-    notes = []
-    # Unknown packages anywhere in the file: one line each.
-    for url in sorted(set(re.findall(r"package://[^\s\"'<>]+", text))):
-        _package_path(package_map, config, url, "robot.model URI")
+def _drop_unread_joint_tags(root, notes):
+    """Joint and actuator tags Drake ignores with a warning at every
+    parse, removed; what they held that the cell can model instead is
+    said in ``notes``."""
     # Joint tags Drake does not read (it warns at every parse); the cell
     # uses neither. URDF joint friction Drake does not model either: said
     # once, with the values, for robot.joint_coulomb_friction.
@@ -655,6 +629,39 @@ def prepared_model(package_map, config: RobotConfig):
             f"its joint friction {friction} (N m) is not modelled: "
             "give it in robot.joint_coulomb_friction"
         )
+
+
+_PREPARED: Dict[Tuple, Tuple[str, str, Path, List[str]]] = {}
+
+
+def prepared_model(package_map, config: RobotConfig):
+    """(text, "urdf" or "sdf", model file, notes): the model file of
+    ``robot.model`` as the cell reads it (module docstring), its
+    package:// URIs resolvable through ``package_map`` (filled by
+    :func:`add_packages`). Cached per process."""
+    path = model_path(package_map, config)
+    key = (
+        str(path),
+        path.stat().st_mtime_ns,
+        config.flange_frame,
+        tuple(sorted(config.packages.items())),
+        tuple(config.package_paths),
+    )
+    if key in _PREPARED:
+        return _PREPARED[key]
+    text = _declare_drake_namespace(path.read_text())
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as e:
+        raise ConfigError(
+            f"robot.model = {config.model!r} is invalid: bad XML ({e})"
+        ) from None
+    urdf = root.tag == "robot"
+    notes = []
+    # Unknown packages anywhere in the file: one line each.
+    for url in sorted(set(re.findall(r"package://[^\s\"'<>]+", text))):
+        _package_path(package_map, config, url, "robot.model URI")
+    _drop_unread_joint_tags(root, notes)
     if urdf:
         _one_definition_per_material(root, notes)
         _unmimic_fixed_joints(root, notes)
