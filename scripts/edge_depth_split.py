@@ -30,6 +30,7 @@ import numpy as np
 
 from deburr_drake.cell.edge import make_contour
 from deburr_drake.config.scenario import load_scenario
+from deburr_drake.math import metrics
 from deburr_drake.runs.pass_metrics import TRANSIENT
 
 
@@ -99,19 +100,23 @@ def orientation_lag(logs, contour, scenario, step=1e-5) -> dict:
     }
 
 
-def finish_regions(logs, cutter_radius, entry=5e-3) -> dict:
+def finish_regions(logs, contour, cutter_radius, entry=5e-3) -> dict:
     """The finish bins' RMS error (mm) over the bins the metric judges (the
-    transient's bins left out as ``finish_metrics`` does, without the
-    wrap of a loop's end), split into the first ``entry`` (m) of arc after
-    them and the rest."""
+    transient's bins left out as ``finish_metrics`` does), split into the
+    first ``entry`` (m) of arc after them and the rest."""
     arc, depth = logs["finish.arc"], logs["finish.depth"]
     error = depth - float(logs["meta.desired_depth"])
     t, s = logs["process.t"], logs["process.arc_position"]
     contact = float(logs["meta.contact_start"])
+    L, closed = contour.length, contour.closed
     transient = (t >= contact) & (t <= contact + TRANSIENT)
-    first, last = s[transient][0] - cutter_radius, s[transient].max()
-    judged = ~((arc >= first) & (arc <= last))
-    near = judged & (arc < last + entry)
+    span = s[transient]
+    if closed:
+        span = np.unwrap(span / L * 2 * np.pi) * L / (2 * np.pi)
+    first, last = span[0], span.max()
+    skipped = metrics.arc_span_mask(arc, first - cutter_radius, last, L, closed)
+    near = ~skipped & metrics.arc_span_mask(arc, last, last + entry, L, closed)
+    judged = ~skipped
     return {
         "finish_judged_rms_mm": rms_mm(error[judged]),
         "finish_entry_rms_mm": rms_mm(error[near]),
@@ -168,7 +173,7 @@ def main():
     with np.load(args.out / "logs.npz") as logs:
         logs = dict(logs)
     split = depth_split(logs, contour)
-    split.update(finish_regions(logs, scenario.tool.cutter_radius))
+    split.update(finish_regions(logs, contour, scenario.tool.cutter_radius))
     split.update(orientation_lag(logs, contour, scenario))
     metrics = json.loads((args.out / "metrics.json").read_text())
     split["finish_rms_mm"] = metrics["chamfer_depth_rms_error_mm"]
