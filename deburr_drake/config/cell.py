@@ -185,7 +185,11 @@ class EdgeConfig:
     the one whose normal is nearest ``tool_face`` (a direction in the part
     frame, e.g. [0, 0, 1]: the face looking up), or the one ``tool_rule``
     names (left or right of the edge's own direction; a loop runs
-    counter-clockwise seen from outside; neither given: left), turned by
+    counter-clockwise seen from outside). Neither given, the default: a
+    loop round a cylindrical or conical wall (a hole, a bore, a boss) has
+    the axis along the wall's axis, out of the part, the cutter's side on
+    the wall; any other edge the tool on the face whose outward normal is
+    nearest the world's up. The tool axis is then turned by
     ``tilt`` about the edge and leaned by ``lead`` towards the travel; the
     cutter cuts with its side, ``tool.engagement`` below the edge along the
     axis. ``direction`` +1 runs the edge its own way, -1 the other; the
@@ -224,7 +228,7 @@ class EdgeConfig:
     # m, mesh: the contact band's width into the material, where it fits
     band_width: float = 0.005
     # -, mesh: the tool axis along the left or right face's outward normal
-    # ("": by tool_face, else left)
+    # ("": by tool_face, else the default: a hole's axis or the face up)
     tool_rule: str = ""
     # -, mesh: a direction in the part frame: the tool stands on the face
     # whose outward normal is nearest it ([]: by tool_rule)
@@ -340,20 +344,39 @@ class EdgeConfig:
             near=self.near,
         )
 
+    def mesh_rule(self, pose: PoseConfig):
+        """The ``ToolRule`` of the mesh edge at ``pose``: ``tool_rule``'s
+        face, or the face whose normal is nearest ``tool_face``, or
+        neither given, the default (a hole's axis, else the face looking
+        up: deburr_drake.math.mesh_part.default_tool_rule)."""
+        from deburr_drake.math.edge_contour import face_rule
+        from deburr_drake.math.mesh_part import ToolRule, default_tool_rule
+
+        part, curve, _ = self.mesh_edge(pose)
+        if self.tool_rule:
+            return ToolRule("face", side=self.tool_rule, reason="tool_rule")
+        if self.tool_face:
+            side = face_rule(curve, part.rotation @ self.tool_face)
+            return ToolRule(
+                "face",
+                side=side,
+                reason=f"nearest tool_face {list(self.tool_face)}",
+            )
+        return default_tool_rule(curve.chain)
+
     def mesh_path(self, tool, pose: PoseConfig):
         """The cutter tip's path along the mesh edge of the part at
         ``pose``, an ``EdgeContour`` (ValueError: see it)."""
-        from deburr_drake.math.edge_contour import EdgeContour, face_rule
+        from deburr_drake.math.edge_contour import EdgeContour
 
         part, curve, _ = self.mesh_edge(pose)
-        rule = self.tool_rule or "left"
-        if self.tool_face:
-            rule = face_rule(curve, part.rotation @ self.tool_face)
+        rule = self.mesh_rule(pose)
         return EdgeContour(
             curve,
             cutter_radius=tool.cutter_radius,
             engagement=tool.engagement,
-            rule=rule,
+            rule=rule.kind if rule.kind == "axis" else rule.side,
+            axis=rule.axis or None,
             tilt=self.tilt,
             lead=self.lead,
             direction=self.direction,

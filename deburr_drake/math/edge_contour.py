@@ -57,7 +57,7 @@ __all__ = [
     "load_edge",
 ]
 
-_RULES = ("left", "right")
+_RULES = ("left", "right", "axis")
 # -, the least difference of the two faces' mean cosines to a direction
 # that names one of them (a direction halfway between names neither)
 _FACE_MARGIN = 0.05
@@ -114,7 +114,8 @@ class EdgeContour(Contour):
 
     ``rule`` (left or right: the face whose outward normal the tool axis
     follows, left and right of the chain's own direction, which for a loop
-    runs counter-clockwise seen from outside), ``tilt`` (rad, about the
+    runs counter-clockwise seen from outside; ``axis``: the constant unit
+    direction ``axis``, world, as a hole's), ``tilt`` (rad, about the
     chain's tangent) and ``lead`` (rad, towards the traversal direction)
     set the tool axis as ``EdgeCurve.tool_axis`` does. ``direction`` +1
     runs the chain's own way, -1 the other. The pass starts at
@@ -137,6 +138,7 @@ class EdgeContour(Contour):
         cutter_radius: float,
         engagement: float,
         rule: str = "left",
+        axis=None,
         tilt: float = 0.0,
         lead: float = 0.0,
         direction: int = 1,
@@ -145,6 +147,9 @@ class EdgeContour(Contour):
         spacing: float = 2.5e-4,
     ):
         self._check_arguments(rule, lead, direction, start_fraction)
+        if (rule == "axis") != (axis is not None):
+            raise ValueError("the axis rule takes an axis (and only it does)")
+        self._axis = None if axis is None else _vec3_float(axis, "axis")
         self._curve = curve
         self._r = _finite_scalar(cutter_radius, "cutter_radius")
         self._e = _finite_scalar(engagement, "engagement")
@@ -185,7 +190,9 @@ class EdgeContour(Contour):
         left and right outward normals and the faces' angle."""
         curve = self._curve
         f = curve.frame(u)
-        axis = curve.tool_axis(u, rule=self._rule, tilt=self._tilt)
+        axis = curve.tool_axis(
+            u, rule=self._rule, tilt=self._tilt, axis=self._axis
+        )
         axis = (
             math.cos(self._lead) * axis + math.sin(self._lead) * self._d * f.n2
         )

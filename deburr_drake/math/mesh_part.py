@@ -44,13 +44,22 @@ __all__ = [
     "load_part",
     "sharp_edges",
     "choose_edge",
+    "UP",
+    "ToolRule",
+    "EdgeSummary",
+    "wall_axis",
+    "hole_axis",
+    "default_tool_rule",
+    "rule_axes",
+    "open_side",
+    "describe_edges",
 ]
 
 
 _MESH_TYPES = {".stl": "stl", ".obj": "obj"}
 _STEP_TYPES = {".step", ".stp"}
 _DEFAULT_SHARP_ANGLE = math.radians(30.0)
-_TOOL_RULES = ("left", "right", "bisector")
+_TOOL_RULES = ("left", "right", "bisector", "axis")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -342,15 +351,60 @@ def sharp_edges(part: MeshPart, *, min_angle: float = _DEFAULT_SHARP_ANGLE):
                 i = lookup[(q, p)]
                 left.append(right_of_ab[i])
                 right.append(left_of_ab[i])
-        chain = EdgeChain(
-            mesh.vertices[path].copy(),
-            normals[left].copy(),
-            normals[right].copy(),
-            closed,
-        )
-        chains.append(_canonical(chain))
+        left, right = np.array(left), np.array(right)
+        if part.face_tags is not None:
+            corners = _tag_changes(part.face_tags, left, right)
+        else:
+            corners = _normal_jumps(normals, left, right, min_angle)
+        for piece, is_loop in _split(len(path), closed, corners):
+            chain = EdgeChain(
+                mesh.vertices[[path[k] for k in piece]].copy(),
+                normals[left[piece[:-1] if not is_loop else piece]].copy(),
+                normals[right[piece[:-1] if not is_loop else piece]].copy(),
+                is_loop,
+            )
+            chains.append(_canonical(chain))
     chains.sort(key=lambda c: -c.length)
     return chains
+
+
+def _normal_jumps(normals, left, right, min_angle):
+    """Per segment k: True where the face left or right of segment k is
+    another face than that of segment k - 1 (their normals more than
+    ``min_angle`` apart): a third face meets the edge there."""
+    cos = math.cos(min_angle)
+    turn_left = np.sum(normals[left] * normals[np.roll(left, 1)], axis=1)
+    turn_right = np.sum(normals[right] * normals[np.roll(right, 1)], axis=1)
+    return (turn_left < cos) | (turn_right < cos)
+
+
+def _tag_changes(tags, left, right):
+    """As ``_normal_jumps``, by the CAD faces of a STEP part."""
+    return (tags[left] != tags[np.roll(left, 1)]) | (
+        tags[right] != tags[np.roll(right, 1)]
+    )
+
+
+def _split(n_points, closed, corners):
+    """A walk's vertex positions 0..n_points-1 cut at its corners
+    (``corners[k]``: segment k starts on another face pair than segment
+    k - 1, so vertex k is a corner): (positions, is a loop) per piece. A
+    loop with no corner stays one; an open walk's first flag is
+    meaningless (it has no segment before it)."""
+    n_segments = n_points if closed else n_points - 1
+    cuts = [k for k in range(n_segments) if corners[k]]
+    if not closed:
+        cuts = [k for k in cuts if k > 0]
+        bounds = [0, *cuts, n_points - 1]
+        return [
+            (list(range(a, b + 1)), False) for a, b in zip(bounds, bounds[1:])
+        ]
+    if not cuts:
+        return [(list(range(n_points)), True)]
+    pieces = []
+    for a, b in zip(cuts, cuts[1:] + [cuts[0] + n_points]):
+        pieces.append(([k % n_points for k in range(a, b + 1)], False))
+    return pieces
 
 
 def _canonical(chain):
@@ -489,6 +543,7 @@ class EdgeCurve:
         normal_window: float = 1.0e-3,
     ):
         self.closed = chain.closed
+        self.chain = chain
         points, parent = _densify(chain.points, chain.closed)
         data = np.vstack([points, points[:1]]) if self.closed else points
         chord = np.linalg.norm(np.diff(data, axis=0), axis=1)
@@ -583,11 +638,12 @@ class EdgeCurve:
         angle = np.where(convex, math.pi - between, math.pi + between)
         return ChamferFrame(self.point(u), n1, n2, left, right, angle, convex)
 
-    def tool_axis(self, u, *, rule="bisector", lead=0.0, tilt=0.0):
+    def tool_axis(self, u, *, rule="bisector", lead=0.0, tilt=0.0, axis=None):
         """The tool's axis at u: a unit vector out of the part (from the
         cutter's tip towards its holder). ``rule``: ``left`` or ``right``
-        (along that face's normal) or ``bisector`` (-n1, between the two
-        normals). Then ``tilt`` (rad) turns it about n2 (right hand) and
+        (along that face's normal), ``bisector`` (-n1, between the two
+        normals) or ``axis`` (the constant unit direction ``axis``, world:
+        a hole's). Then ``tilt`` (rad) turns it about n2 (right hand) and
         ``lead`` (rad) leans it towards n2 (the holder ahead of the tip)."""
         if rule not in _TOOL_RULES:
             raise ValueError(
@@ -595,11 +651,17 @@ class EdgeCurve:
                 f"{', '.join(_TOOL_RULES)}"
             )
         frame = self.frame(u)
-        base = {
-            "left": frame.left_normal,
-            "right": frame.right_normal,
-            "bisector": -frame.n1,
-        }[rule]
+        if rule == "axis":
+            base = np.broadcast_to(
+                np.asarray(axis, float) / np.linalg.norm(axis),
+                frame.n2.shape,
+            )
+        else:
+            base = {
+                "left": frame.left_normal,
+                "right": frame.right_normal,
+                "bisector": -frame.n1,
+            }[rule]
         t = frame.n2
         side = np.cross(t, base)
         axis = math.cos(tilt) * base + math.sin(tilt) * side
@@ -617,3 +679,254 @@ class EdgeCurve:
             step = (r @ d1) / (d1 @ d1 + r @ d2)
             u0 = float(self._u(u0 - step))
         return u0
+
+
+#: The part's up (world): the default tool rule stands the tool on the
+#: face whose outward normal is nearest it.
+UP = np.array([0.0, 0.0, 1.0])
+# -, the wall's normals' spread about the fitted axis (the square root of
+# the least eigenvalue of their scatter) below which a face is a cylinder
+# or cone about it: the facets of a 160-sided hole give 1e-3
+_WALL_RESIDUAL = 0.05
+# -, the scatter's middle eigenvalue above which the normals go round the
+# axis (a full turn of a cylinder gives 0.5, a 45-degree cone's 0.25; an
+# arc of a pipe's wall beside a small hole much less)
+_WALL_SPREAD = 0.05
+# m, how far off the edge the open-side rays start (out of the material,
+# along the tool axis), so that they miss the edge's own two faces
+_RAY_OFFSET = 5.0e-4
+# rays cast per edge (at most one per segment)
+_RAY_COUNT = 48
+
+
+@dataclasses.dataclass(frozen=True)
+class ToolRule:
+    """How the tool axis is set along an edge.
+
+    ``kind`` ``face``: along the outward normal of the face ``side`` (left
+    or right of the chain's direction) stands on; ``axis``: the constant
+    unit direction ``axis`` (world; a hole's axis, out of the part).
+    ``reason`` says, in a few words, why this rule."""
+
+    kind: str
+    side: str = ""
+    axis: tuple = ()
+    reason: str = ""
+
+    def describe(self) -> str:
+        """One line: the rule and why."""
+        if self.kind == "axis":
+            a = ", ".join(f"{x:.3f}" for x in self.axis)
+            return f"tool axis along [{a}] ({self.reason})"
+        return f"tool on the {self.side} face ({self.reason})"
+
+
+def _weights(chain):
+    return np.linalg.norm(chain.segments, axis=1)
+
+
+def wall_axis(chain: EdgeChain, side: str):
+    """(axis, residual, spread): the unit axis of a cylinder or cone
+    fitted to the outward normals of the face on ``side`` (left or right)
+    of the loop ``chain``: the normals of such a face keep one angle to
+    its axis, so they lie on a plane's circle on the unit sphere and the
+    axis is the least eigenvector of their (length-weighted) scatter.
+    ``residual``: the normals' spread off that circle (0 on an exact
+    cylinder or cone); ``spread``: the scatter's middle eigenvalue (how
+    far the normals go round). The axis' sign is not set."""
+    normals = chain.left_normals if side == "left" else chain.right_normals
+    w = _weights(chain)
+    w = w / w.sum()
+    mean = w @ normals
+    d = normals - mean
+    scatter = (w[:, None] * d).T @ d
+    values, vectors = np.linalg.eigh(scatter)
+    return (
+        vectors[:, 0],
+        math.sqrt(max(values[0], 0.0)),
+        float(values[1]),
+    )
+
+
+def hole_axis(chain: EdgeChain):
+    """(the unit axis out of the part, the wall's side) when ``chain`` is
+    a loop round a cylindrical or conical wall (a hole, a bore, a boss),
+    else None. The axis is fitted from the wall's normals (``wall_axis``)
+    and points to the side the other face looks to (out of the hole)."""
+    if not chain.closed:
+        return None
+    fits = []
+    for side in ("left", "right"):
+        axis, residual, spread = wall_axis(chain, side)
+        if residual < _WALL_RESIDUAL and spread > _WALL_SPREAD:
+            fits.append((residual, side, axis))
+    if not fits:
+        return None
+    _, side, axis = min(fits, key=lambda fit: fit[0])
+    w = _weights(chain)
+    out = w @ (chain.left_normals + chain.right_normals)
+    if axis @ out < 0.0:
+        axis = -axis
+    return axis, side
+
+
+def default_tool_rule(chain: EdgeChain, up=UP) -> ToolRule:
+    """The tool rule that needs no guess: on a loop round a cylindrical or
+    conical wall (a hole, in a flat or curved face, drilled along its
+    face's normal or not), the axis along the wall (``hole_axis``), the
+    cutter's side on the wall; else the tool on the face whose outward
+    normal is nearest ``up`` (world) on average along the edge (where
+    both are as near, the left one)."""
+    hole = hole_axis(chain)
+    if hole is not None:
+        axis, side = hole
+        return ToolRule(
+            "axis",
+            axis=tuple(float(x) for x in axis),
+            reason=f"a loop round a cylindrical wall ({side} of the chain): "
+            "the wall's axis",
+        )
+    w = _weights(chain)
+    up = np.asarray(up, float) / np.linalg.norm(up)
+    near_left = float(w @ (chain.left_normals @ up)) / w.sum()
+    near_right = float(w @ (chain.right_normals @ up)) / w.sum()
+    side = "left" if near_left >= near_right else "right"
+    return ToolRule(
+        "face",
+        side=side,
+        reason="the face whose outward normal is nearest up "
+        f"(cosines {near_left:.2f} left, {near_right:.2f} right)",
+    )
+
+
+def rule_axes(chain: EdgeChain, rule: ToolRule):
+    """The tool axis (unit, world) on each segment of ``chain`` by
+    ``rule``, untilted."""
+    if rule.kind == "axis":
+        return np.tile(np.asarray(rule.axis, float), (len(chain.segments), 1))
+    normals = chain.left_normals if rule.side == "left" else chain.right_normals
+    return normals.copy()
+
+
+@dataclasses.dataclass(frozen=True)
+class EdgeSummary:
+    """One edge chain of a part, as ``deburr-drake edges`` lists it.
+
+    ``index`` (in ``sharp_edges``' order), ``closed`` (a loop),
+    ``length`` (m), ``dihedral`` (rad, least and greatest angle between
+    the two faces' outward normals), ``convex`` (True, False; None where
+    it is both along the chain), ``point`` (m, world: the middle
+    vertex), ``rule`` (``default_tool_rule``), ``reachable`` and, if not,
+    ``blocked`` (why, one phrase)."""
+
+    index: int
+    closed: bool
+    length: float
+    dihedral: tuple
+    convex: bool | None
+    point: np.ndarray
+    rule: ToolRule
+    reachable: bool
+    blocked: str = ""
+
+
+def _convexity(chain):
+    t = chain.segments / np.linalg.norm(chain.segments, axis=1)[:, None]
+    sign = np.sum(t * np.cross(chain.left_normals, chain.right_normals), 1)
+    if np.all(sign > 0.0):
+        return True
+    if np.all(sign < 0.0):
+        return False
+    return None
+
+
+def open_side(part: MeshPart, chain: EdgeChain, rule: ToolRule, up=UP):
+    """'' when the tool can reach ``chain`` from the part's open side, else
+    why not. The rule: (1) the part stands on its lowest point along
+    ``up`` (a table, a fixture): an edge there is not reachable; (2) at
+    up to ``_RAY_COUNT`` points along the edge a ray along the tool axis
+    of ``rule`` (from the cutter's tip towards its holder), started just
+    off the edge out of the material, must leave the part without
+    meeting it: the holder and the spindle stand in free space."""
+    up = np.asarray(up, float) / np.linalg.norm(up)
+    base = float(np.min(part.mesh.vertices @ up))
+    scale = float(part.mesh.scale)
+    heights = chain.points @ up - base
+    if np.max(heights) < 1e-6 * scale + 1e-9:
+        return "on the part's base (it stands on it)"
+    axes = rule_axes(chain, rule)
+    n = len(chain.segments)
+    pick = np.unique(np.linspace(0, n - 1, min(n, _RAY_COUNT)).astype(int))
+    ends = np.roll(chain.points, -1, axis=0) if chain.closed else None
+    if ends is None:
+        ends = chain.points[1:]
+    middle = 0.5 * (chain.points[: len(ends)] + ends)[pick]
+    outward = chain.left_normals[pick] + chain.right_normals[pick]
+    outward /= np.linalg.norm(outward, axis=1)[:, None]
+    origins = middle + _RAY_OFFSET * (outward + axes[pick])
+    hits = _rays_hit(part.mesh.triangles, origins, axes[pick])
+    if not np.any(hits):
+        return ""
+    where = middle[int(np.flatnonzero(hits)[0])]
+    share = float(np.mean(hits))
+    return (
+        f"the part is in the way along the tool axis at {share:.0%} of it "
+        f"(first at [{where[0]:.4f}, {where[1]:.4f}, {where[2]:.4f}] m)"
+    )
+
+
+def _rays_hit(triangles, origins, directions):
+    """Per ray: whether it meets any of the triangles (T x 3 x 3) ahead of
+    its origin (Moller-Trumbore, all pairs at once: rtree is not
+    needed for the few rays an edge casts)."""
+    a = triangles[:, 0]
+    e1 = triangles[:, 1] - a
+    e2 = triangles[:, 2] - a
+    hit = np.zeros(len(origins), bool)
+    for k, (o, d) in enumerate(zip(origins, directions)):
+        p = np.cross(d, e2)
+        det = np.einsum("ij,ij->i", e1, p)
+        ok = np.abs(det) > 1e-18
+        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        t_vec = o - a
+        u = np.einsum("ij,ij->i", t_vec, p) * inv
+        q = np.cross(t_vec, e1)
+        v = (q @ d) * inv
+        t = np.einsum("ij,ij->i", e2, q) * inv
+        inside = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+        hit[k] = bool(np.any(inside))
+    return hit
+
+
+def _middle(chain):
+    """m: the chain's point half its length along it."""
+    lengths = np.linalg.norm(chain.segments, axis=1)
+    k = int(np.searchsorted(np.cumsum(lengths), 0.5 * lengths.sum()))
+    k = min(k, len(lengths) - 1)
+    before = float(np.sum(lengths[:k]))
+    t = (0.5 * lengths.sum() - before) / max(lengths[k], 1e-300)
+    return chain.points[k] + t * chain.segments[k]
+
+
+def describe_edges(part: MeshPart, chains, up=UP):
+    """An ``EdgeSummary`` of each chain of ``part`` (``sharp_edges``)."""
+    out = []
+    for index, chain in enumerate(chains):
+        cos = np.sum(chain.left_normals * chain.right_normals, axis=1)
+        dihedral = np.arccos(np.clip(cos, -1.0, 1.0))
+        rule = default_tool_rule(chain, up)
+        blocked = open_side(part, chain, rule, up)
+        out.append(
+            EdgeSummary(
+                index=index,
+                closed=chain.closed,
+                length=chain.length,
+                dihedral=(float(dihedral.min()), float(dihedral.max())),
+                convex=_convexity(chain),
+                point=_middle(chain),
+                rule=rule,
+                reachable=not blocked,
+                blocked=blocked,
+            )
+        )
+    return out
