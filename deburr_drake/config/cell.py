@@ -354,13 +354,16 @@ class EdgeConfig:
 
         part, curve, _ = self.mesh_edge(pose)
         if self.tool_rule:
-            return ToolRule("face", side=self.tool_rule, reason="tool_rule")
+            return ToolRule(
+                "face", side=self.tool_rule, reason="part.edge.tool_rule"
+            )
         if self.tool_face:
             side = face_rule(curve, part.rotation @ self.tool_face)
             return ToolRule(
                 "face",
                 side=side,
-                reason=f"nearest tool_face {list(self.tool_face)}",
+                reason="its normal nearest part.edge.tool_face "
+                f"{list(self.tool_face)}",
             )
         return default_tool_rule(curve.chain)
 
@@ -377,6 +380,7 @@ class EdgeConfig:
             engagement=tool.engagement,
             rule=rule.kind if rule.kind == "axis" else rule.side,
             axis=rule.axis or None,
+            rule_note=rule.reason,
             tilt=self.tilt,
             lead=self.lead,
             direction=self.direction,
@@ -411,7 +415,7 @@ class EdgeConfig:
             "is in metres, in the part's frame, not the world's)",
         )
         try:
-            self.mesh_path(tool, pose)
+            path = self.mesh_path(tool, pose)
         except ValueError as e:
             message = str(e)
             field, value = "part.edge.tilt", self.tilt
@@ -424,6 +428,38 @@ class EdgeConfig:
             raise ConfigError(
                 f"{field} = {value!r} is invalid: {message}"
             ) from None
+        self._check_spindle(part, path, tool, pose)
+
+    def _rule_field(self):
+        """(the field that set the tool rule, its value)."""
+        if self.tool_rule:
+            return "part.edge.tool_rule", self.tool_rule
+        if self.tool_face:
+            return "part.edge.tool_face", self.tool_face
+        if self.tilt:
+            return "part.edge.tilt", self.tilt
+        return "part.edge.tool_face", self.tool_face
+
+    def _check_spindle(self, part, path, tool, pose):
+        """One ConfigError naming the field that set the tool axis when
+        the spindle, along the axis beyond the cutter, stands in the part
+        (deburr_drake.math.mesh_part.spindle_hits): the tool stands on a
+        face it cannot stand on (its axis points across the part)."""
+        from deburr_drake.math.edge_contour import spindle_clash
+
+        clash = spindle_clash(
+            part, path, tool.cutter_radius, tool.cutter_length
+        )
+        if not clash:
+            return
+        field, value = self._rule_field()
+        rule = self.mesh_rule(pose).describe()
+        raise ConfigError(
+            f"{field} = {value!r} is invalid: with {rule} {clash}: the axis "
+            "points across the part, not out of its open side; allowed "
+            "the face the tool can stand on (part.edge.tool_face, e.g. "
+            "[0, 0, 1], or neither tool_face nor tool_rule: the default)"
+        )
 
     def check_profile(self, pose, band, tool, part_error):
         """One ConfigError naming the field if the profile, the cutter's

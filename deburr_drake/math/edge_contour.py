@@ -47,6 +47,8 @@ from deburr_drake.math.mesh_part import (
     choose_edge,
     load_part,
     sharp_edges,
+    spindle_hits,
+    surface_points,
 )
 
 __all__ = [
@@ -55,6 +57,7 @@ __all__ = [
     "chamfer_area_ratio",
     "face_rule",
     "load_edge",
+    "spindle_clash",
 ]
 
 _RULES = ("left", "right", "axis")
@@ -139,6 +142,7 @@ class EdgeContour(Contour):
         engagement: float,
         rule: str = "left",
         axis=None,
+        rule_note: str = "",
         tilt: float = 0.0,
         lead: float = 0.0,
         direction: int = 1,
@@ -150,6 +154,7 @@ class EdgeContour(Contour):
         if (rule == "axis") != (axis is not None):
             raise ValueError("the axis rule takes an axis (and only it does)")
         self._axis = None if axis is None else _vec3_float(axis, "axis")
+        self._rule_note = rule_note
         self._curve = curve
         self._r = _finite_scalar(cutter_radius, "cutter_radius")
         self._e = _finite_scalar(engagement, "engagement")
@@ -362,6 +367,20 @@ class EdgeContour(Contour):
         # world z onto the start's axis: the task frame at the start
         self._task0 = minimal_rotation(np.array([0.0, 0.0, 1.0]), self._a0)
         self._last_s = 0.0
+
+    def describe_rule(self) -> str:
+        """One line: the tool rule this path was built with (and
+        ``rule_note``: why), its tilt and lead."""
+        if self._rule == "axis":
+            a = ", ".join(f"{x:.3f}" for x in self._axis)
+            what = f"the tool axis along [{a}] (world)"
+        else:
+            what = f"the tool on the {self._rule} face"
+        note = f" ({self._rule_note})" if self._rule_note else ""
+        return (
+            f"tool rule: {what}{note}, tilt {self._tilt:g} rad, lead "
+            f"{self._lead:g} rad"
+        )
 
     # ----- evaluation -----
     def _clamp(self, s):
@@ -668,6 +687,32 @@ def face_rule(curve: EdgeCurve, direction) -> str:
             "the face the tool stands on more nearly"
         )
     return "left" if near_left > near_right else "right"
+
+
+def spindle_clash(
+    part: MeshPart, path: EdgeContour, cutter_radius, cutter_length
+) -> str:
+    """'' when along ``path`` (48 stations) the spindle beyond the
+    cutter stands clear of ``part`` (``spindle_hits``), else where it
+    does not, in a phrase."""
+    stations = path.stations(path.length / 48)
+    hits = spindle_hits(
+        surface_points(part),
+        stations.points,
+        stations.n1,
+        stations.axis,
+        cutter_radius=cutter_radius,
+        cutter_length=cutter_length,
+    )
+    if not np.any(hits):
+        return ""
+    k = int(np.flatnonzero(hits)[0])
+    a = ", ".join(f"{x:.3f}" for x in stations.axis[k])
+    return (
+        f"the spindle stands in the part at {np.mean(hits):.0%} of the edge "
+        f"(first at arc position {stations.arc[k] * 1e3:.1f} mm, the tool "
+        f"axis along [{a}])"
+    )
 
 
 @functools.lru_cache(maxsize=8)

@@ -52,6 +52,11 @@ __all__ = [
     "default_tool_rule",
     "rule_axes",
     "open_side",
+    "surface_points",
+    "spindle_hits",
+    "CUTTER_RADIUS",
+    "CUTTER_LENGTH",
+    "HOLDER_RADIUS",
     "describe_edges",
 ]
 
@@ -692,11 +697,17 @@ _WALL_RESIDUAL = 0.05
 # axis (a full turn of a cylinder gives 0.5, a 45-degree cone's 0.25; an
 # arc of a pipe's wall beside a small hole much less)
 _WALL_SPREAD = 0.05
-# m, how far off the edge the open-side rays start (out of the material,
-# along the tool axis), so that they miss the edge's own two faces
-_RAY_OFFSET = 5.0e-4
-# rays cast per edge (at most one per segment)
-_RAY_COUNT = 48
+#: The tool as the open-side check sees it (m): the cutter (radius and
+#: length along its axis from the edge) and beyond it the spindle's nose,
+#: a cylinder of ``HOLDER_RADIUS`` round the axis; the part's surface must
+#: keep out of the spindle's cylinder.
+CUTTER_RADIUS = 0.003
+CUTTER_LENGTH = 0.020
+HOLDER_RADIUS = 0.020
+# stations per edge the open-side check looks at (at most one per segment)
+_STATIONS = 48
+# points sampled (seeded) on the part's surface, area-weighted, for it
+_SURFACE_SAMPLES = 20000
 
 
 @dataclasses.dataclass(frozen=True)
@@ -717,8 +728,8 @@ class ToolRule:
         """One line: the rule and why."""
         if self.kind == "axis":
             a = ", ".join(f"{x:.3f}" for x in self.axis)
-            return f"tool axis along [{a}] ({self.reason})"
-        return f"tool on the {self.side} face ({self.reason})"
+            return f"the tool axis along [{a}] ({self.reason})"
+        return f"the tool on the {self.side} face ({self.reason})"
 
 
 def _weights(chain):
@@ -783,8 +794,8 @@ def default_tool_rule(chain: EdgeChain, up=UP) -> ToolRule:
         return ToolRule(
             "axis",
             axis=tuple(float(x) for x in axis),
-            reason=f"a loop round a cylindrical wall ({side} of the chain): "
-            "the wall's axis",
+            reason=f"the default: a loop round a cylindrical wall ({side} "
+            "of the chain), the tool along its axis",
         )
     w = _weights(chain)
     up = np.asarray(up, float) / np.linalg.norm(up)
@@ -794,7 +805,7 @@ def default_tool_rule(chain: EdgeChain, up=UP) -> ToolRule:
     return ToolRule(
         "face",
         side=side,
-        reason="the face whose outward normal is nearest up "
+        reason="the default: the face whose outward normal is nearest up "
         f"(cosines {near_left:.2f} left, {near_right:.2f} right)",
     )
 
@@ -840,62 +851,100 @@ def _convexity(chain):
     return None
 
 
-def open_side(part: MeshPart, chain: EdgeChain, rule: ToolRule, up=UP):
+def surface_points(part: MeshPart, count=_SURFACE_SAMPLES):
+    """m, world: the part's vertices and ``count`` points spread over its
+    surface by area (seeded): what the spindle must keep clear of."""
+    rng = np.random.default_rng(0)
+    mesh = part.mesh
+    area = mesh.area_faces / mesh.area_faces.sum()
+    faces = rng.choice(len(area), size=count, p=area)
+    r = rng.random((count, 2))
+    flip = r.sum(axis=1) > 1.0
+    r[flip] = 1.0 - r[flip]
+    tri = mesh.triangles[faces]
+    inside = (
+        tri[:, 0]
+        + r[:, :1] * (tri[:, 1] - tri[:, 0])
+        + r[:, 1:] * (tri[:, 2] - tri[:, 0])
+    )
+    return np.vstack([mesh.vertices, inside])
+
+
+def spindle_hits(
+    surface,
+    points,
+    n1,
+    axes,
+    *,
+    cutter_radius=CUTTER_RADIUS,
+    cutter_length=CUTTER_LENGTH,
+    holder_radius=HOLDER_RADIUS,
+):
+    """Per station (rows of ``points`` on the edge, ``n1`` into the
+    material, the tool ``axes``, unit, world): whether any of the part's
+    ``surface`` points (``surface_points``) lies in the spindle: farther
+    than ``cutter_length`` from the edge along the axis and within
+    ``holder_radius`` of the axis (the line through the cutter's centre,
+    ``cutter_radius`` off the edge against n1). The cutter itself cuts
+    the part; the spindle beyond it must stand in free space."""
+    hits = np.zeros(len(points), bool)
+    for k, (p, n, a) in enumerate(zip(points, n1, axes)):
+        d = surface - (p - cutter_radius * n)
+        along = d @ a
+        near = along > cutter_length
+        if not np.any(near):
+            continue
+        radial = d[near] - along[near, None] * a
+        hits[k] = bool(
+            np.any(np.einsum("ij,ij->i", radial, radial) < holder_radius**2)
+        )
+    return hits
+
+
+def _rule_n1(chain, axes):
+    """n1 along ``chain`` for tool ``axes`` (one per segment): normal to
+    the axis and the tangent, into the material."""
+    t = chain.segments / np.linalg.norm(chain.segments, axis=1)[:, None]
+    side = np.cross(t, axes)
+    side /= np.maximum(np.linalg.norm(side, axis=1), 1e-12)[:, None]
+    into = -(chain.left_normals + chain.right_normals)
+    return side * np.where(np.sum(side * into, 1) >= 0.0, 1.0, -1.0)[:, None]
+
+
+def open_side(
+    part: MeshPart, chain: EdgeChain, rule: ToolRule, up=UP, surface=None
+):
     """'' when the tool can reach ``chain`` from the part's open side, else
-    why not. The rule: (1) the part stands on its lowest point along
-    ``up`` (a table, a fixture): an edge there is not reachable; (2) at
-    up to ``_RAY_COUNT`` points along the edge a ray along the tool axis
-    of ``rule`` (from the cutter's tip towards its holder), started just
-    off the edge out of the material, must leave the part without
-    meeting it: the holder and the spindle stand in free space."""
+    why not. The rule: (1) the part stands on its lowest points along
+    ``up`` (a table, a fixture): an edge all on them is not reachable;
+    (2) at up to 48 stations along the edge, with the tool axis of
+    ``rule``, the spindle (``spindle_hits``: beyond the cutter's
+    ``CUTTER_LENGTH``, within ``HOLDER_RADIUS`` of the axis) holds none
+    of the part's surface."""
     up = np.asarray(up, float) / np.linalg.norm(up)
     base = float(np.min(part.mesh.vertices @ up))
     scale = float(part.mesh.scale)
-    heights = chain.points @ up - base
-    if np.max(heights) < 1e-6 * scale + 1e-9:
+    if np.max(chain.points @ up - base) < 1e-6 * scale + 1e-9:
         return "on the part's base (it stands on it)"
     axes = rule_axes(chain, rule)
     n = len(chain.segments)
-    pick = np.unique(np.linspace(0, n - 1, min(n, _RAY_COUNT)).astype(int))
+    pick = np.unique(np.linspace(0, n - 1, min(n, _STATIONS)).astype(int))
     ends = np.roll(chain.points, -1, axis=0) if chain.closed else None
     if ends is None:
         ends = chain.points[1:]
     middle = 0.5 * (chain.points[: len(ends)] + ends)[pick]
-    outward = chain.left_normals[pick] + chain.right_normals[pick]
-    outward /= np.linalg.norm(outward, axis=1)[:, None]
-    origins = middle + _RAY_OFFSET * (outward + axes[pick])
-    hits = _rays_hit(part.mesh.triangles, origins, axes[pick])
+    surface = surface_points(part) if surface is None else surface
+    hits = spindle_hits(
+        surface, middle, _rule_n1(chain, axes)[pick], axes[pick]
+    )
     if not np.any(hits):
         return ""
     where = middle[int(np.flatnonzero(hits)[0])]
-    share = float(np.mean(hits))
     return (
-        f"the part is in the way along the tool axis at {share:.0%} of it "
-        f"(first at [{where[0]:.4f}, {where[1]:.4f}, {where[2]:.4f}] m)"
+        f"the spindle along the tool axis meets the part at {np.mean(hits):.0%}"
+        f" of the edge (first at [{where[0]:.4f}, {where[1]:.4f}, "
+        f"{where[2]:.4f}] m, world)"
     )
-
-
-def _rays_hit(triangles, origins, directions):
-    """Per ray: whether it meets any of the triangles (T x 3 x 3) ahead of
-    its origin (Moller-Trumbore, all pairs at once: rtree is not
-    needed for the few rays an edge casts)."""
-    a = triangles[:, 0]
-    e1 = triangles[:, 1] - a
-    e2 = triangles[:, 2] - a
-    hit = np.zeros(len(origins), bool)
-    for k, (o, d) in enumerate(zip(origins, directions)):
-        p = np.cross(d, e2)
-        det = np.einsum("ij,ij->i", e1, p)
-        ok = np.abs(det) > 1e-18
-        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-        t_vec = o - a
-        u = np.einsum("ij,ij->i", t_vec, p) * inv
-        q = np.cross(t_vec, e1)
-        v = (q @ d) * inv
-        t = np.einsum("ij,ij->i", e2, q) * inv
-        inside = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
-        hit[k] = bool(np.any(inside))
-    return hit
 
 
 def _middle(chain):
@@ -911,11 +960,12 @@ def _middle(chain):
 def describe_edges(part: MeshPart, chains, up=UP):
     """An ``EdgeSummary`` of each chain of ``part`` (``sharp_edges``)."""
     out = []
+    surface = surface_points(part)
     for index, chain in enumerate(chains):
         cos = np.sum(chain.left_normals * chain.right_normals, axis=1)
         dihedral = np.arccos(np.clip(cos, -1.0, 1.0))
         rule = default_tool_rule(chain, up)
-        blocked = open_side(part, chain, rule, up)
+        blocked = open_side(part, chain, rule, up, surface)
         out.append(
             EdgeSummary(
                 index=index,

@@ -56,8 +56,14 @@ def test_the_face_looking_up_is_the_top_face_either_way(tube_file):
 def test_left_and_right_still_pick_by_the_chains_direction(tube_file):
     right = load_scenario(tube_file, text="part: {edge: {tool_rule: right}}")
     np.testing.assert_allclose(_axis(right), [0, 0, 1], atol=1e-6)
-    left = load_scenario(tube_file, text="part: {edge: {tool_rule: left}}")
-    assert _axis(left)[2] < 0.5  # the bore's wall's normal
+    # left is the bore's wall: the tool would lie across the bore, its
+    # spindle in the far wall; refused for that, not for reach
+    with pytest.raises(
+        ConfigError, match=r"^part.edge.tool_rule = 'left' is invalid: "
+    ) as refused:
+        load_scenario(tube_file, text="part: {edge: {tool_rule: left}}")
+    assert "the spindle stands in the part" in str(refused.value)
+    assert "reach" not in str(refused.value)
 
 
 def test_the_default_on_a_bore_is_the_bores_axis(tube_file):
