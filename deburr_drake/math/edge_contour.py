@@ -47,6 +47,7 @@ from deburr_drake.math.mesh_part import (
     choose_edge,
     load_part,
     sharp_edges,
+    shown_direction,
     spindle_hits,
     surface_points,
 )
@@ -372,8 +373,7 @@ class EdgeContour(Contour):
         """One line: the tool rule this path was built with (and
         ``rule_note``: why), its tilt and lead."""
         if self._rule == "axis":
-            a = ", ".join(f"{x:.3f}" for x in self._axis)
-            what = f"the tool axis along [{a}] (world)"
+            what = f"the tool axis along {shown_direction(self._axis)} (world)"
         else:
             what = f"the tool on the {self._rule} face"
         note = f" ({self._rule_note})" if self._rule_note else ""
@@ -707,11 +707,10 @@ def spindle_clash(
     if not np.any(hits):
         return ""
     k = int(np.flatnonzero(hits)[0])
-    a = ", ".join(f"{x:.3f}" for x in stations.axis[k])
     return (
         f"the spindle stands in the part at {np.mean(hits):.0%} of the edge "
         f"(first at arc position {stations.arc[k] * 1e3:.1f} mm, the tool "
-        f"axis along [{a}])"
+        f"axis along {shown_direction(stations.axis[k])})"
     )
 
 

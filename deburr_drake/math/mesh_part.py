@@ -58,6 +58,7 @@ __all__ = [
     "CUTTER_LENGTH",
     "HOLDER_RADIUS",
     "describe_edges",
+    "shown_direction",
 ]
 
 
@@ -356,60 +357,15 @@ def sharp_edges(part: MeshPart, *, min_angle: float = _DEFAULT_SHARP_ANGLE):
                 i = lookup[(q, p)]
                 left.append(right_of_ab[i])
                 right.append(left_of_ab[i])
-        left, right = np.array(left), np.array(right)
-        if part.face_tags is not None:
-            corners = _tag_changes(part.face_tags, left, right)
-        else:
-            corners = _normal_jumps(normals, left, right, min_angle)
-        for piece, is_loop in _split(len(path), closed, corners):
-            chain = EdgeChain(
-                mesh.vertices[[path[k] for k in piece]].copy(),
-                normals[left[piece[:-1] if not is_loop else piece]].copy(),
-                normals[right[piece[:-1] if not is_loop else piece]].copy(),
-                is_loop,
-            )
-            chains.append(_canonical(chain))
+        chain = EdgeChain(
+            mesh.vertices[path].copy(),
+            normals[left].copy(),
+            normals[right].copy(),
+            closed,
+        )
+        chains.append(_canonical(chain))
     chains.sort(key=lambda c: -c.length)
     return chains
-
-
-def _normal_jumps(normals, left, right, min_angle):
-    """Per segment k: True where the face left or right of segment k is
-    another face than that of segment k - 1 (their normals more than
-    ``min_angle`` apart): a third face meets the edge there."""
-    cos = math.cos(min_angle)
-    turn_left = np.sum(normals[left] * normals[np.roll(left, 1)], axis=1)
-    turn_right = np.sum(normals[right] * normals[np.roll(right, 1)], axis=1)
-    return (turn_left < cos) | (turn_right < cos)
-
-
-def _tag_changes(tags, left, right):
-    """As ``_normal_jumps``, by the CAD faces of a STEP part."""
-    return (tags[left] != tags[np.roll(left, 1)]) | (
-        tags[right] != tags[np.roll(right, 1)]
-    )
-
-
-def _split(n_points, closed, corners):
-    """A walk's vertex positions 0..n_points-1 cut at its corners
-    (``corners[k]``: segment k starts on another face pair than segment
-    k - 1, so vertex k is a corner): (positions, is a loop) per piece. A
-    loop with no corner stays one; an open walk's first flag is
-    meaningless (it has no segment before it)."""
-    n_segments = n_points if closed else n_points - 1
-    cuts = [k for k in range(n_segments) if corners[k]]
-    if not closed:
-        cuts = [k for k in cuts if k > 0]
-        bounds = [0, *cuts, n_points - 1]
-        return [
-            (list(range(a, b + 1)), False) for a, b in zip(bounds, bounds[1:])
-        ]
-    if not cuts:
-        return [(list(range(n_points)), True)]
-    pieces = []
-    for a, b in zip(cuts, cuts[1:] + [cuts[0] + n_points]):
-        pieces.append(([k % n_points for k in range(a, b + 1)], False))
-    return pieces
 
 
 def _canonical(chain):
@@ -710,6 +666,11 @@ _STATIONS = 48
 _SURFACE_SAMPLES = 20000
 
 
+def shown_direction(v) -> str:
+    """A unit vector as text, 3 decimals, no "-0.000"."""
+    return "[" + ", ".join(f"{round(float(x), 3) + 0.0:.3f}" for x in v) + "]"
+
+
 @dataclasses.dataclass(frozen=True)
 class ToolRule:
     """How the tool axis is set along an edge.
@@ -727,8 +688,8 @@ class ToolRule:
     def describe(self) -> str:
         """One line: the rule and why."""
         if self.kind == "axis":
-            a = ", ".join(f"{x:.3f}" for x in self.axis)
-            return f"the tool axis along [{a}] ({self.reason})"
+            a = shown_direction(self.axis)
+            return f"the tool axis along {a} ({self.reason})"
         return f"the tool on the {self.side} face ({self.reason})"
 
 
