@@ -53,7 +53,7 @@ def _part_source(args):
     return file, args.units, pose[:3], pose[3:], angle, None
 
 
-def _row(summary, part):
+def _row(summary, part, marker):
     p = part.rotation.T @ (summary.point - part.translation)
     low, high = (math.degrees(a) for a in summary.dihedral)
     kind = {True: "convex", False: "concave", None: "mixed"}[summary.convex]
@@ -62,7 +62,7 @@ def _row(summary, part):
     return (
         f"{summary.index:4d}  {'loop' if summary.closed else 'open':4s}  "
         f"{summary.length * 1e3:9.1f}  {low:6.1f}-{high:5.1f}  {kind:7s}  "
-        f"{point}  {reach}\n"
+        f"{point}  {reach}{marker}\n"
         f"{'':6s}{summary.rule.describe()}"
     )
 
@@ -99,7 +99,7 @@ def _edges(args) -> int:
     )
     for summary in summaries:
         marker = "  <- the scenario's edge" if summary.index == chosen else ""
-        print(_row(summary, part) + marker)
+        print(_row(summary, part, marker))
     print(_OPEN_SIDE)
     out = Path(args.out or f"out/edges/{Path(file).stem}.png")
     edge_figure(
