@@ -57,6 +57,7 @@ def edge_figure(part, chains, summaries, path, *, title="", chosen=None):
         (space.set_xlim, space.set_ylim, space.set_zlim), range(3)
     ):
         set_limits(middle[k] - 0.55 * span, middle[k] + 0.55 * span)
+    space.set_box_aspect((1.0, 1.0, 1.0))  # millimetres alike on the axes
     space.set_xlabel("x (mm)")
     space.set_ylabel("y (mm)")
     space.set_zlabel("z (mm)")
