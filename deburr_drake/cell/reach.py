@@ -353,14 +353,10 @@ def check_part_in_reach(
     vertical, and how far out of reach it is; when the tool turned along
     another axis of the flange frame (the spindle's mount) reaches it, the
     error names ``robot.tool_mount`` and that axis instead. Along a 3-D
-    edge (``contour.varying_frame``) the tool follows the edge's axis and
-    the arm's whole joint path is checked instead (continuous, within the
-    joint limits, away from singular postures; the error names the arc
-    length and the joint). ``model``: check_robot's, if the caller has it.
-
-    Returns None, or along a 3-D edge that the arm follows only with the
-    tool spun about its axis off the seed's posture (the spin is free),
-    the start posture it follows the edge from (joint angles, rad)."""
+    edge (``contour.varying_frame``) the arm's whole joint path with the
+    tool along the edge's axis is checked instead (``_check_edge_path``:
+    None, or the start posture it is followed from if not the seed's,
+    returned). ``model``: check_robot's, if the caller has it."""
     robot = scenario.robot
     key = _reach_key(scenario, samples) if contour is None else None
     if key is not None and key in _REACHED:
