@@ -154,6 +154,10 @@ def parts_folder() -> Path:
     return models / "parts"
 
 
+#: spindle_clash's answers, by the cell they were worked out for.
+_SPINDLE_CLASHES: Dict[str, str] = {}
+
+
 @dataclass
 class EdgeConfig:
     """Which edge of the part is cut, and where and which way the tool runs
@@ -447,9 +451,23 @@ class EdgeConfig:
         face it cannot stand on (its axis points across the part)."""
         from deburr_drake.math.edge_contour import spindle_clash
 
-        clash = spindle_clash(
-            part, path, tool.cutter_radius, tool.cutter_length
+        # a scenario is validated again and again (every variant an
+        # analysis or a sweep makes): the check runs once per cell
+        key = repr(
+            (
+                self,
+                self.mesh_file().stat().st_mtime_ns,
+                pose,
+                tool.cutter_radius,
+                tool.cutter_length,
+                tool.engagement,
+            )
         )
+        if key not in _SPINDLE_CLASHES:
+            _SPINDLE_CLASHES[key] = spindle_clash(
+                part, path, tool.cutter_radius, tool.cutter_length
+            )
+        clash = _SPINDLE_CLASHES[key]
         if not clash:
             return
         field, value = self._rule_field()
