@@ -326,8 +326,8 @@ class ProbingSequence(LeafSystem):
     ``probe_missed:<touch index>``), record x_p, go on until it exceeds
     ``stiffness_threshold`` (the way between the two crossings gives the
     contact's stiffness), retract by ``retract``. Then every touch less
-    the :func:`detection_depth` on the touches' median stiffness and the calibrated ``detection_bias``
-    along n1, the fit, a travel (along the corrected edge) to the
+    the :func:`detection_depth` on the touches' median stiffness and the
+    calibrated ``detection_bias`` along n1, the fit, a travel (along the corrected edge) to the
     corrected start's standoff and an entry at the approach speed to
     ``start`` on the corrected part (the tool point the pass starts from);
     the command generator takes over from there.
