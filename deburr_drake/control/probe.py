@@ -317,20 +317,20 @@ class ProbingSequence(LeafSystem):
       the way on to ``stiffness_threshold`` (m, 0: not reached)), updated
       every ``sample_period`` (the sensor's).
 
-    Each touch: travel (smooth, along the believed edge at the standoff:
-    a straight move would cut a convex corner) to the standoff point
-    ``standoff`` before the believed zero-depth path along -n1, settle,
-    tare the force, move along n1 at ``approach_speed`` until
-    -(f - tare).n1 exceeds ``force_threshold`` (nothing within
-    ``search_distance``: a miss, which ends the run with the stop reason
-    ``probe_missed:<touch index>``), record x_p, go on until it exceeds
-    ``stiffness_threshold`` (the way between the two crossings gives the
-    contact's stiffness), retract by ``retract``. Then every touch less
-    the :func:`detection_depth` on the touches' median stiffness and the
-    calibrated ``detection_bias`` along n1, the fit, a travel (along the corrected edge) to the
-    corrected start's standoff and an entry at the approach speed to
-    ``start`` on the corrected part (the tool point the pass starts from);
-    the command generator takes over from there.
+    Each touch: travel (smooth, along the believed edge at the standoff: a
+    straight move would cut a convex corner) to the standoff point
+    ``standoff`` before the believed zero-depth path along -n1, settle, tare
+    the force, move along n1 at ``approach_speed`` until -(f - tare).n1
+    exceeds ``force_threshold`` (nothing within ``search_distance``: a miss,
+    which ends the run with the stop reason ``probe_missed:<touch index>``),
+    record x_p, go on until it exceeds ``stiffness_threshold`` (the way
+    between the two crossings gives the contact's stiffness), retract by
+    ``retract``. Then every touch less the :func:`detection_depth` on the
+    touches' median stiffness and the calibrated ``detection_bias`` along
+    n1, the fit, a travel (along the corrected edge) to the corrected
+    start's standoff and an entry at the approach speed to ``start`` on the
+    corrected part (the tool point the pass starts from); the command
+    generator takes over from there.
     """
 
     def __init__(
