@@ -1133,13 +1133,7 @@ class PartErrorConfig:
         part's ``yaw`` and ``radius``."""
         o = "part_error"
         if kind != "mesh":
-            _require(
-                self.rpy[0] == 0.0 and self.rpy[1] == 0.0,
-                f"{o}.rpy",
-                self.rpy,
-                f"[0, 0, yaw] for a {kind} edge (a planar part turns "
-                "about the vertical only; roll and pitch on a mesh part)",
-            )
+            _upright(o, self.rpy, kind)
             return
         _require(
             self.yaw == 0.0,
@@ -1154,6 +1148,17 @@ class PartErrorConfig:
             self.radius,
             "0 with part.edge.kind mesh (a mesh part's size is its file's)",
         )
+
+
+def _upright(owner: str, rpy, kind: str):
+    """A planar part's turn: about the vertical only."""
+    _require(
+        rpy[0] == 0.0 and rpy[1] == 0.0,
+        f"{owner}.rpy",
+        rpy,
+        f"[0, 0, yaw] for a {kind} edge (a planar part turns about the "
+        "vertical only; roll and pitch on a mesh part)",
+    )
 
 
 def _rpy(owner: str, rpy):
@@ -1223,13 +1228,7 @@ class PartStepConfig:
     def check_kind(self, kind: str, owner="faults.part_step"):
         """A planar part steps about the vertical only."""
         if kind != "mesh":
-            _require(
-                self.rpy[0] == 0.0 and self.rpy[1] == 0.0,
-                f"{owner}.rpy",
-                self.rpy,
-                f"[0, 0, yaw] for a {kind} edge (a planar part turns "
-                "about the vertical only)",
-            )
+            _upright(owner, self.rpy, kind)
 
     def active(self) -> bool:
         return self.time > 0.0

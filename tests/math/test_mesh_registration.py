@@ -4,43 +4,28 @@ noise to 1e-9, a hole's size, a burr touch dropped, touches that pin too
 little named) and its covariance against Monte Carlo fits."""
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy import stats
 import trimesh
 
-from deburr_drake.math.mesh_part import load_part
 from deburr_drake.math.mesh_registration import (
     MeshSurface,
     _closest_on_triangles,
     closest_on_mesh,
-    cylinder_faces,
     pose_amplification,
     register_mesh,
 )
 from deburr_drake.math.rigid import rpy_matrix
 
-PARTS = Path(__file__).resolve().parents[2] / "models" / "parts"
 DEG = math.pi / 180.0
-# The cross-hole part as examples/cross_hole_6dof.yaml places it: the
-# hole's axis (+x in the file) up, the tube's axis along -x.
-XYZ, RPY = [0.99, 0.0, 0.47], [0.0, -math.pi / 2, 0.0]
+XYZ = [0.99, 0.0, 0.47]  # the cross-hole part's origin (conftest.py)
 
 
 @pytest.fixture(scope="module")
-def cross_hole():
-    part = load_part(PARTS / "cross_hole.stl", units="mm", xyz=XYZ, rpy=RPY)
-    surface = MeshSurface(part.mesh.vertices, part.mesh.faces)
-    hole = cylinder_faces(
-        surface,
-        point=part.to_world([0.0, 0.0, 0.040]),
-        axis=part.rotation @ [1.0, 0.0, 0.0],
-        radius=0.008,
-        tolerance=2e-4,
-    )
-    return part, surface, hole
+def cross_hole(cross_hole_part):
+    return cross_hole_part
 
 
 def _touch_faces(part, surface, hole, n_hole, n_outer):

@@ -2,7 +2,6 @@
 reachable faces pin its pose (and a hole's size), and a part whose faces
 cannot pin a degree of freedom is refused naming it."""
 
-import math
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +11,6 @@ import trimesh
 from deburr_drake.math.mesh_part import load_part
 from deburr_drake.math.mesh_registration import (
     MeshSurface,
-    cylinder_faces,
     register_mesh,
 )
 from deburr_drake.math.registration import MAX_AMPLIFICATION
@@ -20,21 +18,13 @@ from deburr_drake.math.rigid import rpy_matrix
 from deburr_drake.math.touch_plan import plan_touches, reachable_faces
 
 PARTS = Path(__file__).resolve().parents[2] / "models" / "parts"
-XYZ, RPY = [0.99, 0.0, 0.47], [0.0, -math.pi / 2, 0.0]
+XYZ = [0.99, 0.0, 0.47]  # the cross-hole part's origin (conftest.py)
 PROBE = dict(probe_radius=0.003, clearance=0.002, rise=0.05)
 
 
 @pytest.fixture(scope="module")
-def cross_hole():
-    part = load_part(PARTS / "cross_hole.stl", units="mm", xyz=XYZ, rpy=RPY)
-    surface = MeshSurface(part.mesh.vertices, part.mesh.faces)
-    hole = cylinder_faces(
-        surface,
-        point=part.to_world([0.0, 0.0, 0.040]),
-        axis=part.rotation @ [1.0, 0.0, 0.0],
-        radius=0.008,
-        tolerance=2e-4,
-    )
+def cross_hole(cross_hole_part):
+    _, surface, hole = cross_hole_part
     return surface, hole, reachable_faces(surface, **PROBE)
 
 
