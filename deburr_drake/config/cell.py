@@ -655,6 +655,7 @@ class PartConfig:
         (PartErrorConfig); a planar part's ``pose`` is the real one."""
         if self.edge.kind != "mesh" or not part_error.moves():
             return self.pose
+        # Imported here: scipy's rotations load only for a moved mesh part.
         from deburr_drake.math.rigid import (
             matrix_rpy,
             real_from_believed,
