@@ -10,7 +10,14 @@ import copy
 import numpy as np
 
 from deburr_drake.config import Scenario
+from deburr_drake.config.cell import PoseConfig
 from deburr_drake.math.geometry import CircularContour, Contour, StraightContour
+from deburr_drake.math.rigid import (
+    believed_from_real,
+    matrix_rpy,
+    rpy_matrix,
+    stepped_belief,
+)
 
 __all__ = [
     "make_contour",
@@ -51,8 +58,8 @@ def make_contour(scenario: Scenario, *, grow: float = 0.0) -> Contour:
     mesh edge: its ``EdgeContour`` (the part read once per file)."""
     part, tool = scenario.part, scenario.tool
     edge = part.edge
-    if edge.kind == "mesh":
-        return part.mesh_path(tool)
+    if edge.kind == "mesh":  # the real part: moved by part_error
+        return part.mesh_path(tool, part.real_pose(scenario.part_error))
     if edge.kind == "profile":
         return edge.profile_path(
             profile_center(scenario), tool.cutter_radius, grow=grow
@@ -77,18 +84,22 @@ def believed_scenario(scenario: Scenario) -> Scenario:
     (``part_error`` applied to ``part``); the scenario itself
     when there is no error."""
     e = scenario.part_error
-    if not any(e.offset) and e.yaw == 0.0 and e.radius == 0.0:
+    if not e.moves() and e.radius == 0.0:
         return scenario
     believed = copy.deepcopy(scenario)
     real, part = scenario.part, believed.part
+    believed.part_error = type(e)()
+    if real.edge.kind == "mesh":  # part.pose is the believed pose
+        return believed
+    yaw = e.planar_yaw()
     part.pose.xyz = [p + d for p, d in zip(real.pose.xyz, e.offset)]
     part.edge.inner_radius += e.radius
     if real.edge.kind == "straight":
-        part.edge.heading += e.yaw
+        part.edge.heading += yaw
     else:
-        part.edge.start_angle += e.yaw
+        part.edge.start_angle += yaw
     if real.edge.kind == "profile":  # turned about part.pose.xyz
-        c, s = np.cos(e.yaw), np.sin(e.yaw)
+        c, s = np.cos(yaw), np.sin(yaw)
         part.edge.vertices = [
             [c * x - s * y, s * x + c * y] for x, y in real.edge.vertices
         ]
@@ -98,7 +109,7 @@ def believed_scenario(scenario: Scenario) -> Scenario:
 def believed_contour(scenario: Scenario) -> Contour:
     """The zero-depth path on the part the controller believes in (a
     profile: moved, turned and grown by ``part_error``; a mesh edge: the
-    real one, as validation refuses a part error on it)."""
+    file at ``part.pose``)."""
     grow = (
         scenario.part_error.radius
         if scenario.part.edge.kind == "profile"
@@ -109,15 +120,36 @@ def believed_contour(scenario: Scenario) -> Contour:
 
 def believed_contour_step(scenario: Scenario):
     """(time (s), believed contour from then on) of ``faults.part_step``:
-    the believed part moved by minus the real part's step; None without a
-    step."""
+    the believed part's pose against the unmoved real part what it is
+    against the stepped one (deburr_drake.math.rigid.stepped_belief);
+    None without a step."""
     step = scenario.faults.part_step
     if not step.active():
         return None
     after = copy.deepcopy(scenario)
-    after.part_error.offset = [
-        e - d for e, d in zip(scenario.part_error.offset, step.offset)
-    ]
+    e, part = scenario.part_error, scenario.part
+    if not any(step.rpy):
+        # A pure move: the believed part moved back by it (exactly, as
+        # the offsets subtract).
+        after.part_error.offset = [x - d for x, d in zip(e.offset, step.offset)]
+        return step.time, believed_contour(after)
+    real = part.real_pose(e)
+    X_WR = (rpy_matrix(real.rpy), np.asarray(real.xyz, float))
+    if part.edge.kind == "mesh":
+        X_WB = (rpy_matrix(part.pose.rpy), np.asarray(part.pose.xyz, float))
+    else:
+        X_WB = believed_from_real(X_WR, e.offset, [0.0, 0.0, e.planar_yaw()])
+    R, p = stepped_belief(X_WR, X_WB, step.offset, step.rpy)
+    if part.edge.kind == "mesh":
+        pose = PoseConfig(
+            xyz=[float(x) for x in p], rpy=[float(a) for a in matrix_rpy(R)]
+        )
+        return step.time, part.mesh_path(scenario.tool, pose)
+    # The error against the (unturned) real part: a turn about the
+    # vertical, as a planar part's.
+    after.part_error.offset = [float(x) for x in p - X_WR[1]]
+    after.part_error.yaw = 0.0
+    after.part_error.rpy = [0.0, 0.0, float(matrix_rpy(R)[2])]
     return step.time, believed_contour(after)
 
 

@@ -182,4 +182,7 @@ def _add_mesh_edge(plant, scenario: Scenario):
     it; the part's mesh drawn."""
     stations, band = mesh_edge_band(scenario)
     register_compliant_edge(plant, stations, **band)
-    register_part_visual(plant, scenario.part.mesh_edge()[0])
+    part = scenario.part  # the real part: moved by part_error
+    register_part_visual(
+        plant, part.mesh_edge(part.real_pose(scenario.part_error))[0]
+    )

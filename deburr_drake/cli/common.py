@@ -33,6 +33,7 @@ EXIT_CODES = {
     "guard": 3,  # a runtime guard stopped the run (outputs written)
     "nan": 4,  # Drake detected a NaN (outputs written)
     "diverged": 5,  # the numerical sanity check ended it (outputs written)
+    "probe_missed": 6,  # a touch found nothing (outputs written)
     "interrupted": 130,  # SIGINT (Ctrl-C); SIGTERM gives 143
 }
 
@@ -41,11 +42,12 @@ _EXIT_HELP = (
     "exit codes: 0 the pass completed or the duration was reached; "
     "1 error during the run; 2 bad input (nothing run or written); "
     "3 a guard stopped the run; 4 NaN detected; 5 the run diverged "
-    "(numerical sanity, guards or not); 130 interrupted "
+    "(numerical sanity, guards or not); 6 a probing touch found "
+    "nothing within its search distance; 130 interrupted "
     "(SIGINT), 143 terminated (SIGTERM). Every ending after the "
     "start writes logs.npz and metrics.json (stop_reason: "
-    "pass_complete, duration, interrupted, guard:<name>, diverged, "
-    "nan, error)."
+    "pass_complete, duration, interrupted, guard:<name>, "
+    "probe_missed:<touch index>, diverged, nan, error)."
 )
 
 

@@ -10,6 +10,8 @@ import os
 from pathlib import Path
 from typing import Dict, List
 
+import numpy as np
+
 from deburr_drake.config.checks import (
     ConfigError,
     _finite,
@@ -714,14 +716,37 @@ class PartConfig:
                 f"<= part.edge.height ({self.edge.height})",
             )
 
-    def mesh_edge(self):
+    def mesh_edge(self, pose=None):
         """A mesh edge's (part, EdgeCurve, distance from ``near``) at
-        ``pose`` (EdgeConfig.mesh_edge)."""
-        return self.edge.mesh_edge(self.pose)
+        ``pose`` (default ``part.pose``; EdgeConfig.mesh_edge)."""
+        return self.edge.mesh_edge(pose or self.pose)
 
-    def mesh_path(self, tool):
-        """A mesh edge's cutter path (EdgeConfig.mesh_path)."""
-        return self.edge.mesh_path(tool, self.pose)
+    def mesh_path(self, tool, pose=None):
+        """A mesh edge's cutter path at ``pose`` (default ``part.pose``;
+        EdgeConfig.mesh_path)."""
+        return self.edge.mesh_path(tool, pose or self.pose)
+
+    def real_pose(self, part_error) -> PoseConfig:
+        """Where the real part is: a mesh part's ``pose`` is the believed
+        one, the real part's is moved back by ``part_error``
+        (PartErrorConfig); a planar part's ``pose`` is the real one."""
+        if self.edge.kind != "mesh" or not part_error.moves():
+            return self.pose
+        # Imported here: scipy's rotations load only for a moved mesh part.
+        from deburr_drake.math.rigid import (
+            matrix_rpy,
+            real_from_believed,
+            rpy_matrix,
+        )
+
+        R, p = real_from_believed(
+            (rpy_matrix(self.pose.rpy), np.asarray(self.pose.xyz, float)),
+            part_error.offset,
+            part_error.rpy,
+        )
+        return PoseConfig(
+            xyz=[float(x) for x in p], rpy=[float(a) for a in matrix_rpy(R)]
+        )
 
     def path_length(self, tool) -> float:
         """The cutter's path along the edge (m): the length a burr's arc
@@ -743,6 +768,20 @@ class PartConfig:
             self.edge.check_profile(self.pose, self.band, tool, part_error)
         if self.edge.kind == "mesh":
             self.edge.check_mesh(tool, self.pose)
+            if part_error.moves():
+                self._check_real_mesh(tool, part_error)
+
+    def _check_real_mesh(self, tool, part_error):
+        """The cutter's path along the real part's edge (``part_error``
+        moves it from ``pose``) can be built."""
+        try:
+            self.mesh_path(tool, self.real_pose(part_error))
+        except ValueError as e:
+            raise ConfigError(
+                f"part_error.offset = {part_error.offset!r} and "
+                f"part_error.rpy = {part_error.rpy!r} are invalid: the real "
+                f"part's edge: {e}"
+            ) from None
 
 
 @dataclass
@@ -1105,25 +1144,41 @@ def _dist_hint(entry) -> str:
 
 @dataclass
 class PartErrorConfig:
-    """How the part the controller believes in differs from the real one.
-    ``part`` describes the real part (the plant, the contact, the cutting
-    process and the metrics use it); the command generator, the
-    first-order hold, the observer and the start pose use the believed
-    part: the real one moved by ``offset``, turned by ``yaw`` about its
-    vertical axis (circle: the start angle; straight: the heading about
-    ``part.pose.xyz``; profile: its vertices and start angle about
-    ``part.pose.xyz``) and with an inner radius ``radius`` larger (profile:
-    grown outward by ``radius``, a pocket's or a boss's)."""
+    """How the part the controller believes in differs from the real one,
+    believed - real, in six degrees of freedom: the believed part is the
+    real one turned by ``rpy`` about the real part frame's own axes at its
+    origin (R = Rz Ry Rx, Drake's RollPitchYaw), then moved by ``offset``
+    along the world's axes, R_WB = R_WR R(rpy), p_WB = p_WR + offset
+    (deburr_drake.math.rigid.believed_from_real). The plant, the contact,
+    the cutting process and the metrics use the real part; the command
+    generator, the first-order hold, the observer and the start pose the
+    believed one.
+
+    - A planar part (circle, straight, profile): ``part`` describes the
+      real part; its frame is the world's turned by nothing, so ``rpy``
+      is a turn about the world's vertical through ``part.pose.xyz``
+      (roll and pitch 0: its walls stand upright), as ``yaw`` is (circle:
+      the start angle; straight: the heading; profile: its vertices and
+      start angle); ``radius``: the inner radius that much larger
+      (profile: grown outward by it, a pocket's or a boss's).
+    - A mesh part: ``part.pose`` is where the controller believes the
+      file is (the fixture's nominal pose); the real part is at
+      R_WR = R_WB R(rpy)^T, p_WR = p_WB - offset. ``yaw`` and ``radius``
+      are 0 (its turn is ``rpy``)."""
 
     offset: List[float] = field(
         default_factory=lambda: [0.0, 0.0, 0.0]
-    )  # m, believed - real
-    yaw: float = 0.0  # rad, believed - real, about the vertical
+    )  # m, world, believed - real
+    rpy: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0]
+    )  # rad, believed - real, about the real part frame's axes
+    yaw: float = 0.0  # rad, believed - real, about the vertical (planar)
     radius: float = 0.0  # m, believed - real inner radius; profile: growth
 
     def validate(self):
         o = "part_error"
         _vector(o, "offset", self.offset, 3, _finite)
+        _rpy(o, self.rpy)
         _require(
             isinstance(self.yaw, (int, float))
             and math.isfinite(self.yaw)
@@ -1132,7 +1187,68 @@ class PartErrorConfig:
             self.yaw,
             "a number in [-pi, pi] rad",
         )
+        _require(
+            self.yaw == 0.0 or self.rpy[2] == 0.0,
+            f"{o}.yaw",
+            self.yaw,
+            f"0 when {o}.rpy[2] is not (both are the turn about the "
+            "vertical: give one)",
+        )
         _finite(o, "radius", self.radius)
+
+    def moves(self) -> bool:
+        """True if the believed part is moved or turned."""
+        return any(self.offset) or any(self.rpy) or self.yaw != 0.0
+
+    def planar_yaw(self) -> float:
+        """rad: a planar part's turn about the vertical (``yaw`` or
+        ``rpy[2]``, whichever is given)."""
+        return self.yaw if self.yaw != 0.0 else float(self.rpy[2])
+
+    def check_kind(self, kind: str):
+        """One ConfigError naming the field this kind of part cannot take:
+        a planar part's roll and pitch (its walls stand upright), a mesh
+        part's ``yaw`` and ``radius``."""
+        o = "part_error"
+        if kind != "mesh":
+            _upright(o, self.rpy, kind)
+            return
+        _require(
+            self.yaw == 0.0,
+            f"{o}.yaw",
+            self.yaw,
+            "0 with part.edge.kind mesh (its turn is part_error.rpy, "
+            "about the part frame's axes)",
+        )
+        _require(
+            self.radius == 0.0,
+            f"{o}.radius",
+            self.radius,
+            "0 with part.edge.kind mesh (a mesh part's size is its file's)",
+        )
+
+
+def _upright(owner: str, rpy, kind: str):
+    """A planar part's turn: about the vertical only."""
+    _require(
+        rpy[0] == 0.0 and rpy[1] == 0.0,
+        f"{owner}.rpy",
+        rpy,
+        f"[0, 0, yaw] for a {kind} edge (a planar part turns about the "
+        "vertical only; roll and pitch on a mesh part)",
+    )
+
+
+def _rpy(owner: str, rpy):
+    """A turn of at most pi about each axis (rad)."""
+    _vector(owner, "rpy", rpy, 3, _finite)
+    for i, v in enumerate(rpy):
+        _require(
+            abs(v) <= math.pi,
+            f"{owner}.rpy[{i}]",
+            v,
+            "a number in [-pi, pi] rad",
+        )
 
 
 @dataclass
@@ -1158,27 +1274,39 @@ class DropoutConfig:
 
 @dataclass
 class PartStepConfig:
-    """The part moves in its fixture at ``time`` by ``offset``. The real
-    part is fixed in the plant (welded hydroelastic geometry), so the step
-    is applied to the part the controller believes in, by -``offset``:
-    from ``time`` on, the observer and the command generator see the part
-    where it was before while it is ``offset`` away, the error a slipped
-    fixture gives the controller (without the contact's own jolt)."""
+    """The part moves in its fixture at ``time``: turned by ``rpy`` about
+    its own axes at its origin, then moved by ``offset`` along the world's
+    (as ``part_error`` turns and moves the believed part; a planar part
+    turns about the vertical only). The real part is fixed in the plant
+    (welded hydroelastic geometry), so the step is applied to the part
+    the controller believes in: from ``time`` on it takes the pose
+    against the unmoved real part that it has against the stepped one
+    (deburr_drake.math.rigid.stepped_belief), the error a slipped fixture
+    gives the controller (without the contact's own jolt)."""
 
     time: float = 0.0  # s; 0: no step
     offset: List[float] = field(
         default_factory=lambda: [0.0, 0.0, 0.0]
     )  # m, world, real part's move
+    rpy: List[float] = field(
+        default_factory=lambda: [0.0, 0.0, 0.0]
+    )  # rad, real part's turn about its own axes
 
     def validate(self, owner="faults.part_step"):
         _non_negative(owner, "time", self.time)
         _vector(owner, "offset", self.offset, 3, _finite)
+        _rpy(owner, self.rpy)
         _require(
-            self.time == 0.0 or any(self.offset),
+            self.time == 0.0 or any(self.offset) or any(self.rpy),
             f"{owner}.offset",
             self.offset,
-            f"not all zero when {owner}.time > 0",
+            f"not all zero when {owner}.time > 0 (and {owner}.rpy is)",
         )
+
+    def check_kind(self, kind: str, owner="faults.part_step"):
+        """A planar part steps about the vertical only."""
+        if kind != "mesh":
+            _upright(owner, self.rpy, kind)
 
     def active(self) -> bool:
         return self.time > 0.0

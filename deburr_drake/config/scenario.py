@@ -194,6 +194,8 @@ class Scenario:
             f"< tool.cutter_radius and {wall_name} "
             f"({min(self.tool.cutter_radius, wall)})",
         )
+        self.part_error.check_kind(edge.kind)
+        self.faults.part_step.check_kind(edge.kind)
         if edge.kind == "mesh":
             self._check_mesh_edge()
         self.part.check(self.tool, self.part_error)
@@ -201,13 +203,6 @@ class Scenario:
 
     def _check_mesh_edge(self):
         """What a mesh edge does not support yet."""
-        e = self.part_error
-        later = "0 with part.edge.kind mesh (not supported yet)"
-        _require(not any(e.offset), "part_error.offset", e.offset, later)
-        _require(e.yaw == 0.0, "part_error.yaw", e.yaw, later)
-        _require(e.radius == 0.0, "part_error.radius", e.radius, later)
-        step = self.faults.part_step
-        _require(not step.active(), "faults.part_step.time", step.time, later)
         off = "false with part.edge.kind mesh (not supported yet)"
         for name in ("probe", "online"):
             enabled = getattr(self.localisation, name).enabled

@@ -26,7 +26,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import EventStatus, LeafSystem
 
 from deburr_drake.config import ConfigError, ProbeConfig
 from deburr_drake.control.layout import CHAMFER_STATE, VectorLayout
@@ -40,6 +40,7 @@ from deburr_drake.math.registration import (
 )
 
 __all__ = [
+    "PROBE_MISSED",
     "ProbingSequence",
     "ProbeGate",
     "PROBE_STATE",
@@ -53,6 +54,10 @@ __all__ = [
     "sensor_timing",
     "SensorTiming",
 ]
+
+#: The stop reason of a run a touch found nothing in:
+#: ``probe_missed:<touch index>``.
+PROBE_MISSED = "probe_missed"
 
 #: The phases of the sequence, in order.
 PHASES = ("travel", "settle", "approach", "retract", "return", "enter", "done")
@@ -312,19 +317,20 @@ class ProbingSequence(LeafSystem):
       the way on to ``stiffness_threshold`` (m, 0: not reached)), updated
       every ``sample_period`` (the sensor's).
 
-    Each touch: travel (smooth, along the believed edge at the standoff:
-    a straight move would cut a convex corner) to the standoff point
-    ``standoff`` before the believed zero-depth path along -n1, settle,
-    tare the force, move along n1 at ``approach_speed`` until
-    -(f - tare).n1 exceeds ``force_threshold`` (or ``search_distance``: a
-    miss), record x_p, go on until it exceeds ``stiffness_threshold`` (the
-    way between the two crossings gives the contact's stiffness), retract
-    by ``retract``. Then every touch less the :func:`detection_depth` on
-    the touches' median stiffness and the calibrated ``detection_bias``
-    along n1, the fit, a travel (along the corrected edge) to the
-    corrected start's standoff and an entry at the approach speed to
-    ``start`` on the corrected part (the tool point the pass starts from);
-    the command generator takes over from there.
+    Each touch: travel (smooth, along the believed edge at the standoff: a
+    straight move would cut a convex corner) to the standoff point
+    ``standoff`` before the believed zero-depth path along -n1, settle, tare
+    the force, move along n1 at ``approach_speed`` until -(f - tare).n1
+    exceeds ``force_threshold`` (nothing within ``search_distance``: a miss,
+    which ends the run with the stop reason ``probe_missed:<touch index>``),
+    record x_p, go on until it exceeds ``stiffness_threshold`` (the way
+    between the two crossings gives the contact's stiffness), retract by
+    ``retract``. Then every touch less the :func:`detection_depth` on the
+    touches' median stiffness and the calibrated ``detection_bias`` along
+    n1, the fit, a travel (along the corrected edge) to the corrected
+    start's standoff and an entry at the approach speed to ``start`` on the
+    corrected part (the tool point the pass starts from); the command
+    generator takes over from there.
     """
 
     def __init__(
@@ -522,10 +528,11 @@ class ProbingSequence(LeafSystem):
             for k in (self._touch_state, self._crossing_state)
         )
         step = _Step(context, x, t, command, finished, touches, crossings)
-        self._PHASE_STEPS[phase](self, step)
+        status = self._PHASE_STEPS[phase](self, step)
         discrete_state.set_value(self._state, x)
         discrete_state.set_value(self._touch_state, touches)
         discrete_state.set_value(self._crossing_state, crossings)
+        return status  # None but for a missed touch
 
     def _watch_entry(self, context, x, t, discrete_state):
         """Every sample of the pass: the time the entry's cut is
@@ -602,8 +609,19 @@ class ProbingSequence(LeafSystem):
             )
         elif not step.finished:
             return
-        # Back from the touch, or from the search's end on a miss.
-        back = x_p - c.retract * n if step.touches[4 * i + 3] > 0.5 else a
+        elif not touched:
+            # Nothing within the search distance: the part is not where
+            # the cell believes, by more than the probe looks; the run
+            # ends rather than cut a part it could not find.
+            return EventStatus.ReachedTermination(
+                self,
+                f"{PROBE_MISSED}:{i}: no contact within search_distance "
+                f"{c.search_distance:g} m along n1 {np.round(n, 6).tolist()} "
+                f"from {np.round(a, 6).tolist()} m (touch {i} of {self._n}, "
+                f"arc {self._arcs[i]:.6g} m)",
+            )
+        # Back from the touch.
+        back = x_p - c.retract * n
         self._segment(
             x,
             step.t,
@@ -720,7 +738,7 @@ class ProbingSequence(LeafSystem):
                 fit_radius=self._config.fit_radius,
             )
         except ValueError:
-            # The touches made (some missed) do not fix the part: the
+            # The touches do not fix the part (too many dropped): the
             # believed part stays as it is (probe_state: kept 0).
             return
         x[PROBE_STATE.slice("registration")] = fit.registration

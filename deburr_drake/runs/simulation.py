@@ -35,6 +35,7 @@ from deburr_drake.control.layout import (
     COMMAND_STATE,
     CONTROLLER_DIAGNOSTICS,
 )
+from deburr_drake.control.probe import PROBE_MISSED
 from deburr_drake.math import metrics
 
 __all__ = [
@@ -49,13 +50,16 @@ __all__ = [
 ]
 
 #: Why a run ended (``RunLog.stop_reason``). ``guard:<name>`` names the
-#: guard that tripped (deburr_drake.cell.guards); ``diverged``: the
-#: numerical sanity check (:class:`NumericalSanity`) ended it.
+#: guard that tripped (deburr_drake.cell.guards); ``probe_missed:<i>``:
+#: touch i of the touch probing found nothing within its search distance
+#: (deburr_drake.control.probe); ``diverged``: the numerical sanity check
+#: (:class:`NumericalSanity`) ended it.
 STOP_REASONS = (
     "pass_complete",
     "duration",
     "interrupted",
     "guard:<name>",
+    "probe_missed:<touch index>",
     "diverged",
     "nan",
     "error",
@@ -410,6 +414,9 @@ def _stop_of(status, diagram) -> tuple:
         return f"guard:{message.split(':', 1)[0]}", message
     if name == "command_generator":
         return "pass_complete", message
+    if message.startswith(f"{PROBE_MISSED}:"):
+        reason, _, detail = message.partition(": ")
+        return reason, detail
     if message.startswith(f"{DIVERGED}:"):
         return DIVERGED, message.split(":", 1)[1].strip()
     return message or "interrupted", ""

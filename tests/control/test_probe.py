@@ -424,3 +424,34 @@ def test_measured_stiffness_follows_the_exponent_falling_with_depth(d1):
     d3 = brentq(lambda d: law(d) - 3.0 * law(d1), d1, 3e-3, xtol=1e-14)
     k = measured_stiffness(d3 - d1, 1.0, 3.0, n, b)
     assert k == pytest.approx(1.0 / d1, rel=1e-6)
+
+
+def test_a_touch_that_finds_nothing_ends_the_run():
+    """No contact anywhere: the first touch's guarded move ends at its
+    search distance and the simulation stops, naming the touch."""
+    from pydrake.systems.analysis import Simulator
+
+    from deburr_drake.runs.simulation import _stop_of
+
+    believed = CircularContour([0.4, 0.0, 0.048], 0.027)
+    cfg = ProbeConfig(points=4, settle_time=0.01, travel_speed=0.05)
+    timing = sensor_timing(0.0025, 10.0)
+    x0 = believed.point_at(0.0) - cfg.standoff * believed.n1(
+        believed.point_at(0.0)
+    )
+    probe = ProbingSequence(
+        believed, cfg, sample_period=0.0025, timing=timing, initial_position=x0
+    )
+    simulator = Simulator(probe)
+    context = simulator.get_mutable_context()
+    probe.GetInputPort("command_in").FixValue(context, np.zeros(3))
+    probe.GetInputPort("chamfer_state").FixValue(context, _chamfer(x0))
+    probe.GetInputPort("measured_force").FixValue(context, np.zeros(3))
+    status = simulator.AdvanceTo(10.0)
+    assert status.reason() == status.ReturnReason.kReachedTerminationCondition
+    # the search: search_distance at approach_speed after the settle
+    search = cfg.search_distance / cfg.approach_speed
+    assert search < context.get_time() < search + 0.1
+    reason, detail = _stop_of(status, None)
+    assert reason == "probe_missed:0"
+    assert detail.startswith("no contact within search_distance 0.004 m")

@@ -1,0 +1,74 @@
+"""Rigid poses as (R, p) pairs (pure numpy): roll-pitch-yaw angles, the
+product and the inverse of poses, and the pose of the part the controller
+believes in against the real one.
+
+A pose X_AB = (R_AB, p_AB) maps a point given in frame B into frame A:
+p_A = R_AB p_B + p_AB. Angles are Drake's RollPitchYaw: R = Rz(yaw)
+Ry(pitch) Rx(roll)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+__all__ = [
+    "rpy_matrix",
+    "matrix_rpy",
+    "compose",
+    "inverse",
+    "believed_from_real",
+    "real_from_believed",
+    "stepped_belief",
+]
+
+
+def rpy_matrix(rpy) -> np.ndarray:
+    """R = Rz(yaw) Ry(pitch) Rx(roll) of ``rpy`` (rad)."""
+    # scipy's extrinsic "xyz" is Rz(yaw) Ry(pitch) Rx(roll)
+    return Rotation.from_euler("xyz", np.asarray(rpy, float)).as_matrix()
+
+
+def matrix_rpy(R) -> np.ndarray:
+    """(roll, pitch, yaw) (rad) of the rotation matrix ``R``."""
+    return Rotation.from_matrix(np.asarray(R, float)).as_euler("xyz")
+
+
+def compose(a, b):
+    """X_AC = X_AB X_BC of ``a`` = (R_AB, p_AB) and ``b`` = (R_BC, p_BC)."""
+    Ra, pa = a
+    Rb, pb = b
+    return Ra @ Rb, Ra @ pb + pa
+
+
+def inverse(a):
+    """X_BA of ``a`` = X_AB."""
+    R, p = a
+    return R.T, -R.T @ p
+
+
+def believed_from_real(real, offset, rpy):
+    """The believed part's pose in the world: the real part's, ``real``
+    = (R_WR, p_WR), turned by ``rpy`` (rad) about the real part frame's
+    own axes at its origin, then moved by ``offset`` (m) along the world's
+    axes: R_WB = R_WR R(rpy), p_WB = p_WR + offset."""
+    R, p = real
+    return R @ rpy_matrix(rpy), p + np.asarray(offset, float)
+
+
+def real_from_believed(believed, offset, rpy):
+    """The inverse of :func:`believed_from_real`: the real part's pose
+    given the believed one's, R_WR = R_WB R(rpy)^T, p_WR = p_WB -
+    offset."""
+    R, p = believed
+    return R @ rpy_matrix(rpy).T, p - np.asarray(offset, float)
+
+
+def stepped_belief(real, believed, offset, rpy):
+    """The believed part's pose after the real one has stepped by
+    (``offset``, ``rpy``) (turned by ``rpy`` about its own axes, moved by
+    ``offset`` along the world's) when the simulation keeps the real part
+    where it was: the believed part takes the pose against the unmoved
+    real part that it has against the stepped one,
+    X_WB' = X_WR X_WR'^-1 X_WB."""
+    stepped = believed_from_real(real, offset, rpy)
+    return compose(real, compose(inverse(stepped), believed))
