@@ -27,19 +27,9 @@ _OUTPUTS = ("logs.npz", "metrics.json")
 
 
 def _simulate(args) -> int:
-    from deburr_drake.runs.figure_process import FigureProcess
-
-    # Started first: it imports matplotlib while this process plans and
-    # runs, and draws the figures once the logs are written.
-    with FigureProcess() as drawer:
-        return _simulate_drawing(args, drawer)
-
-
-def _simulate_drawing(args, drawer) -> int:
     from pathlib import Path
-    import signal
 
-    from deburr_drake.cell.diagram import make_deburring_diagram
+    from deburr_drake.runs.figure_process import FigureProcess
 
     scenario = _load(args)
     if args.duration is not None:
@@ -59,6 +49,18 @@ def _simulate_drawing(args, drawer) -> int:
         _check_writable_target(
             args.record, "--record", args.force, is_dir=False
         )
+    # Started once the input is accepted (before Meshcat's threads): it
+    # imports matplotlib while this process plans and runs, and draws the
+    # figures once the logs are written.
+    with FigureProcess() as drawer:
+        return _plan_and_run(args, scenario, out, drawer)
+
+
+def _plan_and_run(args, scenario, out, drawer) -> int:
+    import signal
+
+    from deburr_drake.cell.diagram import make_deburring_diagram
+
     # One plan and one diagram: the pre-flight runs on the run's.
     meshcat = _meshcat(args)
     plan, diagram, found = _planned(

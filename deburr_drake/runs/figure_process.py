@@ -104,6 +104,7 @@ class FigureProcess:
 
     def __init__(self):
         self._process = self._connection = None
+        self._drawn = False
         if "fork" not in multiprocessing.get_all_start_methods():
             return
         context = multiprocessing.get_context("fork")
@@ -121,6 +122,7 @@ class FigureProcess:
             try:
                 self._connection.send((logs_path, out, label))
                 paths, failure, said = self._connection.recv()
+                self._drawn = True
             except (EOFError, OSError):
                 self.close()
             else:
@@ -131,14 +133,14 @@ class FigureProcess:
         return draw_figures(logs_path, out, label)
 
     def close(self):
-        """Ends the process (it is waiting or done)."""
+        """Ends the process: it is done once it has drawn; before, it is
+        stopped at once (it writes nothing until asked), so a command that
+        refuses its input does not wait for matplotlib's import."""
         if self._process is None:
             return
-        try:
-            self._connection.send(None)
-        except (OSError, ValueError):
-            pass
         self._connection.close()
+        if not self._drawn:
+            self._process.kill()
         self._process.join(timeout=5.0)
         if self._process.is_alive():
             self._process.kill()
