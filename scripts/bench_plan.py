@@ -109,8 +109,10 @@ def main(argv):
                 for name in order:
                     out = Path(tmp) / f"{case}_{name}"
                     out.mkdir(exist_ok=True)
+                    # Each tree's own file: the form of a scenario
+                    # changes between revisions.
                     scenario_path = (
-                        str(HERE / scenario)
+                        str(trees[name] / scenario)
                         if scenario.endswith(".yaml")
                         else scenario
                     )

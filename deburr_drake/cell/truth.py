@@ -7,12 +7,19 @@ ideal law read it."""
 from __future__ import annotations
 
 import copy
+import dataclasses
 from dataclasses import dataclass
+import hashlib
+import json
+import os
+from pathlib import Path
+import tempfile
 
 import numpy as np
 from pydrake.systems.framework import DiagramBuilder
 
 from deburr_drake.cell.edge import make_contour
+from deburr_drake.cell.models import models_dir
 from deburr_drake.cell.part import EdgeContactProbe, contact_force_on_body
 from deburr_drake.cell.plant import add_cell_plant, mesh_edge_band
 from deburr_drake.config import RobotConfig, Scenario
@@ -130,12 +137,33 @@ class ContactTruth:
     force_range: tuple = (float("nan"), float("nan"))
 
 
-def contact_truth(scenario: Scenario, *, step: float = 2e-5) -> ContactTruth:
+def contact_truth(
+    scenario: Scenario, *, step: float = 2e-5, cache_dir=None
+) -> ContactTruth:
     """The normal-force law at ``task.desired_depth`` on the part the cell
     builds for the scenario's edge (ring, wall, profile or mesh band), by
     central differences of :func:`contact_normal_force` over +-``step``
     (m), at the first of :func:`truth_stations` (``force_range`` over
-    all)."""
+    all).
+
+    Measured once for the same inputs: kept in ``cache_dir``
+    ($XDG_CACHE_HOME/deburr_drake/truth by default) under a hash of all it
+    reads (the scenario, the package's source and models, the part's
+    file, Drake's and numpy's versions), so any change measures again."""
+    path = _truth_cache(cache_dir) / f"{_truth_key(scenario, step)}.json"
+    try:
+        fields = json.loads(path.read_text())
+        return ContactTruth(
+            **{**fields, "force_range": tuple(fields["force_range"])}
+        )
+    except (OSError, ValueError, TypeError, KeyError):
+        pass  # absent or unreadable: measured and written below
+    truth = _measured_truth(scenario, step)
+    _write_atomically(path, json.dumps(dataclasses.asdict(truth)))
+    return truth
+
+
+def _measured_truth(scenario: Scenario, step: float) -> ContactTruth:
     material, d = scenario.part.material, scenario.task.desired_depth
     rows = contact_normal_force(
         scenario, [d - step, d, d + step], arc_fraction=truth_stations(scenario)
@@ -153,3 +181,53 @@ def contact_truth(scenario: Scenario, *, step: float = 2e-5) -> ContactTruth:
             float(rows[:, 1].max() + c0),
         ),
     )
+
+
+def _truth_cache(cache_dir) -> Path:
+    if cache_dir is not None:
+        return Path(cache_dir)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(
+        os.path.expanduser("~"), ".cache"
+    )
+    return Path(base) / "deburr_drake" / "truth"
+
+
+def _truth_key(scenario: Scenario, step: float) -> str:
+    """SHA-256 of everything the measurement reads: the scenario as
+    written, the step, the package's source, the models, the part's file
+    and the versions of Drake and numpy."""
+    from importlib.metadata import version
+
+    from pydrake.common.yaml import yaml_dump_typed
+
+    digest = hashlib.sha256()
+    digest.update(yaml_dump_typed(scenario).encode())
+    digest.update(repr(float(step)).encode())
+    digest.update(f"{version('drake')} {np.__version__}".encode())
+    package = Path(__file__).resolve().parents[1]
+    files = sorted(package.rglob("*.py")) + sorted(
+        p for p in models_dir().rglob("*") if p.is_file()
+    )
+    part_file = getattr(scenario.part.edge, "file", "")
+    if part_file and Path(part_file).is_file():
+        files.append(Path(part_file))
+    for f in files:
+        digest.update(str(f).encode())
+        digest.update(f.read_bytes())
+    return digest.hexdigest()[:32]
+
+
+def _write_atomically(path: Path, text: str):
+    """``text`` into ``path`` through a temporary file and os.replace, so
+    a concurrent run never reads a partial file; a cache that cannot be
+    written is left out."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(
+            prefix=path.stem + ".", suffix=".tmp", dir=path.parent
+        )
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except OSError:
+        pass

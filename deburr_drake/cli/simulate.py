@@ -28,9 +28,8 @@ _OUTPUTS = ("logs.npz", "metrics.json")
 
 def _simulate(args) -> int:
     from pathlib import Path
-    import signal
 
-    from deburr_drake.cell.diagram import make_deburring_diagram
+    from deburr_drake.runs.figure_process import FigureProcess
 
     scenario = _load(args)
     if args.duration is not None:
@@ -50,6 +49,18 @@ def _simulate(args) -> int:
         _check_writable_target(
             args.record, "--record", args.force, is_dir=False
         )
+    # Started once the input is accepted (before Meshcat's threads): it
+    # imports matplotlib while this process plans and runs, and draws the
+    # figures once the logs are written.
+    with FigureProcess() as drawer:
+        return _plan_and_run(args, scenario, out, drawer)
+
+
+def _plan_and_run(args, scenario, out, drawer) -> int:
+    import signal
+
+    from deburr_drake.cell.diagram import make_deburring_diagram
+
     # One plan and one diagram: the pre-flight runs on the run's.
     meshcat = _meshcat(args)
     plan, diagram, found = _planned(
@@ -86,7 +97,14 @@ def _simulate(args) -> int:
     }
     try:
         return _run_and_write(
-            args, plan, diagram, meshcat, out, (received, running), found
+            args,
+            plan,
+            diagram,
+            meshcat,
+            out,
+            (received, running),
+            found,
+            drawer,
         )
     finally:
         for number, handler in previous.items():
@@ -106,7 +124,9 @@ def _meshcat(args):
     return meshcat
 
 
-def _run_and_write(args, plan, diagram, meshcat, out, flags, found) -> int:
+def _run_and_write(
+    args, plan, diagram, meshcat, out, flags, found, drawer
+) -> int:
     import signal
 
     from deburr_drake.runs import report
@@ -148,7 +168,7 @@ def _run_and_write(args, plan, diagram, meshcat, out, flags, found) -> int:
     # logs.npz, metrics.json, the scenario as run and the figures.
     files = report.write_run(log, out, values)
     _write_resolved(out, plan.scenario, found)
-    pngs = _figures(files["logs"], out, plan.scenario)
+    pngs = _figures(drawer, files["logs"], out, plan.scenario)
     # The metrics and what was written.
     print()
     _print_metrics(values)
@@ -179,25 +199,14 @@ def _write_replay(meshcat, path):
         )
 
 
-def _figures(logs_path, out, scenario):
+def _figures(drawer, logs_path, out, scenario):
     """The run's figures from logs.npz; none (said on stderr) when the run
     is too short to draw."""
-    from deburr_drake.runs import figures
-
-    try:
-        with np.load(logs_path) as logs:
-            return figures.make_figures(
-                dict(logs),
-                out,
-                label=f"{scenario.name} (m = "
-                f"{scenario.controller.fuzzy.order})",
-            )
-    except Exception as e:
-        print(
-            f"deburr-drake: no figures: {type(e).__name__}: {e}",
-            file=sys.stderr,
-        )
-        return []
+    label = f"{scenario.name} (m = {scenario.controller.fuzzy.order})"
+    paths, failure = drawer.draw(logs_path, out, label)
+    if failure is not None:
+        print(f"deburr-drake: no figures: {failure}", file=sys.stderr)
+    return paths
 
 
 def _add_simulate_parser(subparsers):

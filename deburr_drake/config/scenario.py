@@ -419,6 +419,23 @@ def _schema_error(where: str, node, message: str):
 _TAG = "tag:yaml.org,2002:"
 
 
+def _parsed(operation, text: str):
+    """``operation`` (yaml.compose or yaml.load) of ``text`` by libyaml's
+    safe loader (the same nodes, marks and values as the pure-Python
+    one, parsed several times faster), by the pure-Python one where
+    libyaml is missing or refuses the text: its error messages are the
+    ones reported."""
+    import yaml
+
+    fast = getattr(yaml, "CSafeLoader", None)
+    if fast is not None:
+        try:
+            return operation(text, Loader=fast)
+        except yaml.YAMLError:
+            pass
+    return operation(text, Loader=yaml.SafeLoader)
+
+
 def _check_node(where: str, node, schema, path: str):
     """Checks a composed YAML node against the dataclass ``schema``: every
     key known (named with its full dotted path), no key twice, every value
@@ -504,8 +521,8 @@ def _check_edge_fields(text: str, where: str, kind: str):
     not)."""
     import yaml
 
-    root = yaml.compose(text, Loader=yaml.SafeLoader)
-    data = yaml.safe_load(text)
+    root = _parsed(yaml.compose, text)
+    data = _parsed(yaml.load, text)
     for section in ("part", "edge"):
         if not isinstance(root, yaml.MappingNode):
             return
@@ -600,7 +617,7 @@ def _check_scalar_node(where: str, node, schema, path: str):
         schema is float
         and isinstance(node, yaml.ScalarNode)
         and node.tag == _TAG + "str"
-        and node.style is None
+        and not node.style  # plain: None from PyYAML, "" from libyaml
     ):
         try:  # YAML 1.1 reads 4.5e6 as a string; the loader takes it
             float(node.value)
@@ -633,7 +650,7 @@ def _check_yaml(text: str, where: str, schema=None, path: str = ""):
     import yaml
 
     try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
+        root = _parsed(yaml.compose, text)
     except yaml.MarkedYAMLError as e:
         mark = e.problem_mark or e.context_mark
         problem = e.problem or ""
@@ -719,7 +736,7 @@ def _base_of(source: str, path: Path, depth: int = 0) -> Scenario:
     defaults."""
     import yaml
 
-    data = yaml.safe_load(source)
+    data = _parsed(yaml.load, source)
     base = data.get("base", "") if isinstance(data, dict) else ""
     if not base:
         return Scenario()

@@ -376,23 +376,35 @@ def _run(name, fn, *args):
     return out if isinstance(out, list) else [out]
 
 
+_PLOTS = {
+    "fig08": _plot_fig08,
+    "fig09": _plot_fig09,
+    "fig10": _plot_fig10,
+    "fig11_12": _plot_fig11_12,
+}
+
+
 def make_figures(
-    logs: Mapping[str, np.ndarray], out_dir, *, label: str = ""
+    logs: Mapping[str, np.ndarray],
+    out_dir,
+    *,
+    label: str = "",
+    names=tuple(FIGURE_NAMES),
 ) -> list[pathlib.Path]:
     """Write Figs. 8-12 of one run as PNGs into out_dir; return the written
     paths.
 
     logs: dict (or NpzFile) of the run's arrays, SI units.  label goes into
-    titles, e.g. "paper (m = 2)".  Figures whose keys are missing are skipped
-    with a warning; malformed arrays raise ValueError naming the key.
+    titles, e.g. "paper (m = 2)".  names: the figures to draw (keys of
+    FIGURE_NAMES, in this order), all by default.  Figures whose keys are
+    missing are skipped with a warning; malformed arrays raise ValueError
+    naming the key.
     """
     out_dir = pathlib.Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
-    paths += _run("fig08", _plot_fig08, logs, out_dir, label)
-    paths += _run("fig09", _plot_fig09, logs, out_dir, label)
-    paths += _run("fig10", _plot_fig10, logs, out_dir, label)
-    paths += _run("fig11_12", _plot_fig11_12, logs, out_dir, label)
+    for name in names:
+        paths += _run(name, _PLOTS[name], logs, out_dir, label)
     return paths
 
 

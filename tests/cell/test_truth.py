@@ -152,3 +152,56 @@ def test_truth_is_measured_on_the_body_built_for_the_edge():
     # a convex fillet touches less material than a line
     assert boss.force_range[0] < 0.95 * boss.force_range[1]
     assert boss.force_range[1] == pytest.approx(low, rel=0.01)
+
+
+def test_the_truth_is_measured_once_for_the_same_inputs(tmp_path, monkeypatch):
+    from deburr_drake.cell import truth
+
+    scenario = load_scenario("paper")
+    measured = truth.contact_truth(scenario, cache_dir=tmp_path)
+    assert len(list(tmp_path.glob("*.json"))) == 1
+
+    def measure_again(*args):
+        raise AssertionError("measured again for the same inputs")
+
+    monkeypatch.setattr(truth, "_measured_truth", measure_again)
+    assert truth.contact_truth(scenario, cache_dir=tmp_path) == measured
+    # A file that does not read is measured again, not trusted.
+    (cached,) = tmp_path.glob("*.json")
+    cached.write_text("{")
+    monkeypatch.undo()
+    assert truth.contact_truth(scenario, cache_dir=tmp_path) == measured
+
+
+@pytest.mark.parametrize(
+    "change",
+    [
+        "part: {material: {hydroelastic_modulus: 2.0e7}}",
+        "tool: {cutter_radius: 0.0025}",
+        "task: {desired_depth: 0.0004}",
+        "robot: {model: cartesian_tool}",
+    ],
+)
+def test_a_change_of_part_tool_task_or_robot_measures_again(change):
+    from deburr_drake.cell.truth import _truth_key
+
+    assert _truth_key(load_scenario("paper"), 2e-5) != _truth_key(
+        load_scenario("paper", text=change), 2e-5
+    )
+
+
+def test_a_change_of_the_package_source_measures_again(monkeypatch):
+    from pathlib import Path
+
+    from deburr_drake.cell import truth
+
+    scenario = load_scenario("paper")
+    key = truth._truth_key(scenario, 2e-5)
+    read = Path.read_bytes
+
+    def edited(path):
+        data = read(path)
+        return data + b"#" if path.name == "plant.py" else data
+
+    monkeypatch.setattr(Path, "read_bytes", edited)
+    assert truth._truth_key(scenario, 2e-5) != key
