@@ -184,17 +184,29 @@ def clearance(cell: PlanningCell, q, *, cutter=True, within=0.5) -> float:
     """m, the least signed distance between the robot (with its cutter
     unless ``cutter`` is False) and the part at ``q``; ``within`` if
     nothing is nearer than that."""
+    return _nearest(cell, q, cutter=cutter, within=within)[0]
+
+
+def _nearest(cell: PlanningCell, q, *, cutter=True, within=0.5):
+    """(m, the least distance as :func:`clearance`; the robot's shape
+    there, by name, or "")."""
     context = cell.diagram.CreateDefaultContext()
     plant_context = cell.plant.GetMyContextFromRoot(context)
     cell.plant.SetPositions(plant_context, q)
     query = cell.plant.get_geometry_query_input_port().Eval(plant_context)
-    pairs = query.ComputeSignedDistancePairwiseClosestPoints(within)
-    distances = [
-        p.distance
-        for p in pairs
+    pairs = [
+        p
+        for p in query.ComputeSignedDistancePairwiseClosestPoints(within)
         if cutter or cell.cutter not in (p.id_A, p.id_B)
     ]
-    return float(min(distances, default=within))
+    if not pairs:
+        return float(within), ""
+    pair = min(pairs, key=lambda p: p.distance)
+    inspector = query.inspector()
+    names = [inspector.GetName(g) for g in (pair.id_A, pair.id_B)]
+    shape = next((n for n in names if "part_piece" not in n), "")
+    # a scoped name (arm6::spindle_collision) told as the shape's own
+    return float(pair.distance), shape.split("::")[-1].split("_collision")[0]
 
 
 def _solve(prog, what):
@@ -343,15 +355,23 @@ def plan_move(
             )
     retract = _line(np.asarray(q_a), segments["retract"], step)
     approach = _line(segments["approach"], np.asarray(q_b), step)
-    least = min(
-        min(clearance(cell, q, cutter=False) for q in retract),
-        min(clearance(cell, q) for q in middle),
-        min(clearance(cell, q, cutter=False) for q in approach),
-    )
-    if least < 0.0:
-        raise MovePlanningError(
-            f"{label}: the move comes {-least * 1e3:.2g} mm into the part"
-        )
+    # The clearance along the move; the cutter's own left out where it is
+    # in the cut, at the retract's start and the approach's end.
+    least = np.inf
+    for name, qs, cutter in (
+        ("retract", retract, False),
+        ("transit", middle, True),
+        ("approach", approach, False),
+    ):
+        for i, q in enumerate(qs):
+            distance, shape = _nearest(cell, q, cutter=cutter)
+            if distance < 0.0:
+                raise MovePlanningError(
+                    f"{label}: {name}: the {shape} enters the part "
+                    f"{100 * i / max(1, len(qs) - 1):.0f} % along it "
+                    f"({-distance * 1e3:.2g} mm deep there)"
+                )
+            least = min(least, distance)
     side = [
         settings.retract / settings.axial_speed,
         settings.approach / settings.axial_speed,

@@ -108,3 +108,36 @@ def test_a_move_that_cannot_be_planned_says_where(cell, bore_and_slot):
     inside = MoveSettings(approach=-0.03)
     with pytest.raises(MovePlanningError, match=r"^0 -> 1: approach point: "):
         plan_move(planning, end, start, settings=inside, label="0 -> 1")
+
+
+def test_a_move_into_the_part_names_the_shape_and_where(cell, bore_and_slot):
+    """The chamfer's edge cut with the tool tilted 45 degrees off the top:
+    coming down that axis, the spindle meets the top face."""
+    scenario, planning = cell
+    end, _ = bore_and_slot
+    edge = EdgeConfig(
+        kind="mesh",
+        file=str(BLOCK),
+        units="mm",
+        near=[0.045, 0.0, 0.0],
+        tool_face=[0, 0, 1],
+        tilt=-np.pi / 4,
+    )
+    contour = edge.mesh_path(scenario.tool, POSE)
+    p, axis = contour.point_at(0.0), contour.tool_axis_at(0.0)
+    model = check_robot(scenario.robot)
+    q = solve_tool_pose(
+        model,
+        p,
+        q_guess=ik_seed(scenario.robot, p),
+        instance=model.GetFrameByName(
+            scenario.robot.tool_frame
+        ).model_instance(),
+        tool_frame=scenario.robot.tool_frame,
+        tool_axis=axis,
+    )
+    with pytest.raises(
+        MovePlanningError,
+        match=r"^0 -> 1: approach: the spindle enters the part \d+ % along",
+    ):
+        plan_move(planning, end, (p, axis, q), label="0 -> 1")
