@@ -8,6 +8,13 @@ inclined_hole.stl  a 20 mm hole (radius 10 mm) through an 80 x 80 x 20 mm
                 plate tilted 30 degrees about x; the hole's axis is the
                 plate's normal through the origin, which is the centre of
                 the hole's rim on the top face
+angled_hole.stl a 16 mm hole (radius 8 mm) drilled 30 degrees off the
+                normal of an 80 x 80 x 20 mm plate lying flat (top face at
+                z = 0), its axis turned about x and through the origin, the
+                centre of its elliptic rim on the top face
+pipe_hole.stl   a 16 mm radial hole (radius 8 mm) through the top of a
+                pipe lying along x (outer radius 30 mm, wall 10 mm, 100 mm
+                long, resting on z = 0), the hole's axis along +z at x = 0
 wedge.stl       a prism 60 mm long along y whose top face and sloped face
                 meet at 120 degrees in a straight open edge at x = 40 mm,
                 z = 20 mm
@@ -67,6 +74,29 @@ def inclined_hole():
         trimesh.transformations.rotation_matrix(math.radians(30.0), [1, 0, 0])
     )
     return part
+
+
+def angled_hole():
+    plate = trimesh.creation.box(extents=[80.0, 80.0, 20.0])
+    plate.apply_translation([0.0, 0.0, -10.0])  # top face at z = 0
+    drill = trimesh.creation.cylinder(radius=8.0, height=80.0, sections=160)
+    drill.apply_transform(
+        trimesh.transformations.rotation_matrix(math.radians(30.0), [1, 0, 0])
+    )
+    return trimesh.boolean.difference([plate, drill], engine="manifold")
+
+
+def pipe_hole():
+    body = tube(20.0, 30.0, 100.0)
+    body.apply_translation([0.0, 0.0, -50.0])
+    # the pipe's axis along x, resting on z = 0
+    body.apply_transform(
+        trimesh.transformations.rotation_matrix(math.pi / 2, [0, 1, 0])
+    )
+    body.apply_translation([0.0, 0.0, 30.0])
+    drill = trimesh.creation.cylinder(radius=8.0, height=40.0, sections=160)
+    drill.apply_translation([0.0, 0.0, 50.0])  # from z = 30 (the bore) up
+    return trimesh.boolean.difference([body, drill], engine="manifold")
 
 
 def wedge(length=60.0):
@@ -152,6 +182,8 @@ def main():
         "cross_hole": cross_hole,
         "inclined_hole": inclined_hole,
         "wedge": wedge,
+        "angled_hole": angled_hole,
+        "pipe_hole": pipe_hole,
         "block": block,
     }
     for name in args.parts or parts:

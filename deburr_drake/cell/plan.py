@@ -118,10 +118,14 @@ def _start_position(scenario: Scenario, belief: Contour) -> np.ndarray:
     return x0
 
 
-def _start(scenario: Scenario, model: MultibodyPlant, belief) -> Start:
+def _start(
+    scenario: Scenario, model: MultibodyPlant, belief, q_spun=None
+) -> Start:
     """The start: :func:`_start_position`, the arm posed there by inverse
     kinematics with the tool vertical (along a 3-D edge, along its axis
-    there)."""
+    there), nearest the seed, or nearest ``q_spun`` (the posture with the
+    tool spun about its axis that the reach check found the arm follows
+    the edge from)."""
     robot = scenario.robot
     x0 = _start_position(scenario, belief)
     if robot.model == "cartesian_tool":
@@ -138,7 +142,7 @@ def _start(scenario: Scenario, model: MultibodyPlant, belief) -> Start:
             model,
             x0,
             instance=frame.model_instance(),
-            q_guess=ik_seed(robot, x0),
+            q_guess=ik_seed(robot, x0) if q_spun is None else q_spun,
             tool_frame=robot.tool_frame,
             tool_axis=axis,
         )
@@ -163,10 +167,10 @@ def plan_cell(scenario: Scenario) -> CellPlan:
     scenario.validate()
     # The controller's model of the robot, checked against the cell.
     model = check_robot(scenario.robot)
-    check_part_in_reach(scenario, model=model)
+    q_spun = check_part_in_reach(scenario, model=model)
     # Neither the edges, the model nor the start depend on the gains.
     contour, belief = make_contour(scenario), believed_contour(scenario)
-    start = _start(scenario, model, belief)
+    start = _start(scenario, model, belief, q_spun)
     design = None
     resolved = scenario
     c = scenario.controller

@@ -11,10 +11,14 @@ import numpy as np
 from deburr_drake.cell.arm import (
     MIN_CONDITIONING,
     SingularPose,
+    _arm_positions,
+    _starts,
     check_reach,
     path_conditioning,
     solve_tool_pose,
+    tool_conditioning,
 )
+from deburr_drake.cell.description import notice
 from deburr_drake.cell.edge import believed_contour, start_position
 from deburr_drake.cell.joint_path import PathBreak, joint_path
 from deburr_drake.cell.robot import (
@@ -180,13 +184,22 @@ _STATION_SPACING = 0.002
 _MIN_STATIONS = 24
 
 
-def _check_edge_path(scenario: Scenario, model, contour):
-    """ConfigError in one line naming the arc length (mm) and the joint
-    where the arm, from the start pose ``robot.ik_seed`` gives, does not
-    follow the edge continuously with the tool along its axis
-    (deburr_drake.cell.joint_path)."""
-    robot = scenario.robot
-    instance = model.GetFrameByName(robot.tool_frame).model_instance()
+#: Turns (rad) of the arm's last joint off the seed tried when the arm
+#: does not follow the edge from the posture nearest the seed: the cut
+#: does not depend on the tool's spin about its axis, so the arm may take
+#: any; the last joint spins the tool about it the most. Then a few
+#: seeded postures within the joint limits.
+_SPIN_TURNS = np.linspace(-np.pi, np.pi, 8, endpoint=False)[1:]
+_OTHER_STARTS = 8
+
+
+def _shown_pose(pose) -> str:
+    return f"{{xyz: {list(pose.xyz)}, rpy: {list(pose.rpy)}}}"
+
+
+def _edge_stations(scenario: Scenario, contour):
+    """(the start point, the stations' points, axes and arc lengths from
+    the start) of the joint path along ``contour``."""
     start = start_position(scenario, contour)
     s0 = float(contour.arc_position(start))
     end = s0 + contour.length if contour.closed else contour.length
@@ -195,42 +208,124 @@ def _check_edge_path(scenario: Scenario, model, contour):
     wrapped = np.mod(arcs, contour.length) if contour.closed else arcs
     axes = [contour.tool_axis_at(s) for s in wrapped]
     points = [start] + [contour.point_at(s) for s in wrapped]
+    return (
+        start,
+        points,
+        [contour.tool_axis_at(s0)] + axes,
+        np.concatenate([[s0], arcs]) - s0,
+    )
+
+
+def _follow(model, robot, instance, stations, q_guess):
+    """(the start posture nearest ``q_guess``, the joint path from it);
+    PathBreak or RuntimeError as joint_path and solve_tool_pose."""
+    start, points, axes, arcs = stations
+    q0 = solve_tool_pose(
+        model,
+        start,
+        instance=instance,
+        q_guess=q_guess,
+        tool_frame=robot.tool_frame,
+        tool_axis=axes[0],
+    )
+    path = joint_path(
+        model,
+        points,
+        axes,
+        arcs,
+        q0,
+        instance=instance,
+        tool_frame=robot.tool_frame,
+    )
+    return q0, path
+
+
+def _free_spin(model, robot, instance, stations):
+    """The start posture, among those from the seed with the arm's last
+    joint turned by ``_SPIN_TURNS`` (the tool spun about its axis) and
+    ``_OTHER_STARTS`` seeded ones, from which the arm follows the whole
+    edge with the most margin to its joint limits (rad, the least along
+    the path), then the best conditioning at the start; None if none
+    does."""
+    arm = _arm_positions(model, instance)
+    lower = model.GetPositionLowerLimits()[arm]
+    upper = model.GetPositionUpperLimits()[arm]
+    seed = ik_seed(robot, stations[0])
+    if seed is None:
+        seed = model.GetPositions(model.CreateDefaultContext(), instance)
+    spun = [np.array(seed, float) for _ in _SPIN_TURNS]
+    for q_guess, turn in zip(spun, _SPIN_TURNS):
+        q_guess[-1] += turn
+    best = None
+    for q_guess in spun + _starts(model, arm, _OTHER_STARTS):
+        try:
+            q0, path = _follow(model, robot, instance, stations, q_guess)
+        except (PathBreak, RuntimeError):
+            continue
+        margin = float(np.min(np.minimum(path - lower, upper - path)))
+        score = (
+            round(margin, 2),
+            tool_conditioning(
+                model, q0, instance=instance, tool_frame=robot.tool_frame
+            ),
+        )
+        if best is None or score > best[0]:
+            best = (score, q0)
+    return None if best is None else best[1]
+
+
+def _check_edge_path(scenario: Scenario, model, contour):
+    """None when the arm, from the start pose ``robot.ik_seed`` gives,
+    follows the edge continuously with the tool along its axis
+    (deburr_drake.cell.joint_path); else the start posture with the tool
+    spun about its axis (``_free_spin``) from which it does; else a
+    ConfigError in one line naming the arc length (mm) and the joint
+    where it does not from the seed's."""
+    robot = scenario.robot
+    instance = model.GetFrameByName(robot.tool_frame).model_instance()
+    stations = _edge_stations(scenario, contour)
     try:
-        q0 = solve_tool_pose(
-            model,
-            start,
-            instance=instance,
-            q_guess=ik_seed(robot, start),
-            tool_frame=robot.tool_frame,
-            tool_axis=contour.tool_axis_at(s0),
+        _follow(model, robot, instance, stations, ik_seed(robot, stations[0]))
+        return None
+    except (PathBreak, RuntimeError) as e:
+        refusal = e
+    q0 = _free_spin(model, robot, instance, stations)
+    if q0 is not None:
+        notice(
+            "the arm does not follow the edge from the posture nearest "
+            f"robot.ik_seed ({refusal}); it does from "
+            f"{np.round(q0, 3).tolist()} rad (the tool spun about its "
+            "axis, or another posture), chosen for the most margin to the "
+            "joint limits along the edge: the run starts there"
         )
-        joint_path(
-            model,
-            points,
-            [axes[0]] + axes,
-            np.concatenate([[s0], arcs]) - s0,
-            q0,
-            instance=instance,
-            tool_frame=robot.tool_frame,
-        )
-    except PathBreak as e:
+        return q0
+    if isinstance(refusal, SingularPose):
         raise ConfigError(
-            f"part.edge is not followed by the arm: {e} (from the start pose "
-            f"robot.ik_seed = {list(robot.ik_seed)} gives): allowed a "
-            "part.pose, part.edge.tool_rule or seed with which the arm "
-            "follows the whole edge"
+            f"part.pose = {_shown_pose(scenario.part.pose)} is invalid: the "
+            f"arm meets the edge's start only near a singular posture "
+            f"({refusal}), from the seed, with the tool spun about its axis "
+            "and from other postures: allowed a part pose (or "
+            "part.edge.tool_face / tool_rule) whose tool axis the arm holds "
+            "away from its singular postures"
         ) from None
-    except RuntimeError as e:
+    if isinstance(refusal, PathBreak):
         raise ConfigError(
-            f"part.edge is out of the arm's reach at its start (arc 0.0 "
-            f"mm): {e}: allowed a part.pose or robot.ik_seed from which the "
-            "arm reaches it with the tool along the edge's axis"
+            f"part.edge is not followed by the arm: {refusal} (from the "
+            f"start pose robot.ik_seed = {list(robot.ik_seed)} gives, nor "
+            "with the tool spun about its axis): allowed a part.pose, "
+            "part.edge.tool_rule or seed with which the arm follows the "
+            "whole edge"
         ) from None
+    raise ConfigError(
+        f"part.edge is out of the arm's reach at its start (arc 0.0 "
+        f"mm): {refusal}: allowed a part.pose or robot.ik_seed from which "
+        "the arm reaches it with the tool along the edge's axis"
+    ) from None
 
 
 #: Scenarios already checked (the robot, part and tool as text): a diagram
 #: built again for the same cell (the analysis builds many) checks once.
-_REACHED = set()
+_REACHED = {}
 
 
 def _reach_key(scenario: Scenario, samples: int) -> str:
@@ -258,23 +353,23 @@ def check_part_in_reach(
     vertical, and how far out of reach it is; when the tool turned along
     another axis of the flange frame (the spindle's mount) reaches it, the
     error names ``robot.tool_mount`` and that axis instead. Along a 3-D
-    edge (``contour.varying_frame``) the tool follows the edge's axis and
-    the arm's whole joint path is checked instead (continuous, within the
-    joint limits, away from singular postures; the error names the arc
-    length and the joint). ``model``: check_robot's, if the caller has it."""
+    edge (``contour.varying_frame``) the arm's whole joint path with the
+    tool along the edge's axis is checked instead (``_check_edge_path``:
+    None, or the start posture it is followed from if not the seed's,
+    returned). ``model``: check_robot's, if the caller has it."""
     robot = scenario.robot
     key = _reach_key(scenario, samples) if contour is None else None
     if key is not None and key in _REACHED:
-        return
+        return _REACHED[key]
     model = check_robot(robot) if model is None else model
     if robot.model == "cartesian_tool":
         return  # the Cartesian tool reaches everywhere
     contour = contour or believed_contour(scenario)
     if contour.varying_frame:
-        _check_edge_path(scenario, model, contour)
+        q_start = _check_edge_path(scenario, model, contour)
         if key is not None:
-            _REACHED.add(key)
-        return
+            _REACHED[key] = q_start
+        return q_start
     arcs = np.linspace(
         0.0, contour.length, samples, endpoint=not contour.closed
     )
@@ -303,8 +398,8 @@ def check_part_in_reach(
     if miss is None:
         _check_path_conditioning(model, instance, robot, points, place)
         if key is not None:
-            _REACHED.add(key)
-        return
+            _REACHED[key] = None
+        return None
     if miss is not None:
         k, p, distance, q_other = miss
         where = place(k)

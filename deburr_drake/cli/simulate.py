@@ -68,6 +68,8 @@ def _simulate(args) -> int:
         + f", output {out}/",
         flush=True,
     )
+    if hasattr(plan.contour, "describe_rule"):
+        print(plan.contour.describe_rule(), flush=True)
     received, running = [], [True]
 
     def on_signal(number, frame):

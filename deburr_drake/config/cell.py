@@ -154,6 +154,10 @@ def parts_folder() -> Path:
     return models / "parts"
 
 
+#: spindle_clash's answers, by the cell they were worked out for.
+_SPINDLE_CLASHES: Dict[str, str] = {}
+
+
 @dataclass
 class EdgeConfig:
     """Which edge of the part is cut, and where and which way the tool runs
@@ -185,7 +189,11 @@ class EdgeConfig:
     the one whose normal is nearest ``tool_face`` (a direction in the part
     frame, e.g. [0, 0, 1]: the face looking up), or the one ``tool_rule``
     names (left or right of the edge's own direction; a loop runs
-    counter-clockwise seen from outside; neither given: left), turned by
+    counter-clockwise seen from outside). Neither given, the default: a
+    loop round a cylindrical or conical wall (a hole, a bore, a boss) has
+    the axis along the wall's axis, out of the part, the cutter's side on
+    the wall; any other edge the tool on the face whose outward normal is
+    nearest the world's up. The tool axis is then turned by
     ``tilt`` about the edge and leaned by ``lead`` towards the travel; the
     cutter cuts with its side, ``tool.engagement`` below the edge along the
     axis. ``direction`` +1 runs the edge its own way, -1 the other; the
@@ -224,7 +232,7 @@ class EdgeConfig:
     # m, mesh: the contact band's width into the material, where it fits
     band_width: float = 0.005
     # -, mesh: the tool axis along the left or right face's outward normal
-    # ("": by tool_face, else left)
+    # ("": by tool_face, else the default: a hole's axis or the face up)
     tool_rule: str = ""
     # -, mesh: a direction in the part frame: the tool stands on the face
     # whose outward normal is nearest it ([]: by tool_rule)
@@ -340,20 +348,43 @@ class EdgeConfig:
             near=self.near,
         )
 
+    def mesh_rule(self, pose: PoseConfig):
+        """The ``ToolRule`` of the mesh edge at ``pose``: ``tool_rule``'s
+        face, or the face whose normal is nearest ``tool_face``, or
+        neither given, the default (a hole's axis, else the face looking
+        up: deburr_drake.math.mesh_part.default_tool_rule)."""
+        from deburr_drake.math.edge_contour import face_rule
+        from deburr_drake.math.mesh_part import ToolRule, default_tool_rule
+
+        part, curve, _ = self.mesh_edge(pose)
+        if self.tool_rule:
+            return ToolRule(
+                "face", side=self.tool_rule, reason="part.edge.tool_rule"
+            )
+        if self.tool_face:
+            side = face_rule(curve, part.rotation @ self.tool_face)
+            return ToolRule(
+                "face",
+                side=side,
+                reason="its normal nearest part.edge.tool_face "
+                f"{list(self.tool_face)}",
+            )
+        return default_tool_rule(curve.chain)
+
     def mesh_path(self, tool, pose: PoseConfig):
         """The cutter tip's path along the mesh edge of the part at
         ``pose``, an ``EdgeContour`` (ValueError: see it)."""
-        from deburr_drake.math.edge_contour import EdgeContour, face_rule
+        from deburr_drake.math.edge_contour import EdgeContour
 
         part, curve, _ = self.mesh_edge(pose)
-        rule = self.tool_rule or "left"
-        if self.tool_face:
-            rule = face_rule(curve, part.rotation @ self.tool_face)
+        rule = self.mesh_rule(pose)
         return EdgeContour(
             curve,
             cutter_radius=tool.cutter_radius,
             engagement=tool.engagement,
-            rule=rule,
+            rule=rule.kind if rule.kind == "axis" else rule.side,
+            axis=rule.axis or None,
+            rule_note=rule.reason,
             tilt=self.tilt,
             lead=self.lead,
             direction=self.direction,
@@ -388,7 +419,7 @@ class EdgeConfig:
             "is in metres, in the part's frame, not the world's)",
         )
         try:
-            self.mesh_path(tool, pose)
+            path = self.mesh_path(tool, pose)
         except ValueError as e:
             message = str(e)
             field, value = "part.edge.tilt", self.tilt
@@ -401,6 +432,52 @@ class EdgeConfig:
             raise ConfigError(
                 f"{field} = {value!r} is invalid: {message}"
             ) from None
+        self._check_spindle(part, path, tool, pose)
+
+    def _rule_field(self):
+        """(the field that set the tool rule, its value)."""
+        if self.tool_rule:
+            return "part.edge.tool_rule", self.tool_rule
+        if self.tool_face:
+            return "part.edge.tool_face", self.tool_face
+        if self.tilt:
+            return "part.edge.tilt", self.tilt
+        return "part.edge.tool_face", self.tool_face
+
+    def _check_spindle(self, part, path, tool, pose):
+        """One ConfigError naming the field that set the tool axis when
+        the spindle, along the axis beyond the cutter, stands in the part
+        (deburr_drake.math.mesh_part.spindle_hits): the tool stands on a
+        face it cannot stand on (its axis points across the part)."""
+        from deburr_drake.math.edge_contour import spindle_clash
+
+        # a scenario is validated again and again (every variant an
+        # analysis or a sweep makes): the check runs once per cell
+        key = repr(
+            (
+                self,
+                self.mesh_file().stat().st_mtime_ns,
+                pose,
+                tool.cutter_radius,
+                tool.cutter_length,
+                tool.engagement,
+            )
+        )
+        if key not in _SPINDLE_CLASHES:
+            _SPINDLE_CLASHES[key] = spindle_clash(
+                part, path, tool.cutter_radius, tool.cutter_length
+            )
+        clash = _SPINDLE_CLASHES[key]
+        if not clash:
+            return
+        field, value = self._rule_field()
+        rule = self.mesh_rule(pose).describe()
+        raise ConfigError(
+            f"{field} = {value!r} is invalid: with {rule} {clash}: the axis "
+            "points across the part, not out of its open side; allowed "
+            "the face the tool can stand on (part.edge.tool_face, e.g. "
+            "[0, 0, 1], or neither tool_face nor tool_rule: the default)"
+        )
 
     def check_profile(self, pose, band, tool, part_error):
         """One ConfigError naming the field if the profile, the cutter's

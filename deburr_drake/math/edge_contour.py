@@ -47,6 +47,9 @@ from deburr_drake.math.mesh_part import (
     choose_edge,
     load_part,
     sharp_edges,
+    shown_direction,
+    spindle_hits,
+    surface_points,
 )
 
 __all__ = [
@@ -55,9 +58,10 @@ __all__ = [
     "chamfer_area_ratio",
     "face_rule",
     "load_edge",
+    "spindle_clash",
 ]
 
-_RULES = ("left", "right")
+_RULES = ("left", "right", "axis")
 # -, the least difference of the two faces' mean cosines to a direction
 # that names one of them (a direction halfway between names neither)
 _FACE_MARGIN = 0.05
@@ -114,7 +118,8 @@ class EdgeContour(Contour):
 
     ``rule`` (left or right: the face whose outward normal the tool axis
     follows, left and right of the chain's own direction, which for a loop
-    runs counter-clockwise seen from outside), ``tilt`` (rad, about the
+    runs counter-clockwise seen from outside; ``axis``: the constant unit
+    direction ``axis``, world, as a hole's), ``tilt`` (rad, about the
     chain's tangent) and ``lead`` (rad, towards the traversal direction)
     set the tool axis as ``EdgeCurve.tool_axis`` does. ``direction`` +1
     runs the chain's own way, -1 the other. The pass starts at
@@ -137,6 +142,8 @@ class EdgeContour(Contour):
         cutter_radius: float,
         engagement: float,
         rule: str = "left",
+        axis=None,
+        rule_note: str = "",
         tilt: float = 0.0,
         lead: float = 0.0,
         direction: int = 1,
@@ -145,6 +152,10 @@ class EdgeContour(Contour):
         spacing: float = 2.5e-4,
     ):
         self._check_arguments(rule, lead, direction, start_fraction)
+        if (rule == "axis") != (axis is not None):
+            raise ValueError("the axis rule takes an axis (and only it does)")
+        self._axis = None if axis is None else _vec3_float(axis, "axis")
+        self._rule_note = rule_note
         self._curve = curve
         self._r = _finite_scalar(cutter_radius, "cutter_radius")
         self._e = _finite_scalar(engagement, "engagement")
@@ -185,7 +196,9 @@ class EdgeContour(Contour):
         left and right outward normals and the faces' angle."""
         curve = self._curve
         f = curve.frame(u)
-        axis = curve.tool_axis(u, rule=self._rule, tilt=self._tilt)
+        axis = curve.tool_axis(
+            u, rule=self._rule, tilt=self._tilt, axis=self._axis
+        )
         axis = (
             math.cos(self._lead) * axis + math.sin(self._lead) * self._d * f.n2
         )
@@ -355,6 +368,19 @@ class EdgeContour(Contour):
         # world z onto the start's axis: the task frame at the start
         self._task0 = minimal_rotation(np.array([0.0, 0.0, 1.0]), self._a0)
         self._last_s = 0.0
+
+    def describe_rule(self) -> str:
+        """One line: the tool rule this path was built with (and
+        ``rule_note``: why), its tilt and lead."""
+        if self._rule == "axis":
+            what = f"the tool axis along {shown_direction(self._axis)} (world)"
+        else:
+            what = f"the tool on the {self._rule} face"
+        note = f" ({self._rule_note})" if self._rule_note else ""
+        return (
+            f"tool rule: {what}{note}, tilt {self._tilt:g} rad, lead "
+            f"{self._lead:g} rad"
+        )
 
     # ----- evaluation -----
     def _clamp(self, s):
@@ -661,6 +687,31 @@ def face_rule(curve: EdgeCurve, direction) -> str:
             "the face the tool stands on more nearly"
         )
     return "left" if near_left > near_right else "right"
+
+
+def spindle_clash(
+    part: MeshPart, path: EdgeContour, cutter_radius, cutter_length
+) -> str:
+    """'' when along ``path`` (48 stations) the spindle beyond the
+    cutter stands clear of ``part`` (``spindle_hits``), else where it
+    does not, in a phrase."""
+    stations = path.stations(path.length / 48)
+    hits = spindle_hits(
+        surface_points(part),
+        stations.points,
+        stations.n1,
+        stations.axis,
+        cutter_radius=cutter_radius,
+        cutter_length=cutter_length,
+    )
+    if not np.any(hits):
+        return ""
+    k = int(np.flatnonzero(hits)[0])
+    return (
+        f"the spindle stands in the part at {np.mean(hits):.0%} of the edge "
+        f"(first at arc position {stations.arc[k] * 1e3:.1f} mm, the tool "
+        f"axis along {shown_direction(stations.axis[k])})"
+    )
 
 
 @functools.lru_cache(maxsize=8)

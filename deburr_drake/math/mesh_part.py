@@ -44,13 +44,28 @@ __all__ = [
     "load_part",
     "sharp_edges",
     "choose_edge",
+    "UP",
+    "ToolRule",
+    "EdgeSummary",
+    "wall_axis",
+    "hole_axis",
+    "default_tool_rule",
+    "rule_axes",
+    "open_side",
+    "surface_points",
+    "spindle_hits",
+    "CUTTER_RADIUS",
+    "CUTTER_LENGTH",
+    "HOLDER_RADIUS",
+    "describe_edges",
+    "shown_direction",
 ]
 
 
 _MESH_TYPES = {".stl": "stl", ".obj": "obj"}
 _STEP_TYPES = {".step", ".stp"}
 _DEFAULT_SHARP_ANGLE = math.radians(30.0)
-_TOOL_RULES = ("left", "right", "bisector")
+_TOOL_RULES = ("left", "right", "bisector", "axis")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -489,6 +504,7 @@ class EdgeCurve:
         normal_window: float = 1.0e-3,
     ):
         self.closed = chain.closed
+        self.chain = chain
         points, parent = _densify(chain.points, chain.closed)
         data = np.vstack([points, points[:1]]) if self.closed else points
         chord = np.linalg.norm(np.diff(data, axis=0), axis=1)
@@ -583,11 +599,12 @@ class EdgeCurve:
         angle = np.where(convex, math.pi - between, math.pi + between)
         return ChamferFrame(self.point(u), n1, n2, left, right, angle, convex)
 
-    def tool_axis(self, u, *, rule="bisector", lead=0.0, tilt=0.0):
+    def tool_axis(self, u, *, rule="bisector", lead=0.0, tilt=0.0, axis=None):
         """The tool's axis at u: a unit vector out of the part (from the
         cutter's tip towards its holder). ``rule``: ``left`` or ``right``
-        (along that face's normal) or ``bisector`` (-n1, between the two
-        normals). Then ``tilt`` (rad) turns it about n2 (right hand) and
+        (along that face's normal), ``bisector`` (-n1, between the two
+        normals) or ``axis`` (the constant unit direction ``axis``, world:
+        a hole's). Then ``tilt`` (rad) turns it about n2 (right hand) and
         ``lead`` (rad) leans it towards n2 (the holder ahead of the tip)."""
         if rule not in _TOOL_RULES:
             raise ValueError(
@@ -595,11 +612,17 @@ class EdgeCurve:
                 f"{', '.join(_TOOL_RULES)}"
             )
         frame = self.frame(u)
-        base = {
-            "left": frame.left_normal,
-            "right": frame.right_normal,
-            "bisector": -frame.n1,
-        }[rule]
+        if rule == "axis":
+            base = np.broadcast_to(
+                np.asarray(axis, float) / np.linalg.norm(axis),
+                frame.n2.shape,
+            )
+        else:
+            base = {
+                "left": frame.left_normal,
+                "right": frame.right_normal,
+                "bisector": -frame.n1,
+            }[rule]
         t = frame.n2
         side = np.cross(t, base)
         axis = math.cos(tilt) * base + math.sin(tilt) * side
@@ -617,3 +640,304 @@ class EdgeCurve:
             step = (r @ d1) / (d1 @ d1 + r @ d2)
             u0 = float(self._u(u0 - step))
         return u0
+
+
+#: The part's up (world): the default tool rule stands the tool on the
+#: face whose outward normal is nearest it.
+UP = np.array([0.0, 0.0, 1.0])
+# -, the wall's normals' spread about the fitted axis (the square root of
+# the least eigenvalue of their scatter) below which a face is a cylinder
+# or cone about it: the facets of a 160-sided hole give 1e-3
+_WALL_RESIDUAL = 0.05
+# -, the scatter's middle eigenvalue above which the normals go round the
+# axis (a full turn of a cylinder gives 0.5, a 45-degree cone's 0.25; an
+# arc of a pipe's wall beside a small hole much less)
+_WALL_SPREAD = 0.05
+#: The tool as the open-side check sees it (m): the cutter (radius and
+#: length along its axis from the edge) and beyond it the spindle's nose,
+#: a cylinder of ``HOLDER_RADIUS`` round the axis; the part's surface must
+#: keep out of the spindle's cylinder.
+CUTTER_RADIUS = 0.003
+CUTTER_LENGTH = 0.020
+HOLDER_RADIUS = 0.020
+# stations per edge the open-side check looks at (at most one per segment)
+_STATIONS = 48
+# points sampled (seeded) on the part's surface, area-weighted, for it
+_SURFACE_SAMPLES = 20000
+
+
+def shown_direction(v) -> str:
+    """A unit vector as text, 3 decimals, no "-0.000"."""
+    return "[" + ", ".join(f"{round(float(x), 3) + 0.0:.3f}" for x in v) + "]"
+
+
+@dataclasses.dataclass(frozen=True)
+class ToolRule:
+    """How the tool axis is set along an edge.
+
+    ``kind`` ``face``: along the outward normal of the face ``side`` (left
+    or right of the chain's direction) stands on; ``axis``: the constant
+    unit direction ``axis`` (world; a hole's axis, out of the part).
+    ``reason`` says, in a few words, why this rule."""
+
+    kind: str
+    side: str = ""
+    axis: tuple = ()
+    reason: str = ""
+
+    def describe(self) -> str:
+        """One line: the rule and why."""
+        if self.kind == "axis":
+            a = shown_direction(self.axis)
+            return f"the tool axis along {a} ({self.reason})"
+        return f"the tool on the {self.side} face ({self.reason})"
+
+
+def _weights(chain):
+    return np.linalg.norm(chain.segments, axis=1)
+
+
+def wall_axis(chain: EdgeChain, side: str):
+    """(axis, residual, spread): the unit axis of a cylinder or cone
+    fitted to the outward normals of the face on ``side`` (left or right)
+    of the loop ``chain``: the normals of such a face keep one angle to
+    its axis, so they lie on a plane's circle on the unit sphere and the
+    axis is the least eigenvector of their (length-weighted) scatter.
+    ``residual``: the normals' spread off that circle (0 on an exact
+    cylinder or cone); ``spread``: the scatter's middle eigenvalue (how
+    far the normals go round). The axis' sign is not set."""
+    normals = chain.left_normals if side == "left" else chain.right_normals
+    w = _weights(chain)
+    w = w / w.sum()
+    mean = w @ normals
+    d = normals - mean
+    scatter = (w[:, None] * d).T @ d
+    values, vectors = np.linalg.eigh(scatter)
+    return (
+        vectors[:, 0],
+        math.sqrt(max(values[0], 0.0)),
+        float(values[1]),
+    )
+
+
+def hole_axis(chain: EdgeChain):
+    """(the unit axis out of the part, the wall's side) when ``chain`` is
+    a loop round a cylindrical or conical wall (a hole, a bore, a boss),
+    else None. The axis is fitted from the wall's normals (``wall_axis``)
+    and points to the side the other face looks to (out of the hole)."""
+    if not chain.closed:
+        return None
+    fits = []
+    for side in ("left", "right"):
+        axis, residual, spread = wall_axis(chain, side)
+        if residual < _WALL_RESIDUAL and spread > _WALL_SPREAD:
+            fits.append((residual, side, axis))
+    if not fits:
+        return None
+    _, side, axis = min(fits, key=lambda fit: fit[0])
+    w = _weights(chain)
+    out = w @ (chain.left_normals + chain.right_normals)
+    if axis @ out < 0.0:
+        axis = -axis
+    return axis, side
+
+
+def default_tool_rule(chain: EdgeChain, up=UP) -> ToolRule:
+    """The tool rule that needs no guess: on a loop round a cylindrical or
+    conical wall (a hole, in a flat or curved face, drilled along its
+    face's normal or not), the axis along the wall (``hole_axis``), the
+    cutter's side on the wall; else the tool on the face whose outward
+    normal is nearest ``up`` (world) on average along the edge (where
+    both are as near, the left one)."""
+    hole = hole_axis(chain)
+    if hole is not None:
+        axis, side = hole
+        return ToolRule(
+            "axis",
+            axis=tuple(float(x) for x in axis),
+            reason=f"the default: a loop round a cylindrical wall ({side} "
+            "of the chain), the tool along its axis",
+        )
+    w = _weights(chain)
+    up = np.asarray(up, float) / np.linalg.norm(up)
+    near_left = float(w @ (chain.left_normals @ up)) / w.sum()
+    near_right = float(w @ (chain.right_normals @ up)) / w.sum()
+    side = "left" if near_left >= near_right else "right"
+    return ToolRule(
+        "face",
+        side=side,
+        reason="the default: the face whose outward normal is nearest up "
+        f"(cosines {near_left:.2f} left, {near_right:.2f} right)",
+    )
+
+
+def rule_axes(chain: EdgeChain, rule: ToolRule):
+    """The tool axis (unit, world) on each segment of ``chain`` by
+    ``rule``, untilted."""
+    if rule.kind == "axis":
+        return np.tile(np.asarray(rule.axis, float), (len(chain.segments), 1))
+    normals = chain.left_normals if rule.side == "left" else chain.right_normals
+    return normals.copy()
+
+
+@dataclasses.dataclass(frozen=True)
+class EdgeSummary:
+    """One edge chain of a part, as ``deburr-drake edges`` lists it.
+
+    ``index`` (in ``sharp_edges``' order), ``closed`` (a loop),
+    ``length`` (m), ``dihedral`` (rad, least and greatest angle between
+    the two faces' outward normals), ``convex`` (True, False; None where
+    it is both along the chain), ``point`` (m, world: the middle
+    vertex), ``rule`` (``default_tool_rule``), ``reachable`` and, if not,
+    ``blocked`` (why, one phrase)."""
+
+    index: int
+    closed: bool
+    length: float
+    dihedral: tuple
+    convex: bool | None
+    point: np.ndarray
+    rule: ToolRule
+    reachable: bool
+    blocked: str = ""
+
+
+def _convexity(chain):
+    t = chain.segments / np.linalg.norm(chain.segments, axis=1)[:, None]
+    sign = np.sum(t * np.cross(chain.left_normals, chain.right_normals), 1)
+    if np.all(sign > 0.0):
+        return True
+    if np.all(sign < 0.0):
+        return False
+    return None
+
+
+def surface_points(part: MeshPart, count=_SURFACE_SAMPLES):
+    """m, world: the part's vertices and ``count`` points spread over its
+    surface by area (seeded): what the spindle must keep clear of."""
+    rng = np.random.default_rng(0)
+    mesh = part.mesh
+    area = mesh.area_faces / mesh.area_faces.sum()
+    faces = rng.choice(len(area), size=count, p=area)
+    r = rng.random((count, 2))
+    flip = r.sum(axis=1) > 1.0
+    r[flip] = 1.0 - r[flip]
+    tri = mesh.triangles[faces]
+    inside = (
+        tri[:, 0]
+        + r[:, :1] * (tri[:, 1] - tri[:, 0])
+        + r[:, 1:] * (tri[:, 2] - tri[:, 0])
+    )
+    return np.vstack([mesh.vertices, inside])
+
+
+def spindle_hits(
+    surface,
+    points,
+    n1,
+    axes,
+    *,
+    cutter_radius=CUTTER_RADIUS,
+    cutter_length=CUTTER_LENGTH,
+    holder_radius=HOLDER_RADIUS,
+):
+    """Per station (rows of ``points`` on the edge, ``n1`` into the
+    material, the tool ``axes``, unit, world): whether any of the part's
+    ``surface`` points (``surface_points``) lies in the spindle: farther
+    than ``cutter_length`` from the edge along the axis and within
+    ``holder_radius`` of the axis (the line through the cutter's centre,
+    ``cutter_radius`` off the edge against n1). The cutter itself cuts
+    the part; the spindle beyond it must stand in free space."""
+    hits = np.zeros(len(points), bool)
+    for k, (p, n, a) in enumerate(zip(points, n1, axes)):
+        d = surface - (p - cutter_radius * n)
+        along = d @ a
+        near = along > cutter_length
+        if not np.any(near):
+            continue
+        radial = d[near] - along[near, None] * a
+        hits[k] = bool(
+            np.any(np.einsum("ij,ij->i", radial, radial) < holder_radius**2)
+        )
+    return hits
+
+
+def _rule_n1(chain, axes):
+    """n1 along ``chain`` for tool ``axes`` (one per segment): normal to
+    the axis and the tangent, into the material."""
+    t = chain.segments / np.linalg.norm(chain.segments, axis=1)[:, None]
+    side = np.cross(t, axes)
+    side /= np.maximum(np.linalg.norm(side, axis=1), 1e-12)[:, None]
+    into = -(chain.left_normals + chain.right_normals)
+    return side * np.where(np.sum(side * into, 1) >= 0.0, 1.0, -1.0)[:, None]
+
+
+def open_side(
+    part: MeshPart, chain: EdgeChain, rule: ToolRule, up=UP, surface=None
+):
+    """'' when the tool can reach ``chain`` from the part's open side, else
+    why not. The rule: (1) the part stands on its lowest points along
+    ``up`` (a table, a fixture): an edge all on them is not reachable;
+    (2) at up to 48 stations along the edge, with the tool axis of
+    ``rule``, the spindle (``spindle_hits``: beyond the cutter's
+    ``CUTTER_LENGTH``, within ``HOLDER_RADIUS`` of the axis) holds none
+    of the part's surface."""
+    up = np.asarray(up, float) / np.linalg.norm(up)
+    base = float(np.min(part.mesh.vertices @ up))
+    scale = float(part.mesh.scale)
+    if np.max(chain.points @ up - base) < 1e-6 * scale + 1e-9:
+        return "on the part's base (it stands on it)"
+    axes = rule_axes(chain, rule)
+    n = len(chain.segments)
+    pick = np.unique(np.linspace(0, n - 1, min(n, _STATIONS)).astype(int))
+    ends = np.roll(chain.points, -1, axis=0) if chain.closed else None
+    if ends is None:
+        ends = chain.points[1:]
+    middle = 0.5 * (chain.points[: len(ends)] + ends)[pick]
+    surface = surface_points(part) if surface is None else surface
+    hits = spindle_hits(
+        surface, middle, _rule_n1(chain, axes)[pick], axes[pick]
+    )
+    if not np.any(hits):
+        return ""
+    where = middle[int(np.flatnonzero(hits)[0])]
+    return (
+        f"the spindle along the tool axis meets the part at {np.mean(hits):.0%}"
+        f" of the edge (first at [{where[0]:.4f}, {where[1]:.4f}, "
+        f"{where[2]:.4f}] m, world)"
+    )
+
+
+def _middle(chain):
+    """m: the chain's point half its length along it."""
+    lengths = np.linalg.norm(chain.segments, axis=1)
+    k = int(np.searchsorted(np.cumsum(lengths), 0.5 * lengths.sum()))
+    k = min(k, len(lengths) - 1)
+    before = float(np.sum(lengths[:k]))
+    t = (0.5 * lengths.sum() - before) / max(lengths[k], 1e-300)
+    return chain.points[k] + t * chain.segments[k]
+
+
+def describe_edges(part: MeshPart, chains, up=UP):
+    """An ``EdgeSummary`` of each chain of ``part`` (``sharp_edges``)."""
+    out = []
+    surface = surface_points(part)
+    for index, chain in enumerate(chains):
+        cos = np.sum(chain.left_normals * chain.right_normals, axis=1)
+        dihedral = np.arccos(np.clip(cos, -1.0, 1.0))
+        rule = default_tool_rule(chain, up)
+        blocked = open_side(part, chain, rule, up, surface)
+        out.append(
+            EdgeSummary(
+                index=index,
+                closed=chain.closed,
+                length=chain.length,
+                dihedral=(float(dihedral.min()), float(dihedral.max())),
+                convex=_convexity(chain),
+                point=_middle(chain),
+                rule=rule,
+                reachable=not blocked,
+                blocked=blocked,
+            )
+        )
+    return out

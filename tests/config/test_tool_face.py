@@ -56,7 +56,27 @@ def test_the_face_looking_up_is_the_top_face_either_way(tube_file):
 def test_left_and_right_still_pick_by_the_chains_direction(tube_file):
     right = load_scenario(tube_file, text="part: {edge: {tool_rule: right}}")
     np.testing.assert_allclose(_axis(right), [0, 0, 1], atol=1e-6)
-    assert _axis(load_scenario(tube_file))[2] < 0.5  # default: left
+    # left is the bore's wall: the tool would lie across the bore, its
+    # spindle in the far wall; refused for that, not for reach
+    with pytest.raises(
+        ConfigError, match=r"^part.edge.tool_rule = 'left' is invalid: "
+    ) as refused:
+        load_scenario(tube_file, text="part: {edge: {tool_rule: left}}")
+    assert "the spindle stands in the part" in str(refused.value)
+    assert "reach" not in str(refused.value)
+
+
+def test_the_default_on_a_bore_is_the_bores_axis(tube_file):
+    """Neither tool_rule nor tool_face: the bore's rim is a loop round a
+    cylindrical wall, so the tool stands along its axis, out of the part,
+    whichever way the pass runs."""
+    for direction in (1, -1):
+        scenario = load_scenario(
+            tube_file, text=f"part: {{edge: {{direction: {direction}}}}}"
+        )
+        rule = scenario.part.edge.mesh_rule(scenario.part.pose)
+        assert rule.kind == "axis"
+        np.testing.assert_allclose(_axis(scenario), [0, 0, 1], atol=1e-6)
 
 
 @pytest.mark.parametrize(

@@ -9,11 +9,16 @@ import numpy as np
 import pytest
 import trimesh
 
-from deburr_drake.math.edge_contour import EdgeContour, chamfer_area_ratio
+from deburr_drake.math.edge_contour import (
+    EdgeContour,
+    chamfer_area_ratio,
+    spindle_clash,
+)
 from deburr_drake.math.geometry import CircularContour
 from deburr_drake.math.mesh_part import (
     EdgeCurve,
     choose_edge,
+    default_tool_rule,
     load_part,
     sharp_edges,
 )
@@ -440,3 +445,53 @@ def test_the_chamfer_area_by_a_polygon():
         assert chamfer_area_ratio(faces, delta, e) * delta * e == (
             pytest.approx(area, rel=1e-9, abs=1e-15)
         )
+
+
+def test_a_hole_off_its_faces_normal_cuts_along_its_own_axis():
+    """angled_hole.stl: a 16 mm hole 30 deg off a flat plate's normal.
+    With the tool on the top face every constant tilt gouges the wall
+    somewhere; along the hole's axis (the default rule) the cutter's
+    side plane is the wall's tangent plane all round, no tilt given: the
+    tool path is the rim moved r into the hole and e down the axis."""
+    part = load_part(PARTS / "angled_hole.stl", units="mm")
+    chain = choose_edge(sharp_edges(part), near=[0.008, 0.0, 0.0])
+    curve = EdgeCurve(chain)
+    with pytest.raises(ValueError, match="cuts .* into a face"):
+        EdgeContour(curve, cutter_radius=r, engagement=e, rule="left")
+    rule = default_tool_rule(chain)
+    path = EdgeContour(
+        curve, cutter_radius=r, engagement=e, rule="axis", axis=rule.axis
+    )
+    hole = np.array([0.0, -math.sin(INCLINE), math.cos(INCLINE)])
+    for s in np.linspace(0.0, path.length, 16, endpoint=False):
+        np.testing.assert_allclose(path.tool_axis_at(s), hole, atol=1e-3)
+        # the tool's centre line is r - r = 0 from the hole's wall...
+        z = path.point_at(s)
+        radial = z - (z @ hole) * hole  # off the hole's axis (origin)
+        assert np.linalg.norm(radial) == pytest.approx(0.008 - r, abs=3e-5)
+        # ...e below the rim along the axis
+        assert z @ hole == pytest.approx(
+            path.edge_point(s) @ hole - e, abs=3e-5
+        )
+    assert "axis along [0.000, -0.500, 0.866]" in path.describe_rule()
+
+
+def test_the_axis_rule_takes_an_axis(bore):
+    with pytest.raises(ValueError, match="takes an axis"):
+        EdgeContour(bore, cutter_radius=r, engagement=e, rule="axis")
+    with pytest.raises(ValueError, match="takes an axis"):
+        EdgeContour(
+            bore, cutter_radius=r, engagement=e, rule="left", axis=[0, 0, 1]
+        )
+
+
+def test_the_spindle_clash_of_a_tool_lying_across_the_bore(bore):
+    """The tube's bore with the tool on the wall (left for this chain):
+    the tool lies across the bore and its spindle in the far wall; on the
+    top face (right) it stands clear."""
+    part = load_part(PARTS / "tube.stl", units="mm")
+    across = EdgeContour(bore, cutter_radius=r, engagement=e, rule="left")
+    assert "spindle stands in the part at 100%" in spindle_clash(
+        part, across, r, 0.02
+    )
+    assert spindle_clash(part, _bore_contour(bore), r, 0.02) == ""

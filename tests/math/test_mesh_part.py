@@ -13,8 +13,12 @@ import trimesh
 from deburr_drake.math.mesh_part import (
     EdgeCurve,
     choose_edge,
+    default_tool_rule,
+    describe_edges,
+    hole_axis,
     load_part,
     sharp_edges,
+    wall_axis,
 )
 
 PARTS = Path(__file__).resolve().parents[2] / "models" / "parts"
@@ -289,3 +293,99 @@ def test_the_job_blocks_top_side_edges():
     f = EdgeCurve(chamfer).frame(np.array([0.05]))
     np.testing.assert_allclose(f.face_angle, 3 * math.pi / 4, atol=1e-6)
     assert f.convex.all()
+
+
+def test_a_corner_where_a_third_edge_meets_ends_the_chains(tmp_path):
+    """A hexagonal prism: with sharp_angle 50 deg its vertical edges
+    (side faces 60 deg apart) are edges too, so three edges meet at each
+    corner and every side is an edge of its own (18); with 70 deg they are
+    not, the sides' faces turn smoothly, and the rims stay two loops."""
+    prism = trimesh.creation.cylinder(radius=0.02, height=0.01, sections=6)
+    part = load_part(_write(prism, tmp_path / "hex.stl"))
+    chains = sharp_edges(part, min_angle=math.radians(50.0))
+    assert len(chains) == 18
+    for chain in chains:
+        assert not chain.closed and len(chain.points) == 2
+        # one face pair per chain
+        assert np.ptp(chain.left_normals, axis=0).max() < 1e-9
+        assert np.ptp(chain.right_normals, axis=0).max() < 1e-9
+    rims = sharp_edges(part, min_angle=math.radians(70.0))
+    assert [(c.closed, len(c.points)) for c in rims] == [(True, 6)] * 2
+
+
+def test_the_default_rule_on_a_hole_drilled_off_its_faces_normal():
+    """angled_hole.stl: a 16 mm hole 30 deg off the normal of a flat
+    plate. The top rim is a loop round the hole's cylindrical wall: the
+    tool axis is the hole's axis, fitted from the wall's normals, out of
+    the part; an outer edge of the plate stands the tool on the top."""
+    part = load_part(PARTS / "angled_hole.stl", units="mm")
+    chains = sharp_edges(part)
+    rim = choose_edge(chains, near=[0.008, 0.0, 0.0])
+    rule = default_tool_rule(rim)
+    assert rule.kind == "axis"
+    hole = [0.0, -math.sin(INCLINE), math.cos(INCLINE)]
+    np.testing.assert_allclose(rule.axis, hole, atol=1e-3)
+    _, residual, spread = wall_axis(rim, hole_axis(rim)[1])
+    assert residual < 0.01 and spread > 0.4
+    top = choose_edge(chains, near=[0.04, 0.0, 0.0])
+    rule = default_tool_rule(top)
+    assert rule.kind == "face"
+    normals = top.left_normals if rule.side == "left" else top.right_normals
+    np.testing.assert_allclose(normals[0], [0, 0, 1], atol=1e-9)
+
+
+def test_the_default_rule_on_a_pipes_radial_hole():
+    """pipe_hole.stl: the radial hole's outer rim (a saddle on the pipe's
+    curved face) gets the hole's axis, +z; the pipe's own face round the
+    rim is no cylinder about it (its normals do not go round)."""
+    part = load_part(PARTS / "pipe_hole.stl", units="mm")
+    rim = choose_edge(sharp_edges(part), near=[0.008, 0.0, 0.06])
+    axis, side = hole_axis(rim)
+    np.testing.assert_allclose(axis, [0, 0, 1], atol=1e-3)
+    other = "right" if side == "left" else "left"
+    assert wall_axis(rim, other)[2] < 0.05
+
+
+def test_the_listing_of_a_block(tmp_path):
+    """A 40 x 30 x 20 mm block on its base: twelve convex 90-degree
+    edges, a point half way along each; the four on its base are not
+    reachable, the eight others are."""
+    box = trimesh.creation.box(extents=[0.04, 0.03, 0.02])
+    part = load_part(_write(box, tmp_path / "block.stl"), xyz=[0.5, 0, 0.1])
+    chains = sharp_edges(part)
+    listing = describe_edges(part, chains)
+    assert [s.index for s in listing] == list(range(12))
+    assert (
+        sorted(round(s.length, 6) for s in listing)
+        == [0.02] * 4 + [0.03] * 4 + [0.04] * 4
+    )
+    for summary, chain in zip(listing, chains):
+        assert not summary.closed and summary.convex is True
+        np.testing.assert_allclose(summary.dihedral, [math.pi / 2] * 2)
+        assert chain.distance(summary.point) < 1e-12
+        np.testing.assert_allclose(
+            summary.point, chain.points.mean(axis=0), atol=1e-12
+        )
+    base = [s for s in listing if s.point[2] < 0.1 - 0.0099]
+    assert len(base) == 4
+    assert all(not s.reachable and "base" in s.blocked for s in base)
+    assert sum(s.reachable for s in listing) == 8
+
+
+def test_the_spindle_across_a_pipe_is_not_the_open_side():
+    """The radial hole's inner rim (at the pipe's bore): its axis points
+    into the bore, so the spindle stands in the pipe's far wall; the
+    outer rim's stands in free space."""
+    part = load_part(PARTS / "pipe_hole.stl", units="mm")
+    chains = sharp_edges(part)
+    listing = describe_edges(part, chains)
+    inner, outer = (
+        listing[[c is chain for c in chains].index(True)]
+        for chain in (
+            choose_edge(chains, near=[0.008, 0, 0.05]),
+            choose_edge(chains, near=[0.008, 0, 0.06]),
+        )
+    )
+    assert outer.reachable and not outer.blocked
+    assert not inner.reachable and "spindle" in inner.blocked
+    np.testing.assert_allclose(inner.rule.axis, [0, 0, -1], atol=1e-3)
