@@ -90,10 +90,8 @@ class JobConfig:
         return shipped if shipped.is_file() else path
 
     def validate(self, owner: str = "job"):
-        if not self.file:
-            return
         _require(
-            self.part_file().is_file(),
+            not self.file or self.part_file().is_file(),
             f"{owner}.file",
             self.file,
             "an STL or OBJ file (relative to the scenario file, or a name "
