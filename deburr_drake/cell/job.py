@@ -66,7 +66,7 @@ def _posture(model, robot, frame, p, axis, q_guess=None):
     )
 
 
-def _cut(scenario, model, part, chains, ordered):
+def _cut(scenario, model, part, chains, ordered, tilt=0.0):
     """The JobCut of ``ordered`` (no move yet); ValueError or
     RuntimeError say why not."""
     job = scenario.job
@@ -79,6 +79,11 @@ def _cut(scenario, model, part, chains, ordered):
         units=job.units,
         near=point.tolist(),
         sharp_angle=job.sharp_angle,
+        tilt=tilt,
+        # an open edge cut from its last point runs backwards
+        direction=-1
+        if not chain.closed and np.allclose(ordered.start, chain.points[-1])
+        else 1,
         start_near=(to_part @ (ordered.start - part.translation)).tolist(),
     )
     contour = edge.mesh_path(scenario.tool, job.pose)
@@ -119,9 +124,13 @@ def plan_job(
         Pick(part.to_world(e.near) if e.near else None, e.index)
         for e in job.edges
     ]
-    selected, skipped = select_edges(
-        describe_edges(part, chains), chains, picks
-    )
+    summaries = describe_edges(part, chains)
+    selected, skipped = select_edges(summaries, chains, picks)
+    # each picked edge's tilt (the first pick of an edge picked twice)
+    tilts = {}
+    for pick, edge in zip(picks, job.edges):
+        (index,), _ = select_edges(summaries, chains, [pick])
+        tilts.setdefault(index, edge.tilt)
     start = part.to_world(job.start) if job.start else None
     ordered = order_edges(chains, selected, start=start, order=job.order)
     # The robot, and the planning cell of it and the part's convex pieces.
@@ -134,7 +143,9 @@ def plan_job(
     cuts, refused = [], []
     for item in ordered:
         try:
-            cut = _cut(scenario, model, part, chains, item)
+            cut = _cut(
+                scenario, model, part, chains, item, tilts.get(item.index, 0.0)
+            )
         except (ValueError, RuntimeError) as e:
             refused.append((item.index, f"edge {item.index}: {e}"))
             continue

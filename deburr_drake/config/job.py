@@ -32,10 +32,12 @@ __all__ = ["JobConfig", "JobEdgeConfig"]
 @dataclass
 class JobEdgeConfig:
     """One edge of a job: the edge nearest ``near`` (m, part frame) or the
-    one at ``index`` of the part's listing; one of them."""
+    one at ``index`` of the part's listing; one of them. ``tilt`` turns
+    the tool axis about the edge, as ``part.edge.tilt``."""
 
     near: List[float] = field(default_factory=list)  # m, part frame
     index: int = -1  # -, in deburr-drake edges' listing (-1: by near)
+    tilt: float = 0.0  # rad, the tool axis turned about the edge
 
     def validate(self, owner: str):
         _require(
@@ -44,6 +46,7 @@ class JobEdgeConfig:
             {"near": self.near, "index": self.index},
             "one of near (a point, m, part frame) or index (>= 0)",
         )
+        _finite(owner, "tilt", self.tilt)
         if self.near:
             _vector(owner, "near", self.near, 3, _finite)
         else:

@@ -47,3 +47,16 @@ def test_the_chamfer_is_refused_naming_the_edge_and_the_tilt(plan):
     assert len(plan.refused) == 1
     assert line.startswith(f"edge {index}: ")
     assert "tilt" in line and "\n" not in line
+
+
+def test_tilted_as_told_the_chamfers_approach_meets_the_spindle():
+    """The tilt the refusal names, given to the chamfer's pick: the cut's
+    path is made, and the move down to it is refused naming the spindle."""
+    text = JOB.replace(
+        "{near: [0.045, 0.0, 0.0]}", "{near: [0.045, 0.0, 0.0], tilt: -0.7854}"
+    )
+    plan = plan_job(load_scenario("paper_6dof", text=text))
+    (index, line) = plan.refused[0]
+    assert len(plan.refused) == 1 and len(plan.cuts) == 3
+    assert line.startswith(f"move from edge {plan.cuts[0].index} to edge ")
+    assert "approach: the spindle enters the part" in line
