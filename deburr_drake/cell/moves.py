@@ -248,8 +248,10 @@ def waypoint(cell: PlanningCell, point, axis, q_near, gap: float) -> np.ndarray:
     return result.GetSolution(q)
 
 
-def _transit(cell: PlanningCell, q_a, q_b, settings: MoveSettings):
-    """The transit from ``q_a`` to ``q_b`` (both at rest)."""
+def _transit(cell: PlanningCell, q_a, q_b, settings: MoveSettings, extra=()):
+    """The transit from ``q_a`` to ``q_b`` (both at rest), the distance
+    constraint at ``settings.samples`` points and at the path parameters
+    ``extra`` (in [0, 1])."""
     plant = cell.plant
     n = plant.num_positions()
     trajopt = KinematicTrajectoryOptimization(n, settings.control_points)
@@ -283,7 +285,7 @@ def _transit(cell: PlanningCell, q_a, q_b, settings: MoveSettings):
     constraint = MinimumDistanceLowerBoundConstraint(
         plant, settings.clearance, plant_context, None, 0.05
     )
-    for s in np.linspace(0.0, 1.0, settings.samples):
+    for s in np.union1d(np.linspace(0.0, 1.0, settings.samples), extra):
         trajopt.AddPathPositionConstraint(constraint, s)
     result = _solve(prog, "no collision-free transit")
     return trajopt.ReconstructTrajectory(result)
@@ -335,17 +337,10 @@ def plan_move(
             )
         except MovePlanningError as e:
             raise MovePlanningError(f"{label}: {name} point: {e}") from None
-    try:
-        transit = _transit(
-            cell, segments["retract"], segments["approach"], settings
-        )
-    except MovePlanningError as e:
-        raise MovePlanningError(f"{label}: transit: {e}") from None
-    step = settings.check_step
+    transit, times, middle, distances = _checked_transit(
+        cell, segments, settings, label
+    )
     ends = (transit.start_time(), transit.end_time())
-    count = max(2, int(np.ceil(_max_joint_travel(transit) / step)) + 1)
-    times = np.linspace(*ends, count)
-    middle = np.array([transit.value(t).ravel() for t in times])
     # The check: the transit by the collision checker, edge by edge.
     for i, (a, b) in enumerate(zip(middle[:-1], middle[1:])):
         if not cell.checker.CheckEdgeCollisionFree(a, b):
@@ -353,14 +348,21 @@ def plan_move(
                 f"{label}: transit collides at {times[i]:.3g} s of "
                 f"{ends[1]:.3g} s (SceneGraphCollisionChecker)"
             )
+    step = settings.check_step
     retract = _line(np.asarray(q_a), segments["retract"], step)
     approach = _line(segments["approach"], np.asarray(q_b), step)
     # The clearance along the move; the cutter's own left out where it is
     # in the cut, at the retract's start and the approach's end.
-    least = np.inf
+    least = float(np.min(distances))
+    if least < 0.0:
+        i = int(np.argmin(distances))
+        raise MovePlanningError(
+            f"{label}: transit: the {_nearest(cell, middle[i])[1]} enters "
+            f"the part at {times[i] - ends[0]:.3g} s of "
+            f"{ends[1] - ends[0]:.3g} s ({-least * 1e3:.2g} mm deep there)"
+        )
     for name, qs, cutter in (
         ("retract", retract, False),
-        ("transit", middle, True),
         ("approach", approach, False),
     ):
         for i, q in enumerate(qs):
@@ -396,6 +398,38 @@ def plan_move(
         min_clearance_m=least,
         planning_time_s=time.perf_counter() - started,
     )
+
+
+def _checked_transit(cell, segments, settings, label, rounds=3):
+    """The transit between the retract and the approach points, sampled
+    at ``settings.check_step``: (trajectory, times, q, clearances). Where
+    the clearance between the constraint's points dips under
+    ``settings.clearance``, solved again with the constraint there too
+    (up to ``rounds`` times)."""
+    extra = np.zeros(0)
+    for _ in range(rounds):
+        try:
+            transit = _transit(
+                cell,
+                segments["retract"],
+                segments["approach"],
+                settings,
+                extra,
+            )
+        except MovePlanningError as e:
+            raise MovePlanningError(f"{label}: transit: {e}") from None
+        t0, t1 = transit.start_time(), transit.end_time()
+        count = max(
+            2, int(np.ceil(_max_joint_travel(transit) / settings.check_step))
+        )
+        times = np.linspace(t0, t1, count + 1)
+        q = np.array([transit.value(t).ravel() for t in times])
+        distances = np.array([clearance(cell, x) for x in q])
+        low = (times[distances < settings.clearance] - t0) / (t1 - t0)
+        if len(low) == 0:
+            break
+        extra = np.union1d(extra, low[:: max(1, len(low) // 10)])
+    return transit, times, q, distances
 
 
 def _max_joint_travel(trajectory) -> float:
