@@ -40,13 +40,13 @@ class JobEdgeConfig:
     tilt: float = 0.0  # rad, the tool axis turned about the edge
 
     def validate(self, owner: str):
+        _finite(owner, "tilt", self.tilt)
         _require(
             bool(self.near) != (self.index >= 0),
             owner,
             {"near": self.near, "index": self.index},
             "one of near (a point, m, part frame) or index (>= 0)",
         )
-        _finite(owner, "tilt", self.tilt)
         if self.near:
             _vector(owner, "near", self.near, 3, _finite)
         else:
