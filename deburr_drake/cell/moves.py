@@ -321,22 +321,8 @@ def plan_move(
     second. MovePlanningError (one line, starting with ``label``) names the
     segment that cannot be planned or that the check refuses."""
     started = time.perf_counter()
-    (p_a, axis_a, q_a), (p_b, axis_b, q_b) = cut_end, next_start
-    segments = {}
-    for name, p, axis, q, distance in (
-        ("retract", p_a, axis_a, q_a, settings.retract),
-        ("approach", p_b, axis_b, q_b, settings.approach),
-    ):
-        try:
-            segments[name] = waypoint(
-                cell,
-                np.asarray(p) + distance * np.asarray(axis),
-                axis,
-                q,
-                settings.clearance,
-            )
-        except MovePlanningError as e:
-            raise MovePlanningError(f"{label}: {name} point: {e}") from None
+    q_a, q_b = cut_end[2], next_start[2]
+    segments = _waypoints(cell, cut_end, next_start, settings, label)
     transit, times, middle, distances = _checked_transit(
         cell, segments, settings, label
     )
@@ -398,6 +384,27 @@ def plan_move(
         min_clearance_m=least,
         planning_time_s=time.perf_counter() - started,
     )
+
+
+def _waypoints(cell, cut_end, next_start, settings, label):
+    """{"retract": q, "approach": q}: the postures ``settings.retract`` up
+    the first cut's tool axis and ``settings.approach`` up the next's."""
+    segments = {}
+    for name, (p, axis, q), distance in (
+        ("retract", cut_end, settings.retract),
+        ("approach", next_start, settings.approach),
+    ):
+        try:
+            segments[name] = waypoint(
+                cell,
+                np.asarray(p) + distance * np.asarray(axis),
+                axis,
+                q,
+                settings.clearance,
+            )
+        except MovePlanningError as e:
+            raise MovePlanningError(f"{label}: {name} point: {e}") from None
+    return segments
 
 
 def _checked_transit(cell, segments, settings, label, rounds=3):
