@@ -18,12 +18,21 @@ pipe_hole.stl   a 16 mm radial hole (radius 8 mm) through the top of a
 wedge.stl       a prism 60 mm long along y whose top face and sloped face
                 meet at 120 degrees in a straight open edge at x = 40 mm,
                 z = 20 mm
+block.stl       the job example: a 140 x 100 x 30 mm block, vertical
+                corners rounded 12 mm, its top face at z = 0 with the
+                origin at its centre, and on the top side: a through bore
+                of radius 10 mm at (-40, 15); holes of radius 6 mm drilled
+                15 degrees off the top's normal (about x) at (-40, -28) and
+                30 degrees off it (about y) at (0, -25); a slot 12 mm wide,
+                48 mm long and 10 mm deep along x centred at (5, 22); the
+                outer rim; a chamfer along x = 45 mm sloping down at 45
+                degrees to the +x end (135 degrees between it and the top)
 
 The hole parts need manifold3d (trimesh's boolean engine; pip install
 deburr_drake[parts]). Facets: 256 round a tube, 160 round a hole, so that
 the smoothed edges are within a few micrometres of the true curves.
 
-    python scripts/make_test_parts.py [--out models/parts]
+    python scripts/make_test_parts.py [--out models/parts] [block ...]
 """
 
 import argparse
@@ -108,20 +117,77 @@ def wedge(length=60.0):
     return mesh
 
 
+def _drill(radius, depth, *, at, tilt_deg=0.0, about=(1, 0, 0), sections=160):
+    """A drill of ``radius`` through z = 0 at ``at`` (x, y), its axis
+    turned ``tilt_deg`` about ``about``, reaching ``depth`` both ways."""
+    drill = trimesh.creation.cylinder(
+        radius=radius, height=2.0 * depth, sections=sections
+    )
+    drill.apply_transform(
+        trimesh.transformations.rotation_matrix(math.radians(tilt_deg), about)
+    )
+    drill.apply_translation([at[0], at[1], 0.0])
+    return drill
+
+
+def block(length=140.0, width=100.0, height=30.0, corner=12.0):
+    """The job example (see the module docstring)."""
+    # a rounded rectangle extruded: two boxes and the four corners' posts
+    pieces = [
+        trimesh.creation.box(extents=[length, width - 2 * corner, height]),
+        trimesh.creation.box(extents=[length - 2 * corner, width, height]),
+    ]
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            post = trimesh.creation.cylinder(
+                radius=corner, height=height, sections=64
+            )
+            post.apply_translation(
+                [sx * (length / 2 - corner), sy * (width / 2 - corner), 0]
+            )
+            pieces.append(post)
+    body = trimesh.boolean.union(pieces, engine="manifold")
+    body.apply_translation([0.0, 0.0, -0.5 * height])
+    # the chamfer: a box whose bottom face is the plane x + z = 45
+    chamfer = trimesh.creation.box(extents=[100.0, 200.0, 100.0])
+    chamfer.apply_translation([0.0, 0.0, 50.0])
+    chamfer.apply_transform(
+        trimesh.transformations.rotation_matrix(math.radians(45.0), [0, 1, 0])
+    )
+    chamfer.apply_translation([45.0, 0.0, 0.0])
+    slot = [trimesh.creation.box(extents=[36.0, 12.0, 20.0])]
+    slot += [_drill(6.0, 10.0, at=(x, 0.0), sections=96) for x in (-18, 18)]
+    slot = trimesh.boolean.union(slot, engine="manifold")
+    slot.apply_translation([5.0, 22.0, 0.0])  # 10 mm deep
+    cuts = [
+        chamfer,
+        _drill(10.0, 40.0, at=(-40.0, 15.0)),
+        _drill(6.0, 50.0, at=(-40.0, -28.0), tilt_deg=15.0),
+        _drill(6.0, 50.0, at=(0.0, -25.0), tilt_deg=30.0, about=(0, 1, 0)),
+        slot,
+    ]
+    return trimesh.boolean.difference([body, *cuts], engine="manifold")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "models" / "parts")
+    parser.add_argument(
+        "parts", nargs="*", help="the parts to write (default: all)"
+    )
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     parts = {
-        "tube": tube(30.0, 35.0, 50.0),
-        "cross_hole": cross_hole(),
-        "inclined_hole": inclined_hole(),
-        "wedge": wedge(),
-        "angled_hole": angled_hole(),
-        "pipe_hole": pipe_hole(),
+        "tube": lambda: tube(30.0, 35.0, 50.0),
+        "cross_hole": cross_hole,
+        "inclined_hole": inclined_hole,
+        "wedge": wedge,
+        "angled_hole": angled_hole,
+        "pipe_hole": pipe_hole,
+        "block": block,
     }
-    for name, mesh in parts.items():
+    for name in args.parts or parts:
+        mesh = parts[name]()
         assert mesh.is_watertight and mesh.volume > 0, name
         path = args.out / f"{name}.stl"
         mesh.export(path)

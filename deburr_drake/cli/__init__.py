@@ -15,6 +15,7 @@ from deburr_drake.cli.converge import _add_converge_parser
 from deburr_drake.cli.demo import _add_demo_parser
 from deburr_drake.cli.diagram import _add_diagram_parser
 from deburr_drake.cli.edges import _add_edges_parser
+from deburr_drake.cli.job import _add_job_parser
 from deburr_drake.cli.simulate import _add_simulate_parser
 from deburr_drake.cli.sweep import _add_sweep_parser
 
@@ -38,6 +39,7 @@ def main(argv=None) -> int:
     _add_analyze_parser(subparsers)
     _add_converge_parser(subparsers)
     _add_edges_parser(subparsers)
+    _add_job_parser(subparsers)
     args = parser.parse_args(argv)
     from deburr_drake.config import ConfigError
 

@@ -43,6 +43,7 @@ from deburr_drake.config.control import (
     RobustConfig,
     TaskConfig,
 )
+from deburr_drake.config.job import JobConfig, JobEdgeConfig
 from deburr_drake.config.localisation import (
     LocalisationConfig,
     OnlineRegistrationConfig,
@@ -61,6 +62,8 @@ from deburr_drake.config.scenario import (
 
 __all__ = [
     "ConfigError",
+    "JobConfig",
+    "JobEdgeConfig",
     "PartConfig",
     "PoseConfig",
     "MaterialConfig",

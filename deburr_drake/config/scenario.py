@@ -35,6 +35,7 @@ from deburr_drake.config.control import (
     EstimatorConfig,
     TaskConfig,
 )
+from deburr_drake.config.job import JobConfig
 from deburr_drake.config.localisation import LocalisationConfig
 
 __all__ = [
@@ -132,6 +133,7 @@ class Scenario:
     part_error: PartErrorConfig = field(default_factory=PartErrorConfig)
     faults: FaultsConfig = field(default_factory=FaultsConfig)
     localisation: LocalisationConfig = field(default_factory=LocalisationConfig)
+    job: JobConfig = field(default_factory=JobConfig)
 
     def validate(self):
         # The default output directory is out/<name>: a plain file name.
@@ -728,6 +730,16 @@ def _resolve_edge_file(part: PartConfig, directory: Path):
         edge.file = str(candidate.resolve())
 
 
+def _resolve_job_file(job: JobConfig, directory: Path):
+    """A job's relative part file is relative to the scenario file, as the
+    edge's."""
+    if not job.file or Path(job.file).is_absolute():
+        return
+    candidate = directory / job.file
+    if candidate.is_file():
+        job.file = str(candidate.resolve())
+
+
 def _base_of(source: str, path: Path, depth: int = 0) -> Scenario:
     """The defaults a scenario file starts from: its ``base`` scenario
     (a shipped name or a file relative to it), or the dataclasses'
@@ -791,6 +803,7 @@ def load_scenario(
             _check_edge_fields(source, str(path), scenario.part.edge.kind)
             _resolve_robot_model(scenario.robot, path.parent)
             _resolve_edge_file(scenario.part, path.parent)
+            _resolve_job_file(scenario.job, path.parent)
         if text:
             _check_yaml(text, "--scenario-text")
             scenario = yaml_load_typed(data=text, defaults=scenario)

@@ -261,6 +261,40 @@ def test_step_without_cascadio_says_so(tmp_path):
         load_part(step)
 
 
+def test_the_job_blocks_top_side_edges():
+    """models/parts/block.stl: on its top face (z = 0) a through bore, two
+    holes drilled 15 and 30 degrees off the top's normal, a slot, the outer
+    rim and a chamfer's 135-degree edge, each an edge of its own."""
+    chains = sharp_edges(load_part(PARTS / "block.stl", units="mm"))
+    top = [c for c in chains if np.allclose(c.points[:, 2], 0.0, atol=1e-9)]
+    assert len(top) == 6
+
+    def dihedral(chain):
+        cos = np.sum(chain.left_normals * chain.right_normals, axis=1)
+        d = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+        return d.min(), d.max()
+
+    def at(x, y):
+        return choose_edge(top, near=[x * 1e-3, y * 1e-3, 0.0])
+
+    bore, hole15, hole30 = at(-30, 15), at(-34, -28), at(7, -25)
+    slot, rim, chamfer = at(5, 28), at(-70, 0), at(45, 0)
+    assert len({id(c) for c in (bore, hole15, hole30, slot, rim, chamfer)}) == 6
+    for loop in (bore, hole15, hole30, slot):
+        assert loop.closed
+    assert bore.length == pytest.approx(2 * math.pi * 0.010, rel=1e-3)
+    np.testing.assert_allclose(dihedral(bore), [90.0, 90.0], atol=1e-6)
+    # a hole drilled off the normal: its wall meets the top at 90 -/+ tilt
+    np.testing.assert_allclose(dihedral(hole15), [75.0, 105.0], atol=0.1)
+    np.testing.assert_allclose(dihedral(hole30), [60.0, 120.0], atol=0.1)
+    assert slot.length == pytest.approx(2 * 0.036 + 2 * math.pi * 0.006, 1e-3)
+    assert not rim.closed and not chamfer.closed
+    assert chamfer.length == pytest.approx(0.100)
+    f = EdgeCurve(chamfer).frame(np.array([0.05]))
+    np.testing.assert_allclose(f.face_angle, 3 * math.pi / 4, atol=1e-6)
+    assert f.convex.all()
+
+
 def test_a_corner_where_a_third_edge_meets_ends_the_chains(tmp_path):
     """A hexagonal prism: with sharp_angle 50 deg its vertical edges
     (side faces 60 deg apart) are edges too, so three edges meet at each
