@@ -2,7 +2,6 @@
 again when the file changes, and on the job's block leaving the bore, the
 slot and the holes open while covering the material."""
 
-import importlib.util
 from pathlib import Path
 import shutil
 
@@ -70,9 +69,6 @@ def test_pieces_are_placed_as_the_part():
     )
 
 
-@pytest.mark.skipif(
-    importlib.util.find_spec("vhacdx") is None, reason="needs vhacdx"
-)
 def test_a_changed_file_is_decomposed_again(tmp_path):
     path = tmp_path / "box.stl"
     trimesh.creation.box(extents=[10, 20, 30]).export(path)
