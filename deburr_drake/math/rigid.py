@@ -9,7 +9,6 @@ Ry(pitch) Rx(roll)."""
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 __all__ = [
     "rpy_matrix",
@@ -22,15 +21,35 @@ __all__ = [
 ]
 
 
+# Written out rather than scipy.spatial.transform's: importing
+# scipy.spatial costs every command about a second, and every scenario
+# reads a part's pose.
 def rpy_matrix(rpy) -> np.ndarray:
     """R = Rz(yaw) Ry(pitch) Rx(roll) of ``rpy`` (rad)."""
-    # scipy's extrinsic "xyz" is Rz(yaw) Ry(pitch) Rx(roll)
-    return Rotation.from_euler("xyz", np.asarray(rpy, float)).as_matrix()
+    roll, pitch, yaw = np.asarray(rpy, float)
+    cr, sr = np.cos(roll), np.sin(roll)
+    cp, sp = np.cos(pitch), np.sin(pitch)
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
 
 
 def matrix_rpy(R) -> np.ndarray:
-    """(roll, pitch, yaw) (rad) of the rotation matrix ``R``."""
-    return Rotation.from_matrix(np.asarray(R, float)).as_euler("xyz")
+    """(roll, pitch, yaw) (rad) of the rotation matrix ``R``, pitch in
+    [-pi/2, pi/2]."""
+    R = np.asarray(R, float)
+    return np.array(
+        [
+            np.arctan2(R[2, 1], R[2, 2]),
+            np.arctan2(-R[2, 0], np.hypot(R[2, 1], R[2, 2])),
+            np.arctan2(R[1, 0], R[0, 0]),
+        ]
+    )
 
 
 def compose(a, b):

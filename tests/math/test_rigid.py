@@ -62,3 +62,15 @@ def test_stepped_belief_keeps_the_error_against_the_stepped_part():
     moved = stepped_belief(real, believed, offset, [0.0, 0.0, 0.0])
     np.testing.assert_allclose(moved[0], believed[0], atol=1e-15)
     np.testing.assert_allclose(moved[1], believed[1] - offset, atol=1e-15)
+
+
+def test_rpy_round_trip_over_the_angles():
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        rpy = rng.uniform(-np.pi, np.pi, 3)
+        rpy[1] = rng.uniform(-1.5, 1.5)
+        R = rpy_matrix(rpy)
+        np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-14)
+        np.testing.assert_allclose(np.linalg.det(R), 1.0, atol=1e-14)
+        np.testing.assert_allclose(rpy_matrix(matrix_rpy(R)), R, atol=1e-14)
+        np.testing.assert_allclose(matrix_rpy(R), rpy, atol=1e-12)
