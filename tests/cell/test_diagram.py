@@ -16,9 +16,8 @@ from deburr_drake.math.geometry import CircularContour
 
 
 @pytest.fixture(scope="module")
-def paper_diagram():
-    scenario = load_scenario("paper")
-    return scenario, make_deburring_diagram(scenario=scenario)
+def paper_diagram(paper_cell):
+    return paper_cell()
 
 
 def test_every_system_is_named(paper_diagram):

@@ -59,12 +59,9 @@ def test_noise_scale_multiplies_the_sensor_noise():
     )
 
 
-def test_no_fault_adds_no_system():
-    scenario = load_scenario("paper")
-    names = {
-        s.get_name()
-        for s in make_deburring_diagram(scenario=scenario).GetSystems()
-    }
+def test_no_fault_adds_no_system(paper_cell):
+    _, diagram = paper_cell()
+    names = {s.get_name() for s in diagram.GetSystems()}
     assert not names & {"sensor_faults", "sensor_noise_scale"}
 
 
