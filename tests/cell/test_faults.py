@@ -104,8 +104,9 @@ faults:
     log = simulate(
         make_deburring_diagram(scenario=scenario),
         scenario,
-        duration=3.5,
-        progress_interval=3.5,
+        # to the dropout window's end: nothing after 3.2 s is read
+        duration=3.25,
+        progress_interval=3.25,
     )
     ch, sensed = log["chamfer"], log["tool_force"]["value"]
     true_f_n = -np.einsum("ij,ij->i", sensed, ch["n1"])
