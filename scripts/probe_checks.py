@@ -14,6 +14,7 @@ centre within 20 um.
 
 import sys
 
+from check_table import report  # scripts/check_table.py
 import numpy as np
 
 from deburr_drake.config import load_scenario
@@ -70,22 +71,10 @@ def check(text, radius_tolerance, correction):
 
 
 def main() -> int:
-    failed = []
-    for label, text, tolerance, correction in CASES:
-        print(label, flush=True)
-        for name, value, bound, ok in check(text, tolerance, correction):
-            print(
-                f"  {name:24s} {value:10.4g}  {bound:>16s}  "
-                + ("ok" if ok else "FAIL"),
-                flush=True,
-            )
-            if not ok:
-                failed.append(f"{label}: {name}")
-    if failed:
-        print("failed: " + "; ".join(failed))
-        return 1
-    print("all checks pass")
-    return 0
+    return report(
+        (label, check(text, tolerance, correction))
+        for label, text, tolerance, correction in CASES
+    )
 
 
 if __name__ == "__main__":

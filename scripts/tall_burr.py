@@ -13,6 +13,8 @@ limit, the feed on the burr below 1.2 mm/s (it falls from 2.4 mm/s toward
 
 import sys
 
+from check_table import report  # scripts/check_table.py
+
 from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.config import load_scenario
 from deburr_drake.runs import envelope
@@ -66,18 +68,7 @@ def main() -> int:
             <= max(0.25 * abs(m["feed_law_on_burr_m_s"]), 1e-12),
         ),
     ]
-    print("paper cell, burr 2 mm x 20 mm, f_d = 10 N, 17 s")
-    for name, value, bound, ok in checks:
-        print(
-            f"  {name:34s} {value:10.4g}  {bound:>10s}  "
-            + ("ok" if ok else "FAIL")
-        )
-    failed = [name for name, *_, ok in checks if not ok]
-    if failed:
-        print("failed: " + ", ".join(failed))
-        return 1
-    print("all checks pass")
-    return 0
+    return report([("paper cell, burr 2 mm x 20 mm, f_d = 10 N, 17 s", checks)])
 
 
 if __name__ == "__main__":
