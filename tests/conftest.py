@@ -96,3 +96,38 @@ class TiltedCircle(Contour):
 def tilted_circle():
     """The TiltedCircle class (a Contour whose tool axis turns)."""
     return TiltedCircle
+
+
+@pytest.fixture(scope="session")
+def paper_cell():
+    """The paper cell per controller kind, built once for the whole run:
+    ``paper_cell(kind=None)`` -> (the scenario as loaded, with ``kind``,
+    and its Diagram). Tests that share one only read it or simulate it
+    from a fresh context (each Simulator makes its own), and never change
+    the scenario."""
+    from deburr_drake.cell.diagram import make_deburring_diagram
+    from deburr_drake.config import load_scenario
+
+    built = {}
+
+    def cell(kind=None):
+        scenario = load_scenario("paper")
+        if kind is not None:
+            scenario.controller.kind = kind
+        key = scenario.controller.kind
+        if key not in built:
+            diagram = make_deburring_diagram(scenario=scenario)
+            built[key] = (scenario, diagram)
+        return built[key]
+
+    return cell
+
+
+@pytest.fixture(scope="session")
+def paper_log(paper_cell):
+    """5 simulated seconds of the paper cell (contact, the depth's
+    convergence, no guard trip), run once for the tests that read it."""
+    from deburr_drake.runs.simulation import simulate
+
+    scenario, diagram = paper_cell()
+    return simulate(diagram, scenario, duration=5.0)

@@ -83,12 +83,11 @@ def _leaf_systems(system):
             yield sub
 
 
-def _diagrams():
-    """(label, diagram) for every diagram the checked cells build."""
+def _diagrams(paper_cell):
+    """(label, diagram) for every diagram the checked cells build (the
+    paper cell's per kind from ``paper_cell``, tests/conftest.py)."""
     for kind in KINDS:
-        scenario = load_scenario("paper")
-        scenario.controller.kind = kind
-        yield f"paper/{kind}", make_deburring_diagram(scenario=scenario)
+        yield f"paper/{kind}", paper_cell(kind)[1]
     yield (
         "paper_localised",
         make_deburring_diagram(scenario=load_scenario("paper_localised")),
@@ -137,14 +136,14 @@ def _mismatch(system):
 
 
 @pytest.fixture(scope="module")
-def package_systems():
+def package_systems(paper_cell):
     """{(class name, input ports, output ports): (where it was first seen,
     system)} of every deburr_drake LeafSystem of :func:`_diagrams`, one
     per class and set of ports (a system declares some ports only when
     asked to)."""
     systems = {}
     diagrams = []  # the diagrams own their systems: keep them alive
-    for label, diagram in _diagrams():
+    for label, diagram in _diagrams(paper_cell):
         diagrams.append(diagram)
         for system in _leaf_systems(diagram):
             cls = type(system)

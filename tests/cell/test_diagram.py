@@ -16,9 +16,8 @@ from deburr_drake.math.geometry import CircularContour
 
 
 @pytest.fixture(scope="module")
-def paper_diagram():
-    scenario = load_scenario("paper")
-    return scenario, make_deburring_diagram(scenario=scenario)
+def paper_diagram(paper_cell):
+    return paper_cell()
 
 
 def test_every_system_is_named(paper_diagram):
@@ -192,17 +191,18 @@ def test_straight_edge_cell():
     np.testing.assert_allclose(tip, contour.point_at(0.0), atol=1e-7)
 
 
-def _one_sample_from(source, context, scenario, kick):
+def _one_sample_from(source, context, cell, kick):
     """The tool's speed along the edge after one 2.5 ms sample of
-    ``scenario``'s diagram started from ``context`` of ``source`` (its
-    state copied by subsystem), with the tool's joint velocities kicked
-    by ``kick`` along the edge's direction (joint space, J^+ n2)."""
+    ``cell`` ((scenario, its diagram)) started from ``context`` of
+    ``source`` (its state copied by subsystem; in a simulator of its own),
+    with the tool's joint velocities kicked by ``kick`` along the edge's
+    direction (joint space, J^+ n2)."""
     from pydrake.systems.analysis import InitializeParams
 
     from deburr_drake.analysis.operating_point import transfer_state
     from deburr_drake.runs.simulation import make_simulator
 
-    diagram = make_deburring_diagram(scenario=scenario)
+    scenario, diagram = cell
     simulator = make_simulator(diagram, scenario)
     root = simulator.get_mutable_context()
     transfer_state(source, context, diagram, root)
@@ -219,7 +219,7 @@ def _one_sample_from(source, context, scenario, kick):
 
 
 @pytest.mark.slow
-def test_held_mean_at_one_step_follows_eq3_at_fine_steps():
+def test_held_mean_at_one_step_follows_eq3_at_fine_steps(paper_cell):
     """The paper cell in cutting, the tool kicked 2 mm/s along the edge,
     one 2.5 ms sample: with the cutting force held at its exact mean
     (process.sample_mean, one cenic step) the tool's speed along the edge
@@ -229,10 +229,9 @@ def test_held_mean_at_one_step_follows_eq3_at_fine_steps():
     (measured: 3.4 % of the kick)."""
     from deburr_drake.runs.simulation import make_simulator
 
-    shipped = load_scenario("paper")
+    shipped, diagram = paper_cell()
     assert shipped.process.sample_mean
     assert shipped.simulation.max_step == shipped.controller.control_period
-    diagram = make_deburring_diagram(scenario=shipped)
     simulator = make_simulator(diagram, shipped)
     simulator.Initialize()
     simulator.AdvanceTo(1.0 - 1e-9)  # cutting, off the burrs
@@ -269,9 +268,13 @@ def test_held_mean_at_one_step_follows_eq3_at_fine_steps():
         ),
         ("explicit", "{process: {sample_mean: false}}"),
     ):
-        scenario = load_scenario("paper", text=text)
+        if text is None:  # the shipped cell: its diagram, a new simulator
+            cell = (shipped, diagram)
+        else:
+            scenario = load_scenario("paper", text=text)
+            cell = (scenario, make_deburring_diagram(scenario=scenario))
         speeds[name] = float(
-            _one_sample_from(diagram, context, scenario, kick) @ n2
+            _one_sample_from(diagram, context, cell, kick) @ n2
         )
     assert abs(speeds["held"] - speeds["fine"]) < 0.01 * 2e-3, speeds
     assert abs(speeds["explicit"] - speeds["fine"]) > 3 * abs(

@@ -59,12 +59,9 @@ def test_noise_scale_multiplies_the_sensor_noise():
     )
 
 
-def test_no_fault_adds_no_system():
-    scenario = load_scenario("paper")
-    names = {
-        s.get_name()
-        for s in make_deburring_diagram(scenario=scenario).GetSystems()
-    }
+def test_no_fault_adds_no_system(paper_cell):
+    _, diagram = paper_cell()
+    names = {s.get_name() for s in diagram.GetSystems()}
     assert not names & {"sensor_faults", "sensor_noise_scale"}
 
 
@@ -107,8 +104,9 @@ faults:
     log = simulate(
         make_deburring_diagram(scenario=scenario),
         scenario,
-        duration=3.5,
-        progress_interval=3.5,
+        # to the dropout window's end: nothing after 3.2 s is read
+        duration=3.25,
+        progress_interval=3.25,
     )
     ch, sensed = log["chamfer"], log["tool_force"]["value"]
     true_f_n = -np.einsum("ij,ij->i", sensed, ch["n1"])

@@ -17,7 +17,6 @@ from deburr_drake.config import (
     ConfigError,
     ControllerConfig,
     TaskConfig,
-    load_scenario,
 )
 from deburr_drake.control.command import CommandGenerator
 from deburr_drake.control.controller import HybridController
@@ -262,17 +261,13 @@ def test_constant_feed_is_a_timed_path():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("kind", ["robust", "ideal", "impedance", "position"])
-def test_short_closed_loop_run(kind):
+def test_short_closed_loop_run(kind, paper_cell):
     """2 s of the paper cell: in contact from 0.5 s on, no NaN, no guard."""
-    from deburr_drake.cell.diagram import make_deburring_diagram
     from deburr_drake.math import metrics
     from deburr_drake.runs.simulation import simulate
 
-    scenario = load_scenario("paper")
-    scenario.controller.kind = kind
-    log = simulate(
-        make_deburring_diagram(scenario=scenario), scenario, duration=2.0
-    )
+    scenario, diagram = paper_cell(kind)
+    log = simulate(diagram, scenario, duration=2.0)
     assert log.stop_reason == "duration"
     ch = log["chamfer"]
     assert np.all(ch["f_n"][ch["t"] > 0.5] > 1.0)

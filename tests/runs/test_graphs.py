@@ -5,14 +5,13 @@ import shutil
 
 import pytest
 
-from deburr_drake.cell.diagram import make_deburring_diagram
-from deburr_drake.config import ConfigError, load_scenario
+from deburr_drake.config import ConfigError
 from deburr_drake.runs import graphs
 
 
 @pytest.fixture(scope="module")
-def diagram():
-    return make_deburring_diagram(scenario=load_scenario("paper"))
+def diagram(paper_cell):
+    return paper_cell()[1]
 
 
 def test_graph_names_every_system_and_port(diagram, tmp_path):

@@ -5,20 +5,15 @@ established and the chamfer depth converges. The full pass is
 import numpy as np
 import pytest
 
-from deburr_drake.cell.diagram import make_deburring_diagram
-from deburr_drake.config import load_scenario
 from deburr_drake.math import metrics
-from deburr_drake.runs.simulation import simulate
 
 pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def log():
-    scenario = load_scenario("paper")
-    return simulate(
-        make_deburring_diagram(scenario=scenario), scenario, duration=5.0
-    )
+def log(paper_log):
+    # 5 s of the paper cell (tests/conftest.py), run once for the session.
+    return paper_log
 
 
 def test_contact_is_established(log):

@@ -222,11 +222,10 @@ def test_a_pass_is_complete_only_when_the_tool_cut_the_edge(monkeypatch):
     assert np.mean(log["finish"]["depth"] > 0) < 0.05
 
 
-def test_the_sanity_check_names_what_diverged():
+def test_the_sanity_check_names_what_diverged(paper_cell):
     from deburr_drake.runs.simulation import NumericalSanity, make_simulator
 
-    scenario = load_scenario("paper")
-    diagram = make_deburring_diagram(scenario=scenario)
+    scenario, diagram = paper_cell()
     simulator = make_simulator(diagram, scenario)
     simulator.Initialize()
     context = simulator.get_mutable_context()
