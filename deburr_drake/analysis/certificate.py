@@ -15,6 +15,11 @@ exact:
   dynamics from then on live on the others;
 - a diagonal similarity (``scipy.linalg.matrix_balance`` of the nominal
   map) puts the states' units on one scale;
+- after one period the state lies in the span of the maps' images (a
+  sampled loop's map has low rank: the modes faster than a period are
+  gone within it), so the maps are restricted to that span (its
+  orthonormal basis from the SVD of [A_1 ... A_N], singular values below
+  ``IMAGE_TOLERANCE`` of the largest, round-off, left out and recorded);
 - modes that no parameter moves (eigenvalues within ``neutral_tolerance``
   of 1 of the nominal map, spanning a subspace every map leaves
   invariant with the same eigenvalues there: a rigid-body shift, an
@@ -57,6 +62,9 @@ __all__ = [
 #: x^T P x would not bound the state in any useful sense, and the check's
 #: own round-off grows with it.
 MAX_CONDITION = 1e10
+#: Singular values of [A_1 ... A_N] below this fraction of the largest are
+#: round-off: their directions are left out of the maps' common image.
+IMAGE_TOLERANCE = 1e-12
 #: The largest P-norm of a map must stay below 1 - CHECK_MARGIN.
 CHECK_MARGIN = 1e-6
 
@@ -98,6 +106,8 @@ class ReducedFamily:
     overwritten: List[str]
     separated: List[SeparatedMode] = field(default_factory=list)
     separation_error: float = 0.0
+    image_rank: int = 0
+    neglected_singular_value: float = 0.0  # relative to the largest
 
 
 def _overwritten(maps: Sequence[np.ndarray]) -> np.ndarray:
@@ -131,7 +141,14 @@ def reduce_family(
         maps[0], permute=False, separate=True
     )
     maps = [A * (1.0 / scale)[:, None] * scale[None, :] for A in maps]
-    reduced = ReducedFamily(maps, kept, overwritten)
+    # The maps' common image: where the state is after one period.
+    U, sigma, _ = np.linalg.svd(np.hstack(maps))
+    rank = int(np.sum(sigma > IMAGE_TOLERANCE * sigma[0]))
+    U = U[:, :rank]
+    maps = [U.T @ A @ U for A in maps]
+    reduced = ReducedFamily(maps, kept, overwritten, image_rank=rank)
+    if rank < sigma.size:
+        reduced.neglected_singular_value = float(sigma[rank] / sigma[0])
     # Neutral modes of the nominal map, first in an ordered real Schur form.
     T, Z, n_neutral = scipy.linalg.schur(
         maps[0],
@@ -154,7 +171,7 @@ def reduce_family(
     # unscaled coordinates.
     eigs, vecs = np.linalg.eig(maps[0])
     for lam in neutral:
-        v = vecs[:, int(np.argmin(np.abs(eigs - lam)))] * scale
+        v = (U @ vecs[:, int(np.argmin(np.abs(eigs - lam)))]) * scale
         reduced.separated.append(
             SeparatedMode(complex(lam), kept[int(np.argmax(np.abs(v)))])
         )
@@ -295,6 +312,8 @@ class Certificate:
             "solver_status": self.solver_status,
             "solves": self.solves,
             "certified_dimension": int(r.maps[0].shape[0]),
+            "image_rank": r.image_rank,
+            "neglected_singular_value": r.neglected_singular_value,
             "overwritten_states": r.overwritten,
             "separated_modes": [m.to_dict() for m in r.separated],
             "separation_error": r.separation_error,
