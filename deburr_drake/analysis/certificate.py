@@ -108,6 +108,18 @@ class ReducedFamily:
     separation_error: float = 0.0
     image_rank: int = 0
     neglected_singular_value: float = 0.0  # relative to the largest
+    # The reductions: kept coordinates, their scale, the basis (columns)
+    # of the certified coordinates in the scaled ones.
+    keep: np.ndarray = None
+    scale: np.ndarray = None
+    basis: np.ndarray = None
+
+    def transform(self, M: np.ndarray) -> np.ndarray:
+        """A matrix on the original state, in the certified coordinates
+        (as the family's maps were taken there)."""
+        M = np.asarray(M, float)[np.ix_(self.keep, self.keep)]
+        M = M * (1.0 / self.scale)[:, None] * self.scale[None, :]
+        return self.basis.T @ M @ self.basis
 
 
 def _overwritten(maps: Sequence[np.ndarray]) -> np.ndarray:
@@ -146,7 +158,15 @@ def reduce_family(
     rank = int(np.sum(sigma > IMAGE_TOLERANCE * sigma[0]))
     U = U[:, :rank]
     maps = [U.T @ A @ U for A in maps]
-    reduced = ReducedFamily(maps, kept, overwritten, image_rank=rank)
+    reduced = ReducedFamily(
+        maps,
+        kept,
+        overwritten,
+        image_rank=rank,
+        keep=keep,
+        scale=scale,
+        basis=U,
+    )
     if rank < sigma.size:
         reduced.neglected_singular_value = float(sigma[rank] / sigma[0])
     # Neutral modes of the nominal map, first in an ordered real Schur form.
@@ -176,6 +196,7 @@ def reduce_family(
             SeparatedMode(complex(lam), kept[int(np.argmax(np.abs(v)))])
         )
     reduced.maps = [W.T @ A @ W for A in maps]
+    reduced.basis = U @ W
     reduced.separation_error = error
     return reduced
 

@@ -9,6 +9,7 @@ import sys
 
 from deburr_drake.cli.analyze import _add_analyze_parser
 from deburr_drake.cli.batch import _add_batch_parser
+from deburr_drake.cli.certify import _add_certify_parser
 from deburr_drake.cli.common import _EXIT_HELP
 from deburr_drake.cli.compare import _add_compare_parser
 from deburr_drake.cli.converge import _add_converge_parser
@@ -36,6 +37,7 @@ def main(argv=None) -> int:
     _add_sweep_parser(subparsers)
     _add_analyze_parser(subparsers)
     _add_converge_parser(subparsers)
+    _add_certify_parser(subparsers)
     args = parser.parse_args(argv)
     from deburr_drake.config import ConfigError
 

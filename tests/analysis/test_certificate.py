@@ -145,3 +145,11 @@ def test_states_every_map_overwrites_are_left_out():
     assert certify_family([A, 0.9 * A], ["a", "b", "held"]).status == (
         "certified"
     )
+
+
+def test_transform_takes_a_matrix_into_the_certified_coordinates():
+    T = np.array([[1.0, 0.0, 0.0], [0.3, 1.0, 0.0], [0.0, 0.5, 1.0]])
+    maps = [_with_shift(0.7 * _rotation(t), T) for t in (0.1, 0.9)]
+    reduced = reduce_family(maps, ["s", "x", "y"])
+    for A, B in zip(maps, reduced.maps):
+        np.testing.assert_allclose(reduced.transform(A), B, atol=1e-12)
