@@ -19,8 +19,8 @@ from deburr_drake.analysis.along import (
     without_guards,
 )
 from deburr_drake.analysis.analyze_run import SUMMARY_KEYS, analyze
+from deburr_drake.analysis.box_certificate import certificate_summary, certify
 from deburr_drake.analysis.certificate import Certificate, certify_family
-from deburr_drake.analysis.certify import certificate_summary, certify
 from deburr_drake.analysis.frequency import (
     NormalForceLoop,
     frequency_response,
