@@ -54,6 +54,7 @@ VERTEX_THRESHOLD = 1e-2
 
 __all__ = [
     "box_maps",
+    "secant_corners",
     "certify",
     "certificate_summary",
     "PROVES",
@@ -173,6 +174,24 @@ def box_maps(op, box, say=lambda m: None) -> Dict:
     }
 
 
+def secant_corners(A0, ends, axes):
+    """(corners, signs): the maps of the secant model A(p) = A0 + sum_j
+    (A_j(p_j) - A0), A_j the chord through parameter j's end maps ``ends[j]``
+    = (A_lo, A_hi), at every corner of the parameters ``axes`` (the others
+    at their chords' midpoints), and each corner's signs per parameter (-1
+    low end, +1 high, 0 midpoint)."""
+    centre = A0 + sum(0.5 * (lo + hi) - A0 for lo, hi in ends)
+    half = [0.5 * (hi - lo) for lo, hi in ends]
+    corners, signs = [], []
+    for s in itertools.product((-1.0, 1.0), repeat=len(axes)):
+        corners.append(centre + sum(si * half[j] for si, j in zip(s, axes)))
+        full = [0.0] * len(ends)
+        for si, j in zip(s, axes):
+            full[j] = si
+        signs.append(full)
+    return corners, signs
+
+
 def _balancer(A0: np.ndarray) -> Callable:
     """M -> D^-1 M D, D the diagonal balancing of ``A0`` (one scale for
     the states' units, as the certificate's program takes them)."""
@@ -246,14 +265,7 @@ def certify(
         for j, h in enumerate(half)
         if np.linalg.norm(balanced(h)) > vertex_threshold * size
     ]
-    centre = A0 + sum(0.5 * (lo + hi) - A0 for lo, hi in ends)
-    corners, signs = [], []
-    for s in itertools.product((-1.0, 1.0), repeat=len(axes)):
-        corners.append(centre + sum(si * half[j] for si, j in zip(s, axes)))
-        full = [0.0] * len(box)
-        for si, j in zip(s, axes):
-            full[j] = si
-        signs.append(full)
+    corners, signs = secant_corners(A0, ends, axes)
     radii = [np.max(np.abs(np.linalg.eigvals(C))) for C in corners]
     worst = signs[int(np.argmax(radii))]
     worst = [w if w else 1.0 for w in worst]
