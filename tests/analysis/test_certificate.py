@@ -153,27 +153,3 @@ def test_transform_takes_a_matrix_into_the_certified_coordinates():
     reduced = reduce_family(maps, ["s", "x", "y"])
     for A, B in zip(maps, reduced.maps):
         np.testing.assert_allclose(reduced.transform(A), B, atol=1e-12)
-
-
-def test_the_secant_model_is_exact_for_maps_affine_in_each_parameter():
-    from deburr_drake.analysis.box_certificate import secant_corners
-
-    rng = np.random.default_rng(1)
-    A0, B1, B2 = (rng.normal(size=(3, 3)) for _ in range(3))
-    # Parameter 1 on [-1, 2] (nominal 0 inside), parameter 2 on [0, 1]
-    # (nominal 0 at an end).
-    ranges = [(-1.0, 2.0), (0.0, 1.0)]
-
-    def A(p1, p2):
-        return A0 + p1 * B1 + p2 * B2
-
-    ends = [(A(-1.0, 0.0), A(2.0, 0.0)), (A(0.0, 0.0), A(0.0, 1.0))]
-    corners, signs = secant_corners(A0, ends, [0, 1])
-    assert len(corners) == 4
-    for C, s in zip(corners, signs):
-        p = [r[0] if si < 0 else r[1] for r, si in zip(ranges, s)]
-        np.testing.assert_allclose(C, A(*p), atol=1e-12)
-    # Without an axis a parameter sits at its chord's midpoint.
-    corners, signs = secant_corners(A0, ends, [0])
-    np.testing.assert_allclose(corners[1], A(2.0, 0.5), atol=1e-12)
-    assert signs[1] == [1.0, 0.0]
