@@ -216,6 +216,60 @@ def _value_text(box, signs) -> str:
     )
 
 
+def _corner_axes(A0, ends, threshold) -> List[int]:
+    """The parameters whose half-range moves the (balanced) map by more
+    than ``threshold`` of its norm: each gets a corner axis; the others'
+    half-differences are bounded in P's norm instead."""
+    balanced = _balancer(A0)
+    size = np.linalg.norm(balanced(A0))
+    return [
+        j
+        for j, (lo, hi) in enumerate(ends)
+        if np.linalg.norm(balanced(0.5 * (hi - lo))) > threshold * size
+    ]
+
+
+def _corners(op, box, axes):
+    """(maps, signs): the true maps at every corner of ``axes``, the other
+    parameters nominal. The parameters' effects do not add up (their cross
+    terms), so corners of a model built from the ends would not do."""
+    corners, signs = [], []
+    for corner in itertools.product((-1.0, 1.0), repeat=len(axes)):
+        sign = [0.0] * len(box)
+        for si, k in zip(corner, axes):
+            sign[k] = si
+        corners.append(_corner_map(op, box, _values(box, sign)))
+        signs.append(sign)
+    return corners, signs
+
+
+def _model_error(cert, box, maps, axes) -> Dict:
+    """What the corners leave out, in P's norm: the curvature of each
+    parameter's map (its midpoint map against the chord through its ends)
+    and the half-range of those without a corner axis; the status
+    inconclusive when the decay rate plus it is not below 1."""
+    left_out = []
+    for j, (p, (lo, hi), mid) in enumerate(
+        zip(box, maps["ends"], maps["mids"])
+    ):
+        bound = p_norm(cert.reduced.transform(mid - 0.5 * (lo + hi)), cert.P)
+        if j not in axes:
+            bound += p_norm(cert.reduced.transform(0.5 * (hi - lo)), cert.P)
+        left_out.append({"parameter": p["name"], "p_norm": bound})
+    miss = sum(c["p_norm"] for c in left_out)
+    out = {
+        "model_error": left_out,
+        "decay_rate_with_model_error": cert.decay_rate + miss,
+    }
+    if cert.status == "certified" and cert.decay_rate + miss >= 1.0:
+        out["status"] = "inconclusive"
+        out["breaking_reason"] = (
+            f"decay rate {cert.decay_rate:.6f} plus what the corners "
+            f"leave out {miss:.3g} is not below 1"
+        )
+    return out
+
+
 def certify(
     scenario: Scenario,
     *,
@@ -245,26 +299,8 @@ def certify(
     box = _box(op.scenario)
     maps = box_maps(op, box, say)
     A0, ends = maps["A0"], maps["ends"]
-    # A corner axis for each parameter that moves the map; the others'
-    # half-differences are bounded in P's norm instead.
-    half = [0.5 * (hi - lo) for lo, hi in ends]
-    balanced = _balancer(A0)
-    size = np.linalg.norm(balanced(A0))
-    axes = [
-        j
-        for j, h in enumerate(half)
-        if np.linalg.norm(balanced(h)) > vertex_threshold * size
-    ]
-    # The true maps at the corners of the parameters that move the map
-    # (the others nominal): the parameters' effects do not add up (their
-    # cross terms), so corners of a model built from the ends would not do.
-    corners, signs = [], []
-    for corner in itertools.product((-1.0, 1.0), repeat=len(axes)):
-        sign = [0.0] * len(box)
-        for si, k in zip(corner, axes):
-            sign[k] = si
-        corners.append(_corner_map(op, box, _values(box, sign)))
-        signs.append(sign)
+    axes = _corner_axes(A0, ends, vertex_threshold)
+    corners, signs = _corners(op, box, axes)
     say(f"maps at the {len(corners)} corners")
     timings["maps_s"] = time.perf_counter() - t1
     family = [A0] + [m for pair in ends for m in pair] + corners
@@ -282,26 +318,8 @@ def certify(
     timings["program_s"] = time.perf_counter() - t2
     result = cert.to_dict()
     result["vertex_parameters"] = [box[j]["name"] for j in axes]
-    # What the vertices leave out, in P's norm: the curvature of each
-    # parameter's map, and the half-range of those without a vertex axis.
     if cert.P is not None:
-        left_out = []
-        for j, (p, (lo, hi), mid) in enumerate(zip(box, ends, maps["mids"])):
-            bound = p_norm(
-                cert.reduced.transform(mid - 0.5 * (lo + hi)), cert.P
-            )
-            if j not in axes:
-                bound += p_norm(cert.reduced.transform(half[j]), cert.P)
-            left_out.append({"parameter": p["name"], "p_norm": bound})
-        miss = sum(c["p_norm"] for c in left_out)
-        result["model_error"] = left_out
-        result["decay_rate_with_model_error"] = cert.decay_rate + miss
-        if cert.status == "certified" and cert.decay_rate + miss >= 1.0:
-            result["status"] = "inconclusive"
-            result["breaking_reason"] = (
-                f"decay rate {cert.decay_rate:.6f} plus what the vertices "
-                f"leave out {miss:.3g} is not below 1"
-            )
+        result.update(_model_error(cert, box, maps, axes))
     if result["breaking_map"] is not None:
         result["breaking_vertex"] = names[result["breaking_map"]]
     result.update(
