@@ -153,3 +153,34 @@ def test_transform_takes_a_matrix_into_the_certified_coordinates():
     reduced = reduce_family(maps, ["s", "x", "y"])
     for A, B in zip(maps, reduced.maps):
         np.testing.assert_allclose(reduced.transform(A), B, atol=1e-12)
+
+
+def test_what_the_corners_leave_out_is_added_to_the_decay_rate():
+    from deburr_drake.analysis.box_certificate import _model_error
+
+    A0 = np.diag([0.5, 0.6])
+    B = np.array([[0.0, 0.1], [0.0, 0.0]])
+    # Parameter "a" has a corner axis and is curved (its midpoint map off
+    # the chord by 0.05 I); "b" has none: its half-range counts whole.
+    ends = [(A0 - B, A0 + B), (A0 - 0.5 * B, A0 + 0.5 * B)]
+    mids = [A0 + 0.05 * np.eye(2), A0]
+    cert = certify_family([A0] + [m for e in ends for m in e], ["x", "y"])
+    assert cert.status == "certified"
+    box = [{"name": "a"}, {"name": "b"}]
+    out = _model_error(cert, box, {"ends": ends, "mids": mids}, [0])
+    a, b = out["model_error"]
+    assert a["p_norm"] == pytest.approx(
+        p_norm(cert.reduced.transform(0.05 * np.eye(2)), cert.P)
+    )
+    assert b["p_norm"] == pytest.approx(
+        p_norm(cert.reduced.transform(0.5 * B), cert.P)
+    )
+    assert out["decay_rate_with_model_error"] == pytest.approx(
+        cert.decay_rate + a["p_norm"] + b["p_norm"]
+    )
+    assert "status" not in out
+    # A curvature that takes the rate to 1: inconclusive.
+    out = _model_error(
+        cert, box, {"ends": ends, "mids": [A0 + np.eye(2), A0]}, [0]
+    )
+    assert out["status"] == "inconclusive"
