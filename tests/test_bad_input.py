@@ -11,6 +11,14 @@ from deburr_drake.cell.tube_mesh import ring_mesh_path, ring_surface_path
 SIM = ["simulate", "--duration", "0.01"]
 
 CASES = {
+    "certify with an unknown field": (
+        ["certify", "--set", "controller.no_such_gain=1"],
+        ["controller.no_such_gain"],
+    ),
+    "certify with a value that is not a number": (
+        ["certify", "--set", "sensor.cutoff_frequency=fast"],
+        ["sensor.cutoff_frequency=fast", "VALUE must be a number"],
+    ),
     "malformed YAML text": (
         SIM + ["--scenario-text", "task: {desired_depth: [0.1"],
         ["--scenario-text:1:", "YAML syntax error"],

@@ -19,6 +19,8 @@ from deburr_drake.analysis.along import (
     without_guards,
 )
 from deburr_drake.analysis.analyze_run import SUMMARY_KEYS, analyze
+from deburr_drake.analysis.box_certificate import certificate_summary, certify
+from deburr_drake.analysis.certificate import Certificate, certify_family
 from deburr_drake.analysis.frequency import (
     NormalForceLoop,
     frequency_response,
@@ -114,6 +116,10 @@ from deburr_drake.analysis.validation import (
 
 __all__ = [
     "DEFAULT_TIME_AFTER_CONTACT",
+    "Certificate",
+    "certify_family",
+    "certify",
+    "certificate_summary",
     "OperatingPoint",
     "find_operating_point",
     "frozen_scenario",

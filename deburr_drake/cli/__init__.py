@@ -9,6 +9,7 @@ import sys
 
 from deburr_drake.cli.analyze import _add_analyze_parser
 from deburr_drake.cli.batch import _add_batch_parser
+from deburr_drake.cli.certify import _add_certify_parser
 from deburr_drake.cli.common import _EXIT_HELP
 from deburr_drake.cli.compare import _add_compare_parser
 from deburr_drake.cli.converge import _add_converge_parser
@@ -40,6 +41,7 @@ def main(argv=None) -> int:
     _add_converge_parser(subparsers)
     _add_edges_parser(subparsers)
     _add_job_parser(subparsers)
+    _add_certify_parser(subparsers)
     args = parser.parse_args(argv)
     from deburr_drake.config import ConfigError
 

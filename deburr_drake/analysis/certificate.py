@@ -1,0 +1,448 @@
+"""A stability certificate for a family of one-period maps A_i: a common
+quadratic Lyapunov function V(x) = x^T P x with V(A_i x) <= gamma^2 V(x)
+for every i, found by a semidefinite program in Drake's
+``MathematicalProgram`` and checked in numpy after the solve.
+
+Such a P proves the switched (and, by convexity, any time-varying convex
+combination of the A_i) linear system x+ = A(k) x stable with decay rate
+gamma per period, whatever the order in which the maps follow each other.
+
+Before the program, the family is reduced by transformations that are
+exact:
+
+- coordinates every map overwrites (a zero row in every A_i: a held
+  value set anew at each sample) are zero after one period, so the
+  dynamics from then on live on the others;
+- a diagonal similarity (``scipy.linalg.matrix_balance`` of the nominal
+  map) puts the states' units on one scale;
+- after one period the state lies in the span of the maps' images (a
+  sampled loop's map has low rank: the modes faster than a period are
+  gone within it), so the maps are restricted to that span (its
+  orthonormal basis from the SVD of [A_1 ... A_N], singular values below
+  ``IMAGE_TOLERANCE`` of the largest, round-off, left out and recorded);
+- modes that no parameter moves (eigenvalues within ``neutral_tolerance``
+  of 1 of the nominal map, spanning a subspace every map leaves
+  invariant with the same eigenvalues there: a rigid-body shift, an
+  integrator) are separated by an orthogonal similarity and named; the
+  program certifies the maps on the quotient, the rest of the state.
+
+The solver's "solved" is not taken as a proof: the P it returns is
+checked (P positive definite with a bounded condition number; the largest
+P-norm of the maps below 1 by ``margin``); a P that fails is
+``inconclusive``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+from pydrake.solvers import (
+    ClarabelSolver,
+    CsdpSolver,
+    MathematicalProgram,
+    ScsSolver,
+)
+import scipy.linalg
+
+__all__ = [
+    "SeparatedMode",
+    "ReducedFamily",
+    "LmiSolution",
+    "Certificate",
+    "reduce_family",
+    "solve_common_lyapunov",
+    "check_lyapunov",
+    "certify_family",
+    "p_norm",
+]
+
+#: A P whose condition number is above this is not accepted as a proof:
+#: x^T P x would not bound the state in any useful sense, and the check's
+#: own round-off grows with it.
+MAX_CONDITION = 1e10
+#: Singular values of [A_1 ... A_N] below this fraction of the largest are
+#: round-off: their directions are left out of the maps' common image.
+IMAGE_TOLERANCE = 1e-12
+#: The largest P-norm of a map must stay below 1 - CHECK_MARGIN.
+CHECK_MARGIN = 1e-6
+
+_SOLVERS = {
+    "Clarabel": ClarabelSolver,
+    "CSDP": CsdpSolver,
+    "SCS": ScsSolver,
+}
+
+
+@dataclass
+class SeparatedMode:
+    """A mode no map moves: its eigenvalue and the state it lives in most
+    (the largest component of its eigenvector, by label)."""
+
+    eigenvalue: complex
+    label: str
+
+    def to_dict(self) -> Dict:
+        return {
+            "eigenvalue": [
+                float(self.eigenvalue.real),
+                float(self.eigenvalue.imag),
+            ],
+            "state": self.label,
+        }
+
+
+@dataclass
+class ReducedFamily:
+    """The maps on the coordinates the program certifies: ``maps`` (m x
+    m), ``kept`` the labels of the original coordinates that survive the
+    overwritten-state reduction, ``separated`` the neutral modes taken
+    out, ``separation_error`` how far (relative) the other maps are from
+    leaving the neutral subspace invariant."""
+
+    maps: List[np.ndarray]
+    kept: List[str]
+    overwritten: List[str]
+    separated: List[SeparatedMode] = field(default_factory=list)
+    separation_error: float = 0.0
+    image_rank: int = 0
+    neglected_singular_value: float = 0.0  # relative to the largest
+    # The reductions: kept coordinates, their scale, the basis (columns)
+    # of the certified coordinates in the scaled ones.
+    keep: np.ndarray = None
+    scale: np.ndarray = None
+    basis: np.ndarray = None
+
+    def transform(self, M: np.ndarray) -> np.ndarray:
+        """A matrix on the original state, in the certified coordinates
+        (as the family's maps were taken there)."""
+        M = np.asarray(M, float)[np.ix_(self.keep, self.keep)]
+        M = M * (1.0 / self.scale)[:, None] * self.scale[None, :]
+        return self.basis.T @ M @ self.basis
+
+
+def _overwritten(maps: Sequence[np.ndarray]) -> np.ndarray:
+    """Coordinates with a zero row in every map."""
+    rows = np.zeros(maps[0].shape[0], dtype=bool)
+    for A in maps:
+        rows |= np.any(A != 0.0, axis=1)
+    return ~rows
+
+
+def reduce_family(
+    maps: Sequence[np.ndarray],
+    labels: Sequence[str],
+    *,
+    neutral_tolerance: float = 1e-6,
+    invariance_tolerance: float = 1e-6,
+) -> ReducedFamily:
+    """The exact reductions of the module docstring; ``maps[0]`` is the
+    nominal map. Neutral modes that are not shared (another map moves them
+    or does not leave their subspace invariant within
+    ``invariance_tolerance``, relative) stay in the program, which then
+    cannot certify the family."""
+    maps = [np.asarray(A, dtype=float) for A in maps]
+    dropped = _overwritten(maps)
+    keep = np.flatnonzero(~dropped)
+    maps = [A[np.ix_(keep, keep)] for A in maps]
+    kept = [labels[i] for i in keep]
+    overwritten = [labels[i] for i in np.flatnonzero(dropped)]
+    # One scale for every state's units: a diagonal similarity.
+    _, (scale, _) = scipy.linalg.matrix_balance(
+        maps[0], permute=False, separate=True
+    )
+    maps = [A * (1.0 / scale)[:, None] * scale[None, :] for A in maps]
+    # The maps' common image: where the state is after one period.
+    U, sigma, _ = np.linalg.svd(np.hstack(maps))
+    rank = int(np.sum(sigma > IMAGE_TOLERANCE * sigma[0]))
+    U = U[:, :rank]
+    maps = [U.T @ A @ U for A in maps]
+    reduced = ReducedFamily(
+        maps,
+        kept,
+        overwritten,
+        image_rank=rank,
+        keep=keep,
+        scale=scale,
+        basis=U,
+    )
+    if rank < sigma.size:
+        reduced.neglected_singular_value = float(sigma[rank] / sigma[0])
+    # Neutral modes of the nominal map, first in an ordered real Schur form.
+    T, Z, n_neutral = scipy.linalg.schur(
+        maps[0],
+        output="real",
+        sort=lambda re, im: abs(complex(re, im) - 1.0) < neutral_tolerance,
+    )
+    if n_neutral == 0:
+        return reduced
+    V, W = Z[:, :n_neutral], Z[:, n_neutral:]
+    neutral = np.linalg.eigvals(T[:n_neutral, :n_neutral])
+    error = 0.0
+    for A in maps:
+        leak = np.linalg.norm(W.T @ A @ V) / max(np.linalg.norm(A), 1e-300)
+        moved = np.max(np.abs(np.linalg.eigvals(V.T @ A @ V) - 1.0))
+        error = max(error, leak)
+        if leak > invariance_tolerance or moved > neutral_tolerance:
+            reduced.separation_error = error
+            return reduced
+    # The modes' names: each eigenvector's largest component, back in the
+    # unscaled coordinates.
+    eigs, vecs = np.linalg.eig(maps[0])
+    for lam in neutral:
+        v = (U @ vecs[:, int(np.argmin(np.abs(eigs - lam)))]) * scale
+        reduced.separated.append(
+            SeparatedMode(complex(lam), kept[int(np.argmax(np.abs(v)))])
+        )
+    reduced.maps = [W.T @ A @ W for A in maps]
+    reduced.basis = U @ W
+    reduced.separation_error = error
+    return reduced
+
+
+@dataclass
+class LmiSolution:
+    """What the solver returned for one decay rate (P None if it did not
+    succeed)."""
+
+    P: Optional[np.ndarray]
+    solver: str
+    status: str
+    success: bool
+
+
+def _symmetric_basis(n: int) -> List[np.ndarray]:
+    basis = []
+    for i in range(n):
+        for j in range(i, n):
+            E = np.zeros((n, n))
+            E[i, j] = E[j, i] = 1.0
+            basis.append(E)
+    return basis
+
+
+def solve_common_lyapunov(
+    maps: Sequence[np.ndarray],
+    gamma: float,
+    *,
+    solver: str = "Clarabel",
+    epsilon: float = 1e-9,
+) -> LmiSolution:
+    """P = P^T, P >= I, A_i^T P A_i - gamma^2 P <= -epsilon I for all i,
+    P <= kappa I with kappa minimised (a well-conditioned P), by
+    ``solver`` (Clarabel, CSDP or SCS, all shipped with the wheel). The
+    LMIs are written in P's basis (``AddLinearMatrixInequalityConstraint``)
+    rather than as symbolic products, which grow as n^3 expressions."""
+    n = maps[0].shape[0]
+    prog = MathematicalProgram()
+    P = prog.NewSymmetricContinuousVariables(n, "P")
+    kappa = prog.NewContinuousVariables(1, "kappa")
+    variables = [P[i, j] for i in range(n) for j in range(i, n)]
+    basis = _symmetric_basis(n)
+    eye = np.eye(n)
+    # P - I >= 0 and kappa I - P >= 0.
+    prog.AddLinearMatrixInequalityConstraint([-eye] + basis, variables)
+    prog.AddLinearMatrixInequalityConstraint(
+        [np.zeros((n, n)), eye] + [-E for E in basis],
+        np.concatenate([kappa, variables]),
+    )
+    # gamma^2 P - A^T P A - epsilon I >= 0 at every map.
+    for A in maps:
+        prog.AddLinearMatrixInequalityConstraint(
+            [-epsilon * eye] + [gamma**2 * E - A.T @ E @ A for E in basis],
+            variables,
+        )
+    prog.AddLinearCost(kappa[0])
+    result = _SOLVERS[solver]().Solve(prog)
+    success = result.is_success()
+    return LmiSolution(
+        P=result.GetSolution(P) if success else None,
+        solver=solver,
+        status=result.get_solution_result().name,
+        success=success,
+    )
+
+
+def p_norm(A: np.ndarray, P: np.ndarray) -> float:
+    """The induced norm of A in ||x||_P = sqrt(x^T P x): the square root of
+    the largest generalized eigenvalue of (A^T P A, P)."""
+    mu = scipy.linalg.eigh(A.T @ P @ A, P, eigvals_only=True)
+    return float(np.sqrt(max(mu[-1], 0.0)))
+
+
+def check_lyapunov(
+    maps: Sequence[np.ndarray],
+    P: np.ndarray,
+    *,
+    margin: float = CHECK_MARGIN,
+    max_condition: float = MAX_CONDITION,
+) -> Dict:
+    """The check after the solve, in numpy: P symmetric positive definite
+    with condition number below ``max_condition``, and every map's P-norm
+    (its decay rate under V) below 1 - ``margin``; also the largest
+    eigenvalue of A_i^T P A_i - rate^2 P relative to P's largest, at the
+    achieved rate (<= 0 up to round-off)."""
+    P = 0.5 * (P + P.T)
+    eig = np.linalg.eigvalsh(P)
+    positive = bool(eig[0] > 0)
+    condition = float(eig[-1] / eig[0]) if positive else float("inf")
+    norms = [p_norm(A, P) for A in maps] if positive else [float("inf")]
+    rate = max(norms)
+    worst = int(np.argmax(norms))
+    passed = positive and condition < max_condition and rate < 1.0 - margin
+    return {
+        "passed": bool(passed),
+        "P_min_eigenvalue": float(eig[0]),
+        "P_max_eigenvalue": float(eig[-1]),
+        "P_condition": condition,
+        "decay_rate": rate,
+        "worst_map": worst,
+        "margin": margin,
+        "max_condition": max_condition,
+    }
+
+
+@dataclass
+class Certificate:
+    """The outcome: ``status`` certified, not_certified or inconclusive;
+    ``decay_rate`` the checked one (the largest P-norm of the maps, per
+    period) when certified; ``breaking`` the index of the map that breaks
+    the program when not."""
+
+    status: str
+    decay_rate: Optional[float]
+    P: Optional[np.ndarray]
+    check: Optional[Dict]
+    solver: str
+    solver_status: str
+    reduced: ReducedFamily
+    breaking: Optional[int] = None
+    breaking_reason: str = ""
+    spectral_radii: List[float] = field(default_factory=list)
+    solves: int = 0
+
+    def to_dict(self) -> Dict:
+        r = self.reduced
+        return {
+            "status": self.status,
+            "decay_rate_per_period": self.decay_rate,
+            "P_condition": self.check["P_condition"] if self.check else None,
+            "check": self.check,
+            "solver": self.solver,
+            "solver_status": self.solver_status,
+            "solves": self.solves,
+            "certified_dimension": int(r.maps[0].shape[0]),
+            "image_rank": r.image_rank,
+            "neglected_singular_value": r.neglected_singular_value,
+            "overwritten_states": r.overwritten,
+            "separated_modes": [m.to_dict() for m in r.separated],
+            "separation_error": r.separation_error,
+            "largest_spectral_radius": max(self.spectral_radii),
+            "breaking_map": self.breaking,
+            "breaking_reason": self.breaking_reason,
+        }
+
+
+def _feasible(maps, gamma, solver, margin):
+    """(solution, check or None): the program at ``gamma`` and its check."""
+    solution = solve_common_lyapunov(maps, gamma, solver=solver)
+    if not solution.success:
+        return solution, None
+    return solution, check_lyapunov(maps, solution.P, margin=margin)
+
+
+def _breaking_map(maps, radii, solver, margin, gamma) -> tuple:
+    """The map that breaks the program: one whose own spectral radius is
+    not below 1, else the first map, adding them in order of decreasing
+    radius, with which no common P exists (found by bisection on the
+    count); (index, reason, solves)."""
+    order = np.argsort(radii)[::-1]
+    if radii[order[0]] >= 1.0 - margin:
+        return (
+            int(order[0]),
+            f"its own spectral radius is {radii[order[0]]:.6f}",
+            0,
+        )
+    lo, hi, solves = 1, len(maps), 0  # lo feasible (one stable map), hi not
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        solution, check = _feasible(
+            [maps[i] for i in order[:mid]], gamma, solver, margin
+        )
+        solves += 1
+        if solution.success and check["passed"]:
+            lo = mid
+        else:
+            hi = mid
+    return (
+        int(order[hi - 1]),
+        f"each map alone is stable (largest radius "
+        f"{radii[order[0]]:.6f}), but with this one added to the "
+        f"{hi - 1} of larger radius no common P exists",
+        solves,
+    )
+
+
+def certify_family(
+    maps: Sequence[np.ndarray],
+    labels: Sequence[str],
+    *,
+    solver: str = "Clarabel",
+    margin: float = CHECK_MARGIN,
+    bisections: int = 8,
+    neutral_tolerance: float = 1e-6,
+) -> Certificate:
+    """The certificate of the family ``maps`` (``maps[0]`` nominal) over
+    states ``labels``: reduced (:func:`reduce_family`), then the program
+    at gamma = 1 - 10 margin (the minimal-kappa P sits on the LMI's
+    boundary, so the check at 1 - margin keeps room for round-off); if it
+    holds and passes the check, gamma is
+    bisected down towards the largest spectral radius (below it no P
+    exists) for the best decay rate. Infeasible: not_certified, with the
+    breaking map; solved but failing the check: inconclusive."""
+    reduced = reduce_family(maps, labels, neutral_tolerance=neutral_tolerance)
+    family = reduced.maps
+    radii = [float(np.max(np.abs(np.linalg.eigvals(A)))) for A in family]
+    hi = 1.0 - 10 * margin
+    solution, check = _feasible(family, hi, solver, margin)
+    cert = Certificate(
+        status="certified",
+        decay_rate=None,
+        P=None,
+        check=check,
+        solver=solver,
+        solver_status=solution.status,
+        reduced=reduced,
+        spectral_radii=radii,
+        solves=1,
+    )
+    if not solution.success:
+        cert.status = "not_certified"
+        index, reason, solves = _breaking_map(family, radii, solver, margin, hi)
+        cert.breaking, cert.breaking_reason = index, reason
+        cert.solves += solves
+        return cert
+    if not check["passed"]:
+        cert.status = "inconclusive"
+        cert.breaking = check["worst_map"]
+        cert.breaking_reason = (
+            f"the solver reported {solution.status} but its P fails the "
+            f"check: decay rate {check['decay_rate']:.8f} (needs < "
+            f"{1 - margin}), condition {check['P_condition']:.3g}"
+        )
+        return cert
+    best, best_check = solution, check
+    lo = max(radii)
+    for _ in range(bisections):
+        gamma = 0.5 * (lo + hi)
+        trial, trial_check = _feasible(family, gamma, solver, margin)
+        cert.solves += 1
+        if trial.success and trial_check["passed"]:
+            hi, best, best_check = gamma, trial, trial_check
+        else:
+            lo = gamma
+    cert.P, cert.check = best.P, best_check
+    cert.solver_status = best.status
+    cert.decay_rate = best_check["decay_rate"]
+    return cert

@@ -1,0 +1,103 @@
+"""``deburr-drake certify``: a stability certificate of the sampled loop
+over a box of parameters, certificate.json in --out."""
+
+from __future__ import annotations
+
+from deburr_drake.cli.common import (
+    _check_writable_target,
+    _load,
+    _output_arguments,
+    _scenario_arguments,
+)
+
+#: What ``certify`` writes into its output directory.
+_CERTIFY_OUTPUTS = ("certificate.json", "maps.npz")
+
+
+def _certify(args) -> int:
+    import json
+    from pathlib import Path
+
+    import numpy as np
+
+    from deburr_drake import analysis
+    from deburr_drake.config import set_field
+
+    # The scenario and every option, checked before anything runs.
+    scenario = _load(args)
+    settings = analysis.parse_settings(scenario, args.set or [])
+    for path, value in settings.items():
+        set_field(scenario, path, value)
+    scenario.validate()
+    out = Path(args.out or f"out/{scenario.name}/certificate")
+    _check_writable_target(
+        out, "--out", args.force, is_dir=True, names=_CERTIFY_OUTPUTS
+    )
+    out.mkdir(parents=True, exist_ok=True)
+
+    def say(message):
+        print(f"  {message}", flush=True)
+
+    result = analysis.certify(
+        scenario,
+        numerics=args.numerics,
+        solver=args.solver,
+        bisections=args.bisections,
+        progress=say,
+    )
+    result["settings"] = settings
+    maps = result.pop("_maps")
+    path = out / "certificate.json"
+    path.write_text(json.dumps(result, indent=2) + "\n")
+    np.savez_compressed(
+        out / "maps.npz",
+        maps=np.array(maps["family"]),
+        names=np.array(maps["names"]),
+        labels=np.array(maps["labels"]),
+    )
+    print(analysis.certificate_summary(result))
+    print(f"\nwrote {path}")
+    return 0
+
+
+def _add_certify_parser(subparsers):
+    p = subparsers.add_parser(
+        "certify",
+        help="a stability certificate: a common Lyapunov function of the "
+        "sampled loop's maps over a box of parameters",
+    )
+    _scenario_arguments(p, "paper", None)
+    p.add_argument(
+        "--set",
+        nargs="+",
+        default=None,
+        metavar="FIELD=VALUE",
+        help="certify the scenario with these fields changed (its run "
+        "too), e.g. controller.sliding_gain[0]=4500",
+    )
+    p.add_argument(
+        "--numerics",
+        choices=("shipped", "refined"),
+        default="shipped",
+        help="how the run to the operating point and the maps are "
+        "integrated: shipped (default, the scenario's step) or refined "
+        "(a quarter of it, as analyze's verdict)",
+    )
+    p.add_argument(
+        "--bisections",
+        type=int,
+        default=0,
+        help="bisect the decay rate this many times after the first solve "
+        "(each a solve as long; default 0: the decay rate the first P "
+        "is checked to give)",
+    )
+    p.add_argument(
+        "--solver",
+        choices=("Clarabel", "CSDP", "SCS"),
+        default="Clarabel",
+        help="the semidefinite solver (all ship with Drake's wheel)",
+    )
+    _output_arguments(
+        p, "out/<scenario>/certificate", "an existing certificate.json"
+    )
+    p.set_defaults(func=_certify)

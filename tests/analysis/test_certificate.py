@@ -1,0 +1,186 @@
+"""Known answers of the common-Lyapunov certificate, on small matrices."""
+
+import numpy as np
+import pytest
+
+from deburr_drake.analysis import certificate
+from deburr_drake.analysis.certificate import (
+    LmiSolution,
+    certify_family,
+    check_lyapunov,
+    p_norm,
+    reduce_family,
+)
+
+
+def _rotation(theta):
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[c, -s], [s, c]])
+
+
+def _known_family():
+    """S^-1 (0.8 R_i) S: V = x^T S^T S x decays by 0.8 under every map,
+    though each map's 2-norm is far above 1."""
+    S = np.array([[1.0, 5.0], [0.0, 0.2]])
+    Si = np.linalg.inv(S)
+    return [Si @ (0.8 * _rotation(t)) @ S for t in (0.0, 0.7, 2.0, -1.1)]
+
+
+def test_a_family_with_a_known_common_lyapunov_function_is_certified():
+    maps = _known_family()
+    assert max(np.linalg.norm(A, 2) for A in maps) > 5.0
+    cert = certify_family(maps, ["a", "b"])
+    assert cert.status == "certified"
+    assert cert.solver == "Clarabel" and cert.solver_status == "kSolutionFound"
+    # The checked P is a Lyapunov function of every map, in numpy.
+    P = cert.P
+    assert np.linalg.eigvalsh(P)[0] > 0
+    rate = cert.decay_rate
+    for A in cert.reduced.maps:
+        assert (
+            np.linalg.eigvalsh(A.T @ P @ A - rate**2 * P)[-1]
+            <= 1e-9 * (np.linalg.eigvalsh(P)[-1])
+        )
+    # The bisection reaches close to the known rate 0.8.
+    assert 0.8 - 1e-6 <= rate < 0.8 + 0.01
+
+
+def _switched_pair():
+    A1 = np.array([[0.9, 2.0], [0.0, 0.9]])
+    return [A1, A1.T]
+
+
+def test_a_switched_pair_unstable_under_switching_is_not_certified():
+    A1, A2 = _switched_pair()
+    for A in (A1, A2):
+        assert np.max(np.abs(np.linalg.eigvals(A))) < 1.0
+    assert np.max(np.abs(np.linalg.eigvals(A1 @ A2))) > 1.0
+    cert = certify_family([A1, A2], ["a", "b"])
+    assert cert.status == "not_certified"
+    assert cert.breaking in (0, 1)
+    assert "no common P" in cert.breaking_reason
+
+
+def test_a_map_unstable_by_itself_is_named():
+    stable = np.diag([0.5, 0.6])
+    unstable = np.array([[1.02, 0.0], [0.1, 0.3]])
+    cert = certify_family([stable, unstable, stable * 0.9], ["a", "b"])
+    assert cert.status == "not_certified"
+    assert cert.breaking == 1
+    assert "spectral radius is 1.02" in cert.breaking_reason
+
+
+def test_a_solved_program_whose_p_fails_the_check_is_inconclusive(
+    monkeypatch,
+):
+    # Schur-stable (rho 0.5), but V = |x|^2 grows under it: ||A||_2 > 1.
+    A = np.array([[0.5, 3.0], [0.0, 0.5]])
+    assert np.linalg.norm(A, 2) > 1.0
+    # The solver itself finds a P that passes.
+    assert certify_family([A], ["a", "b"]).status == "certified"
+
+    def solver_says_solved(maps, gamma, **kwargs):
+        return LmiSolution(np.eye(2), "Clarabel", "kSolutionFound", True)
+
+    monkeypatch.setattr(
+        certificate, "solve_common_lyapunov", solver_says_solved
+    )
+    cert = certify_family([A], ["a", "b"])
+    assert cert.status == "inconclusive"
+    assert cert.solver_status == "kSolutionFound"
+    # The injected P = I is checked on the balanced map the program saw.
+    balanced = cert.reduced.maps[0]
+    assert cert.check["decay_rate"] == pytest.approx(
+        np.linalg.norm(balanced, 2)
+    )
+    assert cert.check["decay_rate"] >= 1.0 - cert.check["margin"]
+    assert "fails the check" in cert.breaking_reason
+
+
+def test_the_check_rejects_an_indefinite_or_ill_conditioned_p():
+    A = np.diag([0.5, 0.5])
+    assert not check_lyapunov([A], np.diag([1.0, -1.0]))["passed"]
+    assert not check_lyapunov([A], np.diag([1.0, 1e-12]))["passed"]
+    assert check_lyapunov([A], np.diag([1.0, 2.0]))["passed"]
+    assert p_norm(A, np.eye(2)) == pytest.approx(0.5)
+
+
+def _with_shift(B, T):
+    """T blockdiag(1, B) T^-1: a mode at 1 (state "s") that B does not
+    touch, in coordinates that mix it with the others."""
+    M = np.zeros((3, 3))
+    M[0, 0] = 1.0
+    M[1:, 1:] = B
+    return T @ M @ np.linalg.inv(T)
+
+
+def test_a_mode_at_one_shared_by_every_map_is_separated_and_named():
+    T = np.array([[1.0, 0.0, 0.0], [0.3, 1.0, 0.0], [0.0, 0.5, 1.0]])
+    maps = [_with_shift(0.7 * _rotation(t), T) for t in (0.1, 0.9)]
+    for A in maps:
+        assert np.isclose(np.max(np.abs(np.linalg.eigvals(A))), 1.0)
+    cert = certify_family(maps, ["s", "x", "y"])
+    assert cert.status == "certified"
+    assert [m.label for m in cert.reduced.separated] == ["s"]
+    assert cert.reduced.separated[0].eigenvalue == pytest.approx(1.0)
+    assert cert.reduced.maps[0].shape == (2, 2)
+    assert cert.decay_rate < 0.71
+
+
+def test_a_mode_at_one_that_a_map_moves_is_not_separated():
+    T = np.eye(3)
+    maps = [_with_shift(0.5 * np.eye(2), T), _with_shift(0.5 * np.eye(2), T)]
+    maps[1][0, 0] = 1.01  # this map moves the neutral mode
+    cert = certify_family(maps, ["s", "x", "y"])
+    assert cert.reduced.separated == []
+    assert cert.status == "not_certified"
+    assert cert.breaking == 1
+
+
+def test_states_every_map_overwrites_are_left_out():
+    A = np.array([[0.5, 0.1, 2.0], [0.0, 0.4, 1.0], [0.0, 0.0, 0.0]])
+    reduced = reduce_family([A, 0.9 * A], ["a", "b", "held"])
+    assert reduced.overwritten == ["held"]
+    assert reduced.kept == ["a", "b"]
+    assert certify_family([A, 0.9 * A], ["a", "b", "held"]).status == (
+        "certified"
+    )
+
+
+def test_transform_takes_a_matrix_into_the_certified_coordinates():
+    T = np.array([[1.0, 0.0, 0.0], [0.3, 1.0, 0.0], [0.0, 0.5, 1.0]])
+    maps = [_with_shift(0.7 * _rotation(t), T) for t in (0.1, 0.9)]
+    reduced = reduce_family(maps, ["s", "x", "y"])
+    for A, B in zip(maps, reduced.maps):
+        np.testing.assert_allclose(reduced.transform(A), B, atol=1e-12)
+
+
+def test_what_the_corners_leave_out_is_added_to_the_decay_rate():
+    from deburr_drake.analysis.box_certificate import _model_error
+
+    A0 = np.diag([0.5, 0.6])
+    B = np.array([[0.0, 0.1], [0.0, 0.0]])
+    # Parameter "a" has a corner axis and is curved (its midpoint map off
+    # the chord by 0.05 I); "b" has none: its half-range counts whole.
+    ends = [(A0 - B, A0 + B), (A0 - 0.5 * B, A0 + 0.5 * B)]
+    mids = [A0 + 0.05 * np.eye(2), A0]
+    cert = certify_family([A0] + [m for e in ends for m in e], ["x", "y"])
+    assert cert.status == "certified"
+    box = [{"name": "a"}, {"name": "b"}]
+    out = _model_error(cert, box, {"ends": ends, "mids": mids}, [0])
+    a, b = out["model_error"]
+    assert a["p_norm"] == pytest.approx(
+        p_norm(cert.reduced.transform(0.05 * np.eye(2)), cert.P)
+    )
+    assert b["p_norm"] == pytest.approx(
+        p_norm(cert.reduced.transform(0.5 * B), cert.P)
+    )
+    assert out["decay_rate_with_model_error"] == pytest.approx(
+        cert.decay_rate + a["p_norm"] + b["p_norm"]
+    )
+    assert "status" not in out
+    # A curvature that takes the rate to 1: inconclusive.
+    out = _model_error(
+        cert, box, {"ends": ends, "mids": [A0 + np.eye(2), A0]}, [0]
+    )
+    assert out["status"] == "inconclusive"
