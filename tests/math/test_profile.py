@@ -211,14 +211,7 @@ def test_polyline_self_intersection():
 
 
 # An L-shaped pocket whose origin is its inner (reflex) corner, vertex 3.
-L_POCKET = [
-    [-0.03, -0.03],
-    [0.03, -0.03],
-    [0.03, 0.0],
-    [0.0, 0.0],
-    [0.0, 0.03],
-    [-0.03, 0.03],
-]
+L_POCKET = L_SHAPE
 
 
 def test_an_l_pocket_with_its_origin_on_a_vertex_starts_at_the_vertex():
