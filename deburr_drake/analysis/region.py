@@ -25,21 +25,28 @@ import time
 from typing import Callable, Dict, List, Optional, Sequence
 
 import numpy as np
+from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.solvers import (
     ClarabelSolver,
     CsdpSolver,
     MathematicalProgram,
     ScsSolver,
 )
-from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.symbolic import Expression, Polynomial, Variables
 
-from deburr_drake.analysis.operating_point import OperatingPoint
-from deburr_drake.analysis.sampled import frozen_cell
+from deburr_drake.analysis.operating_point import (
+    OperatingPoint,
+    frozen_scenario,
+    transfer_state,
+)
+from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.cell.truth import contact_normal_force
 from deburr_drake.control.laws import TaskTerms
 from deburr_drake.control.layout import CHAMFER_STATE
 from deburr_drake.math.region import (
+    IN,
+    ONSET,
+    OUT,
     STATE_NAMES,
     NormalAxisModel,
     fit_contact_law,
@@ -285,17 +292,22 @@ def diagram_response(
     *,
     reference_step: float,
     duration: float,
+    max_step: Optional[float] = None,
 ) -> np.ndarray:
     """(steps + 1, 4) reduced states of the full Diagram (the frozen
     scenario: adaptation and noise off) from ``op``'s state with the depth
     reference moved by ``reference_step`` (m), one row per control
-    period."""
-    diagram, context, _ = frozen_cell(op, {})
+    period; ``max_step`` (s) refines the integration step."""
+    overrides = {} if max_step is None else {"simulation.max_step": max_step}
+    scenario = frozen_scenario(op.scenario, **overrides)
+    diagram = make_deburring_diagram(op.variant(scenario))
+    context = diagram.CreateDefaultContext()
+    transfer_state(op.diagram, op.context, diagram, context)
     controller = diagram.GetSubsystemByName("controller")
     cc = controller.GetMyMutableContextFromRoot(context)
     x = cc.get_mutable_continuous_state_vector()
     x.SetAtIndex(0, x.GetAtIndex(0) + reference_step)
-    simulator = make_simulator(diagram, op.scenario)
+    simulator = make_simulator(diagram, scenario)
     simulator.reset_context(context)
     simulator.Initialize()
     period = op.scenario.controller.control_period
@@ -306,3 +318,455 @@ def diagram_response(
         simulator.AdvanceTo(t0 + k * period)
         out.append(reduced_state(diagram, simulator.get_context()))
     return np.array(out)
+
+
+@dataclass
+class Region:
+    """One piece of a piecewise-polynomial map: ``next_state`` (the map,
+    polynomials in ``x`` and the region's ``extras``) where every
+    ``linear`` constraint a . x + b >= 0 holds (rows (a, b)), and the
+    ``bounds`` (polynomials >= 0: the extras' sectors and limits) hold."""
+
+    name: str
+    next_state: List[Expression]
+    linear: List[tuple] = field(default_factory=list)
+    bounds: List[Expression] = field(default_factory=list)
+    extras: List = field(default_factory=list)
+
+    def meets(self, P_inv: np.ndarray, rho: float) -> bool:
+        """False when a linear constraint misses the ellipsoid
+        x^T P x <= rho altogether (the region is then empty there)."""
+        for a, b in self.linear:
+            a = np.asarray(a, float)
+            if b + np.sqrt(max(rho * a @ P_inv @ a, 0.0)) < 0:
+                return False
+        return True
+
+
+@dataclass
+class SublevelResult:
+    """The largest rho found, the status per region at it, the program's
+    size and times; ``status`` is ``proven`` (the program and the
+    sample check agree), ``inconclusive`` (the check failed) or
+    ``failed`` (no rho > 0 was proven)."""
+
+    rho: float
+    status: str
+    solver: str
+    bisections: List[Dict] = field(default_factory=list)
+    regions_checked: int = 0
+    gram_sizes: List[int] = field(default_factory=list)
+    solve_time_s: float = 0.0
+    check: Dict = field(default_factory=dict)
+
+
+def _region_feasible(x, P, eps, rho, region, solver, multiplier_degree):
+    """Whether the S-procedure proves V(f(x)) - V(x) <= -eps |x|^2 on
+    {V <= rho} and ``region``; (ok, solver status, Gram size, time)."""
+    prog = MathematicalProgram()
+    variables = list(x) + list(region.extras)
+    prog.AddIndeterminates(variables)
+    indeterminates = Variables(variables)
+    xv = np.array(x)
+    V = Polynomial(xv @ P @ xv, indeterminates)
+    Vf = Polynomial(
+        np.array(region.next_state) @ P @ np.array(region.next_state),
+        indeterminates,
+    )
+    decrease = -(Vf - V + Polynomial(eps * (xv @ xv), indeterminates))
+    degree = max(Vf.TotalDegree(), 2)
+    half = degree // 2
+    constraints = [Polynomial(rho - xv @ P @ xv, indeterminates)]
+    constraints += [
+        Polynomial(float(b) + np.asarray(a, float) @ xv, indeterminates)
+        for a, b in region.linear
+    ]
+    constraints += [Polynomial(g, indeterminates) for g in region.bounds]
+    from pydrake.symbolic import MonomialBasis
+
+    for g in constraints:
+        d = max(0, (degree - g.TotalDegree()) // 2)
+        d = min(d, multiplier_degree // 2)
+        lam, _ = prog.NewSosPolynomial(MonomialBasis(indeterminates, d))
+        decrease -= lam * g
+    _, gram = prog.AddSosConstraint(decrease)[:2]
+    start = time.perf_counter()
+    result = SOLVERS[solver]().Solve(prog)
+    elapsed = time.perf_counter() - start
+    status = result.get_solution_result().name
+    return result.is_success(), status, half, gram.shape[0], elapsed
+
+
+def sublevel_certificate(
+    x,
+    P: np.ndarray,
+    regions: Sequence[Region],
+    *,
+    eps: float,
+    rho_max: float,
+    solver: str = "Clarabel",
+    bisections: int = 12,
+    multiplier_degree: int = 4,
+    check: Optional[Callable[[float], Dict]] = None,
+) -> SublevelResult:
+    """The largest rho in (0, rho_max] (bisection, ``bisections`` steps)
+    for which every region that meets {x^T P x <= rho} is proven by the
+    S-procedure (:func:`_region_feasible`); then ``check(rho)`` (a dict
+    with ``ok``), which makes the result ``inconclusive`` when it fails."""
+    P_inv = np.linalg.inv(P)
+    out = SublevelResult(rho=0.0, status="failed", solver=solver)
+
+    def proven(rho):
+        entry = {"rho": rho, "regions": 0, "failed_region": None}
+        for region in regions:
+            if not region.meets(P_inv, rho):
+                continue
+            ok, status, _, size, elapsed = _region_feasible(
+                x, P, eps, rho, region, solver, multiplier_degree
+            )
+            entry["regions"] += 1
+            out.gram_sizes.append(size)
+            out.solve_time_s += elapsed
+            if not ok:
+                entry["failed_region"] = region.name
+                entry["solver_status"] = status
+                break
+        entry["proven"] = entry["failed_region"] is None
+        out.bisections.append(entry)
+        return entry["proven"], entry["regions"]
+
+    ok, n = proven(rho_max)
+    if ok:
+        lo, hi = rho_max, rho_max
+        out.regions_checked = n
+    else:
+        lo, hi = 0.0, rho_max
+        for _ in range(bisections):
+            mid = 0.5 * (lo + hi)
+            ok, n = proven(mid)
+            if ok:
+                lo, out.regions_checked = mid, n
+            else:
+                hi = mid
+    out.rho = lo
+    if lo <= 0.0:
+        return out
+    out.check = check(lo) if check is not None else {"ok": True}
+    out.status = "proven" if out.check["ok"] else "inconclusive"
+    return out
+
+
+def check_sublevel(
+    step: Callable,
+    P: np.ndarray,
+    rho: float,
+    eps: float,
+    *,
+    samples: int = 2000,
+    seed: int = 0,
+    boundary_fraction: float = 0.5,
+) -> Dict:
+    """Samples {x^T P x <= rho} (uniform inside, and on its boundary) and
+    checks V(x+) - V(x) <= -eps |x|^2 at each for every x+ that
+    ``step(x)`` returns (a list: one per value of the model's uncertain
+    terms). ``ok`` False, with the worst point, on any failure."""
+    rng = np.random.default_rng(seed)
+    n = P.shape[0]
+    L = np.linalg.cholesky(np.linalg.inv(P))
+    directions = rng.normal(size=(samples, n))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    radii = rng.uniform(size=samples) ** (1.0 / n)
+    radii[: int(boundary_fraction * samples)] = 1.0
+    worst, worst_x, failures = -np.inf, None, 0
+    for d, r in zip(directions, radii):
+        x = np.sqrt(rho) * r * (L @ d)
+        V = x @ P @ x
+        for x_next in step(x):
+            margin = x_next @ P @ x_next - V + eps * (x @ x)
+            if margin > worst:
+                worst, worst_x = margin, x
+            if margin > 1e-9 * max(V, 1e-12):
+                failures += 1
+    return {
+        "ok": failures == 0,
+        "samples": samples,
+        "failures": failures,
+        "worst_margin": float(worst),
+        "worst_point": None if worst_x is None else worst_x.tolist(),
+    }
+
+
+def normal_axis_pieces(model: NormalAxisModel, x_vars):
+    """(regions, x*, rho cap) of ``model`` in the scaled deviation
+    xi = (x - x*) / :data:`STATE_SCALES` (``x_vars`` its four symbolic
+    variables): one :class:`Region` per fuzzy cell and contact region (out
+    of contact, c0's onset, in contact up to the fit's largest depth),
+    each with the friction's sector phi (c_f v - phi) >= 0 and, in
+    contact, the fit's residual bounds. The cap keeps {V <= rho} within
+    the fit's depths: rho <= ((max_depth - delta*) / scale)^2 / (P^-1)_00
+    is applied by the caller, who knows P."""
+    from pydrake.symbolic import Variable
+
+    x_star = model.equilibrium()
+    scale = STATE_SCALES
+    xi = np.array(x_vars, dtype=object)
+    x_phys = x_star + scale * xi
+    w, phi = Variable("w"), Variable("phi")
+    fit = model.contact
+    s_star = float(model.sliding(x_star))
+    a_s = np.array(
+        [
+            float(model.sliding(x_star + scale * e)) - s_star
+            for e in np.eye(len(scale))
+        ]
+    )
+    e0 = np.eye(len(scale))[0]
+    d_star, d_c, d_max = x_star[0], model.threshold_depth, fit.max_depth
+    sc0 = scale[0]
+    contact_rows = {
+        OUT: [(-e0, -d_star / sc0)],
+        ONSET: [(e0, d_star / sc0), (-e0, (d_c - d_star) / sc0)],
+        IN: [(e0, (d_star - d_c) / sc0), (-e0, (d_max - d_star) / sc0)],
+    }
+    friction = phi * (model.friction_slope * scale[1] * xi[1] - phi)
+    residual = fit.max_residual**2 - w * w
+    sector = fit.sector**2 * (sc0 * xi[0]) ** 2 - w * w
+    bounds = {OUT: [friction], ONSET: [friction, residual]}
+    bounds[IN] = [friction, residual, sector]
+    regions = []
+    edges = model.compensator.edges
+    for cell in range(model.compensator.n_cells):
+        lo, hi = edges[cell], edges[cell + 1]
+        rows = []
+        if np.isfinite(lo):
+            rows.append((a_s / 1e-2, (s_star - lo) / 1e-2))
+        if np.isfinite(hi):
+            rows.append((-a_s / 1e-2, (hi - s_star) / 1e-2))
+        for contact in (IN, ONSET, OUT):
+            nxt = model.step_in_region(
+                x_phys, w if contact != OUT else 0.0, cell, contact, phi
+            )
+            regions.append(
+                Region(
+                    name=f"cell {cell} [{lo:.4g}, {hi:.4g}] m/s, "
+                    + CONTACT_NAMES[contact],
+                    next_state=[
+                        ((nxt[i] - x_star[i]) / scale[i]).Expand()
+                        for i in range(len(scale))
+                    ],
+                    linear=rows + contact_rows[contact],
+                    bounds=bounds[contact],
+                    extras=[phi] if contact == OUT else [phi, w],
+                )
+            )
+    # The operating point's own region first: it is the one that matters.
+    home = model.region_of(x_star)
+    regions.sort(
+        key=lambda r: (
+            0
+            if r.name.startswith(f"cell {home[0]} ")
+            and r.name.endswith(CONTACT_NAMES[home[1]])
+            else 1
+        )
+    )
+    return regions, x_star
+
+
+#: The contact regions' names.
+CONTACT_NAMES = {OUT: "out of contact", ONSET: "c0 onset", IN: "in contact"}
+
+
+def _scaled_step(model: NormalAxisModel, x_star):
+    """xi -> the list of xi+ over the uncertain terms' extremes: the fit's
+    residual at -bound, 0, +bound (in contact), the friction's change at
+    0, c_f v and its true value."""
+    scale = STATE_SCALES
+    fit = model.contact
+
+    def step(xi):
+        x = x_star + scale * xi
+        cell, contact = model.region_of(x)
+        v = float(x[1])
+        if contact == IN:
+            bound = min(fit.sector * abs(x[0] - fit.anchor), fit.max_residual)
+        elif contact == ONSET:
+            bound = fit.max_residual
+        else:
+            bound = 0.0
+        out = []
+        for w in (-bound, 0.0, bound):
+            for phi in (0.0, model.friction_slope * v, model.friction(v)):
+                nxt = model.step_in_region(x, w, cell, contact, phi)
+                out.append((nxt - x_star) / scale)
+        return out
+
+    return step
+
+
+def vertex_maps(model: NormalAxisModel, x_star, *, h=1e-4):
+    """The scaled map's Jacobians at x* (central differences) at the
+    vertices of its uncertain terms' sectors: the friction's slope 0 and
+    c_f, the fit's residual slope -sector, 0 and +sector."""
+    scale = STATE_SCALES
+    n = len(scale)
+    cell, contact = model.region_of(x_star)
+    maps = []
+    for slope in (0.0, model.friction_slope):
+        for sign in (-1.0, 0.0, 1.0):
+
+            def f(xi):
+                x = x_star + scale * xi
+                w = sign * model.contact.sector * (x[0] - x_star[0])
+                nxt = model.step_in_region(x, w, cell, contact, slope * x[1])
+                return (nxt - x_star) / scale
+
+            maps.append(
+                np.column_stack(
+                    [(f(h * e) - f(-h * e)) / (2 * h) for e in np.eye(n)]
+                )
+            )
+    return maps
+
+
+def common_lyapunov(maps, *, solver: str = "Clarabel") -> np.ndarray:
+    """P with P >= I and A^T P A - P <= -I at every map, its largest
+    eigenvalue minimised (a small semidefinite program); ValueError when
+    there is none."""
+    n = maps[0].shape[0]
+    prog = MathematicalProgram()
+    P = prog.NewSymmetricContinuousVariables(n, "P")
+    kappa = prog.NewContinuousVariables(1, "kappa")[0]
+    prog.AddPositiveSemidefiniteConstraint(P - np.eye(n))
+    prog.AddPositiveSemidefiniteConstraint(kappa * np.eye(n) - P)
+    for A in maps:
+        prog.AddPositiveSemidefiniteConstraint(P - A.T @ P @ A - np.eye(n))
+    prog.AddLinearCost(kappa)
+    result = SOLVERS[solver]().Solve(prog)
+    if not result.is_success():
+        raise ValueError(
+            "common_lyapunov: no common quadratic V for the linearised "
+            f"maps ({result.get_solution_result().name})"
+        )
+    value = result.GetSolution(P)
+    return 0.5 * (value + value.T)
+
+
+def normal_axis_region(
+    op: OperatingPoint,
+    *,
+    eps: float = 0.01,
+    bisections: int = 8,
+    solver: str = "Clarabel",
+    degree: int = 2,
+    check_samples: int = 2000,
+    validation_steps: Sequence[float] = (),
+    validation_duration: float = 1.0,
+    validation_max_step: Optional[float] = None,
+) -> Dict:
+    """The region of attraction of the normal-force axis at ``op``: the
+    reduced model, a common quadratic V of its linearised sector vertices,
+    the largest proven sublevel set, what it means in physical units, and
+    (``validation_steps``, m) the full Diagram against the reduced model
+    after each depth-reference step. A plain dict (JSON-ready)."""
+    from pydrake.symbolic import Variable
+
+    start = time.perf_counter()
+    model, info = normal_axis_model(op, degree=degree)
+    x = [Variable(name) for name in STATE_NAMES]
+    regions, x_star = normal_axis_pieces(model, x)
+    P = common_lyapunov(vertex_maps(model, x_star), solver=solver)
+    P_inv = np.linalg.inv(P)
+    cap = ((model.contact.max_depth - x_star[0]) / STATE_SCALES[0]) ** 2 / (
+        P_inv[0, 0]
+    )
+    step = _scaled_step(model, x_star)
+    result = sublevel_certificate(
+        x,
+        P,
+        regions,
+        eps=eps,
+        rho_max=cap,
+        solver=solver,
+        bisections=bisections,
+        check=lambda rho: check_sublevel(
+            step, P, rho, eps, samples=check_samples
+        ),
+    )
+    rho = result.rho
+    scale = STATE_SCALES
+    extent = np.sqrt(rho * np.diag(P_inv)) * scale
+    alone = np.sqrt(rho / np.diag(P)) * scale
+    out = {
+        "status": result.status,
+        "rho": rho,
+        "rho_cap_fit_range": float(cap),
+        "eps": eps,
+        "solver": solver,
+        "bisections": result.bisections,
+        "regions": len(regions),
+        "regions_meeting_the_set": result.regions_checked,
+        "largest_gram": max(result.gram_sizes, default=0),
+        "solve_time_s": result.solve_time_s,
+        "check": result.check,
+        "P_scaled": P.tolist(),
+        "state_scales": dict(zip(STATE_NAMES, scale.tolist())),
+        "equilibrium": dict(zip(STATE_NAMES, x_star.tolist())),
+        # The set's half-widths along each state (the others free) and
+        # the largest error of one state alone (the others at x*).
+        "extent": dict(zip(STATE_NAMES, extent.tolist())),
+        "single_state_error": dict(zip(STATE_NAMES, alone.tolist())),
+        "contact_loss_inside": bool(x_star[0] - extent[0] < 0.0),
+        "model": {
+            **info,
+            "contact_fit_coefficients": model.contact.coefficients.tolist(),
+            "contact_fit_sector_n_per_m": model.contact.sector,
+            "contact_fit_max_residual_n": model.contact.max_residual,
+            "contact_fit_max_depth_m": model.contact.max_depth,
+            "sensor_alpha": model.sensor_alpha,
+            "disturbance_n": model.disturbance,
+        },
+    }
+    out["validation"] = [
+        _validate(
+            op, model, d, validation_duration, alone[3], validation_max_step
+        )
+        for d in validation_steps
+    ]
+    out["time_s"] = time.perf_counter() - start
+    return out
+
+
+def _validate(
+    op, model, reference_step, duration, proven_step, max_step
+) -> Dict:
+    """The full Diagram against the reduced model after a depth-reference
+    step: the largest depth and force differences, the least depth, and
+    whether each is back within 5 % of the step (or 5 um) of its start at
+    the end."""
+    full = diagram_response(
+        op, reference_step=reference_step, duration=duration, max_step=max_step
+    )
+    reduced = model.simulate(full[0], len(full) - 1)
+    settled = max(0.05 * abs(reference_step), 5e-6)
+    base = diagram_response(
+        op, reference_step=0.0, duration=duration, max_step=max_step
+    )
+    return {
+        "reference_step_m": reference_step,
+        "inside_proven_region": bool(abs(reference_step) <= proven_step),
+        "duration_s": duration,
+        "depth_difference_max_m": float(
+            np.max(np.abs(full[:, 0] - reduced[:, 0]))
+        ),
+        "force_difference_max_n": float(
+            np.max(np.abs(full[:, 2] - reduced[:, 2]))
+        ),
+        "least_depth_full_m": float(full[:, 0].min()),
+        "least_depth_reduced_m": float(reduced[:, 0].min()),
+        "contact_lost_full": bool(full[:, 0].min() < 0.0),
+        "contact_lost_reduced": bool(reduced[:, 0].min() < 0.0),
+        "recovered_full": bool(abs(full[-1, 0] - base[-1, 0]) < settled),
+        "recovered_reduced": bool(
+            abs(reduced[-1, 0] - model.equilibrium()[0]) < settled
+        ),
+    }

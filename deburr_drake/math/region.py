@@ -297,7 +297,8 @@ class NormalAxisModel:
 
     def equilibrium(self) -> np.ndarray:
         """The operating point [delta*, 0, f_d, delta_d*]: delta* the
-        contact fit's anchor (where c0 + p = f_d), s* solves K s + u(s) + d = 0 (the disturbance
+        contact fit's anchor (where c0 + p = f_d), delta_d* = delta* +
+        s* / lambda with s* solving K s + u(s) + d = 0 (the disturbance
         is chosen so that it does)."""
         s_star = self._equilibrium_sliding()
         depth = self.contact.anchor

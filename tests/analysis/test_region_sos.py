@@ -1,0 +1,103 @@
+"""Known answers of the sums-of-squares region of attraction and its
+check after the solve."""
+
+import numpy as np
+from pydrake.symbolic import Variable
+import pytest
+
+from deburr_drake.analysis.region import (
+    Region,
+    check_sublevel,
+    common_lyapunov,
+    sublevel_certificate,
+)
+
+
+def _scalar():
+    """x+ = x / 2 + x^2: with V = x^2, V(x+) - V <= -eps x^2 holds exactly
+    for -1.5 + ... < x <= sqrt(1 - eps) - 1/2, so the largest symmetric
+    sublevel set has rho = (sqrt(1 - eps) - 1/2)^2."""
+    x = Variable("x")
+    return x, Region("all", [0.5 * x + x * x])
+
+
+def _scalar_step(z):
+    return [np.array([0.5 * z[0] + z[0] ** 2])]
+
+
+def test_a_stable_scalar_map_gets_its_known_region():
+    x, region = _scalar()
+    eps = 0.19
+    P = np.eye(1)
+    result = sublevel_certificate(
+        [x],
+        P,
+        [region],
+        eps=eps,
+        rho_max=1.0,
+        bisections=12,
+        check=lambda rho: check_sublevel(_scalar_step, P, rho, eps),
+    )
+    known = (np.sqrt(1 - eps) - 0.5) ** 2
+    assert result.status == "proven"
+    assert known * (1 - 2.0**-10) <= result.rho / (1 - 1e-6) <= known * 1.001
+    assert result.check["ok"]
+
+
+def test_the_check_rejects_a_sublevel_set_too_large():
+    P = np.eye(1)
+    assert check_sublevel(_scalar_step, P, 0.16, 0.19)["ok"]
+    bad = check_sublevel(_scalar_step, P, 0.3, 0.19)
+    assert not bad["ok"] and bad["failures"] > 0
+
+
+def test_the_check_rejects_a_wrong_v():
+    """A stable linear map (radius 0.5) that V = |x|^2 does not prove:
+    its 2-norm is above 1, so |x|^2 grows somewhere; the P of the
+    Lyapunov equation does."""
+    A = np.array([[0.5, 3.0], [0.0, 0.5]])
+
+    def step(z):
+        return [A @ z]
+
+    assert not check_sublevel(step, np.eye(2), 1.0, 0.0)["ok"]
+    P = common_lyapunov([A])
+    assert check_sublevel(step, P, 1.0, 0.0)["ok"]
+
+
+def test_a_solved_program_whose_check_fails_is_inconclusive():
+    """The program is given x+ = x / 2 + x^2, the check the true map
+    x+ = 1.1 x: the solver's answer does not make the result proven."""
+    x, region = _scalar()
+    P = np.eye(1)
+    result = sublevel_certificate(
+        [x],
+        P,
+        [region],
+        eps=0.19,
+        rho_max=0.1,
+        check=lambda rho: check_sublevel(
+            lambda z: [1.1 * z], P, rho, 0.19, samples=200
+        ),
+    )
+    assert result.rho == pytest.approx(0.1)
+    assert result.status == "inconclusive"
+
+
+def test_an_unstable_map_proves_nothing():
+    x = Variable("x")
+    result = sublevel_certificate(
+        [x],
+        np.eye(1),
+        [Region("all", [1.2 * x])],
+        eps=0.0,
+        rho_max=1.0,
+        bisections=4,
+    )
+    assert result.status == "failed" and result.rho == 0.0
+
+
+def test_a_region_missing_the_set_is_skipped():
+    region = Region("far", [], linear=[(np.array([1.0]), -2.0)])
+    assert not region.meets(np.eye(1), 1.0)
+    assert region.meets(np.eye(1), 4.5)
