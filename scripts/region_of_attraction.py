@@ -24,6 +24,9 @@ def main():
     ap.add_argument("--bisections", type=int, default=8)
     ap.add_argument("--degree", type=int, default=2, help="contact fit")
     ap.add_argument(
+        "--iterations", type=int, default=3, help="V-s iterations on P"
+    )
+    ap.add_argument(
         "--validate",
         type=float,
         nargs="*",
@@ -46,6 +49,7 @@ def main():
         bisections=args.bisections,
         solver=args.solver,
         degree=args.degree,
+        iterations=args.iterations,
         validation_steps=[d * 1e-3 for d in args.validate],
         validation_duration=args.duration,
         validation_max_step=args.max_step,
@@ -60,6 +64,7 @@ def main():
         extent = region["extent"][name]
         print(f"  {name:16s} alone +-{value:.4g}  extent +-{extent:.4g}")
     print(f"  contact loss inside: {region['contact_loss_inside']}")
+    print(f"  ball radius by iteration: {region['ball_radius_history']}")
     print(f"  check: {region['check']}")
     for v in region["validation"]:
         print(

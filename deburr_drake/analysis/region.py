@@ -32,7 +32,12 @@ from pydrake.solvers import (
     MathematicalProgram,
     ScsSolver,
 )
-from pydrake.symbolic import Expression, Polynomial, Variables
+from pydrake.symbolic import (
+    Expression,
+    MonomialBasis,
+    Polynomial,
+    Variables,
+)
 
 from deburr_drake.analysis.operating_point import (
     OperatingPoint,
@@ -358,43 +363,107 @@ class SublevelResult:
     gram_sizes: List[int] = field(default_factory=list)
     solve_time_s: float = 0.0
     check: Dict = field(default_factory=dict)
+    # The multipliers of (rho - V) at the last rho proven, by region.
+    multipliers: Dict = field(default_factory=dict)
 
 
-def _region_feasible(x, P, eps, rho, region, solver, multiplier_degree):
-    """Whether the S-procedure proves V(f(x)) - V(x) <= -eps |x|^2 on
-    {V <= rho} and ``region``; (ok, solver status, Gram size, time)."""
-    prog = MathematicalProgram()
-    variables = list(x) + list(region.extras)
-    prog.AddIndeterminates(variables)
-    indeterminates = Variables(variables)
+def _add_decrease(
+    prog, x, P, region, rho, eps, multiplier_degree, rho_multiplier=None
+):
+    """Adds to ``prog`` the S-procedure of V(f(x)) - V(x) <= -eps |x|^2
+    on {V <= rho} and ``region``, V = x^T P x (``P`` numbers or
+    ``prog``'s decision variables): -(V(f) - V + eps |x|^2) - lam0
+    (rho - V) - sum lam_i g_i is SOS with SOS multipliers lam
+    (``rho_multiplier``: lam0 given, which keeps a free P linear).
+    Returns (lam0, the Gram matrix's size)."""
+    indeterminates = Variables(list(x) + list(region.extras))
     xv = np.array(x)
+    fv = np.array(region.next_state)
     V = Polynomial(xv @ P @ xv, indeterminates)
-    Vf = Polynomial(
-        np.array(region.next_state) @ P @ np.array(region.next_state),
-        indeterminates,
-    )
+    Vf = Polynomial(fv @ P @ fv, indeterminates)
     decrease = -(Vf - V + Polynomial(eps * (xv @ xv), indeterminates))
-    degree = max(Vf.TotalDegree(), 2)
-    half = degree // 2
-    constraints = [Polynomial(rho - xv @ P @ xv, indeterminates)]
-    constraints += [
+    degree = max(Polynomial(fv @ fv, indeterminates).TotalDegree(), 2)
+    constraints = [
         Polynomial(float(b) + np.asarray(a, float) @ xv, indeterminates)
         for a, b in region.linear
     ]
     constraints += [Polynomial(g, indeterminates) for g in region.bounds]
-    from pydrake.symbolic import MonomialBasis
-
+    level = Polynomial(rho, indeterminates) - V
+    if rho_multiplier is None:
+        d = min(max(0, (degree - 2) // 2), multiplier_degree // 2)
+        rho_multiplier, _ = prog.NewSosPolynomial(
+            MonomialBasis(indeterminates, d)
+        )
+    decrease -= rho_multiplier * level
     for g in constraints:
         d = max(0, (degree - g.TotalDegree()) // 2)
         d = min(d, multiplier_degree // 2)
         lam, _ = prog.NewSosPolynomial(MonomialBasis(indeterminates, d))
         decrease -= lam * g
-    _, gram = prog.AddSosConstraint(decrease)[:2]
+    gram = prog.AddSosConstraint(decrease)[0]
+    return rho_multiplier, gram.shape[0]
+
+
+def _region_feasible(x, P, eps, rho, region, solver, multiplier_degree):
+    """Whether the S-procedure proves V(f(x)) - V(x) <= -eps |x|^2 on
+    {V <= rho} and ``region``; (ok, solver status, lam0's value, Gram
+    size, time)."""
+    prog = MathematicalProgram()
+    prog.AddIndeterminates(list(x) + list(region.extras))
+    lam0, size = _add_decrease(prog, x, P, region, rho, eps, multiplier_degree)
     start = time.perf_counter()
     result = SOLVERS[solver]().Solve(prog)
     elapsed = time.perf_counter() - start
     status = result.get_solution_result().name
-    return result.is_success(), status, half, gram.shape[0], elapsed
+    ok = result.is_success()
+    value = result.GetSolution(lam0) if ok else None
+    return ok, status, value, size, elapsed
+
+
+def improve_quadratic(
+    x,
+    P: np.ndarray,
+    rho: float,
+    regions: Sequence[Region],
+    multipliers: Dict[str, Polynomial],
+    *,
+    eps: float,
+    shape: np.ndarray,
+    solver: str = "Clarabel",
+    multiplier_degree: int = 4,
+):
+    """A new P, the multipliers of (rho - V) held at ``multipliers`` (by
+    region name; these regions only) so the program is linear in P: the
+    S-procedure of every region with P free, P >= eps I, and P / rho <=
+    t ``shape`` with t minimised (the set {V <= rho} holds the largest
+    {x^T shape x <= 1 / t}). None when the program fails. The new P is
+    only a proposal: :func:`sublevel_certificate` proves it again."""
+    n = len(x)
+    prog = MathematicalProgram()
+    extras = {v.get_id(): v for r in regions for v in r.extras}
+    prog.AddIndeterminates(list(x) + list(extras.values()))
+    Pv = prog.NewSymmetricContinuousVariables(n, "P")
+    t = prog.NewContinuousVariables(1, "t")[0]
+    prog.AddPositiveSemidefiniteConstraint(Pv - eps * np.eye(n))
+    prog.AddPositiveSemidefiniteConstraint(t * shape - Pv * (1.0 / rho))
+    for region in regions:
+        if region.name in multipliers:
+            _add_decrease(
+                prog,
+                x,
+                Pv,
+                region,
+                rho,
+                eps,
+                multiplier_degree,
+                rho_multiplier=multipliers[region.name],
+            )
+    prog.AddLinearCost(t)
+    result = SOLVERS[solver]().Solve(prog)
+    if not result.is_success():
+        return None
+    value = result.GetSolution(Pv)
+    return 0.5 * (value + value.T)
 
 
 def sublevel_certificate(
@@ -418,12 +487,14 @@ def sublevel_certificate(
 
     def proven(rho):
         entry = {"rho": rho, "regions": 0, "failed_region": None}
+        multipliers = {}
         for region in regions:
             if not region.meets(P_inv, rho):
                 continue
-            ok, status, _, size, elapsed = _region_feasible(
+            ok, status, lam0, size, elapsed = _region_feasible(
                 x, P, eps, rho, region, solver, multiplier_degree
             )
+            multipliers[region.name] = lam0
             entry["regions"] += 1
             out.gram_sizes.append(size)
             out.solve_time_s += elapsed
@@ -433,6 +504,8 @@ def sublevel_certificate(
                 break
         entry["proven"] = entry["failed_region"] is None
         out.bisections.append(entry)
+        if entry["proven"]:
+            out.multipliers = multipliers
         return entry["proven"], entry["regions"]
 
     ok, n = proven(rho_max)
@@ -662,6 +735,7 @@ def normal_axis_region(
     validation_steps: Sequence[float] = (),
     validation_duration: float = 1.0,
     validation_max_step: Optional[float] = None,
+    iterations: int = 3,
 ) -> Dict:
     """The region of attraction of the normal-force axis at ``op``: the
     reduced model, a common quadratic V of its linearised sector vertices,
@@ -675,23 +749,56 @@ def normal_axis_region(
     x = [Variable(name) for name in STATE_NAMES]
     regions, x_star = normal_axis_pieces(model, x)
     P = common_lyapunov(vertex_maps(model, x_star), solver=solver)
-    P_inv = np.linalg.inv(P)
-    cap = ((model.contact.max_depth - x_star[0]) / STATE_SCALES[0]) ** 2 / (
-        P_inv[0, 0]
-    )
     step = _scaled_step(model, x_star)
-    result = sublevel_certificate(
-        x,
-        P,
-        regions,
-        eps=eps,
-        rho_max=cap,
-        solver=solver,
-        bisections=bisections,
-        check=lambda rho: check_sublevel(
-            step, P, rho, eps, samples=check_samples
-        ),
-    )
+
+    def cap_of(P):
+        # {V <= rho} within the fit's depths.
+        depth_room = (model.contact.max_depth - x_star[0]) / STATE_SCALES[0]
+        return depth_room**2 / np.linalg.inv(P)[0, 0]
+
+    def proven_set(P):
+        return sublevel_certificate(
+            x,
+            P,
+            regions,
+            eps=eps,
+            rho_max=cap_of(P),
+            solver=solver,
+            bisections=bisections,
+        )
+
+    # V-s iteration: the largest rho for P, then a P that holds a larger
+    # ball in {V <= rho} with the multipliers of (rho - V) held, and again;
+    # a P is kept only when its own rho, proven anew, holds a larger ball.
+    result = proven_set(P)
+    history = [_ball(P, result.rho)]
+    for _ in range(iterations):
+        if result.rho <= 0.0:
+            break
+        proposal = improve_quadratic(
+            x,
+            P,
+            result.rho,
+            regions,
+            result.multipliers,
+            eps=eps,
+            shape=np.eye(len(x)),
+            solver=solver,
+        )
+        if proposal is None:
+            break
+        again = proven_set(proposal)
+        history.append(_ball(proposal, again.rho))
+        if history[-1] <= max(history[:-1]):
+            break
+        P, result = proposal, again
+    if result.rho > 0.0:
+        result.check = check_sublevel(
+            step, P, result.rho, eps, samples=check_samples
+        )
+        result.status = "proven" if result.check["ok"] else "inconclusive"
+    P_inv = np.linalg.inv(P)
+    cap = cap_of(P)
     rho = result.rho
     scale = STATE_SCALES
     extent = np.sqrt(rho * np.diag(P_inv)) * scale
@@ -707,6 +814,9 @@ def normal_axis_region(
         "regions_meeting_the_set": result.regions_checked,
         "largest_gram": max(result.gram_sizes, default=0),
         "solve_time_s": result.solve_time_s,
+        # The radius of the largest ball (scaled units) in each proven
+        # set of the V-s iteration, the first for the linearised V.
+        "ball_radius_history": history,
         "check": result.check,
         "P_scaled": P.tolist(),
         "state_scales": dict(zip(STATE_NAMES, scale.tolist())),
@@ -734,6 +844,11 @@ def normal_axis_region(
     ]
     out["time_s"] = time.perf_counter() - start
     return out
+
+
+def _ball(P, rho) -> float:
+    """The radius of the largest ball in {x^T P x <= rho}."""
+    return float(np.sqrt(rho / np.linalg.eigvalsh(P)[-1]))
 
 
 def _validate(
