@@ -462,7 +462,7 @@ def improve_quadratic(
     result = SOLVERS[solver]().Solve(prog)
     if not result.is_success():
         return None
-    value = result.GetSolution(Pv)
+    value = np.reshape(result.GetSolution(Pv), (n, n))
     return 0.5 * (value + value.T)
 
 

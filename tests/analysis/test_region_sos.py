@@ -9,6 +9,7 @@ from deburr_drake.analysis.region import (
     Region,
     check_sublevel,
     common_lyapunov,
+    improve_quadratic,
     sublevel_certificate,
 )
 
@@ -101,3 +102,33 @@ def test_a_region_missing_the_set_is_skipped():
     region = Region("far", [], linear=[(np.array([1.0]), -2.0)])
     assert not region.meets(np.eye(1), 1.0)
     assert region.meets(np.eye(1), 4.5)
+
+
+def test_a_new_p_of_the_v_s_iteration_is_proven_anew_and_stays_sound():
+    """The scalar map from V = 3 x^2: the proposal P, proven again, keeps
+    the set within the known interval for V = P x^2,
+    P x^2 ((1/2 + x)^2 - 1) <= -eps x^2, i.e. x <= sqrt(1 - eps / P) - 1/2."""
+    x, region = _scalar()
+    eps = 0.19
+    first = sublevel_certificate(
+        [x], 3.0 * np.eye(1), [region], eps=eps, rho_max=3.0, bisections=10
+    )
+    assert first.status == "proven"
+    proposal = improve_quadratic(
+        [x],
+        3.0 * np.eye(1),
+        first.rho,
+        [region],
+        first.multipliers,
+        eps=eps,
+        shape=np.eye(1),
+    )
+    assert proposal is not None
+    again = sublevel_certificate(
+        [x], proposal, [region], eps=eps, rho_max=3.0, bisections=10
+    )
+    P = proposal[0, 0]
+    half_width = np.sqrt(again.rho / P)
+    known = np.sqrt(1 - eps / P) - 0.5
+    assert half_width <= known * (1 + 1e-6)
+    assert half_width >= known * 0.99
