@@ -36,6 +36,7 @@ from pydrake.symbolic import (
     Expression,
     MonomialBasis,
     Polynomial,
+    Variable,
     Variables,
 )
 
@@ -47,7 +48,7 @@ from deburr_drake.analysis.operating_point import (
 from deburr_drake.cell.diagram import make_deburring_diagram
 from deburr_drake.cell.truth import contact_normal_force
 from deburr_drake.control.laws import TaskTerms
-from deburr_drake.control.layout import CHAMFER_STATE
+from deburr_drake.control.layout import CHAMFER_STATE, CONTROLLER_DIAGNOSTICS
 from deburr_drake.math.region import (
     IN,
     ONSET,
@@ -69,7 +70,12 @@ __all__ = [
     "sublevel_certificate",
     "check_sublevel",
     "normal_axis_pieces",
+    "normal_axis_region",
+    "vertex_maps",
+    "common_lyapunov",
+    "improve_quadratic",
     "STATE_SCALES",
+    "CONTACT_NAMES",
 ]
 
 #: The free semidefinite solvers of Drake's wheel.
@@ -111,7 +117,7 @@ def _joint_terms(diagram, context, n1, robot):
     F_c tanh(qdot / v_s) from the operating point's, along n1."""
     plant = diagram.GetSubsystemByName("plant")
     pc = plant.GetMyContextFromRoot(context)
-    frame = plant.GetFrameByName(_tool_frame(diagram))
+    frame = plant.GetFrameByName(robot.tool_frame)
     J = plant.CalcJacobianTranslationalVelocity(
         pc,
         JacobianWrtVariable.kV,
@@ -148,12 +154,6 @@ def _joint_terms(diagram, context, n1, robot):
 
     slope = float(jbar @ (coulomb / v_s * jbar))
     return mass, float(jbar @ (damping * jbar)), friction, slope
-
-
-def _tool_frame(diagram) -> str:
-    return diagram.GetSubsystemByName("controller")._arguments[
-        "tool_frame_name"
-    ]
 
 
 def _compensator_along(controller, cc, s_op, n1, x_p):
@@ -222,8 +222,6 @@ def normal_axis_model(
     n1 = np.asarray(CHAMFER_STATE.get(chamfer, "n1"), float)
     x_p = np.asarray(CHAMFER_STATE.get(chamfer, "x_p"), float)
     diagnostics = controller.GetOutputPort("diagnostics").Eval(cc)
-    from deburr_drake.control.layout import CONTROLLER_DIAGNOSTICS
-
     s_op = np.asarray(CONTROLLER_DIAGNOSTICS.get(diagnostics, "s"), float)
     f_d = float(controller.GetInputPort("desired_normal_force").Eval(cc)[0])
     K, _ = controller.gains(cc)
@@ -578,8 +576,6 @@ def normal_axis_pieces(model: NormalAxisModel, x_vars):
     contact, the fit's residual bounds. The cap keeps {V <= rho} within
     the fit's depths: rho <= ((max_depth - delta*) / scale)^2 / (P^-1)_00
     is applied by the caller, who knows P."""
-    from pydrake.symbolic import Variable
-
     x_star = model.equilibrium()
     scale = STATE_SCALES
     xi = np.array(x_vars, dtype=object)
@@ -742,8 +738,6 @@ def normal_axis_region(
     the largest proven sublevel set, what it means in physical units, and
     (``validation_steps``, m) the full Diagram against the reduced model
     after each depth-reference step. A plain dict (JSON-ready)."""
-    from pydrake.symbolic import Variable
-
     start = time.perf_counter()
     model, info = normal_axis_model(op, degree=degree)
     x = [Variable(name) for name in STATE_NAMES]
