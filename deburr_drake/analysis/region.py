@@ -203,6 +203,26 @@ def _compensator_along(controller, cc, s_op, n1, x_p):
     return u_along, breaks
 
 
+def _contact_fit(
+    scenario, depth_op, force_op, force_d, *, degree, top, n_depths
+):
+    """(fit, calibration): the hydroelastic law measured on the cell's
+    part (at the middle of the edge), scaled to the force ``force_op``
+    (N, without c0) the run reads at its own depth ``depth_op`` and place
+    (the tool's height and tilt there differ from the measurement's),
+    fitted on [0, ``top``] and anchored where it gives ``force_d`` (the
+    depth the depth law settles at)."""
+    depths = np.linspace(0.0, top, n_depths)
+    measured = contact_normal_force(scenario, depths)
+    calibration = force_op / float(np.interp(depth_op, depths, measured))
+    forces = calibration * measured
+    anchor = float(np.interp(force_d, forces, depths))
+    fit = fit_contact_law(
+        depths, forces, degree=degree, anchor=anchor, anchor_force=force_d
+    )
+    return fit, calibration
+
+
 def normal_axis_model(
     op: OperatingPoint,
     *,
@@ -226,22 +246,16 @@ def normal_axis_model(
     f_d = float(controller.GetInputPort("desired_normal_force").Eval(cc)[0])
     K, _ = controller.gains(cc)
     c = scenario.controller
-    # The contact law measured on the cell's part; the anchor where it
-    # gives the desired force (the depth the depth law settles at).
     depth_op = float(CHAMFER_STATE.get(chamfer, "delta"))
-    top = max_depth or 2.0 * depth_op
-    depths = np.linspace(0.0, top, n_depths)
     c0 = scenario.process.contact_threshold_force
-    # The law measured at the middle of the edge, scaled to the force the
-    # run reads at its own depth and place (the tool's height and tilt
-    # there differ from the measurement's).
-    measured = contact_normal_force(scenario, depths)
-    f_op = float(CHAMFER_STATE.get(chamfer, "f_n"))
-    calibration = (f_op - c0) / float(np.interp(depth_op, depths, measured))
-    forces = calibration * measured
-    anchor = float(np.interp(f_d - c0, forces, depths))
-    fit = fit_contact_law(
-        depths, forces, degree=degree, anchor=anchor, anchor_force=f_d - c0
+    fit, calibration = _contact_fit(
+        scenario,
+        depth_op,
+        float(CHAMFER_STATE.get(chamfer, "f_n")) - c0,
+        f_d - c0,
+        degree=degree,
+        top=max_depth or 2.0 * depth_op,
+        n_depths=n_depths,
     )
     u_along, breaks = _compensator_along(controller, cc, s_op, n1, x_p)
     compensator = piecewise_quadratic(u_along, breaks, tolerance=1e-7)
@@ -281,7 +295,7 @@ def normal_axis_model(
         "sliding_variable_m_per_s": s_n,
         "desired_normal_force_n": f_d,
         "operating_depth_m": depth_op,
-        "anchor_depth_m": anchor,
+        "anchor_depth_m": fit.anchor,
         "contact_calibration": calibration,
         "joint_damping_n_s_per_m": damping,
         "friction_slope_n_s_per_m": slope,
@@ -735,20 +749,65 @@ def normal_axis_region(
 ) -> Dict:
     """The region of attraction of the normal-force axis at ``op``: the
     reduced model, a common quadratic V of its linearised sector vertices,
-    the largest proven sublevel set, what it means in physical units, and
-    (``validation_steps``, m) the full Diagram against the reduced model
-    after each depth-reference step. A plain dict (JSON-ready)."""
+    the largest proven sublevel set (:func:`_iterate`), what it means in
+    physical units, and (``validation_steps``, m) the full Diagram against
+    the reduced model after each depth-reference step. A plain dict
+    (JSON-ready)."""
     start = time.perf_counter()
     model, info = normal_axis_model(op, degree=degree)
     x = [Variable(name) for name in STATE_NAMES]
     regions, x_star = normal_axis_pieces(model, x)
     P = common_lyapunov(vertex_maps(model, x_star), solver=solver)
-    step = _scaled_step(model, x_star)
+    P, result, history, solve_time = _iterate(
+        x,
+        P,
+        regions,
+        depth_room=(model.contact.max_depth - x_star[0]) / STATE_SCALES[0],
+        eps=eps,
+        solver=solver,
+        bisections=bisections,
+        iterations=iterations,
+    )
+    if result.rho > 0.0:
+        result.check = check_sublevel(
+            _scaled_step(model, x_star),
+            P,
+            result.rho,
+            eps,
+            samples=check_samples,
+        )
+        result.status = "proven" if result.check["ok"] else "inconclusive"
+    out = _summary(model, info, x_star, P, result)
+    out.update(
+        eps=eps,
+        regions=len(regions),
+        # The radius of the largest ball (scaled units) in each proven
+        # set of the V-s iteration, the first for the linearised V.
+        ball_radius_history=history,
+        solve_time_all_iterations_s=solve_time,
+    )
+    out["validation"] = [
+        _validate(
+            op,
+            model,
+            d,
+            validation_duration,
+            out["single_state_error"]["depth_reference"],
+            validation_max_step,
+        )
+        for d in validation_steps
+    ]
+    out["time_s"] = time.perf_counter() - start
+    return out
 
-    def cap_of(P):
-        # {V <= rho} within the fit's depths.
-        depth_room = (model.contact.max_depth - x_star[0]) / STATE_SCALES[0]
-        return depth_room**2 / np.linalg.inv(P)[0, 0]
+
+def _iterate(x, P, regions, *, depth_room, eps, solver, bisections, iterations):
+    """The V-s iteration: the largest rho for P, then a P that holds a
+    larger ball in {V <= rho} with the multipliers of (rho - V) held
+    (:func:`improve_quadratic`), and again; a P is kept only when its own
+    rho, proven anew, holds a larger ball. rho is capped so that
+    {V <= rho} stays within the fit's depths (``depth_room``, scaled).
+    Returns (P, its SublevelResult, the balls' radii, all solves' time)."""
 
     def proven_set(P):
         return sublevel_certificate(
@@ -756,16 +815,13 @@ def normal_axis_region(
             P,
             regions,
             eps=eps,
-            rho_max=cap_of(P),
+            rho_max=depth_room**2 / np.linalg.inv(P)[0, 0],
             solver=solver,
             bisections=bisections,
         )
 
-    # V-s iteration: the largest rho for P, then a P that holds a larger
-    # ball in {V <= rho} with the multipliers of (rho - V) held, and again;
-    # a P is kept only when its own rho, proven anew, holds a larger ball.
     result = proven_set(P)
-    history = [_ball(P, result.rho)]
+    history, solve_time = [_ball(P, result.rho)], result.solve_time_s
     for _ in range(iterations):
         if result.rho <= 0.0:
             break
@@ -782,41 +838,33 @@ def normal_axis_region(
         if proposal is None:
             break
         again = proven_set(proposal)
+        solve_time += again.solve_time_s
         history.append(_ball(proposal, again.rho))
         if history[-1] <= max(history[:-1]):
             break
         P, result = proposal, again
-    if result.rho > 0.0:
-        result.check = check_sublevel(
-            step, P, result.rho, eps, samples=check_samples
-        )
-        result.status = "proven" if result.check["ok"] else "inconclusive"
-    P_inv = np.linalg.inv(P)
-    cap = cap_of(P)
-    rho = result.rho
-    scale = STATE_SCALES
-    extent = np.sqrt(rho * np.diag(P_inv)) * scale
+    return P, result, history, solve_time
+
+
+def _summary(model, info, x_star, P, result) -> Dict:
+    """The proven set in physical units: its half-widths along each state
+    (the others free) and the largest error of one state alone (the others
+    at x*), with the program's record and the model's numbers."""
+    rho, scale = result.rho, STATE_SCALES
+    extent = np.sqrt(rho * np.diag(np.linalg.inv(P))) * scale
     alone = np.sqrt(rho / np.diag(P)) * scale
-    out = {
+    return {
         "status": result.status,
         "rho": rho,
-        "rho_cap_fit_range": float(cap),
-        "eps": eps,
-        "solver": solver,
+        "solver": result.solver,
         "bisections": result.bisections,
-        "regions": len(regions),
         "regions_meeting_the_set": result.regions_checked,
         "largest_gram": max(result.gram_sizes, default=0),
         "solve_time_s": result.solve_time_s,
-        # The radius of the largest ball (scaled units) in each proven
-        # set of the V-s iteration, the first for the linearised V.
-        "ball_radius_history": history,
         "check": result.check,
         "P_scaled": P.tolist(),
         "state_scales": dict(zip(STATE_NAMES, scale.tolist())),
         "equilibrium": dict(zip(STATE_NAMES, x_star.tolist())),
-        # The set's half-widths along each state (the others free) and
-        # the largest error of one state alone (the others at x*).
         "extent": dict(zip(STATE_NAMES, extent.tolist())),
         "single_state_error": dict(zip(STATE_NAMES, alone.tolist())),
         "contact_loss_inside": bool(x_star[0] - extent[0] < 0.0),
@@ -830,14 +878,6 @@ def normal_axis_region(
             "disturbance_n": model.disturbance,
         },
     }
-    out["validation"] = [
-        _validate(
-            op, model, d, validation_duration, alone[3], validation_max_step
-        )
-        for d in validation_steps
-    ]
-    out["time_s"] = time.perf_counter() - start
-    return out
 
 
 def _ball(P, rho) -> float:
