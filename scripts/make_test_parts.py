@@ -25,8 +25,10 @@ block.stl       the job example: a 140 x 100 x 30 mm block, vertical
                 15 degrees off the top's normal (about x) at (-40, -28) and
                 30 degrees off it (about y) at (0, -25); a slot 12 mm wide,
                 48 mm long and 10 mm deep along x centred at (5, 22); the
-                outer rim; a chamfer along x = 45 mm sloping down at 45
-                degrees to the +x end (135 degrees between it and the top)
+                outer rim; a chamfer along y = 32 mm sloping down at 60
+                degrees to the +y side, down to the bottom (120 degrees
+                between it and the top: a tool standing on the top needs
+                a 30-degree tilt, leaning across the arm, not towards it)
 
 The hole parts need manifold3d (trimesh's boolean engine; pip install
 deburr_drake[parts]). Facets: 256 round a tube, 160 round a hole, so that
@@ -130,8 +132,19 @@ def _drill(radius, depth, *, at, tilt_deg=0.0, about=(1, 0, 0), sections=160):
     return drill
 
 
-def block(length=140.0, width=100.0, height=30.0, corner=12.0):
-    """The job example (see the module docstring)."""
+def block(
+    length=140.0,
+    width=100.0,
+    height=30.0,
+    corner=12.0,
+    chamfer_at=32.0,
+    chamfer_slope=60.0,
+    chamfer_heading=90.0,
+):
+    """The job example (see the module docstring); the chamfer's top edge
+    ``chamfer_at`` from the centre, its face sloping down
+    ``chamfer_slope`` degrees from the top towards the heading
+    ``chamfer_heading`` (degrees about z from +x)."""
     # a rounded rectangle extruded: two boxes and the four corners' posts
     pieces = [
         trimesh.creation.box(extents=[length, width - 2 * corner, height]),
@@ -148,13 +161,21 @@ def block(length=140.0, width=100.0, height=30.0, corner=12.0):
             pieces.append(post)
     body = trimesh.boolean.union(pieces, engine="manifold")
     body.apply_translation([0.0, 0.0, -0.5 * height])
-    # the chamfer: a box whose bottom face is the plane x + z = 45
+    # the chamfer: a box whose bottom face is the sloping plane through
+    # the line x = chamfer_at, z = 0
     chamfer = trimesh.creation.box(extents=[100.0, 200.0, 100.0])
     chamfer.apply_translation([0.0, 0.0, 50.0])
     chamfer.apply_transform(
-        trimesh.transformations.rotation_matrix(math.radians(45.0), [0, 1, 0])
+        trimesh.transformations.rotation_matrix(
+            math.radians(chamfer_slope), [0, 1, 0]
+        )
     )
-    chamfer.apply_translation([45.0, 0.0, 0.0])
+    chamfer.apply_translation([chamfer_at, 0.0, 0.0])
+    chamfer.apply_transform(
+        trimesh.transformations.rotation_matrix(
+            math.radians(chamfer_heading), [0, 0, 1]
+        )
+    )
     slot = [trimesh.creation.box(extents=[36.0, 12.0, 20.0])]
     slot += [_drill(6.0, 10.0, at=(x, 0.0), sections=96) for x in (-18, 18)]
     slot = trimesh.boolean.union(slot, engine="manifold")

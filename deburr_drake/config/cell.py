@@ -387,7 +387,8 @@ class EdgeConfig:
             rule=rule.kind if rule.kind == "axis" else rule.side,
             axis=rule.axis or None,
             rule_note=rule.reason,
-            tilt=self.tilt,
+            # a tilt given replaces the one the default rule chose
+            tilt=self.tilt or rule.tilt,
             lead=self.lead,
             direction=self.direction,
             start_fraction=(

@@ -264,7 +264,7 @@ def test_step_without_cascadio_says_so(tmp_path):
 def test_the_job_blocks_top_side_edges():
     """models/parts/block.stl: on its top face (z = 0) a through bore, two
     holes drilled 15 and 30 degrees off the top's normal, a slot, the outer
-    rim and a chamfer's 135-degree edge, each an edge of its own."""
+    rim and a chamfer's 120-degree edge, each an edge of its own."""
     chains = sharp_edges(load_part(PARTS / "block.stl", units="mm"))
     top = [c for c in chains if np.allclose(c.points[:, 2], 0.0, atol=1e-9)]
     assert len(top) == 6
@@ -278,7 +278,7 @@ def test_the_job_blocks_top_side_edges():
         return choose_edge(top, near=[x * 1e-3, y * 1e-3, 0.0])
 
     bore, hole15, hole30 = at(-30, 15), at(-34, -28), at(7, -25)
-    slot, rim, chamfer = at(5, 28), at(-70, 0), at(45, 0)
+    slot, rim, chamfer = at(5, 28), at(-70, 0), at(0, 32)
     assert len({id(c) for c in (bore, hole15, hole30, slot, rim, chamfer)}) == 6
     for loop in (bore, hole15, hole30, slot):
         assert loop.closed
@@ -289,9 +289,9 @@ def test_the_job_blocks_top_side_edges():
     np.testing.assert_allclose(dihedral(hole30), [60.0, 120.0], atol=0.1)
     assert slot.length == pytest.approx(2 * 0.036 + 2 * math.pi * 0.006, 1e-3)
     assert not rim.closed and not chamfer.closed
-    assert chamfer.length == pytest.approx(0.100)
-    f = EdgeCurve(chamfer).frame(np.array([0.05]))
-    np.testing.assert_allclose(f.face_angle, 3 * math.pi / 4, atol=1e-6)
+    assert chamfer.length == pytest.approx(0.140)
+    f = EdgeCurve(chamfer).frame(np.array([0.07]))
+    np.testing.assert_allclose(f.face_angle, 2 * math.pi / 3, atol=1e-6)
     assert f.convex.all()
 
 
