@@ -53,3 +53,40 @@ def test_the_chamfer_is_cut_tilted_off_the_top_by_the_least_clear_turn(plan):
         np.testing.assert_allclose(
             chamfer.tool_axis_at(s), [0.0, -0.5, math.sqrt(0.75)], atol=1e-6
         )
+
+
+@pytest.mark.parametrize("angle", [120.0, 135.0])
+def test_a_roof_edge_is_cut_up_to_where_the_spindle_meets_the_top(
+    angle, roof_stl, tmp_path
+):
+    """A roof-like prism turned so the tool leans away from the arm: at
+    120 degrees the default's 30-degree turn cuts the edge, the arm and
+    spindle clear of the part along it; at 135 degrees the 45-degree turn
+    lays arm6's spindle (30 mm round the axis from 24 mm up) into the top,
+    and the refusal names the spindle, how deep, and the tilt."""
+    path = roof_stl(angle, tmp_path / "roof.stl")
+    job = f"""
+job:
+  file: {path}
+  units: mm
+  pose: {{xyz: [0.99, 0.03, 0.48], rpy: [0.0, 0.0, {math.pi}]}}
+  edges: [{{near: [0.04, 0.03, 0.02]}}]
+"""
+    plan = plan_job(load_scenario("paper_6dof", text=job))
+    if angle == 120.0:
+        assert plan.refused == [] and len(plan.cuts) == 1
+        (cut,) = plan.cuts
+        np.testing.assert_allclose(
+            cut.contour.tool_axis_at(0.0),
+            [0.5, 0.0, math.sqrt(0.75)],
+            atol=1e-6,
+        )
+        assert cut.min_clearance_m > 0.0
+        assert len(cut.postures) == len(cut.arcs) >= 15
+        np.testing.assert_array_equal(cut.end[2], cut.postures[-1])
+    else:
+        assert plan.cuts == []
+        ((index, line),) = plan.refused
+        assert line.startswith(f"edge {index}: at arc ")
+        assert "the spindle stands" in line and "135.0 deg" in line
+        assert "tilt 0.785398 rad" in line or "tilt -0.785398 rad" in line

@@ -17,7 +17,9 @@ from deburr_drake.math.mesh_part import (
     describe_edges,
     hole_axis,
     load_part,
+    rule_axes,
     sharp_edges,
+    side_plane_tilts,
     wall_axis,
 )
 
@@ -344,6 +346,42 @@ def test_the_default_rule_on_a_pipes_radial_hole():
     np.testing.assert_allclose(axis, [0, 0, 1], atol=1e-3)
     other = "right" if side == "left" else "left"
     assert wall_axis(rim, other)[2] < 0.05
+
+
+@pytest.mark.parametrize("angle", [90.0, 120.0, 128.0, 135.0])
+def test_an_obtuse_edge_turns_the_tool_by_the_least_clear_angle(
+    angle, roof_stl, tmp_path
+):
+    """The tool stands on the top; where the faces meet at more than 90
+    degrees the top's normal would lay the cutter's side plane into the
+    sloped face, so the default turns it about the edge by the faces'
+    angle less 90 degrees, leaning over the top: the side plane along the
+    sloped face. The path with that tilt is accepted, with 3 degrees
+    less it gouges."""
+    from deburr_drake.math.edge_contour import EdgeContour
+
+    part = load_part(roof_stl(angle, tmp_path / "roof.stl"), units="mm")
+    edge = choose_edge(sharp_edges(part), near=[0.04, 0.03, 0.02])
+    rule = default_tool_rule(edge)
+    assert rule.kind == "face"
+    top = edge.left_normals if rule.side == "left" else edge.right_normals
+    np.testing.assert_allclose(top, [[0.0, 0.0, 1.0]] * len(top), atol=1e-9)
+    assert abs(rule.tilt) == pytest.approx(math.radians(angle - 90.0), abs=1e-6)
+    # leaning over the top (-x), away from the sloped face
+    tilt = math.radians(angle - 90.0)
+    np.testing.assert_allclose(
+        rule_axes(edge, rule)[0],
+        [-math.sin(tilt), 0.0, math.cos(tilt)],
+        atol=1e-6,
+    )
+    lo, hi = side_plane_tilts(edge, rule.side)
+    assert hi - lo == pytest.approx(math.radians(180.0 - angle), abs=1e-6)
+    path = dict(cutter_radius=0.003, engagement=0.002, rule=rule.side)
+    EdgeContour(EdgeCurve(edge), tilt=rule.tilt, **path)
+    if angle > 90.0:
+        less = rule.tilt - math.copysign(math.radians(3.0), rule.tilt)
+        with pytest.raises(ValueError, match="cuts .* into a face"):
+            EdgeContour(EdgeCurve(edge), tilt=less, **path)
 
 
 def test_the_listing_of_a_block(tmp_path):
