@@ -132,6 +132,25 @@ def _drill(radius, depth, *, at, tilt_deg=0.0, about=(1, 0, 0), sections=160):
     return drill
 
 
+def _rounded_box(length, width, height, corner, sections=64):
+    """A rounded rectangle (corners of radius ``corner``) extruded
+    ``height`` about the origin: two boxes and the four corners' posts."""
+    pieces = [
+        trimesh.creation.box(extents=[length, width - 2 * corner, height]),
+        trimesh.creation.box(extents=[length - 2 * corner, width, height]),
+    ]
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            post = trimesh.creation.cylinder(
+                radius=corner, height=height, sections=sections
+            )
+            post.apply_translation(
+                [sx * (length / 2 - corner), sy * (width / 2 - corner), 0]
+            )
+            pieces.append(post)
+    return trimesh.boolean.union(pieces, engine="manifold")
+
+
 def block(
     length=140.0,
     width=100.0,
@@ -145,21 +164,7 @@ def block(
     ``chamfer_at`` from the centre, its face sloping down
     ``chamfer_slope`` degrees from the top towards the heading
     ``chamfer_heading`` (degrees about z from +x)."""
-    # a rounded rectangle extruded: two boxes and the four corners' posts
-    pieces = [
-        trimesh.creation.box(extents=[length, width - 2 * corner, height]),
-        trimesh.creation.box(extents=[length - 2 * corner, width, height]),
-    ]
-    for sx in (-1, 1):
-        for sy in (-1, 1):
-            post = trimesh.creation.cylinder(
-                radius=corner, height=height, sections=64
-            )
-            post.apply_translation(
-                [sx * (length / 2 - corner), sy * (width / 2 - corner), 0]
-            )
-            pieces.append(post)
-    body = trimesh.boolean.union(pieces, engine="manifold")
+    body = _rounded_box(length, width, height, corner)
     body.apply_translation([0.0, 0.0, -0.5 * height])
     # the chamfer: a box whose bottom face is the sloping plane through
     # the line x = chamfer_at, z = 0
@@ -190,6 +195,97 @@ def block(
     return trimesh.boolean.difference([body, *cuts], engine="manifold")
 
 
+def flange(radius=60.0, thickness=12.0, hub_radius=25.0, hub_height=18.0):
+    """A flange: a disc about z (0 <= z <= ``thickness``), a hub on it up
+    to ``thickness + hub_height``, a bore of radius 12 mm through both and
+    six bolt holes of radius 5 mm on a 45 mm radius."""
+    disc = trimesh.creation.cylinder(
+        radius=radius, height=thickness, sections=192
+    )
+    disc.apply_translation([0.0, 0.0, 0.5 * thickness])
+    hub = trimesh.creation.cylinder(
+        radius=hub_radius, height=hub_height + 1.0, sections=128
+    )
+    hub.apply_translation([0.0, 0.0, thickness + 0.5 * hub_height - 0.5])
+    body = trimesh.boolean.union([disc, hub], engine="manifold")
+    holes = [_drill(12.0, 60.0, at=(0.0, 0.0), sections=128)]
+    for k in range(6):
+        angle = math.radians(30.0 + 60.0 * k)
+        at = (45.0 * math.cos(angle), 45.0 * math.sin(angle))
+        holes.append(_drill(5.0, 30.0, at=at, sections=64))
+    return trimesh.boolean.difference([body, *holes], engine="manifold")
+
+
+def plate_holes(length=120.0, width=80.0, thickness=15.0):
+    """A plate (top face at z = 0) with holes of other sizes and angles
+    than the block's: radius 4 mm 45 degrees off the normal (about y) at
+    (-35, 15); radius 7 mm 20 degrees off it about the diagonal x = y at
+    (0, -15); radius 12 mm along the normal at (35, 10); radius 3 mm
+    along the normal at (-35, -22)."""
+    plate = trimesh.creation.box(extents=[length, width, thickness])
+    plate.apply_translation([0.0, 0.0, -0.5 * thickness])
+    diagonal = (1.0 / math.sqrt(2.0), 1.0 / math.sqrt(2.0), 0.0)
+    holes = [
+        _drill(4.0, 40.0, at=(-35.0, 15.0), tilt_deg=45.0, about=(0, 1, 0)),
+        _drill(7.0, 40.0, at=(0.0, -15.0), tilt_deg=20.0, about=diagonal),
+        _drill(12.0, 40.0, at=(35.0, 10.0)),
+        _drill(3.0, 40.0, at=(-35.0, -22.0), sections=64),
+    ]
+    return trimesh.boolean.difference([plate, *holes], engine="manifold")
+
+
+def casting(length=110.0, width=80.0, height=35.0):
+    """A casting-like part, its top at z = 0: a block with a pocket 60 x
+    40 mm and 12 mm deep (corners rounded 8 mm) leaving a rim round it,
+    its -x end an inclined face sloping down at 40 degrees from the top
+    (140 degrees between them), and a hole of radius 6 mm drilled along
+    that face's normal through its middle."""
+    body = trimesh.creation.box(extents=[length, width, height])
+    body.apply_translation([0.0, 0.0, -0.5 * height])
+    # the pocket: a rounded rectangle 12 mm deep, centred at (10, 0)
+    pocket = _rounded_box(60.0, 40.0, 24.0, 8.0)
+    pocket.apply_translation([10.0, 0.0, 0.0])  # 12 mm deep
+    # the inclined face: its top edge along y at x = -35
+    slope = math.radians(40.0)
+    cut = trimesh.creation.box(extents=[100.0, 200.0, 100.0])
+    cut.apply_translation([0.0, 0.0, 50.0])
+    cut.apply_transform(
+        trimesh.transformations.rotation_matrix(-slope, [0, 1, 0])
+    )
+    cut.apply_translation([-35.0, 0.0, 0.0])
+    # the hole along the inclined face's normal (the drill's z turned
+    # about y by -slope), through its middle
+    middle = np.array([-35.0, 0.0, 0.0]) + 15.0 * np.array(
+        [-math.cos(slope), 0.0, -math.sin(slope)]
+    )
+    drill = trimesh.creation.cylinder(radius=6.0, height=80.0, sections=128)
+    drill.apply_transform(
+        trimesh.transformations.rotation_matrix(-slope, [0, 1, 0])
+    )
+    drill.apply_translation(middle)
+    return trimesh.boolean.difference(
+        [body, pocket, cut, drill], engine="manifold"
+    )
+
+
+def small_block():
+    """Another block: 90 x 70 x 25 mm, corners rounded 6 mm, top at z = 0,
+    with a through bore of radius 8 mm at (-20, 10), a hole of radius 5 mm
+    25 degrees off the normal (about x) at (20, -15), and a pocket 30 x
+    20 mm, 8 mm deep, at (15, 15)."""
+    height = 25.0
+    body = _rounded_box(90.0, 70.0, height, 6.0, sections=48)
+    body.apply_translation([0.0, 0.0, -0.5 * height])
+    pocket = trimesh.creation.box(extents=[30.0, 20.0, 16.0])
+    pocket.apply_translation([15.0, 15.0, 0.0])
+    cuts = [
+        _drill(8.0, 40.0, at=(-20.0, 10.0)),
+        _drill(5.0, 40.0, at=(20.0, -15.0), tilt_deg=25.0),
+        pocket,
+    ]
+    return trimesh.boolean.difference([body, *cuts], engine="manifold")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "models" / "parts")
@@ -206,6 +302,10 @@ def main():
         "angled_hole": angled_hole,
         "pipe_hole": pipe_hole,
         "block": block,
+        "flange": flange,
+        "plate_holes": plate_holes,
+        "casting": casting,
+        "small_block": small_block,
     }
     for name in args.parts or parts:
         mesh = parts[name]()

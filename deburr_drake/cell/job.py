@@ -12,9 +12,12 @@ the part's convex pieces.
 
 Use: ``job = plan_job(scenario)`` for a scenario with a ``job`` section.
 An edge that cannot be cut (its path, a station the arm does not follow,
-the spindle or the arm in the part) or reached (no move to it) is refused
-in one line naming the edge and where; the job goes on from the last cut
-with the next edge."""
+the spindle or the arm in the part) is refused in one line naming the
+edge and where; the job goes on from the last cut with the next edge. An
+edge no move reaches from the last cut is tried again from each of the
+next ``RETRIES`` cuts (a move between cuts whose tools stand far apart,
+vertical and horizontal, may not be found where a move from another cut
+is), and refused naming the last move tried if none reaches it."""
 
 from dataclasses import dataclass, replace
 import math
@@ -193,8 +196,9 @@ def plan_job(
     cell = make_planning_cell(
         scenario.robot, scenario.tool, pieces, settings=settings
     )
-    # Each cut, and the move to it from the last one cut.
-    cuts, refused = [], []
+    # Each cut, and the move to it from the last one cut; an edge no move
+    # reaches from there is tried again from the next cuts.
+    cuts, refused, waiting = [], [], []
     for item in ordered:
         try:
             cut = _cut(
@@ -210,19 +214,41 @@ def plan_job(
         except (ValueError, RuntimeError) as e:
             refused.append((item.index, f"edge {item.index}: {e}"))
             continue
-        if cuts:
-            label = f"move from edge {cuts[-1].index} to edge {cut.index}"
-            try:
-                move = plan_move(
-                    cell,
-                    cuts[-1].end,
-                    cut.start,
-                    settings=settings,
-                    label=label,
-                )
-            except MovePlanningError as e:
-                refused.append((cut.index, str(e)))
-                continue
-            cut = cut._replace(move=move)
-        cuts.append(cut)
+        waiting.append([cut, "", RETRIES + 1, None])
+        while waiting and _join(cell, cuts, waiting, settings):
+            pass
+    refused += [(cut.index, why) for cut, why, _, _ in waiting]
     return JobPlan(cuts, skipped, refused)
+
+
+#: -, how many later cuts an edge no move reached is tried again from
+RETRIES = 2
+
+
+def _join(cell, cuts, waiting, settings) -> bool:
+    """Appends to ``cuts`` the first of ``waiting`` ([cut, why not yet,
+    tries left, the index of the cut last tried from]) a move from the
+    last cut reaches (or the first, when nothing is cut yet); True if one
+    was. Each try from a cut not tried from before spends one of its
+    tries; one with none left stays, with why, for the refusals."""
+    for entry in waiting:
+        cut, _, left, tried = entry
+        if not cuts:
+            cuts.append(cut)
+            waiting.remove(entry)
+            return True
+        if left <= 0 or tried == cuts[-1].index:
+            continue
+        entry[2:] = [left - 1, cuts[-1].index]
+        label = f"move from edge {cuts[-1].index} to edge {cut.index}"
+        try:
+            move = plan_move(
+                cell, cuts[-1].end, cut.start, settings=settings, label=label
+            )
+        except MovePlanningError as e:
+            entry[1] = str(e)
+            continue
+        cuts.append(cut._replace(move=move))
+        waiting.remove(entry)
+        return True
+    return False

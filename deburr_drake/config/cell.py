@@ -432,6 +432,8 @@ class EdgeConfig:
                 field, value = "part.edge.lead", self.lead
             elif "pass is empty" in message:
                 field, value = "part.edge.start_fraction", self.start_fraction
+            elif "tighter than the cutter" in message:
+                field, value = "tool.cutter_radius", tool.cutter_radius
             raise ConfigError(
                 f"{field} = {value!r} is invalid: {message}"
             ) from None

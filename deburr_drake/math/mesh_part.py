@@ -569,6 +569,15 @@ class EdgeCurve:
         """The unit tangent n2 at u, in the traversal direction."""
         return _unit(self._tangent(self._u(u)))
 
+    def curvature_vector(self, u):
+        """1/m, the curvature vector at u: towards the centre of
+        curvature, its length the curvature."""
+        u = self._u(u)
+        t = self._tangent(u)
+        a = self._point.derivative(2)(u)
+        speed2 = np.sum(t * t, axis=-1, keepdims=True)
+        return np.cross(np.cross(t, a), t) / speed2**2
+
     def curvature(self, u):
         """1/m, |c''| at u (c is parametrised by arc length)."""
         u = self._u(u)
