@@ -30,6 +30,20 @@ block.stl       the job example: a 140 x 100 x 30 mm block, vertical
                 between it and the top: a tool standing on the top needs
                 a 30-degree tilt, leaning across the arm, not towards it)
 
+plate_holes.stl a 120 x 80 x 15 mm plate (top face at z = 0) with holes of
+                radius 4 mm 45 degrees off the normal (about y), 7 mm
+                20 degrees off it (about the diagonal x = y), 12 mm and
+                3 mm along it (plate_holes)
+casting.stl     a 110 x 80 x 35 mm casting-like block (top at z = 0): a
+                rounded pocket 60 x 40 x 12 mm leaving a rim, its -x end an
+                inclined face 40 degrees down from the top, a hole of
+                radius 6 mm along that face's normal (casting)
+
+Not shipped, for trying the planner on other parts (--out elsewhere):
+flange (a disc with a hub, a bore and six bolt holes) and small_block (a
+90 x 70 x 25 mm block with a bore, a hole 25 degrees off the normal and a
+pocket).
+
 The hole parts need manifold3d (trimesh's boolean engine; pip install
 deburr_drake[parts]). Facets: 256 round a tube, 160 round a hole, so that
 the smoothed edges are within a few micrometres of the true curves.
@@ -290,7 +304,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "models" / "parts")
     parser.add_argument(
-        "parts", nargs="*", help="the parts to write (default: all)"
+        "parts",
+        nargs="*",
+        help="the parts to write (default: the shipped ones)",
     )
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
@@ -307,7 +323,8 @@ def main():
         "casting": casting,
         "small_block": small_block,
     }
-    for name in args.parts or parts:
+    shipped = [p for p in parts if p not in ("flange", "small_block")]
+    for name in args.parts or shipped:
         mesh = parts[name]()
         assert mesh.is_watertight and mesh.volume > 0, name
         path = args.out / f"{name}.stl"

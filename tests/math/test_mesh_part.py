@@ -427,3 +427,64 @@ def test_the_spindle_across_a_pipe_is_not_the_open_side():
     assert outer.reachable and not outer.blocked
     assert not inner.reachable and "spindle" in inner.blocked
     np.testing.assert_allclose(inner.rule.axis, [0, 0, -1], atol=1e-3)
+
+
+def _summary(part, chains, summaries, near):
+    chain = choose_edge(chains, near=near)
+    return chain, summaries[[c is chain for c in chains].index(True)]
+
+
+def test_the_castings_inclined_face_its_hole_and_its_edges():
+    """casting.stl: an inclined face sloping down 40 degrees from the
+    top, a hole along its normal. The hole's rim gets that normal as its
+    axis; the inclined face's edge with the vertical end (130 degrees) is
+    cut with a 40-degree turn; its edge with the top (140 degrees) needs
+    50, which lays the spindle on the top: not reachable, and why."""
+    part = load_part(PARTS / "casting.stl", units="mm")
+    chains = sharp_edges(part)
+    summaries = describe_edges(part, chains)
+    slope = math.radians(40.0)
+    _, hole = _summary(part, chains, summaries, [-0.0419, 0.0, -0.0058])
+    np.testing.assert_allclose(
+        hole.rule.axis, [-math.sin(slope), 0.0, math.cos(slope)], atol=1e-6
+    )
+    assert hole.reachable
+    _, lower = _summary(part, chains, summaries, [-0.055, 0.0, -0.0168])
+    assert abs(lower.rule.tilt) == pytest.approx(math.radians(40.0), abs=1e-6)
+    assert lower.reachable
+    _, top = _summary(part, chains, summaries, [-0.035, 0.0, 0.0])
+    assert abs(top.rule.tilt) == pytest.approx(math.radians(50.0), abs=1e-6)
+    assert not top.reachable and "spindle" in top.blocked
+
+
+def test_the_plates_holes_at_other_angles_and_sizes():
+    """plate_holes.stl: holes of radius 4 mm 45 degrees off the normal,
+    7 mm 20 degrees off it about the diagonal, 3 mm along it. Each rim
+    gets its hole's axis; at 45 degrees the spindle lies on the top; the
+    3 mm hole is no larger than the 3 mm cutter, and its path says so."""
+    from deburr_drake.math.edge_contour import EdgeContour
+
+    part = load_part(PARTS / "plate_holes.stl", units="mm")
+    chains = sharp_edges(part)
+    summaries = describe_edges(part, chains)
+    _, steep = _summary(part, chains, summaries, [-0.0293, 0.015, 0.0])
+    half = math.sqrt(0.5)
+    np.testing.assert_allclose(steep.rule.axis, [half, 0.0, half], atol=1e-6)
+    assert not steep.reachable and "spindle" in steep.blocked
+    _, diagonal = _summary(part, chains, summaries, [0.0072, -0.0155, 0.0])
+    tilt = math.radians(20.0)
+    np.testing.assert_allclose(
+        diagonal.rule.axis,
+        [half * math.sin(tilt), -half * math.sin(tilt), math.cos(tilt)],
+        atol=1e-6,
+    )
+    assert diagonal.reachable
+    small, summary = _summary(part, chains, summaries, [-0.032, -0.022, 0.0])
+    with pytest.raises(ValueError, match="bends tighter than the cutter"):
+        EdgeContour(
+            EdgeCurve(small),
+            cutter_radius=0.003,
+            engagement=0.002,
+            rule="axis",
+            axis=summary.rule.axis,
+        )
