@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+import trimesh
 
 from deburr_drake.math.geometry import Contour
 
@@ -131,3 +132,27 @@ def paper_log(paper_cell):
 
     scenario, diagram = paper_cell()
     return simulate(diagram, scenario, duration=5.0)
+
+
+def _roof_stl(angle_deg, path):
+    """Writes to ``path`` (mm) a prism 60 mm long along y: a flat top
+    (z = 20 mm, x <= 40 mm) meeting a face that slopes down towards +x at
+    ``angle_deg`` between the two faces through the material, the edge
+    along y at x = 40 mm, z = 20 mm; returns ``path``."""
+    run = 20.0 / math.tan(math.radians(180.0 - angle_deg))
+    section = [[0.0, 0.0], [40.0 + run, 0.0], [40.0, 20.0], [0.0, 20.0]]
+    front = np.array([[x, 0.0, z] for x, z in section])
+    vertices = np.vstack([front, front + [0.0, 60.0, 0.0]])
+    faces = [[0, 1, 2], [0, 2, 3], [4, 6, 5], [4, 7, 6]]  # the y ends
+    for i in range(4):
+        j = (i + 1) % 4
+        faces += [[i, i + 4, j + 4], [i, j + 4, j]]
+    trimesh.Trimesh(vertices, faces).export(path)
+    return path
+
+
+@pytest.fixture
+def roof_stl():
+    """The writer of a roof-like prism (``_roof_stl``): an open straight
+    edge between a flat top and a sloped face at a given angle."""
+    return _roof_stl

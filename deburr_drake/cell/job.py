@@ -2,24 +2,39 @@
 ordered (deburr_drake.math.job_order), each cut's path and its start and
 end postures, and the moves between the cuts (deburr_drake.cell.moves).
 
+Each cut is followed by the arm as the run would: postures station by
+station along the cutter's path, each from the one before
+(deburr_drake.cell.joint_path: reach, joint limits, wrist flips and
+conditioning), the tool spun about its axis or another posture taken at
+the start when the seed's does not follow; at every station the arm and
+its spindle (not the cutter, which is in the cut) must stand clear of
+the part's convex pieces.
+
 Use: ``job = plan_job(scenario)`` for a scenario with a ``job`` section.
-An edge that cannot be cut (its path, or no posture at its start or end)
-or reached (no move to it) is refused in one line naming the edge and
-where; the job goes on from the last cut with the next edge."""
+An edge that cannot be cut (its path, a station the arm does not follow,
+the spindle or the arm in the part) is refused in one line naming the
+edge and where; the job goes on from the last cut with the next edge. An
+edge no move reaches from the last cut is tried again from each of the
+next ``RETRIES`` cuts (a move between cuts whose tools stand far apart,
+vertical and horizontal, may not be found where a move from another cut
+is), and refused naming the last move tried if none reaches it."""
 
 from dataclasses import dataclass, replace
+import math
 from typing import List, NamedTuple, Optional
 
 import numpy as np
 
-from deburr_drake.cell.arm import solve_tool_pose
+from deburr_drake.cell.joint_path import PathBreak
 from deburr_drake.cell.moves import (
     Move,
     MovePlanningError,
     MoveSettings,
+    _nearest,
     make_planning_cell,
     plan_move,
 )
+from deburr_drake.cell.reach import _follow, _free_spin
 from deburr_drake.cell.robot import check_robot, ik_seed
 from deburr_drake.config import EdgeConfig, Scenario
 from deburr_drake.math.convex_pieces import convex_pieces, placed_pieces
@@ -39,6 +54,13 @@ class JobCut(NamedTuple):
     start: tuple  # (tip m, tool axis, q rad) at the cut's start
     end: tuple  # the same at its end
     move: Optional[Move]  # the move to this cut (None for the first)
+    # m, the stations' arc positions along the cutter's path (contour)
+    arcs: Optional[np.ndarray] = None
+    # rad, (stations, joints): the arm's postures there, followed in order
+    postures: Optional[np.ndarray] = None
+    # m, the least distance of the arm and spindle (not the cutter) to the
+    # part along the cut
+    min_clearance_m: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -55,24 +77,53 @@ class JobPlan:
         return [c.move for c in self.cuts if c.move is not None]
 
 
-def _posture(model, robot, frame, p, axis, q_guess=None):
-    return solve_tool_pose(
-        model,
-        p,
-        q_guess=ik_seed(robot, p) if q_guess is None else q_guess,
-        instance=frame.model_instance(),
-        tool_frame=robot.tool_frame,
-        tool_axis=axis,
-    )
+#: m, between the stations the arm is followed at along a cut
+STATION_SPACING = 0.004
 
 
-def _cut(scenario, model, part, chains, ordered, tilt=0.0):
-    """The JobCut of ``ordered`` (no move yet); ValueError or
-    RuntimeError say why not."""
+def _stations(contour):
+    """(the start point, the stations' points, tool axes and arc
+    positions) along ``contour``, as deburr_drake.cell.reach follows an
+    edge: about ``STATION_SPACING`` apart, from its start to its end (a
+    loop: back to its start)."""
+    count = max(8, math.ceil(contour.length / STATION_SPACING))
+    arcs = np.linspace(0.0, contour.length, count + 1)
+    points = [contour.point_at(s) for s in arcs]
+    axes = [contour.tool_axis_at(s) for s in arcs]
+    return points[0], points, axes, arcs
+
+
+def _follow_cut(model, robot, contour):
+    """(arcs, postures) of the arm following ``contour`` from the start
+    posture nearest the seed's, else from the one the tool's free spin or
+    another posture gives (deburr_drake.cell.reach); RuntimeError naming
+    the station and the joint where it does not."""
+    instance = model.GetFrameByName(robot.tool_frame).model_instance()
+    stations = _stations(contour)
+    try:
+        _, path = _follow(
+            model, robot, instance, stations, ik_seed(robot, stations[0])
+        )
+    except (PathBreak, RuntimeError) as e:
+        q0 = _free_spin(model, robot, instance, stations)
+        if q0 is None:
+            raise RuntimeError(
+                f"the arm does not follow it (from the seed, with the tool "
+                f"spun about its axis, nor from other postures): {e}"
+            ) from None
+        _, path = _follow(model, robot, instance, stations, q0)
+    return stations[3], path
+
+
+def _cut(scenario, model, cell, part, chains, summary, ordered, tilt=0.0):
+    """The JobCut of ``ordered`` (no move yet; ``summary`` its edge's
+    EdgeSummary); ValueError or RuntimeError say why not."""
     job = scenario.job
     to_part = part.rotation.T
     chain = chains[ordered.index]
-    point = to_part @ (chain.points[len(chain.points) // 2] - part.translation)
+    # the edge's middle by length: a vertex may be the corner where
+    # another edge ends, and ``near`` would pick either
+    point = to_part @ (summary.point - part.translation)
     edge = EdgeConfig(
         kind="mesh",
         file=str(job.part_file()),
@@ -87,19 +138,25 @@ def _cut(scenario, model, part, chains, ordered, tilt=0.0):
         start_near=(to_part @ (ordered.start - part.translation)).tolist(),
     )
     contour = edge.mesh_path(scenario.tool, job.pose)
-    robot = scenario.robot
-    frame = model.GetFrameByName(robot.tool_frame)
-    ends = []
-    for s in (0.0, contour.length):
-        p, axis = contour.point_at(s), contour.tool_axis_at(s)
-        q_guess = ends[0][2] if ends else None
-        try:
-            q = _posture(model, robot, frame, p, axis, q_guess)
-        except RuntimeError as e:
-            where = "start" if not ends else "end"
-            raise RuntimeError(f"no posture at its {where}: {e}") from None
-        ends.append((p, axis, q))
-    return JobCut(ordered.index, point, edge, contour, *ends, None)
+    arcs, path = _follow_cut(model, scenario.robot, contour)
+    # The arm and the spindle along the cut, clear of the part.
+    least = math.inf
+    for arc, q in zip(arcs, path):
+        distance, shape = _nearest(cell, q, cutter=False)
+        if distance < 0.0:
+            raise RuntimeError(
+                f"at arc {arc * 1e3:.1f} mm the {shape} stands "
+                f"{-distance * 1e3:.2g} mm in the part "
+                f"({contour.describe_rule()})"
+            )
+        least = min(least, distance)
+    ends = [
+        (contour.point_at(s), contour.tool_axis_at(s), q)
+        for s, q in ((arcs[0], path[0]), (arcs[-1], path[-1]))
+    ]
+    return JobCut(
+        ordered.index, point, edge, contour, *ends, None, arcs, path, least
+    )
 
 
 def plan_job(
@@ -139,29 +196,59 @@ def plan_job(
     cell = make_planning_cell(
         scenario.robot, scenario.tool, pieces, settings=settings
     )
-    # Each cut, and the move to it from the last one cut.
-    cuts, refused = [], []
+    # Each cut, and the move to it from the last one cut; an edge no move
+    # reaches from there is tried again from the next cuts.
+    cuts, refused, waiting = [], [], []
     for item in ordered:
         try:
             cut = _cut(
-                scenario, model, part, chains, item, tilts.get(item.index, 0.0)
+                scenario,
+                model,
+                cell,
+                part,
+                chains,
+                summaries[item.index],
+                item,
+                tilts.get(item.index, 0.0),
             )
         except (ValueError, RuntimeError) as e:
             refused.append((item.index, f"edge {item.index}: {e}"))
             continue
-        if cuts:
-            label = f"move from edge {cuts[-1].index} to edge {cut.index}"
-            try:
-                move = plan_move(
-                    cell,
-                    cuts[-1].end,
-                    cut.start,
-                    settings=settings,
-                    label=label,
-                )
-            except MovePlanningError as e:
-                refused.append((cut.index, str(e)))
-                continue
-            cut = cut._replace(move=move)
-        cuts.append(cut)
+        waiting.append([cut, "", RETRIES + 1, None])
+        while waiting and _join(cell, cuts, waiting, settings):
+            pass
+    refused += [(cut.index, why) for cut, why, _, _ in waiting]
     return JobPlan(cuts, skipped, refused)
+
+
+#: -, how many later cuts an edge no move reached is tried again from
+RETRIES = 2
+
+
+def _join(cell, cuts, waiting, settings) -> bool:
+    """Appends to ``cuts`` the first of ``waiting`` ([cut, why not yet,
+    tries left, the index of the cut last tried from]) a move from the
+    last cut reaches (or the first, when nothing is cut yet); True if one
+    was. Each try from a cut not tried from before spends one of its
+    tries; one with none left stays, with why, for the refusals."""
+    for entry in waiting:
+        cut, _, left, tried = entry
+        if not cuts:
+            cuts.append(cut)
+            waiting.remove(entry)
+            return True
+        if left <= 0 or tried == cuts[-1].index:
+            continue
+        entry[2:] = [left - 1, cuts[-1].index]
+        label = f"move from edge {cuts[-1].index} to edge {cut.index}"
+        try:
+            move = plan_move(
+                cell, cuts[-1].end, cut.start, settings=settings, label=label
+            )
+        except MovePlanningError as e:
+            entry[1] = str(e)
+            continue
+        cuts.append(cut._replace(move=move))
+        waiting.remove(entry)
+        return True
+    return False

@@ -17,7 +17,9 @@ part.
 * The transit: ``KinematicTrajectoryOptimization`` (a B-spline in joint
   space, at rest at both ends, within the joint position and velocity
   limits) with the minimum-distance constraint at samples along the path,
-  started from the straight line in joint space.
+  started from the straight line in joint space; where that stalls (the
+  tool turning over far, vertical to horizontal), started again through a
+  posture 0.1 m above the two ends with the tool axis halfway.
 * The check: a ``SceneGraphCollisionChecker`` on the transit at a fine
   joint step, and the clearance (signed distance to the part) along the
   whole move at as fine a step. On the retract and approach segments the
@@ -248,10 +250,13 @@ def waypoint(cell: PlanningCell, point, axis, q_near, gap: float) -> np.ndarray:
     return result.GetSolution(q)
 
 
-def _transit(cell: PlanningCell, q_a, q_b, settings: MoveSettings, extra=()):
+def _transit(
+    cell: PlanningCell, q_a, q_b, settings: MoveSettings, extra=(), via=None
+):
     """The transit from ``q_a`` to ``q_b`` (both at rest), the distance
     constraint at ``settings.samples`` points and at the path parameters
-    ``extra`` (in [0, 1])."""
+    ``extra`` (in [0, 1]), started from the straight line in joint space
+    (through the posture ``via`` when given)."""
     plant = cell.plant
     n = plant.num_positions()
     trajopt = KinematicTrajectoryOptimization(n, settings.control_points)
@@ -271,9 +276,21 @@ def _transit(cell: PlanningCell, q_a, q_b, settings: MoveSettings, extra=()):
     zero = np.zeros(n)
     trajopt.AddPathVelocityConstraint(zero, zero, 0.0)
     trajopt.AddPathVelocityConstraint(zero, zero, 1.0)
-    # The straight line in joint space, at the speed limit, to start from.
-    duration = max(1.0, float(np.max(np.abs(q_b - q_a) / speed)) * 1.5)
-    line = np.linspace(q_a, q_b, settings.control_points).T
+    # The straight line in joint space (through via), at the speed limit,
+    # to start from.
+    if via is None:
+        line = np.linspace(q_a, q_b, settings.control_points).T
+        span = np.abs(q_b - q_a)
+    else:
+        half = settings.control_points // 2
+        line = np.vstack(
+            [
+                np.linspace(q_a, via, half, endpoint=False),
+                np.linspace(via, q_b, settings.control_points - half),
+            ]
+        ).T
+        span = np.abs(via - q_a) + np.abs(q_b - via)
+    duration = max(1.0, float(np.max(span / speed)) * 1.5)
     guess = BsplineTrajectory(
         trajopt.basis(),
         [line[:, [i]] for i in range(settings.control_points)],
@@ -323,17 +340,27 @@ def plan_move(
     started = time.perf_counter()
     q_a, q_b = cut_end[2], next_start[2]
     segments = _waypoints(cell, cut_end, next_start, settings, label)
-    transit, times, middle, distances = _checked_transit(
-        cell, segments, settings, label
-    )
-    ends = (transit.start_time(), transit.end_time())
-    # The check: the transit by the collision checker, edge by edge.
-    for i, (a, b) in enumerate(zip(middle[:-1], middle[1:])):
-        if not cell.checker.CheckEdgeCollisionFree(a, b):
-            raise MovePlanningError(
-                f"{label}: transit collides at {times[i]:.3g} s of "
-                f"{ends[1]:.3g} s (SceneGraphCollisionChecker)"
+    try:
+        transit, times, middle, distances = _clear_transit(
+            cell, segments, settings, label
+        )
+    except MovePlanningError as e:
+        # A local program from the straight line in joint space stalls
+        # where the tool turns over far (vertical to horizontal): started
+        # again through a posture above the part, the axis halfway.
+        via = _via(cell, cut_end, next_start, segments, settings)
+        if via is None:
+            raise
+        try:
+            transit, times, middle, distances = _clear_transit(
+                cell, segments, settings, label, via=via
             )
+        except MovePlanningError:
+            raise MovePlanningError(
+                f"{e}, nor through a posture {_VIA_RISE * 1e3:.0f} mm above "
+                "the two ends"
+            ) from None
+    ends = (transit.start_time(), transit.end_time())
     step = settings.check_step
     retract = _line(np.asarray(q_a), segments["retract"], step)
     approach = _line(segments["approach"], np.asarray(q_b), step)
@@ -407,12 +434,57 @@ def _waypoints(cell, cut_end, next_start, settings, label):
     return segments
 
 
-def _checked_transit(cell, segments, settings, label, rounds=3):
+def _clear_transit(cell, segments, settings, label, via=None):
+    """``_checked_transit``, then checked by the collision checker edge
+    by edge (MovePlanningError where it collides)."""
+    transit, times, middle, distances = _checked_transit(
+        cell, segments, settings, label, via=via
+    )
+    end = transit.end_time()
+    for i, (a, b) in enumerate(zip(middle[:-1], middle[1:])):
+        if not cell.checker.CheckEdgeCollisionFree(a, b):
+            raise MovePlanningError(
+                f"{label}: transit collides at {times[i]:.3g} s of "
+                f"{end:.3g} s (SceneGraphCollisionChecker)"
+            )
+    return transit, times, middle, distances
+
+
+#: m, how far above the higher of a move's ends its via posture's tip is
+_VIA_RISE = 0.10
+
+
+def _via(cell, cut_end, next_start, segments, settings):
+    """A posture between a move's ends for its transit to pass through:
+    the tool tip ``_VIA_RISE`` above the higher of the retract and
+    approach points, halfway between them, the tool axis halfway between
+    the two cuts' (or up), clear of the part; None if there is none."""
+    ends = [
+        np.asarray(p) + d * np.asarray(axis)
+        for (p, axis, _), d in (
+            (cut_end, settings.retract),
+            (next_start, settings.approach),
+        )
+    ]
+    point = 0.5 * (ends[0] + ends[1])
+    point[2] = max(ends[0][2], ends[1][2]) + _VIA_RISE
+    axis = np.asarray(cut_end[1]) + np.asarray(next_start[1])
+    norm = np.linalg.norm(axis)
+    axis = axis / norm if norm > 1e-6 else np.array([0.0, 0.0, 1.0])
+    q_near = 0.5 * (segments["retract"] + segments["approach"])
+    try:
+        return waypoint(cell, point, axis, q_near, settings.clearance)
+    except MovePlanningError:
+        return None
+
+
+def _checked_transit(cell, segments, settings, label, rounds=3, via=None):
     """The transit between the retract and the approach points, sampled
     at ``settings.check_step``: (trajectory, times, q, clearances). Where
     the clearance between the constraint's points dips under
     ``settings.clearance``, solved again with the constraint there too
-    (up to ``rounds`` times)."""
+    (up to ``rounds`` times). ``via``: a posture the first guess passes
+    through."""
     extra = np.zeros(0)
     for _ in range(rounds):
         try:
@@ -422,6 +494,7 @@ def _checked_transit(cell, segments, settings, label, rounds=3):
                 segments["approach"],
                 settings,
                 extra,
+                via,
             )
         except MovePlanningError as e:
             raise MovePlanningError(f"{label}: transit: {e}") from None

@@ -20,6 +20,9 @@ def _job_plan_record(plan) -> dict:
                 "index": cut.index,
                 "point": [float(x) for x in cut.point],
                 "length_m": float(cut.contour.length),
+                "tool_rule": cut.contour.describe_rule(),
+                # the arm and spindle along the cut (the cutter is in it)
+                "min_clearance_m": float(cut.min_clearance_m),
                 "move_before": None
                 if move is None
                 else {
@@ -66,7 +69,9 @@ def _job(args) -> int:
             f"{move['min_clearance_m'] * 1e3:.1f} mm"
         )
         print(
-            f"  edge {cut['index']:3d}  {cut['length_m'] * 1e3:7.1f} mm  {how}"
+            f"  edge {cut['index']:3d}  {cut['length_m'] * 1e3:7.1f} mm  "
+            f"(clearance along it {cut['min_clearance_m'] * 1e3:.1f} mm)  "
+            f"{how}"
         )
     for index, why in plan.skipped:
         print(f"  edge {index:3d}  not selected: {why}")

@@ -387,7 +387,8 @@ class EdgeConfig:
             rule=rule.kind if rule.kind == "axis" else rule.side,
             axis=rule.axis or None,
             rule_note=rule.reason,
-            tilt=self.tilt,
+            # a tilt given replaces the one the default rule chose
+            tilt=self.tilt or rule.tilt,
             lead=self.lead,
             direction=self.direction,
             start_fraction=(
@@ -431,6 +432,8 @@ class EdgeConfig:
                 field, value = "part.edge.lead", self.lead
             elif "pass is empty" in message:
                 field, value = "part.edge.start_fraction", self.start_fraction
+            elif "tighter than the cutter" in message:
+                field, value = "tool.cutter_radius", tool.cutter_radius
             raise ConfigError(
                 f"{field} = {value!r} is invalid: {message}"
             ) from None

@@ -166,6 +166,7 @@ class EdgeContour(Contour):
         self._tabulate_path(spacing)
         self._u0 = self._start_u(start_fraction, start_near)
         self._check_side_plane()
+        self._check_cutter_fits()
         self._fit(spacing)
 
     # ----- construction -----
@@ -313,6 +314,33 @@ class EdgeContour(Contour):
             f"{self._tilt:g} rad) cuts {into:.1f} deg into a face at arc "
             f"position {where * 1e3:.2f} mm, where the faces meet at "
             f"{angle:.1f} deg: {cure}"
+        )
+
+    def _check_cutter_fits(self):
+        """The edge, seen along the tool axis, bends towards the free side
+        (a hole's rim, a pocket's rounded corner) no tighter than the
+        cutter's radius: else the cutter's centre would pass the edge's
+        centre of curvature and its side cut the wall across."""
+        n = max(256, math.ceil(self._edge_length / 2.5e-4))
+        u = np.linspace(0.0, self._edge_length, n, endpoint=self._closed)
+        f, n1, axis = self._geometry(u)
+        # the curvature towards the free side, over the share of the
+        # tangent across the axis squared: the curvature seen along it
+        bend = -_dot(self._curve.curvature_vector(u), n1) / np.maximum(
+            1.0 - _dot(f.n2, axis) ** 2, 1e-12
+        )
+        k = int(np.argmax(bend))
+        if bend[k] * self._r < 1.0:
+            return
+        where = self._S_of(u[k]) - self._S_of(self._u0)
+        if self._closed:
+            where %= self._grid_S[-1]
+        raise ValueError(
+            f"the edge bends tighter than the cutter at arc position "
+            f"{abs(where) * 1e3:.2f} mm: its radius there, seen along the "
+            f"tool axis, is {1e3 / bend[k]:.2f} mm towards the free side, "
+            f"not larger than the cutter's {self._r * 1e3:.2f} mm: a "
+            "smaller tool.cutter_radius fits"
         )
 
     def _fit(self, spacing):

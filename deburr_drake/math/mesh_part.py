@@ -50,6 +50,7 @@ __all__ = [
     "wall_axis",
     "hole_axis",
     "default_tool_rule",
+    "side_plane_tilts",
     "rule_axes",
     "open_side",
     "surface_points",
@@ -568,6 +569,15 @@ class EdgeCurve:
         """The unit tangent n2 at u, in the traversal direction."""
         return _unit(self._tangent(self._u(u)))
 
+    def curvature_vector(self, u):
+        """1/m, the curvature vector at u: towards the centre of
+        curvature, its length the curvature."""
+        u = self._u(u)
+        t = self._tangent(u)
+        a = self._point.derivative(2)(u)
+        speed2 = np.sum(t * t, axis=-1, keepdims=True)
+        return np.cross(np.cross(t, a), t) / speed2**2
+
     def curvature(self, u):
         """1/m, |c''| at u (c is parametrised by arc length)."""
         u = self._u(u)
@@ -660,6 +670,10 @@ _WALL_SPREAD = 0.05
 CUTTER_RADIUS = 0.003
 CUTTER_LENGTH = 0.020
 HOLDER_RADIUS = 0.020
+# rad: a turn of the tool about the edge smaller than this is none (a
+# box's edge sits at the end of its range, 0 give or take rounding; the
+# side plane check allows 0.02 rad)
+_TILT_NEEDED = 0.01
 # stations per edge the open-side check looks at (at most one per segment)
 _STATIONS = 48
 # points sampled (seeded) on the part's surface, area-weighted, for it
@@ -676,7 +690,8 @@ class ToolRule:
     """How the tool axis is set along an edge.
 
     ``kind`` ``face``: along the outward normal of the face ``side`` (left
-    or right of the chain's direction) stands on; ``axis``: the constant
+    or right of the chain's direction) stands on, turned ``tilt`` (rad)
+    about the chain's own tangent (right hand); ``axis``: the constant
     unit direction ``axis`` (world; a hole's axis, out of the part).
     ``reason`` says, in a few words, why this rule."""
 
@@ -684,13 +699,19 @@ class ToolRule:
     side: str = ""
     axis: tuple = ()
     reason: str = ""
+    tilt: float = 0.0
 
     def describe(self) -> str:
         """One line: the rule and why."""
         if self.kind == "axis":
             a = shown_direction(self.axis)
             return f"the tool axis along {a} ({self.reason})"
-        return f"the tool on the {self.side} face ({self.reason})"
+        tilted = (
+            f", tilted {math.degrees(self.tilt):.1f} deg about the edge"
+            if self.tilt
+            else ""
+        )
+        return f"the tool on the {self.side} face{tilted} ({self.reason})"
 
 
 def _weights(chain):
@@ -742,13 +763,48 @@ def hole_axis(chain: EdgeChain):
     return axis, side
 
 
+def side_plane_tilts(chain: EdgeChain, side: str):
+    """rad, (lo, hi): the tilts about the chain's tangent (right hand) of a
+    tool along the outward normal of the face on ``side`` for which the
+    cutter's side plane (through the edge, holding the tool axis and the
+    tangent) supports the part on every segment: its normal n1 within
+    (pi - the faces' angle) / 2 of the faces' bisector, so it cuts into
+    neither face. lo > hi: no constant tilt does (the faces' angle varies
+    too much along the edge). On a convex edge at 90 degrees (a box's) the
+    face's own normal is at the end of the range (0 in it); where the
+    faces meet at an obtuse angle theta the least turn is theta - 90 deg,
+    towards the other face."""
+    t = chain.segments / np.linalg.norm(chain.segments, axis=1)[:, None]
+    base = chain.left_normals if side == "left" else chain.right_normals
+    into = -(chain.left_normals + chain.right_normals)
+    into /= np.maximum(np.linalg.norm(into, axis=1), 1e-12)[:, None]
+    n1 = np.cross(t, base)
+    n1 /= np.maximum(np.linalg.norm(n1, axis=1), 1e-12)[:, None]
+    n1 *= np.where(np.sum(n1 * into, 1) >= 0.0, 1.0, -1.0)[:, None]
+    off = np.arctan2(
+        np.sum(t * np.cross(into, n1), 1),
+        np.clip(np.sum(into * n1, 1), -1.0, 1.0),
+    )
+    between = np.arccos(
+        np.clip(np.sum(chain.left_normals * chain.right_normals, 1), -1, 1)
+    )
+    half = 0.5 * between  # (pi - (pi - between)) / 2 on a convex edge
+    return float(np.max(-half - off)), float(np.min(half - off))
+
+
 def default_tool_rule(chain: EdgeChain, up=UP) -> ToolRule:
     """The tool rule that needs no guess: on a loop round a cylindrical or
     conical wall (a hole, in a flat or curved face, drilled along its
     face's normal or not), the axis along the wall (``hole_axis``), the
     cutter's side on the wall; else the tool on the face whose outward
     normal is nearest ``up`` (world) on average along the edge (where
-    both are as near, the left one)."""
+    both are as near, the left one). On a convex edge whose faces meet at
+    more than 90 degrees that face's normal would lay the cutter's side
+    plane into the other face, so the tool is turned about the edge
+    towards the other face by the least angle that clears it
+    (``side_plane_tilts``: the faces' angle less 90 degrees), the side
+    along the other face, the axis as near the face's normal as the
+    cutter allows."""
     hole = hole_axis(chain)
     if hole is not None:
         axis, side = hole
@@ -763,21 +819,38 @@ def default_tool_rule(chain: EdgeChain, up=UP) -> ToolRule:
     near_left = float(w @ (chain.left_normals @ up)) / w.sum()
     near_right = float(w @ (chain.right_normals @ up)) / w.sum()
     side = "left" if near_left >= near_right else "right"
-    return ToolRule(
-        "face",
-        side=side,
-        reason="the default: the face whose outward normal is nearest up "
-        f"(cosines {near_left:.2f} left, {near_right:.2f} right)",
+    reason = (
+        "the default: the face whose outward normal is nearest up "
+        f"(cosines {near_left:.2f} left, {near_right:.2f} right)"
     )
+    tilt = 0.0
+    lo, hi = side_plane_tilts(chain, side)
+    needed = lo > _TILT_NEEDED or hi < -_TILT_NEEDED
+    if _convexity(chain) and lo <= hi and needed:
+        tilt = lo if lo > 0.0 else hi
+        between = np.arccos(
+            np.clip(np.sum(chain.left_normals * chain.right_normals, 1), -1, 1)
+        )
+        angle = math.degrees(math.pi - float(np.min(between)))
+        reason += (
+            f"; the faces meet at up to {angle:.1f} deg, so the least turn "
+            "that keeps the cutter's side out of the other face"
+        )
+    return ToolRule("face", side=side, reason=reason, tilt=tilt)
 
 
 def rule_axes(chain: EdgeChain, rule: ToolRule):
     """The tool axis (unit, world) on each segment of ``chain`` by
-    ``rule``, untilted."""
+    ``rule``, its tilt included."""
     if rule.kind == "axis":
         return np.tile(np.asarray(rule.axis, float), (len(chain.segments), 1))
     normals = chain.left_normals if rule.side == "left" else chain.right_normals
-    return normals.copy()
+    if not rule.tilt:
+        return normals.copy()
+    t = chain.segments / np.linalg.norm(chain.segments, axis=1)[:, None]
+    return math.cos(rule.tilt) * normals + math.sin(rule.tilt) * np.cross(
+        t, normals
+    )
 
 
 @dataclasses.dataclass(frozen=True)

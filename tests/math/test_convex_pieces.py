@@ -44,8 +44,8 @@ def test_the_blocks_pieces_cover_it_and_leave_its_openings_open():
     volume = sum(ConvexHull(p).volume for p in pieces)
     assert volume == pytest.approx(mesh.volume, rel=0.02)
     solid = np.array(
-        [[-60, -40, -15], [30, -40, -15], [0, 0, -15], [-60, 40, -5]]
-        + [[40, 0, -20], [-40, 0, -15], [5, 22, -15]]
+        [[-60, -40, -15], [30, -40, -15], [0, 0, -15], [-60, 30, -5]]
+        + [[40, 0, -20], [-40, 0, -15], [5, 22, -15], [0, 44, -25]]
     )
     assert _inside(pieces, solid).all()
     # the air where the cutter goes in: the bore's and the slot's middles

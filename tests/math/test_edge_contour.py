@@ -495,3 +495,26 @@ def test_the_spindle_clash_of_a_tool_lying_across_the_bore(bore):
         part, across, r, 0.02
     )
     assert spindle_clash(part, _bore_contour(bore), r, 0.02) == ""
+
+
+@pytest.mark.parametrize("hole", [0.0030, 0.0033])
+def test_a_hole_no_larger_than_the_cutter_is_refused(hole, tmp_path):
+    """A hole's rim bends towards the free side with the hole's radius:
+    the 3 mm cutter fits a 3.3 mm hole (its path a 0.3 mm circle) and not
+    a 3 mm one, where its centre would stand on the hole's axis."""
+    ring = trimesh.creation.annulus(
+        r_min=hole * 1e3, r_max=20.0, height=10.0, sections=160
+    )
+    ring.export(tmp_path / "ring.stl")
+    part = load_part(tmp_path / "ring.stl", units="mm")
+    rim = choose_edge(sharp_edges(part), near=[hole, 0.0, 0.005])
+    rule = default_tool_rule(rim)
+    path = dict(cutter_radius=r, engagement=e, rule="axis", axis=rule.axis)
+    if hole > r:
+        contour = EdgeContour(EdgeCurve(rim), **path)
+        assert contour.length == pytest.approx(
+            2 * math.pi * (hole - r), rel=0.05
+        )
+    else:
+        with pytest.raises(ValueError, match="bends tighter than the cutter"):
+            EdgeContour(EdgeCurve(rim), **path)

@@ -26,7 +26,7 @@ def block():
 def test_all_means_the_convex_edges_reachable_from_the_open_side(block):
     _, chains, summaries = block
     selected, skipped = select_edges(summaries, chains)
-    assert sorted(selected + [i for i, _ in skipped]) == list(range(12))
+    assert sorted(selected + [i for i, _ in skipped]) == list(range(14))
     for i in selected:
         assert summaries[i].convex is True and summaries[i].reachable
     why = dict(skipped)
@@ -40,7 +40,7 @@ def test_all_means_the_convex_edges_reachable_from_the_open_side(block):
         [0.007, -0.025, 0.0],
         [0.011, 0.028, 0.0],
         [-0.07, 0.0, 0.0],
-        [0.045, 0.0, 0.0],
+        [0.0, 0.032, 0.0],
     ):
         assert _nearest(chains, point) in selected
 
@@ -52,8 +52,8 @@ def test_picks_by_point_and_index_in_their_order(block):
     selected, skipped = select_edges(summaries, chains, picks)
     bore = _nearest(chains, [-0.03, 0.015, 0.0])
     assert selected == [bore, 3] and skipped == []
-    with pytest.raises(ValueError, match=r"^picks\[0\]: edge index 12"):
-        select_edges(summaries, chains, [Pick(None, 12)])
+    with pytest.raises(ValueError, match=r"^picks\[0\]: edge index 14"):
+        select_edges(summaries, chains, [Pick(None, 14)])
 
 
 def test_nearest_next_from_a_start_point(block):

@@ -17,7 +17,9 @@ from deburr_drake.math.mesh_part import (
     describe_edges,
     hole_axis,
     load_part,
+    rule_axes,
     sharp_edges,
+    side_plane_tilts,
     wall_axis,
 )
 
@@ -264,7 +266,7 @@ def test_step_without_cascadio_says_so(tmp_path):
 def test_the_job_blocks_top_side_edges():
     """models/parts/block.stl: on its top face (z = 0) a through bore, two
     holes drilled 15 and 30 degrees off the top's normal, a slot, the outer
-    rim and a chamfer's 135-degree edge, each an edge of its own."""
+    rim and a chamfer's 120-degree edge, each an edge of its own."""
     chains = sharp_edges(load_part(PARTS / "block.stl", units="mm"))
     top = [c for c in chains if np.allclose(c.points[:, 2], 0.0, atol=1e-9)]
     assert len(top) == 6
@@ -278,7 +280,7 @@ def test_the_job_blocks_top_side_edges():
         return choose_edge(top, near=[x * 1e-3, y * 1e-3, 0.0])
 
     bore, hole15, hole30 = at(-30, 15), at(-34, -28), at(7, -25)
-    slot, rim, chamfer = at(5, 28), at(-70, 0), at(45, 0)
+    slot, rim, chamfer = at(5, 28), at(-70, 0), at(0, 32)
     assert len({id(c) for c in (bore, hole15, hole30, slot, rim, chamfer)}) == 6
     for loop in (bore, hole15, hole30, slot):
         assert loop.closed
@@ -289,9 +291,9 @@ def test_the_job_blocks_top_side_edges():
     np.testing.assert_allclose(dihedral(hole30), [60.0, 120.0], atol=0.1)
     assert slot.length == pytest.approx(2 * 0.036 + 2 * math.pi * 0.006, 1e-3)
     assert not rim.closed and not chamfer.closed
-    assert chamfer.length == pytest.approx(0.100)
-    f = EdgeCurve(chamfer).frame(np.array([0.05]))
-    np.testing.assert_allclose(f.face_angle, 3 * math.pi / 4, atol=1e-6)
+    assert chamfer.length == pytest.approx(0.140)
+    f = EdgeCurve(chamfer).frame(np.array([0.07]))
+    np.testing.assert_allclose(f.face_angle, 2 * math.pi / 3, atol=1e-6)
     assert f.convex.all()
 
 
@@ -346,6 +348,42 @@ def test_the_default_rule_on_a_pipes_radial_hole():
     assert wall_axis(rim, other)[2] < 0.05
 
 
+@pytest.mark.parametrize("angle", [90.0, 120.0, 128.0, 135.0])
+def test_an_obtuse_edge_turns_the_tool_by_the_least_clear_angle(
+    angle, roof_stl, tmp_path
+):
+    """The tool stands on the top; where the faces meet at more than 90
+    degrees the top's normal would lay the cutter's side plane into the
+    sloped face, so the default turns it about the edge by the faces'
+    angle less 90 degrees, leaning over the top: the side plane along the
+    sloped face. The path with that tilt is accepted, with 3 degrees
+    less it gouges."""
+    from deburr_drake.math.edge_contour import EdgeContour
+
+    part = load_part(roof_stl(angle, tmp_path / "roof.stl"), units="mm")
+    edge = choose_edge(sharp_edges(part), near=[0.04, 0.03, 0.02])
+    rule = default_tool_rule(edge)
+    assert rule.kind == "face"
+    top = edge.left_normals if rule.side == "left" else edge.right_normals
+    np.testing.assert_allclose(top, [[0.0, 0.0, 1.0]] * len(top), atol=1e-9)
+    assert abs(rule.tilt) == pytest.approx(math.radians(angle - 90.0), abs=1e-6)
+    # leaning over the top (-x), away from the sloped face
+    tilt = math.radians(angle - 90.0)
+    np.testing.assert_allclose(
+        rule_axes(edge, rule)[0],
+        [-math.sin(tilt), 0.0, math.cos(tilt)],
+        atol=1e-6,
+    )
+    lo, hi = side_plane_tilts(edge, rule.side)
+    assert hi - lo == pytest.approx(math.radians(180.0 - angle), abs=1e-6)
+    path = dict(cutter_radius=0.003, engagement=0.002, rule=rule.side)
+    EdgeContour(EdgeCurve(edge), tilt=rule.tilt, **path)
+    if angle > 90.0:
+        less = rule.tilt - math.copysign(math.radians(3.0), rule.tilt)
+        with pytest.raises(ValueError, match="cuts .* into a face"):
+            EdgeContour(EdgeCurve(edge), tilt=less, **path)
+
+
 def test_the_listing_of_a_block(tmp_path):
     """A 40 x 30 x 20 mm block on its base: twelve convex 90-degree
     edges, a point half way along each; the four on its base are not
@@ -389,3 +427,64 @@ def test_the_spindle_across_a_pipe_is_not_the_open_side():
     assert outer.reachable and not outer.blocked
     assert not inner.reachable and "spindle" in inner.blocked
     np.testing.assert_allclose(inner.rule.axis, [0, 0, -1], atol=1e-3)
+
+
+def _summary(part, chains, summaries, near):
+    chain = choose_edge(chains, near=near)
+    return chain, summaries[[c is chain for c in chains].index(True)]
+
+
+def test_the_castings_inclined_face_its_hole_and_its_edges():
+    """casting.stl: an inclined face sloping down 40 degrees from the
+    top, a hole along its normal. The hole's rim gets that normal as its
+    axis; the inclined face's edge with the vertical end (130 degrees) is
+    cut with a 40-degree turn; its edge with the top (140 degrees) needs
+    50, which lays the spindle on the top: not reachable, and why."""
+    part = load_part(PARTS / "casting.stl", units="mm")
+    chains = sharp_edges(part)
+    summaries = describe_edges(part, chains)
+    slope = math.radians(40.0)
+    _, hole = _summary(part, chains, summaries, [-0.0419, 0.0, -0.0058])
+    np.testing.assert_allclose(
+        hole.rule.axis, [-math.sin(slope), 0.0, math.cos(slope)], atol=1e-6
+    )
+    assert hole.reachable
+    _, lower = _summary(part, chains, summaries, [-0.055, 0.0, -0.0168])
+    assert abs(lower.rule.tilt) == pytest.approx(math.radians(40.0), abs=1e-6)
+    assert lower.reachable
+    _, top = _summary(part, chains, summaries, [-0.035, 0.0, 0.0])
+    assert abs(top.rule.tilt) == pytest.approx(math.radians(50.0), abs=1e-6)
+    assert not top.reachable and "spindle" in top.blocked
+
+
+def test_the_plates_holes_at_other_angles_and_sizes():
+    """plate_holes.stl: holes of radius 4 mm 45 degrees off the normal,
+    7 mm 20 degrees off it about the diagonal, 3 mm along it. Each rim
+    gets its hole's axis; at 45 degrees the spindle lies on the top; the
+    3 mm hole is no larger than the 3 mm cutter, and its path says so."""
+    from deburr_drake.math.edge_contour import EdgeContour
+
+    part = load_part(PARTS / "plate_holes.stl", units="mm")
+    chains = sharp_edges(part)
+    summaries = describe_edges(part, chains)
+    _, steep = _summary(part, chains, summaries, [-0.0293, 0.015, 0.0])
+    half = math.sqrt(0.5)
+    np.testing.assert_allclose(steep.rule.axis, [half, 0.0, half], atol=1e-6)
+    assert not steep.reachable and "spindle" in steep.blocked
+    _, diagonal = _summary(part, chains, summaries, [0.0072, -0.0155, 0.0])
+    tilt = math.radians(20.0)
+    np.testing.assert_allclose(
+        diagonal.rule.axis,
+        [half * math.sin(tilt), -half * math.sin(tilt), math.cos(tilt)],
+        atol=1e-6,
+    )
+    assert diagonal.reachable
+    small, summary = _summary(part, chains, summaries, [-0.032, -0.022, 0.0])
+    with pytest.raises(ValueError, match="bends tighter than the cutter"):
+        EdgeContour(
+            EdgeCurve(small),
+            cutter_radius=0.003,
+            engagement=0.002,
+            rule="axis",
+            axis=summary.rule.axis,
+        )
