@@ -5,11 +5,15 @@ import pytest
 
 from deburr_drake.analysis import certificate
 from deburr_drake.analysis.certificate import (
+    FOUND_BY_NOMINAL,
+    FOUND_BY_PROGRAM,
     LmiSolution,
     certify_family,
     check_lyapunov,
+    lift,
     p_norm,
     reduce_family,
+    search_basis,
 )
 
 
@@ -31,6 +35,9 @@ def test_a_family_with_a_known_common_lyapunov_function_is_certified():
     assert max(np.linalg.norm(A, 2) for A in maps) > 5.0
     cert = certify_family(maps, ["a", "b"])
     assert cert.status == "certified"
+    # The first map is 0.8 I: its own Lyapunov function, I, does not
+    # serve the others (2-norms above 5), so the program found P.
+    assert cert.found_by == FOUND_BY_PROGRAM
     assert cert.solver == "Clarabel" and cert.solver_status == "kSolutionFound"
     # The checked P is a Lyapunov function of every map, in numpy.
     P = cert.P
@@ -43,6 +50,46 @@ def test_a_family_with_a_known_common_lyapunov_function_is_certified():
         )
     # The bisection reaches close to the known rate 0.8.
     assert 0.8 - 1e-6 <= rate < 0.8 + 0.01
+
+
+def test_the_nominal_maps_lyapunov_function_serves_maps_near_it():
+    A0 = np.array([[0.5, 0.2], [0.0, 0.6]])
+    maps = [A0, A0 + 0.02 * np.eye(2), A0 - np.array([[0, 0.05], [0, 0]])]
+    cert = certify_family(maps, ["a", "b"], bisections=0)
+    assert cert.status == "certified"
+    assert cert.found_by == FOUND_BY_NOMINAL
+    assert cert.solver_status == "not run" and cert.solves == 0
+    assert cert.decay_rate < 1.0 - cert.check["margin"]
+
+
+def test_p_is_searched_in_the_common_row_space_and_checked_on_the_family():
+    # Maps that read the state through two coordinates (A = F_i G): the
+    # search runs in 2 of 4 dimensions; the lifted P is checked on all 4.
+    rng = np.random.default_rng(3)
+    G = np.linalg.qr(rng.normal(size=(4, 2)))[0].T
+    family = [
+        S @ G
+        for S in (
+            G.T @ (0.8 * _rotation(t)) + 0.1 * rng.normal(size=(4, 2))
+            for t in (0.0, 0.5, 1.3)
+        )
+    ]
+    V = search_basis(family)
+    assert V.shape == (4, 2)
+    np.testing.assert_allclose(V @ V.T, G.T @ G, atol=1e-12)
+    cert = certify_family(family, list("abcd"), bisections=0)
+    assert cert.status == "certified"
+    assert cert.search_dimension == 2
+    assert cert.P.shape == (4, 4)
+    assert check_lyapunov(cert.reduced.maps, cert.P)["passed"]
+
+
+def test_the_lift_keeps_the_search_coordinates_decay():
+    A = np.diag([0.5, 0.0])
+    V = np.array([[1.0], [0.0]])
+    P = lift(np.array([[2.0]]), V, [A])
+    assert P[0, 0] == pytest.approx(2.0)
+    assert p_norm(A, P) == pytest.approx(0.5)
 
 
 def _switched_pair():
@@ -82,6 +129,11 @@ def test_a_solved_program_whose_p_fails_the_check_is_inconclusive(
     def solver_says_solved(maps, gamma, **kwargs):
         return LmiSolution(np.eye(2), "Clarabel", "kSolutionFound", True)
 
+    # The nominal map's Lyapunov function would pass; replaced by P = I
+    # it fails the check and the program is asked, whose P fails too.
+    monkeypatch.setattr(
+        certificate, "nominal_lyapunov", lambda maps: np.eye(2)
+    )
     monkeypatch.setattr(
         certificate, "solve_common_lyapunov", solver_says_solved
     )
