@@ -95,6 +95,8 @@ __all__ = [
     "PROVES",
     "DOES_NOT_PROVE",
     "SETTLE_PERIODS",
+    "BOX_KEYS",
+    "certified_limit",
 ]
 
 PROVES = (
@@ -560,3 +562,58 @@ def certificate_summary(result: Dict) -> str:
     lines.append(f"  does not prove: {result['does_not_prove']}")
     lines.append(f"  wall time {result['timings_s']['total']:.1f} s")
     return "\n".join(lines)
+
+
+def certified_limit(
+    scenario: Scenario,
+    overrides: Callable[[float], Dict[str, float]],
+    lo: float,
+    hi: float,
+    *,
+    harder_above: bool = True,
+    rel_tol: float = 0.02,
+    progress: Optional[Callable[[str], None]] = None,
+    **certify_options,
+) -> Dict:
+    """The boundary of the certified values of one parameter, by
+    bisection between ``lo`` and ``hi`` to ``rel_tol``: the scenario with
+    ``overrides(value)`` (dotted fields) certified (:func:`certify` with
+    ``certify_options``) at each trial. ``harder_above``: larger values
+    are the harder ones (a gain; False for a cutoff, whose lowest
+    certified value is sought). {certified, refused, trials}: the last
+    certified and first refused values (None when an end decides it),
+    and every trial's value, status, decay rate and wall time."""
+    from deburr_drake.config import set_field
+
+    say = progress or (lambda message: None)
+    trials = []
+
+    def certified(value):
+        varied = copy.deepcopy(scenario)
+        for path, v in overrides(value).items():
+            set_field(varied, path, v)
+        result = certify(varied.validate(), **certify_options)
+        trials.append(
+            {
+                "value": value,
+                "status": result["status"],
+                "decay_rate": result["decay_rate_per_period"],
+                "breaking_vertex": result.get("breaking_vertex"),
+                "wall_s": result["timings_s"]["total"],
+            }
+        )
+        say(f"{value:g}: {result['status']}")
+        return result["status"] == "certified"
+
+    easy, hard = (lo, hi) if harder_above else (hi, lo)
+    if not certified(easy):
+        return {"certified": None, "refused": easy, "trials": trials}
+    if certified(hard):
+        return {"certified": hard, "refused": None, "trials": trials}
+    while abs(hard - easy) > rel_tol * max(abs(hard), abs(easy)):
+        mid = 0.5 * (easy + hard)
+        if certified(mid):
+            easy = mid
+        else:
+            hard = mid
+    return {"certified": easy, "refused": hard, "trials": trials}

@@ -131,9 +131,7 @@ def test_a_solved_program_whose_p_fails_the_check_is_inconclusive(
 
     # The nominal map's Lyapunov function would pass; replaced by P = I
     # it fails the check and the program is asked, whose P fails too.
-    monkeypatch.setattr(
-        certificate, "nominal_lyapunov", lambda maps: np.eye(2)
-    )
+    monkeypatch.setattr(certificate, "nominal_lyapunov", lambda maps: np.eye(2))
     monkeypatch.setattr(
         certificate, "solve_common_lyapunov", solver_says_solved
     )
@@ -236,3 +234,40 @@ def test_what_the_corners_leave_out_is_added_to_the_decay_rate():
         cert, box, {"ends": ends, "mids": [A0 + np.eye(2), A0]}, [0]
     )
     assert out["status"] == "inconclusive"
+
+
+def test_the_certified_limit_lies_between_a_certified_and_a_refused_value(
+    monkeypatch,
+):
+    from deburr_drake.analysis import box_certificate
+    from deburr_drake.config import Scenario
+
+    def certify(scenario, **options):
+        ok = (
+            scenario.controller.sliding_gain[0] <= 1234.0
+            and scenario.sensor.cutoff_frequency >= 12.3
+        )
+        return {
+            "status": "certified" if ok else "not_certified",
+            "decay_rate_per_period": 0.9,
+            "timings_s": {"total": 0.0},
+        }
+
+    monkeypatch.setattr(box_certificate, "certify", certify)
+    gain = lambda v: {"controller.sliding_gain[0]": v}  # noqa: E731
+    out = box_certificate.certified_limit(
+        Scenario(), gain, 400.0, 8000.0, rel_tol=1e-3
+    )
+    assert out["certified"] <= 1234.0 < out["refused"]
+    assert out["refused"] - out["certified"] <= 1e-3 * out["refused"]
+    assert [t["value"] for t in out["trials"][:2]] == [400.0, 8000.0]
+    # A cutoff: the lowest certified value; the easy end is the high one.
+    cutoff = lambda v: {"sensor.cutoff_frequency": v}  # noqa: E731
+    out = box_certificate.certified_limit(
+        Scenario(), cutoff, 2.0, 40.0, harder_above=False, rel_tol=1e-3
+    )
+    assert out["refused"] < 12.3 <= out["certified"]
+    assert out["certified"] - out["refused"] <= 1e-3 * out["certified"]
+    # An easy end refused: no certified value.
+    out = box_certificate.certified_limit(Scenario(), gain, 2000.0, 8000.0)
+    assert out["certified"] is None and out["refused"] == 2000.0
