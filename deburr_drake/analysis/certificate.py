@@ -296,8 +296,12 @@ def solve_common_lyapunov(
 
 def p_norm(A: np.ndarray, P: np.ndarray) -> float:
     """The induced norm of A in ||x||_P = sqrt(x^T P x): the square root of
-    the largest generalized eigenvalue of (A^T P A, P)."""
-    mu = scipy.linalg.eigh(A.T @ P @ A, P, eigvals_only=True)
+    the largest generalized eigenvalue of (A^T P A, P); inf when P is
+    not positive definite in floating point (its Cholesky fails)."""
+    try:
+        mu = scipy.linalg.eigh(A.T @ P @ A, P, eigvals_only=True)
+    except np.linalg.LinAlgError:
+        return float("inf")  # P not positive definite in floating point
     return float(np.sqrt(max(mu[-1], 0.0)))
 
 
