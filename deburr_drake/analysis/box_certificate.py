@@ -580,10 +580,11 @@ def certified_limit(
     ``overrides(value)`` (dotted fields) certified (:func:`certify` with
     ``certify_options``) at each trial. ``harder_above``: larger values
     are the harder ones (a gain; False for a cutoff, whose lowest
-    certified value is sought). {certified, refused, trials}: the last
+    certified value is sought); a trial without an operating point (the
+    run lost contact) is refused. {certified, refused, trials}: the last
     certified and first refused values (None when an end decides it),
     and every trial's value, status, decay rate and wall time."""
-    from deburr_drake.config import set_field
+    from deburr_drake.config import ConfigError, set_field
 
     say = progress or (lambda message: None)
     trials = []
@@ -592,13 +593,24 @@ def certified_limit(
         varied = copy.deepcopy(scenario)
         for path, v in overrides(value).items():
             set_field(varied, path, v)
-        result = certify(varied.validate(), **certify_options)
+        varied.validate()
+        try:
+            result = certify(varied, **certify_options)
+        except ConfigError as e:
+            # No operating point: the run lost contact (or never made it).
+            result = {
+                "status": "no_operating_point",
+                "decay_rate_per_period": None,
+                "breaking_reason": str(e),
+                "timings_s": {"total": None},
+            }
         trials.append(
             {
                 "value": value,
                 "status": result["status"],
                 "decay_rate": result["decay_rate_per_period"],
                 "breaking_vertex": result.get("breaking_vertex"),
+                "breaking_reason": result.get("breaking_reason"),
                 "wall_s": result["timings_s"]["total"],
             }
         )
