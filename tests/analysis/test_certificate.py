@@ -153,6 +153,8 @@ def test_the_check_rejects_an_indefinite_or_ill_conditioned_p():
     assert not check_lyapunov([A], np.diag([1.0, 1e-12]))["passed"]
     assert check_lyapunov([A], np.diag([1.0, 2.0]))["passed"]
     assert p_norm(A, np.eye(2)) == pytest.approx(0.5)
+    # A P that is not positive definite has no norm: the check fails.
+    assert p_norm(A, np.diag([1.0, -1.0])) == np.inf
 
 
 def _with_shift(B, T):
