@@ -65,7 +65,7 @@ from deburr_drake.analysis.operating_point import (
     find_operating_point,
 )
 from deburr_drake.analysis.robust import UNCERTAIN_PARAMETERS
-from deburr_drake.analysis.sampled import FrozenMap, period_map
+from deburr_drake.analysis.sampled import FrozenMap
 from deburr_drake.config import Scenario
 from deburr_drake.control.layout import CHAMFER_STATE, CONTROLLER_DIAGNOSTICS
 from deburr_drake.runs.simulation import set_monitor
@@ -259,13 +259,7 @@ class _Maps:
         context, moved, residual = steady_context(frozen, context, self.settle)
         self.moved.append(abs(moved))
         self.residuals.append(abs(residual))
-        return period_map(
-            frozen.diagram,
-            context,
-            frozen.entries,
-            period=frozen.period,
-            config=frozen.config,
-        )
+        return frozen.at_context(context)
 
 
 def _box(op) -> List[Dict]:
