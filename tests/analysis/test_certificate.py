@@ -273,3 +273,51 @@ def test_the_certified_limit_lies_between_a_certified_and_a_refused_value(
     # An easy end refused: no certified value.
     out = box_certificate.certified_limit(Scenario(), gain, 2000.0, 8000.0)
     assert out["certified"] is None and out["refused"] == 2000.0
+
+
+@pytest.mark.slow
+def test_a_box_map_is_taken_at_its_own_steady_state():
+    from deburr_drake.analysis import box_certificate as bc
+    from deburr_drake.analysis import find_operating_point
+    from deburr_drake.config import load_scenario
+    from deburr_drake.control.layout import CONTROLLER_DIAGNOSTICS
+
+    op = find_operating_point(load_scenario("point_mass"), after_contact=0.5)
+    box = bc._box(op)
+    slope = next(p for p in box if p["key"] == "slope_x1")
+    maps = bc._Maps(op, box, 0)
+    stiff = maps.frozen(
+        {"part.material.hydroelastic_modulus": box[0]["range"][1]}
+    )
+    context = stiff.context_from(
+        op.diagram,
+        op.context,
+        bc._pivoted_slope(0, 1000.0 - slope["nominal"], slope["s0"]),
+    )
+    # The surface now has slope 1000 at the operating s, and its value
+    # there is the learned one: the operating point stays put.
+    point = bc._fuzzy_point(
+        type(op)(op.scenario, stiff.diagram, context, op.time, 0.0)
+    )[0]
+    assert point["slope"] == pytest.approx(1000.0, rel=1e-6)
+    assert point["s0"] == pytest.approx(slope["s0"], abs=1e-12)
+
+    def u_fuzzy(diagram, context):
+        controller = diagram.GetSubsystemByName("controller")
+        diagnostics = controller.GetOutputPort("diagnostics").Eval(
+            controller.GetMyContextFromRoot(context)
+        )
+        return CONTROLLER_DIAGNOSTICS.get(diagnostics, "u_fuzzy")
+
+    np.testing.assert_allclose(
+        u_fuzzy(stiff.diagram, context),
+        u_fuzzy(op.diagram, op.context),
+        atol=1e-9,
+    )
+    # The steady state of the stiffer contact: the desired force is the
+    # normal force the sensor reads.
+    context, moved, residual = bc.steady_context(stiff, context, 0)
+    assert abs(moved) > 0.01 and residual == 0.0
+    assert bc._match_estimates(stiff.diagram, context) == pytest.approx(
+        0.0, abs=1e-9
+    )
