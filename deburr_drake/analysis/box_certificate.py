@@ -111,8 +111,8 @@ PROVES = (
 DOES_NOT_PROVE = (
     "loss of contact, burr impacts, the depth^1.4 contact away from the "
     "operating point, the outer loop and the adaptation's own dynamics "
-    "(frozen), a negative slope of the fuzzy surface, and the feed's "
-    "range (not in the box)"
+    "(frozen), a negative slope of the fuzzy surface, the feed's range "
+    "and other poses along the edge (not in the box)"
 )
 
 
