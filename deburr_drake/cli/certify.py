@@ -98,9 +98,10 @@ def _add_certify_parser(subparsers):
         "--bisections",
         type=int,
         default=0,
-        help="bisect the decay rate this many times after the first solve "
-        "(each a solve as long; default 0: the decay rate the first P "
-        "is checked to give)",
+        help="bisect the decay rate this many times after the first P "
+        "(each one more solve; default 0: the decay rate the first P is "
+        "checked to give, bisected 6 times only when it leaves no room "
+        "for what the corners leave out)",
     )
     p.add_argument(
         "--box",
