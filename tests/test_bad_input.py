@@ -19,6 +19,10 @@ CASES = {
         ["certify", "--set", "sensor.cutoff_frequency=fast"],
         ["sensor.cutoff_frequency=fast", "VALUE must be a number"],
     ),
+    "certify over a box parameter that does not exist": (
+        ["certify", "--box", "stiffness", "burr"],
+        ["--box 'burr' is invalid", "slope_x2"],
+    ),
     "malformed YAML text": (
         SIM + ["--scenario-text", "task: {desired_depth: [0.1"],
         ["--scenario-text:1:", "YAML syntax error"],

@@ -1,68 +1,109 @@
-"""``certify``: the stability certificate of a scenario's sampled loop over
-a box of parameters, from the run's Context at its operating point.
+"""``certify``: the stability certificate of a scenario's sampled loop
+over a box of parameters, each map taken at the steady state its own
+parameters produce.
 
-The box: the robust margin's parameters and ranges
-(:data:`deburr_drake.analysis.robust.UNCERTAIN_PARAMETERS`: contact
-stiffness, c0, the cutting coefficient, the model mass scale; the burr
-height only enters on a burr, and the operating point is off them), the
-contact estimator's c-hat (all three scaled together by 0.5-1.5, not below
-their projection floor ``estimator.lower_bounds``) and the fuzzy surface's
-slope added on every fuzzy axis, 0 to the projection bound
-``controller.fuzzy.max_slope`` (:func:`deburr_drake.analysis.add_fuzzy_slope`).
+The box, the values the loop can be at:
+
+- the robust margin's parameters and ranges
+  (:data:`deburr_drake.analysis.robust.UNCERTAIN_PARAMETERS`: contact
+  stiffness, c0, the cutting coefficient, the model mass scale; the burr
+  height only enters on a burr, and the operating point is off them);
+- the fuzzy surface's slope on each fuzzy axis: the total local slope
+  d u_f / d s_k at the operating s_k, from 0 to the projection bound
+  ``controller.fuzzy.max_slope``. The law bounds |slope| by it; a
+  negative total slope is left out (below -K_k the total gain on s_k is
+  negative and the loop unstable: docs/certify.md). A slope is changed
+  about the operating s_k (theta_ij += (slope - learned) (j Delta_k -
+  s_k)), so u_f and the operating point stay where they are: only the
+  map's gain moves.
+
+The contact estimator's c-hat is not an axis of its own: in the frozen
+loop it enters only through the desired force c0-hat + c1-hat delta*, and
+the estimator converges (with the depth reference) to where that equals
+the contact's normal force at the desired depth (the estimate's split
+between c0-hat and c1-hat is free on that line and does not reach the
+map). So every map is taken at its steady state (:func:`steady_context`):
+the sensor's filter at the contact's force, c-hat scaled so the desired
+force equals the normal force, the loop run ``SETTLE_PERIODS`` periods to
+let the held terms settle, and c-hat matched again.
 
 The maps: the one-period map at the operating point (nominal), at both
 ends and at the midpoint of each parameter's range with the others nominal,
 and at every corner of the parameters that move the map (by more than
 ``VERTEX_THRESHOLD`` of its norm, balanced), the others nominal. Their
-effects do not add up (the paper arm: a corner built by adding each
-parameter's change to the nominal map has radius 1.0127 where the true map
-there has 0.998644), so the corners are true maps. What the corners leave
-out is bounded in the common Lyapunov function's norm and added to the
-decay rate: each parameter's curvature (its midpoint map against the
-chord through its ends: the miss of a map quadratic in it) and the
-half-range of a parameter without a corner axis; the certificate holds
-only if the sum stays below 1.
+effects do not add up (their cross terms), so the corners are true maps.
+What the corners leave out is bounded in the common Lyapunov function's
+norm and added to the decay rate: each parameter's curvature (its
+midpoint map against the chord through its ends: the miss of a map
+quadratic in it) and the half-range of a parameter without a corner axis;
+the certificate holds only if the sum stays below 1.
 
-The c-hat and slope ends are changes of the operating point's Context on
-the nominal diagram; the scenario fields (stiffness, c0, k_c, mass scale)
-are the diagram's construction data, so each end has its frozen diagram
-(one build each).
+The scenario fields (stiffness, c0, k_c, mass scale) are the diagram's
+construction data: each combination has its frozen diagram, built once.
 """
 
 from __future__ import annotations
 
+import copy
 import itertools
 import time
 from typing import Callable, Dict, List, Optional
 
 import numpy as np
+from pydrake.systems.analysis import (
+    ApplySimulatorConfig,
+    InitializeParams,
+    Simulator,
+)
 import scipy.linalg
 
 from deburr_drake.analysis.along import at_numerics
 from deburr_drake.analysis.certificate import certify_family, p_norm
 from deburr_drake.analysis.operating_point import (
     DEFAULT_TIME_AFTER_CONTACT,
+    _next_analysis_time,
     find_operating_point,
 )
 from deburr_drake.analysis.robust import UNCERTAIN_PARAMETERS
 from deburr_drake.analysis.sampled import FrozenMap
-from deburr_drake.analysis.validation import add_fuzzy_slope
 from deburr_drake.config import Scenario
+from deburr_drake.control.layout import CHAMFER_STATE, CONTROLLER_DIAGNOSTICS
+from deburr_drake.runs.simulation import set_monitor
 
 #: A parameter whose half-range moves the map by more than this fraction
 #: (Frobenius norm) of the nominal map gets a vertex axis.
 VERTEX_THRESHOLD = 1e-2
+#: Control periods each map's loop may run at its own parameters before
+#: the map is taken. 0: the steady state is constructed, not run to (the
+#: loop's slowest mode, 0.9986 per period on the paper arm, takes seconds:
+#: a run of 40 periods leaves the desired force up to 0.8 N off the
+#: normal force, a transient, not a steady state; docs/certify.md).
+SETTLE_PERIODS = 0
+#: Bisections of the decay rate when the first P leaves no room for what
+#: the corners leave out (each one more solve).
+ROOM_BISECTIONS = 6
+#: The box's parameters by short key (``certify``'s ``only``).
+BOX_KEYS = {
+    "part.material.hydroelastic_modulus": "stiffness",
+    "process.contact_threshold_force": "c0",
+    "process.cutting_coefficient": "k_c",
+    "controller.model_mass_scale": "mass_scale",
+}
 
 __all__ = [
     "box_maps",
     "certify",
     "certificate_summary",
+    "steady_context",
     "PROVES",
     "DOES_NOT_PROVE",
+    "SETTLE_PERIODS",
+    "BOX_KEYS",
+    "certified_limit",
 ]
 
 PROVES = (
-    "the sampled 2.5 ms loop linearised at the operating point is "
+    "the sampled 2.5 ms loop linearised at its steady cutting state is "
     "exponentially stable for any variation, however fast, of the "
     "parameters within the box (a common quadratic Lyapunov function of "
     "every vertex map)"
@@ -70,30 +111,162 @@ PROVES = (
 DOES_NOT_PROVE = (
     "loss of contact, burr impacts, the depth^1.4 contact away from the "
     "operating point, the outer loop and the adaptation's own dynamics "
-    "(frozen), and the feed's range (not in the box)"
+    "(frozen), a negative slope of the fuzzy surface, the feed's range "
+    "and other poses along the edge (not in the box)"
 )
 
 
-def _scale_estimates(factor: float, floor) -> Callable:
+C_HAT = (
+    "not an axis: in the frozen loop c-hat enters only through the "
+    "desired force c0-hat + c1-hat delta*, which the estimator drives to "
+    "the contact's normal force at the desired depth; every map has c-hat "
+    "scaled to that steady state of its own contact parameters"
+)
+
+
+def _fuzzy_point(op) -> List[Dict]:
+    """[{axis, s0, slope}] per fuzzy axis: the operating s_k (m/s) and
+    the learned surface's local slope there (N s/m)."""
+    controller = op.diagram.GetSubsystemByName("controller")
+    cc = controller.GetMyContextFromRoot(op.context)
+    diagnostics = controller.GetOutputPort("diagnostics").Eval(cc)
+    s = CONTROLLER_DIAGNOSTICS.get(diagnostics, "s")
+    y0 = float(np.linalg.norm(CONTROLLER_DIAGNOSTICS.get(diagnostics, "x_pd")))
+    theta = controller.theta(cc)
+    out = []
+    for k, (axis, rb) in enumerate(
+        zip(op.scenario.controller.fuzzy.axes, controller.rule_bases)
+    ):
+        h = 1e-3 * rb._dk
+        slope = (
+            rb.evaluate(theta[k], y0, s[axis] + h)
+            - rb.evaluate(theta[k], y0, s[axis] - h)
+        ) / (2 * h)
+        out.append({"axis": int(axis), "s0": float(s[axis]), "slope": slope})
+    return out
+
+
+def _pivoted_slope(k: int, added: float, s0: float) -> Callable:
+    """Adds ``added`` (N s/m) to fuzzy axis k's slope about s0: theta_ij
+    += added (j Delta_k - s0); B-splines of order >= 1 reproduce linear
+    functions and sum to one, so u_f gains added (s_k - s0)."""
+
     def modify(diagram, context):
-        estimator = diagram.GetSubsystemByName("contact_estimator")
-        ec = estimator.GetMyMutableContextFromRoot(context)
-        c = ec.get_continuous_state_vector().CopyToVector()
-        ec.SetContinuousState(np.maximum(factor * c, floor))
+        controller = diagram.GetSubsystemByName("controller")
+        cc = controller.GetMyMutableContextFromRoot(context)
+        x = cc.get_continuous_state_vector().CopyToVector()
+        rb = controller.rule_bases[k]
+        j = np.arange(-rb._U, rb._U + 1)
+        grid = np.tile(added * (j * rb._dk - s0), (2 * rb._U + 1, 1))
+        start = 1 + k * rb.n_rules
+        x[start : start + rb.n_rules] += grid.ravel()
+        cc.SetContinuousState(x)
 
     return modify
 
 
-def _slope(value: float) -> Callable:
-    def modify(diagram, context):
-        add_fuzzy_slope(diagram, context, value)
+def _match_estimates(diagram, context) -> float:
+    """Scales c-hat so the desired force c0-hat + c1-hat delta* equals the
+    measured normal force (the estimator's steady state); returns the
+    force error it removed (N)."""
+    observer = diagram.GetSubsystemByName("chamfer_observer")
+    chamfer = observer.GetOutputPort("chamfer_state").Eval(
+        observer.GetMyContextFromRoot(context)
+    )
+    f_n = float(CHAMFER_STATE.get(chamfer, "f_n"))
+    estimator = diagram.GetSubsystemByName("contact_estimator")
+    ec = estimator.GetMyMutableContextFromRoot(context)
+    desired = float(estimator.GetOutputPort("desired_normal_force").Eval(ec)[0])
+    c = ec.get_continuous_state_vector().CopyToVector()
+    ec.SetContinuousState(c * (f_n / desired))
+    return desired - f_n
 
-    return modify
+
+def steady_context(frozen: FrozenMap, context, periods: int = SETTLE_PERIODS):
+    """(context, moved, residual): ``context`` of ``frozen``'s diagram
+    brought to its own steady state (module docstring): the sensor's
+    filter at the raw force, c-hat scaled so the desired force is the
+    normal force (``moved``: by how much it changed it, N), then, with
+    ``periods``, that many periods run (ending just before an inner
+    sample that is not an outer one) and c-hat matched again
+    (``residual``: the desired-force error it removed, N; 0 without)."""
+    diagram = frozen.diagram
+    sensor = diagram.GetSubsystemByName("force_sensor")
+    sc = sensor.GetMyMutableContextFromRoot(context)
+    sc.SetDiscreteState(0, sensor.raw_force(sc))
+    moved = _match_estimates(diagram, context)
+    if periods <= 0:
+        return context, moved, 0.0
+    scenario = frozen.scenario
+    config = copy.copy(frozen.config)
+    config.start_time = context.get_time()
+    simulator = Simulator(diagram, context)
+    set_monitor(simulator, diagram, config.integration_scheme)
+    ApplySimulatorConfig(config, simulator)
+    simulator.Initialize(InitializeParams(suppress_initialization_events=True))
+    simulator.AdvanceTo(
+        _next_analysis_time(
+            context.get_time() + periods * frozen.period,
+            frozen.period,
+            scenario.command.period,
+        )
+    )
+    context = simulator.get_context().Clone()
+    return context, moved, _match_estimates(diagram, context)
 
 
-def _box(scenario: Scenario) -> List[Dict]:
-    """[{name, field, unit, nominal, low, high, overrides(v) or
-    modify(v)}]: the parameters and their ranges."""
+class _Maps:
+    """The one-period maps at parameter values ({name: value}), each
+    frozen diagram built once per combination of scenario fields."""
+
+    def __init__(self, op, box, settle_periods):
+        self.op, self.box, self.settle = op, box, settle_periods
+        self._frozen = {}
+        self.moved, self.residuals = [], []
+
+    def frozen(self, fields) -> FrozenMap:
+        key = tuple(sorted(fields.items()))
+        if key not in self._frozen:
+            self._frozen[key] = FrozenMap(
+                self.op.scenario, plan=self.op.plan, **fields
+            )
+        return self._frozen[key]
+
+    def __call__(self, values) -> np.ndarray:
+        box = self.box
+        frozen = self.frozen(
+            {
+                p["field"]: values[p["name"]]
+                for p in box
+                if p["field"] is not None
+            }
+        )
+        modifies = [
+            _pivoted_slope(
+                p["fuzzy_index"], values[p["name"]] - p["nominal"], p["s0"]
+            )
+            for p in box
+            if p["field"] is None
+        ]
+
+        def modify_all(diagram, context):
+            for m in modifies:
+                m(diagram, context)
+
+        context = frozen.context_from(
+            self.op.diagram, self.op.context, modify_all
+        )
+        context, moved, residual = steady_context(frozen, context, self.settle)
+        self.moved.append(abs(moved))
+        self.residuals.append(abs(residual))
+        return frozen.at_context(context)
+
+
+def _box(op) -> List[Dict]:
+    """[{name, field, unit, nominal, range}] (a fuzzy slope: field None,
+    with its axis' index and operating s0): the parameters and their
+    ranges."""
+    scenario = op.scenario
     box = []
     for p in UNCERTAIN_PARAMETERS:
         if p.field is None:
@@ -101,6 +274,7 @@ def _box(scenario: Scenario) -> List[Dict]:
         nominal, low, high = p.values(scenario)
         box.append(
             {
+                "key": BOX_KEYS[p.field],
                 "name": p.name,
                 "field": p.field,
                 "unit": p.unit,
@@ -108,29 +282,22 @@ def _box(scenario: Scenario) -> List[Dict]:
                 "range": [low, high],
             }
         )
-    floor = np.asarray(scenario.estimator.lower_bounds, float)
-    box.append(
-        {
-            "name": "contact estimates c-hat (x the operating point's)",
-            "field": None,
-            "unit": "-",
-            "nominal": 1.0,
-            "range": [0.5, 1.5],
-            "modify": lambda v: _scale_estimates(v, floor),
-        }
-    )
     max_slope = float(scenario.controller.fuzzy.max_slope)
     if np.isfinite(max_slope) and max_slope > 0:
-        box.append(
-            {
-                "name": "fuzzy surface slope added (theta_ij += s j Delta_k)",
-                "field": None,
-                "unit": "N s/m",
-                "nominal": 0.0,
-                "range": [0.0, max_slope],
-                "modify": _slope,
-            }
-        )
+        for k, point in enumerate(_fuzzy_point(op)):
+            box.append(
+                {
+                    "key": f"slope_x{point['axis'] + 1}",
+                    "name": f"fuzzy surface slope on x{point['axis'] + 1} "
+                    "(total, at the operating s)",
+                    "field": None,
+                    "unit": "N s/m",
+                    "nominal": point["slope"],
+                    "range": [0.0, max_slope],
+                    "fuzzy_index": k,
+                    "s0": point["s0"],
+                }
+            )
     return box
 
 
@@ -143,34 +310,30 @@ def _labels(frozen: FrozenMap) -> List[str]:
     return labels
 
 
-def box_maps(op, box, say=lambda m: None) -> Dict:
+def box_maps(maps: _Maps, box, say=lambda m: None) -> Dict:
     """{A0, ends [(A_lo, A_hi)], mids, labels, period}: the one-period
-    maps at ``op`` (nominal), at both ends and at the midpoint of every
-    parameter of ``box``."""
-    nominal = FrozenMap(op.scenario, plan=op.plan)
-    A0 = nominal.at(op.diagram, op.context)
-
-    def map_at(p, v):
-        if "modify" in p:
-            return nominal.at(op.diagram, op.context, p["modify"](v))
-        frozen = FrozenMap(op.scenario, plan=op.plan, **{p["field"]: v})
-        return frozen.at(op.diagram, op.context)
-
+    maps (``maps``) at the nominal values, at both ends and at the
+    midpoint of every parameter of ``box``."""
+    nominal = {p["name"]: p["nominal"] for p in box}
+    A0 = maps(nominal)
     ends, mids = [], []
     for p in box:
         lo, hi = p["range"]
-        ends.append((map_at(p, lo), map_at(p, hi)))
+        ends.append(tuple(maps({**nominal, p["name"]: v}) for v in (lo, hi)))
         # The midpoint's map measures the curvature; it is the nominal
         # one when the range is centred on the nominal value.
         centred = abs(0.5 * (lo + hi) - p["nominal"]) <= 1e-12 * abs(hi - lo)
-        mids.append(A0 if centred else map_at(p, 0.5 * (lo + hi)))
+        mids.append(
+            A0 if centred else maps({**nominal, p["name"]: 0.5 * (lo + hi)})
+        )
         say(f"maps at the ends of {p['name']}")
+    frozen = maps.frozen({})
     return {
         "A0": A0,
         "ends": ends,
         "mids": mids,
-        "labels": _labels(nominal),
-        "period": nominal.period,
+        "labels": _labels(frozen),
+        "period": frozen.period,
     }
 
 
@@ -181,24 +344,6 @@ def _balancer(A0: np.ndarray) -> Callable:
         A0, permute=False, separate=True
     )
     return lambda M: M * (1.0 / scale)[:, None] * scale[None, :]
-
-
-def _corner_map(op, box, values) -> np.ndarray:
-    """The true one-period map with every parameter at ``values``."""
-    modifies = [p["modify"](values[p["name"]]) for p in box if "modify" in p]
-
-    def modify_all(diagram, context):
-        for m in modifies:
-            m(diagram, context)
-
-    frozen = FrozenMap(
-        op.scenario,
-        plan=op.plan,
-        **{
-            p["field"]: values[p["name"]] for p in box if p["field"] is not None
-        },
-    )
-    return frozen.at(op.diagram, op.context, modify_all)
 
 
 def _values(box, signs) -> Dict[str, float]:
@@ -229,16 +374,18 @@ def _corner_axes(A0, ends, threshold) -> List[int]:
     ]
 
 
-def _corners(op, box, axes):
+def _corners(maps: _Maps, box, axes):
     """(maps, signs): the true maps at every corner of ``axes``, the other
     parameters nominal. The parameters' effects do not add up (their cross
     terms), so corners of a model built from the ends would not do."""
     corners, signs = [], []
+    if not axes:
+        return corners, signs
     for corner in itertools.product((-1.0, 1.0), repeat=len(axes)):
         sign = [0.0] * len(box)
         for si, k in zip(corner, axes):
             sign[k] = si
-        corners.append(_corner_map(op, box, _values(box, sign)))
+        corners.append(maps(_values(box, sign)))
         signs.append(sign)
     return corners, signs
 
@@ -278,6 +425,8 @@ def certify(
     solver: str = "Clarabel",
     vertex_threshold: float = VERTEX_THRESHOLD,
     bisections: int = 0,
+    settle_periods: int = SETTLE_PERIODS,
+    only: Optional[List[str]] = None,
     progress: Optional[Callable[[str], None]] = None,
 ) -> Dict:
     """The certificate (the dict of certificate.json, SI units) of
@@ -286,8 +435,11 @@ def certify(
     and maps at ``numerics`` ("shipped" or "refined",
     :func:`deburr_drake.analysis.along.at_numerics`). ``bisections`` of
     the decay rate after the first solve (each a solve as long as the
-    first; 0: the decay rate is the checked one of the first P). The
-    live maps are under ``"_maps"``."""
+    first; 0: the decay rate is the checked one of the first P); each
+    map at its steady state after ``settle_periods`` periods
+    (:func:`steady_context`); ``only``: the box's parameters by key
+    (``BOX_KEYS``, ``slope_x1``...; [] the nominal map alone), the others
+    at their nominal values. The live maps are under ``"_maps"``."""
     say = progress or (lambda message: None)
     timings = {}
     t0 = time.perf_counter()
@@ -296,11 +448,20 @@ def certify(
     op = find_operating_point(run_scenario, after_contact=after_contact)
     timings["operating_point_s"] = time.perf_counter() - t0
     t1 = time.perf_counter()
-    box = _box(op.scenario)
-    maps = box_maps(op, box, say)
+    box = _box(op)
+    if only is not None:
+        unknown = set(only) - {p["key"] for p in box}
+        if unknown:
+            raise ValueError(
+                f"unknown box parameters {sorted(unknown)}: allowed "
+                f"{[p['key'] for p in box]}"
+            )
+        box = [p for p in box if p["key"] in only]
+    maps_at = _Maps(op, box, settle_periods)
+    maps = box_maps(maps_at, box, say)
     A0, ends = maps["A0"], maps["ends"]
     axes = _corner_axes(A0, ends, vertex_threshold)
-    corners, signs = _corners(op, box, axes)
+    corners, signs = _corners(maps_at, box, axes)
     say(f"maps at the {len(corners)} corners")
     timings["maps_s"] = time.perf_counter() - t1
     family = [A0] + [m for pair in ends for m in pair] + corners
@@ -315,11 +476,18 @@ def certify(
     cert = certify_family(
         family, maps["labels"], solver=solver, bisections=bisections
     )
+    error = _model_error(cert, box, maps, axes) if cert.P is not None else {}
+    if "status" in error and bisections < ROOM_BISECTIONS:
+        # The first P sits on its LMI's boundary at gamma = 1 - 1e-5: a
+        # smaller decay rate may leave room for what the corners leave out.
+        cert = certify_family(
+            family, maps["labels"], solver=solver, bisections=ROOM_BISECTIONS
+        )
+        error = _model_error(cert, box, maps, axes)
     timings["program_s"] = time.perf_counter() - t2
     result = cert.to_dict()
     result["vertex_parameters"] = [box[j]["name"] for j in axes]
-    if cert.P is not None:
-        result.update(_model_error(cert, box, maps, axes))
+    result.update(error)
     if result["breaking_map"] is not None:
         result["breaking_vertex"] = names[result["breaking_map"]]
     result.update(
@@ -329,9 +497,27 @@ def certify(
             "sampling_period_s": maps["period"],
             "operating_point": op.summary(),
             "box": [
-                {k: p[k] for k in ("name", "field", "unit", "nominal", "range")}
+                {
+                    k: p[k]
+                    for k in (
+                        "key",
+                        "name",
+                        "field",
+                        "unit",
+                        "nominal",
+                        "range",
+                        "s0",
+                    )
+                    if k in p
+                }
                 for p in box
             ],
+            "contact_estimates": C_HAT,
+            "steady_state": {
+                "settle_periods": settle_periods,
+                "largest_desired_force_change_N": max(maps_at.moved),
+                "largest_desired_force_residual_N": max(maps_at.residuals),
+            },
             "vertices": len(family),
             "proves": PROVES,
             "does_not_prove": DOES_NOT_PROVE,
@@ -362,6 +548,12 @@ def certificate_summary(result: Dict) -> str:
             f"largest spectral radius {result['largest_spectral_radius']:.6f}; "
             f"P's condition {result['P_condition']:.3g}"
         )
+    if result.get("found_by"):
+        lines.append(
+            f"  P found by {result['found_by']}, searched in "
+            f"{result['search_dimension']} of {result['certified_dimension']} "
+            "coordinates, checked in all"
+        )
     if result.get("breaking_vertex"):
         lines.append(f"  breaks at: {result['breaking_vertex']}")
     if result.get("breaking_reason"):
@@ -374,3 +566,70 @@ def certificate_summary(result: Dict) -> str:
     lines.append(f"  does not prove: {result['does_not_prove']}")
     lines.append(f"  wall time {result['timings_s']['total']:.1f} s")
     return "\n".join(lines)
+
+
+def certified_limit(
+    scenario: Scenario,
+    overrides: Callable[[float], Dict[str, float]],
+    lo: float,
+    hi: float,
+    *,
+    harder_above: bool = True,
+    rel_tol: float = 0.02,
+    progress: Optional[Callable[[str], None]] = None,
+    **certify_options,
+) -> Dict:
+    """The boundary of the certified values of one parameter, by
+    bisection between ``lo`` and ``hi`` to ``rel_tol``: the scenario with
+    ``overrides(value)`` (dotted fields) certified (:func:`certify` with
+    ``certify_options``) at each trial. ``harder_above``: larger values
+    are the harder ones (a gain; False for a cutoff, whose lowest
+    certified value is sought); a trial without an operating point (the
+    run lost contact) is refused. {certified, refused, trials}: the last
+    certified and first refused values (None when an end decides it),
+    and every trial's value, status, decay rate and wall time."""
+    from deburr_drake.config import ConfigError, set_field
+
+    say = progress or (lambda message: None)
+    trials = []
+
+    def certified(value):
+        varied = copy.deepcopy(scenario)
+        for path, v in overrides(value).items():
+            set_field(varied, path, v)
+        varied.validate()
+        try:
+            result = certify(varied, **certify_options)
+        except ConfigError as e:
+            # No operating point: the run lost contact (or never made it).
+            result = {
+                "status": "no_operating_point",
+                "decay_rate_per_period": None,
+                "breaking_reason": str(e),
+                "timings_s": {"total": None},
+            }
+        trials.append(
+            {
+                "value": value,
+                "status": result["status"],
+                "decay_rate": result["decay_rate_per_period"],
+                "breaking_vertex": result.get("breaking_vertex"),
+                "breaking_reason": result.get("breaking_reason"),
+                "wall_s": result["timings_s"]["total"],
+            }
+        )
+        say(f"{value:g}: {result['status']}")
+        return result["status"] == "certified"
+
+    easy, hard = (lo, hi) if harder_above else (hi, lo)
+    if not certified(easy):
+        return {"certified": None, "refused": easy, "trials": trials}
+    if certified(hard):
+        return {"certified": hard, "refused": None, "trials": trials}
+    while abs(hard - easy) > rel_tol * max(abs(hard), abs(easy)):
+        mid = 0.5 * (easy + hard)
+        if certified(mid):
+            easy = mid
+        else:
+            hard = mid
+    return {"certified": easy, "refused": hard, "trials": trials}

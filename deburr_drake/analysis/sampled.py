@@ -346,7 +346,13 @@ class FrozenMap:
     ) -> np.ndarray:
         """The one-period map at ``source_context`` (just before a
         sample)."""
-        context = self.context_from(source, source_context, modify)
+        return self.at_context(
+            self.context_from(source, source_context, modify)
+        )
+
+    def at_context(self, context: Context) -> np.ndarray:
+        """The one-period map at ``context``, a context of this frozen
+        diagram (just before a sample)."""
         return period_map(
             self.diagram,
             context,

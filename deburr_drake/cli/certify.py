@@ -21,7 +21,8 @@ def _certify(args) -> int:
     import numpy as np
 
     from deburr_drake import analysis
-    from deburr_drake.config import set_field
+    from deburr_drake.analysis.box_certificate import BOX_KEYS
+    from deburr_drake.config import ConfigError, set_field
 
     # The scenario and every option, checked before anything runs.
     scenario = _load(args)
@@ -29,6 +30,15 @@ def _certify(args) -> int:
     for path, value in settings.items():
         set_field(scenario, path, value)
     scenario.validate()
+    if args.box is not None:
+        allowed = list(BOX_KEYS.values()) + [
+            f"slope_x{axis + 1}" for axis in scenario.controller.fuzzy.axes
+        ]
+        for key in args.box:
+            if key not in allowed:
+                raise ConfigError(
+                    f"--box {key!r} is invalid: allowed {', '.join(allowed)}"
+                )
     out = Path(args.out or f"out/{scenario.name}/certificate")
     _check_writable_target(
         out, "--out", args.force, is_dir=True, names=_CERTIFY_OUTPUTS
@@ -43,6 +53,7 @@ def _certify(args) -> int:
         numerics=args.numerics,
         solver=args.solver,
         bisections=args.bisections,
+        only=args.box,
         progress=say,
     )
     result["settings"] = settings
@@ -87,9 +98,19 @@ def _add_certify_parser(subparsers):
         "--bisections",
         type=int,
         default=0,
-        help="bisect the decay rate this many times after the first solve "
-        "(each a solve as long; default 0: the decay rate the first P "
-        "is checked to give)",
+        help="bisect the decay rate this many times after the first P "
+        "(each one more solve; default 0: the decay rate the first P is "
+        "checked to give, bisected 6 times only when it leaves no room "
+        "for what the corners leave out)",
+    )
+    p.add_argument(
+        "--box",
+        nargs="*",
+        default=None,
+        metavar="KEY",
+        help="certify over these parameters of the box only, the others "
+        "at their nominal values (stiffness, c0, k_c, mass_scale, "
+        "slope_x1, slope_x2; none: the nominal map alone; default: all)",
     )
     p.add_argument(
         "--solver",

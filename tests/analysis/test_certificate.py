@@ -5,11 +5,15 @@ import pytest
 
 from deburr_drake.analysis import certificate
 from deburr_drake.analysis.certificate import (
+    FOUND_BY_NOMINAL,
+    FOUND_BY_PROGRAM,
     LmiSolution,
     certify_family,
     check_lyapunov,
+    lift,
     p_norm,
     reduce_family,
+    search_basis,
 )
 
 
@@ -31,6 +35,9 @@ def test_a_family_with_a_known_common_lyapunov_function_is_certified():
     assert max(np.linalg.norm(A, 2) for A in maps) > 5.0
     cert = certify_family(maps, ["a", "b"])
     assert cert.status == "certified"
+    # The first map is 0.8 I: its own Lyapunov function, I, does not
+    # serve the others (2-norms above 5), so the program found P.
+    assert cert.found_by == FOUND_BY_PROGRAM
     assert cert.solver == "Clarabel" and cert.solver_status == "kSolutionFound"
     # The checked P is a Lyapunov function of every map, in numpy.
     P = cert.P
@@ -43,6 +50,46 @@ def test_a_family_with_a_known_common_lyapunov_function_is_certified():
         )
     # The bisection reaches close to the known rate 0.8.
     assert 0.8 - 1e-6 <= rate < 0.8 + 0.01
+
+
+def test_the_nominal_maps_lyapunov_function_serves_maps_near_it():
+    A0 = np.array([[0.5, 0.2], [0.0, 0.6]])
+    maps = [A0, A0 + 0.02 * np.eye(2), A0 - np.array([[0, 0.05], [0, 0]])]
+    cert = certify_family(maps, ["a", "b"], bisections=0)
+    assert cert.status == "certified"
+    assert cert.found_by == FOUND_BY_NOMINAL
+    assert cert.solver_status == "not run" and cert.solves == 0
+    assert cert.decay_rate < 1.0 - cert.check["margin"]
+
+
+def test_p_is_searched_in_the_common_row_space_and_checked_on_the_family():
+    # Maps that read the state through two coordinates (A = F_i G): the
+    # search runs in 2 of 4 dimensions; the lifted P is checked on all 4.
+    rng = np.random.default_rng(3)
+    G = np.linalg.qr(rng.normal(size=(4, 2)))[0].T
+    family = [
+        S @ G
+        for S in (
+            G.T @ (0.8 * _rotation(t)) + 0.1 * rng.normal(size=(4, 2))
+            for t in (0.0, 0.5, 1.3)
+        )
+    ]
+    V = search_basis(family)
+    assert V.shape == (4, 2)
+    np.testing.assert_allclose(V @ V.T, G.T @ G, atol=1e-12)
+    cert = certify_family(family, list("abcd"), bisections=0)
+    assert cert.status == "certified"
+    assert cert.search_dimension == 2
+    assert cert.P.shape == (4, 4)
+    assert check_lyapunov(cert.reduced.maps, cert.P)["passed"]
+
+
+def test_the_lift_keeps_the_search_coordinates_decay():
+    A = np.diag([0.5, 0.0])
+    V = np.array([[1.0], [0.0]])
+    P = lift(np.array([[2.0]]), V, [A])
+    assert P[0, 0] == pytest.approx(2.0)
+    assert p_norm(A, P) == pytest.approx(0.5)
 
 
 def _switched_pair():
@@ -82,6 +129,9 @@ def test_a_solved_program_whose_p_fails_the_check_is_inconclusive(
     def solver_says_solved(maps, gamma, **kwargs):
         return LmiSolution(np.eye(2), "Clarabel", "kSolutionFound", True)
 
+    # The nominal map's Lyapunov function would pass; replaced by P = I
+    # it fails the check and the program is asked, whose P fails too.
+    monkeypatch.setattr(certificate, "nominal_lyapunov", lambda maps: np.eye(2))
     monkeypatch.setattr(
         certificate, "solve_common_lyapunov", solver_says_solved
     )
@@ -103,6 +153,8 @@ def test_the_check_rejects_an_indefinite_or_ill_conditioned_p():
     assert not check_lyapunov([A], np.diag([1.0, 1e-12]))["passed"]
     assert check_lyapunov([A], np.diag([1.0, 2.0]))["passed"]
     assert p_norm(A, np.eye(2)) == pytest.approx(0.5)
+    # A P that is not positive definite has no norm: the check fails.
+    assert p_norm(A, np.diag([1.0, -1.0])) == np.inf
 
 
 def _with_shift(B, T):
@@ -184,3 +236,88 @@ def test_what_the_corners_leave_out_is_added_to_the_decay_rate():
         cert, box, {"ends": ends, "mids": [A0 + np.eye(2), A0]}, [0]
     )
     assert out["status"] == "inconclusive"
+
+
+def test_the_certified_limit_lies_between_a_certified_and_a_refused_value(
+    monkeypatch,
+):
+    from deburr_drake.analysis import box_certificate
+    from deburr_drake.config import Scenario
+
+    def certify(scenario, **options):
+        ok = (
+            scenario.controller.sliding_gain[0] <= 1234.0
+            and scenario.sensor.cutoff_frequency >= 12.3
+        )
+        return {
+            "status": "certified" if ok else "not_certified",
+            "decay_rate_per_period": 0.9,
+            "timings_s": {"total": 0.0},
+        }
+
+    monkeypatch.setattr(box_certificate, "certify", certify)
+    gain = lambda v: {"controller.sliding_gain[0]": v}  # noqa: E731
+    out = box_certificate.certified_limit(
+        Scenario(), gain, 400.0, 8000.0, rel_tol=1e-3
+    )
+    assert out["certified"] <= 1234.0 < out["refused"]
+    assert out["refused"] - out["certified"] <= 1e-3 * out["refused"]
+    assert [t["value"] for t in out["trials"][:2]] == [400.0, 8000.0]
+    # A cutoff: the lowest certified value; the easy end is the high one.
+    cutoff = lambda v: {"sensor.cutoff_frequency": v}  # noqa: E731
+    out = box_certificate.certified_limit(
+        Scenario(), cutoff, 2.0, 40.0, harder_above=False, rel_tol=1e-3
+    )
+    assert out["refused"] < 12.3 <= out["certified"]
+    assert out["certified"] - out["refused"] <= 1e-3 * out["certified"]
+    # An easy end refused: no certified value.
+    out = box_certificate.certified_limit(Scenario(), gain, 2000.0, 8000.0)
+    assert out["certified"] is None and out["refused"] == 2000.0
+
+
+@pytest.mark.slow
+def test_a_box_map_is_taken_at_its_own_steady_state():
+    from deburr_drake.analysis import box_certificate as bc
+    from deburr_drake.analysis import find_operating_point
+    from deburr_drake.config import load_scenario
+    from deburr_drake.control.layout import CONTROLLER_DIAGNOSTICS
+
+    op = find_operating_point(load_scenario("point_mass"), after_contact=0.5)
+    box = bc._box(op)
+    slope = next(p for p in box if p["key"] == "slope_x1")
+    maps = bc._Maps(op, box, 0)
+    stiff = maps.frozen(
+        {"part.material.hydroelastic_modulus": box[0]["range"][1]}
+    )
+    context = stiff.context_from(
+        op.diagram,
+        op.context,
+        bc._pivoted_slope(0, 1000.0 - slope["nominal"], slope["s0"]),
+    )
+    # The surface now has slope 1000 at the operating s, and its value
+    # there is the learned one: the operating point stays put.
+    point = bc._fuzzy_point(
+        type(op)(op.scenario, stiff.diagram, context, op.time, 0.0)
+    )[0]
+    assert point["slope"] == pytest.approx(1000.0, rel=1e-6)
+    assert point["s0"] == pytest.approx(slope["s0"], abs=1e-12)
+
+    def u_fuzzy(diagram, context):
+        controller = diagram.GetSubsystemByName("controller")
+        diagnostics = controller.GetOutputPort("diagnostics").Eval(
+            controller.GetMyContextFromRoot(context)
+        )
+        return CONTROLLER_DIAGNOSTICS.get(diagnostics, "u_fuzzy")
+
+    np.testing.assert_allclose(
+        u_fuzzy(stiff.diagram, context),
+        u_fuzzy(op.diagram, op.context),
+        atol=1e-9,
+    )
+    # The steady state of the stiffer contact: the desired force is the
+    # normal force the sensor reads.
+    context, moved, residual = bc.steady_context(stiff, context, 0)
+    assert abs(moved) > 0.01 and residual == 0.0
+    assert bc._match_estimates(stiff.diagram, context) == pytest.approx(
+        0.0, abs=1e-9
+    )
