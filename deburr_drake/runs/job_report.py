@@ -1,22 +1,26 @@
-"""The report of a whole job's run: per edge, the single pass's metrics
-over that edge's slice of the run; for the job, the cycle time split by
-phase, the tool tip's travel, the planned and the simulated clearance of
-the moves, and the share of the selected edges cut.
+"""The report of a whole job's run (deburr_drake.runs.job_log.JobLog):
+per edge, the single pass's metrics over that edge's slice of the run;
+for the job, the cycle time split by phase, the tool tip's travel, the
+planned and the simulated clearance of the moves, and the share of the
+selected edges cut.
 
-Per edge (``edges: [...]`` of metrics.json): the finish, force and feed
-families of :mod:`deburr_drake.runs.pass_metrics` on the edge's log (a
-single pass's log, time-sliced to the edge), over the bins cut when the
-edge was not cut to its end. For the job (``job: {...}``): the time in
-each phase from the job-level phase signal, the tool tip's path length
-from the logged joint positions, and the least signed distance between
-the robot and the part's convex pieces (the planning cell's query,
-:func:`deburr_drake.cell.moves.clearance`) at every logged sample of
-every move, with the cutter's own distance left out on the retract and
-the approach as the planner leaves it out (it is in the cut at one end).
+Per edge (``edges: [...]`` of metrics.json, one entry per planned cut in
+the job's order): the finish, force and feed families of
+:mod:`deburr_drake.runs.pass_metrics` on the edge's pass log, over the
+bins cut when the edge was not cut to its end, and the largest f_t. For
+the job (``job: {...}``): the time in each phase
+(deburr_drake.control.sequencer.JOB_PHASES) from the phase signal, the
+tool tip's path length from the logged joint positions, and the least
+signed distance between the robot and the part's convex pieces (the
+planning cell's query, :func:`deburr_drake.cell.moves.clearance`) at
+every logged sample of every move, the cutter's own left out on the
+retract and the approach as the planner leaves it out (it is in the cut
+at one end).
 
-Use: ``report = job_report(job_log, plan, cell)``;
-``write_job_report(report, job_log, out)`` writes metrics.json, each
-edge's logs.npz and Figs. 8-12 under ``edge_<index>/``."""
+Use: ``report = job_report(job_log, plan, cell)`` (the JobPlan and the
+planning cell the moves were planned in); ``write_job_report(report,
+job_log, out)`` writes metrics.json, and each edge's logs.npz and
+Figs. 8-12 under ``edge_<index>/``."""
 
 from __future__ import annotations
 
@@ -28,7 +32,9 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from deburr_drake.cell.moves import PlanningCell, clearance, tip_positions
+from deburr_drake.control.sequencer import JOB_COMPLETE, JOB_PHASE, JOB_PHASES
 from deburr_drake.math import metrics
+from deburr_drake.runs.job_log import EdgeRun, JobLog
 from deburr_drake.runs.pass_metrics import (
     PassMetrics,
     feed_metrics,
@@ -36,22 +42,24 @@ from deburr_drake.runs.pass_metrics import (
     force_metrics,
     pass_window,
 )
-from deburr_drake.runs.simulation import RunLog
 
 __all__ = [
     "EDGE_FIELDS",
     "JOB_FIELDS",
-    "JOB_COMPLETE",
     "EdgeReport",
     "JobReport",
     "edge_report",
     "job_report",
-    "phase_times",
     "move_clearance",
+    "write_job_report",
 ]
 
-#: The stop reason of a job that cut every edge it planned.
-JOB_COMPLETE = "job_complete"
+#: A cut the job never began.
+NOT_REACHED = "not_reached"
+#: The stop reason of a run that ended as complete with a cut short of
+#: its edge's end (the job is then not complete).
+EDGES_NOT_CUT = "edges_not_cut"
+_MOVING = ("retract", "move", "approach")
 
 #: The metrics of the single pass each edge reports, by name.
 _PASS_FIELDS = (
@@ -72,13 +80,14 @@ EDGE_FIELDS: Dict[str, tuple] = {
     "order": ("-", "its place in the job (0: cut first)"),
     "start_time_s": (
         "s",
-        "when its cut began (the tool at the approach's end); null if the "
-        "job stopped before it",
+        "when its cut began, in the job's time (the approach's end); "
+        "null if the job stopped before it",
     ),
     "contact_time_s": (
         "s",
-        "when the cutter first pressed on the edge (||f_n|| above the "
-        "pass's ``CONTACT_FORCE``); its transient runs ``TRANSIENT`` s on",
+        "when the cutter first pressed on the edge, from its cut's start "
+        "(||f_n|| above the pass's ``CONTACT_FORCE``); the edge's "
+        "metrics begin ``TRANSIENT`` s later",
     ),
     "cut_time_s": ("s", "how long its cut took"),
     "cut_to_end": (
@@ -131,7 +140,7 @@ JOB_FIELDS: Dict[str, tuple] = {
         "time spent on the moves between cuts: retract, transit and approach",
     ),
     "retract_time_s": ("s", "of the moving time, up the tool axis"),
-    "transit_time_s": ("s", "of the moving time, between the two"),
+    "move_time_s": ("s", "of the moving time, the transit between the two"),
     "approach_time_s": ("s", "of the moving time, down onto the next edge"),
     "travel_m": (
         "m",
@@ -192,45 +201,36 @@ def _json(value):
     if isinstance(value, (float, np.floating, int, np.integer)):
         value = float(value)
         return value if np.isfinite(value) else None
-    if isinstance(value, np.ndarray):
-        return [_json(v) for v in value]
     return value
 
 
-def edge_report(
-    *, index: int, order: int, point, length: float, log: Optional[RunLog]
-) -> EdgeReport:
-    """The entry of the edge at ``index`` (cut ``order``-th), from its
-    slice of the run ``log`` (None: the job stopped before it): the
-    finish, force and feed metrics of a pass on that slice, over the bins
-    cut when the edge was not cut to its end."""
+def edge_report(cut, position: int, run: Optional[EdgeRun]) -> EdgeReport:
+    """The entry of the plan's ``cut`` (a JobCut: index, point, contour),
+    cut ``position``-th, from its ``run`` (None: the job stopped before
+    it): the finish, force and feed metrics of a pass on its log, over
+    the bins cut when the edge was not cut to its end."""
     values = {
-        "index": int(index),
-        "order": int(order),
-        "point": [float(x) for x in point],
-        "length_m": float(length),
+        "index": int(cut.index),
+        "order": int(position),
+        "point": [float(x) for x in cut.point],
+        "length_m": float(cut.contour.length),
     }
     out = EdgeReport(values)
-    if log is None:
-        values.update(
-            start_time_s=float("nan"),
-            cut_time_s=float("nan"),
-            cut_to_end=False,
-            stop="not_reached",
-        )
+    if run is None:
+        values.update(cut_to_end=False, stop=NOT_REACHED)
         for name in _TIMES + _PASS_FIELDS + ("chamfering_force_max_N",):
             values[name] = float("nan")
             out.reasons[name] = "the job stopped before this edge"
         return out
-    t0 = float(log["chamfer"]["t"][0]) if len(log["chamfer"]["t"]) else 0.0
+    log = run.log
+    window = pass_window(log)
     values.update(
-        start_time_s=t0,
-        cut_time_s=float(log.stop_time) - t0,
+        start_time_s=run.start_time,
+        contact_time_s=window.contact,
+        cut_time_s=run.end_time - run.start_time,
         cut_to_end=bool(log.completed_pass),
         stop=log.stop_reason,
     )
-    window = pass_window(log)
-    values["contact_time_s"] = window.contact
     if not np.isfinite(window.contact):
         out.reasons["contact_time_s"] = window.reason
     found = PassMetrics()
@@ -245,47 +245,50 @@ def edge_report(
         if name in found.reasons:
             out.reasons[name] = found.reasons[name]
     f_t = np.abs(log["process"]["f_t"])
-    if f_t.size:
-        values["chamfering_force_max_N"] = float(np.max(f_t))
-    else:
-        values["chamfering_force_max_N"] = float("nan")
+    values["chamfering_force_max_N"] = (
+        float(np.max(f_t)) if f_t.size else float("nan")
+    )
+    if not f_t.size:
         out.reasons["chamfering_force_max_N"] = "no process sample"
     return out
 
 
-#: The phases the job's time and travel are split into; the job log's
-#: phase signal names each sample's by its code (``phase_names``).
-CUTTING, RETRACT, TRANSIT, APPROACH = "cut", "retract", "transit", "approach"
-_MOVING = (RETRACT, TRANSIT, APPROACH)
-
-
-def phase_times(t, phase, stop_time: float, phase_names) -> Dict[str, float]:
-    """s by phase name (every one of ``phase_names``' values, 0 when
-    never entered): each sample's phase held to the next sample."""
-    held = metrics.time_by_label(t, phase, stop_time)
-    return {name: held.get(code, 0.0) for code, name in phase_names.items()}
-
-
-def move_clearance(
-    cell: PlanningCell, q, phase, cut, phase_names, times
-) -> tuple:
+def move_clearance(cell: PlanningCell, job: JobLog) -> tuple:
     """(m, where): the least signed distance between the robot and the
-    part (:func:`deburr_drake.cell.moves.clearance`) over the samples of
-    the moves, the cutter's own left out on the retract and the approach
-    (in the cut at one end, as the planner leaves it out); ``where`` names
-    the move by the edge it leads to, the phase and the time. (nan, "")
-    without a move sample."""
-    names = np.array([phase_names.get(int(p), "") for p in phase])
-    best, where = float("nan"), ""
-    for k in np.flatnonzero(np.isin(names, _MOVING)):
-        distance = clearance(cell, q[k], cutter=names[k] == TRANSIT)
+    part (:func:`deburr_drake.cell.moves.clearance`) over every logged
+    sample of the moves, the cutter's own left out on the retract and the
+    approach (in the cut at one end, as the planner leaves it out);
+    ``where`` names the move by the edges it joins, its phase and the
+    time. (nan, "") without a move sample."""
+    signals = job.signals
+    best, at = float("nan"), -1
+    for k in np.flatnonzero(np.isin(signals.phase, _codes(_MOVING))):
+        cutter = signals.phase[k] == JOB_PHASE["move"]
+        distance = clearance(cell, signals.q[k], cutter=cutter)
         if not distance >= best:  # also the first (best nan)
-            best = distance
-            where = (
-                f"{names[k]} into the cut of order {int(cut[k])} at "
-                f"t = {times[k]:.3f} s"
-            )
-    return best, where
+            best, at = distance, k
+    if at < 0:
+        return best, ""
+    t = signals.t[at]
+    after = [m.after for m in job.moves if m.start_time <= t]
+    joins = (
+        f"the move from edge {_index(job, after[-1])} to edge "
+        f"{_index(job, after[-1] + 1)}"
+        if after
+        else "a move"
+    )
+    return best, (f"{joins}, {JOB_PHASES[signals.phase[at]]}, at t = {t:.3f} s")
+
+
+def _codes(names) -> list:
+    return [JOB_PHASE[name] for name in names]
+
+
+def _index(job: JobLog, position: int):
+    for edge in job.edges:
+        if edge.position == position:
+            return edge.index
+    return f"of order {position}"
 
 
 @dataclass
@@ -312,135 +315,112 @@ class JobReport:
         }
 
 
-def job_report(
-    *,
-    cuts,
-    edge_logs: List[Optional[RunLog]],
-    refused=(),
-    planned_clearance: float,
-    t,
-    q,
-    phase,
-    cut,
-    phase_names: Dict[int, str],
-    stop_reason: str,
-    stop_time: float,
-    stop_detail: str = "",
-    wall_time: float = float("nan"),
-    cell: PlanningCell,
-) -> JobReport:
-    """The report of a job's run.
+def _stop_reason(job: JobLog, edges: List[EdgeReport]) -> str:
+    """JOB_COMPLETE only when every planned cut reached its end."""
+    if all(e.values["cut_to_end"] for e in edges):
+        return JOB_COMPLETE
+    if job.stop_reason in (JOB_COMPLETE, "pass_complete"):
+        return EDGES_NOT_CUT
+    return job.stop_reason
 
-    ``cuts``: the plan's cuts in order (``deburr_drake.cell.job.JobCut``:
-    index, point, contour); ``edge_logs``: each one's slice of the run
-    (None for a cut the job never began); ``refused``: (index, why) of
-    the edges selected but not planned; ``planned_clearance``: m, the
-    least clearance of the planned moves. The job-level signals, one row
-    per logged sample: ``t`` (s), ``q`` (rad), ``phase`` (codes named by
-    ``phase_names``), ``cut`` (the order of the cut being made or moved
-    to). ``stop_reason`` is the run's; the job's is :data:`JOB_COMPLETE`
-    only when every planned cut was cut to its end."""
+
+def job_report(job: JobLog, plan, cell: PlanningCell) -> JobReport:
+    """The report of the run ``job`` of ``plan`` (its JobPlan: the cuts
+    in order, the planned moves), its moves checked in ``cell`` (the
+    planning cell of the robot, its tool and the part's convex pieces)."""
+    runs = {edge.position: edge for edge in job.edges}
     edges = [
-        edge_report(
-            index=c.index,
-            order=k,
-            point=c.point,
-            length=c.contour.length,
-            log=log,
-        )
-        for k, (c, log) in enumerate(zip(cuts, edge_logs))
+        edge_report(cut, k, runs.get(k)) for k, cut in enumerate(plan.cuts)
     ]
-    cut_count = sum(bool(e.values["cut_to_end"]) for e in edges)
-    complete = cut_count == len(edges)
-    if complete:
-        reason = JOB_COMPLETE
-    elif stop_reason in (JOB_COMPLETE, "pass_complete"):
-        reason = "edges_not_cut"
-    else:
-        reason = stop_reason
-    # The edge the job stopped on says why.
-    for edge in edges:
-        values = edge.values
-        if not values["cut_to_end"] and values["stop"] != "not_reached":
-            values["stop"] = reason
-    # Time and the tool tip's travel by phase.
-    t, q, phase = np.asarray(t, float), np.asarray(q, float), np.asarray(phase)
-    held = phase_times(t, phase, stop_time, phase_names)
-    names = np.array([phase_names.get(int(p), "") for p in phase])
-    tips = tip_positions(cell, q) if len(q) else np.zeros((0, 3))
-    travel = metrics.path_length_by_label(tips, names)
-    job = {
+    reason = _stop_reason(job, edges)
+    for edge in edges:  # the edge the job stopped on says why
+        if edge.values["stop"] not in ("pass_complete", NOT_REACHED):
+            edge.values["stop"] = reason
+    # Time and the tool tip's travel, by phase.
+    signals = job.signals
+    held = metrics.time_by_label(signals.t, signals.phase, job.stop_time)
+    tips = tip_positions(cell, signals.q)
+    travel = metrics.path_length_by_label(tips, signals.phase)
+
+    def by_phase(values, names):
+        return float(sum(values.get(code, 0.0) for code in _codes(names)))
+
+    planned = [m.min_clearance_m for m in plan.moves()]
+    cut = sum(bool(e.values["cut_to_end"]) for e in edges)
+    selected = len(edges) + len(job.refused)
+    values = {
         "stop_reason": reason,
-        "stop_time_s": float(stop_time),
-        "stop_detail": stop_detail,
-        "cycle_time_s": float(stop_time - t[0]) if len(t) else 0.0,
-        "cutting_time_s": held.get(CUTTING, 0.0),
-        "moving_time_s": sum(held.get(n, 0.0) for n in _MOVING),
-        "retract_time_s": held.get(RETRACT, 0.0),
-        "transit_time_s": held.get(TRANSIT, 0.0),
-        "approach_time_s": held.get(APPROACH, 0.0),
+        "stop_time_s": float(job.stop_time),
+        "stop_detail": job.stop_detail,
+        "cycle_time_s": float(job.stop_time - signals.t[0])
+        if len(signals.t)
+        else 0.0,
+        "cutting_time_s": by_phase(held, ["cut"]),
+        "moving_time_s": by_phase(held, _MOVING),
+        **{
+            f"{name}_time_s": by_phase(held, [name])
+            for name in ("retract", "move", "approach")
+        },
         "travel_m": float(sum(travel.values())),
-        "cutting_travel_m": travel.get(CUTTING, 0.0),
-        "moving_travel_m": sum(travel.get(n, 0.0) for n in _MOVING),
-        "planned_min_clearance_m": float(planned_clearance),
-        "edges_selected": len(edges) + len(refused),
-        "edges_cut": cut_count,
-        "cut_share": cut_count / max(1, len(edges) + len(refused)),
-        "refused": [{"index": int(i), "why": why} for i, why in refused],
-        "wall_time_s": float(wall_time),
+        "cutting_travel_m": by_phase(travel, ["cut"]),
+        "moving_travel_m": by_phase(travel, _MOVING),
+        "planned_min_clearance_m": min(planned, default=float("nan")),
+        "edges_selected": selected,
+        "edges_cut": cut,
+        "cut_share": cut / selected if selected else float("nan"),
+        "refused": [{"index": int(i), "why": why} for i, why in job.refused],
+        "wall_time_s": float(job.wall_time),
     }
-    out = JobReport(edges, job)
-    least, where = move_clearance(cell, q, phase, cut, phase_names, t)
-    job["min_clearance_m"], job["min_clearance_at"] = least, where
+    out = JobReport(edges, values)
+    least, where = move_clearance(cell, job)
+    values["min_clearance_m"], values["min_clearance_at"] = least, where
     if not np.isfinite(least):
         out.reasons["min_clearance_m"] = "no move was logged"
-    if not np.isfinite(planned_clearance):
+    if not planned:
         out.reasons["planned_min_clearance_m"] = "the plan has no move"
+    if not selected:
+        out.reasons["cut_share"] = "the job selected no edge"
     return out
 
 
 def write_job_report(
     report: JobReport,
-    edge_logs: List[Optional[RunLog]],
+    job: JobLog,
     out,
     *,
-    scenario_name: str,
     label: str = "",
     figures: bool = True,
 ) -> Dict[str, object]:
     """metrics.json (``scenario``, ``stop_reason``, ``edges`` and ``job``;
     strict JSON) in ``out``, and per edge cut or begun, under
-    ``edge_<index>/``, its logs.npz (:func:`deburr_drake.runs.report.
-    log_arrays` of its slice) and, with ``figures``, its Figs. 8-12.
-    Returns {"metrics": path, "edges": {index: [paths]}, "failures":
-    {index: one line}}: a figure that cannot be drawn is said, not
-    raised."""
+    ``edge_<index>/``, its logs.npz (``runs.report.log_arrays`` of its
+    pass log) and, with ``figures``, its Figs. 8-12. Returns {"metrics":
+    path, "edges": {index: [paths]}, "failures": {index: one line}}: a
+    figure that cannot be drawn is said, not raised."""
     from deburr_drake.runs.figure_process import draw_figures
     from deburr_drake.runs.report import log_arrays
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    record = {"scenario": scenario_name, **report.record()}
+    record = {"scenario": job.scenario.name, **report.record()}
     metrics_path = out / "metrics.json"
     metrics_path.write_text(
         json.dumps(record, indent=2, sort_keys=True, allow_nan=False) + "\n"
     )
+    entries = {e.values["order"]: e for e in report.edges}
     written, failures = {}, {}
-    for edge, log in zip(report.edges, edge_logs):
-        if log is None:
-            continue
-        index = edge.values["index"]
-        folder = out / f"edge_{index}"
+    for run in job.edges:
+        folder = out / f"edge_{run.index}"
         folder.mkdir(exist_ok=True)
-        arrays = log_arrays(log, edge.values)
-        np.savez_compressed(folder / "logs.npz", **arrays)
-        paths = [folder / "logs.npz"]
-        if figures:
-            drawn, failure = draw_figures(
-                folder / "logs.npz", folder, f"{label} edge {index}".strip()
-            )
-            paths += drawn
-            if failure is not None:
-                failures[index] = failure
-        written[index] = paths
+        logs = folder / "logs.npz"
+        values = entries[run.position].values
+        np.savez_compressed(logs, **log_arrays(run.log, values))
+        written[run.index] = [logs]
+        if not figures:
+            continue
+        name = f"{label} edge {run.index}".strip()
+        drawn, failure = draw_figures(logs, folder, name)
+        written[run.index] += drawn
+        if failure is not None:
+            failures[run.index] = failure
     return {"metrics": metrics_path, "edges": written, "failures": failures}
