@@ -17,6 +17,7 @@ from deburr_drake.cell.moves import (
     Move,
     MovePlanningError,
     MoveSettings,
+    PlanningCell,
     make_planning_cell,
     plan_move,
 )
@@ -45,11 +46,14 @@ class JobCut(NamedTuple):
 class JobPlan:
     """The job planned: ``cuts`` in order, ``skipped`` (index, why: not
     selected by ``edges: []``), ``refused`` (index, one line: selected
-    but not cut)."""
+    but not cut), and the ``cell`` the moves were planned and checked in
+    (the robot, its tool and the part's convex pieces), which checks the
+    run's moves too."""
 
     cuts: List[JobCut]
     skipped: list
     refused: list
+    cell: Optional[PlanningCell] = None
 
     def moves(self) -> List[Move]:
         return [c.move for c in self.cuts if c.move is not None]
@@ -164,4 +168,4 @@ def plan_job(
                 continue
             cut = cut._replace(move=move)
         cuts.append(cut)
-    return JobPlan(cuts, skipped, refused)
+    return JobPlan(cuts, skipped, refused, cell)

@@ -17,8 +17,8 @@ every logged sample of every move, the cutter's own left out on the
 retract and the approach as the planner leaves it out (it is in the cut
 at one end).
 
-Use: ``report = job_report(job_log, plan, cell)`` (the JobPlan and the
-planning cell the moves were planned in); ``write_job_report(report,
+Use: ``report = job_report(job_log, plan)`` (the JobPlan, whose
+planning cell checks the moves); ``write_job_report(report,
 job_log, out)`` writes metrics.json, and each edge's logs.npz and
 Figs. 8-12 under ``edge_<index>/``."""
 
@@ -163,7 +163,7 @@ JOB_FIELDS: Dict[str, tuple] = {
     ),
     "min_clearance_at": (
         "-",
-        "where that least distance was: the move (into which edge), its "
+        "where that least distance was: the move (the edges it joins), its "
         "phase and time",
     ),
     "edges_selected": (
@@ -324,10 +324,14 @@ def _stop_reason(job: JobLog, edges: List[EdgeReport]) -> str:
     return job.stop_reason
 
 
-def job_report(job: JobLog, plan, cell: PlanningCell) -> JobReport:
+def job_report(
+    job: JobLog, plan, cell: Optional[PlanningCell] = None
+) -> JobReport:
     """The report of the run ``job`` of ``plan`` (its JobPlan: the cuts
     in order, the planned moves), its moves checked in ``cell`` (the
-    planning cell of the robot, its tool and the part's convex pieces)."""
+    planning cell of the robot, its tool and the part's convex pieces;
+    the plan's by default)."""
+    cell = cell if cell is not None else getattr(plan, "cell", None)
     runs = {edge.position: edge for edge in job.edges}
     edges = [
         edge_report(cut, k, runs.get(k)) for k, cut in enumerate(plan.cuts)
