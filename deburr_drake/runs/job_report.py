@@ -27,7 +27,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import json
 from pathlib import Path
-from typing import Dict, List, Optional
+from typing import Dict, List, NamedTuple, Optional
 
 import numpy as np
 
@@ -52,6 +52,10 @@ __all__ = [
     "job_report",
     "move_clearance",
     "write_job_report",
+    "Check",
+    "EDGE_RULES",
+    "job_checks",
+    "report_lines",
 ]
 
 #: A cut the job never began.
@@ -428,3 +432,112 @@ def write_job_report(
         if failure is not None:
             failures[run.index] = failure
     return {"metrics": metrics_path, "edges": written, "failures": failures}
+
+
+class Check(NamedTuple):
+    """One rule on the report: what, the value found, the rule, held."""
+
+    what: str
+    value: object
+    rule: str
+    ok: bool
+
+
+#: The rules each edge's cut is held to: metric -> (comparison, bound).
+EDGE_RULES = {
+    "edge_coverage": (">=", 0.99),
+    "chamfer_depth_rms_error_mm": ("<=", 0.05),
+    "chamfering_force_rms_error_N": ("<=", 1.5),
+}
+
+
+def _holds(value, comparison, bound) -> bool:
+    if value is None or not np.isfinite(value):
+        return False
+    return value >= bound if comparison == ">=" else value <= bound
+
+
+def job_checks(report: JobReport) -> List[Check]:
+    """The report against the rules: per edge :data:`EDGE_RULES` (a
+    null value fails), the job complete (no guard, no other ending),
+    and the simulated least clearance of the moves above 0."""
+    checks = []
+    for edge in report.edges:
+        v = edge.values
+        for name, (comparison, bound) in EDGE_RULES.items():
+            checks.append(
+                Check(
+                    f"edge {v['index']} {name}",
+                    v[name],
+                    f"{comparison} {bound:g}",
+                    _holds(v[name], comparison, bound),
+                )
+            )
+    reason = report.stop_reason
+    checks.append(
+        Check("job stop_reason", reason, JOB_COMPLETE, reason == JOB_COMPLETE)
+    )
+    least = report.job["min_clearance_m"]
+    clear = least is not None and bool(np.isfinite(least)) and least > 0.0
+    checks.append(Check("job min_clearance_m", least, "> 0", clear))
+    return checks
+
+
+def _number(value, scale=1.0, spec=".4g") -> str:
+    if value is None or not np.isfinite(value):
+        return "n/a"
+    return f"{value * scale:{spec}}"
+
+
+def report_lines(report: JobReport, checks: List[Check]) -> List[str]:
+    """The report as text (mm for lengths and depths): a row per edge
+    with its rules held or not, the job's ending, times, travel,
+    clearance and share of edges cut, and the checks that failed."""
+    failed = {c.what for c in checks if not c.ok}
+    lines = [
+        "edge order length_mm coverage depth_rms_mm f_t_rms_N f_t_max_N "
+        "feed_mm_s stop"
+    ]
+    for edge in report.edges:
+        v = edge.values
+        held = all(
+            f"edge {v['index']} {name}" not in failed for name in EDGE_RULES
+        )
+        lines.append(
+            f"{v['index']:4d} {v['order']:5d} {v['length_m'] * 1e3:9.1f} "
+            f"{_number(v['edge_coverage'], spec='.4f'):>8s} "
+            f"{_number(v['chamfer_depth_rms_error_mm'], spec='.5f'):>12s} "
+            f"{_number(v['chamfering_force_rms_error_N'], spec='.3f'):>9s} "
+            f"{_number(v['chamfering_force_max_N'], spec='.2f'):>9s} "
+            f"{_number(v['feed_mean_off_burrs_mm_s'], spec='.2f'):>9s} "
+            f"{v['stop']}" + ("" if held else "  MISSES A RULE")
+        )
+    j = report.job
+    lines += [
+        f"job: {j['stop_reason']} at {j['stop_time_s']:.3f} s"
+        + (f" ({j['stop_detail']})" if j["stop_detail"] else ""),
+        f"cycle time {j['cycle_time_s']:.2f} s: cutting "
+        f"{j['cutting_time_s']:.2f} s, moving {j['moving_time_s']:.2f} s "
+        f"(retract {j['retract_time_s']:.2f} s, move "
+        f"{j['move_time_s']:.2f} s, approach {j['approach_time_s']:.2f} s)",
+        f"tool-tip travel {j['travel_m'] * 1e3:.0f} mm: cutting "
+        f"{j['cutting_travel_m'] * 1e3:.0f} mm, moving "
+        f"{j['moving_travel_m'] * 1e3:.0f} mm",
+        f"least clearance on the moves: planned "
+        f"{_number(j['planned_min_clearance_m'], 1e3, '.2f')} mm, simulated "
+        f"{_number(j['min_clearance_m'], 1e3, '.2f')} mm"
+        + (f" ({j['min_clearance_at']})" if j["min_clearance_at"] else ""),
+        f"edges cut {j['edges_cut']} of {j['edges_selected']} selected "
+        f"({_number(j['cut_share'], spec='.2f')})",
+        f"wall time {j['wall_time_s']:.1f} s",
+    ]
+    for refused in j["refused"]:
+        lines.append(f"refused: {refused['why']}")
+    misses = [c for c in checks if not c.ok]
+    lines.append(
+        f"rules: {len(checks) - len(misses)} of {len(checks)} held"
+        + "".join(
+            f"\n  missed: {c.what} = {c.value} (rule {c.rule})" for c in misses
+        )
+    )
+    return lines

@@ -291,3 +291,37 @@ def test_the_report_is_written_with_each_edges_logs(fake_robot, tmp_path):
         assert saved["meta.contact_start"] == pytest.approx(0.5)
         assert saved["meta.stop_reason"] == "guard:max_force"
     assert not (tmp_path / "edge_11").exists()
+
+
+def test_the_checks_pass_a_complete_job_and_fail_a_stopped_one(fake_robot):
+    job, plan = _job()
+    checks = jr.job_checks(jr.job_report(job, plan, None))
+    assert len(checks) == 4 * 3 + 2 and all(c.ok for c in checks)
+    job, plan = _job(stop_on=2, stop_reason="guard:max_force")
+    failed = [
+        c.what
+        for c in jr.job_checks(jr.job_report(job, plan, None))
+        if not c.ok
+    ]
+    # the third edge's coverage (half), the fourth's every metric (null),
+    # and the job's ending; the moves stayed clear
+    assert failed == [
+        "edge 12 edge_coverage",
+        "edge 13 edge_coverage",
+        "edge 13 chamfer_depth_rms_error_mm",
+        "edge 13 chamfering_force_rms_error_N",
+        "job stop_reason",
+    ]
+
+
+def test_the_report_as_text_names_the_misses(fake_robot):
+    job, plan = _job(stop_on=2, stop_reason="guard:max_force")
+    report = jr.job_report(job, plan, None)
+    lines = jr.report_lines(report, jr.job_checks(report))
+    rows = {int(line.split()[0]): line for line in lines[1:5]}
+    assert rows[10].endswith("pass_complete")
+    assert rows[12].endswith("guard:max_force  MISSES A RULE")
+    assert " n/a " in rows[13]
+    assert "job: guard:max_force at 27.000 s" in lines
+    assert "cycle time 27.00 s: cutting 15.00 s, moving 12.00 s" in lines[6]
+    assert lines[-1].startswith("rules: 9 of 14 held")
