@@ -117,7 +117,15 @@ class _Signals(NamedTuple):
 
 
 def _add_loops(
-    builder, c: Scenario, *, plant, contour, x0, tool_frame, **passed
+    builder,
+    c: Scenario,
+    *,
+    plant,
+    contour,
+    x0,
+    tool_frame,
+    sequenced=False,
+    **passed,
 ) -> DeburringController:
     """The observer, the command generator, its hold, the estimator and
     the controller (``passed``: the controller's and observer's optional
@@ -151,6 +159,7 @@ def _add_loops(
             constant_feed=constant_feed,
             contour_step=passed["contour_step"],
             registered=c.localisation.enabled,
+            hold_input=sequenced,
         ),
     )
     # Probing starts off the part, at x0 (the probe's standoff).
@@ -177,8 +186,9 @@ def _add_loops(
             nominal_depth=c.task.desired_depth,
             true_plant=passed["true_plant"],
             posture=passed["posture"],
-            fuzzy_weight_input=probing,
+            fuzzy_weight_input=probing or sequenced,
             contour=contour,
+            active_input=sequenced,
         ),
     )
     return DeburringController(
@@ -359,6 +369,7 @@ def add_deburring_controller(
     contour_step=None,
     true_plant=None,
     posture=None,
+    sequenced: bool = False,
 ) -> DeburringController:
     """Adds the command generator, first-order hold, chamfer observer,
     contact estimator and hybrid controller to ``builder``, configured by
@@ -387,9 +398,18 @@ def add_deburring_controller(
     true plant, the joint posture an arm with more than six joints holds in
     its null space).
 
+    ``sequenced``: a job's loops (deburr_drake.control.sequencer), which
+    a JobSequencer drives: a gate like the probing's (``job_gate``,
+    whose ``probing`` input is 1 off the part) between the observer and
+    the rest, and the generator's ``hold``, the controller's
+    ``fuzzy_weight`` and ``active`` left for the caller to connect (no
+    localisation).
+
     Returns the systems; connect ``.actuation`` to the plant's actuation
     input (directly, or through your own saturation or fault systems)."""
     c = scenario
+    if sequenced and c.localisation.enabled:
+        raise ValueError("a job's loops run without localisation")
     x0 = contour.point_at(0.0) if start is None else np.asarray(start, float)
     # The systems of the two loops.
     loops = _add_loops(
@@ -404,6 +424,7 @@ def add_deburring_controller(
         contour_step=contour_step,
         true_plant=true_plant,
         posture=posture,
+        sequenced=sequenced,
     )
     # The two signals from the user's side of the diagram.
     for system in (loops.observer, loops.controller):
@@ -421,6 +442,18 @@ def add_deburring_controller(
             x0=x0,
             measured_force=measured_force,
         )
+    # A job's gate: no contact seen off the part.
+    if sequenced:
+        gate = builder.AddNamedSystem("job_gate", ProbeGate())
+        builder.Connect(signals.chamfer, gate.GetInputPort("chamfer_state"))
+        builder.Connect(
+            signals.desired, gate.GetInputPort("desired_normal_force")
+        )
+        signals = signals._replace(
+            chamfer=gate.GetOutputPort("chamfer_state"),
+            desired=gate.GetOutputPort("desired_normal_force"),
+        )
+        loops = replace(loops, gate=gate)
     # The loops to each other.
     _connect_loops(builder, loops, signals)
     return loops

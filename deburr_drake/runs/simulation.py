@@ -36,6 +36,7 @@ from deburr_drake.control.layout import (
     CONTROLLER_DIAGNOSTICS,
 )
 from deburr_drake.control.probe import PROBE_MISSED
+from deburr_drake.control.sequencer import JOB_COMPLETE
 from deburr_drake.math import metrics
 
 __all__ = [
@@ -52,10 +53,12 @@ __all__ = [
 #: Why a run ended (``RunLog.stop_reason``). ``guard:<name>`` names the
 #: guard that tripped (deburr_drake.cell.guards); ``probe_missed:<i>``:
 #: touch i of the touch probing found nothing within its search distance
-#: (deburr_drake.control.probe); ``diverged``: the numerical sanity check
-#: (:class:`NumericalSanity`) ended it.
+#: (deburr_drake.control.probe); ``job_complete``: a job's last cut
+#: reached its end (deburr_drake.control.sequencer); ``diverged``: the
+#: numerical sanity check (:class:`NumericalSanity`) ended it.
 STOP_REASONS = (
     "pass_complete",
+    "job_complete",
     "duration",
     "interrupted",
     "guard:<name>",
@@ -414,6 +417,8 @@ def _stop_of(status, diagram) -> tuple:
         return f"guard:{message.split(':', 1)[0]}", message
     if name == "command_generator":
         return "pass_complete", message
+    if message.startswith(f"{JOB_COMPLETE}:"):
+        return JOB_COMPLETE, message.split(":", 1)[1].strip()
     if message.startswith(f"{PROBE_MISSED}:"):
         reason, _, detail = message.partition(": ")
         return reason, detail
