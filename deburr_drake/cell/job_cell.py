@@ -338,18 +338,39 @@ def _connect_actuation(builder, c, plant, processes, laws, generalized, port):
     return actuation
 
 
-def make_job_diagram(plan: JobCellPlan) -> Diagram:
+def _add_meshcat(builder, meshcat, plan, plant, scene_graph, processes):
+    """The cell, its contact forces and every edge's finish drawn in
+    ``meshcat``."""
+    from deburr_drake.cell.meshcat import add_job_meshcat
+
+    edges = []
+    for contour, process in zip(plan.contour.edges, processes):
+        arc = process.bins.centers
+        edges.append(
+            (
+                process,
+                np.array([contour.edge_point(s) for s in arc]),
+                np.array([contour.tool_axis_at(s) for s in arc]),
+            )
+        )
+    add_job_meshcat(
+        builder, meshcat, plant=plant, scene_graph=scene_graph, edges=edges
+    )
+
+
+def make_job_diagram(plan: JobCellPlan, *, meshcat=None) -> Diagram:
     """The job's closed loop as a named Diagram ``job_<scenario name>``
     (see the module docstring), built from ``plan`` alone. Loggers: those
     of LOGGED but ``process`` (``actuation`` is the switch's), a
     ``log_process_<k>`` per edge, ``log_job`` (the sequencer's state) and
-    ``log_plant_state``."""
+    ``log_plant_state``. With a ``meshcat``, the cell is drawn there,
+    each edge's finish too (deburr_drake.cell.meshcat.add_job_meshcat)."""
     count(DIAGRAMS)
     c = plan.scenario
     cell = plan.cell
     builder = DiagramBuilder()
     # The plant: the robot, and a band on every edge cut.
-    plant, _ = add_cell_plant(builder, c, edges=list(plan.edges))
+    plant, scene_graph = add_cell_plant(builder, c, edges=list(plan.edges))
     plant.SetDefaultPositions(cell.start.q)
     model = cell.model
     tool_point = ToolPoint(model, model.GetFrameByName(c.robot.tool_frame))
@@ -455,6 +476,8 @@ def make_job_diagram(plan: JobCellPlan) -> Diagram:
         LogVectorOutput(port, builder, c.simulation.log_period).set_name(
             f"log_{name}"
         )
+    if meshcat is not None:
+        _add_meshcat(builder, meshcat, plan, plant, scene_graph, processes)
     diagram = builder.Build()
     diagram.set_name(f"job_{c.name}")
     return diagram

@@ -127,15 +127,18 @@ def run_job(
     progress_interval: float = 1.0,
     should_stop: Optional[Callable[[], Optional[str]]] = None,
     truth: bool = True,
+    meshcat=None,
 ) -> JobResult:
     """Builds the job's Diagram once (cell.job_cell.make_job_diagram),
     simulates it until the job completes (``job_complete``), a guard
     trips, the run diverges or ``duration`` (the scenario's by default)
     ends, and returns its JobLog and each cut edge's pass metrics
-    (``truth``: against the contact truth of the part's material)."""
+    (``truth``: against the contact truth of the part's material). With
+    a ``meshcat``, the job is drawn there as it runs (record it for the
+    replay: deburr_drake.runs.replay)."""
     scenario = plan.scenario
     duration = scenario.simulation.duration if duration is None else duration
-    diagram = make_job_diagram(plan)
+    diagram = make_job_diagram(plan, meshcat=meshcat)
     ends = _CutEnds(diagram)
     stop = _stop_monitor(diagram, scenario, 0.0, should_stop)
 
