@@ -172,18 +172,7 @@ def add_meshcat(
         edge_points.mean(axis=0),
         publish_period,
     )
-    _add_edge(
-        builder,
-        EdgeVisualizer(
-            meshcat,
-            process,
-            edge_points=edge_points,
-            burr_initial=process.initial_burr_height(),
-            edge_axes=edge_axes,
-            publish_period=publish_period,
-        ),
-        process,
-    )
+    _add_edge(builder, meshcat, process, edge_points, edge_axes, publish_period)
 
 
 def add_job_meshcat(
@@ -202,17 +191,7 @@ def add_job_meshcat(
     center = np.mean([np.mean(points, axis=0) for _, points, _ in edges], 0)
     _add_cell(builder, meshcat, plant, scene_graph, center, publish_period)
     for k, (process, points, axes) in enumerate(edges):
-        edge = EdgeVisualizer(
-            meshcat,
-            process,
-            edge_points=points,
-            burr_initial=process.initial_burr_height(),
-            edge_axes=axes,
-            publish_period=publish_period,
-            prefix=f"deburring/edge_{k}",
-        )
-        edge.set_name(f"edge_visualizer_{k}")
-        _add_edge(builder, edge, process)
+        _add_edge(builder, meshcat, process, points, axes, publish_period, k=k)
 
 
 def _add_cell(builder, meshcat, plant, scene_graph, center, publish_period):
@@ -239,8 +218,23 @@ def _add_cell(builder, meshcat, plant, scene_graph, center, publish_period):
     contact.set_name("contact_visualizer")
 
 
-def _add_edge(builder, edge: EdgeVisualizer, process: CuttingProcess):
-    """``edge`` added and fed by ``process``'s finish and burrs."""
+def _add_edge(
+    builder, meshcat, process, points, axes, publish_period, *, k=None
+):
+    """An EdgeVisualizer of ``process``'s edge (``edge_visualizer`` under
+    ``deburring``, or ``edge_visualizer_<k>`` under
+    ``deburring/edge_<k>``), fed by its finish and burrs."""
+    edge = EdgeVisualizer(
+        meshcat,
+        process,
+        edge_points=points,
+        burr_initial=process.initial_burr_height(),
+        edge_axes=axes,
+        publish_period=publish_period,
+        prefix="deburring" if k is None else f"deburring/edge_{k}",
+    )
+    if k is not None:
+        edge.set_name(f"edge_visualizer_{k}")
     builder.AddSystem(edge)
     builder.Connect(
         process.GetOutputPort("finish_depth"), edge.GetInputPort("finish_depth")
