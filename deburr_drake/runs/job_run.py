@@ -37,7 +37,7 @@ from deburr_drake.runs.simulation import (
     make_simulator,
 )
 
-__all__ = ["JobResult", "run_job"]
+__all__ = ["JobResult", "run_job", "job_summary", "write_job"]
 
 
 @dataclass
@@ -246,3 +246,55 @@ def run_job(
         for edge in log.edges
     ]
     return JobResult(log, metrics, diagram)
+
+
+def job_summary(result: JobResult) -> dict:
+    """What a job's metrics.json holds: how it ended, its wall time, and
+    per edge cut its place in the part, whether its cut reached the end
+    and its pass metrics (null where a metric is not available)."""
+    from deburr_drake.runs.report import run_summary
+
+    log = result.log
+    edges = []
+    for edge, values in zip(log.edges, result.metrics):
+        summary = run_summary(edge.log, values)
+        summary.update(
+            index=edge.index,
+            point=[float(v) for v in edge.point],
+            length_m=float(edge.length_m),
+            start_time_s=float(edge.start_time),
+            end_time_s=float(edge.end_time),
+        )
+        edges.append(summary)
+    return {
+        "scenario": log.scenario.name,
+        "stop_reason": log.stop_reason,
+        "stop_time_s": float(log.stop_time),
+        "stop_detail": log.stop_detail,
+        "wall_time_s": float(log.wall_time),
+        "planned_cuts": log.planned_cuts,
+        "refused": [list(r) for r in log.refused],
+        "edges": edges,
+    }
+
+
+def write_job(result: JobResult, out_dir) -> Dict[str, str]:
+    """metrics.json (:func:`job_summary`) in ``out_dir`` and each edge's
+    logs.npz and metrics.json, as a pass's, in ``edge_<index>/``."""
+    import json
+    from pathlib import Path
+
+    from deburr_drake.runs.report import write_run
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    files = {"metrics": str(out / "metrics.json")}
+    for edge, values in zip(result.log.edges, result.metrics):
+        written = write_run(edge.log, out / f"edge_{edge.index}", values)
+        files[f"edge_{edge.index}"] = str(written["logs"].parent)
+    with open(files["metrics"], "w") as f:
+        json.dump(
+            job_summary(result), f, indent=2, sort_keys=True, allow_nan=False
+        )
+    result.files = files
+    return files
