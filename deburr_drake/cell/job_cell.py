@@ -90,8 +90,9 @@ class JobCellPlan:
     ``cell`` (the first cut's CellPlan: the gains designed at its start,
     the controller's model, the start), ``edges`` (each cut's single-edge
     scenario, resolved as ``cell.scenario``), ``contour`` (the JobContour
-    of every cut's path), ``cuts`` (what the sequencer needs of each)
-    and ``workspace`` (m, world: points on every cut and move)."""
+    of every cut's path), ``cuts`` (what the sequencer needs of each),
+    ``workspace`` (m, world: points on every cut and move) and
+    ``section`` (the scenario's ``job:``)."""
 
     job: JobPlan
     cell: CellPlan
@@ -99,6 +100,7 @@ class JobCellPlan:
     contour: JobContour
     cuts: Tuple[CutPlan, ...]
     workspace: np.ndarray
+    section: JobConfig  # the scenario's job section
 
     @property
     def scenario(self) -> Scenario:
@@ -203,6 +205,7 @@ def plan_job_cell(scenario: Scenario) -> JobCellPlan:
         contour=contour,
         cuts=tuple(cuts),
         workspace=np.array(workspace),
+        section=scenario.job,
     )
 
 
@@ -338,6 +341,71 @@ def _connect_actuation(builder, c, plant, processes, laws, generalized, port):
     return actuation
 
 
+def _add_sequencer(builder, plan: JobCellPlan, plant, loops, processes):
+    """The JobSequencer, wired to the loops (the generator's hold, the
+    gate, the controller's fuzzy weight and activity) and the spindles."""
+    c = plan.scenario
+    sequencer = builder.AddNamedSystem(
+        "job_sequencer",
+        JobSequencer(
+            plan.cuts,
+            period=c.command.period,
+            desired_depth=c.task.desired_depth,
+            entry_dwell=plan.section.entry_dwell,
+            num_positions=plant.num_positions(),
+        ),
+    )
+    connect = builder.Connect
+    for source, port, target in (
+        ("command_state", "command_state", loops.command_generator),
+        ("chamfer_state", "chamfer_state", loops.observer),
+    ):
+        connect(target.GetOutputPort(source), sequencer.GetInputPort(port))
+    for output, system, port in (
+        ("off_part", loops.gate, "probing"),
+        ("hold", loops.command_generator, "hold"),
+        ("fuzzy_weight", loops.controller, "fuzzy_weight"),
+        ("cutting", loops.controller, "active"),
+    ):
+        connect(sequencer.GetOutputPort(output), system.GetInputPort(port))
+    spindles = builder.AddNamedSystem(
+        "spindles", Demultiplexer(len(processes), 1)
+    )
+    connect(sequencer.GetOutputPort("spindles"), spindles.get_input_port())
+    for k, process in enumerate(processes):
+        connect(spindles.get_output_port(k), process.GetInputPort("spindle"))
+    return sequencer
+
+
+def _add_guards_and_loggers(builder, plan, plant, loops, sequencer, switch):
+    """The guards (contact judged on the cuts, the workspace every cut and
+    move spans) and the loggers (``log_<name>``)."""
+    c = plan.scenario
+    logged = {
+        name: builder.GetSubsystemByName(system).GetOutputPort(port)
+        for name, (system, port) in LOGGED.items()
+        if name not in ("process", "actuation")
+    }
+    logged["chamfer"] = loops.chamfer
+    logged["desired_normal_force"] = loops.gate.GetOutputPort(
+        "desired_normal_force"
+    )
+    logged["actuation"] = switch.GetOutputPort("actuation")
+    cutting = sequencer.GetOutputPort("cutting")
+    add_guards(
+        builder, c, plant, plan.contour, logged, job=(cutting, plan.workspace)
+    )
+    logged["job"] = sequencer.GetOutputPort("job_state")
+    logged["plant_state"] = plant.get_state_output_port()
+    for k in range(len(plan.edges)):
+        process = builder.GetSubsystemByName(f"cutting_process_{k}")
+        logged[f"process_{k}"] = process.GetOutputPort("process_state")
+    for name, port in logged.items():
+        LogVectorOutput(port, builder, c.simulation.log_period).set_name(
+            f"log_{name}"
+        )
+
+
 def _add_meshcat(builder, meshcat, plan, plant, scene_graph, processes):
     """The cell, its contact forces and every edge's finish drawn in
     ``meshcat``."""
@@ -396,44 +464,8 @@ def make_job_diagram(plan: JobCellPlan, *, meshcat=None) -> Diagram:
         sequenced=True,
     )
     # The sequencer drives the loops, the spindles and the moves.
-    sequencer = builder.AddNamedSystem(
-        "job_sequencer",
-        JobSequencer(
-            plan.cuts,
-            period=c.command.period,
-            desired_depth=c.task.desired_depth,
-            entry_dwell=c.job.entry_dwell,
-            num_positions=plant.num_positions(),
-        ),
-    )
-    connect = builder.Connect
-    connect(
-        loops.command_generator.GetOutputPort("command_state"),
-        sequencer.GetInputPort("command_state"),
-    )
-    connect(
-        loops.observer.GetOutputPort("chamfer_state"),
-        sequencer.GetInputPort("chamfer_state"),
-    )
+    sequencer = _add_sequencer(builder, plan, plant, loops, processes)
     cutting = sequencer.GetOutputPort("cutting")
-    connect(
-        sequencer.GetOutputPort("off_part"), loops.gate.GetInputPort("probing")
-    )
-    connect(
-        sequencer.GetOutputPort("hold"),
-        loops.command_generator.GetInputPort("hold"),
-    )
-    connect(
-        sequencer.GetOutputPort("fuzzy_weight"),
-        loops.controller.GetInputPort("fuzzy_weight"),
-    )
-    connect(cutting, loops.controller.GetInputPort("active"))
-    spindles = builder.AddNamedSystem(
-        "spindles", Demultiplexer(len(processes), 1)
-    )
-    connect(sequencer.GetOutputPort("spindles"), spindles.get_input_port())
-    for k, process in enumerate(processes):
-        connect(spindles.get_output_port(k), process.GetInputPort("spindle"))
     # The drives: the force loop's actuation on cuts, the position loop's
     # on moves.
     position = _add_position_loop(
@@ -442,9 +474,9 @@ def make_job_diagram(plan: JobCellPlan, *, meshcat=None) -> Diagram:
     switch = builder.AddNamedSystem(
         "actuation_switch", ActuationSwitch(plant.num_actuators())
     )
-    connect(cutting, switch.GetInputPort("cutting"))
-    connect(loops.actuation, switch.GetInputPort("force_loop"))
-    connect(position, switch.GetInputPort("position_loop"))
+    builder.Connect(cutting, switch.GetInputPort("cutting"))
+    builder.Connect(loops.actuation, switch.GetInputPort("force_loop"))
+    builder.Connect(position, switch.GetInputPort("position_loop"))
     _connect_actuation(
         builder,
         c,
@@ -455,27 +487,7 @@ def make_job_diagram(plan: JobCellPlan, *, meshcat=None) -> Diagram:
         switch.GetOutputPort("actuation"),
     )
     # The guards and the loggers.
-    logged = {
-        name: builder.GetSubsystemByName(system).GetOutputPort(port)
-        for name, (system, port) in LOGGED.items()
-        if name not in ("process", "actuation")
-    }
-    logged["chamfer"] = loops.chamfer
-    logged["desired_normal_force"] = loops.gate.GetOutputPort(
-        "desired_normal_force"
-    )
-    logged["actuation"] = switch.GetOutputPort("actuation")
-    add_guards(
-        builder, c, plant, plan.contour, logged, job=(cutting, plan.workspace)
-    )
-    logged["job"] = sequencer.GetOutputPort("job_state")
-    logged["plant_state"] = plant.get_state_output_port()
-    for k, process in enumerate(processes):
-        logged[f"process_{k}"] = process.GetOutputPort("process_state")
-    for name, port in logged.items():
-        LogVectorOutput(port, builder, c.simulation.log_period).set_name(
-            f"log_{name}"
-        )
+    _add_guards_and_loggers(builder, plan, plant, loops, sequencer, switch)
     if meshcat is not None:
         _add_meshcat(builder, meshcat, plan, plant, scene_graph, processes)
     diagram = builder.Build()

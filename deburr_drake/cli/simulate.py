@@ -45,6 +45,8 @@ def _simulate(args) -> int:
     _check_writable_target(
         out, "--out", args.force, is_dir=True, names=_OUTPUTS
     )
+    if scenario.job.file:
+        return _simulate_job(args, scenario, out)
     if args.record:
         _check_writable_target(
             args.record, "--record", args.force, is_dir=False
@@ -109,6 +111,45 @@ def _plan_and_run(args, scenario, out, drawer) -> int:
     finally:
         for number, handler in previous.items():
             signal.signal(number, handler)
+
+
+def _simulate_job(args, scenario, out) -> int:
+    """A scenario with a ``job:`` section: the whole job, one simulation
+    (deburr_drake.runs.job_run), its metrics.json and each edge's logs."""
+    from deburr_drake.cell.job_cell import plan_job_cell
+    from deburr_drake.runs.job_run import run_job, write_job
+
+    plan = plan_job_cell(scenario)
+    cuts = ", ".join(str(c.index) for c in plan.job.cuts)
+    print(
+        f"deburr-drake simulate: job '{scenario.name}', edges {cuts} "
+        f"({len(plan.job.refused)} refused), up to "
+        f"{scenario.simulation.duration:g} s, output {out}/",
+        flush=True,
+    )
+    for _, why in plan.job.refused:
+        print(f"  refused: {why}", flush=True)
+    result = run_job(
+        plan, progress=_progress, progress_interval=args.progress_interval
+    )
+    log = result.log
+    print(
+        f"\nstopped at t = {log.stop_time:.3f} s: {log.stop_reason}"
+        + (f" ({log.stop_detail})" if log.stop_detail else "")
+        + f"; wall {log.wall_time:.1f} s",
+        flush=True,
+    )
+    print("  edge  done  coverage  depth RMS mm  f_t RMS N")
+    for edge, values in zip(log.edges, result.metrics):
+        print(
+            f"  {edge.index:4d}  {'yes' if edge.completed else 'no':>4s}"
+            f"  {values['edge_coverage']:8.4f}"
+            f"  {values.get('chamfer_depth_rms_error_mm', np.nan):12.5f}"
+            f"  {values.get('chamfering_force_rms_error_N', np.nan):9.4f}"
+        )
+    files = write_job(result, out)
+    print(f"\nwrote {files['metrics']} and {len(log.edges)} edge folders")
+    return _exit_code(log, None)
 
 
 def _meshcat(args):

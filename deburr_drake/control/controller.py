@@ -480,9 +480,7 @@ def HybridController_(T):
                 rates,
             )
             force = self._with_integral(force, x, s, rates, to_task, K)
-            if "active" in p and p["active"][0] < 0.5:
-                # Off the part (a job's moves): every state held.
-                rates[:] = 0.0
+            rates *= self._activity(p)
             # Joint torques.
             tau = self._joint_torque(
                 p["plant_state"],
@@ -506,6 +504,12 @@ def HybridController_(T):
                     zeta=force.zeta,
                 ),
             )
+
+        @staticmethod
+        def _activity(p):
+            """0 off the part (the ``active`` input 0: a job's moves,
+            every state held), else 1."""
+            return 0.0 if "active" in p and p["active"][0] < 0.5 else 1.0
 
         def _with_integral(self, force, x, s, rates, to_task, K):
             """f_tau + K lambda_I int s on the integral axes, whose states

@@ -16,9 +16,12 @@ import numpy as np
 from pydrake.common import RandomGenerator
 
 from deburr_drake.cell.job_cell import JobCellPlan, make_job_diagram
+from deburr_drake.cell.moves import clearance, make_planning_cell
 from deburr_drake.cell.process import PROCESS_STATE
 from deburr_drake.cell.truth import contact_truth
 from deburr_drake.control.sequencer import JOB_COMPLETE, JOB_PHASE, JOB_STATE
+from deburr_drake.math.convex_pieces import convex_pieces, placed_pieces
+from deburr_drake.math.mesh_part import load_part
 from deburr_drake.runs.job_log import (
     EdgeSource,
     JobLog,
@@ -34,7 +37,7 @@ from deburr_drake.runs.simulation import (
     make_simulator,
 )
 
-__all__ = ["JobResult", "run_job"]
+__all__ = ["JobResult", "run_job", "job_summary", "write_job"]
 
 
 @dataclass
@@ -112,11 +115,63 @@ def _job_signals(logs, nq) -> JobSignals:
     )
 
 
+#: s, between the samples whose clearance is computed on a move: the
+#: moves' joints turn at most 0.5 rad/s, so about the plan's 5 mrad check
+CLEARANCE_STEP = 0.01
+
+
+def _clearance(plan: JobCellPlan, signals: JobSignals) -> np.ndarray:
+    """m, the robot's least distance to the part's convex pieces at the
+    samples off the part ``CLEARANCE_STEP`` apart (the cutter left out on
+    the retract and the approach, as the plan leaves it out); NaN on the
+    cuts and between those samples."""
+    c, job = plan.scenario, plan.section
+    part = load_part(
+        job.part_file(), units=job.units, xyz=job.pose.xyz, rpy=job.pose.rpy
+    )
+    pieces = placed_pieces(convex_pieces(job.part_file()), part, job.units)
+    cell = make_planning_cell(c.robot, c.tool, pieces)
+    out = np.full(signals.t.shape, np.nan)
+    transit = signals.in_phase("move")
+    for i in np.flatnonzero(
+        ~signals.in_phase("cut") & ~signals.in_phase("done")
+    ):
+        out[i] = clearance(cell, signals.q[i], cutter=bool(transit[i]))
+    return out
+
+
 def _truth(plan: JobCellPlan):
     try:
         return contact_truth(plan.edges[0]).force_at_desired_depth
     except Exception:  # the metrics that need it are then null
         return None
+
+
+def _edge_sources(plan, diagram, context, logs, signals, theta, reason):
+    """An EdgeSource per planned cut: its process's log, its final state
+    (the fuzzy weights at its cut's end, ``theta`` by cut, or the run's
+    last), and whether it reached its end (a later cut began, or the job
+    completed on it)."""
+    controller = diagram.GetSubsystemByName("controller")
+    last = controller.theta(controller.GetMyContextFromRoot(context)).copy()
+    sources = []
+    for k, (cut, edge) in enumerate(zip(plan.job.cuts, plan.edges)):
+        completed = np.any(signals.cut > k) or (
+            reason == JOB_COMPLETE and k == len(plan.edges) - 1
+        )
+        raw = logs[f"process_{k}"]
+        sources.append(
+            EdgeSource(
+                index=cut.index,
+                point=cut.point,
+                length_m=plan.contour.edges[k].length,
+                scenario=edge,
+                process={"t": raw["t"], **PROCESS_STATE.split(raw["value"])},
+                final=_final(diagram, context, k, theta.get(k, last)),
+                completed=bool(completed),
+            )
+        )
+    return sources
 
 
 def run_job(
@@ -159,36 +214,17 @@ def run_job(
     wall = time.perf_counter() - wall_start
     t = context.get_time()
     logs = _collect(diagram, context, logger_names(diagram))
-    controller = diagram.GetSubsystemByName("controller")
-    final_theta = controller.theta(
-        controller.GetMyContextFromRoot(context)
-    ).copy()
     signals = _job_signals(logs, plan.cell.model.num_positions())
+    signals.clearance = _clearance(plan, signals)
     shared = {
         name: logs[name]
         for name in logs
         if name not in ("job", "plant_state")
         and not name.startswith("process_")
     }
-    sources = []
-    for k, (cut, edge) in enumerate(zip(plan.job.cuts, plan.edges)):
-        cut_further = np.any(signals.cut > k) or (
-            reason == JOB_COMPLETE and k == len(plan.edges) - 1
-        )
-        raw = logs[f"process_{k}"]
-        sources.append(
-            EdgeSource(
-                index=cut.index,
-                point=cut.point,
-                length_m=plan.contour.edges[k].length,
-                scenario=edge,
-                process={"t": raw["t"], **PROCESS_STATE.split(raw["value"])},
-                final=_final(
-                    diagram, context, k, ends.theta.get(k, final_theta)
-                ),
-                completed=bool(cut_further),
-            )
-        )
+    sources = _edge_sources(
+        plan, diagram, context, logs, signals, ends.theta, reason
+    )
     log = make_job_log(
         scenario,
         sources,
@@ -213,3 +249,55 @@ def run_job(
         for edge in log.edges
     ]
     return JobResult(log, metrics, diagram)
+
+
+def job_summary(result: JobResult) -> dict:
+    """What a job's metrics.json holds: how it ended, its wall time, and
+    per edge cut its place in the part, whether its cut reached the end
+    and its pass metrics (null where a metric is not available)."""
+    from deburr_drake.runs.report import run_summary
+
+    log = result.log
+    edges = []
+    for edge, values in zip(log.edges, result.metrics):
+        summary = run_summary(edge.log, values)
+        summary.update(
+            index=edge.index,
+            point=[float(v) for v in edge.point],
+            length_m=float(edge.length_m),
+            start_time_s=float(edge.start_time),
+            end_time_s=float(edge.end_time),
+        )
+        edges.append(summary)
+    return {
+        "scenario": log.scenario.name,
+        "stop_reason": log.stop_reason,
+        "stop_time_s": float(log.stop_time),
+        "stop_detail": log.stop_detail,
+        "wall_time_s": float(log.wall_time),
+        "planned_cuts": log.planned_cuts,
+        "refused": [list(r) for r in log.refused],
+        "edges": edges,
+    }
+
+
+def write_job(result: JobResult, out_dir) -> Dict[str, str]:
+    """metrics.json (:func:`job_summary`) in ``out_dir`` and each edge's
+    logs.npz and metrics.json, as a pass's, in ``edge_<index>/``."""
+    import json
+    from pathlib import Path
+
+    from deburr_drake.runs.report import write_run
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    files = {"metrics": str(out / "metrics.json")}
+    for edge, values in zip(result.log.edges, result.metrics):
+        written = write_run(edge.log, out / f"edge_{edge.index}", values)
+        files[f"edge_{edge.index}"] = str(written["logs"].parent)
+    with open(files["metrics"], "w") as f:
+        json.dump(
+            job_summary(result), f, indent=2, sort_keys=True, allow_nan=False
+        )
+    result.files = files
+    return files
