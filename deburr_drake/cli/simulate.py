@@ -115,10 +115,22 @@ def _plan_and_run(args, scenario, out, drawer) -> int:
 
 def _simulate_job(args, scenario, out) -> int:
     """A scenario with a ``job:`` section: the whole job, one simulation
-    (deburr_drake.runs.job_run), its metrics.json and each edge's logs."""
+    (deburr_drake.runs.job_run), and its report
+    (deburr_drake.runs.job_report): metrics.json, each edge's logs and
+    figures in ``edge_<index>/``, the replay with --record."""
     from deburr_drake.cell.job_cell import plan_job_cell
-    from deburr_drake.runs.job_run import run_job, write_job
+    from deburr_drake.runs.job_report import (
+        job_checks,
+        job_report,
+        report_lines,
+        write_job_report,
+    )
+    from deburr_drake.runs.job_run import run_job
 
+    if args.record:
+        _check_writable_target(
+            args.record, "--record", args.force, is_dir=False
+        )
     plan = plan_job_cell(scenario)
     cuts = ", ".join(str(c.index) for c in plan.job.cuts)
     print(
@@ -129,25 +141,31 @@ def _simulate_job(args, scenario, out) -> int:
     )
     for _, why in plan.job.refused:
         print(f"  refused: {why}", flush=True)
+    meshcat = _meshcat(args)
+    if args.record:
+        meshcat.StartRecording(frames_per_second=10.0)
     result = run_job(
-        plan, progress=_progress, progress_interval=args.progress_interval
+        plan,
+        progress=_progress,
+        progress_interval=args.progress_interval,
+        meshcat=meshcat,
     )
     log = result.log
     print(
         f"\nstopped at t = {log.stop_time:.3f} s: {log.stop_reason}"
-        + (f" ({log.stop_detail})" if log.stop_detail else "")
-        + f"; wall {log.wall_time:.1f} s",
+        + (f" ({log.stop_detail})" if log.stop_detail else ""),
         flush=True,
     )
-    print("  edge  done  coverage  depth RMS mm  f_t RMS N")
-    for edge, values in zip(log.edges, result.metrics):
+    if args.record:
+        _write_replay(meshcat, args.record)
+    report = job_report(log, plan.job)
+    files = write_job_report(report, log, out, label=scenario.name)
+    for index, failure in files["failures"].items():
         print(
-            f"  {edge.index:4d}  {'yes' if edge.completed else 'no':>4s}"
-            f"  {values['edge_coverage']:8.4f}"
-            f"  {values.get('chamfer_depth_rms_error_mm', np.nan):12.5f}"
-            f"  {values.get('chamfering_force_rms_error_N', np.nan):9.4f}"
+            f"deburr-drake: edge {index}: no figures: {failure}",
+            file=sys.stderr,
         )
-    files = write_job(result, out)
+    print("\n".join(report_lines(report, job_checks(report))))
     print(f"\nwrote {files['metrics']} and {len(log.edges)} edge folders")
     return _exit_code(log, None)
 

@@ -34,7 +34,7 @@ import numpy as np
 from deburr_drake.cell.moves import PlanningCell, clearance, tip_positions
 from deburr_drake.control.sequencer import JOB_COMPLETE, JOB_PHASE, JOB_PHASES
 from deburr_drake.math import metrics
-from deburr_drake.runs.job_log import EdgeRun, JobLog
+from deburr_drake.runs.job_log import EdgeRun, JobLog, JobSignals
 from deburr_drake.runs.pass_metrics import (
     PassMetrics,
     feed_metrics,
@@ -51,6 +51,7 @@ __all__ = [
     "edge_report",
     "job_report",
     "move_clearance",
+    "move_clearances",
     "write_job_report",
     "Check",
     "EDGE_RULES",
@@ -257,22 +258,31 @@ def edge_report(cut, position: int, run: Optional[EdgeRun]) -> EdgeReport:
     return out
 
 
-def move_clearance(cell: PlanningCell, job: JobLog) -> tuple:
-    """(m, where): the least signed distance between the robot and the
-    part (:func:`deburr_drake.cell.moves.clearance`) over every logged
-    sample of the moves, the cutter's own left out on the retract and the
-    approach (in the cut at one end, as the planner leaves it out);
+def move_clearances(cell: PlanningCell, signals: JobSignals) -> np.ndarray:
+    """m per sample of ``signals``: the least signed distance between the
+    robot and the part (:func:`deburr_drake.cell.moves.clearance`) at
+    every sample of the moves, the cutter's own left out on the retract
+    and the approach (in the cut at one end, as the planner leaves it
+    out); NaN on the cuts and once done."""
+    out = np.full(signals.t.shape, np.nan)
+    transit = signals.phase == JOB_PHASE["move"]
+    for k in np.flatnonzero(np.isin(signals.phase, _codes(_MOVING))):
+        out[k] = clearance(cell, signals.q[k], cutter=bool(transit[k]))
+    return out
+
+
+def move_clearance(cell: Optional[PlanningCell], job: JobLog) -> tuple:
+    """(m, where): the least of :func:`move_clearances` (the run's own
+    ``signals.clearance`` when it holds them, else computed in ``cell``);
     ``where`` names the move by the edges it joins, its phase and the
     time. (nan, "") without a move sample."""
     signals = job.signals
-    best, at = float("nan"), -1
-    for k in np.flatnonzero(np.isin(signals.phase, _codes(_MOVING))):
-        cutter = signals.phase[k] == JOB_PHASE["move"]
-        distance = clearance(cell, signals.q[k], cutter=cutter)
-        if not distance >= best:  # also the first (best nan)
-            best, at = distance, k
-    if at < 0:
-        return best, ""
+    distances = signals.clearance
+    if distances is None:
+        distances = move_clearances(cell, signals)
+    if not np.any(np.isfinite(distances)):
+        return float("nan"), ""
+    at = int(np.nanargmin(distances))
     t = signals.t[at]
     after = [m.after for m in job.moves if m.start_time <= t]
     joins = (
@@ -281,7 +291,9 @@ def move_clearance(cell: PlanningCell, job: JobLog) -> tuple:
         if after
         else "a move"
     )
-    return best, (f"{joins}, {JOB_PHASES[signals.phase[at]]}, at t = {t:.3f} s")
+    return float(distances[at]), (
+        f"{joins}, {JOB_PHASES[signals.phase[at]]}, at t = {t:.3f} s"
+    )
 
 
 def _codes(names) -> list:

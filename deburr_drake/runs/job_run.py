@@ -16,18 +16,16 @@ import numpy as np
 from pydrake.common import RandomGenerator
 
 from deburr_drake.cell.job_cell import JobCellPlan, make_job_diagram
-from deburr_drake.cell.moves import clearance, make_planning_cell
 from deburr_drake.cell.process import PROCESS_STATE
 from deburr_drake.cell.truth import contact_truth
 from deburr_drake.control.sequencer import JOB_COMPLETE, JOB_PHASE, JOB_STATE
-from deburr_drake.math.convex_pieces import convex_pieces, placed_pieces
-from deburr_drake.math.mesh_part import load_part
 from deburr_drake.runs.job_log import (
     EdgeSource,
     JobLog,
     JobSignals,
     make_job_log,
 )
+from deburr_drake.runs.job_report import move_clearances
 from deburr_drake.runs.pass_metrics import PassMetrics, pass_metrics
 from deburr_drake.runs.simulation import (
     _advance,
@@ -37,7 +35,7 @@ from deburr_drake.runs.simulation import (
     make_simulator,
 )
 
-__all__ = ["JobResult", "run_job", "job_summary", "write_job"]
+__all__ = ["JobResult", "run_job"]
 
 
 @dataclass
@@ -115,31 +113,6 @@ def _job_signals(logs, nq) -> JobSignals:
     )
 
 
-#: s, between the samples whose clearance is computed on a move: the
-#: moves' joints turn at most 0.5 rad/s, so about the plan's 5 mrad check
-CLEARANCE_STEP = 0.01
-
-
-def _clearance(plan: JobCellPlan, signals: JobSignals) -> np.ndarray:
-    """m, the robot's least distance to the part's convex pieces at the
-    samples off the part ``CLEARANCE_STEP`` apart (the cutter left out on
-    the retract and the approach, as the plan leaves it out); NaN on the
-    cuts and between those samples."""
-    c, job = plan.scenario, plan.section
-    part = load_part(
-        job.part_file(), units=job.units, xyz=job.pose.xyz, rpy=job.pose.rpy
-    )
-    pieces = placed_pieces(convex_pieces(job.part_file()), part, job.units)
-    cell = make_planning_cell(c.robot, c.tool, pieces)
-    out = np.full(signals.t.shape, np.nan)
-    transit = signals.in_phase("move")
-    for i in np.flatnonzero(
-        ~signals.in_phase("cut") & ~signals.in_phase("done")
-    ):
-        out[i] = clearance(cell, signals.q[i], cutter=bool(transit[i]))
-    return out
-
-
 def _truth(plan: JobCellPlan):
     try:
         return contact_truth(plan.edges[0]).force_at_desired_depth
@@ -215,7 +188,7 @@ def run_job(
     t = context.get_time()
     logs = _collect(diagram, context, logger_names(diagram))
     signals = _job_signals(logs, plan.cell.model.num_positions())
-    signals.clearance = _clearance(plan, signals)
+    signals.clearance = move_clearances(plan.job.cell, signals)
     shared = {
         name: logs[name]
         for name in logs
@@ -249,55 +222,3 @@ def run_job(
         for edge in log.edges
     ]
     return JobResult(log, metrics, diagram)
-
-
-def job_summary(result: JobResult) -> dict:
-    """What a job's metrics.json holds: how it ended, its wall time, and
-    per edge cut its place in the part, whether its cut reached the end
-    and its pass metrics (null where a metric is not available)."""
-    from deburr_drake.runs.report import run_summary
-
-    log = result.log
-    edges = []
-    for edge, values in zip(log.edges, result.metrics):
-        summary = run_summary(edge.log, values)
-        summary.update(
-            index=edge.index,
-            point=[float(v) for v in edge.point],
-            length_m=float(edge.length_m),
-            start_time_s=float(edge.start_time),
-            end_time_s=float(edge.end_time),
-        )
-        edges.append(summary)
-    return {
-        "scenario": log.scenario.name,
-        "stop_reason": log.stop_reason,
-        "stop_time_s": float(log.stop_time),
-        "stop_detail": log.stop_detail,
-        "wall_time_s": float(log.wall_time),
-        "planned_cuts": log.planned_cuts,
-        "refused": [list(r) for r in log.refused],
-        "edges": edges,
-    }
-
-
-def write_job(result: JobResult, out_dir) -> Dict[str, str]:
-    """metrics.json (:func:`job_summary`) in ``out_dir`` and each edge's
-    logs.npz and metrics.json, as a pass's, in ``edge_<index>/``."""
-    import json
-    from pathlib import Path
-
-    from deburr_drake.runs.report import write_run
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    files = {"metrics": str(out / "metrics.json")}
-    for edge, values in zip(result.log.edges, result.metrics):
-        written = write_run(edge.log, out / f"edge_{edge.index}", values)
-        files[f"edge_{edge.index}"] = str(written["logs"].parent)
-    with open(files["metrics"], "w") as f:
-        json.dump(
-            job_summary(result), f, indent=2, sort_keys=True, allow_nan=False
-        )
-    result.files = files
-    return files

@@ -325,3 +325,19 @@ def test_the_report_as_text_names_the_misses(fake_robot):
     assert "job: guard:max_force at 27.000 s" in lines
     assert "cycle time 27.00 s: cutting 15.00 s, moving 12.00 s" in lines[6]
     assert lines[-1].startswith("rules: 9 of 14 held")
+
+
+def test_the_clearance_is_the_runs_own_when_it_holds_it(fake_robot):
+    job, plan = _job(edges=3)
+    signals = job.signals
+    computed = jr.move_clearances(None, signals)
+    cutting = signals.phase == JOB_PHASE["cut"]
+    assert np.all(np.isnan(computed[cutting]))
+    assert np.nanmin(computed) == pytest.approx(0.001)
+    # the run's own, with its least on the approach to the third cut
+    signals.clearance = computed.copy()
+    approach = np.flatnonzero(signals.phase == JOB_PHASE["approach"])
+    signals.clearance[approach[-1]] = 0.0005
+    least, where = jr.move_clearance(None, job)
+    assert least == 0.0005
+    assert where.startswith("the move from edge 11 to edge 12, approach")
