@@ -33,7 +33,6 @@ from dataclasses import dataclass
 from typing import Tuple
 
 import numpy as np
-from pydrake.common import RandomDistribution
 from pydrake.systems.controllers import InverseDynamicsController
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import (
@@ -41,19 +40,21 @@ from pydrake.systems.primitives import (
     Demultiplexer,
     LogVectorOutput,
     MatrixGain,
-    RandomSource,
 )
 
 from deburr_drake.cell.counts import DIAGRAMS, count
-from deburr_drake.cell.diagram import LOGGED
-from deburr_drake.cell.faults import add_noise_scale, add_sensor_faults
+from deburr_drake.cell.diagram import (
+    LOGGED,
+    add_cutting_process,
+    add_force_law,
+    add_force_sensor,
+    sensor_reading,
+)
 from deburr_drake.cell.guards import add_effort_saturation, add_guards
 from deburr_drake.cell.job import JobPlan, plan_job
 from deburr_drake.cell.moves import MoveSettings
 from deburr_drake.cell.plan import CellPlan, plan_cell
 from deburr_drake.cell.plant import add_cell_plant
-from deburr_drake.cell.process import CuttingProcess
-from deburr_drake.cell.sensor import ForceSensor
 from deburr_drake.config import ConfigError, Scenario
 from deburr_drake.config.job import JobConfig
 from deburr_drake.control.kinematics import ToolPoint
@@ -211,35 +212,25 @@ def plan_job_cell(scenario: Scenario) -> JobCellPlan:
 
 def _add_processes(builder, plan: JobCellPlan, plant, tool_point):
     """A cutting process per edge, its force law, and the forces summed
-    on the plant; (processes, force laws, summed applied force)."""
-    c = plan.scenario
+    on the plant; (processes, force laws, summed applied force, the
+    generalized forces' sum)."""
     n = len(plan.edges)
-    nv = plant.num_velocities()
-    processes, laws = [], []
-    state = plant.get_state_output_port()
-    generalized = builder.AddNamedSystem("cutting_forces", Adder(n, nv))
+    generalized = builder.AddNamedSystem(
+        "cutting_forces", Adder(n, plant.num_velocities())
+    )
     applied = builder.AddNamedSystem("cutting_force_sum", Adder(n, 3))
+    processes, laws = [], []
     for k, contour in enumerate(plan.contour.edges):
-        process = builder.AddNamedSystem(
-            f"cutting_process_{k}",
-            CuttingProcess(
-                plant,
-                c.robot.tool_frame,
-                contour,
-                c.process,
-                cut_height=c.tool.engagement,
-                cutter_radius=c.tool.cutter_radius,
-                tool_point=tool_point,
-                spindle_input=True,
-            ),
+        process = add_cutting_process(
+            builder,
+            plan.scenario,
+            plant,
+            contour,
+            tool_point,
+            name=f"cutting_process_{k}",
+            spindle_input=True,
         )
-        law = builder.AddNamedSystem(f"cutting_force_{k}", process.force_law())
-        builder.Connect(state, process.GetInputPort("plant_state"))
-        builder.Connect(state, law.GetInputPort("plant_state"))
-        builder.Connect(
-            process.GetOutputPort("force_law_terms"),
-            law.GetInputPort("force_law_terms"),
-        )
+        law = add_force_law(builder, plant, process, f"cutting_force_{k}")
         builder.Connect(
             law.GetOutputPort("generalized_force"),
             generalized.get_input_port(k),
@@ -259,34 +250,9 @@ def _add_processes(builder, plan: JobCellPlan, plant, tool_point):
 def _add_sensor(builder, c: Scenario, plant, tool_point, applied):
     """The force sensor on the summed force, its noise and faults; the
     reading the controller side gets."""
-    sensor = builder.AddNamedSystem(
-        "force_sensor",
-        ForceSensor(
-            plant, c.robot.sensor_joint, c.sensor, tool_point=tool_point
-        ),
-    )
-    noise = builder.AddNamedSystem(
-        "sensor_noise",
-        RandomSource(RandomDistribution.kGaussian, 3, c.sensor.sample_period),
-    )
-    builder.Connect(
-        plant.get_state_output_port(), sensor.GetInputPort("plant_state")
-    )
+    sensor, noise = add_force_sensor(builder, c, plant, tool_point)
     builder.Connect(applied, sensor.GetInputPort("applied_force"))
-    builder.Connect(
-        plant.get_reaction_forces_output_port(),
-        sensor.GetInputPort("reaction_forces"),
-    )
-    builder.Connect(
-        add_noise_scale(builder, c.faults, noise.get_output_port()),
-        sensor.GetInputPort("noise"),
-    )
-    return add_sensor_faults(
-        builder,
-        c.faults,
-        sensor.GetOutputPort("measured_force"),
-        sample_period=c.sensor.sample_period,
-    )
+    return sensor_reading(builder, c, sensor, noise)
 
 
 def _add_position_loop(builder, plan: JobCellPlan, plant, reference):

@@ -31,6 +31,7 @@ from deburr_drake.runs.simulation import (
     _advance,
     _collect,
     _stop_monitor,
+    final_blocks,
     logger_names,
     make_simulator,
 )
@@ -69,36 +70,14 @@ class _CutEnds:
 
 
 def _final(diagram, context, k, theta):
-    """Edge k's final-state blocks, as a pass's (runs.simulation)."""
+    """Edge k's final-state blocks, as a pass's."""
     process = diagram.GetSubsystemByName(f"cutting_process_{k}")
-    pc = process.GetMyContextFromRoot(context)
-    controller = diagram.GetSubsystemByName("controller")
-    f = controller.config.fuzzy
-    delta0, deltak = f.deltas()
-    return {
-        "finish": {
-            "arc": process.bins.centers.copy(),
-            "depth": process.GetOutputPort("finish_depth").Eval(pc).copy(),
-            "burr_initial": process.initial_burr_height(),
-            "burr_remaining": process.GetOutputPort("burr_height")
-            .Eval(pc)
-            .copy(),
-        },
-        "theta": {"final": theta},
-        "meta": {
-            "fuzzy_order": np.array(f.order),
-            "upsilon": np.array(f.upsilon),
-            "delta0": np.array(delta0),
-            "deltak": np.array(deltak),
-            "dead_zone": np.array(
-                [
-                    rb.resolved_dead_zone_half_width
-                    for rb in controller.rule_bases
-                ]
-            ),
-            "fuzzy_axes": np.array(f.axes),
-        },
-    }
+    return final_blocks(
+        process,
+        process.GetMyContextFromRoot(context),
+        diagram.GetSubsystemByName("controller"),
+        theta,
+    )
 
 
 def _job_signals(logs, nq) -> JobSignals:

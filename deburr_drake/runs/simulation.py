@@ -48,6 +48,7 @@ __all__ = [
     "DIVERGED",
     "NumericalSanity",
     "PassProgress",
+    "final_blocks",
 ]
 
 #: Why a run ended (``RunLog.stop_reason``). ``guard:<name>`` names the
@@ -352,9 +353,20 @@ def _final_state(diagram, context) -> Dict[str, Dict[str, np.ndarray]]:
     """What the run leaves behind: the surface finish and burrs along the
     edge, the final fuzzy rule weights and the rule-base geometry."""
     process = diagram.GetSubsystemByName("cutting_process")
-    pc = process.GetMyContextFromRoot(context)
     controller = diagram.GetSubsystemByName("controller")
-    cc = controller.GetMyContextFromRoot(context)
+    theta = controller.theta(controller.GetMyContextFromRoot(context))
+    return final_blocks(
+        process, process.GetMyContextFromRoot(context), controller, theta
+    )
+
+
+def final_blocks(
+    process, process_context, controller, theta
+) -> Dict[str, Dict[str, np.ndarray]]:
+    """A pass's final-state blocks: ``finish`` (``process``'s bins, the
+    depth cut and the burrs), ``theta`` (``theta``, the rule weights) and
+    ``meta`` (``controller``'s rule-base geometry)."""
+    pc = process_context
     f = controller.config.fuzzy
     delta0, deltak = f.deltas()
     return {
@@ -366,7 +378,7 @@ def _final_state(diagram, context) -> Dict[str, Dict[str, np.ndarray]]:
             .Eval(pc)
             .copy(),
         },
-        "theta": {"final": controller.theta(cc).copy()},
+        "theta": {"final": np.array(theta, copy=True)},
         "meta": {
             "fuzzy_order": np.array(f.order),
             "upsilon": np.array(f.upsilon),

@@ -26,18 +26,10 @@ def _move():
 
 
 def _chamfer(delta):
-    return CHAMFER_STATE.pack(
-        x_p=np.zeros(3),
-        xdot_p=np.zeros(3),
-        n1=np.zeros(3),
-        n2=np.zeros(3),
-        delta=delta,
-        delta_dot=0.0,
-        f_n=0.0,
-        f_t=0.0,
-        arc_position=0.0,
-        n1_rate=np.zeros(3),
-    )
+    """A chamfer state at depth ``delta``, every other block zero."""
+    chamfer = np.zeros(CHAMFER_STATE.size)
+    chamfer[CHAMFER_STATE.slice("delta")] = delta
+    return chamfer
 
 
 class _Run:
