@@ -203,7 +203,9 @@ class EdgeReport:
 def _json(value):
     if isinstance(value, (bool, np.bool_)):
         return bool(value)
-    if isinstance(value, (float, np.floating, int, np.integer)):
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
         value = float(value)
         return value if np.isfinite(value) else None
     return value

@@ -286,6 +286,8 @@ def test_the_report_is_written_with_each_edges_logs(fake_robot, tmp_path):
     assert record["scenario"] == "paper"
     assert record["job"]["stop_reason"] == "guard:max_force"
     assert [e["index"] for e in record["edges"]] == [10, 11]
+    assert isinstance(record["edges"][0]["order"], int)
+    assert isinstance(record["job"]["edges_cut"], int)
     assert list(files["edges"]) == [10]
     with np.load(tmp_path / "edge_10" / "logs.npz") as saved:
         assert saved["meta.contact_start"] == pytest.approx(0.5)
