@@ -62,6 +62,7 @@ GUIDES = [
     "own-part.md",
     "own-robot.md",
     "stability.md",
+    "job.md",
 ]
 MAX_LINES = 250
 

@@ -36,6 +36,10 @@ from deburr_drake.control.loop import add_deburring_controller
 
 __all__ = [
     "make_deburring_diagram",
+    "add_cutting_process",
+    "add_force_sensor",
+    "add_force_law",
+    "sensor_reading",
     "TOOL_FRAME",
     "SENSOR_JOINT",
     "LOGGED",
@@ -94,14 +98,21 @@ class _PlantSide(NamedTuple):
     reading: OutputPort  # what the controller side reads (after faults)
 
 
-def _add_plant_side(
-    builder, scenario: Scenario, plant, contour, tool_point
-) -> _PlantSide:
-    """The cutting process on the real edge, its force law on the plant,
-    and the force sensor with its noise and faults, wired to the plant."""
+def add_cutting_process(
+    builder,
+    scenario: Scenario,
+    plant,
+    contour,
+    tool_point,
+    *,
+    name: str = "cutting_process",
+    spindle_input: bool = False,
+) -> CuttingProcess:
+    """The cutting process on the real edge ``contour``, reading the
+    plant's state (``spindle_input``: its spindle switched by a port)."""
     c = scenario
     process = builder.AddNamedSystem(
-        "cutting_process",
+        name,
         CuttingProcess(
             plant,
             c.robot.tool_frame,
@@ -110,9 +121,20 @@ def _add_plant_side(
             cut_height=c.tool.engagement,
             cutter_radius=c.tool.cutter_radius,
             tool_point=tool_point,
-            spindle_input=c.localisation.probe.enabled,
+            spindle_input=spindle_input,
         ),
     )
+    builder.Connect(
+        plant.get_state_output_port(), process.GetInputPort("plant_state")
+    )
+    return process
+
+
+def add_force_sensor(builder, scenario: Scenario, plant, tool_point):
+    """(the force sensor, its noise source), reading the plant's state and
+    reaction forces; its ``applied_force`` and ``noise`` are left to
+    connect (:func:`add_force_law`, :func:`sensor_reading`)."""
+    c = scenario
     sensor = builder.AddNamedSystem(
         "force_sensor",
         ForceSensor(
@@ -123,38 +145,76 @@ def _add_plant_side(
         "sensor_noise",
         RandomSource(RandomDistribution.kGaussian, 3, c.sensor.sample_period),
     )
-    force_law = builder.AddSystem(process.force_law())
-    state = plant.get_state_output_port()
-    connect = builder.Connect
-    for system in (process, sensor, force_law):
-        connect(state, system.GetInputPort("plant_state"))
-    connect(
-        process.GetOutputPort("force_law_terms"),
-        force_law.GetInputPort("force_law_terms"),
+    builder.Connect(
+        plant.get_state_output_port(), sensor.GetInputPort("plant_state")
     )
-    connect(
-        force_law.GetOutputPort("applied_force"),
-        sensor.GetInputPort("applied_force"),
-    )
-    connect(
-        force_law.GetOutputPort("generalized_force"),
-        plant.get_applied_generalized_force_input_port(),
-    )
-    connect(
+    builder.Connect(
         plant.get_reaction_forces_output_port(),
         sensor.GetInputPort("reaction_forces"),
     )
-    connect(
-        add_noise_scale(builder, c.faults, noise.get_output_port()),
+    return sensor, noise
+
+
+def add_force_law(builder, plant, process, name=None) -> Diagram:
+    """``process``'s force law (its ``applied_force`` and
+    ``generalized_force`` left to connect), reading the plant's state and
+    the process's terms."""
+    law = process.force_law()
+    law = (
+        builder.AddSystem(law)
+        if name is None
+        else builder.AddNamedSystem(name, law)
+    )
+    builder.Connect(
+        plant.get_state_output_port(), law.GetInputPort("plant_state")
+    )
+    builder.Connect(
+        process.GetOutputPort("force_law_terms"),
+        law.GetInputPort("force_law_terms"),
+    )
+    return law
+
+
+def sensor_reading(builder, scenario: Scenario, sensor, noise) -> OutputPort:
+    """The sensor's noise (scaled by the faults) connected, and what the
+    observer and the controller read: its output after the faults (bias,
+    dropouts)."""
+    builder.Connect(
+        add_noise_scale(builder, scenario.faults, noise.get_output_port()),
         sensor.GetInputPort("noise"),
     )
-    # What the observer and the controller read (faults: bias, dropouts).
-    reading = add_sensor_faults(
+    return add_sensor_faults(
         builder,
-        c.faults,
+        scenario.faults,
         sensor.GetOutputPort("measured_force"),
-        sample_period=c.sensor.sample_period,
+        sample_period=scenario.sensor.sample_period,
     )
+
+
+def _add_plant_side(
+    builder, scenario: Scenario, plant, contour, tool_point
+) -> _PlantSide:
+    """The cutting process on the real edge, its force law on the plant,
+    and the force sensor with its noise and faults, wired to the plant."""
+    process = add_cutting_process(
+        builder,
+        scenario,
+        plant,
+        contour,
+        tool_point,
+        spindle_input=scenario.localisation.probe.enabled,
+    )
+    sensor, noise = add_force_sensor(builder, scenario, plant, tool_point)
+    force_law = add_force_law(builder, plant, process)
+    builder.Connect(
+        force_law.GetOutputPort("applied_force"),
+        sensor.GetInputPort("applied_force"),
+    )
+    builder.Connect(
+        force_law.GetOutputPort("generalized_force"),
+        plant.get_applied_generalized_force_input_port(),
+    )
+    reading = sensor_reading(builder, scenario, sensor, noise)
     return _PlantSide(process, force_law, sensor, reading)
 
 

@@ -106,15 +106,22 @@ def add_effort_saturation(builder, scenario: Scenario, plant, actuation):
     return saturation.get_output_port()
 
 
-def guard_limits(scenario: Scenario, plant, contour) -> GuardLimits:
+def guard_limits(
+    scenario: Scenario, plant, contour, *, points=None
+) -> GuardLimits:
     """The scenario's ``guards`` with every 0 replaced by its default from
     the models: effort limits from the plant's actuators, the tool force
     from the task, the depth from the task and the cutter, the workspace
-    from the contour."""
+    from the contour (or from ``points``, m, world: every place the tool
+    is meant to go, a job's edges and moves)."""
     g: GuardsConfig = scenario.guards
     names, limits = effort_limits(plant)
-    samples = np.array(
-        [contour.point_at(s) for s in np.linspace(0.0, contour.length, 97)]
+    samples = (
+        np.asarray(points, float)
+        if points is not None
+        else np.array(
+            [contour.point_at(s) for s in np.linspace(0.0, contour.length, 97)]
+        )
     )
     return GuardLimits(
         joint_names=names,
@@ -177,9 +184,19 @@ class SafetyGuards(LeafSystem):
     comparison, an infinity exceeds the finite bounds of unchecked
     elements); only a failing check is looked at element by element."""
 
-    def __init__(self, limits: GuardLimits, signal_sizes: Dict[str, int]):
+    def __init__(
+        self,
+        limits: GuardLimits,
+        signal_sizes: Dict[str, int],
+        *,
+        cutting_input: bool = False,
+    ):
         super().__init__()
         self.limits = limits
+        # A job's sequencer: contact is judged on its cuts only.
+        self._cutting = (
+            self.DeclareVectorInputPort("cutting", 1) if cutting_input else None
+        )
         self._inputs = {
             name: self.DeclareVectorInputPort(name, size)
             for name, size in signal_sizes.items()
@@ -254,6 +271,13 @@ class SafetyGuards(LeafSystem):
         if f @ f > self._tool_force_squared:
             return self._diagnose(context.get_time(), x)
         made, lost_since = context.get_discrete_state(self._contact).value()
+        if self._cutting is not None and self._cutting.Eval(context)[0] < 0.5:
+            # Off the part: a move; contact is made again on the next cut.
+            if made:
+                discrete_state.get_mutable_vector(self._contact).SetFromVector(
+                    [0.0, -1.0]
+                )
+            return EventStatus.Succeeded()
         in_contact = x[self._f_n] > self.limits.contact_force
         if in_contact:
             if not made or lost_since >= 0:
@@ -337,19 +361,33 @@ class SafetyGuards(LeafSystem):
         return self._trip(t, "nan", f"elements {bad.tolist()} beyond 1e300")
 
 
-def add_guards(builder, scenario: Scenario, plant, contour, logged):
+def add_guards(
+    builder, scenario: Scenario, plant, contour, logged, *, job=None
+):
     """Adds :class:`SafetyGuards` named :data:`GUARDS_SYSTEM` to the
     builder, reading every ``logged`` signal (logger name -> output port),
-    unless ``scenario.guards.enabled`` is false. Returns it (or None)."""
+    unless ``scenario.guards.enabled`` is false. Returns it (or None).
+
+    ``job``: (the sequencer's ``cutting`` output port, the workspace's
+    points (m, world)) for a job: contact_lost judges the cuts only, the
+    workspace spans every edge and move."""
     if not scenario.guards.enabled:
         return None
     guards = builder.AddNamedSystem(
         GUARDS_SYSTEM,
         SafetyGuards(
-            guard_limits(scenario, plant, contour),
+            guard_limits(
+                scenario,
+                plant,
+                contour,
+                points=None if job is None else job[1],
+            ),
             {name: port.size() for name, port in logged.items()},
+            cutting_input=job is not None,
         ),
     )
     for name, port in logged.items():
         builder.Connect(port, guards.GetInputPort(name))
+    if job is not None:
+        builder.Connect(job[0], guards.GetInputPort("cutting"))
     return guards

@@ -30,6 +30,7 @@ from deburr_drake.cell.moves import (
     Move,
     MovePlanningError,
     MoveSettings,
+    PlanningCell,
     _nearest,
     make_planning_cell,
     plan_move,
@@ -67,11 +68,14 @@ class JobCut(NamedTuple):
 class JobPlan:
     """The job planned: ``cuts`` in order, ``skipped`` (index, why: not
     selected by ``edges: []``), ``refused`` (index, one line: selected
-    but not cut)."""
+    but not cut), and the ``cell`` the moves were planned and checked in
+    (the robot, its tool and the part's convex pieces), which checks the
+    run's moves too."""
 
     cuts: List[JobCut]
     skipped: list
     refused: list
+    cell: Optional[PlanningCell] = None
 
     def moves(self) -> List[Move]:
         return [c.move for c in self.cuts if c.move is not None]
@@ -218,7 +222,7 @@ def plan_job(
         while waiting and _join(cell, cuts, waiting, settings):
             pass
     refused += [(cut.index, why) for cut, why, _, _ in waiting]
-    return JobPlan(cuts, skipped, refused)
+    return JobPlan(cuts, skipped, refused, cell)
 
 
 #: -, how many later cuts an edge no move reached is tried again from

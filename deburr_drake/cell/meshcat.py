@@ -25,7 +25,14 @@ from pydrake.systems.framework import DiagramBuilder, LeafSystem
 
 from deburr_drake.cell.process import CuttingProcess
 
-__all__ = ["EdgeVisualizer", "add_meshcat", "UNCUT", "CUT", "BURR"]
+__all__ = [
+    "EdgeVisualizer",
+    "add_meshcat",
+    "add_job_meshcat",
+    "UNCUT",
+    "CUT",
+    "BURR",
+]
 
 UNCUT = Rgba(0.55, 0.55, 0.6, 1.0)
 CUT = Rgba(0.1, 0.8, 0.2, 1.0)
@@ -157,7 +164,39 @@ def add_meshcat(
     ``edge_axes`` (n_bins, 3): the tool axis at each bin, which way the
     burrs stand along a 3-D edge (None: up)."""
     edge_points = np.asarray(edge_points, float)
-    center = edge_points.mean(axis=0)
+    _add_cell(
+        builder,
+        meshcat,
+        plant,
+        scene_graph,
+        edge_points.mean(axis=0),
+        publish_period,
+    )
+    _add_edge(builder, meshcat, process, edge_points, edge_axes, publish_period)
+
+
+def add_job_meshcat(
+    builder: DiagramBuilder,
+    meshcat: Meshcat,
+    *,
+    plant,
+    scene_graph,
+    edges,
+    publish_period: float = 0.1,
+) -> None:
+    """:func:`add_meshcat` for a job's cell: ``edges`` is a (process, edge
+    points, edge axes) per cut edge, each drawn by an
+    ``edge_visualizer_<k>`` under ``deburring/edge_<k>``; the camera on
+    the middle of them all."""
+    center = np.mean([np.mean(points, axis=0) for _, points, _ in edges], 0)
+    _add_cell(builder, meshcat, plant, scene_graph, center, publish_period)
+    for k, (process, points, axes) in enumerate(edges):
+        _add_edge(builder, meshcat, process, points, axes, publish_period, k=k)
+
+
+def _add_cell(builder, meshcat, plant, scene_graph, center, publish_period):
+    """The cell's illustration and its contact forces, the camera on
+    ``center`` (m, world) from above and in front of the arm."""
     meshcat.SetCameraPose(center + np.array([0.10, -0.16, 0.12]), center)
     params = MeshcatVisualizerParams(
         role=Role.kIllustration, publish_period=publish_period
@@ -177,16 +216,26 @@ def add_meshcat(
         ),
     )
     contact.set_name("contact_visualizer")
-    edge = builder.AddSystem(
-        EdgeVisualizer(
-            meshcat,
-            process,
-            edge_points=edge_points,
-            burr_initial=process.initial_burr_height(),
-            edge_axes=edge_axes,
-            publish_period=publish_period,
-        )
+
+
+def _add_edge(
+    builder, meshcat, process, points, axes, publish_period, *, k=None
+):
+    """An EdgeVisualizer of ``process``'s edge (``edge_visualizer`` under
+    ``deburring``, or ``edge_visualizer_<k>`` under
+    ``deburring/edge_<k>``), fed by its finish and burrs."""
+    edge = EdgeVisualizer(
+        meshcat,
+        process,
+        edge_points=points,
+        burr_initial=process.initial_burr_height(),
+        edge_axes=axes,
+        publish_period=publish_period,
+        prefix="deburring" if k is None else f"deburring/edge_{k}",
     )
+    if k is not None:
+        edge.set_name(f"edge_visualizer_{k}")
+    builder.AddSystem(edge)
     builder.Connect(
         process.GetOutputPort("finish_depth"), edge.GetInputPort("finish_depth")
     )

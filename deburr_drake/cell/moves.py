@@ -69,6 +69,7 @@ __all__ = [
     "clearance",
     "make_planning_cell",
     "plan_move",
+    "tip_positions",
     "waypoint",
 ]
 
@@ -313,7 +314,9 @@ def _line(q_a, q_b, step):
     return np.linspace(q_a, q_b, count)
 
 
-def _tip_travel(cell: PlanningCell, path) -> float:
+def tip_positions(cell: PlanningCell, path) -> np.ndarray:
+    """m, (k, 3): the tool tip in the world at each row of ``path`` (joint
+    angles, rad)."""
     context = cell.plant.CreateDefaultContext()
     tips = []
     for q in path:
@@ -321,6 +324,11 @@ def _tip_travel(cell: PlanningCell, path) -> float:
         tips.append(
             cell.tool_frame.CalcPoseInWorld(context).translation().copy()
         )
+    return np.reshape(tips, (-1, 3))
+
+
+def _tip_travel(cell: PlanningCell, path) -> float:
+    tips = tip_positions(cell, path)
     return float(np.sum(np.linalg.norm(np.diff(tips, axis=0), axis=1)))
 
 

@@ -25,9 +25,10 @@ from deburr_drake.config import Scenario
 __all__ = ["add_cell_plant", "mesh_edge_band"]
 
 
-def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
+def add_cell_plant(builder: DiagramBuilder, scenario: Scenario, *, edges=None):
     """(plant, scene_graph), finalized: the robot (``robot``), its
-    friction, and the part (``part``)."""
+    friction, and the part (``part``); ``edges`` (single-edge scenarios
+    of one CAD part, a job's cuts): a band along each of them instead."""
     sim = scenario.simulation
     config = MultibodyPlantConfig(
         time_step=sim.plant_time_step,
@@ -47,7 +48,9 @@ def add_cell_plant(builder: DiagramBuilder, scenario: Scenario):
     )
     add_joint_friction(plant, scenario.robot)
     kind = scenario.part.edge.kind
-    if kind == "straight":
+    if edges is not None:
+        _add_mesh_edges(plant, edges)
+    elif kind == "straight":
         _add_wall(plant, scenario)
     elif kind == "profile":
         _add_profile(plant, scenario)
@@ -175,6 +178,16 @@ def mesh_edge_band(scenario: Scenario):
         n_radial=band.mesh_radial_cells,
         n_z=band.mesh_height_cells,
     )
+
+
+def _add_mesh_edges(plant, edges):
+    """A job's CAD part: the compliant band of ``mesh_edge_band`` along
+    each edge cut (``part_edge_<k>``); the part's mesh drawn once."""
+    for k, scenario in enumerate(edges):
+        stations, band = mesh_edge_band(scenario)
+        register_compliant_edge(plant, stations, name=f"part_edge_{k}", **band)
+    part = edges[0].part
+    register_part_visual(plant, part.mesh_edge(part.pose)[0])
 
 
 def _add_mesh_edge(plant, scenario: Scenario):

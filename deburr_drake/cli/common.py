@@ -27,6 +27,7 @@ def _progress(t, wall, feed):
 #: reasons", and ``--help``).
 EXIT_CODES = {
     "pass_complete": 0,
+    "job_complete": 0,  # a job's every cut reached its end
     "duration": 0,  # a normal ending
     "error": 1,  # an exception during the run (outputs written)
     # 2: bad input (nothing run or written)

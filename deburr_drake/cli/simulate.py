@@ -45,6 +45,8 @@ def _simulate(args) -> int:
     _check_writable_target(
         out, "--out", args.force, is_dir=True, names=_OUTPUTS
     )
+    if scenario.job.file:
+        return _simulate_job(args, scenario, out)
     if args.record:
         _check_writable_target(
             args.record, "--record", args.force, is_dir=False
@@ -109,6 +111,63 @@ def _plan_and_run(args, scenario, out, drawer) -> int:
     finally:
         for number, handler in previous.items():
             signal.signal(number, handler)
+
+
+def _simulate_job(args, scenario, out) -> int:
+    """A scenario with a ``job:`` section: the whole job, one simulation
+    (deburr_drake.runs.job_run), and its report
+    (deburr_drake.runs.job_report): metrics.json, each edge's logs and
+    figures in ``edge_<index>/``, the replay with --record."""
+    from deburr_drake.cell.job_cell import plan_job_cell
+    from deburr_drake.runs.job_report import (
+        job_checks,
+        job_report,
+        report_lines,
+        write_job_report,
+    )
+    from deburr_drake.runs.job_run import run_job
+
+    if args.record:
+        _check_writable_target(
+            args.record, "--record", args.force, is_dir=False
+        )
+    plan = plan_job_cell(scenario)
+    cuts = ", ".join(str(c.index) for c in plan.job.cuts)
+    print(
+        f"deburr-drake simulate: job '{scenario.name}', edges {cuts} "
+        f"({len(plan.job.refused)} refused), up to "
+        f"{scenario.simulation.duration:g} s, output {out}/",
+        flush=True,
+    )
+    for _, why in plan.job.refused:
+        print(f"  refused: {why}", flush=True)
+    meshcat = _meshcat(args)
+    if args.record:
+        meshcat.StartRecording(frames_per_second=10.0)
+    result = run_job(
+        plan,
+        progress=_progress,
+        progress_interval=args.progress_interval,
+        meshcat=meshcat,
+    )
+    log = result.log
+    print(
+        f"\nstopped at t = {log.stop_time:.3f} s: {log.stop_reason}"
+        + (f" ({log.stop_detail})" if log.stop_detail else ""),
+        flush=True,
+    )
+    if args.record:
+        _write_replay(meshcat, args.record)
+    report = job_report(log, plan.job)
+    files = write_job_report(report, log, out, label=scenario.name)
+    for index, failure in files["failures"].items():
+        print(
+            f"deburr-drake: edge {index}: no figures: {failure}",
+            file=sys.stderr,
+        )
+    print("\n".join(report_lines(report, job_checks(report))))
+    print(f"\nwrote {files['metrics']} and {len(log.edges)} edge folders")
+    return _exit_code(log, None)
 
 
 def _meshcat(args):

@@ -10,7 +10,8 @@ index in ``deburr-drake edges``' listing. They are cut in the order listed
 (``order: listed``) or nearest-next (``order: nearest``) from the edge
 nearest ``start``. Between two cuts the tool retracts ``retract`` up its
 axis, moves clear of the part by ``clearance`` at least, and comes down
-``approach`` along the next cut's axis."""
+``approach`` along the next cut's axis; the feed starts once the cut's
+depth is reached, or after ``entry_dwell``."""
 
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -77,6 +78,8 @@ class JobConfig:
     approach: float = 0.02  # m, down the next cut's tool axis to its start
     retract: float = 0.02  # m, up the tool axis from a cut's end
     clearance: float = 0.005  # m, least distance to the part on a move
+    # s, longest wait on a cut's entry for its depth before the feed starts
+    entry_dwell: float = 1.0
     # rad, an edge where the faces' normals differ by more
     sharp_angle: float = 0.5236
 
@@ -120,6 +123,7 @@ class JobConfig:
         for name in ("approach", "retract"):
             _positive(owner, name, getattr(self, name))
         _non_negative(owner, "clearance", self.clearance)
+        _non_negative(owner, "entry_dwell", self.entry_dwell)
         _require(
             0.0 < self.sharp_angle < 3.14159,
             f"{owner}.sharp_angle",

@@ -96,11 +96,12 @@ class CommandGenerator(LeafSystem):
     - ``command_state`` (COMMAND_STATE layout): the discrete state below.
     - ``command`` (3, m): x_c(kT), world frame.
     - ``feed`` (1, m/s): the commanded feed speed v.
-    - ``registration`` (4) and ``hold`` (1), only with ``registered=True``:
-      the contour moved by the registration (as the observer's); while
-      ``hold`` > 0.5 (touch probing) no feed: x_c is the projection of x_p
-      and the arc position the one nearest the start, so the pass starts
-      from where the probe leaves the tool.
+    - ``registration`` (4) and ``hold`` (1), only with ``registered=True``
+      (``hold`` alone with ``hold_input=True``: a job's sequencer holds
+      the feed off the part): the contour moved by the registration (as
+      the observer's); while ``hold`` > 0.5 (touch probing) no feed: x_c
+      is the projection of x_p and the arc position the one nearest the
+      start, so the pass starts from where the probe leaves the tool.
     - Discrete state (COMMAND_STATE layout): x_c (m), feed (m/s), arc
       position of x_c (m, unwrapped, counts progress past one revolution).
 
@@ -124,6 +125,7 @@ class CommandGenerator(LeafSystem):
         constant_feed=None,
         contour_step=None,
         registered: bool = False,
+        hold_input: bool = False,
     ):
         super().__init__()
         config.validate()
@@ -173,7 +175,9 @@ class CommandGenerator(LeafSystem):
             else None
         )
         self._hold = (
-            self.DeclareVectorInputPort("hold", 1) if registered else None
+            self.DeclareVectorInputPort("hold", 1)
+            if registered or hold_input
+            else None
         )
         self._start_arc = s0
         self.DeclarePeriodicDiscreteUpdateEvent(

@@ -114,6 +114,7 @@ def HybridController_(T):
             - commanded_velocity
             - desired_normal_force
             - fuzzy_weight (optional)
+            - active (optional)
             output_ports:
             - actuation
             - diagnostics
@@ -131,6 +132,10 @@ def HybridController_(T):
           travel between touches is not the cutting the rules learn; after
           it w ramps in, so weights learned on an earlier part do not push
           the tool along before the cut is established).
+        - ``active`` (1; only with ``active_input=True``): while <= 0.5
+          every state is held (delta_d, theta, the integral): a job's
+          moves, where another loop drives the arm and the law's errors
+          mean nothing.
         - ``actuation`` (nu, N or N m): actuator efforts.
         - ``diagnostics`` (CONTROLLER_DIAGNOSTICS layout).
         - Continuous state: delta_d (m), then theta_k ((2 Upsilon + 1)^2
@@ -191,6 +196,7 @@ def HybridController_(T):
             posture=None,
             fuzzy_weight_input=False,
             contour=None,
+            active_input=False,
         ):
             LeafSystem_[T].__init__(self, converter)
             config.validate()
@@ -208,6 +214,7 @@ def HybridController_(T):
                 posture=posture,
                 fuzzy_weight_input=fuzzy_weight_input,
                 contour=contour,
+                active_input=active_input,
             )
             # The controller's model of the robot.
             self._set_model(plant, tool_frame_name, tool_point)
@@ -234,7 +241,7 @@ def HybridController_(T):
             self._n_theta = len(self._axes) * self._n_rules
             n_states = 1 + self._n_theta + self._n_integral
             self.DeclareContinuousState(n_states)
-            self._ports = self._declare_inputs(fuzzy_weight_input)
+            self._ports = self._declare_inputs(fuzzy_weight_input, active_input)
             self._declare_outputs(n_states)
 
         def _construct_copy(self, other, converter=None):
@@ -311,7 +318,7 @@ def HybridController_(T):
                 else np.asarray(posture, float)
             )
 
-        def _declare_inputs(self, fuzzy_weight_input):
+        def _declare_inputs(self, fuzzy_weight_input, active_input):
             """name -> input port, in the docstring's order."""
             nx = self._plant.num_multibody_states()
             return {
@@ -325,6 +332,7 @@ def HybridController_(T):
                     ("desired_normal_force", 1),
                 ]
                 + ([("fuzzy_weight", 1)] if fuzzy_weight_input else [])
+                + ([("active", 1)] if active_input else [])
             }
 
         def _declare_outputs(self, n_states):
@@ -472,6 +480,7 @@ def HybridController_(T):
                 rates,
             )
             force = self._with_integral(force, x, s, rates, to_task, K)
+            rates *= self._activity(p)
             # Joint torques.
             tau = self._joint_torque(
                 p["plant_state"],
@@ -495,6 +504,12 @@ def HybridController_(T):
                     zeta=force.zeta,
                 ),
             )
+
+        @staticmethod
+        def _activity(p):
+            """0 off the part (the ``active`` input 0: a job's moves,
+            every state held), else 1."""
+            return 0.0 if "active" in p and p["active"][0] < 0.5 else 1.0
 
         def _with_integral(self, force, x, s, rates, to_task, K):
             """f_tau + K lambda_I int s on the integral axes, whose states

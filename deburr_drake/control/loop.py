@@ -108,11 +108,15 @@ class _Signals(NamedTuple):
 
     @staticmethod
     def of(loops: DeburringController) -> _Signals:
-        """The observer's, the generator's and the estimator's."""
+        """The observer's (a job's: gated), the generator's and the
+        estimator's (a job's: gated)."""
+        desired = (loops.gate or loops.estimator).GetOutputPort(
+            "desired_normal_force"
+        )
         return _Signals(
-            chamfer=loops.observer.GetOutputPort("chamfer_state"),
+            chamfer=loops.chamfer,
             command=loops.command_generator.GetOutputPort("command"),
-            desired=loops.estimator.GetOutputPort("desired_normal_force"),
+            desired=desired,
         )
 
 
@@ -121,8 +125,9 @@ def _add_loops(
 ) -> DeburringController:
     """The observer, the command generator, its hold, the estimator and
     the controller (``passed``: the controller's and observer's optional
-    arguments), not yet connected."""
+    arguments, ``sequenced``), not yet connected."""
     probing = c.localisation.probe.enabled
+    sequenced = _job_loops(c, passed.pop("sequenced"))
     # The constant-feed laws run a timed path, no feedrate law.
     constant_feed = (
         c.command.constant_feed
@@ -151,6 +156,7 @@ def _add_loops(
             constant_feed=constant_feed,
             contour_step=passed["contour_step"],
             registered=c.localisation.enabled,
+            hold_input=sequenced,
         ),
     )
     # Probing starts off the part, at x0 (the probe's standoff).
@@ -177,8 +183,9 @@ def _add_loops(
             nominal_depth=c.task.desired_depth,
             true_plant=passed["true_plant"],
             posture=passed["posture"],
-            fuzzy_weight_input=probing,
+            fuzzy_weight_input=probing or sequenced,
             contour=contour,
+            active_input=sequenced,
         ),
     )
     return DeburringController(
@@ -187,7 +194,29 @@ def _add_loops(
         first_order_hold=foh,
         estimator=estimator,
         controller=controller,
+        gate=_job_gate(builder, observer, estimator) if sequenced else None,
     )
+
+
+def _job_loops(c: Scenario, sequenced: bool) -> bool:
+    """``sequenced``, checked: a job's loops run without localisation."""
+    if sequenced and c.localisation.enabled:
+        raise ValueError("a job's loops run without localisation")
+    return sequenced
+
+
+def _job_gate(builder, observer, estimator) -> ProbeGate:
+    """A job's gate (``job_gate``): no contact seen off the part."""
+    gate = builder.AddNamedSystem("job_gate", ProbeGate())
+    builder.Connect(
+        observer.GetOutputPort("chamfer_state"),
+        gate.GetInputPort("chamfer_state"),
+    )
+    builder.Connect(
+        estimator.GetOutputPort("desired_normal_force"),
+        gate.GetInputPort("desired_normal_force"),
+    )
+    return gate
 
 
 def _add_probing(
@@ -359,35 +388,34 @@ def add_deburring_controller(
     contour_step=None,
     true_plant=None,
     posture=None,
+    sequenced: bool = False,
 ) -> DeburringController:
     """Adds the command generator, first-order hold, chamfer observer,
     contact estimator and hybrid controller to ``builder``, configured by
     ``scenario`` (its ``command``, ``task``, ``estimator`` and ``controller``
     sections), and connects them to each other and to the two signals:
 
-    - ``plant_state``: an output port with [q; v] of ``plant`` (m or rad,
-      m/s or rad/s), e.g. ``plant.get_state_output_port()``;
-    - ``measured_force``: an output port (3, N, world) with the measured
-      force of the part on the tool (a force sensor, or your contact
-      model).
+    - ``plant_state``: [q; v] of ``plant`` (m or rad, m/s or rad/s), e.g.
+      ``plant.get_state_output_port()``;
+    - ``measured_force`` (3, N, world): the force of the part on the tool
+      (a force sensor, or your contact model).
 
-    ``plant`` is a finalized MultibodyPlant of the robot that the
-    controller uses as its model (kinematics, Jacobian, gravity with masses
-    scaled by ``controller.model_mass_scale``); it is not simulated here, so
-    it may be the simulated plant itself or a separate copy. ``tool_frame``
-    names the frame whose origin is the tool point x_p. ``contour`` is the
-    zero-depth path of the tool point along the edge (the part the
-    controller believes in; see :mod:`deburr_drake.math.geometry`), ``start``
-    the tool point where the command starts (m, world; the contour's start
-    by default). ``desired_rotation`` (3 x 3) is the tool orientation the
-    controller holds (identity by default), turned by
-    ``contour.axis_turn(s)`` when ``contour.varying_frame``; ``tool_point``,
-    ``contour_step``, ``true_plant`` and ``posture`` are passed through to
-    the systems (shared kinematics, a part that moves, the ``ideal`` law's
-    true plant, the joint posture an arm with more than six joints holds in
-    its null space).
-
-    Returns the systems; connect ``.actuation`` to the plant's actuation
+    ``plant`` (finalized) is the robot model the controller uses
+    (kinematics, Jacobian, gravity with masses scaled by
+    ``controller.model_mass_scale``): the simulated plant or a copy.
+    ``tool_frame``'s origin is the tool point x_p; ``contour`` the
+    zero-depth path of x_p along the edge the controller believes in
+    (:mod:`deburr_drake.math.geometry`); ``start`` where the command starts
+    (m, world; the contour's start by default); ``desired_rotation`` (3 x
+    3) the tool orientation held (identity by default), turned by
+    ``contour.axis_turn(s)`` when ``contour.varying_frame``;
+    ``tool_point``, ``contour_step``, ``true_plant``, ``posture``: to the
+    systems (shared kinematics, a moving part, the ideal law's plant, a
+    redundant arm's posture).
+    ``sequenced``: a job's (control.sequencer): a gate ``job_gate`` after
+    the observer, its ``probing``, the generator's ``hold``, the
+    controller's ``fuzzy_weight`` and ``active`` left open. Returns the
+    systems; connect ``.actuation`` to the plant's actuation
     input (directly, or through your own saturation or fault systems)."""
     c = scenario
     x0 = contour.point_at(0.0) if start is None else np.asarray(start, float)
@@ -404,6 +432,7 @@ def add_deburring_controller(
         contour_step=contour_step,
         true_plant=true_plant,
         posture=posture,
+        sequenced=sequenced,
     )
     # The two signals from the user's side of the diagram.
     for system in (loops.observer, loops.controller):

@@ -19,6 +19,8 @@ __all__ = [
     "high_frequency_power",
     "cell_crossings",
     "surface_roughness",
+    "time_by_label",
+    "path_length_by_label",
 ]
 
 
@@ -169,3 +171,32 @@ def surface_roughness(
     A = np.column_stack([np.ones(values.size), Y.ravel(), S.ravel()])
     coef, *_ = np.linalg.lstsq(A, values, rcond=None)
     return rms(values - A @ coef)
+
+
+def time_by_label(t, labels, stop: float) -> dict:
+    """{label: s}: how long each label held, each sample's label holding
+    from its time to the next sample's (the last one's to ``stop``).
+    Samples after ``stop`` count for nothing."""
+    t, labels = np.asarray(t, float), np.asarray(labels)
+    if t.size == 0:
+        return {}
+    ends = np.minimum(np.append(t[1:], max(stop, t[-1])), stop)
+    held = np.clip(ends - np.minimum(t, stop), 0.0, None)
+    return {
+        label.item(): float(np.sum(held[labels == label]))
+        for label in np.unique(labels)
+    }
+
+
+def path_length_by_label(points, labels) -> dict:
+    """{label: length}: the polyline through ``points`` (rows), each
+    segment counted for the label of the point it starts at."""
+    points, labels = np.asarray(points, float), np.asarray(labels)
+    if len(points) < 2:
+        return {label.item(): 0.0 for label in np.unique(labels)}
+    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    starts = labels[:-1]
+    return {
+        label.item(): float(np.sum(steps[starts == label]))
+        for label in np.unique(labels)
+    }

@@ -1,7 +1,9 @@
 """The metrics reference page, generated at every docs build (docs/conf.py)
 from the descriptions kept next to the code that computes the metrics:
 :data:`deburr_drake.runs.pass_metrics.METRICS` and
-:data:`deburr_drake.runs.report.SUMMARY_FIELDS`.
+:data:`deburr_drake.runs.report.SUMMARY_FIELDS`, and a job's
+:data:`deburr_drake.runs.job_report.EDGE_FIELDS` and
+:data:`~deburr_drake.runs.job_report.JOB_FIELDS`.
 
 Use: ``write_metrics_reference("docs/metrics-reference.md")``."""
 
@@ -10,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Dict, List
 
+from deburr_drake.runs.job_report import EDGE_FIELDS, JOB_FIELDS
 from deburr_drake.runs.pass_metrics import (
     CONTACT_FORCE,
     METRICS,
@@ -92,10 +95,32 @@ def metrics_reference_markdown() -> str:
         "| key | unit | meaning |",
         "|---|---|---|",
     ]
-    for name, (unit, meaning) in SUMMARY_FIELDS.items():
-        out.append(f"| `{name}` | {unit} | {_cell(meaning)} |")
-    out.append("")
+    out += _field_table(SUMMARY_FIELDS)
+    out += [
+        "## A job's `metrics.json`",
+        "",
+        "A whole part's run (`deburr_drake.runs.job_report`; the guide is "
+        "[a whole part: the job](job.md)) writes `edges`, one entry per "
+        "planned cut in the job's order, `job`, and `stop_reason` (the "
+        "job's, as in `job`). Each edge's values are the pass metrics "
+        "above, computed on that edge's slice of the run (its own "
+        "transient excluded), the rest:",
+        "",
+        "| key of an `edges` entry | unit | meaning |",
+        "|---|---|---|",
+    ]
+    out += _field_table(EDGE_FIELDS)
+    out += ["| key of `job` | unit | meaning |", "|---|---|---|"]
+    out += _field_table(JOB_FIELDS)
     return "\n".join(out)
+
+
+def _field_table(fields) -> List[str]:
+    """The rows of a (unit, meaning) table, and a blank line."""
+    return [
+        f"| `{name}` | {unit} | {_cell(meaning)} |"
+        for name, (unit, meaning) in fields.items()
+    ] + [""]
 
 
 def write_metrics_reference(path) -> str:

@@ -36,6 +36,7 @@ from deburr_drake.control.layout import (
     CONTROLLER_DIAGNOSTICS,
 )
 from deburr_drake.control.probe import PROBE_MISSED
+from deburr_drake.control.sequencer import JOB_COMPLETE
 from deburr_drake.math import metrics
 
 __all__ = [
@@ -47,15 +48,18 @@ __all__ = [
     "DIVERGED",
     "NumericalSanity",
     "PassProgress",
+    "final_blocks",
 ]
 
 #: Why a run ended (``RunLog.stop_reason``). ``guard:<name>`` names the
 #: guard that tripped (deburr_drake.cell.guards); ``probe_missed:<i>``:
 #: touch i of the touch probing found nothing within its search distance
-#: (deburr_drake.control.probe); ``diverged``: the numerical sanity check
-#: (:class:`NumericalSanity`) ended it.
+#: (deburr_drake.control.probe); ``job_complete``: a job's last cut
+#: reached its end (deburr_drake.control.sequencer); ``diverged``: the
+#: numerical sanity check (:class:`NumericalSanity`) ended it.
 STOP_REASONS = (
     "pass_complete",
+    "job_complete",
     "duration",
     "interrupted",
     "guard:<name>",
@@ -349,9 +353,20 @@ def _final_state(diagram, context) -> Dict[str, Dict[str, np.ndarray]]:
     """What the run leaves behind: the surface finish and burrs along the
     edge, the final fuzzy rule weights and the rule-base geometry."""
     process = diagram.GetSubsystemByName("cutting_process")
-    pc = process.GetMyContextFromRoot(context)
     controller = diagram.GetSubsystemByName("controller")
-    cc = controller.GetMyContextFromRoot(context)
+    theta = controller.theta(controller.GetMyContextFromRoot(context))
+    return final_blocks(
+        process, process.GetMyContextFromRoot(context), controller, theta
+    )
+
+
+def final_blocks(
+    process, process_context, controller, theta
+) -> Dict[str, Dict[str, np.ndarray]]:
+    """A pass's final-state blocks: ``finish`` (``process``'s bins, the
+    depth cut and the burrs), ``theta`` (``theta``, the rule weights) and
+    ``meta`` (``controller``'s rule-base geometry)."""
+    pc = process_context
     f = controller.config.fuzzy
     delta0, deltak = f.deltas()
     return {
@@ -363,7 +378,7 @@ def _final_state(diagram, context) -> Dict[str, Dict[str, np.ndarray]]:
             .Eval(pc)
             .copy(),
         },
-        "theta": {"final": controller.theta(cc).copy()},
+        "theta": {"final": np.array(theta, copy=True)},
         "meta": {
             "fuzzy_order": np.array(f.order),
             "upsilon": np.array(f.upsilon),
@@ -414,6 +429,8 @@ def _stop_of(status, diagram) -> tuple:
         return f"guard:{message.split(':', 1)[0]}", message
     if name == "command_generator":
         return "pass_complete", message
+    if message.startswith(f"{JOB_COMPLETE}:"):
+        return JOB_COMPLETE, message.split(":", 1)[1].strip()
     if message.startswith(f"{PROBE_MISSED}:"):
         reason, _, detail = message.partition(": ")
         return reason, detail

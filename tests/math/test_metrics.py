@@ -74,3 +74,20 @@ def test_the_second_order_surface_is_smoother_than_the_zeroth():
         )
     assert rough[0] == pytest.approx(1 / np.sqrt(12), rel=0.1)
     assert rough[2] < 0.2 * rough[0]
+
+
+def test_time_by_label_holds_each_sample_to_the_next():
+    t = np.array([0.0, 1.0, 1.5, 4.0, 6.0])
+    labels = np.array([2, 2, 0, 1, 0])
+    # 0: 1.5 -> 4.0 and 6.0 -> 7.0; the sample at 8.0 lies past the stop
+    held = metrics.time_by_label(np.r_[t, 8.0], np.r_[labels, 1], 7.0)
+    assert held == pytest.approx({0: 3.5, 1: 2.0, 2: 1.5})
+    assert sum(held.values()) == pytest.approx(7.0)
+    assert metrics.time_by_label([], [], 1.0) == {}
+
+
+def test_path_length_by_label_counts_a_segment_for_its_start():
+    points = np.array([[0, 0, 0], [3, 4, 0], [3, 4, 1], [3, 4, 3.0]])
+    lengths = metrics.path_length_by_label(points, ["a", "b", "a", "b"])
+    assert lengths == pytest.approx({"a": 5.0 + 2.0, "b": 1.0})
+    assert metrics.path_length_by_label(points[:1], ["a"]) == {"a": 0.0}
