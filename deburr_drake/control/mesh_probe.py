@@ -36,7 +36,8 @@ from deburr_drake.control.probe import (
     PROBE_MISSED,
     SensorTiming,
     detection_depth,
-    measured_stiffness,
+    fuzzy_weight,
+    median_stiffness,
 )
 from deburr_drake.math.geometry import Contour
 from deburr_drake.math.mesh_registration import MeshSurface, register_mesh
@@ -504,20 +505,7 @@ class MeshProbingSequence(LeafSystem):
         spans = rows[:, 4][hit & (rows[:, 4] > 0)]
         if not len(spans):
             return
-        k = float(
-            np.median(
-                [
-                    measured_stiffness(
-                        span,
-                        c.force_threshold,
-                        c.stiffness_threshold,
-                        c.contact_exponent,
-                        c.contact_exponent_slope,
-                    )
-                    for span in spans
-                ]
-            )
-        )
+        k = median_stiffness(spans, c)
         x[MESH_PROBE_STATE.slice("stiffness")] = k
         for i in np.flatnonzero(hit):
             n = -self._plan.touches.normals[i]
@@ -588,14 +576,12 @@ class MeshProbingSequence(LeafSystem):
 
     def _calc_fuzzy_weight(self, context, output):
         done = float(MESH_PROBE_STATE.get(self._x(context), "done_time"))
-        ramp = self._config.fuzzy_ramp_time
-        if done < 0:
-            w = 0.0
-        elif ramp <= 0:
-            w = 1.0
-        else:
-            w = min(1.0, (context.get_time() - done) / ramp)
-        output.SetAtIndex(0, w)
+        output.SetAtIndex(
+            0,
+            fuzzy_weight(
+                done, context.get_time(), self._config.fuzzy_ramp_time
+            ),
+        )
 
     def _calc_registration(self, context, output):
         output.SetFromVector(
