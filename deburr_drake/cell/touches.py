@@ -206,8 +206,9 @@ class TouchContact(LeafSystem):
       push on the ball about the tool point, F = c d^n exp(-b d) (1 +
       h d'), d the ball's radius less its centre's distance to the real
       part's (``surface``) nearest point, h the Hunt-Crossley
-      dissipation (s/m), along the way from that point to the centre; and minus the compliant band's contact
-      force on the tool's geometries. Nothing otherwise.
+      dissipation (s/m), along the way from that point to the centre;
+      and minus the compliant band's contact force on the tool's
+      geometries. Nothing otherwise.
     - Discrete state (4): the nearest face's point and its normal's
       index, sampled every ``sample_period`` (the tool moves microns in
       one: the face's plane serves between samples).
