@@ -59,8 +59,10 @@ METRICS = (
     "nan_detected",
     "guard_tripped",
     "run_failed",
-    # A run with localisation: its probing and registration (the
-    # localisation family of runs.pass_metrics.METRICS).
+)
+#: What a run with localisation reports besides: its probing and
+#: registration (the localisation family of runs.pass_metrics.METRICS).
+LOCALISATION_METRICS = (
     "probing_time_s",
     "pass_time_s",
     "cycle_time_s",
@@ -91,6 +93,7 @@ METRICS = (
     "probe_sigma_hole_size_mm",
     "probe_amplification",
 )
+METRICS = METRICS + LOCALISATION_METRICS
 
 
 def wilson_interval(successes: int, n: int, z: float = 1.959964):
