@@ -107,13 +107,14 @@ def add_effort_saturation(builder, scenario: Scenario, plant, actuation):
 
 
 def guard_limits(
-    scenario: Scenario, plant, contour, *, points=None
+    scenario: Scenario, plant, contour, route=None, *, points=None
 ) -> GuardLimits:
     """The scenario's ``guards`` with every 0 replaced by its default from
     the models: effort limits from the plant's actuators, the tool force
     from the task, the depth from the task and the cutter, the workspace
     from the contour (or from ``points``, m, world: every place the tool
-    is meant to go, a job's edges and moves)."""
+    is meant to go, a job's edges and moves), and the points of a probe's
+    ``route`` ((N, 3) m, where it leaves the edge)."""
     g: GuardsConfig = scenario.guards
     names, limits = effort_limits(plant)
     samples = (
@@ -123,6 +124,8 @@ def guard_limits(
             [contour.point_at(s) for s in np.linspace(0.0, contour.length, 97)]
         )
     )
+    if route is not None:
+        samples = np.vstack([samples, route])
     return GuardLimits(
         joint_names=names,
         effort_limits=limits,
@@ -362,7 +365,7 @@ class SafetyGuards(LeafSystem):
 
 
 def add_guards(
-    builder, scenario: Scenario, plant, contour, logged, *, job=None
+    builder, scenario: Scenario, plant, contour, logged, route=None, *, job=None
 ):
     """Adds :class:`SafetyGuards` named :data:`GUARDS_SYSTEM` to the
     builder, reading every ``logged`` signal (logger name -> output port),
@@ -380,6 +383,7 @@ def add_guards(
                 scenario,
                 plant,
                 contour,
+                route,
                 points=None if job is None else job[1],
             ),
             {name: port.size() for name, port in logged.items()},

@@ -23,7 +23,7 @@ from deburr_drake.control.layout import CHAMFER_STATE, COMMAND_STATE
 from deburr_drake.control.observer import RegisteredContour
 from deburr_drake.math.feedrate import FeedrateLaw, cutting_damping
 from deburr_drake.math.geometry import Contour, contour_at, removal_scale
-from deburr_drake.math.registration import REGISTRATION_SIZE
+from deburr_drake.math.registration import registration_size
 
 __all__ = [
     "CommandGenerator",
@@ -96,12 +96,13 @@ class CommandGenerator(LeafSystem):
     - ``command_state`` (COMMAND_STATE layout): the discrete state below.
     - ``command`` (3, m): x_c(kT), world frame.
     - ``feed`` (1, m/s): the commanded feed speed v.
-    - ``registration`` (4) and ``hold`` (1), only with ``registered=True``
-      (``hold`` alone with ``hold_input=True``: a job's sequencer holds
-      the feed off the part): the contour moved by the registration (as
-      the observer's); while ``hold`` > 0.5 (touch probing) no feed: x_c
-      is the projection of x_p and the arc position the one nearest the
-      start, so the pass starts from where the probe leaves the tool.
+    - ``registration`` (the observer's size) and ``hold`` (1), only with
+      ``registered=True`` (``hold`` alone with ``hold_input=True``: a job's
+      sequencer holds the feed off the part): the contour moved by the
+      registration (as the observer's); while ``hold`` > 0.5 (touch
+      probing) no feed: x_c is the projection of x_p and the arc position
+      the one nearest the start, so the pass starts from where the probe
+      leaves the tool.
     - Discrete state (COMMAND_STATE layout): x_c (m), feed (m/s), arc
       position of x_c (m, unwrapped, counts progress past one revolution).
 
@@ -170,7 +171,9 @@ class CommandGenerator(LeafSystem):
             "chamfer_state", CHAMFER_STATE.size
         )
         self._registration = RegisteredContour(
-            self.DeclareVectorInputPort("registration", REGISTRATION_SIZE)
+            self.DeclareVectorInputPort(
+                "registration", registration_size(contour)
+            )
             if registered
             else None
         )

@@ -39,11 +39,12 @@ from deburr_drake.config import Scenario
 from deburr_drake.control.command import CommandGenerator, FirstOrderHold
 from deburr_drake.control.controller import HybridController
 from deburr_drake.control.estimator import ContactParameterEstimator
+from deburr_drake.control.mesh_probe import MeshProbePlan, MeshProbingSequence
 from deburr_drake.control.observer import ChamferObserver
 from deburr_drake.control.online import OnlineRegistration
 from deburr_drake.control.probe import ProbeGate, ProbingSequence, sensor_timing
 from deburr_drake.math.geometry import Contour
-from deburr_drake.math.registration import REGISTRATION_SIZE
+from deburr_drake.math.registration import registration_size
 
 __all__ = ["DeburringController", "add_deburring_controller"]
 
@@ -58,8 +59,9 @@ class DeburringController:
     first_order_hold: FirstOrderHold
     estimator: ContactParameterEstimator
     controller: HybridController
-    #: ``localisation.probe.enabled``: the probing sequence and its gate.
-    probe: Optional[ProbingSequence] = None
+    #: ``localisation.probe.enabled``: the probing sequence (a mesh
+    #: part's: MeshProbingSequence) and its gate.
+    probe: Optional[ProbingSequence | MeshProbingSequence] = None
     gate: Optional[ProbeGate] = None
     #: ``localisation.online.enabled``: registration while cutting.
     online: Optional[OnlineRegistration] = None
@@ -219,25 +221,48 @@ def _job_gate(builder, observer, estimator) -> ProbeGate:
     return gate
 
 
+def _probing_sequence(c: Scenario, *, contour, x0, timing, mesh_probe):
+    """The planar parts' sequence, or with ``mesh_probe`` (a
+    MeshProbePlan) a mesh part's."""
+    common = dict(
+        sample_period=c.sensor.sample_period,
+        timing=timing,
+        initial_position=x0,
+        start_depth=c.simulation.initial_depth,
+        desired_depth=c.task.desired_depth,
+    )
+    if mesh_probe is None:
+        return ProbingSequence(contour, c.localisation.probe, **common)
+    return MeshProbingSequence(
+        contour, mesh_probe, c.localisation.probe, **common
+    )
+
+
 def _add_probing(
-    builder, c: Scenario, loops, signals, *, contour, x0, timing, force
+    builder,
+    c: Scenario,
+    loops,
+    signals,
+    *,
+    contour,
+    x0,
+    timing,
+    force,
+    mesh_probe=None,
 ):
     """The probing sequence and its gate between the observer, the
     generator and the estimator and the rest. Returns the signals the
     loops use from then on, the sequence and the gate."""
     probe = builder.AddNamedSystem(
         "probing_sequence",
-        ProbingSequence(
-            contour,
-            c.localisation.probe,
-            sample_period=c.sensor.sample_period,
-            timing=timing,
-            initial_position=x0,
-            start_depth=c.simulation.initial_depth,
-            desired_depth=c.task.desired_depth,
+        _probing_sequence(
+            c, contour=contour, x0=x0, timing=timing, mesh_probe=mesh_probe
         ),
     )
-    gate = builder.AddNamedSystem("probe_gate", ProbeGate())
+    held = None
+    if mesh_probe is not None:  # the start's n1 and arc while probing
+        held = (contour.n1(contour.point_at(0.0)), 0.0)
+    gate = builder.AddNamedSystem("probe_gate", ProbeGate(held))
     _connect(
         builder,
         [
@@ -299,7 +324,15 @@ def _add_online(builder, c: Scenario, loops, base, *, contour, timing, probe):
 
 
 def _add_localisation(
-    builder, c: Scenario, loops, signals, *, contour, x0, measured_force
+    builder,
+    c: Scenario,
+    loops,
+    signals,
+    *,
+    contour,
+    x0,
+    measured_force,
+    mesh_probe=None,
 ):
     """``localisation.probe``: the probing sequence and its gate;
     ``localisation.online``: registration while cutting; the registration
@@ -319,6 +352,7 @@ def _add_localisation(
             x0=x0,
             timing=timing,
             force=measured_force,
+            mesh_probe=mesh_probe,
         )
         registration = probe.GetOutputPort("registration")
     else:
@@ -327,7 +361,9 @@ def _add_localisation(
             generator.GetInputPort("hold"),
         )
         registration = _constant(
-            builder, "no_probe_registration", np.zeros(REGISTRATION_SIZE)
+            builder,
+            "no_probe_registration",
+            np.zeros(registration_size(contour)),
         )
     # Registration while cutting.
     if c.localisation.online.enabled:
@@ -389,6 +425,7 @@ def add_deburring_controller(
     true_plant=None,
     posture=None,
     sequenced: bool = False,
+    mesh_probe: Optional[MeshProbePlan] = None,
 ) -> DeburringController:
     """Adds the command generator, first-order hold, chamfer observer,
     contact estimator and hybrid controller to ``builder``, configured by
@@ -414,8 +451,13 @@ def add_deburring_controller(
     redundant arm's posture).
     ``sequenced``: a job's (control.sequencer): a gate ``job_gate`` after
     the observer, its ``probing``, the generator's ``hold``, the
-    controller's ``fuzzy_weight`` and ``active`` left open. Returns the
-    systems; connect ``.actuation`` to the plant's actuation
+    controller's ``fuzzy_weight`` and ``active`` left open.
+    ``mesh_probe`` (a deburr_drake.control.mesh_probe.MeshProbePlan): with
+    ``localisation.probe``, a mesh part's touches on its faces and its
+    registration in six degrees of freedom (and a hole's size) instead of
+    the planar probe's along the edge.
+
+    Returns the systems; connect ``.actuation`` to the plant's actuation
     input (directly, or through your own saturation or fault systems)."""
     c = scenario
     x0 = contour.point_at(0.0) if start is None else np.asarray(start, float)
@@ -449,6 +491,7 @@ def add_deburring_controller(
             contour=contour,
             x0=x0,
             measured_force=measured_force,
+            mesh_probe=mesh_probe,
         )
     # The loops to each other.
     _connect_loops(builder, loops, signals)

@@ -15,7 +15,7 @@ from pydrake.systems.framework import LeafSystem
 from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.control.layout import CHAMFER_STATE
 from deburr_drake.math.geometry import Contour, contour_at, direction_of_motion
-from deburr_drake.math.registration import REGISTRATION_SIZE, moved_contour
+from deburr_drake.math.registration import moved_contour, registration_size
 
 __all__ = [
     "ChamferObserver",
@@ -110,8 +110,10 @@ class ChamferObserver(LeafSystem):
       of the environment on the tool, world.
     - ``chamfer_state`` (CHAMFER_STATE layout): x_p, xdot_p, n1, n2, delta,
       delta_dot, ||f_n||, ||f_t||, arc position.
-    - ``registration`` (4; only with ``registered=True``): dx, dy (m), dyaw
-      (rad), dradius (m): the believed part moved by it
+    - ``registration`` (only with ``registered=True``;
+      deburr_drake.math.registration.registration_size of the contour):
+      dx, dy (m), dyaw (rad), dradius (m), or on a 3-D edge the pose and
+      size (w (rad), p (m), size (m)): the believed part moved by it
       (deburr_drake.math.registration.moved_contour), from touch probing
       or registration while cutting.
 
@@ -146,7 +148,9 @@ class ChamferObserver(LeafSystem):
         self._state_port = self.DeclareVectorInputPort("plant_state", nx)
         self._force_port = self.DeclareVectorInputPort("measured_force", 3)
         self._registration = RegisteredContour(
-            self.DeclareVectorInputPort("registration", REGISTRATION_SIZE)
+            self.DeclareVectorInputPort(
+                "registration", registration_size(contour)
+            )
             if registered
             else None
         )

@@ -98,8 +98,8 @@ def _refusal(scenario_file, text):
             "faults.part_step.rpy[0] = nan is invalid",
         ),
         (
-            "localisation: {probe: {enabled: true}}",
-            "localisation.probe.enabled = True is invalid",
+            "localisation: {online: {enabled: true}}",
+            "localisation.online.enabled = True is invalid",
         ),
     ],
 )

@@ -276,9 +276,11 @@ def test_local_sweep_records_a_guard_and_a_rerun_does_no_work(tmp_path, capsys):
     results = [sweep.read_result(out, r.key) for r in runs]
     assert results[1]["stop_reason"] == "guard:tool_force"
     # Every metric is there (the force at delta* only when a metric asks).
-    assert set(sweep.METRICS) - {"true_force_at_desired_depth_N"} <= set(
-        results[0]
-    )
+    from deburr_drake.sweep.results import LOCALISATION_METRICS
+
+    assert set(sweep.METRICS) - {"true_force_at_desired_depth_N"} - set(
+        LOCALISATION_METRICS
+    ) <= set(results[0])
     # ... and every metric the run reports is a column (METRICS is the
     # sweep's list: a metric added to the report must be added there).
     reported = json.loads(
@@ -408,3 +410,16 @@ def test_a_run_the_preflight_refuses_is_one_line_naming_it(tmp_path, capsys):
         "controller.sliding_gain[0] = 20000 is predicted unstable"
     )
     assert not (out / "runs").exists()
+
+
+def test_a_study_can_tabulate_every_localisation_metric():
+    from deburr_drake.runs.pass_metrics import METRICS as PASS_METRICS
+    from deburr_drake.sweep.results import METRICS
+
+    localisation = {
+        name
+        for name, doc in PASS_METRICS.items()
+        if doc.family == "localisation_metrics"
+    }
+    assert localisation <= set(METRICS)
+    assert set(METRICS) - set(PASS_METRICS) == {"guard_tripped", "run_failed"}
