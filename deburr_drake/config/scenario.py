@@ -206,9 +206,8 @@ class Scenario:
     def _check_mesh_edge(self):
         """What a mesh edge does not support yet."""
         off = "false with part.edge.kind mesh (not supported yet)"
-        for name in ("probe", "online"):
-            enabled = getattr(self.localisation, name).enabled
-            _require(not enabled, f"localisation.{name}.enabled", enabled, off)
+        enabled = self.localisation.probe.enabled
+        _require(not enabled, "localisation.probe.enabled", enabled, off)
 
     def _check_burrs(self, wall: float, wall_name: str):
         """Each burr fits on the edge, under the cutter and on the wall (a

@@ -23,7 +23,7 @@ from deburr_drake.control.layout import CHAMFER_STATE, COMMAND_STATE
 from deburr_drake.control.observer import RegisteredContour
 from deburr_drake.math.feedrate import FeedrateLaw, cutting_damping
 from deburr_drake.math.geometry import Contour, contour_at, removal_scale
-from deburr_drake.math.registration import REGISTRATION_SIZE
+from deburr_drake.math.registration import registration_size
 
 __all__ = [
     "CommandGenerator",
@@ -168,7 +168,9 @@ class CommandGenerator(LeafSystem):
             "chamfer_state", CHAMFER_STATE.size
         )
         self._registration = RegisteredContour(
-            self.DeclareVectorInputPort("registration", REGISTRATION_SIZE)
+            self.DeclareVectorInputPort(
+                "registration", registration_size(contour)
+            )
             if registered
             else None
         )

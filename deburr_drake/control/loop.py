@@ -43,7 +43,7 @@ from deburr_drake.control.observer import ChamferObserver
 from deburr_drake.control.online import OnlineRegistration
 from deburr_drake.control.probe import ProbeGate, ProbingSequence, sensor_timing
 from deburr_drake.math.geometry import Contour
-from deburr_drake.math.registration import REGISTRATION_SIZE
+from deburr_drake.math.registration import registration_size
 
 __all__ = ["DeburringController", "add_deburring_controller"]
 
@@ -298,7 +298,9 @@ def _add_localisation(
             generator.GetInputPort("hold"),
         )
         registration = _constant(
-            builder, "no_probe_registration", np.zeros(REGISTRATION_SIZE)
+            builder,
+            "no_probe_registration",
+            np.zeros(registration_size(contour)),
         )
     # Registration while cutting.
     if c.localisation.online.enabled:

@@ -15,7 +15,7 @@ from pydrake.systems.framework import LeafSystem
 from deburr_drake.control.kinematics import ToolPoint
 from deburr_drake.control.layout import CHAMFER_STATE
 from deburr_drake.math.geometry import Contour, contour_at, direction_of_motion
-from deburr_drake.math.registration import REGISTRATION_SIZE, moved_contour
+from deburr_drake.math.registration import moved_contour, registration_size
 
 __all__ = [
     "ChamferObserver",
@@ -146,7 +146,9 @@ class ChamferObserver(LeafSystem):
         self._state_port = self.DeclareVectorInputPort("plant_state", nx)
         self._force_port = self.DeclareVectorInputPort("measured_force", 3)
         self._registration = RegisteredContour(
-            self.DeclareVectorInputPort("registration", REGISTRATION_SIZE)
+            self.DeclareVectorInputPort(
+                "registration", registration_size(contour)
+            )
             if registered
             else None
         )

@@ -33,6 +33,10 @@ import math
 
 import numpy as np
 
+from deburr_drake.math.edge_registration import (
+    EDGE_REGISTRATION_SIZE,
+    moved_edge,
+)
 from deburr_drake.math.fits import fit_circle, fit_consensus, fit_line
 from deburr_drake.math.geometry import (
     CircularContour,
@@ -43,6 +47,7 @@ from deburr_drake.math.profile import ProfileContour
 
 __all__ = [
     "REGISTRATION_SIZE",
+    "registration_size",
     "pivot_of",
     "moved_contour",
     "ProbeFit",
@@ -60,6 +65,15 @@ __all__ = [
 
 #: (dx, dy, dyaw, dradius).
 REGISTRATION_SIZE = 4
+
+
+def registration_size(contour: Contour) -> int:
+    """How many numbers register ``contour``: REGISTRATION_SIZE on a
+    planar edge, a 3-D edge's rigid move (EDGE_REGISTRATION_SIZE)."""
+    return (
+        EDGE_REGISTRATION_SIZE if contour.varying_frame else REGISTRATION_SIZE
+    )
+
 
 #: The largest noise amplification a profile's touches may have: the
 #: standard deviation of the worst combination of (dx, dy, L dyaw) per
@@ -97,7 +111,10 @@ def moved_contour(contour: Contour, registration) -> Contour:
     :func:`pivot_of` and moved by (dx, dy) (m); a circle's radius grows by
     dradius (m), a profile's edge grows outward by it (a pocket or a boss
     larger). ValueError for a nonzero dradius on a straight edge (it has
-    no size)."""
+    no size). A 3-D edge (``varying_frame``) takes a rigid move (v, omega)
+    instead (deburr_drake.math.edge_registration.moved_edge)."""
+    if contour.varying_frame:
+        return moved_edge(contour, registration)
     dx, dy, dyaw, dradius = (float(v) for v in registration)
     if not any((dx, dy, dyaw, dradius)):
         return contour

@@ -35,7 +35,14 @@ from deburr_drake.control.controller import make_rule_bases
 from deburr_drake.control.online import ONLINE_STATE
 from deburr_drake.control.probe import PROBE_STATE
 from deburr_drake.math import metrics
+from deburr_drake.math.edge_registration import (
+    EDGE_REGISTRATION_SIZE,
+    edge_pivot,
+    rotation,
+    rotation_vector,
+)
 from deburr_drake.math.registration import moved_contour
+from deburr_drake.math.rigid import rpy_matrix
 from deburr_drake.runs.simulation import RunLog
 
 __all__ = [
@@ -396,6 +403,32 @@ METRICS: Dict[str, MetricDoc] = {
                 "the error of the final registration (the probe's and the "
                 "correction while cutting)",
                 "as ``probe_registration_error_mm``, with both moves added",
+            ),
+            (
+                "online_offset_z_mm",
+                "mm",
+                "z of the final correction while cutting (a mesh part)",
+                "the online registration's last state",
+            ),
+            (
+                "online_rotation_deg",
+                "deg",
+                "angle of the final correction's turn (a mesh part)",
+                "the online registration's last state",
+            ),
+            (
+                "registration_position_error_mm",
+                "mm",
+                "how far a mesh part's final registration leaves the "
+                "believed edge's pivot from the real one",
+                "|v - v_true| of the registration (v, omega) about the "
+                "pivot (``edge_registration_errors``)",
+            ),
+            (
+                "registration_orientation_error_deg",
+                "deg",
+                "the turn a mesh part's final registration leaves",
+                "the angle of R(omega)^T R_true",
             ),
         ],
     ),
@@ -813,6 +846,12 @@ def status_metrics(log: RunLog) -> PassMetrics:
     return out
 
 
+# A mesh part's online state: the correction follows theta and P, whose
+# size is the model's (deburr_drake.control.online.online_state).
+def _correction_slice(size):
+    return slice(size - 3 - EDGE_REGISTRATION_SIZE, size - 3)
+
+
 def registration_error(scenario, registration, samples: int = 400) -> float:
     """m: the largest distance, along the real edge's normal, between the
     believed part's zero-depth path moved by ``registration`` (dx, dy,
@@ -827,6 +866,56 @@ def registration_error(scenario, registration, samples: int = 400) -> float:
             for s in np.linspace(0.0, L, samples, endpoint=not moved.closed)
         )
     )
+
+
+def true_edge_move(scenario) -> np.ndarray:
+    """The registration (v, omega) about the believed edge's pivot that
+    puts a mesh part's believed edge on the real one
+    (deburr_drake.math.edge_registration): x_real = X_WR X_WB^-1 x."""
+    part = scenario.part
+    real = part.real_pose(scenario.part_error)
+    R_WB, p_WB = rpy_matrix(part.pose.rpy), np.asarray(part.pose.xyz, float)
+    R_WR, p_WR = rpy_matrix(real.rpy), np.asarray(real.xyz, float)
+    R = R_WR @ R_WB.T
+    pivot, _ = edge_pivot(believed_contour(scenario))
+    return np.concatenate(
+        [R @ pivot + p_WR - R @ p_WB - pivot, rotation_vector(R)]
+    )
+
+
+def edge_registration_errors(scenario, registration):
+    """(m, rad) of a mesh part's ``registration`` (v, omega): how far it
+    leaves the believed edge's pivot from where the real part puts it,
+    and the angle of the turn it leaves."""
+    truth = true_edge_move(scenario)
+    r = np.asarray(registration, float)
+    left = rotation(r[3:6]).T @ rotation(truth[3:6])
+    return (
+        float(np.linalg.norm(r[:3] - truth[:3])),
+        float(np.linalg.norm(rotation_vector(left))),
+    )
+
+
+def _edge_online_metrics(scenario, online) -> PassMetrics:
+    """A mesh part's registration while cutting: its final correction
+    (mm, deg) and the final registration's errors."""
+    out = PassMetrics()
+    if online is None or not len(online["t"]):
+        return out
+    last = online["value"][-1]
+    correction = last[_correction_slice(len(last))]
+    for axis, value in zip("xyz", correction[:3]):
+        out[f"online_offset_{axis}_mm"] = float(value) * 1e3
+    out["online_rotation_deg"] = float(
+        np.degrees(np.linalg.norm(correction[3:]))
+    )
+    out["online_registration_error_mm"] = (
+        registration_error(scenario, correction) * 1e3
+    )
+    position, angle = edge_registration_errors(scenario, correction)
+    out["registration_position_error_mm"] = position * 1e3
+    out["registration_orientation_error_deg"] = float(np.degrees(angle))
+    return out
 
 
 def localisation_metrics(log: RunLog) -> PassMetrics:
@@ -874,6 +963,9 @@ def localisation_metrics(log: RunLog) -> PassMetrics:
                 registration_error(log.scenario, base) * 1e3
             )
     online = log.signals.get("registration")
+    if log.scenario.part.edge.kind == "mesh":
+        out.update(_edge_online_metrics(log.scenario, online))
+        return out
     if online is not None and len(online["t"]):
         corr = ONLINE_STATE.get(online["value"][-1], "correction")
         out["online_offset_x_mm"] = float(corr[0]) * 1e3
