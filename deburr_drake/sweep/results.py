@@ -31,7 +31,8 @@ __all__ = [
 
 
 #: What a run can report (runs.pass_metrics, plus the sweep's own
-#: ``guard_tripped`` and ``run_failed``: 1.0 or 0.0).
+#: ``guard_tripped`` and ``run_failed``: 1.0 or 0.0); a metric a run does
+#: not report (the probe's without probing) is null in its row.
 METRICS = (
     "contact_time_s",
     "chamfer_depth_mean_error_mm",
@@ -57,6 +58,12 @@ METRICS = (
     "wall_time_s",
     "completed_pass",
     "nan_detected",
+    # with localisation (runs.pass_metrics.localisation_metrics)
+    "probing_time_s",
+    "probe_registration_error_mm",
+    "online_registration_error_mm",
+    "registration_position_error_mm",
+    "registration_orientation_error_deg",
     "guard_tripped",
     "run_failed",
 )

@@ -136,3 +136,10 @@ def test_the_wedge_needs_its_tilt(scenario_file):
     scenario = load_scenario(scenario_file, text=wedge + ", tilt: -0.5236}}")
     length = scenario.part.path_length(scenario.tool)
     assert length == pytest.approx(0.06, rel=1e-6)
+
+
+def test_registration_while_cutting_is_accepted_on_a_mesh_edge(scenario_file):
+    scenario = load_scenario(
+        scenario_file, text="localisation: {online: {enabled: true}}"
+    )
+    assert scenario.localisation.online.enabled

@@ -139,3 +139,67 @@ def test_profile_offset_found_with_stiffer_fillets_left_out():
     np.testing.assert_allclose(reg[:2], move[:2], atol=5e-6)
     assert reg[2] == pytest.approx(move[2], abs=5e-4)
     assert reg[3] == 0.0
+
+
+def test_a_3d_edge_registers_the_move_across_its_axis():
+    """A rim in a plane tilted 30 deg (a 3-D edge: its frame turns), the
+    real part moved by 0.15 mm and turned by 0.2 deg: the correction is
+    the move across the rim's axis, and no turn (the force along n1
+    shows none)."""
+    from deburr_drake.math.edge_registration import (
+        MovedContour,
+        edge_pivot,
+        move_of,
+    )
+    from deburr_drake.math.rigid import rpy_matrix
+
+    rim = CircularContour([0.95, 0.0, 0.5], 0.008)
+    tilt = rpy_matrix([np.radians(30.0), 0.0, 0.0])
+    believed = MovedContour(rim, tilt, rim.center - tilt @ rim.center)
+    believed.varying_frame = True
+    move = np.array([1.2e-4, -0.8e-4, 0.6e-4, 0.0021, -0.0017, 0.0026])
+    real = MovedContour(believed, *move_of(move, edge_pivot(believed)[0]))
+    config = OnlineRegistrationConfig(enabled=True)
+    system = OnlineRegistration(
+        believed,
+        config,
+        EstimatorConfig(initial_estimates=[3.0, 4000.0, 20.0]),
+        latency=0.018,
+    )
+    assert system.GetOutputPort("registration").size() == 6
+    context = system.CreateDefaultContext()
+    system.GetInputPort("base_registration").FixValue(context, np.zeros(6))
+    system.GetInputPort("active").FixValue(context, [1.0])
+    rng = np.random.default_rng(0)
+    T, v, c0, c1 = config.sample_period, 0.002, 2.0, 9000.0
+    for k in range(int(20.0 / T)):
+        t = k * T
+        depth = 5e-4 * (1 - np.exp(-t / 1.5))
+        p = real.point_at(v * t)
+        n1 = real.n1(p)
+        system.GetInputPort("chamfer_state").FixValue(
+            context,
+            CHAMFER_STATE.pack(
+                x_p=p + depth * n1,
+                xdot_p=v * real.tangent(p),
+                n1=n1,
+                n2=n1,
+                delta=depth,
+                delta_dot=0.0,
+                f_n=c0 + c1 * depth + 0.1 * rng.standard_normal(),
+                f_t=0.0,
+                arc_position=v * t,
+                n1_rate=np.zeros(3),
+            ),
+        )
+        context.SetDiscreteState(
+            system.EvalUniquePeriodicDiscreteUpdate(context)
+        )
+        context.SetTime(t + T)
+    reg = system.GetOutputPort("registration").Eval(context)
+    axis = tilt @ [0.0, 0.0, 1.0]
+    across = move[:3] - (move[:3] @ axis) * axis
+    np.testing.assert_allclose(reg[:3], across, atol=5e-6)
+    np.testing.assert_allclose(reg[3:], 0.0, atol=1e-12)
+    theta = system.layout.get(context.get_discrete_state(0).value(), "theta")
+    assert theta[1] == pytest.approx(c1, rel=0.1)
