@@ -20,6 +20,14 @@ learns only where the edge's curvature is that of most of it
 (deburr_drake.math.registration.learning_curvature: a profile's straight
 sides; in its fillets the contact is stiffer or softer and the model
 would take that for an offset).
+
+Along a 3-D edge (``contour.varying_frame``: a mesh part's) the offset is
+a small rigid move of the part seen through n1, d = g(x) . (v, L omega)
+(deburr_drake.math.edge_registration), in the directions whose d varies
+along the arc (a hole's: the two translations across its axis); the
+registration is the move (v, omega) about the edge's pivot, the
+correction composed with the probe's, and the model learns all along
+the edge. The model is chosen once, when the system is built.
 """
 
 from __future__ import annotations
@@ -178,14 +186,16 @@ class OnlineRegistration(LeafSystem):
 
     - ``chamfer_state`` (CHAMFER_STATE, the observer's): x_p, xdot_p,
       ||f_n|| are read.
-    - ``base_registration`` (4): the registration the probe found (zero
-      without probing): the reference contour.
+    - ``base_registration`` (4; a 3-D edge's 6): the registration the
+      probe found (zero without probing): the reference contour.
     - ``active`` (1): 1 while the spindle cuts (0 while probing: nothing
       is learned).
-    - ``registration`` (4): base + the correction, to the observer and the
-      command generator.
-    - ``registration_state`` (ONLINE_STATE layout): the discrete state, for
-      the logs.
+    - ``registration`` (as ``base_registration``): base + the correction
+      (a 3-D edge's: composed), to the observer and the command
+      generator.
+    - ``registration_state`` (``layout``: ONLINE_STATE on a planar edge,
+      :func:`online_state` of the model's size on a 3-D edge): the
+      discrete state, for the logs.
 
     ``probed``: the reference is the probe's fit, so the offset's prior is
     ``probed_offset_prior`` (the probe's accuracy) rather than
