@@ -181,7 +181,52 @@ def _connect_actuation(builder, scenario: Scenario, plant, side, actuation):
         builder.Connect(source, side.process.GetInputPort(port))
 
 
-def _logged_signals(builder, loops, probing: bool) -> dict:
+def _add_touch_contact(
+    builder, plan: CellPlan, plant, tool_point, probe, process
+):
+    """The probe's contact with the real mesh part while it touches
+    (deburr_drake.cell.touches.TouchContact), on the plant's tool; returns
+    the process state as the guards see it (TouchGate)."""
+    from deburr_drake.cell.touches import TouchContact, TouchGate, touch_law
+
+    c = plan.scenario
+    contact = builder.AddNamedSystem(
+        "touch_contact",
+        TouchContact(
+            plant,
+            tool_frame=c.robot.tool_frame,
+            surface=plan.touch_surface,
+            radius=plan.mesh_probe.radius,
+            law=touch_law(c),
+            dissipation=c.part.material.hunt_crossley_dissipation,
+            sample_period=c.sensor.sample_period,
+            tool_point=tool_point,
+        ),
+    )
+    connect = builder.Connect
+    connect(plant.get_state_output_port(), contact.GetInputPort("plant_state"))
+    connect(probe.GetOutputPort("touching"), contact.GetInputPort("touching"))
+    connect(
+        plant.get_contact_results_output_port(),
+        contact.GetInputPort("contact_results"),
+    )
+    connect(
+        plant.get_body_poses_output_port(), contact.GetInputPort("body_poses")
+    )
+    connect(
+        contact.GetOutputPort("spatial_forces"),
+        plant.get_applied_spatial_force_input_port(),
+    )
+    gate = builder.AddNamedSystem("touch_gate", TouchGate())
+    connect(probe.GetOutputPort("touching"), gate.GetInputPort("touching"))
+    connect(
+        process.GetOutputPort("process_state"),
+        gate.GetInputPort("process_state"),
+    )
+    return gate.GetOutputPort("process_state")
+
+
+def _logged_signals(builder, loops, probing: bool, touch_gate=None) -> dict:
     """{logger name: output port} of :data:`LOGGED` and, where the systems
     are there, :data:`LOCALISATION_LOGGED`."""
     logged = {
@@ -194,6 +239,9 @@ def _logged_signals(builder, loops, probing: bool) -> dict:
         logged["desired_normal_force"] = loops.gate.GetOutputPort(
             "desired_normal_force"
         )
+    if touch_gate is not None:
+        # No chamfer is cut while a mesh part is touched.
+        logged["process"] = touch_gate
     for name, (system, port) in LOCALISATION_LOGGED.items():
         if builder.HasSubsystemNamed(system):
             logged[name] = builder.GetSubsystemByName(system).GetOutputPort(
@@ -318,18 +366,31 @@ def make_deburring_diagram(
         contour_step=plan.belief_step,  # after the part moved
         true_plant=plant,
         posture=plan.start.q,
+        mesh_probe=plan.mesh_probe,
     )
-    # Touch probing: the loops turn the spindle off and on.
+    # Touch probing: the loops turn the spindle off and on; on a mesh
+    # part the probe touches the real part's faces.
     if probing:
         builder.Connect(loops.spindle, side.process.GetInputPort("spindle"))
+    touch_gate = None
+    if plan.mesh_probe is not None:
+        touch_gate = _add_touch_contact(
+            builder, plan, plant, tool_point, loops.probe, side.process
+        )
     # The drives: the controller's torque to the plant and the force law.
     _connect_actuation(builder, c, plant, side, loops.actuation)
     # The cell drawn in Meshcat.
     if meshcat is not None:
         _add_meshcat(builder, meshcat, plan, plant, scene_graph, side.process)
     # The guards read the standard signals, the loggers those and more.
-    logged = _logged_signals(builder, loops, probing)
-    add_guards(builder, c, plant, plan.contour, logged)
+    logged = _logged_signals(builder, loops, probing, touch_gate)
+    # A mesh part's probe leaves the edge: the workspace holds its way.
+    route = (
+        None
+        if plan.mesh_probe is None
+        else plan.mesh_probe.route(c.localisation.probe.standoff)
+    )
+    add_guards(builder, c, plant, plan.contour, logged, route)
     _add_loggers(builder, c, logged, extra_logs)
     diagram = builder.Build()
     diagram.set_name(f"deburr_{c.name}")

@@ -106,16 +106,19 @@ def add_effort_saturation(builder, scenario: Scenario, plant, actuation):
     return saturation.get_output_port()
 
 
-def guard_limits(scenario: Scenario, plant, contour) -> GuardLimits:
+def guard_limits(scenario: Scenario, plant, contour, route=None) -> GuardLimits:
     """The scenario's ``guards`` with every 0 replaced by its default from
     the models: effort limits from the plant's actuators, the tool force
     from the task, the depth from the task and the cutter, the workspace
-    from the contour."""
+    from the contour (and the points of a probe's ``route``, (N, 3) m,
+    where it leaves the edge)."""
     g: GuardsConfig = scenario.guards
     names, limits = effort_limits(plant)
     samples = np.array(
         [contour.point_at(s) for s in np.linspace(0.0, contour.length, 97)]
     )
+    if route is not None:
+        samples = np.vstack([samples, route])
     return GuardLimits(
         joint_names=names,
         effort_limits=limits,
@@ -337,7 +340,7 @@ class SafetyGuards(LeafSystem):
         return self._trip(t, "nan", f"elements {bad.tolist()} beyond 1e300")
 
 
-def add_guards(builder, scenario: Scenario, plant, contour, logged):
+def add_guards(builder, scenario: Scenario, plant, contour, logged, route=None):
     """Adds :class:`SafetyGuards` named :data:`GUARDS_SYSTEM` to the
     builder, reading every ``logged`` signal (logger name -> output port),
     unless ``scenario.guards.enabled`` is false. Returns it (or None)."""
@@ -346,7 +349,7 @@ def add_guards(builder, scenario: Scenario, plant, contour, logged):
     guards = builder.AddNamedSystem(
         GUARDS_SYSTEM,
         SafetyGuards(
-            guard_limits(scenario, plant, contour),
+            guard_limits(scenario, plant, contour, route),
             {name: port.size() for name, port in logged.items()},
         ),
     )

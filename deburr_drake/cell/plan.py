@@ -37,7 +37,9 @@ from deburr_drake.cell.gains import (
 from deburr_drake.cell.reach import check_part_in_reach
 from deburr_drake.cell.robot import check_robot, ik_seed
 from deburr_drake.config import Scenario
+from deburr_drake.control.mesh_probe import MeshProbePlan
 from deburr_drake.math.geometry import Contour
+from deburr_drake.math.mesh_registration import MeshSurface
 
 __all__ = ["CellPlan", "Start", "plan_cell"]
 
@@ -61,7 +63,10 @@ class CellPlan:
     believes in, ``belief_step`` the believed edge after
     ``faults.part_step`` (or None); ``model``: the controller's robot
     model; ``start``: the tool's start, in contact (with touch probing,
-    the probe's standoff off the part)."""
+    the probe's standoff off the part); ``mesh_probe``: with touch
+    probing on a mesh part, its touches on the believed part
+    (deburr_drake.cell.touches.plan_mesh_probe), and ``touch_surface``
+    the real part's surface the probe touches (else None)."""
 
     scenario: Scenario
     source: Scenario
@@ -71,6 +76,8 @@ class CellPlan:
     belief_step: Optional[tuple]
     model: MultibodyPlant
     start: Start
+    mesh_probe: Optional[MeshProbePlan] = None
+    touch_surface: Optional[MeshSurface] = None
     _cache: dict = field(
         default_factory=dict, compare=False, repr=False, hash=False
     )
@@ -171,6 +178,16 @@ def plan_cell(scenario: Scenario) -> CellPlan:
     # Neither the edges, the model nor the start depend on the gains.
     contour, belief = make_contour(scenario), believed_contour(scenario)
     start = _start(scenario, model, belief, q_spun)
+    # A mesh part's touches, planned on the believed part.
+    mesh_probe = touch_surface = None
+    if (
+        scenario.localisation.probe.enabled
+        and scenario.part.edge.kind == "mesh"
+    ):
+        from deburr_drake.cell.touches import plan_mesh_probe, real_surface
+
+        mesh_probe = plan_mesh_probe(scenario, start.position)
+        touch_surface = real_surface(scenario)
     design = None
     resolved = scenario
     c = scenario.controller
@@ -186,4 +203,6 @@ def plan_cell(scenario: Scenario) -> CellPlan:
         belief_step=believed_contour_step(scenario),
         model=model,
         start=start,
+        mesh_probe=mesh_probe,
+        touch_surface=touch_surface,
     )

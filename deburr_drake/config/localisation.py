@@ -30,6 +30,14 @@ class ProbeConfig:
     first_arc: float = 0.0  # m, arc position of the first touch (closed edge)
     approach_speed: float = 0.002  # m/s, the guarded move along n1
     travel_speed: float = 0.02  # m/s, between touches at the standoff
+    # m/s, a mesh part's moves between touches: out along the face's
+    # normal, above the part and down to the next standoff, clear of it
+    clear_travel_speed: float = 0.08
+    # m and rad, a mesh part: how far its pose may be off along and about
+    # each axis (its frame's origin); each touch's standoff and search
+    # grow by what that can move its face along the normal
+    pose_offset_allowance: float = 0.001
+    pose_turn_allowance: float = 0.0175
     force_threshold: float = 1.0  # N, contact when -f . n1 exceeds it
     standoff: float = (
         0.002  # m, the guarded move starts this far before the believed edge
@@ -103,6 +111,7 @@ class ProbeConfig:
         for name in (
             "approach_speed",
             "travel_speed",
+            "clear_travel_speed",
             "force_threshold",
             "standoff",
             "search_distance",
@@ -113,6 +122,8 @@ class ProbeConfig:
         ):
             _positive(o, name, getattr(self, name))
         _non_negative(o, "settle_time", self.settle_time)
+        _non_negative(o, "pose_offset_allowance", self.pose_offset_allowance)
+        _non_negative(o, "pose_turn_allowance", self.pose_turn_allowance)
         _non_negative(o, "contact_exponent_slope", self.contact_exponent_slope)
         _require(
             isinstance(self.stiffness_threshold, (int, float))

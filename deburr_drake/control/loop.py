@@ -39,6 +39,7 @@ from deburr_drake.config import Scenario
 from deburr_drake.control.command import CommandGenerator, FirstOrderHold
 from deburr_drake.control.controller import HybridController
 from deburr_drake.control.estimator import ContactParameterEstimator
+from deburr_drake.control.mesh_probe import MeshProbePlan, MeshProbingSequence
 from deburr_drake.control.observer import ChamferObserver
 from deburr_drake.control.online import OnlineRegistration
 from deburr_drake.control.probe import ProbeGate, ProbingSequence, sensor_timing
@@ -58,8 +59,9 @@ class DeburringController:
     first_order_hold: FirstOrderHold
     estimator: ContactParameterEstimator
     controller: HybridController
-    #: ``localisation.probe.enabled``: the probing sequence and its gate.
-    probe: Optional[ProbingSequence] = None
+    #: ``localisation.probe.enabled``: the probing sequence (a mesh
+    #: part's: MeshProbingSequence) and its gate.
+    probe: Optional[ProbingSequence | MeshProbingSequence] = None
     gate: Optional[ProbeGate] = None
     #: ``localisation.online.enabled``: registration while cutting.
     online: Optional[OnlineRegistration] = None
@@ -190,22 +192,42 @@ def _add_loops(
     )
 
 
+def _probing_sequence(c: Scenario, *, contour, x0, timing, mesh_probe):
+    """The planar parts' sequence, or with ``mesh_probe`` (a
+    MeshProbePlan) a mesh part's."""
+    common = dict(
+        sample_period=c.sensor.sample_period,
+        timing=timing,
+        initial_position=x0,
+        start_depth=c.simulation.initial_depth,
+        desired_depth=c.task.desired_depth,
+    )
+    if mesh_probe is None:
+        return ProbingSequence(contour, c.localisation.probe, **common)
+    return MeshProbingSequence(
+        contour, mesh_probe, c.localisation.probe, **common
+    )
+
+
 def _add_probing(
-    builder, c: Scenario, loops, signals, *, contour, x0, timing, force
+    builder,
+    c: Scenario,
+    loops,
+    signals,
+    *,
+    contour,
+    x0,
+    timing,
+    force,
+    mesh_probe=None,
 ):
     """The probing sequence and its gate between the observer, the
     generator and the estimator and the rest. Returns the signals the
     loops use from then on, the sequence and the gate."""
     probe = builder.AddNamedSystem(
         "probing_sequence",
-        ProbingSequence(
-            contour,
-            c.localisation.probe,
-            sample_period=c.sensor.sample_period,
-            timing=timing,
-            initial_position=x0,
-            start_depth=c.simulation.initial_depth,
-            desired_depth=c.task.desired_depth,
+        _probing_sequence(
+            c, contour=contour, x0=x0, timing=timing, mesh_probe=mesh_probe
         ),
     )
     gate = builder.AddNamedSystem("probe_gate", ProbeGate())
@@ -270,7 +292,15 @@ def _add_online(builder, c: Scenario, loops, base, *, contour, timing, probe):
 
 
 def _add_localisation(
-    builder, c: Scenario, loops, signals, *, contour, x0, measured_force
+    builder,
+    c: Scenario,
+    loops,
+    signals,
+    *,
+    contour,
+    x0,
+    measured_force,
+    mesh_probe=None,
 ):
     """``localisation.probe``: the probing sequence and its gate;
     ``localisation.online``: registration while cutting; the registration
@@ -290,6 +320,7 @@ def _add_localisation(
             x0=x0,
             timing=timing,
             force=measured_force,
+            mesh_probe=mesh_probe,
         )
         registration = probe.GetOutputPort("registration")
     else:
@@ -361,6 +392,7 @@ def add_deburring_controller(
     contour_step=None,
     true_plant=None,
     posture=None,
+    mesh_probe: Optional[MeshProbePlan] = None,
 ) -> DeburringController:
     """Adds the command generator, first-order hold, chamfer observer,
     contact estimator and hybrid controller to ``builder``, configured by
@@ -387,7 +419,11 @@ def add_deburring_controller(
     ``contour_step``, ``true_plant`` and ``posture`` are passed through to
     the systems (shared kinematics, a part that moves, the ``ideal`` law's
     true plant, the joint posture an arm with more than six joints holds in
-    its null space).
+    its null space). ``mesh_probe`` (a
+    deburr_drake.control.mesh_probe.MeshProbePlan): with
+    ``localisation.probe``, a mesh part's touches on its faces and its
+    registration in six degrees of freedom (and a hole's size) instead of
+    the planar probe's along the edge.
 
     Returns the systems; connect ``.actuation`` to the plant's actuation
     input (directly, or through your own saturation or fault systems)."""
@@ -422,6 +458,7 @@ def add_deburring_controller(
             contour=contour,
             x0=x0,
             measured_force=measured_force,
+            mesh_probe=mesh_probe,
         )
     # The loops to each other.
     _connect_loops(builder, loops, signals)

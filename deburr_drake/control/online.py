@@ -25,9 +25,9 @@ Along a 3-D edge (``contour.varying_frame``: a mesh part's) the offset is
 a small rigid move of the part seen through n1, d = g(x) . (v, L omega)
 (deburr_drake.math.edge_registration), in the directions whose d varies
 along the arc (a hole's: the two translations across its axis); the
-registration is the move (v, omega) about the edge's pivot, the
-correction composed with the probe's, and the model learns all along
-the edge. The model is chosen once, when the system is built.
+correction (v, omega) moves the probe's pose registration about the
+pivot it carries, and the model learns all along the edge. The model is
+chosen once, when the system is built.
 """
 
 from __future__ import annotations
@@ -41,8 +41,8 @@ from deburr_drake.config import EstimatorConfig, OnlineRegistrationConfig
 from deburr_drake.control.layout import CHAMFER_STATE, VectorLayout
 from deburr_drake.control.observer import RegisteredContour
 from deburr_drake.math.edge_registration import (
-    EDGE_REGISTRATION_SIZE,
-    compose,
+    CORRECTION_SIZE,
+    corrected,
     edge_contact_regressor,
     edge_model,
     edge_onset_regressor,
@@ -52,6 +52,7 @@ from deburr_drake.math.geometry import Contour
 from deburr_drake.math.registration import (
     MAX_AMPLIFICATION,
     ONLINE_PARAMETERS,
+    POSE_REGISTRATION_SIZE,
     REGISTRATION_SIZE,
     contact_regressor,
     learning_curvature,
@@ -93,7 +94,7 @@ class _PlanarModel:
 
     def __init__(self, contour: Contour, config, estimator, prior):
         self.layout = ONLINE_STATE
-        self.registration_size = REGISTRATION_SIZE
+        self.registration_size = self.correction_size = REGISTRATION_SIZE
         # The model learns where the edge's curvature is that of most of
         # it (a profile: its straight sides, not its fillets).
         self._curvature = learning_curvature(contour)
@@ -138,13 +139,15 @@ class _EdgeModel:
     """A 3-D edge's model (deburr_drake.math.edge_registration): the small
     rigid move seen through n1 in the directions the force shows; learns
     all along the edge (its contact law varies smoothly with the faces'
-    angle); a correction composes with the base move."""
+    angle); the correction (v, omega) moves the base's pose registration
+    about the pivot it carries."""
 
     def __init__(self, contour: Contour, config, estimator, prior):
         self.model = edge_model(contour, 1.0 / MAX_AMPLIFICATION)
         k = self.model.basis.shape[1]
-        self.layout = online_state(2 + k, EDGE_REGISTRATION_SIZE)
-        self.registration_size = EDGE_REGISTRATION_SIZE
+        self.layout = online_state(2 + k, CORRECTION_SIZE)
+        self.registration_size = POSE_REGISTRATION_SIZE
+        self.correction_size = CORRECTION_SIZE
         T = config.sample_period
         step = config.max_rate * T
         self.max_step = np.array([step] * 3 + [step / self.model.length] * 3)
@@ -167,7 +170,7 @@ class _EdgeModel:
         return edge_registration_of(self.model, theta)
 
     def applied(self, base, correction):
-        return compose(base, correction)
+        return corrected(base, correction, self.model.pivot)
 
 
 class OnlineRegistration(LeafSystem):
@@ -186,8 +189,9 @@ class OnlineRegistration(LeafSystem):
 
     - ``chamfer_state`` (CHAMFER_STATE, the observer's): x_p, xdot_p,
       ||f_n|| are read.
-    - ``base_registration`` (4; a 3-D edge's 6): the registration the
-      probe found (zero without probing): the reference contour.
+    - ``base_registration`` (4; a 3-D edge's pose and size, 7): the
+      registration the probe found (zero without probing): the reference
+      contour.
     - ``active`` (1): 1 while the spindle cuts (0 while probing: nothing
       is learned).
     - ``registration`` (as ``base_registration``): base + the correction
@@ -231,7 +235,7 @@ class OnlineRegistration(LeafSystem):
             self.layout.pack(
                 theta=self._model.theta0,
                 covariance=self._model.P0.ravel(),
-                correction=np.zeros(size),
+                correction=np.zeros(self._model.correction_size),
                 onset=0.0,
                 arc=0.0,
                 last_arc=0.0,

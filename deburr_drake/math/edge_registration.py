@@ -1,13 +1,15 @@
-"""Registration of a 3-D edge (pure numpy): a small rigid move of the
-believed edge, the contour it gives, and what the contact force along the
-edge's n1 can tell of it while cutting.
+"""Registration of a 3-D edge while cutting (pure numpy): what the
+contact force along the edge's n1 can tell of a small rigid move of the
+part, and the correction it gives on top of the probe's registration.
 
-The move r = (v, omega) (m, rad; :data:`EDGE_REGISTRATION_SIZE` numbers)
-takes a point x of the believed edge to R(omega) (x - c) + c + v, c the
-edge's pivot (:func:`edge_pivot`, the centroid of its tool path) and
-R(omega) the rotation by the rotation vector omega. A move of the contour
-already moved by a base move b keeps its pivot at c + v_b, so the two
-compose as (v_b + v, log(R(omega) R(omega_b))) (:func:`compose`).
+A 3-D edge's registration is a pose and a size (the probe's,
+deburr_drake.math.registration.POSE_REGISTRATION_SIZE: the rotation
+vector w, the translation p of x_real = R(w) x + p, the hole's size). The
+correction while cutting is a small move e = (v, omega) (m, rad;
+:data:`CORRECTION_SIZE` numbers) of the registered edge about the pivot
+the registration carries, c' = R(w) c + p, c the believed edge's
+(:func:`edge_pivot`, the centroid of its tool path): x -> R(omega) (x -
+c') + c' + v (:func:`corrected`).
 
 While cutting, the real edge lies beyond the reference contour along n1
 at the tool point x by
@@ -29,9 +31,8 @@ what those translations explain (:func:`edge_model`; each by
 g's columns over the arc). The rest is left alone, as the planar
 model leaves the constant part to c0.
 
-- :func:`rotation`, :func:`rotation_vector`: exp and log of SO(3).
-- :class:`MovedContour`: any contour moved rigidly (phi, n1, the frame,
-  the tool axis turned with it; the arc position is the believed one's).
+- :func:`edge_pivot`, :func:`carried_pivot`, :func:`move_of`,
+  :func:`corrected`: the pivot and the correction on a registration.
 - :func:`edge_offset_terms`, :func:`edge_contact_regressor`,
   :func:`edge_registration_of`: the online model's regressor and its
   move.
@@ -45,18 +46,16 @@ from typing import NamedTuple
 
 import numpy as np
 
-from deburr_drake.math.geometry import Contour, _finite_scalar
+from deburr_drake.math.geometry import Contour
+from deburr_drake.math.rigid import matrix_rotvec, rotvec_matrix
 
 __all__ = [
-    "EDGE_REGISTRATION_SIZE",
+    "CORRECTION_SIZE",
     "DIRECTION_NAMES",
-    "rotation",
-    "rotation_vector",
     "edge_pivot",
+    "carried_pivot",
     "move_of",
-    "compose",
-    "MovedContour",
-    "moved_edge",
+    "corrected",
     "EdgeModel",
     "edge_offset_terms",
     "observable_directions",
@@ -66,8 +65,9 @@ __all__ = [
     "edge_registration_of",
 ]
 
-#: (v_x, v_y, v_z (m), omega_x, omega_y, omega_z (rad)), world axes.
-EDGE_REGISTRATION_SIZE = 6
+#: The correction (v_x, v_y, v_z (m), omega_x, omega_y, omega_z (rad)),
+#: world axes.
+CORRECTION_SIZE = 6
 
 #: The move's six components, in the order of r and of g's columns.
 DIRECTION_NAMES = (
@@ -78,39 +78,6 @@ DIRECTION_NAMES = (
     "rotation about y",
     "rotation about z",
 )
-
-
-def _hat(w):
-    return np.array(
-        [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
-    )
-
-
-def rotation(omega) -> np.ndarray:
-    """R (3 x 3) of the rotation vector ``omega`` (rad; Rodrigues)."""
-    w = np.asarray(omega, float)
-    angle = float(np.linalg.norm(w))
-    K = _hat(w)
-    if angle < 1e-8:  # the series to second order
-        return np.eye(3) + K + 0.5 * K @ K
-    return (
-        np.eye(3)
-        + (math.sin(angle) / angle) * K
-        + ((1.0 - math.cos(angle)) / angle**2) * K @ K
-    )
-
-
-def rotation_vector(R) -> np.ndarray:
-    """omega (rad) with rotation(omega) = ``R``, |omega| < pi."""
-    R = np.asarray(R, float)
-    axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    c = min(max(0.5 * (np.trace(R) - 1.0), -1.0), 1.0)
-    angle = math.acos(c)
-    if angle < 1e-8:
-        return 0.5 * axis
-    if math.pi - angle < 1e-6:
-        raise ValueError("a turn of pi has no unique rotation vector")
-    return axis * (angle / (2.0 * math.sin(angle)))
 
 
 @functools.lru_cache(maxsize=32)
@@ -131,115 +98,32 @@ def edge_pivot(contour: Contour, samples: int = 256):
     return c.copy(), length
 
 
-def move_of(registration, pivot):
-    """(R, t) with x -> R x + t the move ``registration`` (v, omega)
-    about ``pivot``: t = c + v - R c."""
-    r = np.asarray(registration, float)
-    R = rotation(r[3:6])
-    c = np.asarray(pivot, float)
-    return R, c + r[:3] - R @ c
-
-
-def compose(base, correction) -> np.ndarray:
-    """The registration that moves the believed edge as ``base`` and then
-    ``correction`` (a move about the pivot carried by ``base``)."""
-    b = np.asarray(base, float)
+def move_of(correction, pivot):
+    """(R, t) with x -> R x + t the move ``correction`` (v, omega) about
+    ``pivot``: t = c + v - R c."""
     e = np.asarray(correction, float)
-    return np.concatenate(
-        [b[:3] + e[:3], rotation_vector(rotation(e[3:6]) @ rotation(b[3:6]))]
-    )
+    R = rotvec_matrix(e[3:6])
+    c = np.asarray(pivot, float)
+    return R, c + e[:3] - R @ c
 
 
-class MovedContour(Contour):
-    """``base`` moved rigidly by x -> R x + t (``R``, ``t``: m, world):
-    the same arc positions, its points, normals, tangent and tool axis
-    moved with it; depth, curvature and the chamfer's section are the
-    base's at the point moved back (float inputs; AutoDiff values are
-    reduced to floats)."""
-
-    def __init__(self, base: Contour, R, t):
-        self._base = base
-        self._R = np.asarray(R, float)
-        self._t = np.asarray(t, float)
-        self.varying_frame = base.varying_frame
-
-    @property
-    def base(self) -> Contour:
-        return self._base
-
-    def _back(self, p):
-        p = np.asarray(
-            [x.value() if hasattr(x, "value") else x for x in p], float
-        )
-        return self._R.T @ (p - self._t)
-
-    # ----- Contour -----
-    @property
-    def length(self):
-        return self._base.length
-
-    @property
-    def closed(self):
-        return self._base.closed
-
-    @property
-    def height(self):
-        return float(self.point_at(0.0)[2])
-
-    def phi(self, p):
-        return self._base.phi(self._back(p))
-
-    def grad_phi(self, p):
-        return self._R @ self._base.grad_phi(self._back(p))
-
-    def n1(self, p):
-        return self._R @ self._base.n1(self._back(p))
-
-    def tangent(self, p):
-        return self._R @ self._base.tangent(self._back(p))
-
-    def frame(self, p):
-        n1, tangent, depth, s = self._base.frame(self._back(p))
-        return self._R @ n1, self._R @ tangent, depth, s
-
-    def curvature(self, p):
-        return self._base.curvature(self._back(p))
-
-    def n1_rate(self, p, v):
-        v = np.asarray(v, float)
-        return self._R @ self._base.n1_rate(self._back(p), self._R.T @ v)
-
-    def project(self, p):
-        return self._R @ self._base.project(self._back(p)) + self._t
-
-    def arc_position(self, p):
-        return self._base.arc_position(self._back(p))
-
-    def point_at(self, s):
-        s = _finite_scalar(s, "s")
-        return self._R @ self._base.point_at(s) + self._t
-
-    def tool_axis_at(self, s):
-        return self._R @ self._base.tool_axis_at(s)
-
-    def axis_turn(self, s):
-        return self._R @ self._base.axis_turn(s) @ self._R.T
-
-    def task_frame(self, s):
-        return self._R @ self._base.task_frame(s)
-
-    def chamfer_scale(self, s, delta, height):
-        return self._base.chamfer_scale(s, delta, height)
-
-
-def moved_edge(contour: Contour, registration) -> Contour:
-    """``contour`` moved by ``registration`` (v, omega) about its
-    :func:`edge_pivot` (the contour itself for a zero move)."""
+def carried_pivot(registration, pivot) -> np.ndarray:
+    """The believed edge's ``pivot`` (m) where the pose ``registration``
+    (w, p, ...) puts it: R(w) c + p."""
     r = np.asarray(registration, float)
-    if not np.any(r):
-        return contour
-    R, t = move_of(r, edge_pivot(contour)[0])
-    return MovedContour(contour, R, t)
+    return rotvec_matrix(r[:3]) @ np.asarray(pivot, float) + r[3:6]
+
+
+def corrected(registration, correction, pivot) -> np.ndarray:
+    """The pose registration (w, p, size) that moves the believed edge as
+    ``registration`` and then ``correction`` (v, omega) about the pivot it
+    carries (:func:`carried_pivot` of ``pivot``); the size is kept."""
+    r = np.asarray(registration, float)
+    R, t = move_of(correction, carried_pivot(r, pivot))
+    out = r.copy()
+    out[:3] = matrix_rotvec(R @ rotvec_matrix(r[:3]))
+    out[3:6] = R @ r[3:6] + t
+    return out
 
 
 def edge_offset_terms(points, n1, pivot, length) -> np.ndarray:
@@ -328,10 +212,11 @@ def edge_contact_regressor(
 ) -> np.ndarray:
     """phi with ||f_n|| = phi . theta, theta = (c0, c1, c1 a) (N, N/m, N
     per metre of a), at the tool point ``x_p`` (m) on the reference
-    ``contour`` (the believed edge moved by ``base``, whose pivot it
-    carries): ||f_n|| = c0 + c1 (delta_0 - d), d = g . B a."""
+    ``contour`` (the believed edge moved by the pose registration
+    ``base``, whose pivot it carries): ||f_n|| = c0 + c1 (delta_0 - d),
+    d = g . B a."""
     x_p = np.asarray(x_p, float)
-    pivot = model.pivot + (0.0 if base is None else np.asarray(base)[:3])
+    pivot = model.pivot if base is None else carried_pivot(base, model.pivot)
     g = edge_offset_terms(x_p, contour.n1(x_p), pivot, model.length)[0]
     return np.concatenate(
         [[1.0, float(contour.depth(x_p))], -(g @ model.basis)]
@@ -354,6 +239,6 @@ def edge_registration_of(model: EdgeModel, params) -> np.ndarray:
     in (v, L omega); zero while c1 is not positive."""
     c1 = float(params[1])
     if not c1 > 0.0:
-        return np.zeros(EDGE_REGISTRATION_SIZE)
+        return np.zeros(CORRECTION_SIZE)
     move = model.basis @ (np.asarray(params[2:], float) / c1)
     return np.concatenate([move[:3], move[3:] / model.length])

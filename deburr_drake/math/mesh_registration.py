@@ -49,6 +49,7 @@ from deburr_drake.math.registration import MAX_AMPLIFICATION
 __all__ = [
     "MeshSurface",
     "closest_on_mesh",
+    "closest_on_triangles",
     "pose_jacobian",
     "pose_amplification",
     "weakest_direction",
@@ -99,7 +100,7 @@ class MeshSurface:
         )  # m, each face's corners within it of its centroid
 
 
-def _closest_on_triangles(p, a, b, c):
+def closest_on_triangles(p, a, b, c):
     """(N, F, 3): the point of each triangle (a, b, c: (F, 3)) nearest each
     point of ``p`` (N, 3) (Ericson, Real-Time Collision Detection 5.1.5,
     by regions of the triangle's plane)."""
@@ -170,7 +171,7 @@ def closest_on_mesh(surface: MeshSurface, points, normals=None):
         d = np.linalg.norm(centroid - x, axis=1)
         upper = np.min(np.where(allowed[i], d, np.inf))
         near = np.flatnonzero(allowed[i] & (d - reach <= upper))
-        qi = _closest_on_triangles(x[None, :], a[near], b[near], c[near])[0]
+        qi = closest_on_triangles(x[None, :], a[near], b[near], c[near])[0]
         k = int(np.argmin(np.sum((qi - x) ** 2, axis=1)))
         q[i], j[i] = qi[k], near[k]
     return q, j

@@ -8,6 +8,10 @@ onto the real one, the contour it gives, and ``r`` from probed points.
   (``ProfileContour``: its vertices turn and move, the fillets are
   unchanged; a straight edge has no size: dradius must be 0). The pivot
   moves with (dx, dy), so two registrations compose by adding them.
+  A 3-D edge's (a mesh part's) registration is a pose and a size
+  (:data:`POSE_REGISTRATION_SIZE`: the rotation vector w (rad), the
+  translation p (m) of x_real = Rot(w) x + p, and the hole's size (m)):
+  its contour is a :class:`PosedContour`.
 - :func:`registration_from_points`: the rigid move and the size (a
   circle's radius, a profile's growth, where the touches tell it) that
   put the contour through touch points on the real edge's zero-depth
@@ -33,10 +37,6 @@ import math
 
 import numpy as np
 
-from deburr_drake.math.edge_registration import (
-    EDGE_REGISTRATION_SIZE,
-    moved_edge,
-)
 from deburr_drake.math.fits import fit_circle, fit_consensus, fit_line
 from deburr_drake.math.geometry import (
     CircularContour,
@@ -44,10 +44,13 @@ from deburr_drake.math.geometry import (
     StraightContour,
 )
 from deburr_drake.math.profile import ProfileContour
+from deburr_drake.math.rigid import rotvec_matrix
 
 __all__ = [
     "REGISTRATION_SIZE",
+    "POSE_REGISTRATION_SIZE",
     "registration_size",
+    "PosedContour",
     "pivot_of",
     "moved_contour",
     "ProbeFit",
@@ -66,12 +69,17 @@ __all__ = [
 #: (dx, dy, dyaw, dradius).
 REGISTRATION_SIZE = 4
 
+#: A 3-D edge's: (w (3), rad; p (3), m; size, m): x_real = Rot(w) x + p,
+#: the hole's faces ``size`` into the material.
+POSE_REGISTRATION_SIZE = 7
+
 
 def registration_size(contour: Contour) -> int:
-    """How many numbers register ``contour``: REGISTRATION_SIZE on a
-    planar edge, a 3-D edge's rigid move (EDGE_REGISTRATION_SIZE)."""
+    """The length of ``contour``'s registration: a pose and a size
+    (POSE_REGISTRATION_SIZE) on an edge whose frame turns (a mesh part's),
+    else (dx, dy, dyaw, dradius)."""
     return (
-        EDGE_REGISTRATION_SIZE if contour.varying_frame else REGISTRATION_SIZE
+        POSE_REGISTRATION_SIZE if contour.varying_frame else (REGISTRATION_SIZE)
     )
 
 
@@ -111,10 +119,13 @@ def moved_contour(contour: Contour, registration) -> Contour:
     :func:`pivot_of` and moved by (dx, dy) (m); a circle's radius grows by
     dradius (m), a profile's edge grows outward by it (a pocket or a boss
     larger). ValueError for a nonzero dradius on a straight edge (it has
-    no size). A 3-D edge (``varying_frame``) takes a rigid move (v, omega)
-    instead (deburr_drake.math.edge_registration.moved_edge)."""
-    if contour.varying_frame:
-        return moved_edge(contour, registration)
+    no size). A pose registration (POSE_REGISTRATION_SIZE numbers): the
+    :class:`PosedContour`."""
+    if len(registration) == POSE_REGISTRATION_SIZE:
+        w, p, size = registration[:3], registration[3:6], registration[6]
+        if not np.any(registration):
+            return contour
+        return PosedContour(contour, rotvec_matrix(w), p, float(size))
     dx, dy, dyaw, dradius = (float(v) for v in registration)
     if not any((dx, dy, dyaw, dradius)):
         return contour
@@ -149,6 +160,105 @@ def moved_contour(contour: Contour, registration) -> Contour:
         f"registration of a {type(contour).__name__} is not "
         "supported: a circle, a straight edge or a profile"
     )
+
+
+class PosedContour(Contour):
+    """``base`` (a 3-D edge's contour, on the believed part) on the part
+    moved by x -> R x + p (``rotation`` R, ``translation`` p, m, world),
+    its material ``size`` (m) further along n1 (a hole that much larger:
+    the edge moves along n1 by it; exactly so where n1 is the hole wall's
+    normal, and within 1 - cos of the angle between them elsewhere). Every
+    point is the base's moved, every direction the base's turned; arc
+    positions, curvature and the chamfer's cross-section are the base's.
+    The tool's frame turns with the part: ``axis_turn(s)`` is R times the
+    base's (the start's tool rotation, held on the believed part, times it
+    gives the tool axis R a(s))."""
+
+    varying_frame = True
+
+    def __init__(self, base: Contour, rotation, translation, size=0.0):
+        self._base = base
+        self._R = np.asarray(rotation, float)
+        self._p = np.asarray(translation, float)
+        self._size = float(size)
+
+    @property
+    def base(self) -> Contour:
+        return self._base
+
+    def _back(self, p):
+        """The point p (world, on the real part) on the believed part."""
+        return self._R.T @ (p - self._p)
+
+    def _out(self, q):
+        return self._R @ q + self._p
+
+    @property
+    def length(self):
+        return self._base.length
+
+    @property
+    def closed(self):
+        return self._base.closed
+
+    @property
+    def height(self):
+        return float(self.point_at(0.0)[2])
+
+    def phi(self, p):
+        return self._base.phi(self._back(p)) + self._size
+
+    def grad_phi(self, p):
+        return self._R @ self._base.grad_phi(self._back(p))
+
+    def n1(self, p):
+        return self._R @ self._base.n1(self._back(p))
+
+    def tangent(self, p):
+        return self._R @ self._base.tangent(self._back(p))
+
+    def frame(self, p):
+        n1, t, depth, s = self._base.frame(self._back(np.asarray(p, float)))
+        return self._R @ n1, self._R @ t, depth - self._size, s
+
+    def curvature(self, p):
+        return self._base.curvature(self._back(p))
+
+    def n1_rate(self, p, v):
+        return self._R @ self._base.n1_rate(
+            self._back(np.asarray(p, float)), self._R.T @ np.asarray(v, float)
+        )
+
+    def _grown_at(self, q):
+        """The base's zero-depth point q moved along n1 by the size."""
+        return q + self._size * self._base.n1(q) if self._size else q
+
+    def project(self, p):
+        return self._out(self._grown_at(self._base.project(self._back(p))))
+
+    def arc_position(self, p):
+        return self._base.arc_position(self._back(p))
+
+    def point_at(self, s):
+        return self._out(self._grown_at(self._base.point_at(s)))
+
+    def tool_axis_at(self, s):
+        return self._R @ self._base.tool_axis_at(s)
+
+    def axis_turn(self, s):
+        return self._R @ self._base.axis_turn(s)
+
+    def task_frame(self, s):
+        return self._R @ self._base.task_frame(s)
+
+    def chamfer_scale(self, s, delta, height):
+        return self._base.chamfer_scale(s, delta, height)
+
+    def edge_u(self, s):
+        return self._base.edge_u(s)
+
+    def edge_point(self, s):
+        return self._out(self._base.edge_point(s))
 
 
 @functools.lru_cache(maxsize=16)

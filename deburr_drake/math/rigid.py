@@ -18,6 +18,8 @@ __all__ = [
     "believed_from_real",
     "real_from_believed",
     "stepped_belief",
+    "rotvec_matrix",
+    "matrix_rotvec",
 ]
 
 
@@ -91,3 +93,28 @@ def stepped_belief(real, believed, offset, rpy):
     X_WB' = X_WR X_WR'^-1 X_WB."""
     stepped = believed_from_real(real, offset, rpy)
     return compose(real, compose(inverse(stepped), believed))
+
+
+def rotvec_matrix(w) -> np.ndarray:
+    """The rotation by the angle |w| (rad) about the unit w (Rodrigues):
+    I + sin(t) K + (1 - cos(t)) K^2, K the cross-product matrix of w / t."""
+    w = np.asarray(w, float)
+    t = float(np.linalg.norm(w))
+    if t < 1e-300:
+        return np.eye(3)
+    k = w / t
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + np.sin(t) * K + (1.0 - np.cos(t)) * (K @ K)
+
+
+def matrix_rotvec(R) -> np.ndarray:
+    """The rotation vector w (rad) of ``R``: :func:`rotvec_matrix`'s
+    inverse, |w| in [0, pi)."""
+    R = np.asarray(R, float)
+    axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    s = 0.5 * float(np.linalg.norm(axis))
+    c = 0.5 * (float(np.trace(R)) - 1.0)
+    t = float(np.arctan2(s, c))
+    if s < 1e-12:
+        return 0.5 * axis  # no turn (or a turn of pi, which no fit gives)
+    return t / (2.0 * s) * axis

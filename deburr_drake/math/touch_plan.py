@@ -88,26 +88,29 @@ def reachable_faces(
     surface: MeshSurface,
     *,
     probe_radius: float,
-    clearance: float,
+    clearance,
     rise: float,
     min_normal_z: float = 0.0,
 ) -> np.ndarray:
     """(F,) bool: the faces whose centroid the probe reaches (module
-    docstring)."""
+    docstring); ``clearance`` (m) one for every face or (F,) each its
+    own."""
     facing = surface.normals[:, 2] >= min_normal_z
     tree = cKDTree(_surface_samples(surface))
     margin = _SURFACE_SPACING
     step = _PATH_STEP * probe_radius
-    out_along = np.arange(step, clearance + step, step)
-    up = np.arange(0.0, rise + step, step)
     faces = np.flatnonzero(facing)
+    out = np.broadcast_to(np.asarray(clearance, float), facing.shape)[faces]
+    steps = int(math.ceil(float(out.max(initial=0.0)) / step))
+    along = out[:, None] * np.arange(1, steps + 1)[None, :] / max(steps, 1)
+    up = np.arange(0.0, rise + step, step)
     n = surface.normals[faces]
     centre = surface.centroid[faces] + probe_radius * n
     # (faces, points on the way, 3): out along the normal, then up.
     way = np.concatenate(
         [
-            centre[:, None, :] + out_along[None, :, None] * n[:, None, :],
-            (centre + clearance * n)[:, None, :]
+            centre[:, None, :] + along[:, :, None] * n[:, None, :],
+            (centre + out[:, None] * n)[:, None, :]
             + up[None, :, None] * np.array([0.0, 0.0, 1.0]),
         ],
         axis=1,

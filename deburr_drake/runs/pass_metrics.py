@@ -36,13 +36,15 @@ from deburr_drake.control.online import ONLINE_STATE
 from deburr_drake.control.probe import PROBE_STATE
 from deburr_drake.math import metrics
 from deburr_drake.math.edge_registration import (
-    EDGE_REGISTRATION_SIZE,
+    CORRECTION_SIZE,
+    corrected,
     edge_pivot,
-    rotation,
-    rotation_vector,
 )
-from deburr_drake.math.registration import moved_contour
-from deburr_drake.math.rigid import rpy_matrix
+from deburr_drake.math.registration import (
+    POSE_REGISTRATION_SIZE,
+    moved_contour,
+)
+from deburr_drake.math.rigid import matrix_rotvec, rotvec_matrix, rpy_matrix
 from deburr_drake.runs.simulation import RunLog
 
 __all__ = [
@@ -67,6 +69,7 @@ __all__ = [
     "CONTACT_FORCE",
     "MetricDoc",
     "METRICS",
+    "MESH_PROBE_METRICS",
 ]
 
 #: Excluded after contact is established (s): the contact transient is not
@@ -433,6 +436,89 @@ METRICS: Dict[str, MetricDoc] = {
         ],
     ),
 }
+
+
+def _per_axis(name, unit, meaning, how):
+    """A metric and its components along (about) x, y and z."""
+    rows = [(name, unit, meaning, how)]
+    for axis in "xyz":
+        rows.append(
+            (
+                name.replace(f"_{unit}", f"_{axis}_{unit}"),
+                unit,
+                f"{meaning}: its {axis} component",
+                how,
+            )
+        )
+    return rows
+
+
+_MESH_PROBE_ROWS = [
+    *_per_axis(
+        "probe_position_error_mm",
+        "mm",
+        "a mesh part: how far the registered pose puts the edge's centre "
+        "from where the real part has it",
+        "T c - T_true c, T the registration, T_true the real part's pose "
+        "against the believed one, c the mean of the believed edge's "
+        "points (the metric: its length)",
+    ),
+    *_per_axis(
+        "probe_orientation_error_deg",
+        "deg",
+        "a mesh part: the turn between the registered and the real part's "
+        "orientation",
+        "the rotation vector of R_true R^T (the metric: its angle)",
+    ),
+    *_per_axis(
+        "probe_sigma_position_mm",
+        "mm",
+        "a mesh part: the registration's reported standard deviation of "
+        "position",
+        "sqrt of the covariance's diagonal, sigma^2 (J^T J)^-1 (sigma the "
+        "kept touches' residual RMS), about the touches' centroid (the "
+        "metric: sqrt of its trace)",
+    ),
+    *_per_axis(
+        "probe_sigma_orientation_deg",
+        "deg",
+        "a mesh part: the registration's reported standard deviation of "
+        "orientation",
+        "as ``probe_sigma_position_mm``",
+    ),
+    (
+        "probe_mahalanobis",
+        "-",
+        "a mesh part: the pose error against the reported covariance",
+        "e^T C^-1 e, e the error (rotation vector, the touches' "
+        "centroid's move) and C the 6 x 6 covariance: chi-square(6) when "
+        "the covariance is right",
+    ),
+    (
+        "probe_hole_size_mm",
+        "mm",
+        "a mesh part: how much larger the hole the edge runs round is than "
+        "the file's",
+        "the fitted uniform offset of the hole's faces (nan where the "
+        "touches cannot tell it from the pose)",
+    ),
+    (
+        "probe_sigma_hole_size_mm",
+        "mm",
+        "a mesh part: the hole size's reported standard deviation",
+        "sqrt of the covariance's size entry",
+    ),
+    (
+        "probe_amplification",
+        "-",
+        "a mesh part: how much the kept touches amplify touch noise",
+        "1 / the smallest singular value of their scaled point-to-plane "
+        "Jacobian (docs/part-errors.md)",
+    ),
+]
+#: The metrics only a mesh part's probing gives.
+MESH_PROBE_METRICS = tuple(row[0] for row in _MESH_PROBE_ROWS)
+METRICS.update(_docs("localisation_metrics", _MESH_PROBE_ROWS))
 
 #: The chamfering force is judged settled from this long after the first
 #: full contact (s) ...
@@ -849,7 +935,7 @@ def status_metrics(log: RunLog) -> PassMetrics:
 # A mesh part's online state: the correction follows theta and P, whose
 # size is the model's (deburr_drake.control.online.online_state).
 def _correction_slice(size):
-    return slice(size - 3 - EDGE_REGISTRATION_SIZE, size - 3)
+    return slice(size - 3 - CORRECTION_SIZE, size - 3)
 
 
 def registration_error(scenario, registration, samples: int = 400) -> float:
@@ -868,53 +954,60 @@ def registration_error(scenario, registration, samples: int = 400) -> float:
     )
 
 
-def true_edge_move(scenario) -> np.ndarray:
-    """The registration (v, omega) about the believed edge's pivot that
-    puts a mesh part's believed edge on the real one
-    (deburr_drake.math.edge_registration): x_real = X_WR X_WB^-1 x."""
+def _true_move(scenario):
+    """(R_t, p_t): x_real = R_t x + p_t, from a mesh part's believed pose
+    to the real one."""
     part = scenario.part
     real = part.real_pose(scenario.part_error)
-    R_WB, p_WB = rpy_matrix(part.pose.rpy), np.asarray(part.pose.xyz, float)
-    R_WR, p_WR = rpy_matrix(real.rpy), np.asarray(real.xyz, float)
-    R = R_WR @ R_WB.T
-    pivot, _ = edge_pivot(believed_contour(scenario))
-    return np.concatenate(
-        [R @ pivot + p_WR - R @ p_WB - pivot, rotation_vector(R)]
+    R_wb, p_wb = rpy_matrix(part.pose.rpy), np.asarray(part.pose.xyz, float)
+    R_wr, p_wr = rpy_matrix(real.rpy), np.asarray(real.xyz, float)
+    R_t = R_wr @ R_wb.T
+    return R_t, p_wr - R_t @ p_wb
+
+
+def _pose_errors(scenario, registration):
+    """(position (3, m), turn (3, rad)) of a mesh part's pose
+    ``registration`` (w, p, ...; x_real = R(w) x + p) against the truth
+    (T_true, from the believed pose to the real one): T c - T_true c, c
+    the mean of the believed edge's points, and the rotation vector of
+    R_true R^T."""
+    reg = np.asarray(registration, float)
+    R, p = rotvec_matrix(reg[:3]), reg[3:6]
+    R_t, p_t = _true_move(scenario)
+    belief = believed_contour(scenario)
+    c = np.mean(
+        [belief.point_at(s) for s in np.linspace(0, belief.length, 200)], 0
     )
+    return (R @ c + p) - (R_t @ c + p_t), matrix_rotvec(R_t @ R.T)
 
 
-def edge_registration_errors(scenario, registration):
-    """(m, rad) of a mesh part's ``registration`` (v, omega): how far it
-    leaves the believed edge's pivot from where the real part puts it,
-    and the angle of the turn it leaves."""
-    truth = true_edge_move(scenario)
-    r = np.asarray(registration, float)
-    left = rotation(r[3:6]).T @ rotation(truth[3:6])
-    return (
-        float(np.linalg.norm(r[:3] - truth[:3])),
-        float(np.linalg.norm(rotation_vector(left))),
-    )
-
-
-def _edge_online_metrics(scenario, online) -> PassMetrics:
+def _edge_online_metrics(scenario, online, base) -> PassMetrics:
     """A mesh part's registration while cutting: its final correction
-    (mm, deg) and the final registration's errors."""
+    (mm, deg) and the final registration's error
+    (``online_registration_error_mm``); and the final registration
+    (``base``, the probe's, corrected) as ``registration_*``."""
     out = PassMetrics()
-    if online is None or not len(online["t"]):
-        return out
-    last = online["value"][-1]
-    correction = last[_correction_slice(len(last))]
-    for axis, value in zip("xyz", correction[:3]):
-        out[f"online_offset_{axis}_mm"] = float(value) * 1e3
-    out["online_rotation_deg"] = float(
-        np.degrees(np.linalg.norm(correction[3:]))
+    final = np.asarray(base, float)
+    if online is not None and len(online["t"]):
+        last = online["value"][-1]
+        correction = last[_correction_slice(len(last))]
+        for axis, value in zip("xyz", correction[:3]):
+            out[f"online_offset_{axis}_mm"] = float(value) * 1e3
+        out["online_rotation_deg"] = float(
+            np.degrees(np.linalg.norm(correction[3:]))
+        )
+        pivot, _ = edge_pivot(believed_contour(scenario))
+        final = corrected(final, correction, pivot)
+        out["online_registration_error_mm"] = (
+            registration_error(scenario, final) * 1e3
+        )
+    position, turn = _pose_errors(scenario, final)
+    out["registration_position_error_mm"] = (
+        float(np.linalg.norm(position)) * 1e3
     )
-    out["online_registration_error_mm"] = (
-        registration_error(scenario, correction) * 1e3
+    out["registration_orientation_error_deg"] = float(
+        np.degrees(np.linalg.norm(turn))
     )
-    position, angle = edge_registration_errors(scenario, correction)
-    out["registration_position_error_mm"] = position * 1e3
-    out["registration_orientation_error_deg"] = float(np.degrees(angle))
     return out
 
 
@@ -930,25 +1023,12 @@ def localisation_metrics(log: RunLog) -> PassMetrics:
     out = PassMetrics()
     base = np.zeros(4)
     probe = log.signals.get("probe")
+    if _mesh_probed(log):
+        return _mesh_metrics(log, probe, log.signals.get("registration"))
     if probe is not None and len(probe["t"]):
         last = probe["value"][-1]
         done = float(PROBE_STATE.get(last, "done_time"))
-        if done >= 0.0:
-            out["probing_time_s"] = done
-            out["pass_time_s"] = log.stop_time - done
-        else:
-            out.unavailable(
-                "probing_time_s",
-                "probing did not finish "
-                f"(the run stopped at {log.stop_time:.3f} s)",
-            )
-            out.unavailable("pass_time_s", "probing did not finish")
-        if log.completed_pass:
-            out["cycle_time_s"] = log.stop_time
-        else:
-            out.unavailable(
-                "cycle_time_s", f"the pass did not complete ({log.stop_reason})"
-            )
+        _times(out, log, done)
         out["probe_touches"] = float(PROBE_STATE.get(last, "touches"))
         out["probe_touches_kept"] = float(PROBE_STATE.get(last, "kept"))
         out["probe_fit_rms_mm"] = float(PROBE_STATE.get(last, "fit_rms")) * 1e3
@@ -963,9 +1043,6 @@ def localisation_metrics(log: RunLog) -> PassMetrics:
                 registration_error(log.scenario, base) * 1e3
             )
     online = log.signals.get("registration")
-    if log.scenario.part.edge.kind == "mesh":
-        out.update(_edge_online_metrics(log.scenario, online))
-        return out
     if online is not None and len(online["t"]):
         corr = ONLINE_STATE.get(online["value"][-1], "correction")
         out["online_offset_x_mm"] = float(corr[0]) * 1e3
@@ -975,6 +1052,106 @@ def localisation_metrics(log: RunLog) -> PassMetrics:
             registration_error(log.scenario, base + np.asarray(corr, float))
             * 1e3
         )
+    return out
+
+
+def _mesh_metrics(log: RunLog, probe, online) -> PassMetrics:
+    """:func:`localisation_metrics` of a mesh part: its probing's
+    (:func:`_mesh_probe_metrics`) and its registration while cutting's
+    (:func:`_edge_online_metrics`)."""
+    from deburr_drake.control.mesh_probe import MESH_PROBE_STATE
+
+    out = PassMetrics()
+    base = np.zeros(POSE_REGISTRATION_SIZE)
+    if probe is not None and len(probe["t"]):
+        last = probe["value"][-1]
+        out = _mesh_probe_metrics(log, last)
+        if float(MESH_PROBE_STATE.get(last, "done_time")) >= 0.0:
+            base = np.asarray(MESH_PROBE_STATE.get(last, "registration"))
+    out.update(_edge_online_metrics(log.scenario, online, base))
+    return out
+
+
+def _mesh_probed(log: RunLog) -> bool:
+    return log.scenario.part.edge.kind == "mesh"
+
+
+def _times(out: PassMetrics, log: RunLog, done: float):
+    """probing_time_s, pass_time_s, cycle_time_s of a probed run."""
+    if done >= 0.0:
+        out["probing_time_s"] = done
+        out["pass_time_s"] = log.stop_time - done
+    else:
+        out.unavailable(
+            "probing_time_s",
+            "probing did not finish "
+            f"(the run stopped at {log.stop_time:.3f} s)",
+        )
+        out.unavailable("pass_time_s", "probing did not finish")
+    if log.completed_pass:
+        out["cycle_time_s"] = log.stop_time
+    else:
+        out.unavailable(
+            "cycle_time_s", f"the pass did not complete ({log.stop_reason})"
+        )
+
+
+def _mesh_probe_metrics(log: RunLog, last) -> PassMetrics:
+    """:func:`localisation_metrics` of a mesh part's probing
+    (MESH_PROBE_STATE): the times, the touches, the registration's pose
+    error against the truth, its covariance, the hole's size."""
+    from deburr_drake.control.mesh_probe import MESH_PROBE_STATE, covariance_of
+
+    L, out = MESH_PROBE_STATE, PassMetrics()
+    done = float(L.get(last, "done_time"))
+    _times(out, log, done)
+    out["probe_touches"] = float(L.get(last, "touches"))
+    out["probe_touches_kept"] = float(L.get(last, "kept"))
+    out["probe_fit_rms_mm"] = float(L.get(last, "fit_rms")) * 1e3
+    if float(L.get(last, "kept")) == 0.0:
+        why = "the touches did not register the part"
+        for name in MESH_PROBE_METRICS + ("probe_registration_error_mm",):
+            out.unavailable(name, why)
+        return out
+    reg = np.asarray(L.get(last, "registration"), float)
+    R, p = rotvec_matrix(reg[:3]), reg[3:6]
+    R_t, p_t = _true_move(log.scenario)
+    position, turn = _pose_errors(log.scenario, reg)
+    for name, v, scale, unit in (
+        ("probe_position_error", position, 1e3, "mm"),
+        ("probe_orientation_error", turn, np.degrees(1.0), "deg"),
+    ):
+        out[f"{name}_{unit}"] = float(np.linalg.norm(v)) * scale
+        for axis, x in zip("xyz", v):
+            out[f"{name}_{axis}_{unit}"] = float(x) * scale
+    cov = covariance_of(last)
+    sigma = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    for name, block, scale, unit in (
+        ("probe_sigma_orientation", sigma[:3], np.degrees(1.0), "deg"),
+        ("probe_sigma_position", sigma[3:6], 1e3, "mm"),
+    ):
+        out[f"{name}_{unit}"] = float(np.linalg.norm(block)) * scale
+        for axis, x in zip("xyz", block):
+            out[f"{name}_{axis}_{unit}"] = float(x) * scale
+    # The error e = (omega, v) about the fit's pivot, T_true = exp(e) T.
+    pivot = np.asarray(L.get(last, "pivot"), float)
+    R_e = R_t @ R.T
+    e = np.concatenate([turn, R_e @ pivot + (p_t - R_e @ p) - pivot])
+    out["probe_mahalanobis"] = float(e @ np.linalg.solve(cov[:6, :6], e))
+    if float(L.get(last, "size_fitted")) > 0.5:
+        out["probe_hole_size_mm"] = float(reg[6]) * 1e3
+        out["probe_sigma_hole_size_mm"] = float(sigma[6]) * 1e3
+    else:
+        why = "the touches could not tell the hole's size (or fit_radius off)"
+        out.unavailable("probe_hole_size_mm", why)
+        out.unavailable("probe_sigma_hole_size_mm", why)
+    out["probe_amplification"] = float(L.get(last, "amplification"))
+    if done >= 0.0:
+        out["probe_registration_error_mm"] = (
+            registration_error(log.scenario, reg) * 1e3
+        )
+    else:
+        out.unavailable("probe_registration_error_mm", "probing did not finish")
     return out
 
 

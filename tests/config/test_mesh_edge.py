@@ -97,17 +97,11 @@ def _refusal(scenario_file, text):
             "faults: {part_step: {time: 1.0, rpy: [.nan, 0, 0]}}",
             "faults.part_step.rpy[0] = nan is invalid",
         ),
-        (
-            "localisation: {probe: {enabled: true}}",
-            "localisation.probe.enabled = True is invalid",
-        ),
     ],
 )
 def test_one_line_naming_the_field(scenario_file, text, starts):
     message = _refusal(scenario_file, text)
     assert message.startswith(starts)
-    if "localisation" in text:
-        assert "not supported yet" in message
     assert "\n" not in message
 
 

@@ -130,21 +130,17 @@ def test_a_3d_edge_registers_the_move_across_its_axis():
     real part moved by 0.15 mm and turned by 0.2 deg: the correction is
     the move across the rim's axis, and no turn (the force along n1
     shows none)."""
-    from deburr_drake.math.edge_registration import (
-        MovedContour,
-        edge_pivot,
-        move_of,
-    )
+    from deburr_drake.math.edge_registration import edge_pivot, move_of
+    from deburr_drake.math.registration import PosedContour
     from deburr_drake.math.rigid import rpy_matrix
 
     rim = CircularContour([0.95, 0.0, 0.5], 0.008)
     tilt = rpy_matrix([np.radians(30.0), 0.0, 0.0])
-    believed = MovedContour(rim, tilt, rim.center - tilt @ rim.center)
-    believed.varying_frame = True
+    believed = PosedContour(rim, tilt, rim.center - tilt @ rim.center)
     move = np.array([1.2e-4, -0.8e-4, 0.6e-4, 0.0021, -0.0017, 0.0026])
-    real = MovedContour(believed, *move_of(move, edge_pivot(believed)[0]))
+    real = PosedContour(believed, *move_of(move, edge_pivot(believed)[0]))
     config, system, context = _system(believed)
-    assert system.GetOutputPort("registration").size() == 6
+    assert system.GetOutputPort("registration").size() == 7
     rng = np.random.default_rng(0)
     T, v, c0, c1 = config.sample_period, 0.002, 2.0, 9000.0
     for k in range(int(20.0 / T)):
@@ -155,7 +151,9 @@ def test_a_3d_edge_registers_the_move_across_its_axis():
     reg = system.GetOutputPort("registration").Eval(context)
     axis = tilt @ [0.0, 0.0, 1.0]
     across = move[:3] - (move[:3] @ axis) * axis
-    np.testing.assert_allclose(reg[:3], across, atol=5e-6)
-    np.testing.assert_allclose(reg[3:], 0.0, atol=1e-12)
+    # the pose registration (w, p, size): no turn, the move, no size
+    np.testing.assert_allclose(reg[:3], 0.0, atol=1e-12)
+    np.testing.assert_allclose(reg[3:6], across, atol=5e-6)
+    assert reg[6] == 0.0
     theta = system.layout.get(context.get_discrete_state(0).value(), "theta")
     assert theta[1] == pytest.approx(c1, rel=0.1)

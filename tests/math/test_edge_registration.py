@@ -1,12 +1,13 @@
-"""A 3-D edge's registration: rotations, moves and their composition, the
-moved contour, and what the force along n1 shows of a small rigid move."""
+"""A 3-D edge's registration while cutting: the correction on a pose
+registration, and what the force along n1 shows of a small rigid
+move."""
 
 import numpy as np
 import pytest
 
 from deburr_drake.math.edge_registration import (
-    MovedContour,
-    compose,
+    carried_pivot,
+    corrected,
     edge_contact_regressor,
     edge_model,
     edge_offset_terms,
@@ -14,60 +15,43 @@ from deburr_drake.math.edge_registration import (
     edge_registration_of,
     move_of,
     observable_directions,
-    rotation,
-    rotation_vector,
 )
 from deburr_drake.math.geometry import CircularContour, StraightContour
-from deburr_drake.math.registration import MAX_AMPLIFICATION, rls_update
-from deburr_drake.math.rigid import rpy_matrix
+from deburr_drake.math.registration import (
+    MAX_AMPLIFICATION,
+    PosedContour,
+    rls_update,
+)
+from deburr_drake.math.rigid import rotvec_matrix, rpy_matrix
 
 CIRCLE = CircularContour([0.95, 0.0, 0.5], 0.008)
 # The same circle in a plane tilted 30 deg about x (an inclined hole's rim).
 TILT = rpy_matrix([np.radians(30.0), 0.0, 0.0])
-TILTED = MovedContour(
+TILTED = PosedContour(
     CIRCLE, TILT, CIRCLE.center - TILT @ CIRCLE.center + [0.0, 0.001, 0.0]
 )
 MOVE = np.array([1.2e-4, -0.8e-4, 0.6e-4, 0.0021, -0.0017, 0.0026])
 
 
-def test_rotation_vector_round_trip():
-    rng = np.random.default_rng(3)
-    for w in [np.zeros(3), 1e-10 * np.ones(3), *rng.uniform(-2, 2, (20, 3))]:
-        R = rotation(w)
-        np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-14)
-        np.testing.assert_allclose(rotation_vector(R), w, atol=1e-12)
-    # about z by a quarter turn, as Drake's RollPitchYaw writes it
-    np.testing.assert_allclose(
-        rotation([0, 0, np.pi / 2]), rpy_matrix([0, 0, np.pi / 2]), atol=1e-15
-    )
-
-
-def test_compose_is_the_base_then_the_correction_about_the_carried_pivot():
+def test_a_correction_moves_the_registered_edge_about_its_carried_pivot():
     pivot = np.array([0.9, 0.1, 0.4])
-    base = np.array([1e-3, -2e-3, 5e-4, 0.01, -0.02, 0.015])
+    base = np.array([0.01, -0.02, 0.015, 1e-3, -2e-3, 5e-4, 1e-4])
     correction = np.array([-3e-4, 1e-4, 2e-4, -0.004, 0.003, 0.008])
     x = np.random.default_rng(0).normal(size=(10, 3)) * 0.01 + pivot
-    Rb, tb = move_of(base, pivot)
-    Rc, tc = move_of(correction, pivot + base[:3])  # the pivot moved by b
-    Rt, tt = move_of(compose(base, correction), pivot)
-    expected = (Rc @ (Rb @ x.T + tb[:, None]) + tc[:, None]).T
-    np.testing.assert_allclose((Rt @ x.T).T + tt, expected, atol=1e-15)
-
-
-def test_moved_contour_moves_points_normals_and_keeps_the_depth():
-    R, t = move_of(MOVE, CIRCLE.center)
-    moved = MovedContour(CIRCLE, R, t)
-    for s in np.linspace(0.0, CIRCLE.length, 7, endpoint=False):
-        p = CIRCLE.point_at(s)
-        q = CIRCLE.n1(p) * 2e-4 + p  # 0.2 mm deep
-        x = R @ q + t
-        np.testing.assert_allclose(moved.point_at(s), R @ p + t, atol=1e-15)
-        np.testing.assert_allclose(moved.n1(x), R @ CIRCLE.n1(q), atol=1e-15)
-        np.testing.assert_allclose(moved.depth(x), 2e-4, atol=1e-15)
-        assert moved.arc_position(x) == pytest.approx(s, abs=1e-12)
-        np.testing.assert_allclose(
-            moved.tool_axis_at(s), R @ [0.0, 0.0, 1.0], atol=1e-15
-        )
+    R_b, p_b = rotvec_matrix(base[:3]), base[3:6]
+    c = R_b @ pivot + p_b
+    np.testing.assert_allclose(carried_pivot(base, pivot), c)
+    R_c, t_c = move_of(correction, c)
+    # the correction turns about c and moves it by v
+    np.testing.assert_allclose(R_c @ c + t_c, c + correction[:3])
+    np.testing.assert_allclose(R_c, rotvec_matrix(correction[3:]))
+    total = corrected(base, correction, pivot)
+    expected = (R_c @ (R_b @ x.T + p_b[:, None]) + t_c[:, None]).T
+    found = (rotvec_matrix(total[:3]) @ x.T).T + total[3:6]
+    np.testing.assert_allclose(found, expected, atol=1e-15)
+    assert total[6] == base[6]  # the size is the probe's
+    # no correction: the registration as it was
+    np.testing.assert_allclose(corrected(base, np.zeros(6), pivot), base)
 
 
 def test_offset_terms_are_the_first_order_move_along_n1():
@@ -77,7 +61,7 @@ def test_offset_terms_are_the_first_order_move_along_n1():
     for scale in (1e-2, 1e-3):
         move = MOVE * scale
         R, t = move_of(move, pivot)
-        real = MovedContour(TILTED, R, t)
+        real = PosedContour(TILTED, R, t)
         s = np.linspace(0.0, TILTED.length, 16, endpoint=False)
         x = np.array([TILTED.point_at(v) for v in s])
         n1 = np.array([TILTED.n1(p) for p in x])
@@ -131,7 +115,7 @@ def test_least_squares_on_the_force_recovers_the_shown_part_of_a_move():
     rim's centre: a turn about it moves no point of the rim along n1)."""
     model = edge_model(TILTED, 1.0 / MAX_AMPLIFICATION)
     R, t = move_of(MOVE, model.pivot)
-    real = MovedContour(TILTED, R, t)
+    real = PosedContour(TILTED, R, t)
     c0, c1 = 2.0, 9000.0
     theta = np.array([3.0, 4000.0, 0.0, 0.0])
     P = np.diag([9.0, 4000.0**2, 4.0, 4.0])

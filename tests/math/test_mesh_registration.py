@@ -12,8 +12,8 @@ import trimesh
 
 from deburr_drake.math.mesh_registration import (
     MeshSurface,
-    _closest_on_triangles,
     closest_on_mesh,
+    closest_on_triangles,
     pose_amplification,
     register_mesh,
 )
@@ -75,7 +75,7 @@ def test_nearest_point_of_a_triangle():
     for _ in range(30):
         a, b, c = rng.standard_normal((3, 3))
         p = 2.0 * rng.standard_normal(3)
-        q = _closest_on_triangles(p[None], a[None], b[None], c[None])[0, 0]
+        q = closest_on_triangles(p[None], a[None], b[None], c[None])[0, 0]
         samples = a + np.outer(u, b - a) + np.outer(v, c - a)
         sampled = np.min(np.linalg.norm(samples - p, axis=1))
         step = max(np.linalg.norm(b - a), np.linalg.norm(c - a)) / 300
@@ -89,7 +89,7 @@ def test_closest_on_mesh_searches_every_face(cross_hole):
         part.mesh.bounds, axis=0
     )
     q, j = closest_on_mesh(surface, p)
-    every = _closest_on_triangles(p, *surface.corners)
+    every = closest_on_triangles(p, *surface.corners)
     distance = np.min(np.linalg.norm(every - p[:, None, :], axis=2), axis=1)
     np.testing.assert_allclose(
         np.linalg.norm(q - p, axis=1), distance, atol=1e-15

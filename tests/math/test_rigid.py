@@ -2,13 +2,17 @@
 believed, real and stepped part poses."""
 
 import numpy as np
+from pydrake.common.eigen_geometry import AngleAxis
+from pydrake.math import RotationMatrix
 
 from deburr_drake.math.rigid import (
     believed_from_real,
     compose,
     inverse,
+    matrix_rotvec,
     matrix_rpy,
     real_from_believed,
+    rotvec_matrix,
     rpy_matrix,
     stepped_belief,
 )
@@ -74,3 +78,19 @@ def test_rpy_round_trip_over_the_angles():
         np.testing.assert_allclose(np.linalg.det(R), 1.0, atol=1e-14)
         np.testing.assert_allclose(rpy_matrix(matrix_rpy(R)), R, atol=1e-14)
         np.testing.assert_allclose(matrix_rpy(R), rpy, atol=1e-12)
+
+
+def test_rotation_vector_round_trip_against_drake():
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        axis = rng.normal(size=3)
+        w = axis / np.linalg.norm(axis) * rng.uniform(0.0, 3.0)  # < pi
+        R = rotvec_matrix(w)
+        axis = w / np.linalg.norm(w)
+        expected = RotationMatrix(AngleAxis(np.linalg.norm(w), axis))
+        np.testing.assert_allclose(R, expected.matrix(), atol=1e-14)
+        np.testing.assert_allclose(matrix_rotvec(R), w, atol=1e-12)
+    np.testing.assert_array_equal(rotvec_matrix(np.zeros(3)), np.eye(3))
+    np.testing.assert_allclose(
+        matrix_rotvec(rotvec_matrix([1e-9, 0, 0])), [1e-9, 0, 0], rtol=1e-6
+    )

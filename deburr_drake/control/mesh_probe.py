@@ -1,0 +1,619 @@
+"""Touch probing of a mesh part before the pass: the touches planned on its
+faces, each approached along its face's normal, and the part's pose (and
+a hole's size) registered from them, as a Drake system.
+
+- :class:`MeshProbePlan`: the believed part's surface, the hole's faces,
+  the planned touches (deburr_drake.math.touch_plan) and the height the
+  probe travels at; made once per run (deburr_drake.cell.touches).
+- :class:`MeshProbingSequence`: the planar
+  :class:`~deburr_drake.control.probe.ProbingSequence`'s guarded moves,
+  detection, stiffness measurement and detection-bias compensation, on
+  the planned faces; the moves between touches leave the part along the
+  face's normal, travel above the part and come down to the next
+  touch's standoff. Then the registration
+  (deburr_drake.math.mesh_registration.register_mesh), and the way to
+  the pass's start on the registered part. Its ``registration`` is a
+  pose and a size (deburr_drake.math.registration.POSE_REGISTRATION_SIZE),
+  which moves the believed 3-D edge (its points, frames and tool axis).
+
+The probe is a ball of the cutter's radius about the tool point (a
+stylus, as the touch plan plans it): the touch on a face lies that radius
+along the face's normal from the tool point's crossing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+from pydrake.systems.framework import EventStatus, LeafSystem
+
+from deburr_drake.config import ProbeConfig
+from deburr_drake.control.layout import CHAMFER_STATE, VectorLayout
+from deburr_drake.control.probe import (
+    CUT_ESTABLISHED,
+    PROBE_MISSED,
+    SensorTiming,
+    detection_depth,
+    measured_stiffness,
+)
+from deburr_drake.math.geometry import Contour
+from deburr_drake.math.mesh_registration import MeshSurface, register_mesh
+from deburr_drake.math.registration import (
+    POSE_REGISTRATION_SIZE,
+    moved_contour,
+)
+from deburr_drake.math.rigid import matrix_rotvec
+from deburr_drake.math.touch_plan import TouchPlan
+
+__all__ = [
+    "MeshProbePlan",
+    "MeshProbingSequence",
+    "MESH_PROBE_STATE",
+    "MESH_PHASES",
+    "COVARIANCE_SIZE",
+    "covariance_of",
+]
+
+#: The phases of the sequence, in order: for each touch lift (along the
+#: last touch's normal, then up), over (at the safe height), down (to the
+#: touch's standoff), settle, approach, retract; at the end the same way
+#: to the pass's start's standoff, and the entry.
+MESH_PHASES = (
+    "lift",
+    "over",
+    "down",
+    "settle",
+    "approach",
+    "retract",
+    "enter",
+    "done",
+)
+_P = {name: float(k) for k, name in enumerate(MESH_PHASES)}
+
+#: (omega (3), v (3), size): the registration's covariance is 7 x 7
+#: (the size's row and column zero when it was not fitted).
+COVARIANCE_SIZE = 7
+
+MESH_PROBE_STATE = VectorLayout(
+    "mesh_probe_state",
+    [
+        ("phase", 1),  # index into MESH_PHASES
+        ("index", 1),  # the touch under way (N: on the way to the start)
+        ("phase_start", 1),  # s
+        ("segment_start", 3),  # m, world
+        ("segment_end", 3),  # m
+        ("segment_duration", 1),  # s
+        ("linear", 1),  # 1: constant speed (guarded), 0: smooth
+        ("command", 3),  # m, the commanded tool point
+        ("tare", 3),  # N
+        # w (rad), p (m) of x_real = Rot(w) x + p, the hole's size (m)
+        ("registration", POSE_REGISTRATION_SIZE),
+        # of (omega, v, size) about the fit's pivot (rad, m), row-major
+        ("covariance", COVARIANCE_SIZE * COVARIANCE_SIZE),
+        ("pivot", 3),  # m, world: the point the covariance's turn is about
+        ("size_fitted", 1),  # 1 when the touches told the hole's size
+        ("amplification", 1),  # the kept touches' noise amplification
+        ("done_time", 1),  # s, -1 while probing
+        ("cut_time", 1),  # s, -1 before the entry's cut is established
+        ("touching", 1),  # 1 until the entry: the probe's contact model
+        ("touches", 1),
+        ("kept", 1),
+        ("fit_rms", 1),  # m
+        ("stiffness", 1),  # N/m, the touches' median, as the planar probe
+    ],
+)
+
+#: Per touch, the crossings of the guarded move: x, y, z (m), the speed
+#: along the approach (m/s) at the first threshold, the way (m) on to the
+#: second (0: not reached).
+_CROSSING = 5
+
+
+@dataclass(frozen=True)
+class MeshProbePlan:
+    """What the sequence probes: ``surface`` the believed part (m,
+    world), ``sized`` (F,) bool its hole's faces (None: no hole whose
+    size is fitted), ``touches`` the planned touches on it, the tool
+    point's ``safe_height`` (m, world z) for the travels above the part
+    and the probe's ``radius`` (m, the ball about the tool point);
+    ``allowance`` (N,) m: how far each touch's face may lie off the
+    believed one along its normal (the part's pose allowance), which its
+    standoff and its search add."""
+
+    surface: MeshSurface
+    sized: Optional[np.ndarray]
+    touches: TouchPlan
+    safe_height: float
+    radius: float
+    allowance: np.ndarray
+
+    @property
+    def count(self) -> int:
+        return len(self.touches.points)
+
+    def route(self, standoff: float) -> np.ndarray:
+        """(2 N, 3) m: every touch's standoff point and the point above
+        it at the safe height (where the probe goes, on the believed
+        part)."""
+        low = np.array(
+            [self.standoff_point(i, standoff) for i in range(self.count)]
+        )
+        high = low.copy()
+        high[:, 2] = self.safe_height
+        return np.vstack([low, high])
+
+    def standoff_point(self, i: int, standoff: float) -> np.ndarray:
+        """The tool point ``standoff`` (m) and the touch's allowance off
+        the believed face of touch ``i``, along its normal."""
+        t = self.touches
+        clear = self.radius + standoff + self.allowance[i]
+        return t.points[i] + clear * t.normals[i]
+
+
+class MeshProbingSequence(LeafSystem):
+    """Guarded moves at the planned touches of a mesh part, its
+    registration, and the way to the pass's start on the registered part.
+
+    .. pydrake_system::
+
+        name: MeshProbingSequence
+        input_ports:
+        - chamfer_state
+        - measured_force
+        - command_in
+        output_ports:
+        - command
+        - probing
+        - hold
+        - spindle
+        - fuzzy_weight
+        - registration
+        - touching
+        - probe_state
+        - touch_points
+
+    The ports are :class:`~deburr_drake.control.probe.ProbingSequence`'s
+    but ``registration`` (POSE_REGISTRATION_SIZE: w, p, size; zero until
+    the fit), ``touching`` (1, the plant's probe contact: 1 until the
+    entry, when the tool is at the start's standoff off the registered
+    part) and ``probe_state`` (MESH_PROBE_STATE). ``touch_points`` (N x
+    4): x, y, z (m) of each compensated touch on the part's surface
+    (the ball's radius taken off along the face's normal), 1 if contact
+    was detected (2: dropped by the fit).
+
+    Each touch: lift (back along the last touch's normal by ``retract``
+    and up) to ``safe_height``, over to above the touch's standoff point
+    (``standoff`` off the believed face along its normal), down to it,
+    settle, tare, move along minus the normal at ``approach_speed`` until
+    the force against it exceeds ``force_threshold`` (nothing within
+    ``search_distance``: the run ends, ``probe_missed:<touch index>``),
+    on to ``stiffness_threshold``, back by ``retract``. Then each touch
+    compensated as the planar probe's (:func:`detection_depth` on the
+    touches' median stiffness, ``detection_bias``), the registration
+    (``max_residual``, the hole's size with ``fit_radius``), up, over and
+    down to the standoff of the pass's start on the registered part, and
+    the entry along its n1 at the approach speed.
+    """
+
+    def __init__(
+        self,
+        contour: Contour,
+        plan: MeshProbePlan,
+        config: ProbeConfig,
+        *,
+        sample_period: float,
+        timing: SensorTiming,
+        initial_position,
+        start_depth: float = 0.0,
+        desired_depth: float = 0.0,
+        touch_noise: Optional[float] = None,
+    ):
+        super().__init__()
+        config.validate()
+        self.set_name("probing_sequence")
+        self._contour = contour
+        self._plan = plan
+        self._config = config
+        self._timing = timing
+        self._start_depth = start_depth
+        self._established_depth = CUT_ESTABLISHED * desired_depth
+        self._touch_noise = touch_noise
+        self._n = plan.count
+        # State: the sequence, the touches and their crossings.
+        self._state = self.DeclareDiscreteState(
+            self._initial_state(np.asarray(initial_position, float))
+        )
+        self._touch_state = self.DeclareDiscreteState(np.zeros(4 * self._n))
+        self._crossing_state = self.DeclareDiscreteState(
+            np.zeros(_CROSSING * self._n)
+        )
+        # Inputs, and the sequence stepped at the sensor's samples.
+        self._chamfer_port = self.DeclareVectorInputPort(
+            "chamfer_state", CHAMFER_STATE.size
+        )
+        self._force_port = self.DeclareVectorInputPort("measured_force", 3)
+        self._command_in = self.DeclareVectorInputPort("command_in", 3)
+        self.DeclarePeriodicDiscreteUpdateEvent(
+            sample_period, 0.0, self._update
+        )
+        # Outputs: all functions of the state (and command_in once done).
+        state = {self.discrete_state_ticket(self._state)}
+        self.DeclareVectorOutputPort(
+            "command",
+            3,
+            self._calc_command,
+            prerequisites_of_calc=state | {self._command_in.ticket()},
+        )
+        for name, calc in (
+            ("probing", self._calc_probing),
+            ("hold", self._calc_hold),
+            ("spindle", self._calc_spindle),
+            ("touching", self._calc_touching),
+        ):
+            self.DeclareVectorOutputPort(
+                name, 1, calc, prerequisites_of_calc=state
+            )
+        self.DeclareVectorOutputPort(
+            "fuzzy_weight",
+            1,
+            self._calc_fuzzy_weight,
+            prerequisites_of_calc=state | {self.time_ticket()},
+        )
+        self.DeclareVectorOutputPort(
+            "registration",
+            POSE_REGISTRATION_SIZE,
+            self._calc_registration,
+            prerequisites_of_calc=state,
+        )
+        self.DeclareStateOutputPort("probe_state", self._state)
+        self.DeclareStateOutputPort("touch_points", self._touch_state)
+
+    # -- set-up ----------------------------------------------------------
+    def _initial_state(self, x0):
+        L = MESH_PROBE_STATE
+        x = np.zeros(L.size)
+        x[L.slice("command")] = x0
+        for name in ("done_time", "cut_time"):
+            x[L.slice(name)] = -1.0
+        x[L.slice("touching")] = 1.0
+        x[L.slice("stiffness")] = self._config.contact_stiffness
+        self._lift(x, 0.0, x0)
+        return x
+
+    @property
+    def plan(self) -> MeshProbePlan:
+        return self._plan
+
+    # -- moves -------------------------------------------------------------
+    def _segment(self, x, t, phase, start, end, duration, linear):
+        L = MESH_PROBE_STATE
+        x[L.slice("phase")] = _P[phase]
+        x[L.slice("phase_start")] = t
+        x[L.slice("segment_start")] = start
+        x[L.slice("segment_end")] = end
+        x[L.slice("segment_duration")] = max(duration, 1e-9)
+        x[L.slice("linear")] = 1.0 if linear else 0.0
+
+    def _smooth(self, x, t, phase, start, end):
+        """A smooth move at about ``clear_travel_speed`` (its mean)."""
+        length = float(np.linalg.norm(np.asarray(end) - start))
+        self._segment(
+            x,
+            t,
+            phase,
+            start,
+            end,
+            max(length / self._config.clear_travel_speed, 0.05),
+            False,
+        )
+
+    def _lift(self, x, t, start):
+        """Straight up to the safe height (from a touch's retract point,
+        or from the start: its standoff, clear of the part)."""
+        up = np.array([start[0], start[1], self._plan.safe_height])
+        self._smooth(x, t, "lift", start, up)
+
+    def _target(self, x) -> np.ndarray:
+        """Where the next descent ends: the next touch's standoff point,
+        or after the last touch the pass's start's standoff on the
+        registered part."""
+        i = int(round(float(MESH_PROBE_STATE.get(x, "index"))))
+        if i < self._n:
+            return self._plan.standoff_point(i, self._config.standoff)
+        contour = self._registered(x)
+        p = contour.point_at(0.0)
+        return p - self._config.standoff * contour.n1(p)
+
+    def _along(self, x, t):
+        L = MESH_PROBE_STATE
+        u = (t - L.get(x, "phase_start")) / L.get(x, "segment_duration")
+        u = min(max(u, 0.0), 1.0)
+        w = u if L.get(x, "linear") > 0.5 else u * u * (3 - 2 * u)
+        a = L.get(x, "segment_start")
+        b = L.get(x, "segment_end")
+        return a + w * (b - a), u >= 1.0
+
+    # -- the state machine -----------------------------------------------
+    def _update(self, context, discrete_state):
+        x = context.get_discrete_state(self._state).get_value()
+        phase = MESH_PHASES[int(round(float(MESH_PROBE_STATE.get(x, "phase"))))]
+        t = context.get_time()
+        if phase == "done":
+            self._watch_entry(context, x, t, discrete_state)
+            return None
+        x = x.copy()
+        command, finished = self._along(x, t)
+        x[MESH_PROBE_STATE.slice("command")] = command
+        touches, crossings = (
+            context.get_discrete_state(k).get_value().copy()
+            for k in (self._touch_state, self._crossing_state)
+        )
+        status = self._step(
+            phase, context, x, t, command, finished, touches, crossings
+        )
+        discrete_state.set_value(self._state, x)
+        discrete_state.set_value(self._touch_state, touches)
+        discrete_state.set_value(self._crossing_state, crossings)
+        return status
+
+    def _step(
+        self, phase, context, x, t, command, finished, touches, crossings
+    ):
+        """What a sample does in ``phase`` (it writes ``x``, ``touches``
+        and ``crossings``); an EventStatus for a missed touch."""
+        L, c = MESH_PROBE_STATE, self._config
+        i = int(round(float(L.get(x, "index"))))
+        if phase == "approach":
+            return self._approach(
+                context, x, t, command, finished, touches, crossings, i
+            )
+        if not finished:
+            return None
+        if phase == "lift":
+            target = self._target(x)
+            over = np.array([target[0], target[1], self._plan.safe_height])
+            self._smooth(x, t, "over", command, over)
+        elif phase == "over":
+            self._smooth(x, t, "down", command, self._target(x))
+        elif phase == "down" and i < self._n:
+            self._segment(
+                x, t, "settle", command, command, c.settle_time, False
+            )
+        elif phase == "down":
+            # On to the start on the registered part, along its n1.
+            contour = self._registered(x)
+            p = contour.point_at(0.0)
+            start = p + self._start_depth * contour.n1(p)
+            self._segment(
+                x,
+                t,
+                "enter",
+                command,
+                start,
+                float(np.linalg.norm(start - command)) / c.approach_speed,
+                True,
+            )
+            x[L.slice("touching")] = 0.0
+        elif phase == "settle":
+            x[L.slice("tare")] = self._force_port.Eval(context)
+            n = self._plan.touches.normals[i]
+            search = c.search_distance + 2.0 * self._plan.allowance[i]
+            self._segment(
+                x,
+                t,
+                "approach",
+                command,
+                command - search * n,
+                search / c.approach_speed,
+                True,
+            )
+        elif phase == "retract":
+            x[L.slice("index")] = i + 1
+            if i + 1 == self._n:
+                self._compensate(x, touches, crossings)
+                self._fit(x, touches)
+            self._lift(x, t, command)
+        elif phase == "enter":
+            x[L.slice("phase")] = _P["done"]
+            x[L.slice("done_time")] = t
+        return None
+
+    def _approach(
+        self, context, x, t, command, finished, touches, crossings, i
+    ):
+        c, L = self._config, MESH_PROBE_STATE
+        n = -self._plan.touches.normals[i]  # the approach's direction
+        f = self._force_port.Eval(context) - L.get(x, "tare")
+        pushed = -float(f @ n)
+        chamfer = self._chamfer_port.Eval(context)
+        x_p = CHAMFER_STATE.get(chamfer, "x_p")
+        row = slice(_CROSSING * i, _CROSSING * i + _CROSSING)
+        touched = touches[4 * i + 3] > 0.5
+        if not touched and pushed >= c.force_threshold:
+            speed = float(CHAMFER_STATE.get(chamfer, "xdot_p") @ n)
+            crossings[row] = [*x_p, speed, 0.0]
+            touches[4 * i : 4 * i + 4] = [
+                *self._touch(x_p, n, speed, c.contact_stiffness),
+                1.0,
+            ]
+            x[L.slice("touches")] += 1.0
+            if c.stiffness_threshold > 0:
+                return None
+        elif touched and pushed >= c.stiffness_threshold:
+            crossings[row.stop - 1] = float((x_p - crossings[row][:3]) @ n)
+        elif not finished:
+            return None
+        elif not touched:
+            a = L.get(x, "segment_start")
+            return EventStatus.ReachedTermination(
+                self,
+                f"{PROBE_MISSED}:{i}: no contact within search_distance "
+                f"{c.search_distance:g} m and twice the allowance "
+                f"{self._plan.allowance[i]:.3g} m along "
+                f"{np.round(n, 6).tolist()} "
+                f"from {np.round(a, 6).tolist()} m (touch {i} of {self._n} "
+                "on the part's faces)",
+            )
+        # Back from the touch along the face's normal.
+        back = x_p - c.retract * n
+        length = float(np.linalg.norm(back - command))
+        self._segment(
+            x,
+            t,
+            "retract",
+            command,
+            back,
+            max(length / c.travel_speed, 0.05),
+            False,
+        )
+        return None
+
+    def _touch(self, x_p, n, speed, stiffness):
+        """The touch on the part's surface: the ball's centre at the
+        crossing ``x_p`` moving at ``speed`` along ``n`` (the approach),
+        less the modelled depth at detection and the probe's
+        qualified bias, plus the ball's radius along n."""
+        c = self._config
+        depth = (
+            detection_depth(speed, c.force_threshold, stiffness, self._timing)
+            + c.detection_bias
+        )
+        return x_p + n * (self._plan.radius - depth)
+
+    def _watch_entry(self, context, x, t, discrete_state):
+        if MESH_PROBE_STATE.get(x, "cut_time") < 0 and (
+            CHAMFER_STATE.get(self._chamfer_port.Eval(context), "delta")
+            >= self._established_depth
+            or t - MESH_PROBE_STATE.get(x, "done_time")
+            >= self._config.entry_dwell
+        ):
+            x = x.copy()
+            x[MESH_PROBE_STATE.slice("cut_time")] = t
+            discrete_state.set_value(self._state, x)
+
+    def _compensate(self, x, touches, crossings):
+        """Every touch compensated with the stiffness the touches measured
+        (their median), as the planar probe's."""
+        c = self._config
+        rows = crossings.reshape(self._n, _CROSSING)
+        hit = touches[3::4] > 0.5
+        spans = rows[:, 4][hit & (rows[:, 4] > 0)]
+        if not len(spans):
+            return
+        k = float(
+            np.median(
+                [
+                    measured_stiffness(
+                        span,
+                        c.force_threshold,
+                        c.stiffness_threshold,
+                        c.contact_exponent,
+                        c.contact_exponent_slope,
+                    )
+                    for span in spans
+                ]
+            )
+        )
+        x[MESH_PROBE_STATE.slice("stiffness")] = k
+        for i in np.flatnonzero(hit):
+            n = -self._plan.touches.normals[i]
+            touches[4 * i : 4 * i + 3] = self._touch(
+                rows[i, :3], n, rows[i, 3], k
+            )
+
+    def _fit(self, x, touches):
+        L = MESH_PROBE_STATE
+        t = touches.reshape(self._n, 4)
+        hit = t[:, 3] > 0.5
+        plan = self._plan
+        try:
+            fit = register_mesh(
+                plan.surface,
+                t[hit, :3],
+                max_residual=self._config.max_residual,
+                touch_noise=self._touch_noise,
+                sized_faces=plan.sized if self._config.fit_radius else None,
+            )
+        except ValueError:
+            # The touches do not fix the part: the believed part stays
+            # (probe_state: kept 0).
+            return
+        size = 0.0 if fit.size is None else fit.size
+        x[L.slice("registration")] = [
+            *matrix_rotvec(fit.rotation),
+            *fit.translation,
+            size,
+        ]
+        cov = np.zeros((COVARIANCE_SIZE, COVARIANCE_SIZE))
+        k = fit.covariance.shape[0]
+        cov[:k, :k] = fit.covariance
+        x[L.slice("covariance")] = cov.ravel()
+        x[L.slice("pivot")] = fit.pivot
+        x[L.slice("size_fitted")] = 0.0 if fit.size is None else 1.0
+        x[L.slice("amplification")] = fit.amplification
+        x[L.slice("kept")] = float(fit.kept.sum())
+        x[L.slice("fit_rms")] = fit.rms
+        rows = np.flatnonzero(hit)[~fit.kept]
+        t[rows, 3] = 2.0
+        touches[:] = t.ravel()
+
+    def _registered(self, x) -> Contour:
+        return moved_contour(
+            self._contour, MESH_PROBE_STATE.get(x, "registration")
+        )
+
+    # -- outputs ---------------------------------------------------------
+    def _x(self, context):
+        return context.get_discrete_state(self._state).get_value()
+
+    def _done(self, context) -> bool:
+        return MESH_PROBE_STATE.get(self._x(context), "phase") == _P["done"]
+
+    def _calc_command(self, context, output):
+        if self._done(context):
+            output.SetFromVector(self._command_in.Eval(context))
+        else:
+            output.SetFromVector(
+                MESH_PROBE_STATE.get(self._x(context), "command")
+            )
+
+    def _calc_probing(self, context, output):
+        output.SetAtIndex(0, 0.0 if self._done(context) else 1.0)
+
+    def _calc_hold(self, context, output):
+        cut = MESH_PROBE_STATE.get(self._x(context), "cut_time")
+        output.SetAtIndex(0, 1.0 if cut < 0 else 0.0)
+
+    def _calc_spindle(self, context, output):
+        output.SetAtIndex(0, 1.0 if self._done(context) else 0.0)
+
+    def _calc_touching(self, context, output):
+        output.SetAtIndex(
+            0, float(MESH_PROBE_STATE.get(self._x(context), "touching"))
+        )
+
+    def _calc_fuzzy_weight(self, context, output):
+        done = float(MESH_PROBE_STATE.get(self._x(context), "done_time"))
+        ramp = self._config.fuzzy_ramp_time
+        if done < 0:
+            w = 0.0
+        elif ramp <= 0:
+            w = 1.0
+        else:
+            w = min(1.0, (context.get_time() - done) / ramp)
+        output.SetAtIndex(0, w)
+
+    def _calc_registration(self, context, output):
+        output.SetFromVector(
+            MESH_PROBE_STATE.get(self._x(context), "registration")
+        )
+
+
+def covariance_of(state) -> np.ndarray:
+    """The registration's covariance (7 x 7) in a MESH_PROBE_STATE
+    vector."""
+    return np.asarray(MESH_PROBE_STATE.get(state, "covariance")).reshape(
+        COVARIANCE_SIZE, COVARIANCE_SIZE
+    )
