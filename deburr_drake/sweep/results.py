@@ -61,6 +61,8 @@ METRICS = (
     # with localisation (runs.pass_metrics.localisation_metrics)
     "probing_time_s",
     "probe_registration_error_mm",
+    "probe_position_error_mm",
+    "probe_orientation_error_deg",
     "online_registration_error_mm",
     "registration_position_error_mm",
     "registration_orientation_error_deg",
