@@ -16,6 +16,7 @@ import numpy as np
 
 __all__ = [
     "METRICS",
+    "LOCALISATION_METRICS",
     "wilson_interval",
     "association",
     "badness",
@@ -58,7 +59,14 @@ METRICS = (
     "wall_time_s",
     "completed_pass",
     "nan_detected",
-    # with localisation (runs.pass_metrics.localisation_metrics)
+    "guard_tripped",
+    "run_failed",
+)
+
+#: What a run with localisation reports besides
+#: (runs.pass_metrics.localisation_metrics; a mesh part's registration
+#: errors).
+LOCALISATION_METRICS = (
     "probing_time_s",
     "probe_registration_error_mm",
     "probe_position_error_mm",
@@ -66,9 +74,8 @@ METRICS = (
     "online_registration_error_mm",
     "registration_position_error_mm",
     "registration_orientation_error_deg",
-    "guard_tripped",
-    "run_failed",
 )
+METRICS += LOCALISATION_METRICS
 
 
 def wilson_interval(successes: int, n: int, z: float = 1.959964):
