@@ -33,6 +33,10 @@ class ProbeConfig:
     # m/s, a mesh part's moves between touches: out along the face's
     # normal, above the part and down to the next standoff, clear of it
     clear_travel_speed: float = 0.08
+    # s, a mesh part: held at a touch's standoff after that move before
+    # the tare (the arm rings for longer after it than after a travel
+    # along the edge)
+    clear_settle_time: float = 0.5
     # m and rad, a mesh part: how far its pose may be off along and about
     # each axis (its frame's origin); each touch's standoff and search
     # grow by what that can move its face along the normal
@@ -122,6 +126,7 @@ class ProbeConfig:
         ):
             _positive(o, name, getattr(self, name))
         _non_negative(o, "settle_time", self.settle_time)
+        _non_negative(o, "clear_settle_time", self.clear_settle_time)
         _non_negative(o, "pose_offset_allowance", self.pose_offset_allowance)
         _non_negative(o, "pose_turn_allowance", self.pose_turn_allowance)
         _non_negative(o, "contact_exponent_slope", self.contact_exponent_slope)

@@ -230,7 +230,10 @@ def _add_probing(
             c, contour=contour, x0=x0, timing=timing, mesh_probe=mesh_probe
         ),
     )
-    gate = builder.AddNamedSystem("probe_gate", ProbeGate())
+    held = None
+    if mesh_probe is not None:  # the start's n1 and arc while probing
+        held = (contour.n1(contour.point_at(0.0)), 0.0)
+    gate = builder.AddNamedSystem("probe_gate", ProbeGate(held))
     _connect(
         builder,
         [

@@ -379,7 +379,7 @@ class MeshProbingSequence(LeafSystem):
             self._smooth(x, t, "down", command, self._target(x))
         elif phase == "down" and i < self._n:
             self._segment(
-                x, t, "settle", command, command, c.settle_time, False
+                x, t, "settle", command, command, c.clear_settle_time, False
             )
         elif phase == "down":
             # On to the start on the registered part, along its n1.

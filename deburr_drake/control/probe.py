@@ -800,7 +800,9 @@ class ProbeGate(LeafSystem):
     """What the force loop, the estimator and the guards see while the
     sequence probes: no contact (||f_n||, ||f_t||, delta and delta_dot 0,
     the desired normal force 0, so delta_d' = 0 in (7) and the estimator
-    does not adapt); afterwards its inputs unchanged.
+    does not adapt); afterwards its inputs unchanged. ``held`` (n1,
+    arc position): while probing, n1 and the arc position are those (and
+    n1's rate 0).
 
     .. pydrake_system::
 
@@ -814,9 +816,15 @@ class ProbeGate(LeafSystem):
         - desired_normal_force
     """
 
-    def __init__(self):
+    def __init__(self, held=None):
         super().__init__()
         self.set_name("probe_gate")
+        # A mesh part's probe goes far from the edge: the loops see the
+        # start's n1 and arc position while it probes (``held``: (n1,
+        # arc)), so the tool's orientation and the desired point's offset
+        # along n1 hold still instead of following the nearest point of
+        # the edge across the part.
+        self._held = held
         self._probing = self.DeclareVectorInputPort("probing", 1)
         self._chamfer = self.DeclareVectorInputPort(
             "chamfer_state", CHAMFER_STATE.size
@@ -836,6 +844,11 @@ class ProbeGate(LeafSystem):
         chamfer = self._chamfer.Eval(context).copy()
         if self._on(context):
             chamfer[_GATED] = 0.0
+            if self._held is not None:
+                n1, arc = self._held
+                chamfer[CHAMFER_STATE.slice("n1")] = n1
+                chamfer[CHAMFER_STATE.slice("arc_position")] = arc
+                chamfer[CHAMFER_STATE.slice("n1_rate")] = 0.0
         output.SetFromVector(chamfer)
 
     def _calc_desired(self, context, output):

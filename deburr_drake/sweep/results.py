@@ -68,9 +68,14 @@ METRICS = (
 #: errors).
 LOCALISATION_METRICS = (
     "probing_time_s",
+    "probe_touches_kept",
     "probe_registration_error_mm",
     "probe_position_error_mm",
     "probe_orientation_error_deg",
+    "probe_sigma_position_mm",
+    "probe_sigma_orientation_deg",
+    "probe_mahalanobis",
+    "probe_hole_size_mm",
     "online_registration_error_mm",
     "registration_position_error_mm",
     "registration_orientation_error_deg",
