@@ -1023,6 +1023,8 @@ def localisation_metrics(log: RunLog) -> PassMetrics:
     out = PassMetrics()
     base = np.zeros(4)
     probe = log.signals.get("probe")
+    if not log.scenario.localisation.enabled:
+        return out
     if _mesh_probed(log):
         return _mesh_metrics(log, probe, log.signals.get("registration"))
     if probe is not None and len(probe["t"]):
