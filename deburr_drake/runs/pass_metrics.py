@@ -70,6 +70,7 @@ __all__ = [
     "MetricDoc",
     "METRICS",
     "MESH_PROBE_METRICS",
+    "MESH_ONLINE_METRICS",
 ]
 
 #: Excluded after contact is established (s): the contact transient is not
@@ -518,6 +519,14 @@ _MESH_PROBE_ROWS = [
 ]
 #: The metrics only a mesh part's probing gives.
 MESH_PROBE_METRICS = tuple(row[0] for row in _MESH_PROBE_ROWS)
+#: The metrics only a mesh part's localisation gives (its registration
+#: while cutting, its final registration).
+MESH_ONLINE_METRICS = (
+    "online_offset_z_mm",
+    "online_rotation_deg",
+    "registration_position_error_mm",
+    "registration_orientation_error_deg",
+)
 METRICS.update(_docs("localisation_metrics", _MESH_PROBE_ROWS))
 
 #: The chamfering force is judged settled from this long after the first
