@@ -204,10 +204,11 @@ class TouchContact(LeafSystem):
     - ``contact_results``, ``body_poses``: the plant's.
     - ``spatial_forces``: on the tool body, while touching: the part's
       push on the ball about the tool point, F = c d^n exp(-b d) (1 +
-      h d'), d the ball's depth past the nearest face of the real part
-      (``surface``) along its outward normal m, h the Hunt-Crossley
-      dissipation (s/m), along m; and minus the compliant band's contact
-      force on the tool's geometries. Nothing otherwise.
+      h d'), d the ball's radius less its centre's distance to the real
+      part's (``surface``) nearest point, h the Hunt-Crossley
+      dissipation (s/m), along the way from that point to the centre;
+      and minus the compliant band's contact force on the tool's
+      geometries. Nothing otherwise.
     - Discrete state (4): the nearest face's point and its normal's
       index, sampled every ``sample_period`` (the tool moves microns in
       one: the face's plane serves between samples).
@@ -305,8 +306,18 @@ class TouchContact(LeafSystem):
             x_p, xdot_p, _ = self._tool_point.evaluate(
                 self._state_port.Eval(context)
             )
+            # The ball's overlap with the part: its radius less the
+            # distance to the face's nearest point (off a facet's middle,
+            # by a crease, that point is on the crease: the distance
+            # along the face's normal alone would overstate the overlap);
+            # pushed out along the way to that point.
             m = self._surface.normals[j]
-            depth = self._radius - float(m @ (np.asarray(x_p) - face[:3]))
+            d = np.asarray(x_p) - face[:3]
+            along = float(m @ d)
+            length = float(np.linalg.norm(d))
+            if along > 0.0 and length > 0.0:
+                m, along = d / length, length
+            depth = self._radius - along
             if depth > 0.0:
                 c, n, b = self._law
                 rate = -float(m @ np.asarray(xdot_p))

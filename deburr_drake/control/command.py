@@ -96,7 +96,8 @@ class CommandGenerator(LeafSystem):
     - ``command_state`` (COMMAND_STATE layout): the discrete state below.
     - ``command`` (3, m): x_c(kT), world frame.
     - ``feed`` (1, m/s): the commanded feed speed v.
-    - ``registration`` (4) and ``hold`` (1), only with ``registered=True``:
+    - ``registration`` (the observer's size) and ``hold`` (1), only with
+      ``registered=True``:
       the contour moved by the registration (as the observer's); while
       ``hold`` > 0.5 (touch probing) no feed: x_c is the projection of x_p
       and the arc position the one nearest the start, so the pass starts

@@ -36,7 +36,8 @@ from deburr_drake.control.probe import (
     PROBE_MISSED,
     SensorTiming,
     detection_depth,
-    measured_stiffness,
+    fuzzy_weight,
+    median_stiffness,
 )
 from deburr_drake.math.geometry import Contour
 from deburr_drake.math.mesh_registration import MeshSurface, register_mesh
@@ -54,6 +55,8 @@ __all__ = [
     "MESH_PHASES",
     "COVARIANCE_SIZE",
     "covariance_of",
+    "register_part",
+    "registered_contours",
 ]
 
 #: The phases of the sequence, in order: for each touch lift (along the
@@ -502,20 +505,7 @@ class MeshProbingSequence(LeafSystem):
         spans = rows[:, 4][hit & (rows[:, 4] > 0)]
         if not len(spans):
             return
-        k = float(
-            np.median(
-                [
-                    measured_stiffness(
-                        span,
-                        c.force_threshold,
-                        c.stiffness_threshold,
-                        c.contact_exponent,
-                        c.contact_exponent_slope,
-                    )
-                    for span in spans
-                ]
-            )
-        )
+        k = median_stiffness(spans, c)
         x[MESH_PROBE_STATE.slice("stiffness")] = k
         for i in np.flatnonzero(hit):
             n = -self._plan.touches.normals[i]
@@ -527,25 +517,15 @@ class MeshProbingSequence(LeafSystem):
         L = MESH_PROBE_STATE
         t = touches.reshape(self._n, 4)
         hit = t[:, 3] > 0.5
-        plan = self._plan
         try:
-            fit = register_mesh(
-                plan.surface,
-                t[hit, :3],
-                max_residual=self._config.max_residual,
-                touch_noise=self._touch_noise,
-                sized_faces=plan.sized if self._config.fit_radius else None,
+            registration, fit = register_part(
+                self._plan, t[hit, :3], self._config, self._touch_noise
             )
         except ValueError:
             # The touches do not fix the part: the believed part stays
             # (probe_state: kept 0).
             return
-        size = 0.0 if fit.size is None else fit.size
-        x[L.slice("registration")] = [
-            *matrix_rotvec(fit.rotation),
-            *fit.translation,
-            size,
-        ]
+        x[L.slice("registration")] = registration
         cov = np.zeros((COVARIANCE_SIZE, COVARIANCE_SIZE))
         k = fit.covariance.shape[0]
         cov[:k, :k] = fit.covariance
@@ -596,19 +576,48 @@ class MeshProbingSequence(LeafSystem):
 
     def _calc_fuzzy_weight(self, context, output):
         done = float(MESH_PROBE_STATE.get(self._x(context), "done_time"))
-        ramp = self._config.fuzzy_ramp_time
-        if done < 0:
-            w = 0.0
-        elif ramp <= 0:
-            w = 1.0
-        else:
-            w = min(1.0, (context.get_time() - done) / ramp)
-        output.SetAtIndex(0, w)
+        output.SetAtIndex(
+            0,
+            fuzzy_weight(
+                done, context.get_time(), self._config.fuzzy_ramp_time
+            ),
+        )
 
     def _calc_registration(self, context, output):
         output.SetFromVector(
             MESH_PROBE_STATE.get(self._x(context), "registration")
         )
+
+
+def register_part(
+    plan: MeshProbePlan, points, config: ProbeConfig, touch_noise=None
+):
+    """(registration, fit): the part's pose and the hole's size from
+    compensated touches ``points`` ((N, 3), m, on the real part's
+    surface) on the believed part of ``plan`` (deburr_drake.math.
+    mesh_registration.register_mesh with ``max_residual``, the size with
+    ``fit_radius``), as a POSE_REGISTRATION_SIZE vector (w, p, size) that
+    :func:`registered_contours` moves edges by, and the MeshFit.
+    ValueError: touches that do not fix the pose."""
+    fit = register_mesh(
+        plan.surface,
+        points,
+        max_residual=config.max_residual,
+        touch_noise=touch_noise,
+        sized_faces=plan.sized if config.fit_radius else None,
+    )
+    size = 0.0 if fit.size is None else fit.size
+    registration = np.array(
+        [*matrix_rotvec(fit.rotation), *fit.translation, size]
+    )
+    return registration, fit
+
+
+def registered_contours(contours, registration) -> list:
+    """Every edge of a part (``contours``, believed) moved by the part's
+    one ``registration`` (:func:`register_part`): a whole-part job
+    registers the part once and cuts each edge on the part it found."""
+    return [moved_contour(c, registration) for c in contours]
 
 
 def covariance_of(state) -> np.ndarray:

@@ -110,8 +110,10 @@ class ChamferObserver(LeafSystem):
       of the environment on the tool, world.
     - ``chamfer_state`` (CHAMFER_STATE layout): x_p, xdot_p, n1, n2, delta,
       delta_dot, ||f_n||, ||f_t||, arc position.
-    - ``registration`` (4; only with ``registered=True``): dx, dy (m), dyaw
-      (rad), dradius (m): the believed part moved by it
+    - ``registration`` (only with ``registered=True``;
+      deburr_drake.math.registration.registration_size of the contour):
+      dx, dy (m), dyaw (rad), dradius (m), or on a 3-D edge the pose and
+      size (w (rad), p (m), size (m)): the believed part moved by it
       (deburr_drake.math.registration.moved_contour), from touch probing
       or registration while cutting.
 

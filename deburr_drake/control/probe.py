@@ -50,6 +50,8 @@ __all__ = [
     "check_probe_layout",
     "detection_depth",
     "measured_stiffness",
+    "median_stiffness",
+    "fuzzy_weight",
     "filter_latency",
     "sensor_timing",
     "SensorTiming",
@@ -256,6 +258,35 @@ def measured_stiffness(
     # falls from infinity to 0 as delta grows.
     ratio = math.expm1(target / exponent)
     return threshold * ratio / span
+
+
+def median_stiffness(spans, config: ProbeConfig) -> float:
+    """N/m: the median of :func:`measured_stiffness` over the touches'
+    ``spans`` (m, the way from ``force_threshold`` to
+    ``stiffness_threshold``): a touch on a burr measures the burr's."""
+    c = config
+    return float(
+        np.median(
+            [
+                measured_stiffness(
+                    span,
+                    c.force_threshold,
+                    c.stiffness_threshold,
+                    c.contact_exponent,
+                    c.contact_exponent_slope,
+                )
+                for span in spans
+            ]
+        )
+    )
+
+
+def fuzzy_weight(done_time: float, t: float, ramp: float) -> float:
+    """The fuzzy compensator's weight at ``t`` (s): 0 while probing
+    (``done_time`` < 0), then a ramp to 1 over ``ramp`` (s)."""
+    if done_time < 0:
+        return 0.0
+    return 1.0 if ramp <= 0 else min(1.0, (t - done_time) / ramp)
 
 
 class _Step(NamedTuple):
@@ -703,20 +734,7 @@ class ProbingSequence(LeafSystem):
         spans = rows[:, 4][(touches[3::4] > 0.5) & (rows[:, 4] > 0)]
         if not len(spans):
             return  # the configured stiffness stays
-        k = float(
-            np.median(
-                [
-                    measured_stiffness(
-                        span,
-                        c.force_threshold,
-                        c.stiffness_threshold,
-                        c.contact_exponent,
-                        c.contact_exponent_slope,
-                    )
-                    for span in spans
-                ]
-            )
-        )
+        k = median_stiffness(spans, c)
         x[PROBE_STATE.slice("stiffness")] = k
         for i in np.flatnonzero(touches[3::4] > 0.5):
             n = self._contour.n1(self._contour.point_at(self._arcs[i]))
@@ -774,17 +792,12 @@ class ProbingSequence(LeafSystem):
 
     def _calc_fuzzy_weight(self, context, output):
         done = float(PROBE_STATE.get(self._x(context), "done_time"))
-        ramp = self._config.fuzzy_ramp_time
-        w = (
-            0.0
-            if done < 0
-            else (
-                1.0
-                if ramp <= 0
-                else min(1.0, (context.get_time() - done) / ramp)
-            )
+        output.SetAtIndex(
+            0,
+            fuzzy_weight(
+                done, context.get_time(), self._config.fuzzy_ramp_time
+            ),
         )
-        output.SetAtIndex(0, w)
 
     def _calc_registration(self, context, output):
         output.SetFromVector(PROBE_STATE.get(self._x(context), "registration"))

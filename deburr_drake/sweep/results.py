@@ -63,20 +63,41 @@ METRICS = (
     "run_failed",
 )
 
-#: What a run with localisation reports besides
-#: (runs.pass_metrics.localisation_metrics; a mesh part's registration
-#: errors).
+#: What a run with localisation reports besides: its probing and
+#: registration (the localisation family of runs.pass_metrics.METRICS).
 LOCALISATION_METRICS = (
     "probing_time_s",
+    "pass_time_s",
+    "cycle_time_s",
+    "probe_touches",
     "probe_touches_kept",
+    "probe_fit_rms_mm",
+    "probe_offset_x_mm",
+    "probe_offset_y_mm",
+    "probe_yaw_rad",
+    "probe_radius_mm",
     "probe_registration_error_mm",
-    "probe_position_error_mm",
-    "probe_orientation_error_deg",
-    "probe_sigma_position_mm",
-    "probe_sigma_orientation_deg",
+    "online_offset_x_mm",
+    "online_offset_y_mm",
+    "online_yaw_rad",
+    "online_registration_error_mm",
+    *(
+        f"{name}{axis}_{unit}"
+        for name, unit in (
+            ("probe_position_error", "mm"),
+            ("probe_orientation_error", "deg"),
+            ("probe_sigma_position", "mm"),
+            ("probe_sigma_orientation", "deg"),
+        )
+        for axis in ("", "_x", "_y", "_z")
+    ),
     "probe_mahalanobis",
     "probe_hole_size_mm",
-    "online_registration_error_mm",
+    "probe_sigma_hole_size_mm",
+    "probe_amplification",
+    # a mesh part's registration while cutting and its final registration
+    "online_offset_z_mm",
+    "online_rotation_deg",
     "registration_position_error_mm",
     "registration_orientation_error_deg",
 )

@@ -410,3 +410,16 @@ def test_a_run_the_preflight_refuses_is_one_line_naming_it(tmp_path, capsys):
         "controller.sliding_gain[0] = 20000 is predicted unstable"
     )
     assert not (out / "runs").exists()
+
+
+def test_a_study_can_tabulate_every_localisation_metric():
+    from deburr_drake.runs.pass_metrics import METRICS as PASS_METRICS
+    from deburr_drake.sweep.results import METRICS
+
+    localisation = {
+        name
+        for name, doc in PASS_METRICS.items()
+        if doc.family == "localisation_metrics"
+    }
+    assert localisation <= set(METRICS)
+    assert set(METRICS) - set(PASS_METRICS) == {"guard_tripped", "run_failed"}
