@@ -198,17 +198,8 @@ class Scenario:
         )
         self.part_error.check_kind(edge.kind)
         self.faults.part_step.check_kind(edge.kind)
-        if edge.kind == "mesh":
-            self._check_mesh_edge()
         self.part.check(self.tool, self.part_error)
         self._check_burrs(wall, wall_name)
-
-    def _check_mesh_edge(self):
-        """What a mesh edge does not support yet: registration while
-        cutting (touch probing plans its touches on the part's faces)."""
-        off = "false with part.edge.kind mesh (not supported yet)"
-        enabled = self.localisation.online.enabled
-        _require(not enabled, "localisation.online.enabled", enabled, off)
 
     def _check_burrs(self, wall: float, wall_name: str):
         """Each burr fits on the edge, under the cutter and on the wall (a

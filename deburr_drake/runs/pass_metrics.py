@@ -35,7 +35,16 @@ from deburr_drake.control.controller import make_rule_bases
 from deburr_drake.control.online import ONLINE_STATE
 from deburr_drake.control.probe import PROBE_STATE
 from deburr_drake.math import metrics
-from deburr_drake.math.registration import moved_contour
+from deburr_drake.math.edge_registration import (
+    CORRECTION_SIZE,
+    corrected,
+    edge_pivot,
+)
+from deburr_drake.math.registration import (
+    POSE_REGISTRATION_SIZE,
+    moved_contour,
+)
+from deburr_drake.math.rigid import matrix_rotvec, rotvec_matrix, rpy_matrix
 from deburr_drake.runs.simulation import RunLog
 
 __all__ = [
@@ -61,6 +70,7 @@ __all__ = [
     "MetricDoc",
     "METRICS",
     "MESH_PROBE_METRICS",
+    "MESH_ONLINE_METRICS",
 ]
 
 #: Excluded after contact is established (s): the contact transient is not
@@ -398,6 +408,32 @@ METRICS: Dict[str, MetricDoc] = {
                 "correction while cutting)",
                 "as ``probe_registration_error_mm``, with both moves added",
             ),
+            (
+                "online_offset_z_mm",
+                "mm",
+                "z of the final correction while cutting (a mesh part)",
+                "the online registration's last state",
+            ),
+            (
+                "online_rotation_deg",
+                "deg",
+                "angle of the final correction's turn (a mesh part)",
+                "the online registration's last state",
+            ),
+            (
+                "registration_position_error_mm",
+                "mm",
+                "how far a mesh part's final registration leaves the "
+                "believed edge's pivot from the real one",
+                "|v - v_true| of the registration (v, omega) about the "
+                "pivot (``edge_registration_errors``)",
+            ),
+            (
+                "registration_orientation_error_deg",
+                "deg",
+                "the turn a mesh part's final registration leaves",
+                "the angle of R(omega)^T R_true",
+            ),
         ],
     ),
 }
@@ -483,6 +519,14 @@ _MESH_PROBE_ROWS = [
 ]
 #: The metrics only a mesh part's probing gives.
 MESH_PROBE_METRICS = tuple(row[0] for row in _MESH_PROBE_ROWS)
+#: The metrics only a mesh part's localisation gives (its registration
+#: while cutting, its final registration).
+MESH_ONLINE_METRICS = (
+    "online_offset_z_mm",
+    "online_rotation_deg",
+    "registration_position_error_mm",
+    "registration_orientation_error_deg",
+)
 METRICS.update(_docs("localisation_metrics", _MESH_PROBE_ROWS))
 
 #: The chamfering force is judged settled from this long after the first
@@ -897,6 +941,12 @@ def status_metrics(log: RunLog) -> PassMetrics:
     return out
 
 
+# A mesh part's online state: the correction follows theta and P, whose
+# size is the model's (deburr_drake.control.online.online_state).
+def _correction_slice(size):
+    return slice(size - 3 - CORRECTION_SIZE, size - 3)
+
+
 def registration_error(scenario, registration, samples: int = 400) -> float:
     """m: the largest distance, along the real edge's normal, between the
     believed part's zero-depth path moved by ``registration`` (dx, dy,
@@ -913,6 +963,63 @@ def registration_error(scenario, registration, samples: int = 400) -> float:
     )
 
 
+def _true_move(scenario):
+    """(R_t, p_t): x_real = R_t x + p_t, from a mesh part's believed pose
+    to the real one."""
+    part = scenario.part
+    real = part.real_pose(scenario.part_error)
+    R_wb, p_wb = rpy_matrix(part.pose.rpy), np.asarray(part.pose.xyz, float)
+    R_wr, p_wr = rpy_matrix(real.rpy), np.asarray(real.xyz, float)
+    R_t = R_wr @ R_wb.T
+    return R_t, p_wr - R_t @ p_wb
+
+
+def _pose_errors(scenario, registration):
+    """(position (3, m), turn (3, rad)) of a mesh part's pose
+    ``registration`` (w, p, ...; x_real = R(w) x + p) against the truth
+    (T_true, from the believed pose to the real one): T c - T_true c, c
+    the mean of the believed edge's points, and the rotation vector of
+    R_true R^T."""
+    reg = np.asarray(registration, float)
+    R, p = rotvec_matrix(reg[:3]), reg[3:6]
+    R_t, p_t = _true_move(scenario)
+    belief = believed_contour(scenario)
+    c = np.mean(
+        [belief.point_at(s) for s in np.linspace(0, belief.length, 200)], 0
+    )
+    return (R @ c + p) - (R_t @ c + p_t), matrix_rotvec(R_t @ R.T)
+
+
+def _edge_online_metrics(scenario, online, base) -> PassMetrics:
+    """A mesh part's registration while cutting: its final correction
+    (mm, deg) and the final registration's error
+    (``online_registration_error_mm``); and the final registration
+    (``base``, the probe's, corrected) as ``registration_*``."""
+    out = PassMetrics()
+    final = np.asarray(base, float)
+    if online is not None and len(online["t"]):
+        last = online["value"][-1]
+        correction = last[_correction_slice(len(last))]
+        for axis, value in zip("xyz", correction[:3]):
+            out[f"online_offset_{axis}_mm"] = float(value) * 1e3
+        out["online_rotation_deg"] = float(
+            np.degrees(np.linalg.norm(correction[3:]))
+        )
+        pivot, _ = edge_pivot(believed_contour(scenario))
+        final = corrected(final, correction, pivot)
+        out["online_registration_error_mm"] = (
+            registration_error(scenario, final) * 1e3
+        )
+    position, turn = _pose_errors(scenario, final)
+    out["registration_position_error_mm"] = (
+        float(np.linalg.norm(position)) * 1e3
+    )
+    out["registration_orientation_error_deg"] = float(
+        np.degrees(np.linalg.norm(turn))
+    )
+    return out
+
+
 def localisation_metrics(log: RunLog) -> PassMetrics:
     """With touch probing: ``probing_time_s`` (when the pass started),
     ``pass_time_s`` (after it) and ``cycle_time_s`` (both, when the pass
@@ -925,8 +1032,10 @@ def localisation_metrics(log: RunLog) -> PassMetrics:
     out = PassMetrics()
     base = np.zeros(4)
     probe = log.signals.get("probe")
-    if probe is not None and len(probe["t"]) and _mesh_probed(log):
-        return _mesh_probe_metrics(log, probe["value"][-1])
+    if not log.scenario.localisation.enabled:
+        return out
+    if _mesh_probed(log):
+        return _mesh_metrics(log, probe, log.signals.get("registration"))
     if probe is not None and len(probe["t"]):
         last = probe["value"][-1]
         done = float(PROBE_STATE.get(last, "done_time"))
@@ -954,6 +1063,23 @@ def localisation_metrics(log: RunLog) -> PassMetrics:
             registration_error(log.scenario, base + np.asarray(corr, float))
             * 1e3
         )
+    return out
+
+
+def _mesh_metrics(log: RunLog, probe, online) -> PassMetrics:
+    """:func:`localisation_metrics` of a mesh part: its probing's
+    (:func:`_mesh_probe_metrics`) and its registration while cutting's
+    (:func:`_edge_online_metrics`)."""
+    from deburr_drake.control.mesh_probe import MESH_PROBE_STATE
+
+    out = PassMetrics()
+    base = np.zeros(POSE_REGISTRATION_SIZE)
+    if probe is not None and len(probe["t"]):
+        last = probe["value"][-1]
+        out = _mesh_probe_metrics(log, last)
+        if float(MESH_PROBE_STATE.get(last, "done_time")) >= 0.0:
+            base = np.asarray(MESH_PROBE_STATE.get(last, "registration"))
+    out.update(_edge_online_metrics(log.scenario, online, base))
     return out
 
 
@@ -986,7 +1112,6 @@ def _mesh_probe_metrics(log: RunLog, last) -> PassMetrics:
     (MESH_PROBE_STATE): the times, the touches, the registration's pose
     error against the truth, its covariance, the hole's size."""
     from deburr_drake.control.mesh_probe import MESH_PROBE_STATE, covariance_of
-    from deburr_drake.math.rigid import matrix_rotvec, rotvec_matrix, rpy_matrix
 
     L, out = MESH_PROBE_STATE, PassMetrics()
     done = float(L.get(last, "done_time"))
@@ -1001,19 +1126,8 @@ def _mesh_probe_metrics(log: RunLog, last) -> PassMetrics:
         return out
     reg = np.asarray(L.get(last, "registration"), float)
     R, p = rotvec_matrix(reg[:3]), reg[3:6]
-    # The truth: x_real = R_t x + p_t, from the believed to the real pose.
-    part = log.scenario.part
-    real = part.real_pose(log.scenario.part_error)
-    R_wb, p_wb = rpy_matrix(part.pose.rpy), np.asarray(part.pose.xyz, float)
-    R_wr, p_wr = rpy_matrix(real.rpy), np.asarray(real.xyz, float)
-    R_t = R_wr @ R_wb.T
-    p_t = p_wr - R_t @ p_wb
-    belief = believed_contour(log.scenario)
-    c = np.mean(
-        [belief.point_at(s) for s in np.linspace(0, belief.length, 200)], 0
-    )
-    position = (R @ c + p) - (R_t @ c + p_t)
-    turn = matrix_rotvec(R_t @ R.T)
+    R_t, p_t = _true_move(log.scenario)
+    position, turn = _pose_errors(log.scenario, reg)
     for name, v, scale, unit in (
         ("probe_position_error", position, 1e3, "mm"),
         ("probe_orientation_error", turn, np.degrees(1.0), "deg"),

@@ -16,6 +16,7 @@ import numpy as np
 
 __all__ = [
     "METRICS",
+    "LOCALISATION_METRICS",
     "wilson_interval",
     "association",
     "badness",
@@ -31,7 +32,8 @@ __all__ = [
 
 
 #: What a run can report (runs.pass_metrics, plus the sweep's own
-#: ``guard_tripped`` and ``run_failed``: 1.0 or 0.0).
+#: ``guard_tripped`` and ``run_failed``: 1.0 or 0.0); a metric a run does
+#: not report (the probe's without probing) is null in its row.
 METRICS = (
     "contact_time_s",
     "chamfer_depth_mean_error_mm",
@@ -60,6 +62,7 @@ METRICS = (
     "guard_tripped",
     "run_failed",
 )
+
 #: What a run with localisation reports besides: its probing and
 #: registration (the localisation family of runs.pass_metrics.METRICS).
 LOCALISATION_METRICS = (
@@ -92,6 +95,11 @@ LOCALISATION_METRICS = (
     "probe_hole_size_mm",
     "probe_sigma_hole_size_mm",
     "probe_amplification",
+    # a mesh part's registration while cutting and its final registration
+    "online_offset_z_mm",
+    "online_rotation_deg",
+    "registration_position_error_mm",
+    "registration_orientation_error_deg",
 )
 METRICS = METRICS + LOCALISATION_METRICS
 

@@ -12,9 +12,9 @@ from deburr_drake.math.geometry import CircularContour
 from deburr_drake.math.registration import moved_contour
 
 
-def _run(offset, *, active=1.0, seconds=40.0, c0=2.0, c1=9000.0, seed=0):
-    believed = CircularContour([0.4, 0.0, 0.048], 0.027)
-    real = moved_contour(believed, [*offset, 0.0, 0.0])
+def _system(believed, *, active=1.0):
+    """(config, system, context): registration while cutting on
+    ``believed``, no probe, ``active`` fixed."""
     config = OnlineRegistrationConfig(enabled=True)
     system = OnlineRegistration(
         believed,
@@ -23,20 +23,22 @@ def _run(offset, *, active=1.0, seconds=40.0, c0=2.0, c1=9000.0, seed=0):
         latency=0.018,
     )
     context = system.CreateDefaultContext()
-    system.GetInputPort("base_registration").FixValue(context, np.zeros(4))
+    size = system.GetInputPort("base_registration").size()
+    system.GetInputPort("base_registration").FixValue(context, np.zeros(size))
     system.GetInputPort("active").FixValue(context, [active])
-    rng = np.random.default_rng(seed)
-    T, v = config.sample_period, 0.0024
-    for k in range(int(seconds / T)):
-        t = k * T
-        # The force loop settles the real depth towards 0.5 mm.
-        depth = 5e-4 * (1 - np.exp(-t / 1.5))
-        p = real.point_at(v * t)
-        n1 = real.n1(p)
-        x_p = p + depth * n1
-        f_n = c0 + c1 * depth + 0.1 * rng.standard_normal()
-        chamfer = CHAMFER_STATE.pack(
-            x_p=x_p,
+    return config, system, context
+
+
+def _step(system, context, real, *, s, v, depth, f_n, T):
+    """One sample: the tool ``depth`` into ``real`` at arc position
+    ``s``, moving at ``v`` along it, the force ``f_n``; then the update
+    and the clock by ``T``."""
+    p = real.point_at(s)
+    n1 = real.n1(p)
+    system.GetInputPort("chamfer_state").FixValue(
+        context,
+        CHAMFER_STATE.pack(
+            x_p=p + depth * n1,
             xdot_p=v * real.tangent(p),
             n1=n1,
             n2=n1,
@@ -44,14 +46,26 @@ def _run(offset, *, active=1.0, seconds=40.0, c0=2.0, c1=9000.0, seed=0):
             delta_dot=0.0,
             f_n=f_n,
             f_t=0.0,
-            arc_position=v * t,
+            arc_position=s,
             n1_rate=np.zeros(3),
-        )
-        system.GetInputPort("chamfer_state").FixValue(context, chamfer)
-        context.SetDiscreteState(
-            system.EvalUniquePeriodicDiscreteUpdate(context)
-        )
-        context.SetTime(t + T)
+        ),
+    )
+    context.SetDiscreteState(system.EvalUniquePeriodicDiscreteUpdate(context))
+    context.SetTime(context.get_time() + T)
+
+
+def _run(offset, *, active=1.0, seconds=40.0, c0=2.0, c1=9000.0, seed=0):
+    believed = CircularContour([0.4, 0.0, 0.048], 0.027)
+    real = moved_contour(believed, [*offset, 0.0, 0.0])
+    config, system, context = _system(believed, active=active)
+    rng = np.random.default_rng(seed)
+    T, v = config.sample_period, 0.0024
+    for k in range(int(seconds / T)):
+        t = k * T
+        # The force loop settles the real depth towards 0.5 mm.
+        depth = 5e-4 * (1 - np.exp(-t / 1.5))
+        f_n = c0 + c1 * depth + 0.1 * rng.standard_normal()
+        _step(system, context, real, s=v * t, v=v, depth=depth, f_n=f_n, T=T)
     return system.GetOutputPort("registration").Eval(
         context
     ), context.get_discrete_state(0).get_value()
@@ -86,16 +100,7 @@ def test_profile_offset_found_with_stiffer_fillets_left_out():
     )
     move = [5e-4, -3e-4, 0.004, 0.0]
     real = moved_contour(believed, move)
-    config = OnlineRegistrationConfig(enabled=True)
-    system = OnlineRegistration(
-        believed,
-        config,
-        EstimatorConfig(initial_estimates=[3.0, 4000.0, 20.0]),
-        latency=0.018,
-    )
-    context = system.CreateDefaultContext()
-    system.GetInputPort("base_registration").FixValue(context, np.zeros(4))
-    system.GetInputPort("active").FixValue(context, [1.0])
+    config, system, context = _system(believed)
     rng = np.random.default_rng(0)
     T, v, c0, c1 = config.sample_period, 0.002, 2.0, 9000.0
     n = int(real.length / v / T)  # one lap
@@ -110,32 +115,45 @@ def test_profile_offset_found_with_stiffer_fillets_left_out():
             reg = system.GetOutputPort("registration").Eval(context)
             worst = max(worst, np.max(np.abs(reg[:2] - move[:2])))
         depth = 5e-4 * (1 - np.exp(-t / 1.5))
-        p = real.point_at(v * t)
-        n1 = real.n1(p)
-        x_p = p + depth * n1
-        stiff = 1.5 if real.curvature(p) != 0.0 else 1.0
+        stiff = 1.5 if real.curvature(real.point_at(v * t)) != 0.0 else 1.0
         f_n = c0 + stiff * c1 * depth + 0.1 * rng.standard_normal()
-        system.GetInputPort("chamfer_state").FixValue(
-            context,
-            CHAMFER_STATE.pack(
-                x_p=x_p,
-                xdot_p=v * real.tangent(p),
-                n1=n1,
-                n2=n1,
-                delta=depth,
-                delta_dot=0.0,
-                f_n=f_n,
-                f_t=0.0,
-                arc_position=v * t,
-                n1_rate=np.zeros(3),
-            ),
-        )
-        context.SetDiscreteState(
-            system.EvalUniquePeriodicDiscreteUpdate(context)
-        )
-        context.SetTime(t + T)
+        _step(system, context, real, s=v * t, v=v, depth=depth, f_n=f_n, T=T)
     reg = system.GetOutputPort("registration").Eval(context)
     assert worst < 5e-5
     np.testing.assert_allclose(reg[:2], move[:2], atol=5e-6)
     assert reg[2] == pytest.approx(move[2], abs=5e-4)
     assert reg[3] == 0.0
+
+
+def test_a_3d_edge_registers_the_move_across_its_axis():
+    """A rim in a plane tilted 30 deg (a 3-D edge: its frame turns), the
+    real part moved by 0.15 mm and turned by 0.2 deg: the correction is
+    the move across the rim's axis, and no turn (the force along n1
+    shows none)."""
+    from deburr_drake.math.edge_registration import edge_pivot, move_of
+    from deburr_drake.math.registration import PosedContour
+    from deburr_drake.math.rigid import rpy_matrix
+
+    rim = CircularContour([0.95, 0.0, 0.5], 0.008)
+    tilt = rpy_matrix([np.radians(30.0), 0.0, 0.0])
+    believed = PosedContour(rim, tilt, rim.center - tilt @ rim.center)
+    move = np.array([1.2e-4, -0.8e-4, 0.6e-4, 0.0021, -0.0017, 0.0026])
+    real = PosedContour(believed, *move_of(move, edge_pivot(believed)[0]))
+    config, system, context = _system(believed)
+    assert system.GetOutputPort("registration").size() == 7
+    rng = np.random.default_rng(0)
+    T, v, c0, c1 = config.sample_period, 0.002, 2.0, 9000.0
+    for k in range(int(20.0 / T)):
+        t = k * T
+        depth = 5e-4 * (1 - np.exp(-t / 1.5))
+        f_n = c0 + c1 * depth + 0.1 * rng.standard_normal()
+        _step(system, context, real, s=v * t, v=v, depth=depth, f_n=f_n, T=T)
+    reg = system.GetOutputPort("registration").Eval(context)
+    axis = tilt @ [0.0, 0.0, 1.0]
+    across = move[:3] - (move[:3] @ axis) * axis
+    # the pose registration (w, p, size): no turn, the move, no size
+    np.testing.assert_allclose(reg[:3], 0.0, atol=1e-12)
+    np.testing.assert_allclose(reg[3:6], across, atol=5e-6)
+    assert reg[6] == 0.0
+    theta = system.layout.get(context.get_discrete_state(0).value(), "theta")
+    assert theta[1] == pytest.approx(c1, rel=0.1)

@@ -17,6 +17,7 @@ from deburr_drake import cli, sweep
 from deburr_drake.cell.robot import LIMITS_NOTE
 from deburr_drake.config import ConfigError
 from deburr_drake.runs.pass_metrics import TRANSIENT
+from deburr_drake.sweep.results import LOCALISATION_METRICS
 
 # Two runs of 0.4 s of the point mass: one as given, one whose tool-force
 # guard trips at contact.
@@ -275,9 +276,8 @@ def test_local_sweep_records_a_guard_and_a_rerun_does_no_work(tmp_path, capsys):
     runs = sweep.expand_runs(sweep.load_study(path))
     results = [sweep.read_result(out, r.key) for r in runs]
     assert results[1]["stop_reason"] == "guard:tool_force"
-    # Every metric is there (the force at delta* only when a metric asks).
-    from deburr_drake.sweep.results import LOCALISATION_METRICS
-
+    # Every metric is there (the force at delta* only when a metric asks;
+    # the localisation's only with localisation).
     assert set(sweep.METRICS) - {"true_force_at_desired_depth_N"} - set(
         LOCALISATION_METRICS
     ) <= set(results[0])
