@@ -236,9 +236,11 @@ def run_job(
 
 
 def job_summary(result: JobResult) -> dict:
-    """What a job's metrics.json holds: how it ended, its wall time, and
-    per edge cut its place in the part, whether its cut reached the end
-    and its pass metrics (null where a metric is not available)."""
+    """What a job's metrics.json holds: how it ended, its wall time, per
+    edge cut its place in the part, whether its cut reached the end and
+    its pass metrics (null where a metric is not available), and per move
+    its planned figures and the least clearance simulated on it
+    (``min_clearance_m``, m; null where none was computed)."""
     from deburr_drake.runs.report import run_summary
 
     log = result.log
@@ -253,7 +255,24 @@ def job_summary(result: JobResult) -> dict:
             end_time_s=float(edge.end_time),
         )
         edges.append(summary)
+    clear = log.signals.clearance
+    moves = []
+    for move in log.moves:
+        on = (log.signals.t >= move.start_time) & (
+            log.signals.t <= np.nan_to_num(move.end_time, nan=np.inf)
+        )
+        least = np.nanmin(clear[on]) if np.any(np.isfinite(clear[on])) else None
+        moves.append(
+            {
+                **{
+                    k: float(v) if np.isfinite(v) else None
+                    for k, v in vars(move).items()
+                },
+                "min_clearance_m": None if least is None else float(least),
+            }
+        )
     return {
+        "moves": moves,
         "scenario": log.scenario.name,
         "stop_reason": log.stop_reason,
         "stop_time_s": float(log.stop_time),

@@ -82,3 +82,21 @@ def test_clear_of_the_part_on_the_move_and_the_estimate_carried(job_run):
         first.log["estimates"]["value"][-1],
         rtol=1e-3,
     )
+
+
+def test_the_files_written(job_run, tmp_path):
+    import json
+
+    from deburr_drake.runs.job_run import write_job
+
+    _, result = job_run
+    files = write_job(result, tmp_path)
+    summary = json.loads((tmp_path / "metrics.json").read_text())
+    assert summary["stop_reason"] == JOB_COMPLETE
+    assert [e["index"] for e in summary["edges"]] == [10, 8]
+    assert all(e["completed_pass"] for e in summary["edges"])
+    (move,) = summary["moves"]
+    assert move["min_clearance_m"] > 0.0
+    for edge in (10, 8):
+        assert (tmp_path / f"edge_{edge}" / "logs.npz").is_file()
+        assert f"edge_{edge}" in files
