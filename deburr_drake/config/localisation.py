@@ -37,10 +37,12 @@ class ProbeConfig:
     # the tare (the arm rings for longer after it than after a travel
     # along the edge)
     clear_settle_time: float = 0.5
-    # m and rad, a mesh part: how far its pose may be off along and about
-    # each axis (its frame's origin); each touch's standoff and search
-    # grow by what that can move its face along the normal
+    # m, a mesh part: how far its pose may be off along each axis (its
+    # frame's origin); each touch's standoff and search grow by what that
+    # can move its face along the normal
     pose_offset_allowance: float = 0.001
+    # rad, a mesh part: how far its pose may be turned about each axis,
+    # the same way
     pose_turn_allowance: float = 0.0175
     force_threshold: float = 1.0  # N, contact when -f . n1 exceeds it
     standoff: float = (

@@ -99,16 +99,24 @@ def _truth(plan: JobCellPlan):
         return None
 
 
+def _reached_its_end(signals: JobSignals, k: int) -> bool:
+    """Did cut k reach its end? The sample after its last is the retract
+    that follows a cut's end."""
+    times = signals.t[signals.cut == k]
+    after = np.flatnonzero(signals.t > times[-1]) if len(times) else []
+    return bool(len(after)) and signals.phase[after[0]] == JOB_PHASE["retract"]
+
+
 def _edge_sources(plan, diagram, context, logs, signals, theta, reason):
     """An EdgeSource per planned cut: its process's log, its final state
     (the fuzzy weights at its cut's end, ``theta`` by cut, or the run's
-    last), and whether it reached its end (a later cut began, or the job
-    completed on it)."""
+    last), and whether it reached its end (the retract followed it, or
+    the job completed on it)."""
     controller = diagram.GetSubsystemByName("controller")
     last = controller.theta(controller.GetMyContextFromRoot(context)).copy()
     sources = []
     for k, (cut, edge) in enumerate(zip(plan.job.cuts, plan.edges)):
-        completed = np.any(signals.cut > k) or (
+        completed = _reached_its_end(signals, k) or (
             reason == JOB_COMPLETE and k == len(plan.edges) - 1
         )
         raw = logs[f"process_{k}"]

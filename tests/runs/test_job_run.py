@@ -82,3 +82,21 @@ def test_clear_of_the_part_on_the_move_and_the_estimate_carried(job_run):
         first.log["estimates"]["value"][-1],
         rtol=1e-3,
     )
+
+
+def test_the_files_written(job_run, tmp_path):
+    import json
+
+    from deburr_drake.runs.job_report import job_report, write_job_report
+
+    plan, result = job_run
+    report = job_report(result.log, plan.job)
+    files = write_job_report(report, result.log, tmp_path, figures=False)
+    summary = json.loads((tmp_path / "metrics.json").read_text())
+    assert summary["stop_reason"] == JOB_COMPLETE
+    assert [e["index"] for e in summary["edges"]] == [10, 8]
+    assert all(e["cut_to_end"] for e in summary["edges"])
+    assert summary["job"]["min_clearance_m"] > 0.0
+    for edge in (10, 8):
+        assert (tmp_path / f"edge_{edge}" / "logs.npz").is_file()
+        assert edge in files["edges"]
