@@ -35,8 +35,8 @@ from deburr_drake.control.probe import (
     CUT_ESTABLISHED,
     PROBE_MISSED,
     SensorTiming,
+    SequenceOutputs,
     detection_depth,
-    fuzzy_weight,
     median_stiffness,
 )
 from deburr_drake.math.geometry import Contour
@@ -155,7 +155,7 @@ class MeshProbePlan:
         return t.points[i] + clear * t.normals[i]
 
 
-class MeshProbingSequence(LeafSystem):
+class MeshProbingSequence(SequenceOutputs, LeafSystem):
     """Guarded moves at the planned touches of a mesh part, its
     registration, and the way to the pass's start on the registered part.
 
@@ -216,6 +216,7 @@ class MeshProbingSequence(LeafSystem):
         super().__init__()
         config.validate()
         self.set_name("probing_sequence")
+        self._layout, self._done_phase = MESH_PROBE_STATE, _P["done"]
         self._contour = contour
         self._plan = plan
         self._config = config
@@ -545,47 +546,9 @@ class MeshProbingSequence(LeafSystem):
         )
 
     # -- outputs ---------------------------------------------------------
-    def _x(self, context):
-        return context.get_discrete_state(self._state).get_value()
-
-    def _done(self, context) -> bool:
-        return MESH_PROBE_STATE.get(self._x(context), "phase") == _P["done"]
-
-    def _calc_command(self, context, output):
-        if self._done(context):
-            output.SetFromVector(self._command_in.Eval(context))
-        else:
-            output.SetFromVector(
-                MESH_PROBE_STATE.get(self._x(context), "command")
-            )
-
-    def _calc_probing(self, context, output):
-        output.SetAtIndex(0, 0.0 if self._done(context) else 1.0)
-
-    def _calc_hold(self, context, output):
-        cut = MESH_PROBE_STATE.get(self._x(context), "cut_time")
-        output.SetAtIndex(0, 1.0 if cut < 0 else 0.0)
-
-    def _calc_spindle(self, context, output):
-        output.SetAtIndex(0, 1.0 if self._done(context) else 0.0)
-
     def _calc_touching(self, context, output):
         output.SetAtIndex(
             0, float(MESH_PROBE_STATE.get(self._x(context), "touching"))
-        )
-
-    def _calc_fuzzy_weight(self, context, output):
-        done = float(MESH_PROBE_STATE.get(self._x(context), "done_time"))
-        output.SetAtIndex(
-            0,
-            fuzzy_weight(
-                done, context.get_time(), self._config.fuzzy_ramp_time
-            ),
-        )
-
-    def _calc_registration(self, context, output):
-        output.SetFromVector(
-            MESH_PROBE_STATE.get(self._x(context), "registration")
         )
 
 

@@ -42,6 +42,7 @@ from deburr_drake.math.registration import (
 __all__ = [
     "PROBE_MISSED",
     "ProbingSequence",
+    "SequenceOutputs",
     "ProbeGate",
     "PROBE_STATE",
     "PHASES",
@@ -303,7 +304,49 @@ class _Step(NamedTuple):
     crossings: np.ndarray
 
 
-class ProbingSequence(LeafSystem):
+class SequenceOutputs:
+    """The outputs a probing sequence computes from its state the same way
+    whatever part it touches. The sequence sets ``_state`` (its discrete
+    state's index), ``_layout`` (that state's VectorLayout, with phase,
+    command, cut_time, done_time and registration), ``_done_phase`` (the
+    phase's code once done), ``_command_in`` and ``_config``."""
+
+    def _x(self, context):
+        return context.get_discrete_state(self._state).get_value()
+
+    def _done(self, context) -> bool:
+        return self._layout.get(self._x(context), "phase") == self._done_phase
+
+    def _calc_command(self, context, output):
+        if self._done(context):
+            output.SetFromVector(self._command_in.Eval(context))
+        else:
+            output.SetFromVector(self._layout.get(self._x(context), "command"))
+
+    def _calc_probing(self, context, output):
+        output.SetAtIndex(0, 0.0 if self._done(context) else 1.0)
+
+    def _calc_hold(self, context, output):
+        cut = self._layout.get(self._x(context), "cut_time")
+        output.SetAtIndex(0, 1.0 if cut < 0 else 0.0)
+
+    def _calc_spindle(self, context, output):
+        output.SetAtIndex(0, 1.0 if self._done(context) else 0.0)
+
+    def _calc_fuzzy_weight(self, context, output):
+        done = float(self._layout.get(self._x(context), "done_time"))
+        output.SetAtIndex(
+            0,
+            fuzzy_weight(
+                done, context.get_time(), self._config.fuzzy_ramp_time
+            ),
+        )
+
+    def _calc_registration(self, context, output):
+        output.SetFromVector(self._layout.get(self._x(context), "registration"))
+
+
+class ProbingSequence(SequenceOutputs, LeafSystem):
     """Guarded moves at N points of the believed edge, the fit, and the way
     to the pass's start on the corrected part.
 
@@ -378,6 +421,7 @@ class ProbingSequence(LeafSystem):
         super().__init__()
         config.validate()
         self.set_name("probing_sequence")
+        self._layout, self._done_phase = PROBE_STATE, _P["done"]
         self._contour = contour
         self._config = config
         self._timing = timing
@@ -766,41 +810,6 @@ class ProbingSequence(LeafSystem):
         rows = np.flatnonzero(hit)[~fit.kept]
         t[rows, 3] = 2.0
         touches[:] = t.ravel()
-
-    # -- outputs ---------------------------------------------------------
-    def _x(self, context):
-        return context.get_discrete_state(self._state).get_value()
-
-    def _done(self, context) -> bool:
-        return PROBE_STATE.get(self._x(context), "phase") == _P["done"]
-
-    def _calc_command(self, context, output):
-        if self._done(context):
-            output.SetFromVector(self._command_in.Eval(context))
-        else:
-            output.SetFromVector(PROBE_STATE.get(self._x(context), "command"))
-
-    def _calc_probing(self, context, output):
-        output.SetAtIndex(0, 0.0 if self._done(context) else 1.0)
-
-    def _calc_hold(self, context, output):
-        cut = PROBE_STATE.get(self._x(context), "cut_time")
-        output.SetAtIndex(0, 1.0 if cut < 0 else 0.0)
-
-    def _calc_spindle(self, context, output):
-        output.SetAtIndex(0, 1.0 if self._done(context) else 0.0)
-
-    def _calc_fuzzy_weight(self, context, output):
-        done = float(PROBE_STATE.get(self._x(context), "done_time"))
-        output.SetAtIndex(
-            0,
-            fuzzy_weight(
-                done, context.get_time(), self._config.fuzzy_ramp_time
-            ),
-        )
-
-    def _calc_registration(self, context, output):
-        output.SetFromVector(PROBE_STATE.get(self._x(context), "registration"))
 
 
 _GATED = [
