@@ -365,6 +365,27 @@ def _the_plan(plan, scenario) -> CellPlan:
     return plan_cell(scenario) if plan is None else plan
 
 
+def _wire_probe(builder, plan: CellPlan, plant, tool_point, loops, side):
+    """Touch probing on the plant's side: the loops turn the spindle off
+    and on; on a mesh part the probe touches the real part's faces
+    (returns that contact's gate; None on a planar part)."""
+    if plan.scenario.localisation.probe.enabled:
+        builder.Connect(loops.spindle, side.process.GetInputPort("spindle"))
+    if plan.mesh_probe is None:
+        return None
+    return _add_touch_contact(
+        builder, plan, plant, tool_point, loops.probe, side.process
+    )
+
+
+def _probe_route(plan: CellPlan):
+    """Where a mesh part's probe leaves the edge ((N, 3) m, world), which
+    the guards' workspace must hold; None without one."""
+    if plan.mesh_probe is None:
+        return None
+    return plan.mesh_probe.route(plan.scenario.localisation.probe.standoff)
+
+
 def make_deburring_diagram(
     plan: Optional[CellPlan] = None,
     *,
@@ -428,15 +449,7 @@ def make_deburring_diagram(
         posture=plan.start.q,
         mesh_probe=plan.mesh_probe,
     )
-    # Touch probing: the loops turn the spindle off and on; on a mesh
-    # part the probe touches the real part's faces.
-    if probing:
-        builder.Connect(loops.spindle, side.process.GetInputPort("spindle"))
-    touch_gate = None
-    if plan.mesh_probe is not None:
-        touch_gate = _add_touch_contact(
-            builder, plan, plant, tool_point, loops.probe, side.process
-        )
+    touch_gate = _wire_probe(builder, plan, plant, tool_point, loops, side)
     # The drives: the controller's torque to the plant and the force law.
     _connect_actuation(builder, c, plant, side, loops.actuation)
     # The cell drawn in Meshcat.
@@ -444,13 +457,7 @@ def make_deburring_diagram(
         _add_meshcat(builder, meshcat, plan, plant, scene_graph, side.process)
     # The guards read the standard signals, the loggers those and more.
     logged = _logged_signals(builder, loops, probing, touch_gate)
-    # A mesh part's probe leaves the edge: the workspace holds its way.
-    route = (
-        None
-        if plan.mesh_probe is None
-        else plan.mesh_probe.route(c.localisation.probe.standoff)
-    )
-    add_guards(builder, c, plant, plan.contour, logged, route)
+    add_guards(builder, c, plant, plan.contour, logged, _probe_route(plan))
     _add_loggers(builder, c, logged, extra_logs)
     diagram = builder.Build()
     diagram.set_name(f"deburr_{c.name}")

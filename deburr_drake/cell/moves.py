@@ -332,6 +332,26 @@ def _tip_travel(cell: PlanningCell, path) -> float:
     return float(np.sum(np.linalg.norm(np.diff(tips, axis=0), axis=1)))
 
 
+def _transit_or_via(cell, cut_end, next_start, segments, settings, label):
+    """:func:`_clear_transit` from the straight line in joint space, or,
+    where that local program stalls (the tool turning over far, vertical
+    to horizontal), started again through a posture above the part with
+    the axis halfway."""
+    try:
+        return _clear_transit(cell, segments, settings, label)
+    except MovePlanningError as e:
+        via = _via(cell, cut_end, next_start, segments, settings)
+        if via is None:
+            raise
+        try:
+            return _clear_transit(cell, segments, settings, label, via=via)
+        except MovePlanningError:
+            raise MovePlanningError(
+                f"{e}, nor through a posture {_VIA_RISE * 1e3:.0f} mm above "
+                "the two ends"
+            ) from None
+
+
 def plan_move(
     cell: PlanningCell,
     cut_end,
@@ -348,26 +368,9 @@ def plan_move(
     started = time.perf_counter()
     q_a, q_b = cut_end[2], next_start[2]
     segments = _waypoints(cell, cut_end, next_start, settings, label)
-    try:
-        transit, times, middle, distances = _clear_transit(
-            cell, segments, settings, label
-        )
-    except MovePlanningError as e:
-        # A local program from the straight line in joint space stalls
-        # where the tool turns over far (vertical to horizontal): started
-        # again through a posture above the part, the axis halfway.
-        via = _via(cell, cut_end, next_start, segments, settings)
-        if via is None:
-            raise
-        try:
-            transit, times, middle, distances = _clear_transit(
-                cell, segments, settings, label, via=via
-            )
-        except MovePlanningError:
-            raise MovePlanningError(
-                f"{e}, nor through a posture {_VIA_RISE * 1e3:.0f} mm above "
-                "the two ends"
-            ) from None
+    transit, times, middle, distances = _transit_or_via(
+        cell, cut_end, next_start, segments, settings, label
+    )
     ends = (transit.start_time(), transit.end_time())
     step = settings.check_step
     retract = _line(np.asarray(q_a), segments["retract"], step)

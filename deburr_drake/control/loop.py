@@ -434,28 +434,21 @@ def add_deburring_controller(
 
     - ``plant_state``: [q; v] of ``plant`` (m or rad, m/s or rad/s), e.g.
       ``plant.get_state_output_port()``;
-    - ``measured_force`` (3, N, world): the force of the part on the tool
-      (a force sensor, or your contact model).
+    - ``measured_force`` (3, N, world): the part's force on the tool.
 
-    ``plant`` (finalized) is the robot model the controller uses
-    (kinematics, Jacobian, gravity with masses scaled by
-    ``controller.model_mass_scale``): the simulated plant or a copy.
-    ``tool_frame``'s origin is the tool point x_p; ``contour`` the
-    zero-depth path of x_p along the edge the controller believes in
-    (:mod:`deburr_drake.math.geometry`); ``start`` where the command starts
-    (m, world; the contour's start by default); ``desired_rotation`` (3 x
-    3) the tool orientation held (identity by default), turned by
+    ``plant`` (finalized): the controller's robot model (masses scaled by
+    ``controller.model_mass_scale``), the simulated plant or a copy;
+    ``tool_frame``: its origin is x_p; ``contour``: x_p's zero-depth
+    path along the believed edge; ``start`` (m, world; default: the
+    contour's start); ``desired_rotation`` (default identity), turned by
     ``contour.axis_turn(s)`` when ``contour.varying_frame``;
-    ``tool_point``, ``contour_step``, ``true_plant``, ``posture``: to the
-    systems (shared kinematics, a moving part, the ideal law's plant, a
-    redundant arm's posture).
-    ``sequenced``: a job's (control.sequencer): a gate ``job_gate`` after
-    the observer, its ``probing``, the generator's ``hold``, the
-    controller's ``fuzzy_weight`` and ``active`` left open.
-    ``mesh_probe`` (a deburr_drake.control.mesh_probe.MeshProbePlan): with
-    ``localisation.probe``, a mesh part's touches on its faces and its
-    registration in six degrees of freedom (and a hole's size) instead of
-    the planar probe's along the edge.
+    ``tool_point``, ``contour_step``, ``true_plant``, ``posture``: passed
+    to the systems. ``sequenced``: a job's loops (control.sequencer): a
+    gate ``job_gate`` after the observer, its ``probing``, the generator's
+    ``hold`` and the controller's ``fuzzy_weight`` and ``active`` left
+    open. ``mesh_probe`` (control.mesh_probe.MeshProbePlan): with
+    ``localisation.probe``, a mesh part's touches and its six-degree
+    registration (and a hole's size) instead of the planar probe.
 
     Returns the systems; connect ``.actuation`` to the plant's actuation
     input (directly, or through your own saturation or fault systems)."""
