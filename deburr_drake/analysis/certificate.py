@@ -611,6 +611,11 @@ def mixed_norm(A: np.ndarray, P_to: np.ndarray, P_from: np.ndarray) -> float:
     return float(np.sqrt(max(mu[-1], 0.0)))
 
 
+def _per_node(maps) -> List[List[np.ndarray]]:
+    """[[A, ...] per node]: a node's maps (one array: its only map)."""
+    return [[m] if isinstance(m, np.ndarray) else list(m) for m in maps]
+
+
 def solve_rate_bounded(
     maps: Sequence[np.ndarray],
     thetas: Sequence[float],
@@ -624,7 +629,8 @@ def solve_rate_bounded(
     P_i >= I, P_i <= kappa I (kappa minimised) and A_i^T P(theta') A_i -
     gamma^2 P_i <= -epsilon I at every theta' of :func:`rate_vertices`;
     (Ps or None, solver status, success)."""
-    n, N = maps[0].shape[0], len(maps)
+    maps = _per_node(maps)
+    n, N = maps[0][0].shape[0], len(maps)
     prog = MathematicalProgram()
     Ps = [prog.NewSymmetricContinuousVariables(n, f"P{i}") for i in range(N)]
     kappa = prog.NewContinuousVariables(1, "kappa")
@@ -637,7 +643,7 @@ def solve_rate_bounded(
             [np.zeros((n, n)), eye] + [-E for E in basis],
             np.concatenate([kappa, flat[i]]),
         )
-    for i, A in enumerate(maps):
+    for i, A in ((i, A) for i, node in enumerate(maps) for A in node):
         for t in rate_vertices(thetas, i, step):
             weights = dict(_weights(np.asarray(thetas, float), t))
             weights.setdefault(i, 0.0)
@@ -680,8 +686,9 @@ def check_rate_bounded(
     positive = all(e[0] > 0 for e in eigs)
     condition = max(e[-1] / e[0] for e in eigs) if positive else float("inf")
     rate, worst = 0.0, 0
+    maps = _per_node(maps)
     if positive:
-        for i, A in enumerate(maps):
+        for i, A in ((i, A) for i, node in enumerate(maps) for A in node):
             for t in rate_vertices(thetas, i, step):
                 r = mixed_norm(A, _interpolated(Ps, thetas, t), Ps[i])
                 if r > rate:
@@ -690,8 +697,12 @@ def check_rate_bounded(
         rate = float("inf")
     miss = 0.0
     if mids is not None and positive:
-        for c, mid in enumerate(mids):
-            E = mid - 0.5 * (maps[c] + maps[c + 1])
+        for c, mid, a, b in (
+            (c, mid, a, b)
+            for c, cell in enumerate(_per_node(mids))
+            for mid, a, b in zip(cell, maps[c], maps[c + 1])
+        ):
+            E = mid - 0.5 * (a + b)
             lo = np.searchsorted(thetas, thetas[c] - step, side="right") - 1
             hi = np.searchsorted(thetas, thetas[c + 1] + step, side="left")
             near = range(max(lo, 0), min(hi, len(Ps) - 1) + 1)
@@ -776,22 +787,30 @@ def certify_rate_bounded(
 ) -> RateBoundedCertificate:
     """A Lyapunov function V(x, theta) = x^T P(theta) x, P affine between
     the grid's nodes ``thetas``, for x+ = A(theta) x with theta moving by
-    at most ``step`` per period: A(theta) the chord through ``maps`` (one
-    per node), plus what the chord leaves out measured at the cells'
-    midpoints (``mids``). Reduced as :func:`reduce_family` (the nodes'
+    at most ``step`` per period: A(theta) the chord through ``maps`` (per
+    node one map, or a list: the corners of other parameters, which may
+    move arbitrarily fast, aligned across nodes), plus what the chord
+    leaves out measured at the cells' midpoints (``mids``). Reduced as :func:`reduce_family` (the nodes'
     and midpoints' maps together), P_i searched in the common row space
     and lifted with one weight, then checked in numpy
     (:func:`check_rate_bounded`): a solved program whose P fails the
     check is inconclusive."""
     thetas = np.asarray(thetas, float)
-    N = len(maps)
-    everything = list(maps) + list(mids or [])
-    reduced = reduce_family(everything, labels, neutral_tolerance=0.0)
-    family = reduced.maps[:N]
-    mid_maps = reduced.maps[N:] if mids is not None else None
-    radii = [float(np.max(np.abs(np.linalg.eigvals(A)))) for A in family]
-    V = search_basis(family)
-    search = [V.T @ A @ V for A in family]
+    nodes = _per_node(maps)
+    cells = _per_node(mids) if mids is not None else []
+    flat = [A for node in nodes + cells for A in node]
+    reduced = reduce_family(flat, labels)
+    it = iter(reduced.maps)
+    family = [[next(it) for _ in node] for node in nodes]
+    mid_maps = [[next(it) for _ in cell] for cell in cells] or None
+    N = len(family)
+    radii = [
+        float(np.max(np.abs(np.linalg.eigvals(A))))
+        for node in family
+        for A in node
+    ]
+    V = search_basis([A for node in family for A in node])
+    search = [[V.T @ A @ V for A in node] for node in family]
     out = RateBoundedCertificate(
         "not_certified", None, None, "not run", reduced, int(V.shape[1]), radii
     )
