@@ -790,9 +790,11 @@ def certify_rate_bounded(
     at most ``step`` per period: A(theta) the chord through ``maps`` (per
     node one map, or a list: the corners of other parameters, which may
     move arbitrarily fast, aligned across nodes), plus what the chord
-    leaves out measured at the cells' midpoints (``mids``). Reduced as :func:`reduce_family` (the nodes'
-    and midpoints' maps together), P_i searched in the common row space
-    and lifted with one weight, then checked in numpy
+    leaves out measured at the cells' midpoints (``mids``). Reduced as
+    :func:`reduce_family` (the nodes' and midpoints' maps together), P_i
+    searched in the common row space and lifted with one weight, the
+    decay rate bisected until the chord's miss has room, then checked in
+    numpy
     (:func:`check_rate_bounded`): a solved program whose P fails the
     check is inconclusive."""
     thetas = np.asarray(thetas, float)
