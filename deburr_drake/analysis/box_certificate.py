@@ -623,7 +623,12 @@ def certify(
     timings["program_s"] = time.perf_counter() - t2
     scheduled = None
     status = error.get("status", cert.status)
-    if status != "certified" and any(p["field"] is None for p in box):
+    # A map unstable by itself refuses the box whatever V is tried.
+    if (
+        status != "certified"
+        and max(cert.spectral_radii) < 1.0
+        and any(p["field"] is None for p in box)
+    ):
         t3 = time.perf_counter()
         scheduled = _scheduled(op, box, maps_at, maps, axes, solver, say)
         timings["scheduled_s"] = time.perf_counter() - t3
