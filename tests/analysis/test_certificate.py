@@ -351,7 +351,7 @@ def test_a_slowly_moving_parameter_is_certified_where_fast_switching_is_not():
     assert slow.status == "certified"
     check = slow.check
     assert 0.0 < check["chord_miss"] < 1e-2
-    assert check["decay_rate_with_chord_miss"] < 1.0 - 1e-6
+    assert check["decay_rate_with_model_error"] < 1.0 - 1e-6
     # The check is the numpy one: each node's map decays from P_i to
     # P(theta') at the grid's neighbours.
     Ps = slow.Ps
