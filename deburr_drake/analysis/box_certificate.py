@@ -468,20 +468,36 @@ def _rate_step(op, p, period: float) -> Dict:
 
 
 def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
-    """The certificate with a slope of ``box`` scheduled: the slope whose
-    ends move the map most (balanced) gets a grid of ``SCHEDULE_NODES``
+    """The certificate with a slope of ``box`` scheduled: the first slope
+    whose ends (with the nominal map) have no common P, else the one whose
+    ends move the map most (balanced), gets a grid of ``SCHEDULE_NODES``
     nodes and P(slope) affine between them, moving at most the adaptation
     law's step per period (:func:`_rate_step`); the other corner axes'
     corners are taken at every node and cell midpoint (they may move
     arbitrarily fast), the others' half-ranges and curvatures bounded in
     P(slope) and added (:func:`certify_rate_bounded`)."""
     balanced = _balancer(maps["A0"])
-    slopes = [j for j, p in enumerate(box) if p["field"] is None]
-    k = max(
-        slopes,
-        key=lambda j: np.linalg.norm(
-            balanced(maps["ends"][j][1] - maps["ends"][j][0])
+    slopes = sorted(
+        (j for j, p in enumerate(box) if p["field"] is None),
+        key=lambda j: (
+            -np.linalg.norm(balanced(maps["ends"][j][1] - maps["ends"][j][0]))
         ),
+    )
+    # The slope whose two ends alone have no common P is the one the
+    # quadratic form cannot cover; else the one that moves the map most.
+    k = next(
+        (
+            j
+            for j in slopes
+            if certify_family(
+                [maps["A0"], *maps["ends"][j]],
+                maps["labels"],
+                solver=solver,
+                bisections=0,
+            ).status
+            != "certified"
+        ),
+        slopes[0],
     )
     p = box[k]
     rate = _rate_step(op, p, maps["period"])
