@@ -729,8 +729,10 @@ def certificate_summary(result: Dict) -> str:
             f"most {rate['per_period']:.4g} N s/m per period: "
             f"{schedule['status']} {schedule['reason']}"
         )
+    # With a slope scheduled, the common P's break is what led to it.
+    broken = "the common P " if result.get("scheduled") else ""
     if result.get("breaking_vertex"):
-        lines.append(f"  breaks at: {result['breaking_vertex']}")
+        lines.append(f"  {broken}breaks at: {result['breaking_vertex']}")
     if result.get("breaking_reason"):
         lines.append(f"  why: {result['breaking_reason']}")
     for m in result["separated_modes"]:
