@@ -58,7 +58,11 @@ from pydrake.systems.analysis import (
 import scipy.linalg
 
 from deburr_drake.analysis.along import at_numerics
-from deburr_drake.analysis.certificate import certify_family, p_norm
+from deburr_drake.analysis.certificate import (
+    certify_family,
+    certify_rate_bounded,
+    p_norm,
+)
 from deburr_drake.analysis.operating_point import (
     DEFAULT_TIME_AFTER_CONTACT,
     _next_analysis_time,
@@ -82,6 +86,11 @@ SETTLE_PERIODS = 0
 #: Bisections of the decay rate when the first P leaves no room for what
 #: the corners leave out (each one more solve).
 ROOM_BISECTIONS = 6
+#: Nodes of the grid along a scheduled slope (P affine between them). The
+#: window each node's inequality covers is its two cells plus the rate's
+#: step: on the paper arm pairs of x2 slope maps 0 and 1000 N s/m apart
+#: have a common P and 0 and 2000 none, so cells of at most ~500 N s/m.
+SCHEDULE_NODES = 9
 #: The box's parameters by short key (``certify``'s ``only``).
 BOX_KEYS = {
     "part.material.hydroelastic_modulus": "stiffness",
@@ -113,6 +122,16 @@ DOES_NOT_PROVE = (
     "operating point, the outer loop and the adaptation's own dynamics "
     "(frozen), a negative slope of the fuzzy surface, the feed's range "
     "and other poses along the edge (not in the box)"
+)
+
+
+PROVES_SCHEDULED = (
+    "the sampled 2.5 ms loop linearised at its steady cutting state is "
+    "exponentially stable for any variation of the parameters within the "
+    "box, however fast, with the slope on {axis} moving no faster than "
+    "{step:.4g} N s/m per period (the adaptation law's bound, "
+    "slope_rate_bound): a Lyapunov function x^T P(slope) x, P affine "
+    "between {nodes} nodes of the slope's range"
 )
 
 
@@ -417,6 +436,120 @@ def _model_error(cert, box, maps, axes) -> Dict:
     return out
 
 
+def _rate_step(op, p, period: float) -> Dict:
+    """{per_s, per_period, ...}: the adaptation law's bound on how fast
+    slope ``p`` moves (:meth:`RuleBase.slope_rate_bound` at the operating
+    s_k), 0 when the rules do not adapt."""
+    fuzzy = op.scenario.controller.fuzzy
+    controller = op.diagram.GetSubsystemByName("controller")
+    rb = controller.rule_bases[p["fuzzy_index"]]
+    per_s = (
+        rb.slope_rate_bound(fuzzy.adaptation_gain, p["s0"])
+        if fuzzy.adapt
+        else 0.0
+    )
+    return {
+        "per_s": per_s,
+        "per_period": per_s * period,
+        "period_s": period,
+        "adaptation_gain": float(fuzzy.adaptation_gain),
+        "upsilon": int(rb._U),
+        "deltak": float(rb._dk),
+        "s0": float(p["s0"]),
+        "order": int(rb._m),
+        "derivation": (
+            "d/dt of the slope at s0 = r s (sum_i nu0_i nu0_i') (sum_j "
+            "N_j'(s0) N_j(s)); |s| <= min(upsilon deltak, |s0| + (m + 1) "
+            "deltak) where (35) acts and the rules overlap s0's, the first "
+            "sum <= 1, the second <= max_j |N_j'(s0)|; the slope bound's "
+            "pull is zero inside the box, a fuzzy weight < 1 only slows it"
+        ),
+    }
+
+
+def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
+    """The certificate with a slope of ``box`` scheduled: the first slope
+    whose ends (with the nominal map) have no common P, else the one whose
+    ends move the map most (balanced), gets a grid of ``SCHEDULE_NODES``
+    nodes and P(slope) affine between them, moving at most the adaptation
+    law's step per period (:func:`_rate_step`); the other corner axes'
+    corners are taken at every node and cell midpoint (they may move
+    arbitrarily fast), the others' half-ranges and curvatures bounded in
+    P(slope) and added (:func:`certify_rate_bounded`)."""
+    balanced = _balancer(maps["A0"])
+    slopes = sorted(
+        (j for j, p in enumerate(box) if p["field"] is None),
+        key=lambda j: (
+            -np.linalg.norm(balanced(maps["ends"][j][1] - maps["ends"][j][0]))
+        ),
+    )
+    # The slope whose two ends alone have no common P is the one the
+    # quadratic form cannot cover; else the one that moves the map most.
+    k = next(
+        (
+            j
+            for j in slopes
+            if certify_family(
+                [maps["A0"], *maps["ends"][j]],
+                maps["labels"],
+                solver=solver,
+                bisections=0,
+            ).status
+            != "certified"
+        ),
+        slopes[0],
+    )
+    p = box[k]
+    rate = _rate_step(op, p, maps["period"])
+    lo, hi = p["range"]
+    nodes = np.linspace(lo, hi, SCHEDULE_NODES)
+    others = [j for j in axes if j != k]
+    corners = list(itertools.product((-1.0, 1.0), repeat=len(others)))
+
+    def at(value):
+        out = []
+        for corner in corners or [()]:
+            sign = [0.0] * len(box)
+            for si, j in zip(corner, others):
+                sign[j] = si
+            values = _values(box, sign)
+            values[p["name"]] = value
+            out.append(maps_at(values))
+        return out
+
+    say(
+        f"P({p['key']}) on {SCHEDULE_NODES} nodes, "
+        f"{max(len(corners), 1)} corners each"
+    )
+    node_maps = [at(v) for v in nodes]
+    mid_maps = [at(0.5 * (a + b)) for a, b in zip(nodes[:-1], nodes[1:])]
+    # What the other parameters' corners leave out (their curvature, and
+    # the half-range of those without a corner axis), bounded in P(slope).
+    left_out = []
+    for j, (q, (a, b), mid) in enumerate(zip(box, maps["ends"], maps["mids"])):
+        if j != k:
+            Es = [mid - 0.5 * (a + b)]
+            if j not in axes:
+                Es.append(0.5 * (b - a))
+            left_out.append((q["name"], Es))
+    cert = certify_rate_bounded(
+        node_maps,
+        nodes,
+        rate["per_period"],
+        maps["labels"],
+        mids=mid_maps,
+        left_out=left_out,
+        solver=solver,
+    )
+    return {
+        "scheduled": p["key"],
+        "slope_rate_bound": rate,
+        "schedule_nodes": nodes.tolist(),
+        "schedule": cert.to_dict(),
+        "scheduled_maps": sum(len(m) for m in node_maps + mid_maps),
+    }
+
+
 def certify(
     scenario: Scenario,
     *,
@@ -485,11 +618,43 @@ def certify(
         )
         error = _model_error(cert, box, maps, axes)
     timings["program_s"] = time.perf_counter() - t2
+    scheduled = None
+    status = error.get("status", cert.status)
+    # A map unstable by itself refuses the box whatever V is tried.
+    if (
+        status != "certified"
+        and max(cert.spectral_radii) < 1.0
+        and any(p["field"] is None for p in box)
+    ):
+        t3 = time.perf_counter()
+        scheduled = _scheduled(op, box, maps_at, maps, axes, solver, say)
+        timings["scheduled_s"] = time.perf_counter() - t3
     result = cert.to_dict()
     result["vertex_parameters"] = [box[j]["name"] for j in axes]
     result.update(error)
     if result["breaking_map"] is not None:
         result["breaking_vertex"] = names[result["breaking_map"]]
+    proves = PROVES
+    if scheduled is not None:
+        result["common_quadratic_status"] = result["status"]
+        result.update(scheduled)
+        result["status"] = scheduled["schedule"]["status"]
+        if result["status"] == "certified":
+            rate = scheduled["slope_rate_bound"]["per_period"]
+            proves = PROVES_SCHEDULED.format(
+                axis=scheduled["scheduled"].split("_")[1],
+                step=rate,
+                nodes=len(scheduled["schedule_nodes"]),
+            )
+            result["decay_rate_per_period"] = scheduled["schedule"]["check"][
+                "decay_rate"
+            ]
+            result["decay_rate_with_model_error"] = scheduled["schedule"][
+                "check"
+            ]["decay_rate_with_model_error"]
+            result["P_condition"] = scheduled["schedule"]["check"][
+                "P_condition"
+            ]
     result.update(
         {
             "scenario": op.scenario.name,
@@ -518,8 +683,9 @@ def certify(
                 "largest_desired_force_change_N": max(maps_at.moved),
                 "largest_desired_force_residual_N": max(maps_at.residuals),
             },
-            "vertices": len(family),
-            "proves": PROVES,
+            "vertices": len(family)
+            + (scheduled or {}).get("scheduled_maps", 0),
+            "proves": proves,
             "does_not_prove": DOES_NOT_PROVE,
             "timings_s": {**timings, "total": time.perf_counter() - t0},
             "_maps": {
@@ -554,8 +720,19 @@ def certificate_summary(result: Dict) -> str:
             f"{result['search_dimension']} of {result['certified_dimension']} "
             "coordinates, checked in all"
         )
+    if result.get("scheduled"):
+        schedule, rate = result["schedule"], result["slope_rate_bound"]
+        lines.append(
+            f"  no common quadratic P ({result['common_quadratic_status']}"
+            f"): P({result['scheduled']}) on "
+            f"{len(result['schedule_nodes'])} nodes, the slope moving at "
+            f"most {rate['per_period']:.4g} N s/m per period: "
+            f"{schedule['status']} {schedule['reason']}"
+        )
+    # With a slope scheduled, the common P's break is what led to it.
+    broken = "the common P " if result.get("scheduled") else ""
     if result.get("breaking_vertex"):
-        lines.append(f"  breaks at: {result['breaking_vertex']}")
+        lines.append(f"  {broken}breaks at: {result['breaking_vertex']}")
     if result.get("breaking_reason"):
         lines.append(f"  why: {result['breaking_reason']}")
     for m in result["separated_modes"]:

@@ -50,7 +50,7 @@ P-norm of the maps below 1 by ``margin``); a P that fails is
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 from pydrake.solvers import (
@@ -74,6 +74,12 @@ __all__ = [
     "search_basis",
     "lift",
     "nominal_lyapunov",
+    "RateBoundedCertificate",
+    "certify_rate_bounded",
+    "check_rate_bounded",
+    "mixed_norm",
+    "rate_vertices",
+    "solve_rate_bounded",
 ]
 
 #: A P whose condition number is above this is not accepted as a proof:
@@ -559,3 +565,335 @@ def certify_family(
     cert.P = best
     cert.decay_rate = cert.check["decay_rate"]
     return cert
+
+
+# -- A Lyapunov function that depends on a slowly moving parameter ---------
+
+
+def _weights(thetas: np.ndarray, t: float) -> Dict[int, float]:
+    """{node: weight}: t as the convex combination of its two grid nodes
+    (the piecewise-affine interpolation's hat functions at t)."""
+    j = int(
+        np.clip(
+            np.searchsorted(thetas, t, side="right") - 1, 0, len(thetas) - 2
+        )
+    )
+    lam = float((t - thetas[j]) / (thetas[j + 1] - thetas[j]))
+    lam = min(max(lam, 0.0), 1.0)
+    return {j: 1.0 - lam, j + 1: lam}
+
+
+def rate_vertices(thetas: Sequence[float], i: int, step: float) -> List[float]:
+    """The values of theta' at which node i's inequality is imposed: the
+    ends of [theta_{i-1} - step, theta_{i+1} + step] (within the grid)
+    and every node inside. P(theta') is affine between nodes and
+    A^T P A - gamma^2 P_i is affine in P, so these vertices cover every
+    theta' of that interval."""
+    thetas = np.asarray(thetas, float)
+    lo = max(thetas[max(i - 1, 0)] - step, thetas[0])
+    hi = min(thetas[min(i + 1, len(thetas) - 1)] + step, thetas[-1])
+    inside = [float(t) for t in thetas if lo < t < hi]
+    return sorted({lo, hi, *inside})
+
+
+def _interpolated(Ps: Sequence[np.ndarray], thetas, t) -> np.ndarray:
+    return sum(w * Ps[j] for j, w in _weights(np.asarray(thetas), t).items())
+
+
+def mixed_norm(A: np.ndarray, P_to: np.ndarray, P_from: np.ndarray) -> float:
+    """sup ||A x||_{P_to} / ||x||_{P_from}: the square root of the largest
+    generalized eigenvalue of (A^T P_to A, P_from); inf when P_from is not
+    positive definite in floating point."""
+    try:
+        mu = scipy.linalg.eigh(A.T @ P_to @ A, P_from, eigvals_only=True)
+    except np.linalg.LinAlgError:
+        return float("inf")
+    return float(np.sqrt(max(mu[-1], 0.0)))
+
+
+def _per_node(maps) -> List[List[np.ndarray]]:
+    """[[A, ...] per node]: a node's maps (one array: its only map)."""
+    return [[m] if isinstance(m, np.ndarray) else list(m) for m in maps]
+
+
+def solve_rate_bounded(
+    maps: Sequence[np.ndarray],
+    thetas: Sequence[float],
+    step: float,
+    gamma: float,
+    *,
+    solver: str = "Clarabel",
+    epsilon: float = 1e-9,
+) -> Tuple[Optional[List[np.ndarray]], str, bool]:
+    """P_i (one per grid node theta_i, P(theta) affine between nodes) with
+    P_i >= I, P_i <= kappa I (kappa minimised) and A_i^T P(theta') A_i -
+    gamma^2 P_i <= -epsilon I at every theta' of :func:`rate_vertices`;
+    (Ps or None, solver status, success)."""
+    maps = _per_node(maps)
+    n, N = maps[0][0].shape[0], len(maps)
+    prog = MathematicalProgram()
+    Ps = [prog.NewSymmetricContinuousVariables(n, f"P{i}") for i in range(N)]
+    kappa = prog.NewContinuousVariables(1, "kappa")
+    basis = _symmetric_basis(n)
+    flat = [[P[a, b] for a in range(n) for b in range(a, n)] for P in Ps]
+    eye = np.eye(n)
+    for i in range(N):
+        prog.AddLinearMatrixInequalityConstraint([-eye] + basis, flat[i])
+        prog.AddLinearMatrixInequalityConstraint(
+            [np.zeros((n, n)), eye] + [-E for E in basis],
+            np.concatenate([kappa, flat[i]]),
+        )
+    for i, A in ((i, A) for i, node in enumerate(maps) for A in node):
+        for t in rate_vertices(thetas, i, step):
+            weights = dict(_weights(np.asarray(thetas, float), t))
+            weights.setdefault(i, 0.0)
+            terms, variables = [-epsilon * eye], []
+            for j, w in weights.items():
+                own = gamma**2 if j == i else 0.0
+                terms += [own * E - w * (A.T @ E @ A) for E in basis]
+                variables += flat[j]
+            prog.AddLinearMatrixInequalityConstraint(terms, variables)
+    prog.AddLinearCost(kappa[0])
+    result = _SOLVERS[solver]().Solve(prog)
+    success = result.is_success()
+    Ps_value = [result.GetSolution(P) for P in Ps] if success else None
+    return Ps_value, result.get_solution_result().name, success
+
+
+def check_rate_bounded(
+    maps: Sequence[np.ndarray],
+    thetas: Sequence[float],
+    step: float,
+    Ps: Sequence[np.ndarray],
+    *,
+    mids: Optional[Sequence[np.ndarray]] = None,
+    left_out: Optional[Sequence] = None,
+    margin: float = CHECK_MARGIN,
+    max_condition: float = MAX_CONDITION,
+) -> Dict:
+    """The check in numpy of P(theta) (``Ps`` at the nodes, affine
+    between): every P_i positive definite with condition below
+    ``max_condition``; ``decay_rate`` the largest mixed norm of A_i from
+    P_i to P(theta') over :func:`rate_vertices` (by convexity it bounds
+    the chord's maps between nodes too: A_lin^T Q A_lin <= (1 - l) A_i^T Q
+    A_i + l A_{i+1}^T Q A_{i+1}); with ``mids`` (the maps at the cells'
+    midpoints), ``chord_miss`` bounds what the chord leaves out: the
+    largest mixed norm of (mid - chord) from any node's P of the cell to
+    any P within ``step`` of it (a ratio of convex combinations is at most
+    the largest ratio of their terms), added to the rate; ``left_out``
+    [(name, [E, ...])]: what other parameters' corners leave out, each E
+    bounded likewise over every cell, added too."""
+    thetas = np.asarray(thetas, float)
+    Ps = [0.5 * (P + P.T) for P in Ps]
+    eigs = [np.linalg.eigvalsh(P) for P in Ps]
+    positive = all(e[0] > 0 for e in eigs)
+    condition = max(e[-1] / e[0] for e in eigs) if positive else float("inf")
+    rate, worst = 0.0, 0
+    maps = _per_node(maps)
+    if positive:
+        for i, A in ((i, A) for i, node in enumerate(maps) for A in node):
+            for t in rate_vertices(thetas, i, step):
+                r = mixed_norm(A, _interpolated(Ps, thetas, t), Ps[i])
+                if r > rate:
+                    rate, worst = r, i
+    else:
+        rate = float("inf")
+
+    def pairs():
+        """(j, k): P(theta') from node j, P(theta) from node k, for theta
+        in a cell and theta' within the step of it."""
+        for c in range(len(Ps) - 1):
+            lo = np.searchsorted(thetas, thetas[c] - step, side="right") - 1
+            hi = np.searchsorted(thetas, thetas[c + 1] + step, side="left")
+            for j in range(max(lo, 0), min(hi, len(Ps) - 1) + 1):
+                for k in (c, c + 1):
+                    yield c, j, k
+
+    def bound(E, cells=None):
+        return max(
+            mixed_norm(E, Ps[j], Ps[k])
+            for c, j, k in pairs()
+            if cells is None or c in cells
+        )
+
+    miss = 0.0
+    if mids is not None and positive:
+        for c, cell in enumerate(_per_node(mids)):
+            for mid, a, b in zip(cell, maps[c], maps[c + 1]):
+                miss = max(miss, bound(mid - 0.5 * (a + b), {c}))
+    errors = []
+    if positive:
+        errors = [
+            {"parameter": name, "p_norm": sum(bound(E) for E in Es)}
+            for name, Es in (left_out or [])
+        ]
+    total = rate + miss + sum(e["p_norm"] for e in errors)
+    return {
+        "passed": bool(
+            positive and condition < max_condition and total < 1.0 - margin
+        ),
+        "P_condition": float(condition),
+        "decay_rate": float(rate),
+        "chord_miss": float(miss),
+        "model_error": errors,
+        "decay_rate_with_model_error": float(total),
+        "worst_node": int(worst),
+        "margin": margin,
+        "max_condition": max_condition,
+    }
+
+
+@dataclass
+class RateBoundedCertificate:
+    """The outcome of :func:`certify_rate_bounded`: ``status``, the
+    checked P_i at the grid's nodes (in the reduced coordinates) and the
+    check."""
+
+    status: str
+    Ps: Optional[List[np.ndarray]]
+    check: Optional[Dict]
+    solver_status: str
+    reduced: ReducedFamily
+    search_dimension: int
+    spectral_radii: List[float]
+    reason: str = ""
+    solves: int = 0
+
+    def to_dict(self) -> Dict:
+        return {
+            "status": self.status,
+            "check": self.check,
+            "solver_status": self.solver_status,
+            "search_dimension": self.search_dimension,
+            "certified_dimension": int(self.reduced.maps[0].shape[0]),
+            "largest_spectral_radius": max(self.spectral_radii),
+            "reason": self.reason,
+            "solves": self.solves,
+        }
+
+
+def _lifted_check(P_ws, V, family, thetas, step, mids, left_out, margin):
+    """(Ps, check): the search coordinates' P_i lifted with the one weight
+    (of ``LIFT_WEIGHTS``) whose check leaves the most room."""
+    n, r = V.shape
+    inside = [V @ P @ V.T for P in P_ws]
+    outside = np.eye(n) - V @ V.T
+    smallest = max(min(np.linalg.eigvalsh(P)[0] for P in P_ws), 1e-300)
+    best = None
+    for w in LIFT_WEIGHTS if r < n else [0.0]:
+        Ps = [P + w * smallest * outside for P in inside]
+        check = check_rate_bounded(
+            family,
+            thetas,
+            step,
+            Ps,
+            mids=mids,
+            left_out=left_out,
+            margin=margin,
+        )
+        if best is None or (
+            check["decay_rate_with_model_error"]
+            < best[1]["decay_rate_with_model_error"]
+        ):
+            best = (Ps, check)
+    return best
+
+
+def certify_rate_bounded(
+    maps: Sequence[np.ndarray],
+    thetas: Sequence[float],
+    step: float,
+    labels: Sequence[str],
+    *,
+    mids: Optional[Sequence[np.ndarray]] = None,
+    left_out: Optional[Sequence] = None,
+    solver: str = "Clarabel",
+    margin: float = CHECK_MARGIN,
+    bisections: int = 6,
+) -> RateBoundedCertificate:
+    """A Lyapunov function V(x, theta) = x^T P(theta) x, P affine between
+    the grid's nodes ``thetas``, for x+ = A(theta) x with theta moving by
+    at most ``step`` per period: A(theta) the chord through ``maps`` (per
+    node one map, or a list: the corners of other parameters, which may
+    move arbitrarily fast, aligned across nodes), plus what the chord
+    leaves out measured at the cells' midpoints (``mids``). Reduced as
+    :func:`reduce_family` (the nodes' and midpoints' maps together), P_i
+    searched in the common row space and lifted with one weight, the
+    decay rate bisected until the chord's miss has room, then checked in
+    numpy
+    (:func:`check_rate_bounded`): a solved program whose P fails the
+    check is inconclusive. ``left_out`` [(name, [E, ...])], in the maps'
+    coordinates: what other parameters' corners leave out, bounded in
+    P(theta) and added (:func:`check_rate_bounded`)."""
+    thetas = np.asarray(thetas, float)
+    nodes = _per_node(maps)
+    cells = _per_node(mids) if mids is not None else []
+    flat = [A for node in nodes + cells for A in node]
+    reduced = reduce_family(flat, labels)
+    it = iter(reduced.maps)
+    family = [[next(it) for _ in node] for node in nodes]
+    mid_maps = [[next(it) for _ in cell] for cell in cells] or None
+    N = len(family)
+    left_out = [
+        (name, [reduced.transform(E) for E in Es])
+        for name, Es in (left_out or [])
+    ]
+    radii = [
+        float(np.max(np.abs(np.linalg.eigvals(A))))
+        for node in family
+        for A in node
+    ]
+    V = search_basis([A for node in family for A in node])
+    search = [[V.T @ A @ V for A in node] for node in family]
+    out = RateBoundedCertificate(
+        "not_certified", None, None, "not run", reduced, int(V.shape[1]), radii
+    )
+    if max(radii) >= 1.0 - margin:
+        out.reason = f"a node's own spectral radius is {max(radii):.6f}"
+        return out
+    # The first P(theta) sits on its LMI's boundary at gamma = 1 - 10
+    # margin, leaving no room for the chord's miss: the decay rate is
+    # bisected towards the nodes' largest radius until a P passes.
+    lo, gamma, best = max(radii), 1.0 - 10 * margin, None
+    for attempt in range(bisections + 1):
+        P_ws, status, success = solve_rate_bounded(
+            search, thetas, step, gamma, solver=solver
+        )
+        out.solves += 1
+        if not success:
+            if attempt == 0:
+                out.solver_status = status
+                out.reason = (
+                    f"no P(theta) affine between the {N} nodes exists for "
+                    f"a step of {step:g} per period ({status})"
+                )
+                return out
+            lo, gamma = gamma, 0.5 * (gamma + best[2])
+            continue
+        out.solver_status = status
+        trial = _lifted_check(
+            P_ws, V, family, thetas, step, mid_maps, left_out, margin
+        )
+        if best is None or (
+            trial[1]["decay_rate_with_model_error"]
+            < best[1]["decay_rate_with_model_error"]
+        ):
+            best = (*trial, gamma)
+        if best[1]["passed"]:
+            break
+        gamma = 0.5 * (lo + gamma)
+    out.Ps, out.check = best[0], best[1]
+    if out.check["passed"]:
+        out.status = "certified"
+    else:
+        out.status = "inconclusive"
+        out.reason = (
+            f"the solver reported {status} but P(theta) fails the check: "
+            f"decay rate {out.check['decay_rate']:.8f} plus the chord's "
+            f"miss {out.check['chord_miss']:.3g} plus what the corners "
+            "leave out "
+            f"{sum(e['p_norm'] for e in out.check['model_error']):.3g} "
+            f"(needs < {1 - margin}), condition "
+            f"{out.check['P_condition']:.3g}"
+        )
+    return out

@@ -452,6 +452,40 @@ class RuleBase:
         rates[:, 1:] -= pull
         return out
 
+    def slope_rate_bound(self, r: float, yk0: float | None = None) -> float:
+        """The largest |d/dt| (N s/m per s) that the adaptation (35) with
+        gain ``r`` can give the surface's slope d u / d yk at ``yk0``
+        (anywhere when None). The slope there is sum_ij nu0_i N_j'(yk0)
+        theta_ij and (35) moves theta_ij at r yk nu0_i N_j(yk) on the
+        active rules, so its rate is r yk (sum_i nu0_i nu0_i') (sum_j
+        N_j'(yk0) N_j(yk)): |yk| <= upsilon deltak where (35) acts, the
+        first sum <= 1 and the second <= max_j |N_j'(yk0)| (the N_j(yk)
+        sum to at most 1), itself <= 1 / deltak for m >= 1 (N_m' is a
+        difference of two order m - 1 B-splines, each in [0, 1], over
+        deltak). At ``yk0`` only the yk whose rules overlap yk0's count:
+        |yk| <= |yk0| + (m + 1) deltak too. m = 0: the surface is flat
+        between knots, rate 0. The
+        slope bound's pull is zero while every slope is within it, and a
+        fuzzy weight below 1 only scales the rate down."""
+        if self._m == 0:
+            return 0.0
+        reach = self._U * self._dk
+        if yk0 is None:
+            steepest = 1.0 / self._dk
+        else:
+            reach = min(reach, abs(yk0) + (self._m + 1) * self._dk)
+            j = np.arange(-self._U, self._U + 1)
+            steepest = float(
+                np.max(
+                    np.abs(
+                        bspline_membership_derivative(
+                            yk0 - j * self._dk, self._m, self._dk
+                        )
+                    )
+                )
+            )
+        return float(r * reach * steepest)
+
     def evaluate_and_rate(self, theta, y0, yk, r):
         """(u, idx, dtheta) = evaluate(...) and adaptation_rate(...),
         memberships once."""

@@ -9,9 +9,12 @@ from deburr_drake.analysis.certificate import (
     FOUND_BY_PROGRAM,
     LmiSolution,
     certify_family,
+    certify_rate_bounded,
     check_lyapunov,
     lift,
+    mixed_norm,
     p_norm,
+    rate_vertices,
     reduce_family,
     search_basis,
 )
@@ -321,3 +324,41 @@ def test_a_box_map_is_taken_at_its_own_steady_state():
     assert bc._match_estimates(stiff.diagram, context) == pytest.approx(
         0.0, abs=1e-9
     )
+
+
+def _turned(theta, k=2.0):
+    """0.9 Q(theta) E R(0.5) E^-1 Q(theta)^T: every map's radius 0.9, the
+    same map seen in axes turned by theta."""
+    E = np.diag([k, 1.0 / k])
+    Q = _rotation(theta)
+    return 0.9 * Q @ E @ _rotation(0.5) @ np.linalg.inv(E) @ Q.T
+
+
+def test_a_slowly_moving_parameter_is_certified_where_fast_switching_is_not():
+    thetas = np.linspace(0.0, np.pi / 2, 65)
+    maps = [_turned(t) for t in thetas]
+    mids = [_turned(0.5 * (a + b)) for a, b in zip(thetas[:-1], thetas[1:])]
+    # Switching between the ends grows: no common quadratic P, and no
+    # P(theta) when theta may jump across the whole range.
+    product = maps[0] @ maps[-1]
+    assert np.max(np.abs(np.linalg.eigvals(product))) > 1.19
+    assert certify_family(maps, ["a", "b"]).status == "not_certified"
+    fast = certify_rate_bounded(maps, thetas, np.pi / 2, ["a", "b"], mids=mids)
+    assert fast.status == "not_certified"
+    # Moving by at most 1 mrad per period, P(theta) exists and is checked
+    # with what the chord between nodes leaves out.
+    slow = certify_rate_bounded(maps, thetas, 1e-3, ["a", "b"], mids=mids)
+    assert slow.status == "certified"
+    check = slow.check
+    assert 0.0 < check["chord_miss"] < 1e-2
+    assert check["decay_rate_with_model_error"] < 1.0 - 1e-6
+    # The check is the numpy one: each node's map decays from P_i to
+    # P(theta') at the grid's neighbours.
+    Ps = slow.Ps
+    assert mixed_norm(slow.reduced.maps[3], Ps[4], Ps[3]) <= check["decay_rate"]
+
+
+def test_the_rate_vertices_cover_the_neighbouring_cells_and_the_step():
+    thetas = [0.0, 1.0, 2.0, 3.0]
+    assert rate_vertices(thetas, 1, 0.25) == [0.0, 1.0, 2.0, 2.25]
+    assert rate_vertices(thetas, 3, 0.25) == [1.75, 2.0, 3.0]

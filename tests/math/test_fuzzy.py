@@ -457,3 +457,32 @@ def test_slope_rate_bounds_the_surface_slope(m):
     assert slope.max() <= bound * 1.01
     u0 = np.array([rb.evaluate(theta, 0.4, y) for y in yk])
     assert np.abs(np.diff(u0) / np.diff(yk)).max() > 1.5 * bound
+
+
+@pytest.mark.parametrize("m", [1, 2, 3])
+def test_the_slope_rate_bound_holds_for_the_adaptation_law(m):
+    rb = RuleBase(m=m, upsilon=5, delta0=0.02, deltak=0.001)
+    r, yk0 = 2000.0, 0.0004
+    general = rb.slope_rate_bound(r)
+    at_point = rb.slope_rate_bound(r, yk0)
+    assert at_point <= general == pytest.approx(r * 5)
+    h = 1e-3 * rb.deltak
+
+    def slope(theta, y):
+        return (
+            rb.evaluate(theta, 0.03, y + h) - rb.evaluate(theta, 0.03, y - h)
+        ) / (2 * h)
+
+    rng = np.random.default_rng(0)
+    worst = 0.0
+    for _ in range(400):
+        y0 = 0.03 if rng.uniform() < 0.5 else rng.uniform(0.0, 0.1)
+        yk = rng.uniform(-1.0, 1.0) * rb.omegak_half_width
+        idx, rate = rb.adaptation_rate(y0, yk, r)
+        dtheta = np.zeros(rb.n_rules)
+        dtheta[idx] = rate
+        # The slope at yk0 is linear in theta: its rate is the slope of
+        # the rates' surface (at the y0 the slope is read at).
+        worst = max(worst, abs(slope(dtheta, yk0)))
+    assert worst <= at_point * (1 + 1e-6)
+    assert worst >= 0.04 * at_point  # not vacuous (m = 3: within 20x)
