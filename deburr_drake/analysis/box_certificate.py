@@ -467,15 +467,10 @@ def _rate_step(op, p, period: float) -> Dict:
     }
 
 
-def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
-    """The certificate with a slope of ``box`` scheduled: the first slope
-    whose ends (with the nominal map) have no common P, else the one whose
-    ends move the map most (balanced), gets a grid of ``SCHEDULE_NODES``
-    nodes and P(slope) affine between them, moving at most the adaptation
-    law's step per period (:func:`_rate_step`); the other corner axes'
-    corners are taken at every node and cell midpoint (they may move
-    arbitrarily fast), the others' half-ranges and curvatures bounded in
-    P(slope) and added (:func:`certify_rate_bounded`)."""
+def _schedule_axis(box, maps, solver) -> int:
+    """The index in ``box`` of the slope to schedule: the first whose two
+    ends (with the nominal map) have no common P, else the one whose ends
+    move the map most (balanced by the nominal map's scaling)."""
     balanced = _balancer(maps["A0"])
     slopes = sorted(
         (j for j, p in enumerate(box) if p["field"] is None),
@@ -485,7 +480,7 @@ def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
     )
     # The slope whose two ends alone have no common P is the one the
     # quadratic form cannot cover; else the one that moves the map most.
-    k = next(
+    return next(
         (
             j
             for j in slopes
@@ -499,6 +494,33 @@ def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
         ),
         slopes[0],
     )
+
+
+def _schedule_left_out(box, maps, axes, k) -> List:
+    """[(name, [E...])]: what the other parameters' corners leave out when
+    slope ``k`` is scheduled (each one's curvature, and the half-range of
+    those without a corner axis), for :func:`certify_rate_bounded` to bound
+    in P(slope)."""
+    left_out = []
+    for j, (q, (a, b), mid) in enumerate(zip(box, maps["ends"], maps["mids"])):
+        if j != k:
+            Es = [mid - 0.5 * (a + b)]
+            if j not in axes:
+                Es.append(0.5 * (b - a))
+            left_out.append((q["name"], Es))
+    return left_out
+
+
+def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
+    """The certificate with a slope of ``box`` scheduled: the first slope
+    whose ends (with the nominal map) have no common P, else the one whose
+    ends move the map most (balanced), gets a grid of ``SCHEDULE_NODES``
+    nodes and P(slope) affine between them, moving at most the adaptation
+    law's step per period (:func:`_rate_step`); the other corner axes'
+    corners are taken at every node and cell midpoint (they may move
+    arbitrarily fast), the others' half-ranges and curvatures bounded in
+    P(slope) and added (:func:`certify_rate_bounded`)."""
+    k = _schedule_axis(box, maps, solver)
     p = box[k]
     rate = _rate_step(op, p, maps["period"])
     lo, hi = p["range"]
@@ -523,15 +545,7 @@ def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
     )
     node_maps = [at(v) for v in nodes]
     mid_maps = [at(0.5 * (a + b)) for a, b in zip(nodes[:-1], nodes[1:])]
-    # What the other parameters' corners leave out (their curvature, and
-    # the half-range of those without a corner axis), bounded in P(slope).
-    left_out = []
-    for j, (q, (a, b), mid) in enumerate(zip(box, maps["ends"], maps["mids"])):
-        if j != k:
-            Es = [mid - 0.5 * (a + b)]
-            if j not in axes:
-                Es.append(0.5 * (b - a))
-            left_out.append((q["name"], Es))
+    left_out = _schedule_left_out(box, maps, axes, k)
     cert = certify_rate_bounded(
         node_maps,
         nodes,
