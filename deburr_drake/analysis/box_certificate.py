@@ -564,6 +564,83 @@ def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
     }
 
 
+#: what certificate.json says of each parameter of the box
+_BOX_FIELDS = ("key", "name", "field", "unit", "nominal", "range", "s0")
+
+
+def _select_box(box: List[Dict], only: Optional[List[str]]) -> List[Dict]:
+    """The box's parameters named in ``only`` (all with None); an unknown
+    name is refused before any map is taken."""
+    if only is None:
+        return box
+    unknown = set(only) - {p["key"] for p in box}
+    if unknown:
+        raise ValueError(
+            f"unknown box parameters {sorted(unknown)}: allowed "
+            f"{[p['key'] for p in box]}"
+        )
+    return [p for p in box if p["key"] in only]
+
+
+def _common_quadratic(family, box, maps, axes, solver, bisections):
+    """(certificate, what the corners leave out) of one common quadratic
+    Lyapunov function of ``family``."""
+    cert = certify_family(
+        family, maps["labels"], solver=solver, bisections=bisections
+    )
+    error = _model_error(cert, box, maps, axes) if cert.P is not None else {}
+    if "status" in error and bisections < ROOM_BISECTIONS:
+        # The first P sits on its LMI's boundary at gamma = 1 - 1e-5: a
+        # smaller decay rate may leave room for what the corners leave out.
+        cert = certify_family(
+            family, maps["labels"], solver=solver, bisections=ROOM_BISECTIONS
+        )
+        error = _model_error(cert, box, maps, axes)
+    return cert, error
+
+
+def _with_schedule(result: Dict, scheduled: Optional[Dict]) -> str:
+    """``result`` updated with a slope schedule's certificate (the common
+    quadratic one's status kept apart); returns what it proves."""
+    if scheduled is None:
+        return PROVES
+    result["common_quadratic_status"] = result["status"]
+    result.update(scheduled)
+    result["status"] = scheduled["schedule"]["status"]
+    if result["status"] != "certified":
+        return PROVES
+    check = scheduled["schedule"]["check"]
+    result["decay_rate_per_period"] = check["decay_rate"]
+    result["decay_rate_with_model_error"] = check["decay_rate_with_model_error"]
+    result["P_condition"] = check["P_condition"]
+    return PROVES_SCHEDULED.format(
+        axis=scheduled["scheduled"].split("_")[1],
+        step=scheduled["slope_rate_bound"]["per_period"],
+        nodes=len(scheduled["schedule_nodes"]),
+    )
+
+
+def _map_names(box: List[Dict], signs) -> List[str]:
+    """The family's maps by name: nominal, each parameter's ends, then
+    the corners."""
+    return (
+        ["nominal"]
+        + [f"{p['name']} = {v:g}" for p in box for v in p["range"]]
+        + ["corner: " + _value_text(box, s) for s in signs]
+    )
+
+
+def _schedule_worth_trying(cert, error: Dict, box: List[Dict]) -> bool:
+    """A slope schedule, when the common quadratic form did not certify
+    and the box has a slope (a map unstable by itself refuses the box
+    whatever V is tried)."""
+    return (
+        error.get("status", cert.status) != "certified"
+        and max(cert.spectral_radii) < 1.0
+        and any(p["field"] is None for p in box)
+    )
+
+
 def certify(
     scenario: Scenario,
     *,
@@ -576,17 +653,14 @@ def certify(
     only: Optional[List[str]] = None,
     progress: Optional[Callable[[str], None]] = None,
 ) -> Dict:
-    """The certificate (the dict of certificate.json, SI units) of
-    ``scenario``'s sampled loop over the box (module docstring) at the
-    operating point ``after_contact`` s after the first contact, its run
-    and maps at ``numerics`` ("shipped" or "refined",
-    :func:`deburr_drake.analysis.along.at_numerics`). ``bisections`` of
-    the decay rate after the first solve (each a solve as long as the
-    first; 0: the decay rate is the checked one of the first P); each
-    map at its steady state after ``settle_periods`` periods
-    (:func:`steady_context`); ``only``: the box's parameters by key
-    (``BOX_KEYS``, ``slope_x1``...; [] the nominal map alone), the others
-    at their nominal values. The live maps are under ``"_maps"``."""
+    """certificate.json's dict (SI units) of ``scenario``'s sampled loop
+    over the box (module docstring) at the operating point
+    ``after_contact`` s after the first contact, at ``numerics``
+    ("shipped" or "refined", analysis.along.at_numerics). ``bisections``
+    of the decay rate after the first solve (0: the first P's checked
+    rate); each map at its steady state after ``settle_periods`` periods
+    (:func:`steady_context`); ``only``: the parameters by key (``BOX_KEYS``,
+    ``slope_x1``...; []: the nominal map), the others nominal."""
     say = progress or (lambda message: None)
     timings = {}
     t0 = time.perf_counter()
@@ -595,15 +669,7 @@ def certify(
     op = find_operating_point(run_scenario, after_contact=after_contact)
     timings["operating_point_s"] = time.perf_counter() - t0
     t1 = time.perf_counter()
-    box = _box(op)
-    if only is not None:
-        unknown = set(only) - {p["key"] for p in box}
-        if unknown:
-            raise ValueError(
-                f"unknown box parameters {sorted(unknown)}: allowed "
-                f"{[p['key'] for p in box]}"
-            )
-        box = [p for p in box if p["key"] in only]
+    box = _select_box(_box(op), only)
     maps_at = _Maps(op, box, settle_periods)
     maps = box_maps(maps_at, box, say)
     A0, ends = maps["A0"], maps["ends"]
@@ -612,34 +678,14 @@ def certify(
     say(f"maps at the {len(corners)} corners")
     timings["maps_s"] = time.perf_counter() - t1
     family = [A0] + [m for pair in ends for m in pair] + corners
-    names = (
-        ["nominal"]
-        + [f"{p['name']} = {v:g}" for p in box for v in p["range"]]
-        + ["corner: " + _value_text(box, s) for s in signs]
-    )
+    names = _map_names(box, signs)
     # The program and its check.
     t2 = time.perf_counter()
     say(f"common Lyapunov function of {len(family)} maps ({solver})")
-    cert = certify_family(
-        family, maps["labels"], solver=solver, bisections=bisections
-    )
-    error = _model_error(cert, box, maps, axes) if cert.P is not None else {}
-    if "status" in error and bisections < ROOM_BISECTIONS:
-        # The first P sits on its LMI's boundary at gamma = 1 - 1e-5: a
-        # smaller decay rate may leave room for what the corners leave out.
-        cert = certify_family(
-            family, maps["labels"], solver=solver, bisections=ROOM_BISECTIONS
-        )
-        error = _model_error(cert, box, maps, axes)
+    cert, error = _common_quadratic(family, box, maps, axes, solver, bisections)
     timings["program_s"] = time.perf_counter() - t2
     scheduled = None
-    status = error.get("status", cert.status)
-    # A map unstable by itself refuses the box whatever V is tried.
-    if (
-        status != "certified"
-        and max(cert.spectral_radii) < 1.0
-        and any(p["field"] is None for p in box)
-    ):
+    if _schedule_worth_trying(cert, error, box):
         t3 = time.perf_counter()
         scheduled = _scheduled(op, box, maps_at, maps, axes, solver, say)
         timings["scheduled_s"] = time.perf_counter() - t3
@@ -648,49 +694,14 @@ def certify(
     result.update(error)
     if result["breaking_map"] is not None:
         result["breaking_vertex"] = names[result["breaking_map"]]
-    proves = PROVES
-    if scheduled is not None:
-        result["common_quadratic_status"] = result["status"]
-        result.update(scheduled)
-        result["status"] = scheduled["schedule"]["status"]
-        if result["status"] == "certified":
-            rate = scheduled["slope_rate_bound"]["per_period"]
-            proves = PROVES_SCHEDULED.format(
-                axis=scheduled["scheduled"].split("_")[1],
-                step=rate,
-                nodes=len(scheduled["schedule_nodes"]),
-            )
-            result["decay_rate_per_period"] = scheduled["schedule"]["check"][
-                "decay_rate"
-            ]
-            result["decay_rate_with_model_error"] = scheduled["schedule"][
-                "check"
-            ]["decay_rate_with_model_error"]
-            result["P_condition"] = scheduled["schedule"]["check"][
-                "P_condition"
-            ]
+    proves = _with_schedule(result, scheduled)
     result.update(
         {
             "scenario": op.scenario.name,
             "numerics": numerics,
             "sampling_period_s": maps["period"],
             "operating_point": op.summary(),
-            "box": [
-                {
-                    k: p[k]
-                    for k in (
-                        "key",
-                        "name",
-                        "field",
-                        "unit",
-                        "nominal",
-                        "range",
-                        "s0",
-                    )
-                    if k in p
-                }
-                for p in box
-            ],
+            "box": [{k: p[k] for k in _BOX_FIELDS if k in p} for p in box],
             "contact_estimates": C_HAT,
             "steady_state": {
                 "settle_periods": settle_periods,

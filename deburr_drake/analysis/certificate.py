@@ -484,6 +484,34 @@ def _breaking_map(search, family, V, radii, solver, margin, gamma) -> tuple:
     )
 
 
+def _by_program(cert, search, family, V, radii, solver, margin, hi):
+    """The program's P at decay rate ``hi`` (None when there is none, with
+    ``cert`` then not_certified naming the breaking map, or inconclusive
+    when the solver's P fails the check); ``cert`` records the solve."""
+    solution, check = _feasible(search, hi, solver, margin, V, family)
+    cert.solves, cert.check = 1, check
+    cert.solver_status = solution.status
+    if not solution.success:
+        cert.status = "not_certified"
+        index, reason, solves = _breaking_map(
+            search, family, V, radii, solver, margin, hi
+        )
+        cert.breaking, cert.breaking_reason = index, reason
+        cert.solves += solves
+        return None
+    if not check["passed"]:
+        cert.status = "inconclusive"
+        cert.breaking = check["worst_map"]
+        cert.breaking_reason = (
+            f"the solver reported {solution.status} but its P fails "
+            f"the check: decay rate {check['decay_rate']:.8f} (needs "
+            f"< {1 - margin}), condition {check['P_condition']:.3g}"
+        )
+        return None
+    cert.found_by = FOUND_BY_PROGRAM
+    return solution.P
+
+
 def certify_family(
     maps: Sequence[np.ndarray],
     labels: Sequence[str],
@@ -530,27 +558,9 @@ def certify_family(
             best, cert.check, cert.found_by = P, check, FOUND_BY_NOMINAL
             hi = min(hi, check["decay_rate"])
     if best is None:
-        solution, check = _feasible(search, hi, solver, margin, V, family)
-        cert.solves, cert.check = 1, check
-        cert.solver_status = solution.status
-        if not solution.success:
-            cert.status = "not_certified"
-            index, reason, solves = _breaking_map(
-                search, family, V, radii, solver, margin, hi
-            )
-            cert.breaking, cert.breaking_reason = index, reason
-            cert.solves += solves
+        best = _by_program(cert, search, family, V, radii, solver, margin, hi)
+        if best is None:
             return cert
-        if not check["passed"]:
-            cert.status = "inconclusive"
-            cert.breaking = check["worst_map"]
-            cert.breaking_reason = (
-                f"the solver reported {solution.status} but its P fails "
-                f"the check: decay rate {check['decay_rate']:.8f} (needs "
-                f"< {1 - margin}), condition {check['P_condition']:.3g}"
-            )
-            return cert
-        best, cert.found_by = solution.P, FOUND_BY_PROGRAM
     lo = max(radii)
     for _ in range(bisections):
         gamma = 0.5 * (lo + hi)
@@ -660,6 +670,30 @@ def solve_rate_bounded(
     return Ps_value, result.get_solution_result().name, success
 
 
+def _node_rate(maps, thetas, step, Ps):
+    """(rate, node): the largest mixed norm of a node's map from its P to
+    P(theta') over :func:`rate_vertices`, and the node it is at."""
+    rate, worst = 0.0, 0
+    for i, A in ((i, A) for i, node in enumerate(maps) for A in node):
+        for t in rate_vertices(thetas, i, step):
+            r = mixed_norm(A, _interpolated(Ps, thetas, t), Ps[i])
+            if r > rate:
+                rate, worst = r, i
+    return rate, worst
+
+
+def _cell_pairs(thetas, step):
+    """(c, j, k): P(theta') from node j, P(theta) from node k, for theta in
+    cell c and theta' within ``step`` of it."""
+    n = len(thetas)
+    for c in range(n - 1):
+        lo = np.searchsorted(thetas, thetas[c] - step, side="right") - 1
+        hi = np.searchsorted(thetas, thetas[c + 1] + step, side="left")
+        for j in range(max(lo, 0), min(hi, n - 1) + 1):
+            for k in (c, c + 1):
+                yield c, j, k
+
+
 def check_rate_bounded(
     maps: Sequence[np.ndarray],
     thetas: Sequence[float],
@@ -688,31 +722,15 @@ def check_rate_bounded(
     eigs = [np.linalg.eigvalsh(P) for P in Ps]
     positive = all(e[0] > 0 for e in eigs)
     condition = max(e[-1] / e[0] for e in eigs) if positive else float("inf")
-    rate, worst = 0.0, 0
     maps = _per_node(maps)
-    if positive:
-        for i, A in ((i, A) for i, node in enumerate(maps) for A in node):
-            for t in rate_vertices(thetas, i, step):
-                r = mixed_norm(A, _interpolated(Ps, thetas, t), Ps[i])
-                if r > rate:
-                    rate, worst = r, i
-    else:
-        rate = float("inf")
-
-    def pairs():
-        """(j, k): P(theta') from node j, P(theta) from node k, for theta
-        in a cell and theta' within the step of it."""
-        for c in range(len(Ps) - 1):
-            lo = np.searchsorted(thetas, thetas[c] - step, side="right") - 1
-            hi = np.searchsorted(thetas, thetas[c + 1] + step, side="left")
-            for j in range(max(lo, 0), min(hi, len(Ps) - 1) + 1):
-                for k in (c, c + 1):
-                    yield c, j, k
+    rate, worst = (
+        _node_rate(maps, thetas, step, Ps) if positive else (np.inf, 0)
+    )
 
     def bound(E, cells=None):
         return max(
             mixed_norm(E, Ps[j], Ps[k])
-            for c, j, k in pairs()
+            for c, j, k in _cell_pairs(thetas, step)
             if cells is None or c in cells
         )
 
@@ -799,6 +817,35 @@ def _lifted_check(P_ws, V, family, thetas, step, mids, left_out, margin):
     return best
 
 
+def _reduced_schedule(maps, mids, labels, left_out):
+    """(reduced, per-node maps, per-cell midpoint maps or None, left_out)
+    in the coordinates :func:`reduce_family` gives the nodes' and the
+    midpoints' maps together."""
+    nodes = _per_node(maps)
+    cells = _per_node(mids) if mids is not None else []
+    reduced = reduce_family([A for node in nodes + cells for A in node], labels)
+    it = iter(reduced.maps)
+    family = [[next(it) for _ in node] for node in nodes]
+    mid_maps = [[next(it) for _ in cell] for cell in cells] or None
+    left_out = [
+        (name, [reduced.transform(E) for E in Es])
+        for name, Es in (left_out or [])
+    ]
+    return reduced, family, mid_maps, left_out
+
+
+def _failed_check(status: str, check: Dict, margin: float) -> str:
+    """Why a solved P(theta) is inconclusive: what its check found."""
+    left = sum(e["p_norm"] for e in check["model_error"])
+    return (
+        f"the solver reported {status} but P(theta) fails the check: "
+        f"decay rate {check['decay_rate']:.8f} plus the chord's miss "
+        f"{check['chord_miss']:.3g} plus what the corners leave out "
+        f"{left:.3g} (needs < {1 - margin}), condition "
+        f"{check['P_condition']:.3g}"
+    )
+
+
 def certify_rate_bounded(
     maps: Sequence[np.ndarray],
     thetas: Sequence[float],
@@ -816,28 +863,18 @@ def certify_rate_bounded(
     at most ``step`` per period: A(theta) the chord through ``maps`` (per
     node one map, or a list: the corners of other parameters, which may
     move arbitrarily fast, aligned across nodes), plus what the chord
-    leaves out measured at the cells' midpoints (``mids``). Reduced as
-    :func:`reduce_family` (the nodes' and midpoints' maps together), P_i
-    searched in the common row space and lifted with one weight, the
+    leaves out at the cells' midpoints (``mids``). Reduced together
+    (:func:`reduce_family`), P_i searched in the common row space, lifted, the
     decay rate bisected until the chord's miss has room, then checked in
-    numpy
-    (:func:`check_rate_bounded`): a solved program whose P fails the
-    check is inconclusive. ``left_out`` [(name, [E, ...])], in the maps'
+    numpy (:func:`check_rate_bounded`): a solved program whose P fails
+    the check is inconclusive. ``left_out`` [(name, [E, ...])], in the maps'
     coordinates: what other parameters' corners leave out, bounded in
-    P(theta) and added (:func:`check_rate_bounded`)."""
+    P(theta) and added."""
     thetas = np.asarray(thetas, float)
-    nodes = _per_node(maps)
-    cells = _per_node(mids) if mids is not None else []
-    flat = [A for node in nodes + cells for A in node]
-    reduced = reduce_family(flat, labels)
-    it = iter(reduced.maps)
-    family = [[next(it) for _ in node] for node in nodes]
-    mid_maps = [[next(it) for _ in cell] for cell in cells] or None
+    reduced, family, mid_maps, left_out = _reduced_schedule(
+        maps, mids, labels, left_out
+    )
     N = len(family)
-    left_out = [
-        (name, [reduced.transform(E) for E in Es])
-        for name, Es in (left_out or [])
-    ]
     radii = [
         float(np.max(np.abs(np.linalg.eigvals(A))))
         for node in family
@@ -887,13 +924,5 @@ def certify_rate_bounded(
         out.status = "certified"
     else:
         out.status = "inconclusive"
-        out.reason = (
-            f"the solver reported {status} but P(theta) fails the check: "
-            f"decay rate {out.check['decay_rate']:.8f} plus the chord's "
-            f"miss {out.check['chord_miss']:.3g} plus what the corners "
-            "leave out "
-            f"{sum(e['p_norm'] for e in out.check['model_error']):.3g} "
-            f"(needs < {1 - margin}), condition "
-            f"{out.check['P_condition']:.3g}"
-        )
+        out.reason = _failed_check(status, out.check, margin)
     return out
