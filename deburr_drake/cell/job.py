@@ -31,7 +31,7 @@ from deburr_drake.cell.moves import (
     MovePlanningError,
     MoveSettings,
     PlanningCell,
-    _nearest,
+    least_clearance,
     make_planning_cell,
     plan_move,
 )
@@ -144,16 +144,12 @@ def _cut(scenario, model, cell, part, chains, summary, ordered, tilt=0.0):
     contour = edge.mesh_path(scenario.tool, job.pose)
     arcs, path = _follow_cut(model, scenario.robot, contour)
     # The arm and the spindle along the cut, clear of the part.
-    least = math.inf
-    for arc, q in zip(arcs, path):
-        distance, shape = _nearest(cell, q, cutter=False)
-        if distance < 0.0:
-            raise RuntimeError(
-                f"at arc {arc * 1e3:.1f} mm the {shape} stands "
-                f"{-distance * 1e3:.2g} mm in the part "
-                f"({contour.describe_rule()})"
-            )
-        least = min(least, distance)
+    least, i, shape = least_clearance(cell, path, cutter=False)
+    if i is not None:
+        raise RuntimeError(
+            f"at arc {arcs[i] * 1e3:.1f} mm the {shape} stands "
+            f"{-least * 1e3:.2g} mm in the part ({contour.describe_rule()})"
+        )
     ends = [
         (contour.point_at(s), contour.tool_axis_at(s), q)
         for s, q in ((arcs[0], path[0]), (arcs[-1], path[-1]))

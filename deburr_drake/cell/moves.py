@@ -34,6 +34,7 @@ wheel enables SNOPT too (``SnoptSolver().available()`` is True), and
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 import time
 from typing import NamedTuple
 
@@ -67,6 +68,7 @@ __all__ = [
     "MoveSettings",
     "PlanningCell",
     "clearance",
+    "least_clearance",
     "make_planning_cell",
     "plan_move",
     "tip_positions",
@@ -188,6 +190,20 @@ def clearance(cell: PlanningCell, q, *, cutter=True, within=0.5) -> float:
     unless ``cutter`` is False) and the part at ``q``; ``within`` if
     nothing is nearer than that."""
     return _nearest(cell, q, cutter=cutter, within=within)[0]
+
+
+def least_clearance(cell: PlanningCell, qs, *, cutter=True):
+    """(m, index, shape) along the postures ``qs``: the least distance
+    (:func:`clearance`) and None, "" when the robot stays out of the part;
+    else how deep (negative) it stands in it at the first posture that
+    does, that posture's index and the robot's shape there."""
+    least = math.inf
+    for i, q in enumerate(qs):
+        distance, shape = _nearest(cell, q, cutter=cutter)
+        if distance < 0.0:
+            return distance, i, shape
+        least = min(least, distance)
+    return least, None, ""
 
 
 def _nearest(cell: PlanningCell, q, *, cutter=True, within=0.5):
@@ -385,19 +401,15 @@ def plan_move(
             f"the part at {times[i] - ends[0]:.3g} s of "
             f"{ends[1] - ends[0]:.3g} s ({-least * 1e3:.2g} mm deep there)"
         )
-    for name, qs, cutter in (
-        ("retract", retract, False),
-        ("approach", approach, False),
-    ):
-        for i, q in enumerate(qs):
-            distance, shape = _nearest(cell, q, cutter=cutter)
-            if distance < 0.0:
-                raise MovePlanningError(
-                    f"{label}: {name}: the {shape} enters the part "
-                    f"{100 * i / max(1, len(qs) - 1):.0f} % along it "
-                    f"({-distance * 1e3:.2g} mm deep there)"
-                )
-            least = min(least, distance)
+    for name, qs in (("retract", retract), ("approach", approach)):
+        distance, i, shape = least_clearance(cell, qs, cutter=False)
+        if i is not None:
+            raise MovePlanningError(
+                f"{label}: {name}: the {shape} enters the part "
+                f"{100 * i / max(1, len(qs) - 1):.0f} % along it "
+                f"({-distance * 1e3:.2g} mm deep there)"
+            )
+        least = min(least, distance)
     side = [
         settings.retract / settings.axial_speed,
         settings.approach / settings.axial_speed,
