@@ -106,6 +106,9 @@ class PlanningCell(NamedTuple):
     tool_frame: object  # Frame, the tool tip, +z up the tool
     checker: SceneGraphCollisionChecker
     cutter: object  # GeometryId of the cutter
+    # the diagram's Context the clearance queries pose the robot in (one
+    # for every query: making one costs a third of a query)
+    context: object
 
 
 class Move(NamedTuple):
@@ -182,7 +185,15 @@ def make_planning_cell(
         env_collision_padding=0.0,
         self_collision_padding=0.0,
     )
-    return PlanningCell(diagram, plant, instance, frame, checker, cutter)
+    return PlanningCell(
+        diagram,
+        plant,
+        instance,
+        frame,
+        checker,
+        cutter,
+        diagram.CreateDefaultContext(),
+    )
 
 
 def clearance(cell: PlanningCell, q, *, cutter=True, within=0.5) -> float:
@@ -209,8 +220,7 @@ def least_clearance(cell: PlanningCell, qs, *, cutter=True):
 def _nearest(cell: PlanningCell, q, *, cutter=True, within=0.5):
     """(m, the least distance as :func:`clearance`; the robot's shape
     there, by name, or "")."""
-    context = cell.diagram.CreateDefaultContext()
-    plant_context = cell.plant.GetMyContextFromRoot(context)
+    plant_context = cell.plant.GetMyContextFromRoot(cell.context)
     cell.plant.SetPositions(plant_context, q)
     query = cell.plant.get_geometry_query_input_port().Eval(plant_context)
     pairs = [
