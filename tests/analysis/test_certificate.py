@@ -362,3 +362,47 @@ def test_the_rate_vertices_cover_the_neighbouring_cells_and_the_step():
     thetas = [0.0, 1.0, 2.0, 3.0]
     assert rate_vertices(thetas, 1, 0.25) == [0.0, 1.0, 2.0, 2.25]
     assert rate_vertices(thetas, 3, 0.25) == [1.75, 2.0, 3.0]
+
+
+def _turned_cells(edges):
+    """Per cell [theta_lo, theta_hi] of ``edges``: its family (the centre's
+    map, then the ends') and what the ends leave out (the centre against
+    the chord)."""
+    cells, left_out = [], []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        a, b, mid = _turned(lo), _turned(hi), _turned(0.5 * (lo + hi))
+        cells.append([mid, a, b])
+        left_out.append([mid - 0.5 * (a + b)])
+    return cells, left_out
+
+
+def test_a_constant_parameter_is_certified_per_cell_where_no_common_p_is():
+    from deburr_drake.analysis.certificate import certify_cells
+
+    # theta constant somewhere in [0, pi/2]: each value is stable with its
+    # own P (radius 0.9), but no P serves them all (the ends' product
+    # grows), so as a time-varying parameter it is not certified.
+    edges = np.linspace(0.0, np.pi / 2, 17)
+    everything = [_turned(t) for t in np.linspace(0.0, np.pi / 2, 9)]
+    assert certify_family(everything, ["a", "b"]).status == "not_certified"
+    cells, left_out = _turned_cells(edges)
+    cert = certify_cells(cells, ["a", "b"], left_out=left_out)
+    assert cert.status == "certified"
+    assert len(cert.cells) == 16
+    worst = cert.cells[cert.worst]
+    assert worst["decay_rate_with_model_error"] < 1.0 - 1e-6
+    assert worst["decay_rate_with_model_error"] > worst["decay_rate"]
+    # Each cell's P is checked on the maps at its theta, in numpy: a map
+    # inside a cell decays in that cell's P.
+    inside = cert.certificates[3]
+    theta = edges[3] + 0.3 * (edges[4] - edges[3])
+    assert (
+        p_norm(inside.reduced.transform(_turned(theta)), inside.P)
+        <= (cert.cells[3]["decay_rate_with_model_error"])
+    )
+    # One cell over the whole range is the common P again: not certified,
+    # and the search stops at it.
+    cells, left_out = _turned_cells(np.array([0.0, np.pi / 4, np.pi / 2]))
+    wide = certify_cells(cells, ["a", "b"], left_out=left_out)
+    assert wide.status != "certified"
+    assert wide.worst == 0 and len(wide.cells) == 1
