@@ -91,6 +91,13 @@ ROOM_BISECTIONS = 6
 #: step: on the paper arm pairs of x2 slope maps 0 and 1000 N s/m apart
 #: have a common P and 0 and 2000 none, so cells of at most ~500 N s/m.
 SCHEDULE_NODES = 9
+#: The parameters that are constants of a run (a material's cutting
+#: coefficient and contact threshold, the controller model's mass error)
+#: and the cells of the grid over each: a Lyapunov function per cell
+#: proves every constant value of the box, not values that jump between
+#: cells (the stiffness varies along the edge and the slopes with the
+#: adaptation: they stay time-varying).
+CONSTANT_CELLS = {"k_c": 3, "mass_scale": 1, "c0": 1}
 #: The box's parameters by short key (``certify``'s ``only``).
 BOX_KEYS = {
     "part.material.hydroelastic_modulus": "stiffness",
@@ -108,6 +115,7 @@ __all__ = [
     "DOES_NOT_PROVE",
     "SETTLE_PERIODS",
     "BOX_KEYS",
+    "CONSTANT_CELLS",
     "certified_limit",
 ]
 
@@ -118,10 +126,12 @@ PROVES = (
     "every vertex map)"
 )
 DOES_NOT_PROVE = (
-    "loss of contact, burr impacts, the depth^1.4 contact away from the "
-    "operating point, the outer loop and the adaptation's own dynamics "
-    "(frozen), a negative slope of the fuzzy surface, the feed's range "
-    "and other poses along the edge (not in the box)"
+    "a constant parameter (k_c, c0, the mass scale) jumping between the "
+    "cells of its grid while the loop runs, loss of contact, burr "
+    "impacts, the depth^1.4 contact away from the operating point, the "
+    "outer loop and the adaptation's own dynamics (frozen), a negative "
+    "slope of the fuzzy surface, the feed's range and other poses along "
+    "the edge (not in the box)"
 )
 
 
@@ -241,6 +251,8 @@ class _Maps:
     def __init__(self, op, box, settle_periods):
         self.op, self.box, self.settle = op, box, settle_periods
         self._frozen = {}
+        # Each map once per certify call: cells share their corners.
+        self.taken: Dict[tuple, np.ndarray] = {}
         self.moved, self.residuals = [], []
 
     def frozen(self, fields) -> FrozenMap:
@@ -252,6 +264,12 @@ class _Maps:
         return self._frozen[key]
 
     def __call__(self, values) -> np.ndarray:
+        key = tuple(sorted(values.items()))
+        if key not in self.taken:
+            self.taken[key] = self._take(values)
+        return self.taken[key]
+
+    def _take(self, values) -> np.ndarray:
         box = self.box
         frozen = self.frozen(
             {
@@ -565,7 +583,16 @@ def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
 
 
 #: what certificate.json says of each parameter of the box
-_BOX_FIELDS = ("key", "name", "field", "unit", "nominal", "range", "s0")
+_BOX_FIELDS = (
+    "key",
+    "name",
+    "field",
+    "unit",
+    "nominal",
+    "range",
+    "s0",
+    "constant",
+)
 
 
 def _select_box(box: List[Dict], only: Optional[List[str]]) -> List[Dict]:
@@ -641,45 +668,45 @@ def _schedule_worth_trying(cert, error: Dict, box: List[Dict]) -> bool:
     )
 
 
-def certify(
-    scenario: Scenario,
-    *,
-    numerics: str = "shipped",
-    after_contact: float = DEFAULT_TIME_AFTER_CONTACT,
-    solver: str = "Clarabel",
-    vertex_threshold: float = VERTEX_THRESHOLD,
-    bisections: int = 0,
-    settle_periods: int = SETTLE_PERIODS,
-    only: Optional[List[str]] = None,
-    progress: Optional[Callable[[str], None]] = None,
-) -> Dict:
-    """certificate.json's dict (SI units) of ``scenario``'s sampled loop
-    over the box (module docstring) at the operating point
-    ``after_contact`` s after the first contact, at ``numerics``
-    ("shipped" or "refined", analysis.along.at_numerics). ``bisections``
-    of the decay rate after the first solve (0: the first P's checked
-    rate); each map at its steady state after ``settle_periods`` periods
-    (:func:`steady_context`); ``only``: the parameters by key (``BOX_KEYS``,
-    ``slope_x1``...; []: the nominal map), the others nominal."""
-    say = progress or (lambda message: None)
+def _cells(box: List[Dict], cells: Dict[str, int]) -> List[List[Dict]]:
+    """The boxes of the cells of the grid over the constant parameters of
+    ``box`` (``cells`` by key: how many cells along each), each a copy of
+    ``box`` with the constants' ranges narrowed to the cell and their
+    nominal values at its centre; one cell (``box``) without constants."""
+    constants = [j for j, p in enumerate(box) if cells.get(p["key"], 0) > 0]
+    edges = [
+        np.linspace(*box[j]["range"], cells[box[j]["key"]] + 1)
+        for j in constants
+    ]
+    out = []
+    for index in itertools.product(*[range(len(e) - 1) for e in edges]):
+        cell = [dict(p) for p in box]
+        for j, e, i in zip(constants, edges, index):
+            lo, hi = float(e[i]), float(e[i + 1])
+            cell[j].update(range=[lo, hi], nominal=0.5 * (lo + hi))
+            cell[j]["constant"] = True
+        out.append(cell)
+    return out
+
+
+def _certify_cell(op, box, maps_at, options, say) -> Dict:
+    """The certificate of one cell's box (every parameter time-varying
+    within it): the common quadratic P, then, if it fails, P(slope)."""
+    solver, threshold, bisections = options
     timings = {}
-    t0 = time.perf_counter()
-    run_scenario = at_numerics(scenario, numerics)
-    say(f"operating point: {after_contact:g} s of cutting ({numerics})")
-    op = find_operating_point(run_scenario, after_contact=after_contact)
-    timings["operating_point_s"] = time.perf_counter() - t0
     t1 = time.perf_counter()
-    box = _select_box(_box(op), only)
-    maps_at = _Maps(op, box, settle_periods)
     maps = box_maps(maps_at, box, say)
     A0, ends = maps["A0"], maps["ends"]
-    axes = _corner_axes(A0, ends, vertex_threshold)
+    # A constant's cell gets a corner axis whatever its size: its P must
+    # serve the cell's corners, and a half-range bounded in P's norm
+    # instead costs more than the room the slowest mode leaves.
+    constants = {j for j, p in enumerate(box) if p.get("constant")}
+    axes = sorted(set(_corner_axes(A0, ends, threshold)) | constants)
     corners, signs = _corners(maps_at, box, axes)
     say(f"maps at the {len(corners)} corners")
     timings["maps_s"] = time.perf_counter() - t1
     family = [A0] + [m for pair in ends for m in pair] + corners
     names = _map_names(box, signs)
-    # The program and its check.
     t2 = time.perf_counter()
     say(f"common Lyapunov function of {len(family)} maps ({solver})")
     cert, error = _common_quadratic(family, box, maps, axes, solver, bisections)
@@ -694,33 +721,145 @@ def certify(
     result.update(error)
     if result["breaking_map"] is not None:
         result["breaking_vertex"] = names[result["breaking_map"]]
-    proves = _with_schedule(result, scheduled)
+    result["proves"] = _with_schedule(result, scheduled)
+    result["vertices"] = len(family) + (scheduled or {}).get(
+        "scheduled_maps", 0
+    )
+    result["timings_s"] = timings
+    result["box"] = [{k: p[k] for k in _BOX_FIELDS if k in p} for p in box]
+    result["_maps"] = {"family": family, "names": names}
+    result["sampling_period_s"] = maps["period"]
+    result["labels"] = maps["labels"]
+    return result
+
+
+def _cell_record(cell: Dict) -> Dict:
+    """What certificate.json says of one cell."""
+    keys = (
+        "status",
+        "decay_rate_per_period",
+        "decay_rate_with_model_error",
+        "P_condition",
+        "breaking_vertex",
+        "breaking_reason",
+        "scheduled",
+        "vertices",
+    )
+    return {
+        "constants": {
+            p["key"]: p["range"] for p in cell["box"] if p.get("constant")
+        },
+        **{k: cell.get(k) for k in keys},
+    }
+
+
+def _worst_cell(results: List[Dict]) -> Dict:
+    """The cell that decides: the last tried when it is not certified (the
+    search stops at the first), else the one with the largest decay rate
+    with what its corners leave out."""
+    if results[-1]["status"] != "certified":
+        return results[-1]
+    return max(
+        results,
+        key=lambda r: (
+            r.get("decay_rate_with_model_error") or r["decay_rate_per_period"]
+        ),
+    )
+
+
+def _proves_cells(proves: str, cells: List[Dict]) -> str:
+    """What a certificate over cells of constants proves."""
+    constants = [p["name"] for p in cells[0] if p.get("constant")]
+    if not constants:
+        return proves
+    return (
+        f"for every constant value of the {', '.join(constants)} within the "
+        f"box (a Lyapunov function for each of the {len(cells)} cells of a "
+        "grid over them, each also covering their variation within its "
+        f"cell): {proves}"
+    )
+
+
+def certify(
+    scenario: Scenario,
+    *,
+    numerics: str = "shipped",
+    after_contact: float = DEFAULT_TIME_AFTER_CONTACT,
+    solver: str = "Clarabel",
+    vertex_threshold: float = VERTEX_THRESHOLD,
+    bisections: int = 0,
+    settle_periods: int = SETTLE_PERIODS,
+    only: Optional[List[str]] = None,
+    cells: Optional[Dict[str, int]] = None,
+    progress: Optional[Callable[[str], None]] = None,
+) -> Dict:
+    """certificate.json's dict (SI units) of ``scenario``'s sampled loop
+    over the box (module docstring) at the operating point
+    ``after_contact`` s after the first contact, at ``numerics``
+    ("shipped" or "refined", analysis.along.at_numerics). ``bisections``
+    of the decay rate after the first solve (0: the first P's checked
+    rate); each map at its steady state after ``settle_periods`` periods
+    (:func:`steady_context`); ``only``: the parameters by key (``BOX_KEYS``,
+    ``slope_x1``...; []: the nominal map), the others nominal; ``cells``:
+    the constants' cells by key (``CONSTANT_CELLS`` by default; {}: every
+    parameter time-varying), a certificate per cell, the search stopping
+    at the first cell not certified."""
+    say = progress or (lambda message: None)
+    t0 = time.perf_counter()
+    run_scenario = at_numerics(scenario, numerics)
+    say(f"operating point: {after_contact:g} s of cutting ({numerics})")
+    op = find_operating_point(run_scenario, after_contact=after_contact)
+    timings = {"operating_point_s": time.perf_counter() - t0}
+    box = _select_box(_box(op), only)
+    maps_at = _Maps(op, box, settle_periods)
+    grid = _cells(box, CONSTANT_CELLS if cells is None else cells)
+    results = []
+    for i, cell in enumerate(grid):
+        if len(grid) > 1:
+            say(f"cell {i + 1} of {len(grid)}")
+        options = (solver, vertex_threshold, bisections)
+        results.append(_certify_cell(op, cell, maps_at, options, say))
+        if results[-1]["status"] != "certified":
+            break
+    result = dict(_worst_cell(results))
+    for r in results:
+        for k, v in r["timings_s"].items():
+            timings[k] = timings.get(k, 0.0) + v
+    maps = result.pop("_maps")
     result.update(
         {
             "scenario": op.scenario.name,
             "numerics": numerics,
-            "sampling_period_s": maps["period"],
             "operating_point": op.summary(),
             "box": [{k: p[k] for k in _BOX_FIELDS if k in p} for p in box],
+            "constant_cells": [_cell_record(r) for r in results],
+            "cells_tried": f"{len(results)} of {len(grid)}",
             "contact_estimates": C_HAT,
             "steady_state": {
                 "settle_periods": settle_periods,
                 "largest_desired_force_change_N": max(maps_at.moved),
                 "largest_desired_force_residual_N": max(maps_at.residuals),
             },
-            "vertices": len(family)
-            + (scheduled or {}).get("scheduled_maps", 0),
-            "proves": proves,
+            "vertices": len(maps_at.taken),
+            "proves": _proves_cells(result["proves"], grid),
             "does_not_prove": DOES_NOT_PROVE,
             "timings_s": {**timings, "total": time.perf_counter() - t0},
             "_maps": {
-                "family": family,
-                "names": names,
-                "labels": maps["labels"],
+                "family": maps["family"],
+                "names": maps["names"],
+                "labels": result.pop("labels"),
             },
         }
     )
     return result
+
+
+def _cell_text(cell: Dict) -> str:
+    rate = cell.get("decay_rate_with_model_error")
+    where = ", ".join(
+        f"{k} {lo:.4g}-{hi:.4g}" for k, (lo, hi) in cell["constants"].items()
+    )
+    return where + (f": {rate:.6f}" if rate is not None else "")
 
 
 def certificate_summary(result: Dict) -> str:
@@ -753,6 +892,13 @@ def certificate_summary(result: Dict) -> str:
             f"{len(result['schedule_nodes'])} nodes, the slope moving at "
             f"most {rate['per_period']:.4g} N s/m per period: "
             f"{schedule['status']} {schedule['reason']}"
+        )
+    cells = result.get("constant_cells", [])
+    if len(cells) > 1 or (cells and cells[0]["constants"]):
+        lines.append(
+            "  a certificate per cell of the constants: "
+            f"{result['cells_tried']} cells tried, "
+            + ", ".join(f"{c['status']} ({_cell_text(c)})" for c in cells)
         )
     # With a slope scheduled, the common P's break is what led to it.
     broken = "the common P " if result.get("scheduled") else ""
