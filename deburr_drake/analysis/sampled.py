@@ -58,7 +58,10 @@ __all__ = [
 class StateEntry:
     """A block of a subsystem's state: ``kind`` "continuous" (``group``
     ignored) or "discrete" (group index), ``indices`` within it (None:
-    all), perturbed by ``step``."""
+    all), perturbed by ``step``. ``central`` False: its columns are
+    one-sided differences (one simulation each instead of two), for an
+    entry the period's map is affine in to within the central
+    difference's own error (docs/stability-measurements.md)."""
 
     system: str
     kind: str
@@ -66,27 +69,42 @@ class StateEntry:
     indices: tuple = None
     step: float = 1e-6
     label: str = ""
+    central: bool = True
 
-    def _vector(self, diagram: Diagram, context: Context):
-        sub = diagram.GetSubsystemByName(
+    def subcontext(self, diagram: Diagram, context: Context) -> Context:
+        """This entry's subsystem's context within root ``context``."""
+        return diagram.GetSubsystemByName(
             self.system
         ).GetMyMutableContextFromRoot(context)
+
+    def _mutable(self, sub: Context):
         if self.kind == "continuous":
             return sub.get_mutable_continuous_state_vector()
         return sub.get_mutable_discrete_state(self.group)
 
-    def get(self, diagram, context) -> np.ndarray:
-        v = self._vector(diagram, context).CopyToVector()
+    def read(self, sub: Context) -> np.ndarray:
+        """The entry's values in its subsystem's context ``sub``."""
+        if self.kind == "continuous":
+            v = sub.get_continuous_state_vector().CopyToVector()
+        else:
+            v = sub.get_discrete_state(self.group).CopyToVector()
         return v if self.indices is None else v[list(self.indices)]
 
-    def set(self, diagram, context, values):
-        vector = self._vector(diagram, context)
-        v = vector.CopyToVector()
+    def write(self, sub: Context, values):
+        """Sets the entry's values in its subsystem's context ``sub``."""
+        vector = self._mutable(sub)
         if self.indices is None:
-            v[:] = values
-        else:
-            v[list(self.indices)] = values
+            vector.SetFromVector(values)
+            return
+        v = vector.CopyToVector()
+        v[list(self.indices)] = values
         vector.SetFromVector(v)
+
+    def get(self, diagram, context) -> np.ndarray:
+        return self.read(self.subcontext(diagram, context))
+
+    def set(self, diagram, context, values):
+        self.write(self.subcontext(diagram, context), values)
 
 
 def simulator_config(scenario: Scenario) -> SimulatorConfig:
@@ -120,17 +138,22 @@ class _OnePeriod:
     def __init__(self, diagram, context0, entries, period, config):
         self.diagram, self.context0 = diagram, context0
         self.entries, self.period = entries, period
-        # Each entry's slice of z, found once.
-        sizes = [e.get(diagram, context0).size for e in entries]
-        self._slices = [
-            slice(end - n, end) for end, n in zip(np.cumsum(sizes), sizes)
-        ]
         self.config = copy.copy(config)
         # ApplySimulatorConfig sets the context's time to start_time.
         self.config.start_time = context0.get_time()
         self.simulator = Simulator(diagram, context0.Clone())
         # (with cenic, the plant's cache fresh after each step, as in a run)
         set_monitor(self.simulator, diagram, config.integration_scheme)
+        # Each entry's subsystem context in the working context and its
+        # slice of z, found once.
+        context = self.simulator.get_mutable_context()
+        subs = [e.subcontext(diagram, context) for e in entries]
+        self.z0 = np.concatenate([e.read(s) for e, s in zip(entries, subs)])
+        sizes = [e.read(s).size for e, s in zip(entries, subs)]
+        self._targets = [
+            (e, sub, slice(end - n, end))
+            for e, sub, end, n in zip(entries, subs, np.cumsum(sizes), sizes)
+        ]
 
     def _reset(self, context):
         """``context0``'s time and state into ``context`` (the parameters,
@@ -152,8 +175,10 @@ class _OnePeriod:
         simulator, config = self.simulator, self.config
         context = simulator.get_mutable_context()
         self._reset(context)
-        for e, rows in zip(self.entries, self._slices):
-            e.set(self.diagram, context, z[rows])
+        # The reset state holds z0: only the entries z moves are written.
+        for e, sub, rows in self._targets:
+            if not np.array_equal(z[rows], self.z0[rows]):
+                e.write(sub, z[rows])
         # A new integrator per run: cenic carries its state from one run
         # to the next.
         ApplySimulatorConfig(config, simulator)
@@ -170,7 +195,7 @@ class _OnePeriod:
                 "a one-period map's simulation ended early at t = "
                 f"{context.get_time():.6f} s: {status.FormatMessage()}"
             )
-        return _read(self.entries, self.diagram, context)
+        return np.concatenate([e.read(sub) for e, sub, _ in self._targets])
 
 
 def _one_period(diagram, context0, entries, z, period, config):
@@ -185,22 +210,29 @@ def period_map(
     period: float,
     config: SimulatorConfig,
 ) -> np.ndarray:
-    """d z(t + period) / d z(t) by central differences, z the
-    concatenated ``entries``, each column two simulations of one period
-    from a clone of ``context`` (initialization events suppressed: the
+    """d z(t + period) / d z(t) by finite differences, z the concatenated
+    ``entries``, each column two simulations of one period (central) or,
+    for an entry not ``central``, one against the unperturbed period,
+    from ``context``'s state (initialization events suppressed: the
     periodic events due at the context's time are handled first)."""
-    z0 = _read(entries, diagram, context)
-    steps = np.concatenate(
-        [np.full(e.get(diagram, context).size, e.step) for e in entries]
-    )
     one_period = _OnePeriod(diagram, context, entries, period, config)
+    z0 = one_period.z0
+    steps, central = [], []
+    for e, _, rows in one_period._targets:
+        n = rows.stop - rows.start
+        steps.append(np.full(n, e.step))
+        central.append(np.full(n, e.central))
+    steps, central = np.concatenate(steps), np.concatenate(central)
+    unperturbed = None if central.all() else one_period(z0)
     columns = []
     for i in range(z0.size):
         dz = np.zeros_like(z0)
         dz[i] = steps[i]
         plus = one_period(z0 + dz)
-        minus = one_period(z0 - dz)
-        columns.append((plus - minus) / (2 * steps[i]))
+        if central[i]:
+            columns.append((plus - one_period(z0 - dz)) / (2 * steps[i]))
+        else:
+            columns.append((plus - unperturbed) / steps[i])
     return np.array(columns).T
 
 
@@ -245,13 +277,18 @@ def cell_map_entries(diagram: Diagram) -> List[StateEntry]:
         ),
         StateEntry("force_sensor", "discrete", 0, step=1e-3, label="y"),
         # The controller's held actuation and the process's held force-law
-        # terms (their discrete-state groups, see the classes).
+        # terms (their discrete-state groups, see the classes). The map is
+        # affine in the held values over a period (they enter the
+        # dynamics as held forces and the sample's law through linear
+        # terms), so one-sided differences of them are as good as central
+        # ones.
         StateEntry(
             "controller",
             "discrete",
             int(controller._held["actuation"]),
             step=1e-3,
             label="u_held",
+            central=False,
         ),
         # delta_d's held rate: overwritten at each sample (a zero column
         # of the one-period map), but carried across a split of the
@@ -263,6 +300,7 @@ def cell_map_entries(diagram: Diagram) -> List[StateEntry]:
             indices=(0,),
             step=1e-8,
             label="delta_d_rate",
+            central=False,
         ),
         StateEntry(
             "cutting_process",
@@ -270,6 +308,7 @@ def cell_map_entries(diagram: Diagram) -> List[StateEntry]:
             int(process._terms_index),
             step=1e-4,
             label="force_law_terms",
+            central=False,
         ),
     ]
 

@@ -2,6 +2,7 @@
 cell (point-mass testbed) against eq. (8) and the sampled-loop limit, the
 summary keys and the command line's errors."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -80,6 +81,16 @@ def test_period_map_of_a_mass_under_sampled_pd_matches_the_zoh_closed_form(kd):
     assert (expected > 1.0) == (kd == 250.0)
     # The held value is overwritten by the sample: its columns are zero.
     np.testing.assert_allclose(Phi[:, 2:], 0.0, atol=1e-9)
+    # The loop is linear: one-sided differences give the same map.
+    one_sided = [dataclasses.replace(e, central=False) for e in entries]
+    np.testing.assert_allclose(
+        analysis.period_map(
+            diagram, context, one_sided, period=T, config=config
+        ),
+        Phi,
+        rtol=1e-6,
+        atol=1e-6,
+    )
 
 
 def test_numerical_linearization_matches_drake_linearize_on_a_pendulum():
