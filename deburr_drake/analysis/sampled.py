@@ -32,6 +32,7 @@ from pydrake.systems.analysis import (
     SimulatorConfig,
 )
 from pydrake.systems.framework import Context, Diagram
+import scipy.linalg
 
 from deburr_drake.analysis.operating_point import (
     OperatingPoint,
@@ -171,14 +172,20 @@ class _OnePeriod:
             source.get_abstract_state()
         )
 
-    def __call__(self, z):
-        simulator, config = self.simulator, self.config
-        context = simulator.get_mutable_context()
+    def set_state(self, z) -> Context:
+        """The working context at ``context0``'s state with the entries
+        at z."""
+        context = self.simulator.get_mutable_context()
         self._reset(context)
         # The reset state holds z0: only the entries z moves are written.
         for e, sub, rows in self._targets:
             if not np.array_equal(z[rows], self.z0[rows]):
                 e.write(sub, z[rows])
+        return context
+
+    def __call__(self, z):
+        simulator, config = self.simulator, self.config
+        context = self.set_state(z)
         # A new integrator per run: cenic carries its state from one run
         # to the next.
         ApplySimulatorConfig(config, simulator)
@@ -202,6 +209,15 @@ def _one_period(diagram, context0, entries, z, period, config):
     return _OnePeriod(diagram, context0, entries, period, config)(z)
 
 
+#: The held entries' check (:func:`period_map`): a perturbation of them
+#: that moves none of the ``held_through`` ports may move the period's end
+#: by at most this fraction of what one step of a basis entry moves it.
+HELD_CHECK = 1e-4
+#: A basis column's share of the ports' change (pivoted QR) below which
+#: the held entries' remaining columns are taken as combinations.
+HELD_RANK = 1e-8
+
+
 def period_map(
     diagram: Diagram,
     context: Context,
@@ -209,12 +225,19 @@ def period_map(
     *,
     period: float,
     config: SimulatorConfig,
+    held_through: Sequence = (),
 ) -> np.ndarray:
     """d z(t + period) / d z(t) by finite differences, z the concatenated
     ``entries``, each column two simulations of one period (central) or,
     for an entry not ``central``, one against the unperturbed period,
     from ``context``'s state (initialization events suppressed: the
-    periodic events due at the context's time are handled first)."""
+    periodic events due at the context's time are handled first).
+
+    ``held_through``: input ports (system name, port name) through which
+    alone the one-sided entries act on the period, as held values the
+    sample at its start reads and overwrites (``context`` just before a
+    sample, ``period`` a whole one). Their columns are then the
+    combinations of a few (:func:`_held_columns`)."""
     one_period = _OnePeriod(diagram, context, entries, period, config)
     z0 = one_period.z0
     steps, central = [], []
@@ -224,16 +247,88 @@ def period_map(
         central.append(np.full(n, e.central))
     steps, central = np.concatenate(steps), np.concatenate(central)
     unperturbed = None if central.all() else one_period(z0)
-    columns = []
+    columns = {}
+    if held_through and not central.all():
+        columns = _held_columns(
+            one_period,
+            held_through,
+            np.flatnonzero(~central),
+            steps,
+            unperturbed,
+        )
     for i in range(z0.size):
+        if i in columns:
+            continue
         dz = np.zeros_like(z0)
         dz[i] = steps[i]
         plus = one_period(z0 + dz)
         if central[i]:
-            columns.append((plus - one_period(z0 - dz)) / (2 * steps[i]))
+            columns[i] = (plus - one_period(z0 - dz)) / (2 * steps[i])
         else:
-            columns.append((plus - unperturbed) / steps[i])
-    return np.array(columns).T
+            columns[i] = (plus - unperturbed) / steps[i]
+    return np.array([columns[i] for i in range(z0.size)]).T
+
+
+def _held_columns(
+    one_period: _OnePeriod, ports, held, steps, unperturbed
+) -> dict:
+    """{index: column} of the one-sided entries ``held`` (indices in z,
+    ``unperturbed`` the period's end from z0), or {} when the check
+    fails. Held values the sample overwrites act on
+    the period only through what the sample reads at its instant: if
+    that is the ports' values, each column is d(end)/d(ports) times the
+    ports' change per entry. The ports' change per entry is evaluated
+    (no simulation); a basis of entries whose changes span the others'
+    (pivoted QR) is simulated; every other column is the combination of
+    the basis' that its change is. Checked once: a perturbation of the
+    held entries that leaves the ports unchanged must leave the period's
+    end within ``HELD_CHECK`` of the basis' effect."""
+    diagram, z0 = one_period.diagram, one_period.z0
+
+    def port_values(z):
+        context = one_period.set_state(z)
+        return np.concatenate(
+            [
+                diagram.GetSubsystemByName(system)
+                .GetInputPort(port)
+                .Eval(
+                    diagram.GetSubsystemByName(system).GetMyContextFromRoot(
+                        context
+                    )
+                )
+                for system, port in ports
+            ]
+        )
+
+    def moved(i):
+        z = z0.copy()
+        z[i] += steps[i]
+        return z
+
+    # The ports' change per step of each held entry.
+    w0 = port_values(z0)
+    W = np.array([port_values(moved(i)) - w0 for i in held]).T
+    _, R, pivots = scipy.linalg.qr(W, mode="economic", pivoting=True)
+    rank = int(np.sum(np.abs(np.diag(R)) > HELD_RANK * abs(R[0, 0])))
+    basis = pivots[:rank]
+    # The period's end per step of each basis entry.
+    Y = np.zeros((z0.size, rank))
+    for column, k in enumerate(basis):
+        Y[:, column] = one_period(moved(held[k])) - unperturbed
+    # The check: a perturbation (one step in all, spread over the held
+    # entries) that moves no port.
+    null = scipy.linalg.null_space(W, rcond=HELD_RANK)
+    if null.shape[1]:
+        n = null @ np.random.default_rng(0).standard_normal(null.shape[1])
+        z = z0.copy()
+        z[held] += steps[held] * n / np.linalg.norm(n)
+        scale = np.max(np.abs(Y), axis=1, initial=0.0)
+        if np.any(np.abs(one_period(z) - unperturbed) > HELD_CHECK * scale):
+            return {}
+    combination = np.linalg.lstsq(W[:, basis], W, rcond=None)[0]
+    return {
+        int(i): (Y @ combination[:, j]) / steps[i] for j, i in enumerate(held)
+    }
 
 
 def spectral_radius(
@@ -313,6 +408,27 @@ def cell_map_entries(diagram: Diagram) -> List[StateEntry]:
     ]
 
 
+def cell_held_through(diagram: Diagram) -> tuple:
+    """The input ports through which alone the cell's held entries (the
+    held actuation and force-law terms of :func:`cell_map_entries`) act
+    at the sample that overwrites them (:func:`period_map`'s
+    ``held_through``): the plant's actuation and applied generalized
+    force (the cutting law's), and the law's force at the tool, which the
+    force sensor reads; () for a diagram without them."""
+    ports = (
+        ("plant", "actuation"),
+        ("plant", "applied_generalized_force"),
+        ("force_sensor", "applied_force"),
+    )
+    for system, port in ports:
+        if not (
+            diagram.HasSubsystemNamed(system)
+            and diagram.GetSubsystemByName(system).HasInputPort(port)
+        ):
+            return ()
+    return ports
+
+
 @dataclass
 class SampledLoop:
     """The one-period map Phi at an operating point."""
@@ -367,6 +483,7 @@ class FrozenMap:
             else plan.varied(self.scenario)
         )
         self.entries = cell_map_entries(self.diagram)
+        self.held_through = cell_held_through(self.diagram)
 
     def context_from(
         self, source: Diagram, source_context: Context, modify=None
@@ -398,6 +515,7 @@ class FrozenMap:
             self.entries,
             period=self.period,
             config=self.config,
+            held_through=self.held_through,
         )
 
 
@@ -417,9 +535,7 @@ def sampled_loop(
     frozen = FrozenMap(op.scenario, plan=op.plan, **overrides)
     scenario, diagram, entries = frozen.scenario, frozen.diagram, frozen.entries
     context = frozen.context_from(op.diagram, op.context, modify)
-    Phi = period_map(
-        diagram, context, entries, period=frozen.period, config=frozen.config
-    )
+    Phi = frozen.at_context(context)
     labels, start, rows = [], 0, None
     for e in entries:
         n = e.get(diagram, context).size

@@ -16,6 +16,7 @@ from pydrake.systems.primitives import (
     ZeroOrderHold,
 )
 import pytest
+import scipy.linalg
 
 from deburr_drake import analysis
 from deburr_drake.cli import main
@@ -504,6 +505,43 @@ def test_lyapunov_v1_starts_at_the_estimate_error():
     assert expected <= trace.V1[0] <= expected + 1e-5
     assert np.all(np.isfinite(trace.V)) and np.all(trace.V >= trace.V1 - 1e-12)
     assert len(trace.t) == 5
+
+
+@pytest.mark.slow
+def test_held_columns_match_the_one_sided_ones_and_a_missing_port_is_caught(
+    paper_op,
+):
+    frozen = analysis.FrozenMap(paper_op.scenario, plan=paper_op.plan)
+    context = frozen.context_from(paper_op.diagram, paper_op.context)
+
+    def period_map(held_through):
+        return analysis.period_map(
+            frozen.diagram,
+            context,
+            frozen.entries,
+            period=frozen.period,
+            config=frozen.config,
+            held_through=held_through,
+        )
+
+    every_column = period_map(())
+    held = frozen.at_context(context)
+    # In the coordinates the certificate balances the map to.
+    _, (scale, _) = scipy.linalg.matrix_balance(
+        every_column, permute=False, separate=True
+    )
+    balance = (1.0 / scale)[:, None] * scale[None, :]
+    assert np.linalg.norm((held - every_column) * balance, 2) < 1e-7 * (
+        np.linalg.norm(every_column * balance, 2)
+    )
+    assert analysis.spectral_radius(held) == pytest.approx(
+        analysis.spectral_radius(every_column), abs=1e-10
+    )
+    # Without the sensor's port, the law's force reaches the sensor
+    # unseen: the check catches it and every column is simulated.
+    np.testing.assert_array_equal(
+        period_map(frozen.held_through[:2]), every_column
+    )
 
 
 @pytest.mark.slow
