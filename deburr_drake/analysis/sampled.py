@@ -172,6 +172,13 @@ class _OnePeriod:
             source.get_abstract_state()
         )
 
+    def target_of(self, i: int):
+        """(entry, its subsystem context, its slice of z) holding z[i]."""
+        for target in self._targets:
+            if target[2].start <= i < target[2].stop:
+                return target
+        raise IndexError(i)
+
     def set_state(self, z) -> Context:
         """The working context at ``context0``'s state with the entries
         at z."""
@@ -284,30 +291,34 @@ def _held_columns(
     held entries that leaves the ports unchanged must leave the period's
     end within ``HELD_CHECK`` of the basis' effect."""
     diagram, z0 = one_period.diagram, one_period.z0
-
-    def port_values(z):
-        context = one_period.set_state(z)
-        return np.concatenate(
-            [
-                diagram.GetSubsystemByName(system)
-                .GetInputPort(port)
-                .Eval(
-                    diagram.GetSubsystemByName(system).GetMyContextFromRoot(
-                        context
-                    )
-                )
-                for system, port in ports
-            ]
+    context = one_period.set_state(z0)
+    readers = []
+    for system, port in ports:
+        subsystem = diagram.GetSubsystemByName(system)
+        readers.append(
+            (
+                subsystem.GetInputPort(port),
+                subsystem.GetMyContextFromRoot(context),
+            )
         )
+
+    def port_values():
+        return np.concatenate([port.Eval(sub) for port, sub in readers])
 
     def moved(i):
         z = z0.copy()
         z[i] += steps[i]
         return z
 
-    # The ports' change per step of each held entry.
-    w0 = port_values(z0)
-    W = np.array([port_values(moved(i)) - w0 for i in held]).T
+    # The ports' change per step of each held entry, each entry moved and
+    # put back in turn.
+    w0 = port_values()
+    W = np.zeros((w0.size, len(held)))
+    for column, i in enumerate(held):
+        e, sub, rows = one_period.target_of(i)
+        e.write(sub, moved(i)[rows])
+        W[:, column] = port_values() - w0
+        e.write(sub, z0[rows])
     _, R, pivots = scipy.linalg.qr(W, mode="economic", pivoting=True)
     rank = int(np.sum(np.abs(np.diag(R)) > HELD_RANK * abs(R[0, 0])))
     basis = pivots[:rank]
