@@ -32,6 +32,7 @@ from pydrake.systems.analysis import (
     SimulatorConfig,
 )
 from pydrake.systems.framework import Context, Diagram
+import scipy.linalg
 
 from deburr_drake.analysis.operating_point import (
     OperatingPoint,
@@ -58,7 +59,10 @@ __all__ = [
 class StateEntry:
     """A block of a subsystem's state: ``kind`` "continuous" (``group``
     ignored) or "discrete" (group index), ``indices`` within it (None:
-    all), perturbed by ``step``."""
+    all), perturbed by ``step``. ``central`` False: its columns are
+    one-sided differences (one simulation each instead of two), for an
+    entry the period's map is affine in to within the central
+    difference's own error (docs/stability-measurements.md)."""
 
     system: str
     kind: str
@@ -66,27 +70,42 @@ class StateEntry:
     indices: tuple = None
     step: float = 1e-6
     label: str = ""
+    central: bool = True
 
-    def _vector(self, diagram: Diagram, context: Context):
-        sub = diagram.GetSubsystemByName(
+    def subcontext(self, diagram: Diagram, context: Context) -> Context:
+        """This entry's subsystem's context within root ``context``."""
+        return diagram.GetSubsystemByName(
             self.system
         ).GetMyMutableContextFromRoot(context)
+
+    def _mutable(self, sub: Context):
         if self.kind == "continuous":
             return sub.get_mutable_continuous_state_vector()
         return sub.get_mutable_discrete_state(self.group)
 
-    def get(self, diagram, context) -> np.ndarray:
-        v = self._vector(diagram, context).CopyToVector()
+    def read(self, sub: Context) -> np.ndarray:
+        """The entry's values in its subsystem's context ``sub``."""
+        if self.kind == "continuous":
+            v = sub.get_continuous_state_vector().CopyToVector()
+        else:
+            v = sub.get_discrete_state(self.group).CopyToVector()
         return v if self.indices is None else v[list(self.indices)]
 
-    def set(self, diagram, context, values):
-        vector = self._vector(diagram, context)
-        v = vector.CopyToVector()
+    def write(self, sub: Context, values):
+        """Sets the entry's values in its subsystem's context ``sub``."""
+        vector = self._mutable(sub)
         if self.indices is None:
-            v[:] = values
-        else:
-            v[list(self.indices)] = values
+            vector.SetFromVector(values)
+            return
+        v = vector.CopyToVector()
+        v[list(self.indices)] = values
         vector.SetFromVector(v)
+
+    def get(self, diagram, context) -> np.ndarray:
+        return self.read(self.subcontext(diagram, context))
+
+    def set(self, diagram, context, values):
+        self.write(self.subcontext(diagram, context), values)
 
 
 def simulator_config(scenario: Scenario) -> SimulatorConfig:
@@ -120,17 +139,22 @@ class _OnePeriod:
     def __init__(self, diagram, context0, entries, period, config):
         self.diagram, self.context0 = diagram, context0
         self.entries, self.period = entries, period
-        # Each entry's slice of z, found once.
-        sizes = [e.get(diagram, context0).size for e in entries]
-        self._slices = [
-            slice(end - n, end) for end, n in zip(np.cumsum(sizes), sizes)
-        ]
         self.config = copy.copy(config)
         # ApplySimulatorConfig sets the context's time to start_time.
         self.config.start_time = context0.get_time()
         self.simulator = Simulator(diagram, context0.Clone())
         # (with cenic, the plant's cache fresh after each step, as in a run)
         set_monitor(self.simulator, diagram, config.integration_scheme)
+        # Each entry's subsystem context in the working context and its
+        # slice of z, found once.
+        context = self.simulator.get_mutable_context()
+        subs = [e.subcontext(diagram, context) for e in entries]
+        self.z0 = np.concatenate([e.read(s) for e, s in zip(entries, subs)])
+        sizes = [e.read(s).size for e, s in zip(entries, subs)]
+        self._targets = [
+            (e, sub, slice(end - n, end))
+            for e, sub, end, n in zip(entries, subs, np.cumsum(sizes), sizes)
+        ]
 
     def _reset(self, context):
         """``context0``'s time and state into ``context`` (the parameters,
@@ -148,12 +172,27 @@ class _OnePeriod:
             source.get_abstract_state()
         )
 
+    def target_of(self, i: int):
+        """(entry, its subsystem context, its slice of z) holding z[i]."""
+        for target in self._targets:
+            if target[2].start <= i < target[2].stop:
+                return target
+        raise IndexError(i)
+
+    def set_state(self, z) -> Context:
+        """The working context at ``context0``'s state with the entries
+        at z."""
+        context = self.simulator.get_mutable_context()
+        self._reset(context)
+        # The reset state holds z0: only the entries z moves are written.
+        for e, sub, rows in self._targets:
+            if not np.array_equal(z[rows], self.z0[rows]):
+                e.write(sub, z[rows])
+        return context
+
     def __call__(self, z):
         simulator, config = self.simulator, self.config
-        context = simulator.get_mutable_context()
-        self._reset(context)
-        for e, rows in zip(self.entries, self._slices):
-            e.set(self.diagram, context, z[rows])
+        context = self.set_state(z)
         # A new integrator per run: cenic carries its state from one run
         # to the next.
         ApplySimulatorConfig(config, simulator)
@@ -170,11 +209,20 @@ class _OnePeriod:
                 "a one-period map's simulation ended early at t = "
                 f"{context.get_time():.6f} s: {status.FormatMessage()}"
             )
-        return _read(self.entries, self.diagram, context)
+        return np.concatenate([e.read(sub) for e, sub, _ in self._targets])
 
 
 def _one_period(diagram, context0, entries, z, period, config):
     return _OnePeriod(diagram, context0, entries, period, config)(z)
+
+
+#: The held entries' check (:func:`period_map`): a perturbation of them
+#: that moves none of the ``held_through`` ports may move the period's end
+#: by at most this fraction of what one step of a basis entry moves it.
+HELD_CHECK = 1e-4
+#: A basis column's share of the ports' change (pivoted QR) below which
+#: the held entries' remaining columns are taken as combinations.
+HELD_RANK = 1e-8
 
 
 def period_map(
@@ -184,24 +232,114 @@ def period_map(
     *,
     period: float,
     config: SimulatorConfig,
+    held_through: Sequence = (),
 ) -> np.ndarray:
-    """d z(t + period) / d z(t) by central differences, z the
-    concatenated ``entries``, each column two simulations of one period
-    from a clone of ``context`` (initialization events suppressed: the
-    periodic events due at the context's time are handled first)."""
-    z0 = _read(entries, diagram, context)
-    steps = np.concatenate(
-        [np.full(e.get(diagram, context).size, e.step) for e in entries]
-    )
+    """d z(t + period) / d z(t) by finite differences, z the concatenated
+    ``entries``, each column two simulations of one period (central) or,
+    for an entry not ``central``, one against the unperturbed period,
+    from ``context``'s state (initialization events suppressed: the
+    periodic events due at the context's time are handled first).
+
+    ``held_through``: input ports (system name, port name) through which
+    alone the one-sided entries act on the period, as held values the
+    sample at its start reads and overwrites (``context`` just before a
+    sample, ``period`` a whole one). Their columns are then the
+    combinations of a few (:func:`_held_columns`)."""
     one_period = _OnePeriod(diagram, context, entries, period, config)
-    columns = []
+    z0 = one_period.z0
+    steps, central = [], []
+    for e, _, rows in one_period._targets:
+        n = rows.stop - rows.start
+        steps.append(np.full(n, e.step))
+        central.append(np.full(n, e.central))
+    steps, central = np.concatenate(steps), np.concatenate(central)
+    unperturbed = None if central.all() else one_period(z0)
+    columns = {}
+    if held_through and not central.all():
+        columns = _held_columns(
+            one_period,
+            held_through,
+            np.flatnonzero(~central),
+            steps,
+            unperturbed,
+        )
     for i in range(z0.size):
+        if i in columns:
+            continue
         dz = np.zeros_like(z0)
         dz[i] = steps[i]
         plus = one_period(z0 + dz)
-        minus = one_period(z0 - dz)
-        columns.append((plus - minus) / (2 * steps[i]))
-    return np.array(columns).T
+        if central[i]:
+            columns[i] = (plus - one_period(z0 - dz)) / (2 * steps[i])
+        else:
+            columns[i] = (plus - unperturbed) / steps[i]
+    return np.array([columns[i] for i in range(z0.size)]).T
+
+
+def _held_columns(
+    one_period: _OnePeriod, ports, held, steps, unperturbed
+) -> dict:
+    """{index: column} of the one-sided entries ``held`` (indices in z,
+    ``unperturbed`` the period's end from z0), or {} when the check
+    fails. Held values the sample overwrites act on
+    the period only through what the sample reads at its instant: if
+    that is the ports' values, each column is d(end)/d(ports) times the
+    ports' change per entry. The ports' change per entry is evaluated
+    (no simulation); a basis of entries whose changes span the others'
+    (pivoted QR) is simulated; every other column is the combination of
+    the basis' that its change is. Checked once: a perturbation of the
+    held entries that leaves the ports unchanged must leave the period's
+    end within ``HELD_CHECK`` of the basis' effect."""
+    diagram, z0 = one_period.diagram, one_period.z0
+    context = one_period.set_state(z0)
+    readers = []
+    for system, port in ports:
+        subsystem = diagram.GetSubsystemByName(system)
+        readers.append(
+            (
+                subsystem.GetInputPort(port),
+                subsystem.GetMyContextFromRoot(context),
+            )
+        )
+
+    def port_values():
+        return np.concatenate([port.Eval(sub) for port, sub in readers])
+
+    def moved(i):
+        z = z0.copy()
+        z[i] += steps[i]
+        return z
+
+    # The ports' change per step of each held entry, each entry moved and
+    # put back in turn.
+    w0 = port_values()
+    W = np.zeros((w0.size, len(held)))
+    for column, i in enumerate(held):
+        e, sub, rows = one_period.target_of(i)
+        e.write(sub, moved(i)[rows])
+        W[:, column] = port_values() - w0
+        e.write(sub, z0[rows])
+    _, R, pivots = scipy.linalg.qr(W, mode="economic", pivoting=True)
+    rank = int(np.sum(np.abs(np.diag(R)) > HELD_RANK * abs(R[0, 0])))
+    basis = pivots[:rank]
+    # The period's end per step of each basis entry.
+    Y = np.zeros((z0.size, rank))
+    for column, k in enumerate(basis):
+        Y[:, column] = one_period(moved(held[k])) - unperturbed
+    # The check: a perturbation (one step in all, spread over the held
+    # entries) that moves no port.
+    null = scipy.linalg.null_space(W, rcond=HELD_RANK)
+    if null.shape[1]:
+        n = null @ np.random.default_rng(0).standard_normal(null.shape[1])
+        z = z0.copy()
+        z[held] += steps[held] * n / np.linalg.norm(n)
+        scale = np.max(np.abs(Y), axis=1, initial=0.0)
+        if np.any(np.abs(one_period(z) - unperturbed) > HELD_CHECK * scale):
+            return {}
+    combination = np.linalg.lstsq(W[:, basis], W, rcond=None)[0]
+    return {
+        int(i): (Y @ combination[:, j]) / steps[i] for j, i in enumerate(held)
+    }
 
 
 def spectral_radius(
@@ -245,13 +383,18 @@ def cell_map_entries(diagram: Diagram) -> List[StateEntry]:
         ),
         StateEntry("force_sensor", "discrete", 0, step=1e-3, label="y"),
         # The controller's held actuation and the process's held force-law
-        # terms (their discrete-state groups, see the classes).
+        # terms (their discrete-state groups, see the classes). The map is
+        # affine in the held values over a period (they enter the
+        # dynamics as held forces and the sample's law through linear
+        # terms), so one-sided differences of them are as good as central
+        # ones.
         StateEntry(
             "controller",
             "discrete",
             int(controller._held["actuation"]),
             step=1e-3,
             label="u_held",
+            central=False,
         ),
         # delta_d's held rate: overwritten at each sample (a zero column
         # of the one-period map), but carried across a split of the
@@ -263,6 +406,7 @@ def cell_map_entries(diagram: Diagram) -> List[StateEntry]:
             indices=(0,),
             step=1e-8,
             label="delta_d_rate",
+            central=False,
         ),
         StateEntry(
             "cutting_process",
@@ -270,8 +414,30 @@ def cell_map_entries(diagram: Diagram) -> List[StateEntry]:
             int(process._terms_index),
             step=1e-4,
             label="force_law_terms",
+            central=False,
         ),
     ]
+
+
+def cell_held_through(diagram: Diagram) -> tuple:
+    """The input ports through which alone the cell's held entries (the
+    held actuation and force-law terms of :func:`cell_map_entries`) act
+    at the sample that overwrites them (:func:`period_map`'s
+    ``held_through``): the plant's actuation and applied generalized
+    force (the cutting law's), and the law's force at the tool, which the
+    force sensor reads; () for a diagram without them."""
+    ports = (
+        ("plant", "actuation"),
+        ("plant", "applied_generalized_force"),
+        ("force_sensor", "applied_force"),
+    )
+    for system, port in ports:
+        if not (
+            diagram.HasSubsystemNamed(system)
+            and diagram.GetSubsystemByName(system).HasInputPort(port)
+        ):
+            return ()
+    return ports
 
 
 @dataclass
@@ -328,6 +494,7 @@ class FrozenMap:
             else plan.varied(self.scenario)
         )
         self.entries = cell_map_entries(self.diagram)
+        self.held_through = cell_held_through(self.diagram)
 
     def context_from(
         self, source: Diagram, source_context: Context, modify=None
@@ -359,6 +526,7 @@ class FrozenMap:
             self.entries,
             period=self.period,
             config=self.config,
+            held_through=self.held_through,
         )
 
 
@@ -378,9 +546,7 @@ def sampled_loop(
     frozen = FrozenMap(op.scenario, plan=op.plan, **overrides)
     scenario, diagram, entries = frozen.scenario, frozen.diagram, frozen.entries
     context = frozen.context_from(op.diagram, op.context, modify)
-    Phi = period_map(
-        diagram, context, entries, period=frozen.period, config=frozen.config
-    )
+    Phi = frozen.at_context(context)
     labels, start, rows = [], 0, None
     for e in entries:
         n = e.get(diagram, context).size

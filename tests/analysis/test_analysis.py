@@ -2,6 +2,7 @@
 cell (point-mass testbed) against eq. (8) and the sampled-loop limit, the
 summary keys and the command line's errors."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -15,6 +16,7 @@ from pydrake.systems.primitives import (
     ZeroOrderHold,
 )
 import pytest
+import scipy.linalg
 
 from deburr_drake import analysis
 from deburr_drake.cli import main
@@ -80,6 +82,16 @@ def test_period_map_of_a_mass_under_sampled_pd_matches_the_zoh_closed_form(kd):
     assert (expected > 1.0) == (kd == 250.0)
     # The held value is overwritten by the sample: its columns are zero.
     np.testing.assert_allclose(Phi[:, 2:], 0.0, atol=1e-9)
+    # The loop is linear: one-sided differences give the same map.
+    one_sided = [dataclasses.replace(e, central=False) for e in entries]
+    np.testing.assert_allclose(
+        analysis.period_map(
+            diagram, context, one_sided, period=T, config=config
+        ),
+        Phi,
+        rtol=1e-6,
+        atol=1e-6,
+    )
 
 
 def test_numerical_linearization_matches_drake_linearize_on_a_pendulum():
@@ -493,6 +505,43 @@ def test_lyapunov_v1_starts_at_the_estimate_error():
     assert expected <= trace.V1[0] <= expected + 1e-5
     assert np.all(np.isfinite(trace.V)) and np.all(trace.V >= trace.V1 - 1e-12)
     assert len(trace.t) == 5
+
+
+@pytest.mark.slow
+def test_held_columns_match_the_one_sided_ones_and_a_missing_port_is_caught(
+    paper_op,
+):
+    frozen = analysis.FrozenMap(paper_op.scenario, plan=paper_op.plan)
+    context = frozen.context_from(paper_op.diagram, paper_op.context)
+
+    def period_map(held_through):
+        return analysis.period_map(
+            frozen.diagram,
+            context,
+            frozen.entries,
+            period=frozen.period,
+            config=frozen.config,
+            held_through=held_through,
+        )
+
+    every_column = period_map(())
+    held = frozen.at_context(context)
+    # In the coordinates the certificate balances the map to.
+    _, (scale, _) = scipy.linalg.matrix_balance(
+        every_column, permute=False, separate=True
+    )
+    balance = (1.0 / scale)[:, None] * scale[None, :]
+    assert np.linalg.norm((held - every_column) * balance, 2) < 1e-7 * (
+        np.linalg.norm(every_column * balance, 2)
+    )
+    assert analysis.spectral_radius(held) == pytest.approx(
+        analysis.spectral_radius(every_column), abs=1e-10
+    )
+    # Without the sensor's port, the law's force reaches the sensor
+    # unseen: the check catches it and every column is simulated.
+    np.testing.assert_array_equal(
+        period_map(frozen.held_through[:2]), every_column
+    )
 
 
 @pytest.mark.slow
