@@ -529,29 +529,6 @@ def _schedule_left_out(box, maps, axes, k) -> List:
     return left_out
 
 
-def _slope_chords(at, lo, hi, nodes):
-    """(node maps, cell midpoint maps, maps taken) of a slope's grid from
-    three maps per corner (``at(value)``: the corners' maps there): the
-    map is affine in the slope (the slope is a gain on the sampled s_k,
-    added about the operating s_k, so the linearisation's trajectory does
-    not move), so the nodes' maps are the chord through the range's ends;
-    what it leaves out is measured at the range's midpoint, D = A(mid) -
-    (A(lo) + A(hi)) / 2 (of a map quadratic in the slope, the chord misses
-    by 4 u (1 - u) D, at most D), and every cell's midpoint map is given
-    as its chord plus D, the check's chord miss."""
-    ends = at(lo), at(hi)
-    bend = [m - 0.5 * (a + b) for m, a, b in zip(at(0.5 * (lo + hi)), *ends)]
-    node_maps = [
-        [(1 - u) * a + u * b for a, b in zip(*ends)]
-        for u in (nodes - lo) / (hi - lo)
-    ]
-    mid_maps = [
-        [0.5 * (x + y) + d for x, y, d in zip(n0, n1, bend)]
-        for n0, n1 in zip(node_maps[:-1], node_maps[1:])
-    ]
-    return node_maps, mid_maps, 3 * len(bend)
-
-
 def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
     """The certificate with a slope of ``box`` scheduled: the first slope
     whose ends (with the nominal map) have no common P, else the one whose
@@ -584,7 +561,8 @@ def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
         f"P({p['key']}) on {SCHEDULE_NODES} nodes, "
         f"{max(len(corners), 1)} corners each"
     )
-    node_maps, mid_maps, taken = _slope_chords(at, lo, hi, nodes)
+    node_maps = [at(v) for v in nodes]
+    mid_maps = [at(0.5 * (a + b)) for a, b in zip(nodes[:-1], nodes[1:])]
     left_out = _schedule_left_out(box, maps, axes, k)
     cert = certify_rate_bounded(
         node_maps,
@@ -600,7 +578,7 @@ def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
         "slope_rate_bound": rate,
         "schedule_nodes": nodes.tolist(),
         "schedule": cert.to_dict(),
-        "scheduled_maps": taken,
+        "scheduled_maps": sum(len(m) for m in node_maps + mid_maps),
     }
 
 

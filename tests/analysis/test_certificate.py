@@ -430,26 +430,3 @@ def test_the_constants_cells_narrow_only_the_constants_ranges():
     assert "constant" not in box[0] and box[0]["range"] == [0.7, 1.3]
     # No constants: the box is its only cell.
     assert _cells(box, {}) == [box]
-
-
-def test_the_slopes_grid_is_the_chord_with_its_midpoint_miss():
-    from deburr_drake.analysis.box_certificate import _slope_chords
-
-    A0, B, D = np.diag([0.5, 0.6]), np.eye(2) * 0.01, np.ones((2, 2)) * 1e-3
-    taken = []
-
-    def at(value):  # two corners, quadratic in the slope value (0..4)
-        taken.append(value)
-        u = value / 4.0
-        return [A0 + u * B + 4 * u * (1 - u) * D * k for k in (1.0, 2.0)]
-
-    nodes = np.linspace(0.0, 4.0, 5)
-    node_maps, mid_maps, count = _slope_chords(at, 0.0, 4.0, nodes)
-    assert sorted(taken) == [0.0, 2.0, 4.0] and count == 6
-    # The nodes' maps are the chord through the ends; each cell's midpoint
-    # map is its chord plus the largest miss, D at the range's middle.
-    np.testing.assert_allclose(node_maps[1][0], A0 + 0.25 * B)
-    for c, cell in enumerate(mid_maps):
-        for k, mid in enumerate(cell):
-            chord = 0.5 * (node_maps[c][k] + node_maps[c + 1][k])
-            np.testing.assert_allclose(mid - chord, D * (k + 1), atol=1e-15)
