@@ -551,6 +551,13 @@ def certify_family(
         spectral_radii=radii,
         search_dimension=int(V.shape[1]),
     )
+    worst = int(np.argmax(radii))
+    if radii[worst] >= 1.0 - margin:
+        # A map unstable by itself refuses the family whatever P is tried:
+        # no program is run.
+        cert.status, cert.breaking = "not_certified", worst
+        cert.breaking_reason = f"its own spectral radius is {radii[worst]:.6f}"
+        return cert
     best = None
     # The cheap candidate: the nominal map's own Lyapunov function.
     P_w = nominal_lyapunov(search)
