@@ -772,6 +772,9 @@ def _proves_cells(proves: str, cells: List[Dict]) -> str:
     constants = [p["name"] for p in cells[0] if p.get("constant")]
     if not constants:
         return proves
+    proves = proves.replace(
+        "of the parameters within the box", "of the other parameters"
+    )
     return (
         f"for every constant value of the {', '.join(constants)} within the "
         f"box (a Lyapunov function for each of the {len(cells)} cells of a "
