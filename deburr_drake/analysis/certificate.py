@@ -50,7 +50,7 @@ P-norm of the maps below 1 by ``margin``); a P that fails is
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 from pydrake.solvers import (
@@ -523,6 +523,7 @@ def certify_family(
     margin: float = CHECK_MARGIN,
     bisections: int = 8,
     neutral_tolerance: float = 1e-6,
+    enough: Optional[Callable[[Certificate], bool]] = None,
 ) -> Certificate:
     """The certificate of the family ``maps`` (``maps[0]`` nominal) over
     states ``labels``: reduced (:func:`reduce_family`); P searched in the
@@ -532,8 +533,10 @@ def certify_family(
     (the minimal-kappa P sits on the LMI's boundary, so the check at
     1 - margin keeps room for round-off). Once a P passes,
     gamma is bisected down towards the largest spectral radius (below it
-    no P exists) for the best decay rate. Infeasible: not_certified, with
-    the breaking map; solved but failing the check: inconclusive."""
+    no P exists) for the best decay rate, or, with ``enough``, until
+    ``enough(cert)`` (the checked P so far) says it is enough (each step is
+    a solve). Infeasible: not_certified, with the breaking map; solved but
+    failing the check: inconclusive."""
     reduced = reduce_family(maps, labels, neutral_tolerance=neutral_tolerance)
     family = reduced.maps
     radii = [float(np.max(np.abs(np.linalg.eigvals(A)))) for A in family]
@@ -572,18 +575,20 @@ def certify_family(
         if best is None:
             return cert
     lo = max(radii)
+    cert.P, cert.decay_rate = best, cert.check["decay_rate"]
     for _ in range(bisections):
+        if enough is not None and enough(cert):
+            break
         gamma = 0.5 * (lo + hi)
         trial, trial_check = _feasible(search, gamma, solver, margin, V, family)
         cert.solves += 1
         if trial.success and trial_check["passed"]:
-            hi, best, cert.check = gamma, trial.P, trial_check
+            hi, cert.P, cert.check = gamma, trial.P, trial_check
+            cert.decay_rate = trial_check["decay_rate"]
             cert.solver_status = trial.status
             cert.found_by = FOUND_BY_PROGRAM
         else:
             lo = gamma
-    cert.P = best
-    cert.decay_rate = cert.check["decay_rate"]
     return cert
 
 
@@ -639,21 +644,25 @@ def certify_cells(
     out = CellsCertificate("certified", [], 0, [])
     worst = -1.0
 
-    def attempt(family, errors, tries):
-        cert = certify_family(
-            family, labels, solver=solver, margin=margin, bisections=tries
-        )
-        if cert.status != "certified":
-            return cert, None
-        return cert, cert.decay_rate + left_out_norm(cert, errors)
-
     for i, family in enumerate(cells):
         errors = list(left_out[i]) if left_out is not None else []
-        cert, total = attempt(family, errors, 0)
-        if total is not None and total >= 1.0 - margin and bisections:
-            # The first P sits on its LMI's boundary: a smaller decay rate
-            # may leave room for what the corners leave out.
-            cert, total = attempt(family, errors, bisections)
+
+        def room(cert):
+            return cert.decay_rate + left_out_norm(cert, errors) < 1 - margin
+
+        # The first P sits on its LMI's boundary: the decay rate is
+        # bisected until it leaves room for what the corners leave out.
+        cert = certify_family(
+            family,
+            labels,
+            solver=solver,
+            margin=margin,
+            bisections=bisections,
+            enough=room,
+        )
+        total = None
+        if cert.status == "certified":
+            total = cert.decay_rate + left_out_norm(cert, errors)
         status = cert.status
         if total is not None and total >= 1.0 - margin:
             status = "inconclusive"
