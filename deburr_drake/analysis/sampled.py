@@ -220,6 +220,9 @@ def _one_period(diagram, context0, entries, z, period, config):
 #: that moves none of the ``held_through`` ports may move the period's end
 #: by at most this fraction of what one step of a basis entry moves it.
 HELD_CHECK = 1e-4
+#: A change of the period's end within this fraction of its value is the
+#: arithmetic's (where the basis moves an entry only by rounding, too).
+HELD_ROUNDING = 1e-12
 #: A basis column's share of the ports' change (pivoted QR) below which
 #: the held entries' remaining columns are taken as combinations.
 HELD_RANK = 1e-8
@@ -289,7 +292,8 @@ def _held_columns(
     (pivoted QR) is simulated; every other column is the combination of
     the basis' that its change is. Checked once: a perturbation of the
     held entries that leaves the ports unchanged must leave the period's
-    end within ``HELD_CHECK`` of the basis' effect."""
+    end within ``HELD_CHECK`` of the basis' effect (or of rounding,
+    ``HELD_ROUNDING``)."""
     diagram, z0 = one_period.diagram, one_period.z0
     context = one_period.set_state(z0)
     readers = []
@@ -333,8 +337,11 @@ def _held_columns(
         n = null @ np.random.default_rng(0).standard_normal(null.shape[1])
         z = z0.copy()
         z[held] += steps[held] * n / np.linalg.norm(n)
-        scale = np.max(np.abs(Y), axis=1, initial=0.0)
-        if np.any(np.abs(one_period(z) - unperturbed) > HELD_CHECK * scale):
+        bound = np.maximum(
+            HELD_CHECK * np.max(np.abs(Y), axis=1, initial=0.0),
+            HELD_ROUNDING * np.abs(unperturbed),
+        )
+        if np.any(np.abs(one_period(z) - unperturbed) > bound):
             return {}
     combination = np.linalg.lstsq(W[:, basis], W, rcond=None)[0]
     return {
