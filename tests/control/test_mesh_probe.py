@@ -7,6 +7,7 @@ hand-over; the gate holding n1 and the arc position while probing."""
 import math
 
 import numpy as np
+import pytest
 import trimesh
 
 from deburr_drake.config import ProbeConfig
@@ -75,9 +76,11 @@ def _force(real: MeshSurface, x_p):
     return K * max(depth, 0.0) * m
 
 
-def test_a_moved_box_is_registered_and_entered_on():
+@pytest.mark.parametrize("find_speed", [0.0, ProbeConfig.find_speed])
+def test_a_moved_box_is_registered_and_entered_on(find_speed):
     # The real box: 0.6 mm, -0.4 mm, 0.3 mm off and turned 0.5 deg about
-    # every axis.
+    # every axis; each touch a guarded move alone (find_speed 0) or a
+    # find touch and the measuring touch.
     R_move = rpy_matrix(np.radians([0.5, 0.5, 0.5]))
     p_move = np.array([0.0006, -0.0004, 0.0003])
     believed, real = _box(), _box(R_move, p_move)
@@ -92,6 +95,10 @@ def test_a_moved_box_is_registered_and_entered_on():
         contact_exponent_slope=0.0,
         contact_stiffness=K,
         detection_bias=0.0,
+        # The emulated probe detects at the sample after the crossing:
+        # slow, so that sample's way (1.25 um) stays under the tolerances.
+        approach_speed=0.0005,
+        find_speed=find_speed,
     )
     x0 = contour.point_at(0.0) - config.standoff * contour.n1(
         contour.point_at(0.0)
@@ -150,6 +157,48 @@ def test_a_moved_box_is_registered_and_entered_on():
     end = MESH_PROBE_STATE.get(state, "segment_end")
     assert np.linalg.norm(end - moved) < 3e-5
     assert math.isfinite(MESH_PROBE_STATE.get(state, "done_time"))
+
+
+def test_a_find_touch_that_finds_nothing_ends_the_run():
+    """No part at all: the first touch's find touch ends at its search
+    (search_distance and twice the allowance) and the simulation stops,
+    naming the touch, as a single guarded move's miss does."""
+    from pydrake.systems.analysis import Simulator
+
+    from deburr_drake.runs.simulation import _stop_of
+
+    plan = _plan(_box())
+    contour = StraightContour(
+        [-0.03, -0.02 + R, 0.009], [1, 0, 0], [0, -1, 0], length=0.06
+    )
+    config = ProbeConfig(enabled=True)
+    x0 = plan.standoff_point(0, config.standoff)
+    probe = MeshProbingSequence(
+        contour,
+        plan,
+        config,
+        sample_period=T,
+        timing=sensor_timing(T, 10.0),
+        initial_position=x0,
+    )
+    simulator = Simulator(probe)
+    context = simulator.get_mutable_context()
+    probe.GetInputPort("command_in").FixValue(context, np.zeros(3))
+    probe.GetInputPort("chamfer_state").FixValue(context, _chamfer(x0))
+    probe.GetInputPort("measured_force").FixValue(context, np.zeros(3))
+    status = simulator.AdvanceTo(10.0)
+    assert status.reason() == status.ReturnReason.kReachedTerminationCondition
+    state = context.get_discrete_state(0).get_value()
+    assert MESH_PHASES[int(MESH_PROBE_STATE.get(state, "phase"))] == "find"
+    search = config.search_distance + 2.0 * plan.allowance[0]
+    searched = MESH_PROBE_STATE.get(
+        state, "segment_end"
+    ) - MESH_PROBE_STATE.get(state, "segment_start")
+    assert np.linalg.norm(searched) == pytest.approx(search, rel=1e-12)
+    reason, detail = _stop_of(status, None)
+    assert reason == "probe_missed:0"
+    assert detail.startswith(f"no contact within {search:.3g} m")
+    assert "the find touch of touch 0 of 8" in detail
 
 
 def test_the_gate_holds_n1_and_the_arc_while_probing():
