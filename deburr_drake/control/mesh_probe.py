@@ -120,8 +120,12 @@ MESH_PROBE_STATE = VectorLayout(
 
 #: Per touch, the crossings of the guarded move: x, y, z (m), the speed
 #: along the approach (m/s) at the first threshold, the way (m) on to the
-#: second (0: not reached).
-_CROSSING = 5
+#: second (0: not reached), and the direction of the tared force at the
+#: deeper of the two (3): the part pushes the ball along the normal of
+#: the face it touches, which on a hole's wall (a concave face, its
+#: facets turned with the part) lies up to 20 degrees off the planned
+#: face's normal.
+_CROSSING = 8
 
 
 @dataclass(frozen=True)
@@ -482,10 +486,13 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
         end = command - search * m
         self._segment(x, t, "approach", command, end, search / speed, True)
 
+    def _tared(self, context, x) -> np.ndarray:
+        """N: the force reading less the tare."""
+        return self._force_port.Eval(context) - MESH_PROBE_STATE.get(x, "tare")
+
     def _pushed(self, context, x, n) -> float:
         """N: the tared force against the approach's direction ``n``."""
-        f = self._force_port.Eval(context) - MESH_PROBE_STATE.get(x, "tare")
-        return -float(f @ n)
+        return -float(self._tared(context, x) @ n)
 
     def _find(self, context, x, t, command, finished, i):
         """The find touch: on contact the surface it found (the crossing
@@ -552,23 +559,26 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
     ):
         c, L = self._config, MESH_PROBE_STATE
         n = -self._plan.touches.normals[i]  # the approach's direction
-        pushed = self._pushed(context, x, n)
+        f = self._tared(context, x)
+        pushed = -float(f @ n)
         chamfer = self._chamfer_port.Eval(context)
         x_p = CHAMFER_STATE.get(chamfer, "x_p")
         row = slice(_CROSSING * i, _CROSSING * i + _CROSSING)
         touched = touches[4 * i + 3] > 0.5
         if not touched and pushed >= c.force_threshold:
             speed = float(CHAMFER_STATE.get(chamfer, "xdot_p") @ n)
-            crossings[row] = [*x_p, speed, 0.0]
+            out = f / np.linalg.norm(f)
+            crossings[row] = [*x_p, speed, 0.0, *out]
             touches[4 * i : 4 * i + 4] = [
-                *self._touch(x_p, n, speed, c.contact_stiffness),
+                *self._touch(x_p, -out, speed, c.contact_stiffness),
                 1.0,
             ]
             x[L.slice("touches")] += 1.0
             if c.stiffness_threshold > 0:
                 return None
         elif touched and pushed >= c.stiffness_threshold:
-            crossings[row.stop - 1] = float((x_p - crossings[row][:3]) @ n)
+            crossings[row.start + 4] = float((x_p - crossings[row][:3]) @ n)
+            crossings[row.start + 5 : row.stop] = f / np.linalg.norm(f)
         elif not finished:
             return None
         elif not touched:
@@ -589,9 +599,10 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
 
     def _touch(self, x_p, n, speed, stiffness):
         """The touch on the part's surface: the ball's centre at the
-        crossing ``x_p`` moving at ``speed`` along ``n`` (the approach),
-        less the modelled depth at detection and the probe's
-        qualified bias, plus the ball's radius along n."""
+        crossing ``x_p`` moving at ``speed`` along the approach, less the
+        modelled depth at detection and the probe's qualified bias, plus
+        the ball's radius, along ``n``: into the face the ball touched
+        (against the force it felt)."""
         c = self._config
         depth = (
             detection_depth(speed, c.force_threshold, stiffness, self._timing)
@@ -622,9 +633,8 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
         k = median_stiffness(spans, c)
         x[MESH_PROBE_STATE.slice("stiffness")] = k
         for i in np.flatnonzero(hit):
-            n = -self._plan.touches.normals[i]
             touches[4 * i : 4 * i + 3] = self._touch(
-                rows[i, :3], n, rows[i, 3], k
+                rows[i, :3], -rows[i, 5:8], rows[i, 3], k
             )
 
     def _fit(self, x, touches):

@@ -76,19 +76,18 @@ def _force(real: MeshSurface, x_p):
     return K * max(depth, 0.0) * m
 
 
-@pytest.mark.parametrize("find_speed", [0.0, ProbeConfig.find_speed])
-def test_a_moved_box_is_registered_and_entered_on(find_speed):
-    # The real box: 0.6 mm, -0.4 mm, 0.3 mm off and turned 0.5 deg about
-    # every axis; each touch a guarded move alone (find_speed 0) or a
-    # find touch and the measuring touch.
-    R_move = rpy_matrix(np.radians([0.5, 0.5, 0.5]))
-    p_move = np.array([0.0006, -0.0004, 0.0003])
-    believed, real = _box(), _box(R_move, p_move)
-    plan = _plan(believed)
-    # The edge: the believed box's top front edge, the cutter's radius in.
-    contour = StraightContour(
-        [-0.03, -0.02 + R, 0.009], [1, 0, 0], [0, -1, 0], length=0.06
-    )
+#: The edge: the believed box's top front edge, the cutter's radius in.
+_EDGE = StraightContour(
+    [-0.03, -0.02 + R, 0.009], [1, 0, 0], [0, -1, 0], length=0.06
+)
+
+
+def _probe(real: MeshSurface, find_speed: float):
+    """The sequence on the believed box against ``real``, each touch a
+    guarded move alone (find_speed 0) or a find touch and the measuring
+    touch, stepped until done: (probe, context, the ``touching`` output
+    on the entry's samples)."""
+    plan = _plan(_box())
     config = ProbeConfig(
         enabled=True,
         contact_exponent=1.0,
@@ -100,11 +99,9 @@ def test_a_moved_box_is_registered_and_entered_on(find_speed):
         approach_speed=0.0005,
         find_speed=find_speed,
     )
-    x0 = contour.point_at(0.0) - config.standoff * contour.n1(
-        contour.point_at(0.0)
-    )
+    x0 = _EDGE.point_at(0.0) - config.standoff * _EDGE.n1(_EDGE.point_at(0.0))
     probe = MeshProbingSequence(
-        contour,
+        _EDGE,
         plan,
         config,
         sample_period=T,
@@ -135,6 +132,25 @@ def test_a_moved_box_is_registered_and_entered_on(find_speed):
         )
         context.SetTime(context.get_time() + T)
     assert phase == "done"
+    return probe, context, entered_touching
+
+
+def _off_real(probe, context, real: MeshSurface) -> float:
+    """m: the compensated touches' largest distance from the real box."""
+    touches = probe.GetOutputPort("touch_points").Eval(context)
+    points = touches.reshape(-1, 4)[:, :3]
+    q, _ = closest_on_mesh(real, points)
+    return float(np.max(np.linalg.norm(points - q, axis=1)))
+
+
+@pytest.mark.parametrize("find_speed", [0.0, ProbeConfig.find_speed])
+def test_a_moved_box_is_registered_and_entered_on(find_speed):
+    # The real box: 0.6 mm, -0.4 mm, 0.3 mm off and turned 0.5 deg about
+    # every axis.
+    R_move = rpy_matrix(np.radians([0.5, 0.5, 0.5]))
+    p_move = np.array([0.0006, -0.0004, 0.0003])
+    real = _box(R_move, p_move)
+    probe, context, entered_touching = _probe(real, find_speed)
     assert entered_touching and not any(entered_touching)
     state = context.get_discrete_state(0).get_value()
     assert MESH_PROBE_STATE.get(state, "touches") == 8
@@ -144,19 +160,27 @@ def test_a_moved_box_is_registered_and_entered_on(find_speed):
     # detection leaves (a few microns along the normals).
     np.testing.assert_allclose(rotvec_matrix(reg[:3]), R_move, atol=2e-4)
     np.testing.assert_allclose(reg[3:6], p_move, atol=1e-5)
-    touches = probe.GetOutputPort("touch_points").Eval(context)
-    points = touches.reshape(-1, 4)[:, :3]
-    q, _ = closest_on_mesh(real, points)
-    assert np.max(np.linalg.norm(points - q, axis=1)) < 1e-5
+    assert _off_real(probe, context, real) < 1e-5
     # The tool ends at the start of the edge on the registered part.
     registered = probe.GetOutputPort("command")
     probe.GetInputPort("command_in").FixValue(context, [1.0, 2.0, 3.0])
     np.testing.assert_allclose(registered.Eval(context), [1.0, 2.0, 3.0])
-    start = contour.point_at(0.0)
+    start = _EDGE.point_at(0.0)
     moved = R_move @ start + p_move
     end = MESH_PROBE_STATE.get(state, "segment_end")
     assert np.linalg.norm(end - moved) < 3e-5
     assert math.isfinite(MESH_PROBE_STATE.get(state, "done_time"))
+
+
+def test_a_face_turned_off_its_planned_normal_is_touched_where_it_is():
+    # The real box turned 4 deg about z: its side faces' normals lie 4 deg
+    # off the planned ones, as a hole's wall's facets do where the ball
+    # meets them off the planned point. The ball's radius taken off along
+    # the planned normal would put those touches r (1 - cos 4 deg) = 7 um
+    # off the face; taken off along the force the ball felt, on it.
+    real = _box(rpy_matrix(np.radians([0.0, 0.0, 4.0])))
+    probe, context, _ = _probe(real, ProbeConfig.find_speed)
+    assert _off_real(probe, context, real) < 2.5e-6
 
 
 def test_a_find_touch_that_finds_nothing_ends_the_run():
