@@ -183,12 +183,10 @@ def test_a_face_turned_off_its_planned_normal_is_touched_where_it_is():
     assert _off_real(probe, context, real) < 2.5e-6
 
 
-def test_a_find_touch_that_finds_nothing_ends_the_run():
+def test_a_find_touch_that_finds_nothing_ends_the_run(run_untouched):
     """No part at all: the first touch's find touch ends at its search
     (search_distance and twice the allowance) and the simulation stops,
     naming the touch, as a single guarded move's miss does."""
-    from pydrake.systems.analysis import Simulator
-
     from deburr_drake.runs.simulation import _stop_of
 
     plan = _plan(_box())
@@ -205,12 +203,7 @@ def test_a_find_touch_that_finds_nothing_ends_the_run():
         timing=sensor_timing(T, 10.0),
         initial_position=x0,
     )
-    simulator = Simulator(probe)
-    context = simulator.get_mutable_context()
-    probe.GetInputPort("command_in").FixValue(context, np.zeros(3))
-    probe.GetInputPort("chamfer_state").FixValue(context, _chamfer(x0))
-    probe.GetInputPort("measured_force").FixValue(context, np.zeros(3))
-    status = simulator.AdvanceTo(10.0)
+    status, context = run_untouched(probe, _chamfer(x0))
     assert status.reason() == status.ReturnReason.kReachedTerminationCondition
     state = context.get_discrete_state(0).get_value()
     assert MESH_PHASES[int(MESH_PROBE_STATE.get(state, "phase"))] == "find"
