@@ -44,8 +44,9 @@ class ProbeConfig:
     # standoff
     find_speed: float = 0.015
     # m, the tool (its measured point) off the face the find touch found
-    # before the measuring touch: the run-up to the approach speed
-    find_backoff: float = 0.0003
+    # before the measuring touch: its run-up to the approach speed (the
+    # detection bias is qualified on a long one; docs/part-errors.md)
+    find_backoff: float = 0.0006
     # s, held after the back-off before the measuring touch's tare (the
     # arm rings after the find touch)
     find_settle_time: float = 0.2
