@@ -408,11 +408,15 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
             self._smooth(x, t, "over", command, over)
         elif phase == "over":
             self._smooth(x, t, "down", command, self._target(x))
-        elif phase == "down" and i < self._n:
+        elif phase == "down":
+            # Held until the arm's ringing after the move has died down:
+            # before a touch for its tare, before the entry so that the
+            # entry does not start with the tool still moving (the arm
+            # overshoots the command then and cuts in too deep).
             self._segment(
                 x, t, "settle", command, command, c.clear_settle_time, False
             )
-        elif phase == "down":
+        elif phase == "settle" and i == self._n:
             # On to the start on the registered part, along its n1.
             contour = self._registered(x)
             p = contour.point_at(0.0)

@@ -86,7 +86,7 @@ def _probe(real: MeshSurface, find_speed: float):
     """The sequence on the believed box against ``real``, each touch a
     guarded move alone (find_speed 0) or a find touch and the measuring
     touch, stepped until done: (probe, context, the ``touching`` output
-    on the entry's samples)."""
+    on the entry's samples, the phases in the order they came)."""
     plan = _plan(_box())
     config = ProbeConfig(
         enabled=True,
@@ -112,7 +112,7 @@ def _probe(real: MeshSurface, find_speed: float):
     probe.GetInputPort("command_in").FixValue(context, np.zeros(3))
     assert probe.GetOutputPort("touching").Eval(context)[0] == 1.0
     assert probe.GetOutputPort("registration").size() == 7
-    entered_touching = []
+    entered_touching, phases = [], []
     for _ in range(40000):
         x_p = probe.GetOutputPort("command").Eval(context).copy()
         probe.GetInputPort("chamfer_state").FixValue(context, _chamfer(x_p))
@@ -121,6 +121,8 @@ def _probe(real: MeshSurface, find_speed: float):
         )
         state = context.get_discrete_state(0).get_value()
         phase = MESH_PHASES[int(MESH_PROBE_STATE.get(state, "phase"))]
+        if not phases or phases[-1] != phase:
+            phases.append(phase)
         if phase == "enter":
             entered_touching.append(
                 probe.GetOutputPort("touching").Eval(context)[0]
@@ -132,7 +134,7 @@ def _probe(real: MeshSurface, find_speed: float):
         )
         context.SetTime(context.get_time() + T)
     assert phase == "done"
-    return probe, context, entered_touching
+    return probe, context, entered_touching, phases
 
 
 def _off_real(probe, context, real: MeshSurface) -> float:
@@ -150,8 +152,18 @@ def test_a_moved_box_is_registered_and_entered_on(find_speed):
     R_move = rpy_matrix(np.radians([0.5, 0.5, 0.5]))
     p_move = np.array([0.0006, -0.0004, 0.0003])
     real = _box(R_move, p_move)
-    probe, context, entered_touching = _probe(real, find_speed)
+    probe, context, entered_touching, phases = _probe(real, find_speed)
     assert entered_touching and not any(entered_touching)
+    # The entry starts from rest: after the last descent, the settle.
+    assert phases[-4:] == ["down", "settle", "enter", "done"]
+    if find_speed > 0:
+        assert phases[3:8] == [
+            "settle",
+            "find",
+            "back_off",
+            "steady",
+            "approach",
+        ]
     state = context.get_discrete_state(0).get_value()
     assert MESH_PROBE_STATE.get(state, "touches") == 8
     assert MESH_PROBE_STATE.get(state, "kept") == 8
@@ -179,7 +191,7 @@ def test_a_face_turned_off_its_planned_normal_is_touched_where_it_is():
     # the planned normal would put those touches r (1 - cos 4 deg) = 7 um
     # off the face; taken off along the force the ball felt, on it.
     real = _box(rpy_matrix(np.radians([0.0, 0.0, 4.0])))
-    probe, context, _ = _probe(real, ProbeConfig.find_speed)
+    probe, context, _, _ = _probe(real, ProbeConfig.find_speed)
     assert _off_real(probe, context, real) < 2.5e-6
 
 
