@@ -33,6 +33,11 @@ class ProbeConfig:
     # m/s, a mesh part's moves between touches: out along the face's
     # normal, above the part and down to the next standoff, clear of it
     clear_travel_speed: float = 0.15
+    # m/s, a mesh part: the same moves from the last touch to the pass's
+    # start: where they stop the arm's friction holds the tool, up to
+    # 0.9 mm off the command along the entry after 0.15 m/s, and the
+    # entry cuts that much deeper (docs/part-errors.md)
+    entry_travel_speed: float = 0.08
     # s, a mesh part: held at a touch's standoff after that move before
     # the tare (the arm rings for longer after it than after a travel
     # along the edge; docs/part-errors.md has the ringing measured)
@@ -131,6 +136,7 @@ class ProbeConfig:
             "approach_speed",
             "travel_speed",
             "clear_travel_speed",
+            "entry_travel_speed",
             "force_threshold",
             "standoff",
             "search_distance",

@@ -326,17 +326,13 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
         x[L.slice("linear")] = 1.0 if linear else 0.0
 
     def _smooth(self, x, t, phase, start, end):
-        """A smooth move at about ``clear_travel_speed`` (its mean)."""
+        """A smooth move at about ``clear_travel_speed`` (its mean), on
+        the way to the pass's start at ``entry_travel_speed``."""
+        c = self._config
+        last = MESH_PROBE_STATE.get(x, "index") >= self._n
+        speed = c.entry_travel_speed if last else c.clear_travel_speed
         length = float(np.linalg.norm(np.asarray(end) - start))
-        self._segment(
-            x,
-            t,
-            phase,
-            start,
-            end,
-            max(length / self._config.clear_travel_speed, 0.05),
-            False,
-        )
+        self._segment(x, t, phase, start, end, max(length / speed, 0.05), False)
 
     def _lift(self, x, t, start):
         """Straight up to the safe height (from a touch's retract point,
