@@ -219,10 +219,12 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
     ``probe_missed:<touch index>``. With ``find_speed`` 0 the measuring
     touch starts from the standoff point. Then each touch
     compensated as the planar probe's (:func:`detection_depth` on the
-    touches' median stiffness, ``detection_bias``), the registration
+    touches' median stiffness, ``detection_bias``) but along the force
+    the ball felt (the touched face's normal), the registration
     (``max_residual``, the hole's size with ``fit_radius``), up, over and
-    down to the standoff of the pass's start on the registered part, and
-    the entry along its n1 at the approach speed.
+    down (at ``entry_travel_speed``) to the standoff of the pass's start
+    on the registered part, settle, and the entry along its n1 at the
+    approach speed.
     """
 
     def __init__(
