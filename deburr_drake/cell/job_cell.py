@@ -60,13 +60,13 @@ from deburr_drake.cell.diagram import (
     LOCALISATION_LOGGED,
     LOGGED,
     add_cutting_process,
-    add_touch_contact,
     add_force_law,
     add_force_sensor,
+    add_touch_contact,
     sensor_reading,
 )
-from deburr_drake.cell.guards import add_effort_saturation, add_guards
 from deburr_drake.cell.edge import believed_contour_step, make_contour
+from deburr_drake.cell.guards import add_effort_saturation, add_guards
 from deburr_drake.cell.job import JobPlan, plan_job
 from deburr_drake.cell.job_probe import path_mover
 from deburr_drake.cell.moves import MoveSettings

@@ -8,7 +8,8 @@ cut's tool axis onto its start (deburr_drake.cell.moves plans the three
 as one joint path). The run ends in ``done`` when the last cut has
 reached its end. With touch probing the job begins in ``probe``: the
 part's touches and its registration (deburr_drake.control.mesh_probe),
-then every cut on the registered part and every move moved with it. :class:`JobSequencer` is modelled on the touch probing's
+then every cut on the registered part and every move moved with it.
+:class:`JobSequencer` is modelled on the touch probing's
 ProbingSequence (deburr_drake.control.probe): it holds the command
 generator and gates the force loop the same way."""
 
