@@ -203,7 +203,7 @@ def plan_job_cell(scenario: Scenario) -> JobCellPlan:
     rotations = [cell.start.rotation] + [
         _rotation(cell.model, tool_frame, c.start[2])[0] for c in job.cuts[1:]
     ]
-    contours = [cell.contour] + [c.contour for c in job.cuts[1:]]
+    contours = [cell.belief] + [c.contour for c in job.cuts[1:]]
     contour = JobContour(contours, rotations)
     real = [cell.contour] + [
         make_contour(e) if scenario.part_error.moves() else c.contour
