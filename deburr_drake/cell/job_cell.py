@@ -68,7 +68,7 @@ from deburr_drake.cell.diagram import (
 from deburr_drake.cell.edge import believed_contour_step, make_contour
 from deburr_drake.cell.guards import add_effort_saturation, add_guards
 from deburr_drake.cell.job import JobPlan, plan_job
-from deburr_drake.cell.job_probe import path_mover
+from deburr_drake.cell.job_probe import check_probe_route, path_mover
 from deburr_drake.cell.moves import MoveSettings
 from deburr_drake.cell.plan import CellPlan, plan_cell
 from deburr_drake.cell.plant import add_cell_plant
@@ -114,8 +114,11 @@ class JobCellPlan:
     ``workspace`` (m, world: points on every cut and move, and the
     probe's route), ``section`` (the scenario's ``job:``), ``real``
     (each cut's path on the real part, moved by ``part_error``: the
-    plant's) and ``contour_step`` (``faults.part_step``: (time, the
-    JobContour the loops believe in from then on), else None)."""
+    plant's), ``contour_step`` (``faults.part_step``: (time, the
+    JobContour the loops believe in from then on), else None) and
+    ``probe_clearance`` (m, with touch probing: the arm's least clearance
+    to the part at the probe's route, deburr_drake.cell.job_probe.
+    check_probe_route; else None)."""
 
     job: JobPlan
     cell: CellPlan
@@ -126,6 +129,7 @@ class JobCellPlan:
     section: JobConfig  # the scenario's job section
     real: Tuple[object, ...] = ()
     contour_step: Optional[tuple] = None
+    probe_clearance: Optional[float] = None
 
     @property
     def scenario(self) -> Scenario:
@@ -233,9 +237,19 @@ def plan_job_cell(scenario: Scenario) -> JobCellPlan:
                 _rotation(cell.model, tool_frame, q)[1]
                 for q in following.path[:: max(1, len(following.path) // 50)]
             ]
+    probe_clearance = None
     if cell.mesh_probe is not None:
-        standoff = resolved.localisation.probe.standoff
-        workspace += list(cell.mesh_probe.route(standoff))
+        # The probe's touches, reached by the job's arm clear of the part.
+        route = cell.mesh_probe.route(resolved.localisation.probe.standoff)
+        probe_clearance = check_probe_route(
+            job.cell,
+            cell.model,
+            resolved.robot.tool_frame,
+            route,
+            rotation=cell.start.rotation,
+            q_start=cell.start.q,
+        )
+        workspace += list(route)
     return JobCellPlan(
         job=job,
         cell=cell,
@@ -246,6 +260,7 @@ def plan_job_cell(scenario: Scenario) -> JobCellPlan:
         section=scenario.job,
         real=tuple(real),
         contour_step=_contour_step(edges, rotations),
+        probe_clearance=probe_clearance,
     )
 
 

@@ -15,10 +15,11 @@ ERROR = dict(offset=[5e-4, -5e-4, 5e-4], rpy=list(np.radians([0.5, -0.5, 0.5])))
 
 
 def _scenario(probe=True):
-    """The 15- and 30-degree holes of examples/block_job.yaml, probed,
-    the block off by 0.5 mm and 0.5 degree about every axis."""
+    """The bore and the 15-degree hole of examples/block_job.yaml,
+    probed, the block off by 0.5 mm and 0.5 degree about every axis (the
+    bore first: the probe is held as the first cut's tool, upright)."""
     scenario = load_scenario("examples/block_job.yaml")
-    scenario.job.edges = [JobEdgeConfig(index=10), JobEdgeConfig(index=8)]
+    scenario.job.edges = [JobEdgeConfig(index=7), JobEdgeConfig(index=10)]
     scenario.job.order = "listed"
     scenario.job.retract = scenario.job.approach = 0.01
     scenario.job.clearance = 0.002
@@ -51,6 +52,8 @@ def test_the_touches_on_the_whole_part_pin_six_degrees_of_freedom(plan):
     )
     # Faces of several directions: the top and walls facing apart.
     assert np.linalg.matrix_rank(touches.normals, tol=1e-6) == 3
+    # The job's arm reaches every touch clear of the part.
+    assert 0.0 < plan.probe_clearance < 0.5
     # The probe's route is in the workspace the guards hold the tool to.
     route = probe.route(plan.scenario.localisation.probe.standoff)
     low, high = plan.workspace.min(axis=0), plan.workspace.max(axis=0)
@@ -161,3 +164,22 @@ def test_a_bad_value_on_a_job_is_one_line_naming_its_field(change, field):
     message = str(raised.value)
     assert "\n" not in message
     assert message.startswith(field), message
+
+
+def test_a_touch_the_arm_cannot_reach_is_one_line_naming_the_probe(plan):
+    from deburr_drake.cell.job_probe import check_probe_route
+
+    route = plan.cell.mesh_probe.route(0.002).copy()
+    route[1] += [2.0, 0.0, 0.0]  # 2 m beyond the arm
+    with pytest.raises(ConfigError) as raised:
+        check_probe_route(
+            plan.job.cell,
+            plan.cell.model,
+            plan.scenario.robot.tool_frame,
+            route,
+            rotation=plan.cell.start.rotation,
+            q_start=plan.cell.start.q,
+        )
+    message = str(raised.value)
+    assert message.startswith("localisation.probe.points: the arm does")
+    assert "touch 1's standoff" in message and "\n" not in message
