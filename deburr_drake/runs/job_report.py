@@ -447,11 +447,12 @@ def _probe_values(out: JobReport, job: JobLog, plan, probing: float):
         why = "the job did not probe (localisation.probe.enabled false)"
     else:
         last = probe["value"][-1]
-        values["probing_time_s"] = probing
         values["probe_touches"] = int(L.get(last, "touches"))
         values["probe_touches_kept"] = int(L.get(last, "kept"))
         if float(L.get(last, "done_time")) < 0.0:
             why = f"probing did not finish ({job.stop_reason})"
+        else:
+            values["probing_time_s"] = probing
     if why is not None:
         for name in PROBE_FIELDS:
             if name not in values:
