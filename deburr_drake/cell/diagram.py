@@ -39,6 +39,7 @@ __all__ = [
     "add_cutting_process",
     "add_force_sensor",
     "add_force_law",
+    "add_touch_contact",
     "sensor_reading",
     "TOOL_FRAME",
     "SENSOR_JOINT",
@@ -241,13 +242,12 @@ def _connect_actuation(builder, scenario: Scenario, plant, side, actuation):
         builder.Connect(source, side.process.GetInputPort(port))
 
 
-def _add_touch_contact(
-    builder, plan: CellPlan, plant, tool_point, probe, process
-):
+def add_touch_contact(builder, plan: CellPlan, plant, tool_point, probe):
     """The probe's contact with the real mesh part while it touches
-    (deburr_drake.cell.touches.TouchContact), on the plant's tool; returns
-    the process state as the guards see it (TouchGate)."""
-    from deburr_drake.cell.touches import TouchContact, TouchGate, touch_law
+    (deburr_drake.cell.touches.TouchContact, ``touch_contact``), on the
+    plant's tool, switched by ``probe``'s (MeshProbingSequence)
+    ``touching``; returns it."""
+    from deburr_drake.cell.touches import TouchContact, touch_law
 
     c = plan.scenario
     contact = builder.AddNamedSystem(
@@ -277,6 +277,18 @@ def _add_touch_contact(
         contact.GetOutputPort("spatial_forces"),
         plant.get_applied_spatial_force_input_port(),
     )
+    return contact
+
+
+def _add_touch_contact(
+    builder, plan: CellPlan, plant, tool_point, probe, process
+):
+    """:func:`add_touch_contact`; returns the process state as the guards
+    see it (TouchGate: no chamfer while touching)."""
+    from deburr_drake.cell.touches import TouchGate
+
+    add_touch_contact(builder, plan, plant, tool_point, probe)
+    connect = builder.Connect
     gate = builder.AddNamedSystem("touch_gate", TouchGate())
     connect(probe.GetOutputPort("touching"), gate.GetInputPort("touching"))
     connect(

@@ -24,13 +24,26 @@ the part's material, the same on every edge), the fuzzy weights theta
 (the rules learn the loop, the arm's dynamics and friction and the
 cutting, which the edges share), delta_d and the integral of the sliding
 variable (a force fixed in the world: the model's gravity error); each is
-held while the tool is off the part."""
+held while the tool is off the part.
+
+With ``localisation.probe`` the job probes once, before its first cut:
+the touches planned on the whole part's faces (the first cut's cell
+plan's ``mesh_probe``, deburr_drake.cell.touches.plan_mesh_probe: they
+pin all six degrees of freedom), the part's pose registered from them,
+and every cut on the registered part (the loops' contour moved by that
+one pose); the sequencer moves every planned move's path with it
+(deburr_drake.cell.job_probe). A job registers the pose alone: a hole's
+size is one edge's, the registration moves every edge, so
+``localisation.probe.fit_radius`` is resolved to false. ``part_error``
+moves the plant's part (its bands, processes and the probe's surface);
+``faults.part_step`` steps the part the loops believe in, as in a
+single pass."""
 
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Tuple
+from typing import Optional, Tuple
 
 import numpy as np
 from pydrake.systems.controllers import InverseDynamicsController
@@ -44,14 +57,18 @@ from pydrake.systems.primitives import (
 
 from deburr_drake.cell.counts import DIAGRAMS, count
 from deburr_drake.cell.diagram import (
+    LOCALISATION_LOGGED,
     LOGGED,
     add_cutting_process,
     add_force_law,
     add_force_sensor,
+    add_touch_contact,
     sensor_reading,
 )
+from deburr_drake.cell.edge import believed_contour_step, make_contour
 from deburr_drake.cell.guards import add_effort_saturation, add_guards
 from deburr_drake.cell.job import JobPlan, plan_job
+from deburr_drake.cell.job_probe import check_probe_route, path_mover
 from deburr_drake.cell.moves import MoveSettings
 from deburr_drake.cell.plan import CellPlan, plan_cell
 from deburr_drake.cell.plant import add_cell_plant
@@ -62,10 +79,12 @@ from deburr_drake.control.loop import add_deburring_controller
 from deburr_drake.control.sequencer import (
     ActuationSwitch,
     CutPlan,
+    JobProbe,
     JobSequencer,
     MovePlan,
 )
 from deburr_drake.math.job_contour import JobContour
+from deburr_drake.math.registration import POSE_REGISTRATION_SIZE
 
 __all__ = [
     "JobCellPlan",
@@ -92,8 +111,14 @@ class JobCellPlan:
     the controller's model, the start), ``edges`` (each cut's single-edge
     scenario, resolved as ``cell.scenario``), ``contour`` (the JobContour
     of every cut's path), ``cuts`` (what the sequencer needs of each),
-    ``workspace`` (m, world: points on every cut and move) and
-    ``section`` (the scenario's ``job:``)."""
+    ``workspace`` (m, world: points on every cut and move, and the
+    probe's route), ``section`` (the scenario's ``job:``), ``real``
+    (each cut's path on the real part, moved by ``part_error``: the
+    plant's), ``contour_step`` (``faults.part_step``: (time, the
+    JobContour the loops believe in from then on), else None) and
+    ``probe_clearance`` (m, with touch probing: the arm's least clearance
+    to the part at the probe's route, deburr_drake.cell.job_probe.
+    check_probe_route; else None)."""
 
     job: JobPlan
     cell: CellPlan
@@ -102,6 +127,9 @@ class JobCellPlan:
     cuts: Tuple[CutPlan, ...]
     workspace: np.ndarray
     section: JobConfig  # the scenario's job section
+    real: Tuple[object, ...] = ()
+    contour_step: Optional[tuple] = None
+    probe_clearance: Optional[float] = None
 
     @property
     def scenario(self) -> Scenario:
@@ -119,20 +147,25 @@ def edge_scenario(scenario: Scenario, edge, pose) -> Scenario:
 def _check(scenario: Scenario):
     if not scenario.job.file:
         raise ConfigError("job.file is empty: the scenario has no job")
-    if scenario.localisation.enabled:
+    if scenario.localisation.online.enabled:
         raise ConfigError(
-            "localisation is invalid with a job: allowed "
-            "localisation.probe.enabled and localisation.online.enabled "
-            "false (a job's part is where job.pose says)"
+            "localisation.online.enabled = True is invalid with a job: "
+            "allowed false (a job registers its part by touch probing, "
+            "localisation.probe)"
         )
-    if scenario.part_error.moves():
-        raise ConfigError(
-            "part_error is invalid with a job: allowed zero offset and rpy"
-        )
-    if scenario.faults.part_step.time > 0:
-        raise ConfigError(
-            "faults.part_step.time is invalid with a job: allowed 0 (no step)"
-        )
+
+
+def _resolved(scenario: Scenario) -> Scenario:
+    """``scenario`` as a job runs it: with touch probing, the pose alone
+    registered (``localisation.probe.fit_radius`` false)."""
+    probe = scenario.localisation.probe
+    if not (probe.enabled and probe.fit_radius):
+        return scenario
+    localisation = dataclasses.replace(
+        scenario.localisation,
+        probe=dataclasses.replace(probe, fit_radius=False),
+    )
+    return dataclasses.replace(scenario, localisation=localisation)
 
 
 def _rotation(model, frame_name, q):
@@ -159,6 +192,7 @@ def plan_job_cell(scenario: Scenario) -> JobCellPlan:
     scenario, path and start rotation."""
     scenario.validate()
     _check(scenario)
+    scenario = _resolved(scenario)
     settings = MoveSettings()
     job = plan_job(scenario, settings=settings)
     if not job.cuts:
@@ -173,8 +207,12 @@ def plan_job_cell(scenario: Scenario) -> JobCellPlan:
     rotations = [cell.start.rotation] + [
         _rotation(cell.model, tool_frame, c.start[2])[0] for c in job.cuts[1:]
     ]
-    contours = [cell.contour] + [c.contour for c in job.cuts[1:]]
+    contours = [cell.belief] + [c.contour for c in job.cuts[1:]]
     contour = JobContour(contours, rotations)
+    real = [cell.contour] + [
+        make_contour(e) if scenario.part_error.moves() else c.contour
+        for e, c in zip(edges[1:], job.cuts[1:])
+    ]
     passes = resolved.simulation.stop_after_passes or 1.0
     cuts = []
     workspace = []
@@ -199,6 +237,19 @@ def plan_job_cell(scenario: Scenario) -> JobCellPlan:
                 _rotation(cell.model, tool_frame, q)[1]
                 for q in following.path[:: max(1, len(following.path) // 50)]
             ]
+    probe_clearance = None
+    if cell.mesh_probe is not None:
+        # The probe's touches, reached by the job's arm clear of the part.
+        route = cell.mesh_probe.route(resolved.localisation.probe.standoff)
+        probe_clearance = check_probe_route(
+            job.cell,
+            cell.model,
+            resolved.robot.tool_frame,
+            route,
+            rotation=cell.start.rotation,
+            q_start=cell.start.q,
+        )
+        workspace += list(route)
     return JobCellPlan(
         job=job,
         cell=cell,
@@ -207,7 +258,19 @@ def plan_job_cell(scenario: Scenario) -> JobCellPlan:
         cuts=tuple(cuts),
         workspace=np.array(workspace),
         section=scenario.job,
+        real=tuple(real),
+        contour_step=_contour_step(edges, rotations),
+        probe_clearance=probe_clearance,
     )
+
+
+def _contour_step(edges, rotations) -> Optional[tuple]:
+    """``faults.part_step`` on a job: (time, the JobContour of every
+    cut's believed path after the step), else None."""
+    steps = [believed_contour_step(e) for e in edges]
+    if steps[0] is None:
+        return None
+    return steps[0][0], JobContour([c for _, c in steps], rotations)
 
 
 def _add_processes(builder, plan: JobCellPlan, plant, tool_point):
@@ -220,7 +283,7 @@ def _add_processes(builder, plan: JobCellPlan, plant, tool_point):
     )
     applied = builder.AddNamedSystem("cutting_force_sum", Adder(n, 3))
     processes, laws = [], []
-    for k, contour in enumerate(plan.contour.edges):
+    for k, contour in enumerate(plan.real):
         process = add_cutting_process(
             builder,
             plan.scenario,
@@ -311,6 +374,12 @@ def _add_sequencer(builder, plan: JobCellPlan, plant, loops, processes):
     """The JobSequencer, wired to the loops (the generator's hold, the
     gate, the controller's fuzzy weight and activity) and the spindles."""
     c = plan.scenario
+    probe = None
+    if loops.probe is not None:
+        probe = JobProbe(
+            registration=POSE_REGISTRATION_SIZE,
+            move=path_mover(plan.cell.model, c.robot.tool_frame),
+        )
     sequencer = builder.AddNamedSystem(
         "job_sequencer",
         JobSequencer(
@@ -319,19 +388,27 @@ def _add_sequencer(builder, plan: JobCellPlan, plant, loops, processes):
             desired_depth=c.task.desired_depth,
             entry_dwell=plan.section.entry_dwell,
             num_positions=plant.num_positions(),
+            probe=probe,
         ),
     )
     connect = builder.Connect
+    if probe is not None:
+        for port in ("probing", "registration"):
+            connect(
+                loops.probe.GetOutputPort(port), sequencer.GetInputPort(port)
+            )
     for source, port, target in (
         ("command_state", "command_state", loops.command_generator),
         ("chamfer_state", "chamfer_state", loops.observer),
     ):
         connect(target.GetOutputPort(source), sequencer.GetInputPort(port))
+    # The job's gate (with probing, the probe's gate follows it).
+    job_gate = builder.GetSubsystemByName("job_gate")
     for output, system, port in (
-        ("off_part", loops.gate, "probing"),
+        ("off_part", job_gate, "probing"),
         ("hold", loops.command_generator, "hold"),
         ("fuzzy_weight", loops.controller, "fuzzy_weight"),
-        ("cutting", loops.controller, "active"),
+        ("force_loop", loops.controller, "active"),
     ):
         connect(sequencer.GetOutputPort(output), system.GetInputPort(port))
     spindles = builder.AddNamedSystem(
@@ -345,7 +422,8 @@ def _add_sequencer(builder, plan: JobCellPlan, plant, loops, processes):
 
 def _add_guards_and_loggers(builder, plan, plant, loops, sequencer, switch):
     """The guards (contact judged on the cuts, the workspace every cut and
-    move spans) and the loggers (``log_<name>``)."""
+    move and the probe's route span) and the loggers (``log_<name>``;
+    with probing ``log_probe`` and ``log_touch_points`` too)."""
     c = plan.scenario
     logged = {
         name: builder.GetSubsystemByName(system).GetOutputPort(port)
@@ -357,6 +435,12 @@ def _add_guards_and_loggers(builder, plan, plant, loops, sequencer, switch):
         "desired_normal_force"
     )
     logged["actuation"] = switch.GetOutputPort("actuation")
+    if loops.probe is not None:
+        for name, (system, port) in LOCALISATION_LOGGED.items():
+            if builder.HasSubsystemNamed(system):
+                logged[name] = builder.GetSubsystemByName(system).GetOutputPort(
+                    port
+                )
     cutting = sequencer.GetOutputPort("cutting")
     add_guards(
         builder, c, plant, plan.contour, logged, job=(cutting, plan.workspace)
@@ -378,7 +462,7 @@ def _add_meshcat(builder, meshcat, plan, plant, scene_graph, processes):
     from deburr_drake.cell.meshcat import add_job_meshcat
 
     edges = []
-    for contour, process in zip(plan.contour.edges, processes):
+    for contour, process in zip(plan.real, processes):
         arc = process.bins.centers
         edges.append(
             (
@@ -428,10 +512,15 @@ def make_job_diagram(plan: JobCellPlan, *, meshcat=None) -> Diagram:
         true_plant=plant,
         posture=cell.start.q,
         sequenced=True,
+        contour_step=plan.contour_step,  # after the part moved
+        mesh_probe=cell.mesh_probe,
     )
+    # With touch probing, the probe's contact with the real part.
+    if loops.probe is not None:
+        add_touch_contact(builder, cell, plant, tool_point, loops.probe)
     # The sequencer drives the loops, the spindles and the moves.
     sequencer = _add_sequencer(builder, plan, plant, loops, processes)
-    cutting = sequencer.GetOutputPort("cutting")
+    force_loop = sequencer.GetOutputPort("force_loop")
     # The drives: the force loop's actuation on cuts, the position loop's
     # on moves.
     position = _add_position_loop(
@@ -440,7 +529,7 @@ def make_job_diagram(plan: JobCellPlan, *, meshcat=None) -> Diagram:
     switch = builder.AddNamedSystem(
         "actuation_switch", ActuationSwitch(plant.num_actuators())
     )
-    builder.Connect(cutting, switch.GetInputPort("cutting"))
+    builder.Connect(force_loop, switch.GetInputPort("cutting"))
     builder.Connect(loops.actuation, switch.GetInputPort("force_loop"))
     builder.Connect(position, switch.GetInputPort("position_loop"))
     _connect_actuation(

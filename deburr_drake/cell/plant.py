@@ -186,8 +186,10 @@ def _add_mesh_edges(plant, edges):
     for k, scenario in enumerate(edges):
         stations, band = mesh_edge_band(scenario)
         register_compliant_edge(plant, stations, name=f"part_edge_{k}", **band)
-    part = edges[0].part
-    register_part_visual(plant, part.mesh_edge(part.pose)[0])
+    part = edges[0].part  # the real part: moved by part_error
+    register_part_visual(
+        plant, part.mesh_edge(part.real_pose(edges[0].part_error))[0]
+    )
 
 
 def _add_mesh_edge(plant, scenario: Scenario):

@@ -201,9 +201,10 @@ def _add_loops(
 
 
 def _job_loops(c: Scenario, sequenced: bool) -> bool:
-    """``sequenced``, checked: a job's loops run without localisation."""
-    if sequenced and c.localisation.enabled:
-        raise ValueError("a job's loops run without localisation")
+    """``sequenced``, checked: a job's loops run without registration
+    while cutting (touch probing, before the first cut, they have)."""
+    if sequenced and c.localisation.online.enabled:
+        raise ValueError("a job's loops run without online registration")
     return sequenced
 
 
@@ -249,10 +250,13 @@ def _add_probing(
     timing,
     force,
     mesh_probe=None,
+    sequenced=False,
 ):
     """The probing sequence and its gate between the observer, the
-    generator and the estimator and the rest. Returns the signals the
-    loops use from then on, the sequence and the gate."""
+    generator and the estimator and the rest (``sequenced``: a job's,
+    whose sequencer holds the generator and weighs the fuzzy rules).
+    Returns the signals the loops use from then on, the sequence and the
+    gate."""
     probe = builder.AddNamedSystem(
         "probing_sequence",
         _probing_sequence(
@@ -272,16 +276,22 @@ def _add_probing(
             (probe.GetOutputPort("probing"), gate.GetInputPort("probing")),
             (signals.chamfer, gate.GetInputPort("chamfer_state")),
             (signals.desired, gate.GetInputPort("desired_normal_force")),
-            (
-                probe.GetOutputPort("hold"),
-                loops.command_generator.GetInputPort("hold"),
-            ),
-            (
-                probe.GetOutputPort("fuzzy_weight"),
-                loops.controller.GetInputPort("fuzzy_weight"),
-            ),
         ],
     )
+    if not sequenced:
+        _connect(
+            builder,
+            [
+                (
+                    probe.GetOutputPort("hold"),
+                    loops.command_generator.GetInputPort("hold"),
+                ),
+                (
+                    probe.GetOutputPort("fuzzy_weight"),
+                    loops.controller.GetInputPort("fuzzy_weight"),
+                ),
+            ],
+        )
     gated = _Signals(
         chamfer=gate.GetOutputPort("chamfer_state"),
         command=probe.GetOutputPort("command"),
@@ -333,6 +343,7 @@ def _add_localisation(
     x0,
     measured_force,
     mesh_probe=None,
+    sequenced=False,
 ):
     """``localisation.probe``: the probing sequence and its gate;
     ``localisation.online``: registration while cutting; the registration
@@ -353,6 +364,7 @@ def _add_localisation(
             timing=timing,
             force=measured_force,
             mesh_probe=mesh_probe,
+            sequenced=sequenced,
         )
         registration = probe.GetOutputPort("registration")
     else:
@@ -446,7 +458,9 @@ def add_deburring_controller(
     to the systems. ``sequenced``: a job's loops (control.sequencer): a
     gate ``job_gate`` after the observer, its ``probing``, the generator's
     ``hold`` and the controller's ``fuzzy_weight`` and ``active`` left
-    open. ``mesh_probe`` (control.mesh_probe.MeshProbePlan): with
+    open (with ``localisation.probe`` too: the job probes first, its
+    sequencer reads the sequence's ``probing`` and ``registration``).
+    ``mesh_probe`` (control.mesh_probe.MeshProbePlan): with
     ``localisation.probe``, a mesh part's touches and its six-degree
     registration (and a hole's size) instead of the planar probe.
 
@@ -485,6 +499,7 @@ def add_deburring_controller(
             x0=x0,
             measured_force=measured_force,
             mesh_probe=mesh_probe,
+            sequenced=sequenced,
         )
     # The loops to each other.
     _connect_loops(builder, loops, signals)

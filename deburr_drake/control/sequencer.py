@@ -6,13 +6,16 @@ its edge; between two cuts the tool retracts up the cut's tool axis,
 moves in free space along the planned joint path and comes down the next
 cut's tool axis onto its start (deburr_drake.cell.moves plans the three
 as one joint path). The run ends in ``done`` when the last cut has
-reached its end. :class:`JobSequencer` is modelled on the touch probing's
+reached its end. With touch probing the job begins in ``probe``: the
+part's touches and its registration (deburr_drake.control.mesh_probe),
+then every cut on the registered part and every move moved with it.
+:class:`JobSequencer` is modelled on the touch probing's
 ProbingSequence (deburr_drake.control.probe): it holds the command
 generator and gates the force loop the same way."""
 
 from __future__ import annotations
 
-from typing import NamedTuple, Optional, Sequence
+from typing import Callable, NamedTuple, Optional, Sequence
 
 import numpy as np
 from pydrake.systems.framework import EventStatus, LeafSystem
@@ -31,13 +34,15 @@ __all__ = [
     "JOB_COMPLETE",
     "CutPlan",
     "MovePlan",
+    "JobProbe",
     "JobSequencer",
     "ActuationSwitch",
 ]
 
-#: The phases of a job, in the order each cut goes through them; a
-#: phase's code in the logs is its index here.
-JOB_PHASES = ("cut", "retract", "move", "approach", "done")
+#: The phases of a job, in the order each cut goes through them, and
+#: ``probe`` (touch probing, once, before the first cut); a phase's code
+#: in the logs is its index here.
+JOB_PHASES = ("cut", "retract", "move", "approach", "done", "probe")
 #: phase name -> code.
 JOB_PHASE = {name: k for k, name in enumerate(JOB_PHASES)}
 
@@ -72,10 +77,13 @@ class MovePlan(NamedTuple):
     def duration(self) -> float:
         return float(self.times[-1])
 
-    def reference(self, t: float) -> np.ndarray:
-        """[q; v] at ``t`` s into the move: the path's piecewise-linear
-        interpolation and its slope (at rest before and after)."""
-        times, path = self.times, self.path
+    def reference(self, t: float, path=None) -> np.ndarray:
+        """[q; v] at ``t`` s into the move: the path's (or ``path``'s, the
+        same shape: the path moved with a registered part)
+        piecewise-linear interpolation and its slope (at rest before and
+        after)."""
+        times = self.times
+        path = self.path if path is None else path
         if t <= times[0] or t >= times[-1]:
             q = path[0] if t <= times[0] else path[-1]
             return np.concatenate([q, np.zeros(path.shape[1])])
@@ -96,6 +104,16 @@ class CutPlan(NamedTuple):
     move: Optional[MovePlan]
 
 
+class JobProbe(NamedTuple):
+    """A job's touch probing, as the sequencer sees it: ``registration``
+    (the size of the probe's registration output) and ``move`` (a
+    planned joint path (k, n) and a registration -> the path with the
+    tool's every pose moved as the registration moves the part)."""
+
+    registration: int
+    move: Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
 class JobSequencer(LeafSystem):
     """The job's phases in the Diagram: each cut with the paper's force
     loop, then retract, move and approach under position control along
@@ -108,9 +126,12 @@ class JobSequencer(LeafSystem):
         input_ports:
         - command_state
         - chamfer_state
+        - probing (optional)
+        - registration (optional)
         output_ports:
         - job_state
         - cutting
+        - force_loop
         - off_part
         - hold
         - fuzzy_weight
@@ -121,10 +142,16 @@ class JobSequencer(LeafSystem):
       its arc position says how far the cut has gone.
     - ``chamfer_state`` (CHAMFER_STATE, the observer's, not gated): its
       depth delta says when the cut's entry is established.
+    - ``probing`` (1) and ``registration`` (``probe.registration``),
+      only with a ``probe`` (JobProbe): the probing sequence's, 1 until
+      it is done, and the part's pose it registered.
     - ``job_state`` (JOB_STATE): the discrete state below.
-    - ``cutting`` (1): 1 in the cut phase (the force loop acts, the
+    - ``cutting`` (1): 1 in the cut phase (the force loop cuts, the
       estimator and the controller adapt), else 0; ``off_part`` (1): 1 -
       ``cutting`` (the gate's: no contact seen off the part).
+    - ``force_loop`` (1): 1 where the force loop drives the arm: the cuts
+      and the probing (its touches are the loop's guarded moves), else 0
+      (the position loop's moves).
     - ``hold`` (1): 1 but in a cut once its entry is established (the
       command generator's hold: no feed on the way in, nor off the part).
     - ``fuzzy_weight`` (1): the fuzzy compensator's weight: 1 in a cut
@@ -136,11 +163,18 @@ class JobSequencer(LeafSystem):
     - ``spindles`` (one per cut): 1 for the cut the tool is at (its cut
       and retract, and the approach to it), else 0: each edge's cutting
       process runs only there.
-    - Discrete state (JOB_STATE), updated every ``period`` s.
+    - Discrete state (JOB_STATE), updated every ``period`` s; with a
+      ``probe`` also every move's path (rad, flattened, in the cuts'
+      order), the planned ones until probing ends, then moved by the
+      registration (``probe.move``), once.
 
     A cut's entry is established once delta reaches ``CUT_ESTABLISHED``
     of ``desired_depth`` or ``entry_dwell`` s have passed; the first cut
-    starts in contact, as a single pass does, established at once."""
+    starts in contact, as a single pass does, established at once. With
+    a ``probe`` the job starts in ``probe`` and the first cut begins when
+    the probing sequence is done (it brings the tool into contact at the
+    first cut's start on the registered part), established as the
+    others are."""
 
     def __init__(
         self,
@@ -150,6 +184,7 @@ class JobSequencer(LeafSystem):
         desired_depth: float,
         entry_dwell: float,
         num_positions: int,
+        probe: Optional[JobProbe] = None,
     ):
         super().__init__()
         if not cuts:
@@ -162,12 +197,13 @@ class JobSequencer(LeafSystem):
         self._established_depth = CUT_ESTABLISHED * desired_depth
         self._entry_dwell = entry_dwell
         self._n = num_positions
+        self._probe = probe
         self._state = self.DeclareDiscreteState(
             JOB_STATE.pack(
-                phase=JOB_PHASE["cut"],
+                phase=JOB_PHASE["cut" if probe is None else "probe"],
                 cut=0,
                 phase_start=0.0,
-                established=0.0,
+                established=0.0 if probe is None else -1.0,
                 move_start=-1.0,
             )
         )
@@ -177,11 +213,22 @@ class JobSequencer(LeafSystem):
         self._chamfer = self.DeclareVectorInputPort(
             "chamfer_state", CHAMFER_STATE.size
         )
+        self._paths = self._probing = self._registration = None
+        if probe is not None:
+            self._probing = self.DeclareVectorInputPort("probing", 1)
+            self._registration = self.DeclareVectorInputPort(
+                "registration", probe.registration
+            )
+        if probe is not None and len(self._cuts) > 1:
+            self._paths = self.DeclareDiscreteState(
+                np.concatenate([c.move.path.ravel() for c in self._cuts[:-1]])
+            )
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
         self.DeclareStateOutputPort("job_state", self._state)
         state = {self.xd_ticket()}
         for name, calc in (
             ("cutting", self._calc_cutting),
+            ("force_loop", self._calc_force_loop),
             ("off_part", self._calc_off_part),
             ("hold", self._calc_hold),
             ("fuzzy_weight", self._calc_fuzzy_weight),
@@ -225,6 +272,8 @@ class JobSequencer(LeafSystem):
         k = int(JOB_STATE.get(x, "cut"))
         if phase == "done":
             return EventStatus.Succeeded()
+        if phase == "probe":
+            return self._probed(context, discrete_state, t)
         if phase == "cut":
             return self._cutting(context, discrete_state, x, t, k)
         move = self._cuts[k].move
@@ -260,6 +309,32 @@ class JobSequencer(LeafSystem):
             ),
         )
 
+    def _probed(self, context, discrete_state, t):
+        """Probing: once the sequence is done, every move's path moved
+        by the registration, and the first cut."""
+        if self._probing.Eval(context)[0] > 0.5:
+            return EventStatus.Succeeded()
+        registration = self._registration.Eval(context)
+        paths = [
+            self._probe.move(c.move.path, registration).ravel()
+            for c in self._cuts[:-1]
+        ]
+        if paths:
+            discrete_state.set_value(self._paths, np.concatenate(paths))
+        self._enter(discrete_state, "cut", 0, t)
+        return EventStatus.Succeeded()
+
+    def _path(self, context, k) -> Optional[np.ndarray]:
+        """Cut k's move's path as the arm follows it: the planned one, or
+        with probing the one moved with the registered part."""
+        if self._paths is None:
+            return None
+        n = self._n
+        start = sum(c.move.path.size for c in self._cuts[:k])
+        size = self._cuts[k].move.path.size
+        flat = context.get_discrete_state(self._paths).get_value()
+        return np.asarray(flat[start : start + size]).reshape(-1, n)
+
     def _cutting(self, context, discrete_state, x, t, k):
         if JOB_STATE.get(x, "established") < 0:
             depth = CHAMFER_STATE.get(self._chamfer.Eval(context), "delta")
@@ -290,6 +365,12 @@ class JobSequencer(LeafSystem):
             0, 1.0 if self._phase_code(context) == JOB_PHASE["cut"] else 0.0
         )
 
+    def _calc_force_loop(self, context, output):
+        driving = (JOB_PHASE["cut"], JOB_PHASE["probe"])
+        output.SetAtIndex(
+            0, 1.0 if self._phase_code(context) in driving else 0.0
+        )
+
     def _calc_off_part(self, context, output):
         output.SetAtIndex(
             0, 0.0 if self._phase_code(context) == JOB_PHASE["cut"] else 1.0
@@ -312,17 +393,17 @@ class JobSequencer(LeafSystem):
         x = self._x(context)
         k = int(JOB_STATE.get(x, "cut"))
         phase = int(JOB_STATE.get(x, "phase"))
-        move = self._cuts[k].move
-        if move is None:  # the last cut: nowhere to go
-            move = self._cuts[k - 1].move if k else None
-        if move is None:
+        j = k if self._cuts[k].move is not None else k - 1
+        if j < 0:  # one cut: nowhere to go
             output.SetFromVector(np.zeros(2 * self._n))
             return
-        if phase in (JOB_PHASE["cut"], JOB_PHASE["done"]):
-            into = 0.0 if self._cuts[k].move is not None else move.duration
+        move = self._cuts[j].move
+        at_rest = (JOB_PHASE["cut"], JOB_PHASE["done"], JOB_PHASE["probe"])
+        if phase in at_rest:
+            into = 0.0 if j == k else move.duration
         else:
             into = context.get_time() - float(JOB_STATE.get(x, "move_start"))
-        output.SetFromVector(move.reference(into))
+        output.SetFromVector(move.reference(into, self._path(context, j)))
 
     def _calc_spindles(self, context, output):
         x = self._x(context)

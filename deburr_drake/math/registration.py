@@ -239,6 +239,11 @@ class PosedContour(Contour):
     def arc_position(self, p):
         return self._base.arc_position(self._back(p))
 
+    def unwrapped_arc_position(self, p, reference_s) -> float:
+        # The base's own unwrapping: a job's contour unwraps each of its
+        # closed edges though it is open itself.
+        return self._base.unwrapped_arc_position(self._back(p), reference_s)
+
     def point_at(self, s):
         return self._out(self._grown_at(self._base.point_at(s)))
 

@@ -177,6 +177,9 @@ class JobLog:
     skipped: List[Tuple[int, str]] = field(default_factory=list)
     #: how many cuts the plan has (edges cut or not)
     planned_cuts: int = 0
+    #: with touch probing, the probing sequence's log (``t`` and
+    #: ``value``, MESH_PROBE_STATE), else None
+    probe: Optional[dict] = None
 
     @property
     def completed(self) -> bool:
@@ -270,6 +273,7 @@ def make_job_log(
     steps: int = 0,
     refused: Sequence = (),
     skipped: Sequence = (),
+    probe: Optional[dict] = None,
 ) -> JobLog:
     """The JobLog of a run: ``edges`` (an EdgeSource per planned cut, in
     the job's order), ``shared`` (the loggers every cut shares, over the
@@ -325,4 +329,5 @@ def make_job_log(
         refused=list(refused),
         skipped=list(skipped),
         planned_cuts=len(edges),
+        probe=probe,
     )

@@ -32,6 +32,7 @@ from typing import Dict, List, NamedTuple, Optional
 import numpy as np
 
 from deburr_drake.cell.moves import PlanningCell, clearance, tip_positions
+from deburr_drake.control.mesh_probe import MESH_PROBE_STATE
 from deburr_drake.control.sequencer import JOB_COMPLETE, JOB_PHASE, JOB_PHASES
 from deburr_drake.math import metrics
 from deburr_drake.runs.job_log import EdgeRun, JobLog, JobSignals
@@ -41,6 +42,7 @@ from deburr_drake.runs.pass_metrics import (
     finish_metrics,
     force_metrics,
     pass_window,
+    pose_errors,
 )
 
 __all__ = [
@@ -182,7 +184,34 @@ JOB_FIELDS: Dict[str, tuple] = {
         "s",
         "wall-clock time of the simulation; varies from run to run",
     ),
+    "probing_time_s": (
+        "s",
+        "with touch probing (``localisation.probe``): the time before the "
+        "first cut, from the first touch's lift to the tool in contact at "
+        "the first edge's start on the registered part",
+    ),
+    "probe_touches": ("-", "touches that found the part"),
+    "probe_touches_kept": ("-", "touches the registration kept"),
+    "registration_position_error_mm": (
+        "mm",
+        "how far the registered pose puts the centroid of the cut edges' "
+        "points from where the real part (``part_error``) has it",
+    ),
+    "registration_orientation_error_deg": (
+        "deg",
+        "the angle between the registered part's orientation and the "
+        "real part's",
+    ),
 }
+
+#: The job's probing fields (null without touch probing).
+PROBE_FIELDS = (
+    "probing_time_s",
+    "probe_touches",
+    "probe_touches_kept",
+    "registration_position_error_mm",
+    "registration_orientation_error_deg",
+)
 
 
 @dataclass
@@ -394,6 +423,7 @@ def job_report(
         "wall_time_s": float(job.wall_time),
     }
     out = JobReport(edges, values)
+    _probe_values(out, job, plan, by_phase(held, ["probe"]))
     least, where = move_clearance(cell, job)
     values["min_clearance_m"], values["min_clearance_at"] = least, where
     if not np.isfinite(least):
@@ -403,6 +433,46 @@ def job_report(
     if not selected:
         out.reasons["cut_share"] = "the job selected no edge"
     return out
+
+
+def _probe_values(out: JobReport, job: JobLog, plan, probing: float):
+    """The job's probing (:data:`PROBE_FIELDS`): its time (``probing``,
+    s, the probe phase's), its touches and the registration's error
+    against the real part at the centroid of the cut edges' points."""
+    L = MESH_PROBE_STATE
+    values = out.job
+    probe = job.probe
+    why = None
+    if probe is None or not len(probe["t"]):
+        why = "the job did not probe (localisation.probe.enabled false)"
+    else:
+        last = probe["value"][-1]
+        values["probe_touches"] = int(L.get(last, "touches"))
+        values["probe_touches_kept"] = int(L.get(last, "kept"))
+        if float(L.get(last, "done_time")) < 0.0:
+            why = f"probing did not finish ({job.stop_reason})"
+        else:
+            values["probing_time_s"] = probing
+    if why is not None:
+        for name in PROBE_FIELDS:
+            if name not in values:
+                values[name] = float("nan")
+                out.reasons[name] = why
+        return
+    points = [
+        c.contour.point_at(s)
+        for c in plan.cuts
+        for s in np.linspace(0.0, c.contour.length, 50)
+    ]
+    position, turn = pose_errors(
+        job.scenario, L.get(last, "registration"), np.mean(points, axis=0)
+    )
+    values["registration_position_error_mm"] = float(
+        np.linalg.norm(position) * 1e3
+    )
+    values["registration_orientation_error_deg"] = float(
+        np.degrees(np.linalg.norm(turn))
+    )
 
 
 def write_job_report(

@@ -176,10 +176,12 @@ def run_job(
     logs = _collect(diagram, context, logger_names(diagram))
     signals = _job_signals(logs, plan.cell.model.num_positions())
     signals.clearance = move_clearances(plan.job.cell, signals)
+    # The job's own and the probing's loggers are the job's, not the
+    # edges'.
     shared = {
         name: logs[name]
         for name in logs
-        if name not in ("job", "plant_state")
+        if name not in ("job", "plant_state", "probe", "touch_points")
         and not name.startswith("process_")
     }
     sources = _edge_sources(
@@ -198,6 +200,7 @@ def run_job(
         steps=simulator.get_num_steps_taken(),
         refused=plan.job.refused,
         skipped=plan.job.skipped,
+        probe=logs.get("probe"),
     )
     force = _truth(plan) if truth else None
     metrics = [

@@ -60,6 +60,7 @@ __all__ = [
     "status_metrics",
     "localisation_metrics",
     "registration_error",
+    "pose_errors",
     "first_edge_error",
     "force_at_desired_depth",
     "force_settling_metrics",
@@ -980,13 +981,23 @@ def _pose_errors(scenario, registration):
     (T_true, from the believed pose to the real one): T c - T_true c, c
     the mean of the believed edge's points, and the rotation vector of
     R_true R^T."""
-    reg = np.asarray(registration, float)
-    R, p = rotvec_matrix(reg[:3]), reg[3:6]
-    R_t, p_t = _true_move(scenario)
     belief = believed_contour(scenario)
     c = np.mean(
         [belief.point_at(s) for s in np.linspace(0, belief.length, 200)], 0
     )
+    return pose_errors(scenario, registration, c)
+
+
+def pose_errors(scenario, registration, centre):
+    """(position (3, m), turn (3, rad)) of a mesh part's pose
+    ``registration`` (w, p, ...; x_real = R(w) x + p) against the truth
+    (``part_error``: T_true, from the believed pose to the real one) at
+    ``centre`` (m, world, on the believed part): T c - T_true c, and the
+    rotation vector of R_true R^T."""
+    reg = np.asarray(registration, float)
+    R, p = rotvec_matrix(reg[:3]), reg[3:6]
+    R_t, p_t = _true_move(scenario)
+    c = np.asarray(centre, float)
     return (R @ c + p) - (R_t @ c + p_t), matrix_rotvec(R_t @ R.T)
 
 

@@ -11,6 +11,7 @@ from deburr_drake.control.sequencer import (
     JOB_STATE,
     ActuationSwitch,
     CutPlan,
+    JobProbe,
     JobSequencer,
     MovePlan,
 )
@@ -76,6 +77,82 @@ def _sequencer(dwell=1.0):
     )
 
 
+def _probing_sequencer(moves):
+    """A two-cut job that probes first; ``moves`` records the calls of
+    its path mover (a shift of the path by the registration's first
+    number)."""
+
+    def move(path, registration):
+        moves.append(np.asarray(registration).copy())
+        return path + registration[0]
+
+    return JobSequencer(
+        [CutPlan(end_arc=0.1, move=_move()), CutPlan(end_arc=10.05, move=None)],
+        period=T,
+        desired_depth=DEPTH,
+        entry_dwell=1.0,
+        num_positions=2,
+        probe=JobProbe(registration=7, move=move),
+    )
+
+
+def test_a_probing_job_probes_then_cuts_on_the_moved_paths():
+    moves = []
+    sequencer = _probing_sequencer(moves)
+    inputs = [
+        sequencer.get_input_port(i).get_name()
+        for i in range(sequencer.num_input_ports())
+    ]
+    assert inputs == [
+        "command_state",
+        "chamfer_state",
+        "probing",
+        "registration",
+    ]
+    run = _Run(sequencer)
+    registration = np.array([0.25, 0, 0, 0, 0, 0, 0])
+    sequencer.GetInputPort("registration").FixValue(run.context, registration)
+    sequencer.GetInputPort("probing").FixValue(run.context, [1.0])
+    # Probing: the force loop drives the arm, nothing is cut, the feed is
+    # held, no spindle turns; the planned path until the registration.
+    assert run.phase() == ("probe", 0)
+    assert run.out("force_loop")[0] == 1 and run.out("cutting")[0] == 0
+    assert run.out("off_part")[0] == 1 and run.out("hold")[0] == 1
+    assert run.out("fuzzy_weight")[0] == 0
+    np.testing.assert_array_equal(run.out("spindles"), [0, 0])
+    np.testing.assert_array_equal(run.out("joint_reference"), np.zeros(4))
+    for _ in range(3):
+        run.step()
+    assert run.phase() == ("probe", 0) and moves == []
+    # Done probing: every move's path moved once, the first cut begins,
+    # held until its entry is established (as the later cuts are).
+    sequencer.GetInputPort("probing").FixValue(run.context, [0.0])
+    run.set(arc=0.0, delta=0.0)
+    run.step()
+    assert run.phase() == ("cut", 0) and len(moves) == 1
+    np.testing.assert_array_equal(moves[0], registration)
+    assert run.out("hold")[0] == 1 and run.out("cutting")[0] == 1
+    np.testing.assert_array_equal(run.out("spindles"), [1, 0])
+    run.set(arc=0.0, delta=DEPTH)
+    run.step()
+    assert run.out("hold")[0] == 0
+    # The move follows the moved path.
+    run.set(arc=0.1, delta=DEPTH)
+    run.step()
+    assert run.phase() == ("retract", 0)
+    run.step()
+    reference = run.out("joint_reference")
+    start = JOB_STATE.get(
+        run.context.get_discrete_state(0).value(), "move_start"
+    )
+    into = run.context.get_time() - float(start)
+    assert into > 0
+    expected = _move().reference(into, _move().path + 0.25)
+    np.testing.assert_allclose(reference, expected)
+    assert reference[0] == pytest.approx(0.25)
+    assert len(moves) == 1
+
+
 def test_ports_and_state():
     sequencer = _sequencer()
     assert sequencer.get_name() == "job_sequencer"
@@ -88,6 +165,7 @@ def test_ports_and_state():
     assert sizes == {
         "job_state": JOB_STATE.size,
         "cutting": 1,
+        "force_loop": 1,
         "off_part": 1,
         "hold": 1,
         "fuzzy_weight": 1,
