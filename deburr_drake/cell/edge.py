@@ -128,9 +128,10 @@ def believed_contour_step(scenario: Scenario):
         return None
     after = copy.deepcopy(scenario)
     e, part = scenario.part_error, scenario.part
-    if not any(step.rpy):
-        # A pure move: the believed part moved back by it (exactly, as
-        # the offsets subtract).
+    if not any(step.rpy) and part.edge.kind != "mesh":
+        # A pure move of a planar part: the believed part moved back by it
+        # (exactly, as the offsets subtract). A mesh part's belief is the
+        # file at its nominal pose, which part_error does not move.
         after.part_error.offset = [x - d for x, d in zip(e.offset, step.offset)]
         return step.time, believed_contour(after)
     real = part.real_pose(e)
