@@ -100,15 +100,17 @@ def test_a_touch_that_finds_nothing_ends_the_job_naming_it(tmp_path):
     from deburr_drake.runs.job_run import run_job
 
     # The block 8 mm lower than believed: the touches on its walls find
-    # them lower down, the first on its top finds nothing within its
-    # search.
+    # them lower down; a touch on its top finds nothing within its search
+    # (which one depends on what lies below each within its search).
     plan = plan_job_cell(_scenario([0.0, 0.0, -0.008], [0.0, 0.0, 0.0]))
     normals = plan.cell.mesh_probe.touches.normals
-    top = int(np.flatnonzero(normals[:, 2] > 0.99)[0])
+    tops = np.flatnonzero(normals[:, 2] > 0.99)
     result = run_job(plan, duration=60.0)
     log = result.log
-    missed = f"probe_missed:{top}"
-    assert log.stop_reason == missed
+    missed = log.stop_reason
+    assert missed.startswith("probe_missed:")
+    top = int(missed.removeprefix("probe_missed:"))
+    assert top in tops
     assert f"touch {top} of 7" in log.stop_detail
     assert log.edges == []
     report = job_report(log, plan.job)
