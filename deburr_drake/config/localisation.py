@@ -32,11 +32,29 @@ class ProbeConfig:
     travel_speed: float = 0.02  # m/s, between touches at the standoff
     # m/s, a mesh part's moves between touches: out along the face's
     # normal, above the part and down to the next standoff, clear of it
-    clear_travel_speed: float = 0.08
+    clear_travel_speed: float = 0.15
+    # m/s, a mesh part: the same moves from the last touch to the pass's
+    # start: where they stop the arm's friction holds the tool, up to
+    # 0.9 mm off the command along the entry after 0.15 m/s, and the
+    # entry cuts that much deeper (docs/part-errors.md)
+    entry_travel_speed: float = 0.08
     # s, a mesh part: held at a touch's standoff after that move before
     # the tare (the arm rings for longer after it than after a travel
-    # along the edge)
-    clear_settle_time: float = 0.5
+    # along the edge; docs/part-errors.md has the ringing measured)
+    clear_settle_time: float = 0.2
+    # m/s, a mesh part: each touch first finds the face fast (a smooth
+    # move along the normal, up to 1.5 times this mean speed about the
+    # middle of its search), backs off it and measures it with the
+    # guarded move at approach_speed; 0: the guarded move alone, from the
+    # standoff
+    find_speed: float = 0.015
+    # m, the tool (its measured point) off the face the find touch found
+    # before the measuring touch: its run-up to the approach speed (the
+    # detection bias is qualified on a long one; docs/part-errors.md)
+    find_backoff: float = 0.0006
+    # s, held after the back-off before the measuring touch's tare (the
+    # arm rings after the find touch)
+    find_settle_time: float = 0.2
     # m, a mesh part: how far its pose may be off along each axis (its
     # frame's origin); each touch's standoff and search grow by what that
     # can move its face along the normal
@@ -118,6 +136,7 @@ class ProbeConfig:
             "approach_speed",
             "travel_speed",
             "clear_travel_speed",
+            "entry_travel_speed",
             "force_threshold",
             "standoff",
             "search_distance",
@@ -129,6 +148,9 @@ class ProbeConfig:
             _positive(o, name, getattr(self, name))
         _non_negative(o, "settle_time", self.settle_time)
         _non_negative(o, "clear_settle_time", self.clear_settle_time)
+        _non_negative(o, "find_speed", self.find_speed)
+        _positive(o, "find_backoff", self.find_backoff)
+        _non_negative(o, "find_settle_time", self.find_settle_time)
         _non_negative(o, "pose_offset_allowance", self.pose_offset_allowance)
         _non_negative(o, "pose_turn_allowance", self.pose_turn_allowance)
         _non_negative(o, "contact_exponent_slope", self.contact_exponent_slope)

@@ -61,13 +61,18 @@ __all__ = [
 
 #: The phases of the sequence, in order: for each touch lift (along the
 #: last touch's normal, then up), over (at the safe height), down (to the
-#: touch's standoff), settle, approach, retract; at the end the same way
-#: to the pass's start's standoff, and the entry.
+#: touch's standoff), settle, find (the fast first touch), back_off (off
+#: the surface it found), steady, approach (the measuring touch),
+#: retract; at the end the same way to the pass's start's standoff, and
+#: the entry. Without a find speed settle goes on to approach.
 MESH_PHASES = (
     "lift",
     "over",
     "down",
     "settle",
+    "find",
+    "back_off",
+    "steady",
     "approach",
     "retract",
     "enter",
@@ -105,13 +110,22 @@ MESH_PROBE_STATE = VectorLayout(
         ("kept", 1),
         ("fit_rms", 1),  # m
         ("stiffness", 1),  # N/m, the touches' median, as the planar probe
+        # m, world: the surface the touch under way's find touch found
+        # (its crossing less the modelled detection depth)
+        ("found", 3),
+        # m, the command less the tool point at rest before the find
+        ("rest_error", 3),
     ],
 )
 
 #: Per touch, the crossings of the guarded move: x, y, z (m), the speed
 #: along the approach (m/s) at the first threshold, the way (m) on to the
-#: second (0: not reached).
-_CROSSING = 5
+#: second (0: not reached), and the direction of the tared force at the
+#: deeper of the two (3): the part pushes the ball along the normal of
+#: the face it touches, which on a hole's wall (a concave face, its
+#: facets turned with the part) lies up to 20 degrees off the planned
+#: face's normal.
+_CROSSING = 8
 
 
 @dataclass(frozen=True)
@@ -188,11 +202,22 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
 
     Each touch: lift (back along the last touch's normal by ``retract``
     and up) to ``safe_height``, over to above the touch's standoff point
-    (``standoff`` off the believed face along its normal), down to it,
-    settle, tare, move along minus the normal at ``approach_speed`` until
-    the force against it exceeds ``force_threshold`` (nothing within
-    ``search_distance``: the run ends, ``probe_missed:<touch index>``),
-    on to ``stiffness_threshold``, back by ``retract``. Then each touch
+    (``standoff`` off the believed face along its normal), down to it
+    (these at ``clear_travel_speed``), settle (``clear_settle_time``),
+    tare. Then the find touch: a smooth move along minus the normal at a
+    mean ``find_speed`` until the force against it exceeds
+    ``force_threshold``; the face it found is its crossing less the
+    modelled detection depth at its speed. Back off (at
+    ``travel_speed``) to where the tool comes to rest ``find_backoff``
+    off that face (the command less the arm's error at rest before the
+    find), settle (``find_settle_time``), tare. Then the measuring touch:
+    along minus the normal at ``approach_speed`` until the force exceeds
+    ``force_threshold``, on to ``stiffness_threshold``, back by
+    ``retract``. A find or measuring touch that finds nothing within its
+    search (``search_distance`` and twice the touch's allowance, or
+    ``search_distance`` and ``find_backoff``) ends the run,
+    ``probe_missed:<touch index>``. With ``find_speed`` 0 the measuring
+    touch starts from the standoff point. Then each touch
     compensated as the planar probe's (:func:`detection_depth` on the
     touches' median stiffness, ``detection_bias``), the registration
     (``max_residual``, the hole's size with ``fit_radius``), up, over and
@@ -301,17 +326,13 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
         x[L.slice("linear")] = 1.0 if linear else 0.0
 
     def _smooth(self, x, t, phase, start, end):
-        """A smooth move at about ``clear_travel_speed`` (its mean)."""
+        """A smooth move at about ``clear_travel_speed`` (its mean), on
+        the way to the pass's start at ``entry_travel_speed``."""
+        c = self._config
+        last = MESH_PROBE_STATE.get(x, "index") >= self._n
+        speed = c.entry_travel_speed if last else c.clear_travel_speed
         length = float(np.linalg.norm(np.asarray(end) - start))
-        self._segment(
-            x,
-            t,
-            phase,
-            start,
-            end,
-            max(length / self._config.clear_travel_speed, 0.05),
-            False,
-        )
+        self._segment(x, t, phase, start, end, max(length / speed, 0.05), False)
 
     def _lift(self, x, t, start):
         """Straight up to the safe height (from a touch's retract point,
@@ -373,6 +394,8 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
             return self._approach(
                 context, x, t, command, finished, touches, crossings, i
             )
+        if phase == "find":
+            return self._find(context, x, t, command, finished, i)
         if not finished:
             return None
         if phase == "lift":
@@ -381,11 +404,15 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
             self._smooth(x, t, "over", command, over)
         elif phase == "over":
             self._smooth(x, t, "down", command, self._target(x))
-        elif phase == "down" and i < self._n:
+        elif phase == "down":
+            # Held until the arm's ringing after the move has died down:
+            # before a touch for its tare, before the entry so that the
+            # entry does not start with the tool still moving (the arm
+            # overshoots the command then and cuts in too deep).
             self._segment(
                 x, t, "settle", command, command, c.clear_settle_time, False
             )
-        elif phase == "down":
+        elif phase == "settle" and i == self._n:
             # On to the start on the registered part, along its n1.
             contour = self._registered(x)
             p = contour.point_at(0.0)
@@ -402,17 +429,45 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
             x[L.slice("touching")] = 0.0
         elif phase == "settle":
             x[L.slice("tare")] = self._force_port.Eval(context)
+            x_p = CHAMFER_STATE.get(self._chamfer_port.Eval(context), "x_p")
+            x[L.slice("rest_error")] = command - x_p
             n = self._plan.touches.normals[i]
             search = c.search_distance + 2.0 * self._plan.allowance[i]
+            if c.find_speed > 0:
+                # The find touch: smooth, so it starts without a jerk the
+                # sensor reads as a push (the tool's inertia), fastest
+                # about the middle of its search, where the face is.
+                self._segment(
+                    x,
+                    t,
+                    "find",
+                    command,
+                    command - search * n,
+                    search / c.find_speed,
+                    False,
+                )
+            else:
+                self._guarded(x, t, command, n, search)
+        elif phase == "back_off":
             self._segment(
-                x,
-                t,
-                "approach",
-                command,
-                command - search * n,
-                search / c.approach_speed,
-                True,
+                x, t, "steady", command, command, c.find_settle_time, False
             )
+        elif phase == "steady":
+            m = self._plan.touches.normals[i]
+            x_p = CHAMFER_STATE.get(self._chamfer_port.Eval(context), "x_p")
+            off = float((x_p - L.get(x, "found")) @ m)
+            if off < 0.5 * c.find_backoff:
+                # The arm's friction held the tool nearer the face than
+                # the back-off meant (or on it): back off by what is
+                # missing before the tare.
+                self._back_off(
+                    x, t, command, command + (c.find_backoff - off) * m
+                )
+            else:
+                x[L.slice("tare")] = self._force_port.Eval(context)
+                self._guarded(
+                    x, t, command, m, c.find_backoff + c.search_distance
+                )
         elif phase == "retract":
             x[L.slice("index")] = i + 1
             if i + 1 == self._n:
@@ -424,12 +479,87 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
             x[L.slice("done_time")] = t
         return None
 
+    def _guarded(self, x, t, command, m, search):
+        """The measuring touch: along -``m`` (the face's normal) at the
+        approach speed, ``search`` (m) at most."""
+        speed = self._config.approach_speed
+        end = command - search * m
+        self._segment(x, t, "approach", command, end, search / speed, True)
+
+    def _tared(self, context, x) -> np.ndarray:
+        """N: the force reading less the tare."""
+        return self._force_port.Eval(context) - MESH_PROBE_STATE.get(x, "tare")
+
+    def _pushed(self, context, x, n) -> float:
+        """N: the tared force against the approach's direction ``n``."""
+        return -float(self._tared(context, x) @ n)
+
+    def _find(self, context, x, t, command, finished, i):
+        """The find touch: on contact the surface it found (the crossing
+        less the modelled depth at its speed), then back off it."""
+        c, L = self._config, MESH_PROBE_STATE
+        n = -self._plan.touches.normals[i]
+        if self._pushed(context, x, n) >= c.force_threshold:
+            chamfer = self._chamfer_port.Eval(context)
+            x_p = CHAMFER_STATE.get(chamfer, "x_p")
+            speed = float(CHAMFER_STATE.get(chamfer, "xdot_p") @ n)
+            depth = detection_depth(
+                speed, c.force_threshold, c.contact_stiffness, self._timing
+            )
+            found = x_p - depth * n
+            x[L.slice("found")] = found
+            # Back along the normal, on the find's line, to where the
+            # tool comes to rest find_backoff off that face: the arm's
+            # error at rest before the find (the tool held off the
+            # command) along the normal added.
+            lead = float((command - found) @ n)
+            rest = float(L.get(x, "rest_error") @ n)
+            way = lead + c.find_backoff - rest
+            self._back_off(x, t, command, command - way * n)
+            return None
+        if finished:
+            return self._missed(x, i, n, "find touch")
+        return None
+
+    def _back_off(self, x, t, command, end):
+        """A smooth move off the face to ``end`` (m) at about
+        ``travel_speed``."""
+        length = float(np.linalg.norm(end - command))
+        self._segment(
+            x,
+            t,
+            "back_off",
+            command,
+            end,
+            max(length / self._config.travel_speed, 0.05),
+            False,
+        )
+
+    def _missed(self, x, i, n, what):
+        """The run's end at touch ``i``: its ``what`` (a guarded move
+        along ``n``) found nothing within its search."""
+        L, c = MESH_PROBE_STATE, self._config
+        a = L.get(x, "segment_start")
+        search = float(np.linalg.norm(L.get(x, "segment_end") - a))
+        if what == "measuring touch" and c.find_speed > 0:
+            within = f"find_backoff {c.find_backoff:g} m"
+        else:
+            within = f"twice the allowance {self._plan.allowance[i]:.3g} m"
+        return EventStatus.ReachedTermination(
+            self,
+            f"{PROBE_MISSED}:{i}: no contact within {search:.3g} m "
+            f"(search_distance {c.search_distance:g} m and {within}) "
+            f"along {np.round(n, 6).tolist()} from "
+            f"{np.round(a, 6).tolist()} m (the {what} of touch {i} of "
+            f"{self._n} on the part's faces)",
+        )
+
     def _approach(
         self, context, x, t, command, finished, touches, crossings, i
     ):
         c, L = self._config, MESH_PROBE_STATE
         n = -self._plan.touches.normals[i]  # the approach's direction
-        f = self._force_port.Eval(context) - L.get(x, "tare")
+        f = self._tared(context, x)
         pushed = -float(f @ n)
         chamfer = self._chamfer_port.Eval(context)
         x_p = CHAMFER_STATE.get(chamfer, "x_p")
@@ -437,29 +567,22 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
         touched = touches[4 * i + 3] > 0.5
         if not touched and pushed >= c.force_threshold:
             speed = float(CHAMFER_STATE.get(chamfer, "xdot_p") @ n)
-            crossings[row] = [*x_p, speed, 0.0]
+            out = f / np.linalg.norm(f)
+            crossings[row] = [*x_p, speed, 0.0, *out]
             touches[4 * i : 4 * i + 4] = [
-                *self._touch(x_p, n, speed, c.contact_stiffness),
+                *self._touch(x_p, -out, speed, c.contact_stiffness),
                 1.0,
             ]
             x[L.slice("touches")] += 1.0
             if c.stiffness_threshold > 0:
                 return None
         elif touched and pushed >= c.stiffness_threshold:
-            crossings[row.stop - 1] = float((x_p - crossings[row][:3]) @ n)
+            crossings[row.start + 4] = float((x_p - crossings[row][:3]) @ n)
+            crossings[row.start + 5 : row.stop] = f / np.linalg.norm(f)
         elif not finished:
             return None
         elif not touched:
-            a = L.get(x, "segment_start")
-            return EventStatus.ReachedTermination(
-                self,
-                f"{PROBE_MISSED}:{i}: no contact within search_distance "
-                f"{c.search_distance:g} m and twice the allowance "
-                f"{self._plan.allowance[i]:.3g} m along "
-                f"{np.round(n, 6).tolist()} "
-                f"from {np.round(a, 6).tolist()} m (touch {i} of {self._n} "
-                "on the part's faces)",
-            )
+            return self._missed(x, i, n, "measuring touch")
         # Back from the touch along the face's normal.
         back = x_p - c.retract * n
         length = float(np.linalg.norm(back - command))
@@ -476,9 +599,10 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
 
     def _touch(self, x_p, n, speed, stiffness):
         """The touch on the part's surface: the ball's centre at the
-        crossing ``x_p`` moving at ``speed`` along ``n`` (the approach),
-        less the modelled depth at detection and the probe's
-        qualified bias, plus the ball's radius along n."""
+        crossing ``x_p`` moving at ``speed`` along the approach, less the
+        modelled depth at detection and the probe's qualified bias, plus
+        the ball's radius, along ``n``: into the face the ball touched
+        (against the force it felt)."""
         c = self._config
         depth = (
             detection_depth(speed, c.force_threshold, stiffness, self._timing)
@@ -509,9 +633,8 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
         k = median_stiffness(spans, c)
         x[MESH_PROBE_STATE.slice("stiffness")] = k
         for i in np.flatnonzero(hit):
-            n = -self._plan.touches.normals[i]
             touches[4 * i : 4 * i + 3] = self._touch(
-                rows[i, :3], n, rows[i, 3], k
+                rows[i, :3], -rows[i, 5:8], rows[i, 3], k
             )
 
     def _fit(self, x, touches):

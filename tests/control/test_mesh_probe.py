@@ -7,6 +7,7 @@ hand-over; the gate holding n1 and the arc position while probing."""
 import math
 
 import numpy as np
+import pytest
 import trimesh
 
 from deburr_drake.config import ProbeConfig
@@ -75,29 +76,32 @@ def _force(real: MeshSurface, x_p):
     return K * max(depth, 0.0) * m
 
 
-def test_a_moved_box_is_registered_and_entered_on():
-    # The real box: 0.6 mm, -0.4 mm, 0.3 mm off and turned 0.5 deg about
-    # every axis.
-    R_move = rpy_matrix(np.radians([0.5, 0.5, 0.5]))
-    p_move = np.array([0.0006, -0.0004, 0.0003])
-    believed, real = _box(), _box(R_move, p_move)
-    plan = _plan(believed)
-    # The edge: the believed box's top front edge, the cutter's radius in.
-    contour = StraightContour(
-        [-0.03, -0.02 + R, 0.009], [1, 0, 0], [0, -1, 0], length=0.06
-    )
+#: The edge: the believed box's top front edge, the cutter's radius in.
+_EDGE = StraightContour(
+    [-0.03, -0.02 + R, 0.009], [1, 0, 0], [0, -1, 0], length=0.06
+)
+
+
+def _probe(real: MeshSurface, find_speed: float):
+    """The sequence on the believed box against ``real``, each touch a
+    guarded move alone (find_speed 0) or a find touch and the measuring
+    touch, stepped until done: (probe, context, the ``touching`` output
+    on the entry's samples, the phases in the order they came)."""
+    plan = _plan(_box())
     config = ProbeConfig(
         enabled=True,
         contact_exponent=1.0,
         contact_exponent_slope=0.0,
         contact_stiffness=K,
         detection_bias=0.0,
+        # The emulated probe detects at the sample after the crossing:
+        # slow, so that sample's way (1.25 um) stays under the tolerances.
+        approach_speed=0.0005,
+        find_speed=find_speed,
     )
-    x0 = contour.point_at(0.0) - config.standoff * contour.n1(
-        contour.point_at(0.0)
-    )
+    x0 = _EDGE.point_at(0.0) - config.standoff * _EDGE.n1(_EDGE.point_at(0.0))
     probe = MeshProbingSequence(
-        contour,
+        _EDGE,
         plan,
         config,
         sample_period=T,
@@ -108,7 +112,7 @@ def test_a_moved_box_is_registered_and_entered_on():
     probe.GetInputPort("command_in").FixValue(context, np.zeros(3))
     assert probe.GetOutputPort("touching").Eval(context)[0] == 1.0
     assert probe.GetOutputPort("registration").size() == 7
-    entered_touching = []
+    entered_touching, phases = [], []
     for _ in range(40000):
         x_p = probe.GetOutputPort("command").Eval(context).copy()
         probe.GetInputPort("chamfer_state").FixValue(context, _chamfer(x_p))
@@ -117,6 +121,8 @@ def test_a_moved_box_is_registered_and_entered_on():
         )
         state = context.get_discrete_state(0).get_value()
         phase = MESH_PHASES[int(MESH_PROBE_STATE.get(state, "phase"))]
+        if not phases or phases[-1] != phase:
+            phases.append(phase)
         if phase == "enter":
             entered_touching.append(
                 probe.GetOutputPort("touching").Eval(context)[0]
@@ -128,7 +134,36 @@ def test_a_moved_box_is_registered_and_entered_on():
         )
         context.SetTime(context.get_time() + T)
     assert phase == "done"
+    return probe, context, entered_touching, phases
+
+
+def _off_real(probe, context, real: MeshSurface) -> float:
+    """m: the compensated touches' largest distance from the real box."""
+    touches = probe.GetOutputPort("touch_points").Eval(context)
+    points = touches.reshape(-1, 4)[:, :3]
+    q, _ = closest_on_mesh(real, points)
+    return float(np.max(np.linalg.norm(points - q, axis=1)))
+
+
+@pytest.mark.parametrize("find_speed", [0.0, ProbeConfig.find_speed])
+def test_a_moved_box_is_registered_and_entered_on(find_speed):
+    # The real box: 0.6 mm, -0.4 mm, 0.3 mm off and turned 0.5 deg about
+    # every axis.
+    R_move = rpy_matrix(np.radians([0.5, 0.5, 0.5]))
+    p_move = np.array([0.0006, -0.0004, 0.0003])
+    real = _box(R_move, p_move)
+    probe, context, entered_touching, phases = _probe(real, find_speed)
     assert entered_touching and not any(entered_touching)
+    # The entry starts from rest: after the last descent, the settle.
+    assert phases[-4:] == ["down", "settle", "enter", "done"]
+    if find_speed > 0:
+        assert phases[3:8] == [
+            "settle",
+            "find",
+            "back_off",
+            "steady",
+            "approach",
+        ]
     state = context.get_discrete_state(0).get_value()
     assert MESH_PROBE_STATE.get(state, "touches") == 8
     assert MESH_PROBE_STATE.get(state, "kept") == 8
@@ -137,19 +172,62 @@ def test_a_moved_box_is_registered_and_entered_on():
     # detection leaves (a few microns along the normals).
     np.testing.assert_allclose(rotvec_matrix(reg[:3]), R_move, atol=2e-4)
     np.testing.assert_allclose(reg[3:6], p_move, atol=1e-5)
-    touches = probe.GetOutputPort("touch_points").Eval(context)
-    points = touches.reshape(-1, 4)[:, :3]
-    q, _ = closest_on_mesh(real, points)
-    assert np.max(np.linalg.norm(points - q, axis=1)) < 1e-5
+    assert _off_real(probe, context, real) < 1e-5
     # The tool ends at the start of the edge on the registered part.
     registered = probe.GetOutputPort("command")
     probe.GetInputPort("command_in").FixValue(context, [1.0, 2.0, 3.0])
     np.testing.assert_allclose(registered.Eval(context), [1.0, 2.0, 3.0])
-    start = contour.point_at(0.0)
+    start = _EDGE.point_at(0.0)
     moved = R_move @ start + p_move
     end = MESH_PROBE_STATE.get(state, "segment_end")
     assert np.linalg.norm(end - moved) < 3e-5
     assert math.isfinite(MESH_PROBE_STATE.get(state, "done_time"))
+
+
+def test_a_face_turned_off_its_planned_normal_is_touched_where_it_is():
+    # The real box turned 4 deg about z: its side faces' normals lie 4 deg
+    # off the planned ones, as a hole's wall's facets do where the ball
+    # meets them off the planned point. The ball's radius taken off along
+    # the planned normal would put those touches r (1 - cos 4 deg) = 7 um
+    # off the face; taken off along the force the ball felt, on it.
+    real = _box(rpy_matrix(np.radians([0.0, 0.0, 4.0])))
+    probe, context, _, _ = _probe(real, ProbeConfig.find_speed)
+    assert _off_real(probe, context, real) < 2.5e-6
+
+
+def test_a_find_touch_that_finds_nothing_ends_the_run(run_untouched):
+    """No part at all: the first touch's find touch ends at its search
+    (search_distance and twice the allowance) and the simulation stops,
+    naming the touch, as a single guarded move's miss does."""
+    from deburr_drake.runs.simulation import _stop_of
+
+    plan = _plan(_box())
+    contour = StraightContour(
+        [-0.03, -0.02 + R, 0.009], [1, 0, 0], [0, -1, 0], length=0.06
+    )
+    config = ProbeConfig(enabled=True)
+    x0 = plan.standoff_point(0, config.standoff)
+    probe = MeshProbingSequence(
+        contour,
+        plan,
+        config,
+        sample_period=T,
+        timing=sensor_timing(T, 10.0),
+        initial_position=x0,
+    )
+    status, context = run_untouched(probe, _chamfer(x0))
+    assert status.reason() == status.ReturnReason.kReachedTerminationCondition
+    state = context.get_discrete_state(0).get_value()
+    assert MESH_PHASES[int(MESH_PROBE_STATE.get(state, "phase"))] == "find"
+    search = config.search_distance + 2.0 * plan.allowance[0]
+    searched = MESH_PROBE_STATE.get(
+        state, "segment_end"
+    ) - MESH_PROBE_STATE.get(state, "segment_start")
+    assert np.linalg.norm(searched) == pytest.approx(search, rel=1e-12)
+    reason, detail = _stop_of(status, None)
+    assert reason == "probe_missed:0"
+    assert detail.startswith(f"no contact within {search:.3g} m")
+    assert "the find touch of touch 0 of 8" in detail
 
 
 def test_the_gate_holds_n1_and_the_arc_while_probing():

@@ -426,11 +426,9 @@ def test_measured_stiffness_follows_the_exponent_falling_with_depth(d1):
     assert k == pytest.approx(1.0 / d1, rel=1e-6)
 
 
-def test_a_touch_that_finds_nothing_ends_the_run():
+def test_a_touch_that_finds_nothing_ends_the_run(run_untouched):
     """No contact anywhere: the first touch's guarded move ends at its
     search distance and the simulation stops, naming the touch."""
-    from pydrake.systems.analysis import Simulator
-
     from deburr_drake.runs.simulation import _stop_of
 
     believed = CircularContour([0.4, 0.0, 0.048], 0.027)
@@ -442,12 +440,7 @@ def test_a_touch_that_finds_nothing_ends_the_run():
     probe = ProbingSequence(
         believed, cfg, sample_period=0.0025, timing=timing, initial_position=x0
     )
-    simulator = Simulator(probe)
-    context = simulator.get_mutable_context()
-    probe.GetInputPort("command_in").FixValue(context, np.zeros(3))
-    probe.GetInputPort("chamfer_state").FixValue(context, _chamfer(x0))
-    probe.GetInputPort("measured_force").FixValue(context, np.zeros(3))
-    status = simulator.AdvanceTo(10.0)
+    status, context = run_untouched(probe, _chamfer(x0))
     assert status.reason() == status.ReturnReason.kReachedTerminationCondition
     # the search: search_distance at approach_speed after the settle
     search = cfg.search_distance / cfg.approach_speed
