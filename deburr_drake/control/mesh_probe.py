@@ -682,7 +682,8 @@ def register_part(
     compensated touches ``points`` ((N, 3), m, on the real part's
     surface) on the believed part of ``plan`` (deburr_drake.math.
     mesh_registration.register_mesh with ``max_residual``, the size with
-    ``fit_radius``), as a POSE_REGISTRATION_SIZE vector (w, p, size) that
+    ``fit_radius``, the per-touch error no smaller than ``touch_error``),
+    as a POSE_REGISTRATION_SIZE vector (w, p, size) that
     :func:`registered_contours` moves edges by, and the MeshFit.
     ValueError: touches that do not fix the pose."""
     fit = register_mesh(
@@ -690,6 +691,7 @@ def register_part(
         points,
         max_residual=config.max_residual,
         touch_noise=touch_noise,
+        touch_error=config.touch_error,
         sized_faces=plan.sized if config.fit_radius else None,
     )
     size = 0.0 if fit.size is None else fit.size

@@ -24,10 +24,14 @@ would take that for an offset).
 Along a 3-D edge (``contour.varying_frame``: a mesh part's) the offset is
 a small rigid move of the part seen through n1, d = g(x) . (v, L omega)
 (deburr_drake.math.edge_registration), in the directions whose d varies
-along the arc (a hole's: the two translations across its axis); the
-correction (v, omega) moves the probe's pose registration about the
-pivot it carries, and the model learns all along the edge. The model is
-chosen once, when the system is built.
+along the arc beyond what else varies the force (the engaged height as
+a turn of the part raises and lowers the edge along the tool, the tool's
+lean): those are estimated alongside and never applied, and a move the
+force cannot tell from them is left alone (around a hole's rim, every
+move: its first harmonic is also a tilt's). The correction (v, omega)
+moves the probe's pose registration about the pivot it carries, and the
+model learns all along the edge. The model is chosen once, when the
+system is built.
 """
 
 from __future__ import annotations
@@ -137,7 +141,8 @@ class _PlanarModel:
 
 class _EdgeModel:
     """A 3-D edge's model (deburr_drake.math.edge_registration): the small
-    rigid move seen through n1 in the directions the force shows; learns
+    rigid move seen through n1 in the directions the force shows beyond
+    the nuisances (estimated with it, never applied); learns
     all along the edge (its contact law varies smoothly with the faces'
     angle); the correction (v, omega) moves the base's pose registration
     about the pivot it carries."""
@@ -145,7 +150,8 @@ class _EdgeModel:
     def __init__(self, contour: Contour, config, estimator, prior):
         self.model = edge_model(contour, 1.0 / MAX_AMPLIFICATION)
         k = self.model.basis.shape[1]
-        self.layout = online_state(2 + k, CORRECTION_SIZE)
+        j = self.model.nuisance.shape[1]
+        self.layout = online_state(2 + k + j, CORRECTION_SIZE)
         self.registration_size = POSE_REGISTRATION_SIZE
         self.correction_size = CORRECTION_SIZE
         T = config.sample_period
@@ -153,9 +159,12 @@ class _EdgeModel:
         self.max_step = np.array([step] * 3 + [step / self.model.length] * 3)
         c0, c1, _ = estimator.initial_estimates
         # Priors: c0 and c1 within their own size, c1 a within c1 x prior
-        # (a: metres of (v, L omega)).
-        self.P0 = np.diag([c0**2, c1**2] + [(c1 * prior) ** 2] * k)
-        self.theta0 = np.concatenate([[c0, c1], np.zeros(k)])
+        # (a: metres of (v, L omega)), the nuisances' force within c0's
+        # size (the contact law's own, which they scale).
+        self.P0 = np.diag(
+            [c0**2, c1**2] + [(c1 * prior) ** 2] * k + [c0**2] * j
+        )
+        self.theta0 = np.concatenate([[c0, c1], np.zeros(k + j)])
 
     def learns(self, reference, x_p) -> bool:
         return True

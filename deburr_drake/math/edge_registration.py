@@ -23,19 +23,34 @@ rigid move seen through n1. Along a planar circle g is the first harmonic
 nothing); along a straight edge the turn about the tool axis is the
 heading, and the move along n1 a constant. The force loop cannot tell a
 part of d that is the same all along the edge from the contact threshold
-c0, so what the force shows is how d varies along the arc: the
-translations whose d varies by at least 1 / MAX_AMPLIFICATION of their
-size (RMS over the arc), then the turns that vary by that much beyond
-what those translations explain (:func:`edge_model`; each by
-:func:`observable_directions`, the eigenvectors of the covariance of
-g's columns over the arc). The rest is left alone, as the planar
-model leaves the constant part to c0.
+c0, so what the force shows is how d varies along the arc.
+
+The force varies along the arc for other reasons too, which no move of
+the reference corrects (:func:`nuisance_terms`): a turn of the part
+relative to the tool makes the edge rise and fall along the tool axis,
+a (x) . (omega x (x - c)), so the cutter's side meets more or less of the
+wall (the engaged height, and with it the whole contact law, scales);
+and a lean of the tool relative to the edge (the part's turn, the held
+tool rotation, the tool's lead) makes the depth grow along the engaged
+height, n1 . (beta x a). Around a rim both are first harmonics, as the
+move across the axis is; along a straight edge a turn about n1 tilts the
+top face along the edge and varies the force linearly, as the heading
+does. So the model keeps the translations whose d varies along the arc
+by at least 1 / MAX_AMPLIFICATION of their size (RMS over the arc)
+beyond what a constant and these nuisances explain, then the turns that
+vary by that much beyond those translations as well
+(:func:`edge_model`; each by :func:`observable_directions`, the
+eigenvectors of the covariance of the residual columns over the arc),
+and it estimates the nuisances' shapes with them (:class:`EdgeModel`
+``nuisance``) so that the force they make does not pass for a move. What
+the force cannot tell apart is left alone, as the planar model leaves the
+constant part to c0: around a hole's rim, every move.
 
 - :func:`edge_pivot`, :func:`carried_pivot`, :func:`move_of`,
   :func:`corrected`: the pivot and the correction on a registration.
-- :func:`edge_offset_terms`, :func:`edge_contact_regressor`,
-  :func:`edge_registration_of`: the online model's regressor and its
-  move.
+- :func:`edge_offset_terms`, :func:`nuisance_terms`,
+  :func:`edge_contact_regressor`, :func:`edge_registration_of`: the
+  online model's regressor and its move.
 """
 
 from __future__ import annotations
@@ -58,6 +73,7 @@ __all__ = [
     "corrected",
     "EdgeModel",
     "edge_offset_terms",
+    "nuisance_terms",
     "observable_directions",
     "edge_model",
     "edge_contact_regressor",
@@ -136,18 +152,51 @@ def edge_offset_terms(points, n1, pivot, length) -> np.ndarray:
     return np.column_stack([n, arm])
 
 
+def nuisance_terms(points, n1, axes, pivot, length) -> np.ndarray:
+    """(N, 6) at tool points ``points`` (N, 3) with normals ``n1`` and
+    tool axes ``axes`` (N, 3): what else varies the force along the arc,
+    per unit turn omega of the part and unit lean beta of the tool
+    (rad): the edge's rise along the tool axis, a . (omega x (x - c)) =
+    omega . ((x - c) x a) (over ``length`` = L, the engaged height's
+    change), and the depth's growth along the engaged height,
+    n1 . (beta x a) = beta . (a x n1)."""
+    x = np.atleast_2d(np.asarray(points, float))
+    a = np.atleast_2d(np.asarray(axes, float))
+    rise = np.cross(x - np.asarray(pivot, float), a) / length
+    lean = np.cross(a, np.atleast_2d(np.asarray(n1, float)))
+    return np.column_stack([rise, lean])
+
+
 class EdgeModel(NamedTuple):
     """What the online model of a 3-D edge estimates: the pivot c (m) and
     the length L (m) of :func:`edge_offset_terms`, and ``basis`` (6, k):
     columns in (v, L omega), unit translations then unit turns, spanning
-    the directions the force along n1 shows (:func:`edge_model`);
-    ``shown`` (k,): each column's RMS variation of d along the arc per
-    metre (a turn's: beyond what the translations explain)."""
+    the directions the force along n1 shows beyond what else varies it
+    (:func:`edge_model`); ``shown`` (k,): each column's RMS variation of
+    d along the arc per metre beyond what the nuisances (and, for a
+    turn, the translations) explain. ``nuisance`` (M, j): the shapes along
+    the arc of what else varies the force (:func:`nuisance_terms`'
+    independent combinations, centred), tabulated at arc positions
+    ``arcs`` (M,) over ``period`` (m; 0: an open edge), estimated with
+    the move and never applied."""
 
     pivot: np.ndarray
     length: float
     basis: np.ndarray
     shown: np.ndarray
+    arcs: np.ndarray
+    nuisance: np.ndarray
+    period: float
+
+    def nuisance_at(self, s) -> np.ndarray:
+        """The nuisances' shapes (j,) at arc position ``s`` (m)."""
+        period = self.period if self.period > 0.0 else None
+        return np.array(
+            [
+                np.interp(float(s), self.arcs, column, period=period)
+                for column in self.nuisance.T
+            ]
+        )
 
     def names(self) -> list:
         """Per column of ``basis``: its largest components by name (in
@@ -181,45 +230,70 @@ def observable_directions(g, min_shown: float):
     return basis * signs, shown[keep]
 
 
+def _beyond(columns, explained):
+    """``columns`` less their least squares fit by ``explained``."""
+    fit, *_ = np.linalg.lstsq(explained, columns, rcond=None)
+    return columns - explained @ fit
+
+
 def edge_model(contour: Contour, min_shown: float, samples: int = 256):
     """The :class:`EdgeModel` of ``contour`` (the believed edge) over
-    ``samples`` points along its pass: first the translations the force
-    shows (:func:`observable_directions` of g's translation columns), then
-    the turns that show beyond them (of the turn columns less their least
-    squares fit by a constant and those translations): a turn is not
-    credited with what a translation explains (around a hole whose rim
-    rises and falls a tilt adds a little to the first harmonic of the
-    offset, which is the hole's move)."""
+    ``samples`` points along its pass: the shapes of what else varies the
+    force (:func:`nuisance_terms`, those varying by ``min_shown``), then
+    the translations the force shows beyond a constant and those shapes
+    (:func:`observable_directions`), then the turns that show beyond
+    those as well: a move is not credited with what the part's turn or
+    the tool's lean explain (around a hole's rim nothing is left: a tilt
+    raises the rim on one side, and the force's first harmonic it makes
+    is the hole's move across its axis)."""
     c, length, s, points = _pivot_and_length(contour, samples)
     n1 = np.array([contour.n1(p) for p in points])
+    axes = np.array([contour.tool_axis_at(v) for v in s])
     g = edge_offset_terms(points, n1, c, length)
-    moves, shown_moves = observable_directions(g[:, :3], min_shown)
-    explained = np.column_stack([np.ones(len(g)), g[:, :3] @ moves])
-    fit, *_ = np.linalg.lstsq(explained, g[:, 3:], rcond=None)
+    others = nuisance_terms(points, n1, axes, c, length)
+    shapes, _ = observable_directions(others, min_shown)
+    nuisance = (others - others.mean(axis=0)) @ shapes
+    explained = np.column_stack([np.ones(len(g)), nuisance])
+    moves, shown_moves = observable_directions(
+        _beyond(g[:, :3], explained), min_shown
+    )
+    explained = np.column_stack([explained, g[:, :3] @ moves])
     turns, shown_turns = observable_directions(
-        g[:, 3:] - explained @ fit, min_shown
+        _beyond(g[:, 3:], explained), min_shown
     )
     basis = np.zeros((6, moves.shape[1] + turns.shape[1]))
     basis[:3, : moves.shape[1]] = moves
     basis[3:, moves.shape[1] :] = turns
+    period = contour.length if contour.closed else 0.0
     return EdgeModel(
-        c.copy(), length, basis, np.concatenate([shown_moves, shown_turns])
+        c.copy(),
+        length,
+        basis,
+        np.concatenate([shown_moves, shown_turns]),
+        np.asarray(s, float).copy(),
+        nuisance,
+        float(period),
     )
 
 
 def edge_contact_regressor(
     model: EdgeModel, contour: Contour, x_p, base=None
 ) -> np.ndarray:
-    """phi with ||f_n|| = phi . theta, theta = (c0, c1, c1 a) (N, N/m, N
-    per metre of a), at the tool point ``x_p`` (m) on the reference
-    ``contour`` (the believed edge moved by the pose registration
-    ``base``, whose pivot it carries): ||f_n|| = c0 + c1 (delta_0 - d),
-    d = g . B a."""
+    """phi with ||f_n|| = phi . theta, theta = (c0, c1, c1 a, b) (N, N/m,
+    N per metre of a, N per unit of the nuisances' shapes), at the tool
+    point ``x_p`` (m) on the reference ``contour`` (the believed edge
+    moved by the pose registration ``base``, whose pivot it carries):
+    ||f_n|| = c0 + c1 (delta_0 - d) + b . q(s), d = g . B a, q the
+    nuisances' shapes at the tool point's arc position s."""
     x_p = np.asarray(x_p, float)
     pivot = model.pivot if base is None else carried_pivot(base, model.pivot)
     g = edge_offset_terms(x_p, contour.n1(x_p), pivot, model.length)[0]
     return np.concatenate(
-        [[1.0, float(contour.depth(x_p))], -(g @ model.basis)]
+        [
+            [1.0, float(contour.depth(x_p))],
+            -(g @ model.basis),
+            model.nuisance_at(contour.arc_position(x_p)),
+        ]
     )
 
 
@@ -227,18 +301,21 @@ def edge_onset_regressor(
     model: EdgeModel, contour: Contour, x_p, depth_at_detection=0.0, base=None
 ) -> np.ndarray:
     """phi with 0 = phi . theta where contact first comes: the real depth
-    there is ``depth_at_detection`` (m), so no c0."""
+    there is ``depth_at_detection`` (m), so no c0, and no force for the
+    nuisances to vary."""
     phi = edge_contact_regressor(model, contour, x_p, base)
     phi[0] = 0.0
     phi[1] -= depth_at_detection
+    phi[2 + model.basis.shape[1] :] = 0.0
     return phi
 
 
 def edge_registration_of(model: EdgeModel, params) -> np.ndarray:
-    """(v, omega) of the online model's ``params`` (c0, c1, c1 a): B a
+    """(v, omega) of the online model's ``params`` (c0, c1, c1 a, b): B a
     in (v, L omega); zero while c1 is not positive."""
     c1 = float(params[1])
     if not c1 > 0.0:
         return np.zeros(CORRECTION_SIZE)
-    move = model.basis @ (np.asarray(params[2:], float) / c1)
+    k = model.basis.shape[1]
+    move = model.basis @ (np.asarray(params[2 : 2 + k], float) / c1)
     return np.concatenate([move[:3], move[3:] / model.length])

@@ -399,6 +399,7 @@ def register_mesh(
     normals=None,
     max_residual: float,
     touch_noise: Optional[float] = None,
+    touch_error: float = 0.0,
     sized_faces=None,
 ) -> MeshFit:
     """The move of ``surface`` (the believed part) onto the real part
@@ -412,7 +413,11 @@ def register_mesh(
     touches tell it from the move (pose_amplification with the size at
     most MAX_AMPLIFICATION), else the mesh's size is held.
     ``touch_noise`` (m): the standard deviation of a touch along the
-    normal, for the covariance (None: estimated from the residuals).
+    normal, for the covariance (None: estimated from the residuals, and
+    no smaller than ``touch_error`` (m), the per-touch error the touches'
+    model is known to leave: with 8 touches for 7 unknowns the residuals
+    have one degree of freedom, and a small residual by chance would
+    report a covariance far smaller than the error).
     ValueError: touches that do not fix the six degrees of freedom, one
     line naming the one they pin least."""
     x = np.asarray(points, float)
@@ -447,7 +452,7 @@ def register_mesh(
     sigma = (
         touch_noise
         if touch_noise is not None
-        else float(np.sqrt(np.sum(r[kept] ** 2) / dof))
+        else max(touch_error, float(np.sqrt(np.sum(r[kept] ** 2) / dof)))
     )
     return MeshFit(
         rotation=move[0],

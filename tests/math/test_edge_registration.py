@@ -17,6 +17,7 @@ from deburr_drake.math.edge_registration import (
     observable_directions,
 )
 from deburr_drake.math.geometry import CircularContour, StraightContour
+from deburr_drake.math.profile import ProfileContour
 from deburr_drake.math.registration import (
     MAX_AMPLIFICATION,
     PosedContour,
@@ -29,6 +30,12 @@ CIRCLE = CircularContour([0.95, 0.0, 0.5], 0.008)
 TILT = rpy_matrix([np.radians(30.0), 0.0, 0.0])
 TILTED = PosedContour(
     CIRCLE, TILT, CIRCLE.center - TILT @ CIRCLE.center + [0.0, 0.001, 0.0]
+)
+# A rounded rectangle, 40 x 20 mm: straight sides and fillets.
+PROFILE = ProfileContour(
+    [[-0.02, -0.01], [0.02, -0.01], [0.02, 0.01], [-0.02, 0.01]],
+    0.004,
+    center=(0.4, 0.0, 0.05),
 )
 MOVE = np.array([1.2e-4, -0.8e-4, 0.6e-4, 0.0021, -0.0017, 0.0026])
 
@@ -72,27 +79,49 @@ def test_offset_terms_are_the_first_order_move_along_n1():
         np.testing.assert_allclose(-depth, d, atol=3e-3 * scale**2)
 
 
-def test_a_circle_shows_the_translations_across_its_axis_only():
-    for contour, axis in ((CIRCLE, [0, 0, 1]), (TILTED, TILT @ [0, 0, 1])):
+def test_a_circle_shows_no_move_its_tilt_does_not_make():
+    """Around a rim the move across the axis makes the first harmonic of
+    the force; so does a tilt, which raises the rim on one side (the
+    engaged height), and the tool's lean: the model leaves the move
+    alone and estimates the two harmonics as nuisances."""
+    for contour in (CIRCLE, TILTED):
         model = edge_model(contour, 1.0 / MAX_AMPLIFICATION)
-        assert model.basis.shape == (6, 2)
-        np.testing.assert_allclose(model.shown, np.sqrt(0.5), rtol=1e-3)
-        # pure translations, across the axis
-        np.testing.assert_allclose(model.basis[3:], 0.0, atol=1e-12)
-        np.testing.assert_allclose(axis @ model.basis[:3], 0.0, atol=1e-12)
-        assert model.names()[0].startswith("translation")
+        assert model.basis.shape == (6, 0)
+        assert model.nuisance.shape == (256, 2)
+        s = model.arcs
+        x = np.array([contour.point_at(v) for v in s])
+        n1 = np.array([contour.n1(p) for p in x])
+        g = edge_offset_terms(x, n1, model.pivot, model.length)
+        # the nuisances span the translations' first harmonic
+        explained = np.column_stack([np.ones(len(s)), model.nuisance])
+        fit, *_ = np.linalg.lstsq(explained, g[:, :3], rcond=None)
+        np.testing.assert_allclose(explained @ fit, g[:, :3], atol=1e-12)
 
 
-def test_a_straight_edge_shows_its_heading_only():
+def test_a_straight_edge_leaves_its_heading_to_the_roll():
+    """Along a straight edge the heading varies d linearly; a roll of the
+    part about n1 tilts the top face along the edge and varies the
+    engaged height linearly too: nothing is estimated."""
     line = StraightContour(
         [0.3, -0.02, 0.05], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], length=0.04
     )
     model = edge_model(line, 1.0 / MAX_AMPLIFICATION)
+    assert model.basis.shape == (6, 0)
+    assert model.nuisance.shape[1] == 1
+    assert model.period == 0.0
+
+
+def test_a_profile_shows_its_turn_about_the_axis_only():
+    """On a profile n1 is constant along each side: a move across the
+    axis shows there as the tool's lean does (n1 . (beta x a)), and is
+    left alone; the turn about the axis varies d along each side, which
+    neither a lean nor a tilt's rise does."""
+    model = edge_model(PROFILE, 1.0 / MAX_AMPLIFICATION)
     assert model.basis.shape == (6, 1)
-    np.testing.assert_allclose(np.abs(model.basis[:, 0]), [0, 0, 0, 0, 0, 1])
-    # the heading of a line from -L/2 to L/2 about its middle:
-    # (s - s_pivot) / L has RMS 1
-    np.testing.assert_allclose(model.shown, [1.0], rtol=1e-2)
+    np.testing.assert_allclose(
+        np.abs(model.basis[:, 0]), [0, 0, 0, 0, 0, 1], atol=1e-12
+    )
+    assert model.shown[0] > 1.0 / MAX_AMPLIFICATION
     assert model.names() == ["rotation about z +1.00"]
 
 
@@ -108,29 +137,53 @@ def test_observable_directions_leave_out_what_does_not_vary():
     assert basis.shape == (4, 3)
 
 
-def test_least_squares_on_the_force_recovers_the_shown_part_of_a_move():
-    """The force c0 + c1 (delta_0 - d) along the tilted rim, the real
-    rim moved by MOVE: the fit returns MOVE's part across the axis, and
-    nothing of its turn or its move along the axis (the pivot is the
-    rim's centre: a turn about it moves no point of the rim along n1)."""
-    model = edge_model(TILTED, 1.0 / MAX_AMPLIFICATION)
-    R, t = move_of(MOVE, model.pivot)
-    real = PosedContour(TILTED, R, t)
-    c0, c1 = 2.0, 9000.0
-    theta = np.array([3.0, 4000.0, 0.0, 0.0])
-    P = np.diag([9.0, 4000.0**2, 4.0, 4.0])
-    for k, s in enumerate(np.linspace(0.0, 2 * TILTED.length, 400)):
-        # the depth settles in, as the force loop brings it (a constant
-        # depth cannot tell c1 from c0)
-        depth = 5e-4 * (1.0 - np.exp(-k / 60.0))
-        x = TILTED.point_at(s) + depth * TILTED.n1(TILTED.point_at(s))
-        f_n = c0 + c1 * float(real.depth(x))
-        phi = edge_contact_regressor(model, TILTED, x)
+def _fit_on(contour, real, force_of, seconds=400):
+    """theta after RLS on the force ``force_of(x, s)`` along ``contour``
+    (the reference), the depth settling in as the force loop brings it."""
+    model = edge_model(contour, 1.0 / MAX_AMPLIFICATION)
+    k, j = model.basis.shape[1], model.nuisance.shape[1]
+    theta = np.concatenate([[3.0, 4000.0], np.zeros(k + j)])
+    P = np.diag([9.0, 4000.0**2] + [4.0] * k + [9.0] * j)
+    for i, s in enumerate(np.linspace(0.0, 2 * contour.length, seconds)):
+        # a constant depth cannot tell c1 from c0
+        depth = 5e-4 * (1.0 - np.exp(-i / 60.0))
+        x = contour.point_at(s) + depth * contour.n1(contour.point_at(s))
+        phi = edge_contact_regressor(model, contour, x)
+        f_n = force_of(x, contour.arc_position(x))
         theta, P = rls_update(theta, P, phi, f_n, noise_var=1e-6, forgetting=1)
+    return model, theta
+
+
+def test_least_squares_on_the_force_recovers_the_shown_part_of_a_move():
+    """The force c0 + c1 (delta_0 - d) along a profile, the real profile
+    moved by MOVE: the fit returns MOVE's turn about the axis (what the
+    force tells from a lean and a tilt), nothing else."""
+    pivot, _ = edge_pivot(PROFILE)
+    R, t = move_of(MOVE, pivot)
+    real = PosedContour(PROFILE, R, t)
+    c0, c1 = 2.0, 9000.0
+    model, theta = _fit_on(
+        PROFILE, real, lambda x, s: c0 + c1 * float(real.depth(x))
+    )
     found = edge_registration_of(model, theta)
+    np.testing.assert_allclose(found[:5], 0.0, atol=1e-12)
+    # to within the second-order terms of a 0.15 deg turn
+    assert found[5] == pytest.approx(MOVE[5], rel=0.02)
+    assert theta[1] == pytest.approx(c1, rel=1e-2)
+
+
+def test_a_tilted_part_rising_along_the_tool_makes_no_move():
+    """The tilted rim's force scaled by its engaged height as a 0.2 deg
+    tilt raises it on one side: no move comes of it (before, 0.04 mm
+    across the axis in simulation)."""
+    model = edge_model(TILTED, 1.0 / MAX_AMPLIFICATION)
     axis = TILT @ [0.0, 0.0, 1.0]
-    across = MOVE[:3] - (MOVE[:3] @ axis) * axis
-    # to within the second-order terms of a 0.15 deg turn of an 8 mm rim
-    np.testing.assert_allclose(found[:3], across, atol=2e-7)
-    np.testing.assert_allclose(found[3:], 0.0, atol=1e-12)
-    assert theta[1] == pytest.approx(c1, rel=1e-3)
+    omega = np.radians(0.2) * (TILT @ [1.0, 0.0, 0.0])
+    engaged = 0.002
+
+    def force(x, s):
+        rise = axis @ np.cross(omega, x - model.pivot)
+        return (2.0 + 9000.0 * float(TILTED.depth(x))) * (1 + rise / engaged)
+
+    model, theta = _fit_on(TILTED, TILTED, force)
+    np.testing.assert_array_equal(edge_registration_of(model, theta), 0.0)

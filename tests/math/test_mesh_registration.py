@@ -173,29 +173,54 @@ def test_touches_that_pin_too_little_are_named(cross_hole):
     )
 
 
+def _noisy_distances(cross_hole, touches, sigma, seed, count, **options):
+    """The Mahalanobis distances of ``count`` fits' errors under their
+    reported covariance: ``touches`` (on the hole, on the outer face) on
+    the cross-hole part moved by 1 mm and 1 degree, noise ``sigma`` (m)
+    along their normals; ``options`` to register_mesh."""
+    part, surface, hole = cross_hole
+    faces = _touch_faces(part, surface, hole, *touches)
+    x0 = surface.centroid[faces]
+    n0 = surface.normals[faces]
+    R, t = _true_move(np.array(XYZ))
+    rng = np.random.default_rng(seed)
+    d2 = []
+    for _ in range(count):
+        noisy = x0 + sigma * rng.standard_normal(len(x0))[:, None] * n0
+        fit = register_mesh(
+            surface, _moved(noisy, R, t), max_residual=10 * sigma, **options
+        )
+        e = fit.error_of(R, t)
+        d2.append(e @ np.linalg.solve(fit.covariance, e))
+    return np.array(d2)
+
+
 @pytest.mark.slow  # 200 fits, about a minute
 def test_covariance_matches_monte_carlo(cross_hole):
     """200 fits with the probe's noise along the normal: the Mahalanobis
     distances of their errors under the reported covariance are
     chi-square with 6 degrees of freedom."""
-    part, surface, hole = cross_hole
-    faces = _touch_faces(part, surface, hole, 4, 7)
-    x0 = surface.centroid[faces]
-    n0 = surface.normals[faces]
-    R, t = _true_move(np.array(XYZ))
     sigma = 5e-6  # m
-    rng = np.random.default_rng(7)
-    d2 = []
-    for _ in range(200):
-        noisy = x0 + sigma * rng.standard_normal(len(x0))[:, None] * n0
-        fit = register_mesh(
-            surface,
-            _moved(noisy, R, t),
-            max_residual=10 * sigma,
-            touch_noise=sigma,
-        )
-        e = fit.error_of(R, t)
-        d2.append(e @ np.linalg.solve(fit.covariance, e))
-    d2 = np.array(d2)
+    d2 = _noisy_distances(cross_hole, (4, 7), sigma, 7, 200, touch_noise=sigma)
     assert abs(d2.mean() - 6.0) < 1.0  # the mean's sd: sqrt(12 / 200)
     assert stats.kstest(d2, stats.chi2(6).cdf).pvalue > 0.01
+
+
+@pytest.mark.slow  # 2 x 150 fits, about a minute
+def test_a_floor_on_the_touch_error_keeps_the_covariance_honest(cross_hole):
+    """Seven touches for six unknowns, the touches' noise estimated from
+    the residuals: one degree of freedom, so a small residual by chance
+    reports a covariance far too small, and the Mahalanobis distances of
+    the errors have a long tail (the probe's 37-38 on the inclined hole).
+    With the per-touch error as a floor (``touch_error``, here the
+    noise's own size) they are within chi-square with 6 degrees of
+    freedom: no more of them past its 99th percentile than it allows."""
+    sigma = 2e-5  # m
+    far = stats.chi2(6).ppf(0.99)
+    bare, floored = (
+        _noisy_distances(cross_hole, (3, 4), sigma, 11, 150, touch_error=e)
+        for e in (0.0, sigma)
+    )
+    assert np.mean(bare > far) > 0.1  # the residuals alone: dishonest
+    assert np.mean(floored > far) <= 0.03
+    assert 3.0 < floored.mean() < 6.5  # at most chi-square's 6
