@@ -100,9 +100,12 @@ class CommandGenerator(LeafSystem):
       ``registered=True`` (``hold`` alone with ``hold_input=True``: a job's
       sequencer holds the feed off the part): the contour moved by the
       registration (as the observer's); while ``hold`` > 0.5 (touch
-      probing) no feed: x_c is the projection of x_p and the arc position
-      the one nearest the start, so the pass starts from where the probe
-      leaves the tool.
+      probing and the entry's dwell) no feed: x_c is the pass's start on
+      the registered contour (the point at the start's arc position, the
+      probe's entry target): the position loop keeps the tool there
+      while the entry's cut builds. ``hold`` alone (a job's
+      sequencer): x_c is the projection of x_p and the arc position the
+      one nearest the start.
     - Discrete state (COMMAND_STATE layout): x_c (m), feed (m/s), arc
       position of x_c (m, unwrapped, counts progress past one revolution).
 
@@ -284,20 +287,30 @@ class CommandGenerator(LeafSystem):
         )
 
     def _held(self, context, discrete_state):
-        x_p = CHAMFER_STATE.get(self._chamfer_port.Eval(context), "x_p")
         contour = self._contour_now(context)
+        if self._registration.port is not None:
+            # The probe's hold: while probing its own command drives the
+            # tool (x_c is not passed on), and on the entry's dwell the
+            # tool is at the pass's start. A command on the tool's
+            # projection would follow the tool wherever it drifts and the
+            # cut's tangential force pushes it; held at the start, the
+            # position loop keeps the tool there.
+            s = self._start_arc
+            x_c = contour.point_at(s)
+        else:
+            x_p = CHAMFER_STATE.get(self._chamfer_port.Eval(context), "x_p")
+            s = contour.unwrapped_arc_position(x_p, self._start_arc)
+            x_c = contour.project(x_p)
         discrete_state.set_value(
             self._state_index,
             COMMAND_STATE.pack(
-                x_c=contour.project(x_p),
+                x_c=x_c,
                 feed=(
                     self._config.default_feed
                     if self._constant_feed is None
                     else self._constant_feed
                 ),
-                arc_position=contour.unwrapped_arc_position(
-                    x_p, self._start_arc
-                ),
+                arc_position=s,
             ),
         )
 

@@ -19,6 +19,7 @@ from deburr_drake.control.command import (
 from deburr_drake.control.layout import COMMAND_STATE
 from deburr_drake.control.observer import chamfer_quantities
 from deburr_drake.math.geometry import CircularContour
+from deburr_drake.math.registration import moved_contour
 
 CONTOUR = CircularContour([0.0, 0.0, 0.048], 0.027)
 
@@ -201,6 +202,43 @@ def test_command_counts_arc_past_one_revolution():
     s = COMMAND_STATE.get(xd.CopyToVector(), "arc_position")
     assert s == pytest.approx(L - 1e-5 + 0.001 * config.period, abs=1e-12)
     assert s > L
+
+
+def test_probe_hold_keeps_the_command_at_the_registered_start():
+    """The probe's hold (registered, hold 1: probing, then the entry's
+    dwell): x_c stays at the pass's start on the registered contour
+    while the entry's cut pushes the tool back along the edge; released,
+    the feed law takes over from the tool."""
+    config, task = CommandConfig(), TaskConfig()
+    generator = CommandGenerator(
+        config, task, CONTOUR, CONTOUR.point_at(0.0), registered=True
+    )
+    s0 = generator.start_arc_position
+    registration = np.array([0.0004, -0.0002, 0.01, 0.0003])
+    moved = moved_contour(CONTOUR, registration)
+    # The tool 5 mm behind the start, 0.4 mm deep, moving back.
+    p = moved.point_at(s0 - 0.005)
+    x_p = p + 0.0004 * moved.n1(p)
+    back = -0.005 * moved.tangent(p)
+    chamfer = chamfer_quantities(
+        moved, x_p, back, 30.0 * moved.tangent(p), min_tangential_speed=1e-5
+    )
+    context = generator.CreateDefaultContext()
+    generator.GetInputPort("chamfer_state").FixValue(context, chamfer)
+    generator.GetInputPort("registration").FixValue(context, registration)
+    outputs = []
+    for hold in (1.0, 0.0):
+        generator.GetInputPort("hold").FixValue(context, [hold])
+        xd = generator.EvalUniquePeriodicDiscreteUpdate(context).get_vector(0)
+        outputs.append(COMMAND_STATE.split(xd.CopyToVector()))
+    held, released = outputs
+    np.testing.assert_allclose(held["x_c"], moved.point_at(s0), atol=1e-12)
+    assert held["arc_position"] == pytest.approx(s0, abs=1e-12)
+    assert np.linalg.norm(held["x_c"] - moved.project(x_p)) > 0.0049
+    s_p = moved.unwrapped_arc_position(x_p, s0)
+    assert released["arc_position"] == pytest.approx(
+        s_p + released["feed"] * config.period, abs=1e-12
+    )
 
 
 def test_command_rejects_unreachable_force():
