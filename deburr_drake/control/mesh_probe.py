@@ -115,6 +115,10 @@ MESH_PROBE_STATE = VectorLayout(
         ("found", 3),
         # m, the command less the tool point at rest before the find
         ("rest_error", 3),
+        # m, world: where the find touch's search ends (the measuring
+        # touch searches on to it: a find set off early by the reading
+        # costs time, never a touch)
+        ("find_end", 3),
     ],
 )
 
@@ -436,6 +440,7 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
             n = self._plan.touches.normals[i]
             search = c.search_distance + 2.0 * self._plan.allowance[i]
             if c.find_speed > 0:
+                x[L.slice("find_end")] = command - search * n
                 # The find touch: smooth, so it starts without a jerk the
                 # sensor reads as a push (the tool's inertia), fastest
                 # about the middle of its search, where the face is.
@@ -467,8 +472,16 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
                 )
             else:
                 x[L.slice("tare")] = self._force_port.Eval(context)
+                # On to the find's own end at least: a find set off by the
+                # reading (the arm still ringing at its tare) stopped short
+                # of the face.
+                rest_of_find = float((command - L.get(x, "find_end")) @ m)
                 self._guarded(
-                    x, t, command, m, c.find_backoff + c.search_distance
+                    x,
+                    t,
+                    command,
+                    m,
+                    max(c.find_backoff + c.search_distance, rest_of_find),
                 )
         elif phase == "retract":
             x[L.slice("index")] = i + 1
@@ -544,7 +557,10 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
         a = L.get(x, "segment_start")
         search = float(np.linalg.norm(L.get(x, "segment_end") - a))
         if what == "measuring touch" and c.find_speed > 0:
-            within = f"find_backoff {c.find_backoff:g} m"
+            within = (
+                f"find_backoff {c.find_backoff:g} m, or on to the find "
+                "touch's end"
+            )
         else:
             within = f"twice the allowance {self._plan.allowance[i]:.3g} m"
         return EventStatus.ReachedTermination(

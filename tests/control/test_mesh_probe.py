@@ -82,11 +82,13 @@ _EDGE = StraightContour(
 )
 
 
-def _probe(real: MeshSurface, find_speed: float):
+def _probe(real: MeshSurface, find_speed: float, false_find: float = 0.0):
     """The sequence on the believed box against ``real``, each touch a
     guarded move alone (find_speed 0) or a find touch and the measuring
     touch, stepped until done: (probe, context, the ``touching`` output
-    on the entry's samples, the phases in the order they came)."""
+    on the entry's samples, the phases in the order they came). With
+    ``false_find`` (N) the reading pushes back by that much on each find
+    touch's first sample, as an arm still ringing at the tare does."""
     plan = _plan(_box())
     config = ProbeConfig(
         enabled=True,
@@ -116,11 +118,13 @@ def _probe(real: MeshSurface, find_speed: float):
     for _ in range(40000):
         x_p = probe.GetOutputPort("command").Eval(context).copy()
         probe.GetInputPort("chamfer_state").FixValue(context, _chamfer(x_p))
-        probe.GetInputPort("measured_force").FixValue(
-            context, _force(real, x_p)
-        )
         state = context.get_discrete_state(0).get_value()
         phase = MESH_PHASES[int(MESH_PROBE_STATE.get(state, "phase"))]
+        force = _force(real, x_p)
+        if false_find and phase == "find" and phases[-1] != "find":
+            i = int(MESH_PROBE_STATE.get(state, "index"))
+            force = force + false_find * plan.touches.normals[i]
+        probe.GetInputPort("measured_force").FixValue(context, force)
         if not phases or phases[-1] != phase:
             phases.append(phase)
         if phase == "enter":
@@ -182,6 +186,23 @@ def test_a_moved_box_is_registered_and_entered_on(find_speed):
     end = MESH_PROBE_STATE.get(state, "segment_end")
     assert np.linalg.norm(end - moved) < 3e-5
     assert math.isfinite(MESH_PROBE_STATE.get(state, "done_time"))
+
+
+def test_a_find_touch_set_off_early_still_touches_the_face():
+    # Every find touch set off at its first sample, 1 mm and more short of
+    # the real box (moved 1 mm away from the planned touches' faces): the
+    # measuring touch searches on to the find's end and touches the face.
+    p_move = np.array([0.001, 0.001, -0.001])
+    real = _box(np.eye(3), p_move)
+    probe, context, _, phases = _probe(
+        real, ProbeConfig.find_speed, false_find=1.5
+    )
+    state = context.get_discrete_state(0).get_value()
+    assert MESH_PROBE_STATE.get(state, "touches") == 8
+    np.testing.assert_allclose(
+        MESH_PROBE_STATE.get(state, "registration")[3:6], p_move, atol=1e-5
+    )
+    assert _off_real(probe, context, real) < 1e-5
 
 
 def test_a_face_turned_off_its_planned_normal_is_touched_where_it_is():
