@@ -71,6 +71,18 @@ def edge_steady_feed(
     )
 
 
+def _check(config: CommandConfig, task: TaskConfig):
+    config.validate()
+    task.validate()
+    if task.desired_chamfering_force <= config.threshold_power_force:
+        raise ConfigError(
+            "task.desired_chamfering_force = "
+            f"{task.desired_chamfering_force!r} is invalid: allowed > "
+            f"command.threshold_power_force "
+            f"({config.threshold_power_force})"
+        )
+
+
 class CommandGenerator(LeafSystem):
     """Discrete outer-loop command generator, period T.
 
@@ -103,9 +115,9 @@ class CommandGenerator(LeafSystem):
       probing and the entry's dwell) no feed: x_c is the pass's start on
       the registered contour (the point at the start's arc position, the
       probe's entry target): the position loop keeps the tool there
-      while the entry's cut builds. ``hold`` alone (a job's
-      sequencer): x_c is the projection of x_p and the arc position the
-      one nearest the start.
+      while the entry's cut builds. A job's sequencer's hold
+      (``hold_input=True``, probed or not): x_c is the projection of x_p
+      and the arc position the one nearest the start.
     - Discrete state (COMMAND_STATE layout): x_c (m), feed (m/s), arc
       position of x_c (m, unwrapped, counts progress past one revolution).
 
@@ -132,15 +144,7 @@ class CommandGenerator(LeafSystem):
         hold_input: bool = False,
     ):
         super().__init__()
-        config.validate()
-        task.validate()
-        if task.desired_chamfering_force <= config.threshold_power_force:
-            raise ConfigError(
-                "task.desired_chamfering_force = "
-                f"{task.desired_chamfering_force!r} is invalid: allowed > "
-                f"command.threshold_power_force "
-                f"({config.threshold_power_force})"
-            )
+        _check(config, task)
         self.set_name("command_generator")
         self._config = config
         self._contour = contour
@@ -186,6 +190,8 @@ class CommandGenerator(LeafSystem):
             else None
         )
         self._start_arc = s0
+        # (a job's cuts each start elsewhere: its hold follows the tool)
+        self._hold_at_start = registered and not hold_input
         self.DeclarePeriodicDiscreteUpdateEvent(
             config.period, 0.0, self._update
         )
@@ -288,7 +294,7 @@ class CommandGenerator(LeafSystem):
 
     def _held(self, context, discrete_state):
         contour = self._contour_now(context)
-        if self._registration.port is not None:
+        if self._hold_at_start:
             # The probe's hold: while probing its own command drives the
             # tool (x_c is not passed on), and on the entry's dwell the
             # tool is at the pass's start. A command on the tool's
