@@ -458,17 +458,15 @@ def add_deburring_controller(
     to the systems. ``sequenced``: a job's loops (control.sequencer): a
     gate ``job_gate`` after the observer, its ``probing``, the generator's
     ``hold`` and the controller's ``fuzzy_weight`` and ``active`` left
-    open (with ``localisation.probe`` too: the job probes first, its
-    sequencer reads the sequence's ``probing`` and ``registration``).
-    ``mesh_probe`` (control.mesh_probe.MeshProbePlan): with
-    ``localisation.probe``, a mesh part's touches and its six-degree
-    registration (and a hole's size) instead of the planar probe.
+    open (probed: the sequencer reads the probe's ``probing`` and
+    ``registration``). ``mesh_probe`` (control.mesh_probe.MeshProbePlan):
+    a mesh part's touches and its six-degree registration (and a hole's
+    size) instead of the planar probe.
 
     Returns the systems; connect ``.actuation`` to the plant's actuation
     input (directly, or through your own saturation or fault systems)."""
     c = scenario
     x0 = contour.point_at(0.0) if start is None else np.asarray(start, float)
-    # The systems of the two loops.
     loops = _add_loops(
         builder,
         c,
@@ -488,8 +486,7 @@ def add_deburring_controller(
         builder.Connect(plant_state, system.GetInputPort("plant_state"))
         builder.Connect(measured_force, system.GetInputPort("measured_force"))
     signals = _Signals.of(loops)
-    # Localisation between the loops.
-    if c.localisation.enabled:
+    if c.localisation.enabled:  # between the loops
         loops, signals = _add_localisation(
             builder,
             c,

@@ -419,70 +419,15 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
                 x, t, "settle", command, command, c.clear_settle_time, False
             )
         elif phase == "settle" and i == self._n:
-            # On to the start on the registered part, along its n1.
-            contour = self._registered(x)
-            p = contour.point_at(0.0)
-            start = p + self._start_depth * contour.n1(p)
-            self._segment(
-                x,
-                t,
-                "enter",
-                command,
-                start,
-                float(np.linalg.norm(start - command)) / c.approach_speed,
-                True,
-            )
-            x[L.slice("touching")] = 0.0
+            self._enter(x, t, command)
         elif phase == "settle":
-            x[L.slice("tare")] = self._force_port.Eval(context)
-            x_p = CHAMFER_STATE.get(self._chamfer_port.Eval(context), "x_p")
-            x[L.slice("rest_error")] = command - x_p
-            n = self._plan.touches.normals[i]
-            search = c.search_distance + 2.0 * self._plan.allowance[i]
-            if c.find_speed > 0:
-                x[L.slice("find_end")] = command - search * n
-                # The find touch: smooth, so it starts without a jerk the
-                # sensor reads as a push (the tool's inertia), fastest
-                # about the middle of its search, where the face is.
-                self._segment(
-                    x,
-                    t,
-                    "find",
-                    command,
-                    command - search * n,
-                    search / c.find_speed,
-                    False,
-                )
-            else:
-                self._guarded(x, t, command, n, search)
+            self._start_touch(context, x, t, command, i)
         elif phase == "back_off":
             self._segment(
                 x, t, "steady", command, command, c.find_settle_time, False
             )
         elif phase == "steady":
-            m = self._plan.touches.normals[i]
-            x_p = CHAMFER_STATE.get(self._chamfer_port.Eval(context), "x_p")
-            off = float((x_p - L.get(x, "found")) @ m)
-            if off < 0.5 * c.find_backoff:
-                # The arm's friction held the tool nearer the face than
-                # the back-off meant (or on it): back off by what is
-                # missing before the tare.
-                self._back_off(
-                    x, t, command, command + (c.find_backoff - off) * m
-                )
-            else:
-                x[L.slice("tare")] = self._force_port.Eval(context)
-                # On to the find's own end at least: a find set off by the
-                # reading (the arm still ringing at its tare) stopped short
-                # of the face.
-                rest_of_find = float((command - L.get(x, "find_end")) @ m)
-                self._guarded(
-                    x,
-                    t,
-                    command,
-                    m,
-                    max(c.find_backoff + c.search_distance, rest_of_find),
-                )
+            self._steady(context, x, t, command, i)
         elif phase == "retract":
             x[L.slice("index")] = i + 1
             if i + 1 == self._n:
@@ -493,6 +438,75 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
             x[L.slice("phase")] = _P["done"]
             x[L.slice("done_time")] = t
         return None
+
+    def _enter(self, x, t, command):
+        """On to the start on the registered part, along its n1."""
+        contour = self._registered(x)
+        p = contour.point_at(0.0)
+        start = p + self._start_depth * contour.n1(p)
+        self._segment(
+            x,
+            t,
+            "enter",
+            command,
+            start,
+            float(np.linalg.norm(start - command))
+            / self._config.approach_speed,
+            True,
+        )
+        x[MESH_PROBE_STATE.slice("touching")] = 0.0
+
+    def _start_touch(self, context, x, t, command, i):
+        """Touch ``i`` from its standoff, settled: the tare, then the
+        find touch (or, without a find speed, the measuring touch)."""
+        L, c = MESH_PROBE_STATE, self._config
+        x[L.slice("tare")] = self._force_port.Eval(context)
+        x_p = CHAMFER_STATE.get(self._chamfer_port.Eval(context), "x_p")
+        x[L.slice("rest_error")] = command - x_p
+        n = self._plan.touches.normals[i]
+        search = c.search_distance + 2.0 * self._plan.allowance[i]
+        if c.find_speed > 0:
+            x[L.slice("find_end")] = command - search * n
+            # The find touch: smooth, so it starts without a jerk the
+            # sensor reads as a push (the tool's inertia), fastest
+            # about the middle of its search, where the face is.
+            self._segment(
+                x,
+                t,
+                "find",
+                command,
+                command - search * n,
+                search / c.find_speed,
+                False,
+            )
+        else:
+            self._guarded(x, t, command, n, search)
+
+    def _steady(self, context, x, t, command, i):
+        """After the find's back-off and settle: the measuring touch, or
+        a further back-off if the tool rests too near the face."""
+        L, c = MESH_PROBE_STATE, self._config
+        m = self._plan.touches.normals[i]
+        x_p = CHAMFER_STATE.get(self._chamfer_port.Eval(context), "x_p")
+        off = float((x_p - L.get(x, "found")) @ m)
+        if off < 0.5 * c.find_backoff:
+            # The arm's friction held the tool nearer the face than
+            # the back-off meant (or on it): back off by what is
+            # missing before the tare.
+            self._back_off(x, t, command, command + (c.find_backoff - off) * m)
+            return
+        x[L.slice("tare")] = self._force_port.Eval(context)
+        # On to the find's own end at least: a find set off by the
+        # reading (the arm still ringing at its tare) stopped short of
+        # the face.
+        rest_of_find = float((command - L.get(x, "find_end")) @ m)
+        self._guarded(
+            x,
+            t,
+            command,
+            m,
+            max(c.find_backoff + c.search_distance, rest_of_find),
+        )
 
     def _guarded(self, x, t, command, m, search):
         """The measuring touch: along -``m`` (the face's normal) at the
