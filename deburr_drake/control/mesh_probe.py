@@ -115,10 +115,6 @@ MESH_PROBE_STATE = VectorLayout(
         ("found", 3),
         # m, the command less the tool point at rest before the find
         ("rest_error", 3),
-        # m, world: where the find touch's search ends (the measuring
-        # touch searches on to it: a find set off early by the reading
-        # costs time, never a touch)
-        ("find_end", 3),
     ],
 )
 
@@ -464,9 +460,8 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
         x_p = CHAMFER_STATE.get(self._chamfer_port.Eval(context), "x_p")
         x[L.slice("rest_error")] = command - x_p
         n = self._plan.touches.normals[i]
-        search = c.search_distance + 2.0 * self._plan.allowance[i]
+        search = self._search(i)
         if c.find_speed > 0:
-            x[L.slice("find_end")] = command - search * n
             # The find touch: smooth, so it starts without a jerk the
             # sensor reads as a push (the tool's inertia), fastest
             # about the middle of its search, where the face is.
@@ -499,7 +494,10 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
         # On to the find's own end at least: a find set off by the
         # reading (the arm still ringing at its tare) stopped short of
         # the face.
-        rest_of_find = float((command - L.get(x, "find_end")) @ m)
+        # (the find starts at the touch's standoff point, where the
+        # descent ends)
+        find_end = self._target(x) - self._search(i) * m
+        rest_of_find = float((command - find_end) @ m)
         self._guarded(
             x,
             t,
@@ -507,6 +505,12 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
             m,
             max(c.find_backoff + c.search_distance, rest_of_find),
         )
+
+    def _search(self, i) -> float:
+        """m: touch ``i``'s search from its standoff, widened by what the
+        allowed pose error can move its face."""
+        c = self._config
+        return c.search_distance + 2.0 * self._plan.allowance[i]
 
     def _guarded(self, x, t, command, m, search):
         """The measuring touch: along -``m`` (the face's normal) at the
