@@ -529,15 +529,53 @@ def _schedule_left_out(box, maps, axes, k) -> List:
     return left_out
 
 
+class _SlopeMaps:
+    """The maps along a fuzzy slope, per corner of the other parameters:
+    the quadratic in the slope through the true maps at its range's ends
+    and centre. The slope is a gain of the law (u_f gains slope x (s_k -
+    s0)), and the one-period map is affine in a gain of the held
+    actuation: the centre's miss of the chord through the ends is
+    finite-difference round-off (``record``), and the quadratic carries
+    it, so the chord between grid nodes leaves out what the certificate
+    bounds as it does for true maps (its ``chord_miss``)."""
+
+    def __init__(self, lows, centres, highs, lo, hi):
+        self.lows, self.centres, self.highs = lows, centres, highs
+        self.lo, self.hi = lo, hi
+
+    def __call__(self, value) -> List[np.ndarray]:
+        t = (value - self.lo) / (self.hi - self.lo)
+        return [
+            a + t * (b - a) + 4.0 * t * (1.0 - t) * (c - 0.5 * (a + b))
+            for a, c, b in zip(self.lows, self.centres, self.highs)
+        ]
+
+    def record(self) -> Dict:
+        """The centre's largest miss of the chord, relative to the change
+        of the map over the range (balanced as the nominal map)."""
+        balanced = _balancer(self.centres[0])
+        miss = max(
+            np.linalg.norm(balanced(c - 0.5 * (a + b)))
+            / max(np.linalg.norm(balanced(b - a)), 1e-300)
+            for a, c, b in zip(self.lows, self.centres, self.highs)
+        )
+        return {
+            "maps": "the quadratic in the slope through the true maps at "
+            "its range's ends and centre, per corner",
+            "centre_miss_of_chord": float(miss),
+        }
+
+
 def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
     """The certificate with a slope of ``box`` scheduled: the first slope
     whose ends (with the nominal map) have no common P, else the one whose
     ends move the map most (balanced), gets a grid of ``SCHEDULE_NODES``
     nodes and P(slope) affine between them, moving at most the adaptation
-    law's step per period (:func:`_rate_step`); the other corner axes'
-    corners are taken at every node and cell midpoint (they may move
-    arbitrarily fast), the others' half-ranges and curvatures bounded in
-    P(slope) and added (:func:`certify_rate_bounded`)."""
+    law's step per period (:func:`_rate_step`); at every node and cell
+    midpoint, the maps at the other corner axes' corners (they may move
+    arbitrarily fast), each from its three true maps along the slope
+    (:class:`_SlopeMaps`); the others' half-ranges and curvatures bounded
+    in P(slope) and added (:func:`certify_rate_bounded`)."""
     k = _schedule_axis(box, maps, solver)
     p = box[k]
     rate = _rate_step(op, p, maps["period"])
@@ -561,8 +599,9 @@ def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
         f"P({p['key']}) on {SCHEDULE_NODES} nodes, "
         f"{max(len(corners), 1)} corners each"
     )
-    node_maps = [at(v) for v in nodes]
-    mid_maps = [at(0.5 * (a + b)) for a, b in zip(nodes[:-1], nodes[1:])]
+    along = _SlopeMaps(at(lo), at(0.5 * (lo + hi)), at(hi), lo, hi)
+    node_maps = [along(v) for v in nodes]
+    mid_maps = [along(0.5 * (a + b)) for a, b in zip(nodes[:-1], nodes[1:])]
     left_out = _schedule_left_out(box, maps, axes, k)
     cert = certify_rate_bounded(
         node_maps,
@@ -578,7 +617,8 @@ def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
         "slope_rate_bound": rate,
         "schedule_nodes": nodes.tolist(),
         "schedule": cert.to_dict(),
-        "scheduled_maps": sum(len(m) for m in node_maps + mid_maps),
+        "scheduled_maps": 3 * len(node_maps[0]),
+        "slope_model": along.record(),
     }
 
 

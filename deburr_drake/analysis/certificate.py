@@ -103,6 +103,9 @@ SEARCH_TOLERANCE = 1e-8
 #: P_w's smallest eigenvalue), tried from the largest (see :func:`lift`).
 LIFT_WEIGHTS = np.logspace(2, -8, 21)
 
+#: Constraint generation: how many of the most broken inequalities of a
+#: group (a family; a node of a schedule) each round adds to the program.
+ACTIVE_ADD = 3
 #: How each candidate P is named in the certificate.
 FOUND_BY_NOMINAL = "the discrete Lyapunov equation of the nominal map"
 FOUND_BY_PROGRAM = "the semidefinite program"
@@ -249,6 +252,10 @@ class LmiSolution:
     solver: str
     status: str
     success: bool
+    # How many of the maps' inequalities the program held when it ended,
+    # and in how many solves (constraint generation).
+    inequalities: int = 0
+    rounds: int = 1
 
 
 def _symmetric_basis(n: int) -> List[np.ndarray]:
@@ -261,6 +268,54 @@ def _symmetric_basis(n: int) -> List[np.ndarray]:
     return basis
 
 
+def _program(n: int, N: int):
+    """(prog, Ps, flat, basis, kappa): N symmetric n x n P's with P_i >= I,
+    P_i <= kappa I and kappa minimised (a well-conditioned P); ``flat``
+    each P's entries on and above the diagonal, ``basis`` their matrices."""
+    prog = MathematicalProgram()
+    Ps = [prog.NewSymmetricContinuousVariables(n, f"P{i}") for i in range(N)]
+    kappa = prog.NewContinuousVariables(1, "kappa")
+    basis = _symmetric_basis(n)
+    flat = [[P[a, b] for a in range(n) for b in range(a, n)] for P in Ps]
+    eye = np.eye(n)
+    for f in flat:
+        prog.AddLinearMatrixInequalityConstraint([-eye] + basis, f)
+        prog.AddLinearMatrixInequalityConstraint(
+            [np.zeros((n, n)), eye] + [-E for E in basis],
+            np.concatenate([kappa, f]),
+        )
+    prog.AddLinearCost(kappa[0])
+    return prog, Ps, flat, basis, kappa
+
+
+def _generate(solve, excess, groups, first):
+    """(solution, active, rounds): constraint generation. ``solve(active)``
+    solves the program on the inequalities ``active`` (keys) alone;
+    ``excess(solution, key)`` is how far its solution breaks inequality
+    ``key`` (> 0: broken); ``groups`` [[key, ...]] partition the keys,
+    ``first`` the keys to start from. Each round adds the
+    ``ACTIVE_ADD`` most broken of each group, until none is broken or
+    the program is infeasible (a subset's infeasibility is the whole
+    family's): the solution is the full program's, at the cost of the
+    few inequalities that bind."""
+    active, rounds = set(first), 0
+    while True:
+        solution = solve(sorted(active))
+        rounds += 1
+        if not solution[-1]:
+            return solution, active, rounds
+        added = []
+        for group in groups:
+            broken = [
+                (excess(solution, k), k) for k in group if k not in active
+            ]
+            broken = sorted((b for b in broken if b[0] > 0.0), reverse=True)
+            added += [k for _, k in broken[:ACTIVE_ADD]]
+        if not added:
+            return solution, active, rounds
+        active.update(added)
+
+
 def solve_common_lyapunov(
     maps: Sequence[np.ndarray],
     gamma: float,
@@ -270,36 +325,41 @@ def solve_common_lyapunov(
 ) -> LmiSolution:
     """P = P^T, P >= I, A_i^T P A_i - gamma^2 P <= -epsilon I for all i,
     P <= kappa I with kappa minimised (a well-conditioned P), by
-    ``solver`` (Clarabel, CSDP or SCS, all shipped with the wheel). The
-    LMIs are written in P's basis (``AddLinearMatrixInequalityConstraint``)
-    rather than as symbolic products, which grow as n^3 expressions."""
+    ``solver`` (Clarabel, CSDP or SCS, all shipped with the wheel), the
+    inequalities generated as they bind (:func:`_generate`: from the
+    nominal map and the one of largest radius). The LMIs are written in
+    P's basis (``AddLinearMatrixInequalityConstraint``) rather than as
+    symbolic products, which grow as n^3 expressions."""
     n = maps[0].shape[0]
-    prog = MathematicalProgram()
-    P = prog.NewSymmetricContinuousVariables(n, "P")
-    kappa = prog.NewContinuousVariables(1, "kappa")
-    variables = [P[i, j] for i in range(n) for j in range(i, n)]
-    basis = _symmetric_basis(n)
     eye = np.eye(n)
-    # P - I >= 0 and kappa I - P >= 0.
-    prog.AddLinearMatrixInequalityConstraint([-eye] + basis, variables)
-    prog.AddLinearMatrixInequalityConstraint(
-        [np.zeros((n, n)), eye] + [-E for E in basis],
-        np.concatenate([kappa, variables]),
+
+    def solve(active):
+        prog, (P,), (variables,), basis, _ = _program(n, 1)
+        # gamma^2 P - A^T P A - epsilon I >= 0 at every active map.
+        for i in active:
+            A = maps[i]
+            prog.AddLinearMatrixInequalityConstraint(
+                [-epsilon * eye] + [gamma**2 * E - A.T @ E @ A for E in basis],
+                variables,
+            )
+        result = _SOLVERS[solver]().Solve(prog)
+        success = result.is_success()
+        return (result.GetSolution(P) if success else None, result, success)
+
+    radii = [float(np.max(np.abs(np.linalg.eigvals(A)))) for A in maps]
+    (P, result, success), active, rounds = _generate(
+        solve,
+        lambda solution, i: p_norm(maps[i], solution[0]) - gamma,
+        [list(range(len(maps)))],
+        {0, int(np.argmax(radii))},
     )
-    # gamma^2 P - A^T P A - epsilon I >= 0 at every map.
-    for A in maps:
-        prog.AddLinearMatrixInequalityConstraint(
-            [-epsilon * eye] + [gamma**2 * E - A.T @ E @ A for E in basis],
-            variables,
-        )
-    prog.AddLinearCost(kappa[0])
-    result = _SOLVERS[solver]().Solve(prog)
-    success = result.is_success()
     return LmiSolution(
-        P=result.GetSolution(P) if success else None,
+        P=P,
         solver=solver,
         status=result.get_solution_result().name,
         success=success,
+        inequalities=len(active),
+        rounds=rounds,
     )
 
 
@@ -744,40 +804,63 @@ def solve_rate_bounded(
     *,
     solver: str = "Clarabel",
     epsilon: float = 1e-9,
-) -> Tuple[Optional[List[np.ndarray]], str, bool]:
+) -> Tuple[Optional[List[np.ndarray]], str, bool, Dict]:
     """P_i (one per grid node theta_i, P(theta) affine between nodes) with
     P_i >= I, P_i <= kappa I (kappa minimised) and A_i^T P(theta') A_i -
-    gamma^2 P_i <= -epsilon I at every theta' of :func:`rate_vertices`;
-    (Ps or None, solver status, success)."""
+    gamma^2 P_i <= -epsilon I at every theta' of :func:`rate_vertices`,
+    the inequalities generated as they bind (:func:`_generate`: from
+    each node's map of largest radius); (Ps or None, solver status,
+    success, {inequalities, of, rounds})."""
     maps = _per_node(maps)
+    thetas = np.asarray(thetas, float)
     n, N = maps[0][0].shape[0], len(maps)
-    prog = MathematicalProgram()
-    Ps = [prog.NewSymmetricContinuousVariables(n, f"P{i}") for i in range(N)]
-    kappa = prog.NewContinuousVariables(1, "kappa")
-    basis = _symmetric_basis(n)
-    flat = [[P[a, b] for a in range(n) for b in range(a, n)] for P in Ps]
     eye = np.eye(n)
-    for i in range(N):
-        prog.AddLinearMatrixInequalityConstraint([-eye] + basis, flat[i])
-        prog.AddLinearMatrixInequalityConstraint(
-            [np.zeros((n, n)), eye] + [-E for E in basis],
-            np.concatenate([kappa, flat[i]]),
-        )
-    for i, A in ((i, A) for i, node in enumerate(maps) for A in node):
-        for t in rate_vertices(thetas, i, step):
-            weights = dict(_weights(np.asarray(thetas, float), t))
-            weights.setdefault(i, 0.0)
-            terms, variables = [-epsilon * eye], []
-            for j, w in weights.items():
+    vertices = [rate_vertices(thetas, i, step) for i in range(N)]
+    groups = [
+        [(i, a, t) for a in range(len(node)) for t in range(len(vertices[i]))]
+        for i, node in enumerate(maps)
+    ]
+
+    def weights(i, t):
+        w = dict(_weights(thetas, vertices[i][t]))
+        w.setdefault(i, 0.0)
+        return w
+
+    def solve(active):
+        prog, Ps, flat, basis, _ = _program(n, N)
+        for i, a, t in active:
+            A, terms, variables = maps[i][a], [-epsilon * eye], []
+            for j, w in weights(i, t).items():
                 own = gamma**2 if j == i else 0.0
                 terms += [own * E - w * (A.T @ E @ A) for E in basis]
                 variables += flat[j]
             prog.AddLinearMatrixInequalityConstraint(terms, variables)
-    prog.AddLinearCost(kappa[0])
-    result = _SOLVERS[solver]().Solve(prog)
-    success = result.is_success()
-    Ps_value = [result.GetSolution(P) for P in Ps] if success else None
-    return Ps_value, result.get_solution_result().name, success
+        result = _SOLVERS[solver]().Solve(prog)
+        success = result.is_success()
+        values = [result.GetSolution(P) for P in Ps] if success else None
+        return values, result, success
+
+    def excess(solution, key):
+        i, a, t = key
+        P_to = _interpolated(solution[0], thetas, vertices[i][t])
+        return mixed_norm(maps[i][a], P_to, solution[0][i]) - gamma
+
+    largest = [
+        int(np.argmax([np.max(np.abs(np.linalg.eigvals(A))) for A in node]))
+        for node in maps
+    ]
+    first = {
+        (i, largest[i], t) for i in range(N) for t in range(len(vertices[i]))
+    }
+    (Ps, result, success), active, rounds = _generate(
+        solve, excess, groups, first
+    )
+    stats = {
+        "inequalities": len(active),
+        "of": sum(len(g) for g in groups),
+        "rounds": rounds,
+    }
+    return Ps, result.get_solution_result().name, success, stats
 
 
 def _node_rate(maps, thetas, step, Ps):
@@ -886,10 +969,13 @@ class RateBoundedCertificate:
     spectral_radii: List[float]
     reason: str = ""
     solves: int = 0
+    # The last program's inequalities: held, of all, and its rounds.
+    inequalities: Dict = field(default_factory=dict)
 
     def to_dict(self) -> Dict:
         return {
             "status": self.status,
+            "inequalities": self.inequalities,
             "check": self.check,
             "solver_status": self.solver_status,
             "search_dimension": self.search_dimension,
@@ -902,7 +988,8 @@ class RateBoundedCertificate:
 
 def _lifted_check(P_ws, V, family, thetas, step, mids, left_out, margin):
     """(Ps, check): the search coordinates' P_i lifted with the one weight
-    (of ``LIFT_WEIGHTS``) whose check leaves the most room."""
+    (of ``LIFT_WEIGHTS``) whose check leaves the most room, of those that
+    pass it if any do."""
     n, r = V.shape
     inside = [V @ P @ V.T for P in P_ws]
     outside = np.eye(n) - V @ V.T
@@ -919,12 +1006,12 @@ def _lifted_check(P_ws, V, family, thetas, step, mids, left_out, margin):
             left_out=left_out,
             margin=margin,
         )
-        if best is None or (
-            check["decay_rate_with_model_error"]
-            < best[1]["decay_rate_with_model_error"]
-        ):
-            best = (Ps, check)
-    return best
+        # A weight that passes beats one that does not: the least rate
+        # comes with the smallest weight, and P's condition with it.
+        key = (not check["passed"], check["decay_rate_with_model_error"])
+        if best is None or key < best[0]:
+            best = (key, Ps, check)
+    return best[1:]
 
 
 def _reduced_schedule(maps, mids, labels, left_out):
@@ -1003,10 +1090,11 @@ def certify_rate_bounded(
     # bisected towards the nodes' largest radius until a P passes.
     lo, gamma, best = max(radii), 1.0 - 10 * margin, None
     for attempt in range(bisections + 1):
-        P_ws, status, success = solve_rate_bounded(
+        P_ws, status, success, stats = solve_rate_bounded(
             search, thetas, step, gamma, solver=solver
         )
         out.solves += 1
+        out.inequalities = stats
         if not success:
             if attempt == 0:
                 out.solver_status = status

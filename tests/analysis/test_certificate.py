@@ -430,3 +430,47 @@ def test_the_constants_cells_narrow_only_the_constants_ranges():
     assert "constant" not in box[0] and box[0]["range"] == [0.7, 1.3]
     # No constants: the box is its only cell.
     assert _cells(box, {}) == [box]
+
+
+def test_the_program_holds_only_the_inequalities_that_bind():
+    from deburr_drake.analysis.certificate import solve_common_lyapunov
+
+    # Many maps share V = x^T S^T S x, the slow ones (0.8) bind, the fast
+    # ones (0.3) never do: the program ends holding a few, and its P
+    # serves every map of the family in numpy.
+    S = np.array([[1.0, 5.0], [0.0, 0.2]])
+    Si = np.linalg.inv(S)
+    turns = np.linspace(-2.0, 2.0, 40)
+    maps = [Si @ (0.3 * _rotation(t)) @ S for t in turns]
+    maps += [Si @ (0.8 * _rotation(t)) @ S for t in (0.7, -1.1)]
+    solution = solve_common_lyapunov(maps, 0.85)
+    assert solution.success
+    assert solution.inequalities < 10 < len(maps)
+    assert max(p_norm(A, solution.P) for A in maps) < 0.85 + 1e-7
+    # A subset that is infeasible is the family's answer: the switched
+    # pair among stable maps is refused.
+    pair = _switched_pair()
+    assert not solve_common_lyapunov(maps[:5] + pair, 0.999).success
+
+
+def test_a_schedule_generates_its_inequalities_and_still_serves_every_map():
+    from deburr_drake.analysis.certificate import solve_rate_bounded
+
+    thetas = np.linspace(0.0, np.pi / 2, 65)
+    # Per node, the turned map and three faster copies of it: the fast
+    # ones never bind.
+    maps = [
+        [_turned(t)] + [s * _turned(t) for s in (0.2, 0.3, 0.4)] for t in thetas
+    ]
+    step = 1e-3
+    gamma = 1.0 - 1e-4
+    Ps, status, success, stats = solve_rate_bounded(maps, thetas, step, gamma)
+    assert success, status
+    assert stats["inequalities"] < stats["of"]
+    rate = max(
+        mixed_norm(A, certificate._interpolated(Ps, thetas, t), Ps[i])
+        for i, node in enumerate(maps)
+        for A in node
+        for t in rate_vertices(thetas, i, step)
+    )
+    assert rate < gamma + 1e-7
