@@ -59,6 +59,7 @@ import scipy.linalg
 
 from deburr_drake.analysis.along import at_numerics
 from deburr_drake.analysis.certificate import (
+    CHECK_MARGIN,
     certify_family,
     certify_rate_bounded,
     p_norm,
@@ -485,10 +486,12 @@ def _rate_step(op, p, period: float) -> Dict:
     }
 
 
-def _schedule_axis(box, maps, solver) -> int:
-    """The index in ``box`` of the slope to schedule: the first whose two
-    ends (with the nominal map) have no common P, else the one whose ends
-    move the map most (balanced by the nominal map's scaling)."""
+def _slope_ends(box, maps, solver):
+    """(index in ``box``, certificate) of the first slope whose two ends,
+    with the nominal map, have no common P (the whole family then has
+    none: the program on it need not run); (None, None) if every slope's
+    do. The slopes in order of how much their ends move the map
+    (balanced by the nominal map's scaling)."""
     balanced = _balancer(maps["A0"])
     slopes = sorted(
         (j for j, p in enumerate(box) if p["field"] is None),
@@ -496,21 +499,28 @@ def _schedule_axis(box, maps, solver) -> int:
             -np.linalg.norm(balanced(maps["ends"][j][1] - maps["ends"][j][0]))
         ),
     )
-    # The slope whose two ends alone have no common P is the one the
-    # quadratic form cannot cover; else the one that moves the map most.
-    return next(
-        (
-            j
-            for j in slopes
-            if certify_family(
-                [maps["A0"], *maps["ends"][j]],
-                maps["labels"],
-                solver=solver,
-                bisections=0,
-            ).status
-            != "certified"
+    for j in slopes:
+        cert = certify_family(
+            [maps["A0"], *maps["ends"][j]],
+            maps["labels"],
+            solver=solver,
+            bisections=0,
+        )
+        if cert.status != "certified":
+            return j, cert
+    return None, None
+
+
+def _schedule_axis(box, maps) -> int:
+    """The index in ``box`` of the slope to schedule when every slope's
+    ends have a common P with the nominal map: the one whose ends move
+    the map most (balanced)."""
+    balanced = _balancer(maps["A0"])
+    return max(
+        (j for j, p in enumerate(box) if p["field"] is None),
+        key=lambda j: np.linalg.norm(
+            balanced(maps["ends"][j][1] - maps["ends"][j][0])
         ),
-        slopes[0],
     )
 
 
@@ -566,17 +576,15 @@ class _SlopeMaps:
         }
 
 
-def _scheduled(op, box, maps_at, maps, axes, solver, say) -> Dict:
-    """The certificate with a slope of ``box`` scheduled: the first slope
-    whose ends (with the nominal map) have no common P, else the one whose
-    ends move the map most (balanced), gets a grid of ``SCHEDULE_NODES``
-    nodes and P(slope) affine between them, moving at most the adaptation
+def _scheduled(op, box, maps_at, maps, axes, k, solver, say) -> Dict:
+    """The certificate with slope ``k`` of ``box`` scheduled: a grid of
+    ``SCHEDULE_NODES`` nodes and P(slope) affine between them, moving at
+    most the adaptation
     law's step per period (:func:`_rate_step`); at every node and cell
     midpoint, the maps at the other corner axes' corners (they may move
     arbitrarily fast), each from its three true maps along the slope
     (:class:`_SlopeMaps`); the others' half-ranges and curvatures bounded
     in P(slope) and added (:func:`certify_rate_bounded`)."""
-    k = _schedule_axis(box, maps, solver)
     p = box[k]
     rate = _rate_step(op, p, maps["period"])
     lo, hi = p["range"]
@@ -733,6 +741,15 @@ def _cells(box: List[Dict], cells: Dict[str, int]) -> List[List[Dict]]:
     return out
 
 
+def _stable(family) -> bool:
+    """Every map's own spectral radius below 1 (else the family's program
+    names the unstable one at once)."""
+    return all(
+        np.max(np.abs(np.linalg.eigvals(A))) < 1.0 - CHECK_MARGIN
+        for A in family
+    )
+
+
 def _certify_cell(op, box, maps_at, options, say) -> Dict:
     """The certificate of one cell's box (every parameter time-varying
     within it): the common quadratic P, then, if it fails, P(slope)."""
@@ -752,13 +769,26 @@ def _certify_cell(op, box, maps_at, options, say) -> Dict:
     family = [A0] + [m for pair in ends for m in pair] + corners
     names = _map_names(box, signs)
     t2 = time.perf_counter()
-    say(f"common Lyapunov function of {len(family)} maps ({solver})")
-    cert, error = _common_quadratic(family, box, maps, axes, solver, bisections)
+    k, cert = (
+        _slope_ends(box, maps, solver) if _stable(family) else (None, None)
+    )
+    if cert is None:
+        say(f"common Lyapunov function of {len(family)} maps ({solver})")
+        cert, error = _common_quadratic(
+            family, box, maps, axes, solver, bisections
+        )
+    else:
+        # A subset with no common P: the family has none either.
+        say(f"no common Lyapunov function of the ends of {box[k]['key']}")
+        lo, hi = box[k]["range"]
+        names = ["nominal"] + [f"{box[k]['name']} = {v:g}" for v in (lo, hi)]
+        error = {"common_quadratic_family": f"the ends of {box[k]['key']}"}
     timings["program_s"] = time.perf_counter() - t2
     scheduled = None
     if _schedule_worth_trying(cert, error, box):
         t3 = time.perf_counter()
-        scheduled = _scheduled(op, box, maps_at, maps, axes, solver, say)
+        k = _schedule_axis(box, maps) if k is None else k
+        scheduled = _scheduled(op, box, maps_at, maps, axes, k, solver, say)
         timings["scheduled_s"] = time.perf_counter() - t3
     result = cert.to_dict()
     result["vertex_parameters"] = [box[j]["name"] for j in axes]

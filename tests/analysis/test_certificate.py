@@ -474,3 +474,26 @@ def test_a_schedule_generates_its_inequalities_and_still_serves_every_map():
         for t in rate_vertices(thetas, i, step)
     )
     assert rate < gamma + 1e-7
+
+
+def test_a_slope_whose_ends_have_no_common_p_is_found_before_the_family():
+    from deburr_drake.analysis.box_certificate import _slope_ends
+
+    A1, A2 = _switched_pair()
+    A0 = 0.5 * np.eye(2)
+    box = [
+        {"key": "stiffness", "field": "part.material.hydroelastic_modulus"},
+        {"key": "slope_x1", "field": None},
+        {"key": "slope_x2", "field": None},
+    ]
+    maps = {
+        "A0": A0,
+        # The stiffness's ends alone have no common P either, but only a
+        # slope can be scheduled; slope_x1's ends share V = |x|^2.
+        "ends": [(A1, A2), (0.4 * np.eye(2), 0.6 * np.eye(2)), (A1, A2)],
+        "labels": ["a", "b"],
+    }
+    k, cert = _slope_ends(box, maps, "Clarabel")
+    assert k == 2 and cert.status == "not_certified"
+    maps["ends"][2] = (0.3 * np.eye(2), 0.7 * np.eye(2))
+    assert _slope_ends(box, maps, "Clarabel") == (None, None)
