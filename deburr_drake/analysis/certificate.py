@@ -1090,11 +1090,10 @@ def certify_rate_bounded(
     # bisected towards the nodes' largest radius until a P passes.
     lo, gamma, best = max(radii), 1.0 - 10 * margin, None
     for attempt in range(bisections + 1):
-        P_ws, status, success, stats = solve_rate_bounded(
+        P_ws, status, success, out.inequalities = solve_rate_bounded(
             search, thetas, step, gamma, solver=solver
         )
         out.solves += 1
-        out.inequalities = stats
         if not success:
             if attempt == 0:
                 out.solver_status = status
