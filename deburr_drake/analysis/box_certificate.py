@@ -486,20 +486,24 @@ def _rate_step(op, p, period: float) -> Dict:
     }
 
 
-def _slope_ends(box, maps, solver):
-    """(index in ``box``, certificate) of the first slope whose two ends,
-    with the nominal map, have no common P (the whole family then has
-    none: the program on it need not run); (None, None) if every slope's
-    do. The slopes in order of how much their ends move the map
-    (balanced by the nominal map's scaling)."""
+def _slopes_by_move(box, maps) -> List[int]:
+    """The indices in ``box`` of the fuzzy slopes, the one whose ends move
+    the map most (balanced by the nominal map's scaling) first."""
     balanced = _balancer(maps["A0"])
-    slopes = sorted(
+    return sorted(
         (j for j, p in enumerate(box) if p["field"] is None),
         key=lambda j: (
             -np.linalg.norm(balanced(maps["ends"][j][1] - maps["ends"][j][0]))
         ),
     )
-    for j in slopes:
+
+
+def _slope_ends(box, maps, solver):
+    """(index in ``box``, certificate) of the first slope (in
+    :func:`_slopes_by_move`'s order) whose two ends, with the nominal map,
+    have no common P (the whole family then has none: the program on it
+    need not run); (None, None) if every slope's do."""
+    for j in _slopes_by_move(box, maps):
         cert = certify_family(
             [maps["A0"], *maps["ends"][j]],
             maps["labels"],
@@ -509,19 +513,6 @@ def _slope_ends(box, maps, solver):
         if cert.status != "certified":
             return j, cert
     return None, None
-
-
-def _schedule_axis(box, maps) -> int:
-    """The index in ``box`` of the slope to schedule when every slope's
-    ends have a common P with the nominal map: the one whose ends move
-    the map most (balanced)."""
-    balanced = _balancer(maps["A0"])
-    return max(
-        (j for j, p in enumerate(box) if p["field"] is None),
-        key=lambda j: np.linalg.norm(
-            balanced(maps["ends"][j][1] - maps["ends"][j][0])
-        ),
-    )
 
 
 def _schedule_left_out(box, maps, axes, k) -> List:
@@ -579,8 +570,8 @@ class _SlopeMaps:
 def _scheduled(op, box, maps_at, maps, axes, k, solver, say) -> Dict:
     """The certificate with slope ``k`` of ``box`` scheduled: a grid of
     ``SCHEDULE_NODES`` nodes and P(slope) affine between them, moving at
-    most the adaptation
-    law's step per period (:func:`_rate_step`); at every node and cell
+    most the adaptation law's step per period (:func:`_rate_step`); at
+    every node and cell
     midpoint, the maps at the other corner axes' corners (they may move
     arbitrarily fast), each from its three true maps along the slope
     (:class:`_SlopeMaps`); the others' half-ranges and curvatures bounded
@@ -787,7 +778,8 @@ def _certify_cell(op, box, maps_at, options, say) -> Dict:
     scheduled = None
     if _schedule_worth_trying(cert, error, box):
         t3 = time.perf_counter()
-        k = _schedule_axis(box, maps) if k is None else k
+        # Else the slope that moves the map most.
+        k = _slopes_by_move(box, maps)[0] if k is None else k
         scheduled = _scheduled(op, box, maps_at, maps, axes, k, solver, say)
         timings["scheduled_s"] = time.perf_counter() - t3
     result = cert.to_dict()

@@ -269,7 +269,7 @@ def _symmetric_basis(n: int) -> List[np.ndarray]:
 
 
 def _program(n: int, N: int):
-    """(prog, Ps, flat, basis, kappa): N symmetric n x n P's with P_i >= I,
+    """(prog, Ps, flat, basis): N symmetric n x n P's with P_i >= I,
     P_i <= kappa I and kappa minimised (a well-conditioned P); ``flat``
     each P's entries on and above the diagonal, ``basis`` their matrices."""
     prog = MathematicalProgram()
@@ -285,7 +285,7 @@ def _program(n: int, N: int):
             np.concatenate([kappa, f]),
         )
     prog.AddLinearCost(kappa[0])
-    return prog, Ps, flat, basis, kappa
+    return prog, Ps, flat, basis
 
 
 def _generate(solve, excess, groups, first):
@@ -334,7 +334,7 @@ def solve_common_lyapunov(
     eye = np.eye(n)
 
     def solve(active):
-        prog, (P,), (variables,), basis, _ = _program(n, 1)
+        prog, (P,), (variables,), basis = _program(n, 1)
         # gamma^2 P - A^T P A - epsilon I >= 0 at every active map.
         for i in active:
             A = maps[i]
@@ -827,7 +827,7 @@ def solve_rate_bounded(
         return w
 
     def solve(active):
-        prog, Ps, flat, basis, _ = _program(n, N)
+        prog, Ps, flat, basis = _program(n, N)
         for i, a, t in active:
             A, terms, variables = maps[i][a], [-epsilon * eye], []
             for j, w in weights(i, t).items():

@@ -493,9 +493,8 @@ class MeshProbingSequence(SequenceOutputs, LeafSystem):
         x[L.slice("tare")] = self._force_port.Eval(context)
         # On to the find's own end at least: a find set off by the
         # reading (the arm still ringing at its tare) stopped short of
-        # the face.
-        # (the find starts at the touch's standoff point, where the
-        # descent ends)
+        # the face. The find starts at the touch's standoff point, where
+        # the descent ends.
         find_end = self._target(x) - self._search(i) * m
         rest_of_find = float((command - find_end) @ m)
         self._guarded(
