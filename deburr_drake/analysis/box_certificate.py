@@ -571,11 +571,11 @@ def _scheduled(op, box, maps_at, maps, axes, k, solver, say) -> Dict:
     """The certificate with slope ``k`` of ``box`` scheduled: a grid of
     ``SCHEDULE_NODES`` nodes and P(slope) affine between them, moving at
     most the adaptation law's step per period (:func:`_rate_step`); at
-    every node and cell
-    midpoint, the maps at the other corner axes' corners (they may move
-    arbitrarily fast), each from its three true maps along the slope
-    (:class:`_SlopeMaps`); the others' half-ranges and curvatures bounded
-    in P(slope) and added (:func:`certify_rate_bounded`)."""
+    every node and cell midpoint, the maps at the other corner axes'
+    corners (they may move arbitrarily fast), each from its three true
+    maps along the slope (:class:`_SlopeMaps`); the others' half-ranges
+    and curvatures bounded in P(slope) and added
+    (:func:`certify_rate_bounded`)."""
     p = box[k]
     rate = _rate_step(op, p, maps["period"])
     lo, hi = p["range"]
