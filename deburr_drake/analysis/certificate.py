@@ -80,6 +80,8 @@ __all__ = [
     "check_rate_bounded",
     "mixed_norm",
     "rate_vertices",
+    "reach",
+    "schedule_rate",
     "solve_rate_bounded",
     "CellsCertificate",
     "certify_cells",
@@ -776,6 +778,111 @@ def rate_vertices(thetas: Sequence[float], i: int, step: float) -> List[float]:
     return sorted({lo, hi, *inside})
 
 
+def reach(
+    thetas: Sequence[float], c: int, step: float
+) -> List[Tuple[int, int]]:
+    """(sign, m): from a theta in cell c, theta' = theta + d with d in
+    [0, step] (sign +1) or [-step, 0] (sign -1), and P(theta') - P(theta)
+    = d times a convex combination of the slopes D_m of the cells m it
+    crosses; these are the cells within ``step`` of cell c on that side
+    (within the grid: the slope never leaves its range)."""
+    thetas = np.asarray(thetas, float)
+    if step <= 0.0:
+        return [(1, c)]
+    last = len(thetas) - 2
+    lo = np.searchsorted(thetas, thetas[c] - step, side="right") - 1
+    hi = np.searchsorted(thetas, thetas[c + 1] + step, side="left") - 1
+    down = [(-1, m) for m in range(max(int(lo), 0), c + 1)]
+    return down + [(1, m) for m in range(c, min(int(hi), last) + 1)]
+
+
+def _polya_terms(A0, A1, c, sign, m, thetas, step):
+    """The coefficients of F(a, b) = gamma^2 P(a, b) (a + b)^2 - A(a, b)^T
+    Q A(a, b) on the cell [theta_c, theta_c+1] (a = 1 - l, b = l, A and P
+    the chords, Q = P + (a + b) sign step D_m): [(Pterms, Aterms)] per
+    monomial a^3, a^2 b, a b^2, b^3, each term (X, Y, {node: weight})
+    standing for weight X^T P_node Y; the coefficient is gamma^2 times
+    the first sum minus the second."""
+    eye = np.eye(A0.shape[0])
+    P = [((1, 0), {c: 1.0}), ((0, 1), {c + 1: 1.0})]
+    slope = sign * step / (thetas[m + 1] - thetas[m])
+    dD = {m + 1: slope, m: -slope} if slope else {}
+    Q = P + ([((1, 0), dD), ((0, 1), dD)] if dD else [])
+    coefficients = {(3 - k, k): ([], []) for k in range(4)}
+    for (pa, pb), w in P:
+        for (qa, qb), scale in (((2, 0), 1.0), ((1, 1), 2.0), ((0, 2), 1.0)):
+            coefficients[(pa + qa, pb + qb)][0].append((scale * eye, eye, w))
+    ends = [((1, 0), A0), ((0, 1), A1)]
+    for (xa, xb), X in ends:
+        for (qa, qb), w in Q:
+            for (ya, yb), Y in ends:
+                key = (xa + qa + ya, xb + qb + yb)
+                coefficients[key][1].append((X, Y, w))
+    return [coefficients[(3 - k, k)] for k in range(4)]
+
+
+def _value(terms, Ps) -> np.ndarray:
+    M = sum(
+        X.T @ sum(w * Ps[j] for j, w in weights.items()) @ Y
+        for X, Y, weights in terms
+    )
+    return 0.5 * (M + M.T)
+
+
+def _in_basis(terms, basis) -> Dict[int, np.ndarray]:
+    """{node: [n_basis, n, n]}: the terms' value for each basis matrix of
+    each node's P."""
+    out = {}
+    for X, Y, weights in terms:
+        T = np.einsum("ip,kij,jq->kpq", X, basis, Y)
+        T = 0.5 * (T + T.transpose(0, 2, 1))
+        for j, w in weights.items():
+            out[j] = out.get(j, 0.0) + w * T
+    return out
+
+
+def _schedule_keys(maps, thetas, step) -> List[List[Tuple]]:
+    """[[(cell, corner, sign, m, coefficient), ...] per cell]."""
+    return [
+        [
+            (c, a, sign, m, e)
+            for a in range(len(maps[c]))
+            for sign, m in reach(thetas, c, step)
+            for e in range(4)
+        ]
+        for c in range(len(thetas) - 1)
+    ]
+
+
+def schedule_rate(maps, thetas, step, Ps, keys=None) -> Tuple[float, int]:
+    """(rate, cell): the least gamma for which every coefficient of
+    :func:`_polya_terms` is positive semidefinite with these P_i (its P
+    part is positive definite, so per coefficient the square root of the
+    largest generalized eigenvalue of (A part, P part)), and the cell it
+    is at. By Polya's argument it bounds ||A(theta) x||_P(theta') /
+    ||x||_P(theta) over every theta of the cells and theta' within
+    ``step``."""
+    maps = _per_node(maps)
+    rate, worst = 0.0, 0
+    for group in keys or _schedule_keys(maps, thetas, step):
+        for c, a, sign, m, e in group:
+            Pt, At = _polya_terms(
+                maps[c][a], maps[c + 1][a], c, sign, m, thetas, step
+            )[e]
+            r = _generalized_root(_value(At, Ps), _value(Pt, Ps))
+            if r > rate:
+                rate, worst = r, c
+    return rate, worst
+
+
+def _generalized_root(N: np.ndarray, M: np.ndarray) -> float:
+    try:
+        mu = scipy.linalg.eigh(N, M, eigvals_only=True)
+    except np.linalg.LinAlgError:
+        return float("inf")
+    return float(np.sqrt(max(mu[-1], 0.0)))
+
+
 def _interpolated(Ps: Sequence[np.ndarray], thetas, t) -> np.ndarray:
     return sum(w * Ps[j] for j, w in _weights(np.asarray(thetas), t).items())
 
@@ -796,7 +903,7 @@ def _per_node(maps) -> List[List[np.ndarray]]:
     return [[m] if isinstance(m, np.ndarray) else list(m) for m in maps]
 
 
-def solve_rate_bounded(
+def _solve_neighbourwise(
     maps: Sequence[np.ndarray],
     thetas: Sequence[float],
     step: float,
@@ -863,6 +970,107 @@ def solve_rate_bounded(
     return Ps, result.get_solution_result().name, success, stats
 
 
+def solve_rate_bounded(
+    maps: Sequence[np.ndarray],
+    thetas: Sequence[float],
+    step: float,
+    gamma: float,
+    *,
+    solver: str = "Clarabel",
+    epsilon: float = 1e-9,
+    tied: bool = False,
+) -> Tuple[Optional[List[np.ndarray]], str, bool, Dict]:
+    """P(theta) by the neighbour-wise program (:func:`_solve_neighbourwise`,
+    ``tied`` False: cheap, each node's maps decaying into every P within
+    its neighbours' cells) or the tied one (:func:`_solve_tied`: theta'
+    tied to theta, less conservative, its LMIs spanning up to four
+    nodes' variables)."""
+    program = _solve_tied if tied else _solve_neighbourwise
+    return program(maps, thetas, step, gamma, solver=solver, epsilon=epsilon)
+
+
+def _solve_tied(
+    maps: Sequence[np.ndarray],
+    thetas: Sequence[float],
+    step: float,
+    gamma: float,
+    *,
+    solver: str = "Clarabel",
+    epsilon: float = 1e-9,
+) -> Tuple[Optional[List[np.ndarray]], str, bool, Dict]:
+    """P_i (one per grid node theta_i, P(theta) affine between nodes) with
+    P_i >= I, P_i <= kappa I (kappa minimised) and, on every cell and
+    for every corner map and cell :func:`reach` can cross, each
+    coefficient of :func:`_polya_terms` at ``gamma`` >= epsilon I; the
+    inequalities generated as they bind (:func:`_generate`: from each
+    cell's map of largest radius); (Ps or None, solver status, success,
+    {inequalities, of, rounds}).
+
+    Why the coefficients: with theta = (1 - l) theta_c + l theta_c+1 and
+    theta' = theta + d, A(theta)^T P(theta') A(theta) <= gamma^2
+    P(theta) is a cubic matrix polynomial in (a, b) = (1 - l, l) that
+    keeps theta' tied to theta, so a node's map never has to decay into
+    a neighbouring node's P; a homogeneous polynomial whose coefficients
+    are all positive semidefinite is so on the whole simplex (Polya).
+    Every term is linear in the P_i."""
+    maps = _per_node(maps)
+    thetas = np.asarray(thetas, float)
+    n, N = maps[0][0].shape[0], len(maps)
+    eye = np.eye(n)
+    groups = _schedule_keys(maps, thetas, step)
+    terms = {}
+
+    def polya(key):
+        if key[:4] not in terms:
+            c, a, sign, m = key[:4]
+            terms[key[:4]] = _polya_terms(
+                maps[c][a], maps[c + 1][a], c, sign, m, thetas, step
+            )
+        return terms[key[:4]][key[4]]
+
+    def solve(active):
+        prog, Ps, flat, basis = _program(n, N)
+        basis = np.array(basis)
+        for key in active:
+            Pt, At = polya(key)
+            Pb, Ab = _in_basis(Pt, basis), _in_basis(At, basis)
+            nodes = sorted(set(Pb) | set(Ab))
+            mats = [-epsilon * eye]
+            for j in nodes:
+                mats += list(gamma**2 * Pb.get(j, 0.0) - Ab.get(j, 0.0))
+            variables = [v for j in nodes for v in flat[j]]
+            prog.AddLinearMatrixInequalityConstraint(mats, variables)
+        result = _SOLVERS[solver]().Solve(prog)
+        success = result.is_success()
+        values = [result.GetSolution(P) for P in Ps] if success else None
+        return values, result, success
+
+    def excess(solution, key):
+        Pt, At = polya(key)
+        Ps = solution[0]
+        return _generalized_root(_value(At, Ps), _value(Pt, Ps)) - gamma
+
+    def radius(c, a):
+        return max(
+            np.max(np.abs(np.linalg.eigvals(maps[i][a]))) for i in (c, c + 1)
+        )
+
+    largest = [
+        max(range(len(maps[c])), key=lambda a: radius(c, a))
+        for c in range(N - 1)
+    ]
+    first = {key for g in groups for key in g if key[1] == largest[key[0]]}
+    (Ps, result, success), active, rounds = _generate(
+        solve, excess, groups, first
+    )
+    stats = {
+        "inequalities": len(active),
+        "of": sum(len(g) for g in groups),
+        "rounds": rounds,
+    }
+    return Ps, result.get_solution_result().name, success, stats
+
+
 def _node_rate(maps, thetas, step, Ps):
     """(rate, node): the largest mixed norm of a node's map from its P to
     P(theta') over :func:`rate_vertices`, and the node it is at."""
@@ -897,13 +1105,17 @@ def check_rate_bounded(
     left_out: Optional[Sequence] = None,
     margin: float = CHECK_MARGIN,
     max_condition: float = MAX_CONDITION,
+    tied: bool = False,
 ) -> Dict:
     """The check in numpy of P(theta) (``Ps`` at the nodes, affine
     between): every P_i positive definite with condition below
-    ``max_condition``; ``decay_rate`` the largest mixed norm of A_i from
-    P_i to P(theta') over :func:`rate_vertices` (by convexity it bounds
-    the chord's maps between nodes too: A_lin^T Q A_lin <= (1 - l) A_i^T Q
-    A_i + l A_{i+1}^T Q A_{i+1}); with ``mids`` (the maps at the cells'
+    ``max_condition``; ``decay_rate`` a bound of the chord's maps between
+    nodes decaying from P(theta) to P(theta') within ``step``: with
+    ``tied``, the least gamma at which every coefficient of
+    :func:`_polya_terms` holds (:func:`schedule_rate`), else the largest
+    mixed norm of A_i from P_i to P(theta') over :func:`rate_vertices`
+    (by convexity: A_lin^T Q A_lin <= (1 - l) A_i^T Q A_i + l A_{i+1}^T
+    Q A_{i+1}); with ``mids`` (the maps at the cells'
     midpoints), ``chord_miss`` bounds what the chord leaves out: the
     largest mixed norm of (mid - chord) from any node's P of the cell to
     any P within ``step`` of it (a ratio of convex combinations is at most
@@ -916,9 +1128,8 @@ def check_rate_bounded(
     positive = all(e[0] > 0 for e in eigs)
     condition = max(e[-1] / e[0] for e in eigs) if positive else float("inf")
     maps = _per_node(maps)
-    rate, worst = (
-        _node_rate(maps, thetas, step, Ps) if positive else (np.inf, 0)
-    )
+    rate_of = schedule_rate if tied else _node_rate
+    rate, worst = rate_of(maps, thetas, step, Ps) if positive else (np.inf, 0)
 
     def bound(E, cells=None):
         return max(
@@ -948,7 +1159,8 @@ def check_rate_bounded(
         "chord_miss": float(miss),
         "model_error": errors,
         "decay_rate_with_model_error": float(total),
-        "worst_node": int(worst),
+        "worst": int(worst),
+        "program": "tied" if tied else "neighbour-wise",
         "margin": margin,
         "max_condition": max_condition,
     }
@@ -971,11 +1183,14 @@ class RateBoundedCertificate:
     solves: int = 0
     # The last program's inequalities: held, of all, and its rounds.
     inequalities: Dict = field(default_factory=dict)
+    # Whether the tied program (not the neighbour-wise one) gave P.
+    tied: bool = False
 
     def to_dict(self) -> Dict:
         return {
             "status": self.status,
             "inequalities": self.inequalities,
+            "program": "tied" if self.tied else "neighbour-wise",
             "check": self.check,
             "solver_status": self.solver_status,
             "search_dimension": self.search_dimension,
@@ -986,7 +1201,7 @@ class RateBoundedCertificate:
         }
 
 
-def _lifted_check(P_ws, V, family, thetas, step, mids, left_out, margin):
+def _lifted_check(P_ws, V, family, thetas, step, mids, left_out, margin, tied):
     """(Ps, check): the search coordinates' P_i lifted with the one weight
     (of ``LIFT_WEIGHTS``) whose check leaves the most room, of those that
     pass it if any do."""
@@ -1005,6 +1220,7 @@ def _lifted_check(P_ws, V, family, thetas, step, mids, left_out, margin):
             mids=mids,
             left_out=left_out,
             margin=margin,
+            tied=tied,
         )
         # A weight that passes beats one that does not: the least rate
         # comes with the smallest weight, and P's condition with it.
@@ -1071,7 +1287,6 @@ def certify_rate_bounded(
     reduced, family, mid_maps, left_out = _reduced_schedule(
         maps, mids, labels, left_out
     )
-    N = len(family)
     radii = [
         float(np.max(np.abs(np.linalg.eigvals(A))))
         for node in family
@@ -1085,28 +1300,65 @@ def certify_rate_bounded(
     if max(radii) >= 1.0 - margin:
         out.reason = f"a node's own spectral radius is {max(radii):.6f}"
         return out
-    # The first P(theta) sits on its LMI's boundary at gamma = 1 - 10
-    # margin, leaving no room for the chord's miss: the decay rate is
-    # bisected towards the nodes' largest radius until a P passes.
-    lo, gamma, best = max(radii), 1.0 - 10 * margin, None
+    for tied in (False, True):
+        # The neighbour-wise program asks more than the tied one: its
+        # failure is not the family's.
+        out.tied = tied
+        _bisect_schedule(
+            out,
+            search,
+            V,
+            family,
+            thetas,
+            step,
+            mid_maps,
+            left_out,
+            solver,
+            margin,
+            bisections,
+        )
+        if out.status == "certified":
+            break
+    return out
+
+
+def _bisect_schedule(
+    out,
+    search,
+    V,
+    family,
+    thetas,
+    step,
+    mid_maps,
+    left_out,
+    solver,
+    margin,
+    bisections,
+):
+    """Fills ``out`` from one program (``out.tied``): the first P(theta)
+    sits on its LMI's boundary at gamma = 1 - 10 margin, leaving no room
+    for the chord's miss, so the decay rate is bisected towards the
+    nodes' largest radius until a P passes the check."""
+    lo, gamma, best = max(out.spectral_radii), 1.0 - 10 * margin, None
     for attempt in range(bisections + 1):
         P_ws, status, success, out.inequalities = solve_rate_bounded(
-            search, thetas, step, gamma, solver=solver
+            search, thetas, step, gamma, solver=solver, tied=out.tied
         )
         out.solves += 1
         if not success:
             if attempt == 0:
-                out.solver_status = status
+                out.status, out.solver_status = "not_certified", status
                 out.reason = (
-                    f"no P(theta) affine between the {N} nodes exists for "
-                    f"a step of {step:g} per period ({status})"
+                    f"no P(theta) affine between the {len(family)} nodes "
+                    f"exists for a step of {step:g} per period ({status}, "
+                    f"{'tied' if out.tied else 'neighbour-wise'} program)"
                 )
-                return out
+                return
             lo, gamma = gamma, 0.5 * (gamma + best[2])
             continue
         out.solver_status = status
         trial = _lifted_check(
-            P_ws, V, family, thetas, step, mid_maps, left_out, margin
+            P_ws, V, family, thetas, step, mid_maps, left_out, margin, out.tied
         )
         if best is None or (
             trial[1]["decay_rate_with_model_error"]
@@ -1118,8 +1370,7 @@ def certify_rate_bounded(
         gamma = 0.5 * (lo + gamma)
     out.Ps, out.check = best[0], best[1]
     if out.check["passed"]:
-        out.status = "certified"
+        out.status, out.reason = "certified", ""
     else:
         out.status = "inconclusive"
         out.reason = _failed_check(status, out.check, margin)
-    return out

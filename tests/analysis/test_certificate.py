@@ -14,8 +14,9 @@ from deburr_drake.analysis.certificate import (
     lift,
     mixed_norm,
     p_norm,
-    rate_vertices,
+    reach,
     reduce_family,
+    schedule_rate,
     search_basis,
 )
 
@@ -352,16 +353,54 @@ def test_a_slowly_moving_parameter_is_certified_where_fast_switching_is_not():
     check = slow.check
     assert 0.0 < check["chord_miss"] < 1e-2
     assert check["decay_rate_with_model_error"] < 1.0 - 1e-6
-    # The check is the numpy one: each node's map decays from P_i to
-    # P(theta') at the grid's neighbours.
-    Ps = slow.Ps
-    assert mixed_norm(slow.reduced.maps[3], Ps[4], Ps[3]) <= check["decay_rate"]
+    # The check is the numpy one, and it bounds what it claims: the
+    # chord's map at any theta decays from P(theta) to P(theta') for
+    # every theta' within the step (sampled).
+    assert _sampled_rate(slow.reduced.maps, thetas, 1e-3, slow.Ps) <= (
+        check["decay_rate"] + 1e-9
+    )
 
 
-def test_the_rate_vertices_cover_the_neighbouring_cells_and_the_step():
+def _sampled_rate(maps, thetas, step, Ps, samples=4000):
+    rng = np.random.default_rng(3)
+    worst = 0.0
+    for t, d in zip(
+        rng.uniform(thetas[0], thetas[-1], samples),
+        rng.uniform(-step, step, samples),
+    ):
+        weights = certificate._weights(np.asarray(thetas), t)
+        A = sum(w * maps[j] for j, w in weights.items())
+        P = certificate._interpolated(Ps, thetas, t)
+        after = min(max(t + d, thetas[0]), thetas[-1])
+        P_to = certificate._interpolated(Ps, thetas, after)
+        worst = max(worst, mixed_norm(A, P_to, P))
+    return worst
+
+
+def test_a_slope_tied_to_the_next_one_needs_fewer_nodes():
+    # A node's map need not decay into its neighbours' P: on 9 nodes the
+    # tied program certifies what the neighbour-wise one needs 33 for.
+    thetas = np.linspace(0.0, np.pi / 2, 9)
+    maps = [_turned(t) for t in thetas]
+    mids = [_turned(0.5 * (a + b)) for a, b in zip(thetas[:-1], thetas[1:])]
+    cert = certify_rate_bounded(maps, thetas, 1e-3, ["a", "b"], mids=mids)
+    assert cert.status == "certified"
+    assert cert.to_dict()["program"] == "tied"
+    # Decaying into the next node's P is what the neighbour-wise program
+    # asks, and this P does not give it.
+    Ps = cert.Ps
+    assert mixed_norm(cert.reduced.maps[3], Ps[4], Ps[3]) > 1.0
+    assert _sampled_rate(cert.reduced.maps, thetas, 1e-3, Ps) <= (
+        cert.check["decay_rate"] + 1e-9
+    )
+
+
+def test_reach_covers_the_cells_within_the_step_on_each_side():
     thetas = [0.0, 1.0, 2.0, 3.0]
-    assert rate_vertices(thetas, 1, 0.25) == [0.0, 1.0, 2.0, 2.25]
-    assert rate_vertices(thetas, 3, 0.25) == [1.75, 2.0, 3.0]
+    assert reach(thetas, 1, 0.25) == [(-1, 0), (-1, 1), (1, 1), (1, 2)]
+    assert reach(thetas, 0, 1.5) == [(-1, 0), (1, 0), (1, 1), (1, 2)]
+    assert reach(thetas, 2, 0.25) == [(-1, 1), (-1, 2), (1, 2)]
+    assert reach(thetas, 1, 0.0) == [(1, 1)]
 
 
 def _turned_cells(edges):
@@ -453,7 +492,8 @@ def test_the_program_holds_only_the_inequalities_that_bind():
     assert not solve_common_lyapunov(maps[:5] + pair, 0.999).success
 
 
-def test_a_schedule_generates_its_inequalities_and_still_serves_every_map():
+@pytest.mark.parametrize("tied", [False, True])
+def test_a_schedule_generates_its_inequalities_and_still_serves_every_map(tied):
     from deburr_drake.analysis.certificate import solve_rate_bounded
 
     thetas = np.linspace(0.0, np.pi / 2, 65)
@@ -464,15 +504,14 @@ def test_a_schedule_generates_its_inequalities_and_still_serves_every_map():
     ]
     step = 1e-3
     gamma = 1.0 - 1e-4
-    Ps, status, success, stats = solve_rate_bounded(maps, thetas, step, gamma)
+    Ps, status, success, stats = solve_rate_bounded(
+        maps, thetas, step, gamma, tied=tied
+    )
     assert success, status
     assert stats["inequalities"] < stats["of"]
-    rate = max(
-        mixed_norm(A, certificate._interpolated(Ps, thetas, t), Ps[i])
-        for i, node in enumerate(maps)
-        for A in node
-        for t in rate_vertices(thetas, i, step)
-    )
+    # Each program's own numpy check: its P serves every map.
+    rate_of = schedule_rate if tied else certificate._node_rate
+    rate, _ = rate_of(maps, thetas, step, Ps)
     assert rate < gamma + 1e-7
 
 
