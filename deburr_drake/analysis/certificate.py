@@ -903,15 +903,29 @@ def _per_node(maps) -> List[List[np.ndarray]]:
     return [[m] if isinstance(m, np.ndarray) else list(m) for m in maps]
 
 
-def _solve_neighbourwise(
-    maps: Sequence[np.ndarray],
-    thetas: Sequence[float],
-    step: float,
-    gamma: float,
-    *,
-    solver: str = "Clarabel",
-    epsilon: float = 1e-9,
-) -> Tuple[Optional[List[np.ndarray]], str, bool, Dict]:
+def _solved(prog, Ps, solver):
+    """(the P_i's values or None, the result, success)."""
+    result = _SOLVERS[solver]().Solve(prog)
+    success = result.is_success()
+    values = [result.GetSolution(P) for P in Ps] if success else None
+    return values, result, success
+
+
+def _schedule_solution(solve, excess, groups, first):
+    """(Ps or None, solver status, success, {inequalities, of, rounds}):
+    a schedule program's answer from :func:`_generate`."""
+    (Ps, result, success), active, rounds = _generate(
+        solve, excess, groups, first
+    )
+    stats = {
+        "inequalities": len(active),
+        "of": sum(len(g) for g in groups),
+        "rounds": rounds,
+    }
+    return Ps, result.get_solution_result().name, success, stats
+
+
+def _solve_neighbourwise(maps, thetas, step, gamma, solver, epsilon):
     """P_i (one per grid node theta_i, P(theta) affine between nodes) with
     P_i >= I, P_i <= kappa I (kappa minimised) and A_i^T P(theta') A_i -
     gamma^2 P_i <= -epsilon I at every theta' of :func:`rate_vertices`,
@@ -942,10 +956,7 @@ def _solve_neighbourwise(
                 terms += [own * E - w * (A.T @ E @ A) for E in basis]
                 variables += flat[j]
             prog.AddLinearMatrixInequalityConstraint(terms, variables)
-        result = _SOLVERS[solver]().Solve(prog)
-        success = result.is_success()
-        values = [result.GetSolution(P) for P in Ps] if success else None
-        return values, result, success
+        return _solved(prog, Ps, solver)
 
     def excess(solution, key):
         i, a, t = key
@@ -959,15 +970,7 @@ def _solve_neighbourwise(
     first = {
         (i, largest[i], t) for i in range(N) for t in range(len(vertices[i]))
     }
-    (Ps, result, success), active, rounds = _generate(
-        solve, excess, groups, first
-    )
-    stats = {
-        "inequalities": len(active),
-        "of": sum(len(g) for g in groups),
-        "rounds": rounds,
-    }
-    return Ps, result.get_solution_result().name, success, stats
+    return _schedule_solution(solve, excess, groups, first)
 
 
 def solve_rate_bounded(
@@ -986,18 +989,10 @@ def solve_rate_bounded(
     tied to theta, less conservative, its LMIs spanning up to four
     nodes' variables)."""
     program = _solve_tied if tied else _solve_neighbourwise
-    return program(maps, thetas, step, gamma, solver=solver, epsilon=epsilon)
+    return program(maps, thetas, step, gamma, solver, epsilon)
 
 
-def _solve_tied(
-    maps: Sequence[np.ndarray],
-    thetas: Sequence[float],
-    step: float,
-    gamma: float,
-    *,
-    solver: str = "Clarabel",
-    epsilon: float = 1e-9,
-) -> Tuple[Optional[List[np.ndarray]], str, bool, Dict]:
+def _solve_tied(maps, thetas, step, gamma, solver, epsilon):
     """P_i (one per grid node theta_i, P(theta) affine between nodes) with
     P_i >= I, P_i <= kappa I (kappa minimised) and, on every cell and
     for every corner map and cell :func:`reach` can cross, each
@@ -1040,10 +1035,7 @@ def _solve_tied(
                 mats += list(gamma**2 * Pb.get(j, 0.0) - Ab.get(j, 0.0))
             variables = [v for j in nodes for v in flat[j]]
             prog.AddLinearMatrixInequalityConstraint(mats, variables)
-        result = _SOLVERS[solver]().Solve(prog)
-        success = result.is_success()
-        values = [result.GetSolution(P) for P in Ps] if success else None
-        return values, result, success
+        return _solved(prog, Ps, solver)
 
     def excess(solution, key):
         Pt, At = polya(key)
@@ -1060,15 +1052,7 @@ def _solve_tied(
         for c in range(N - 1)
     ]
     first = {key for g in groups for key in g if key[1] == largest[key[0]]}
-    (Ps, result, success), active, rounds = _generate(
-        solve, excess, groups, first
-    )
-    stats = {
-        "inequalities": len(active),
-        "of": sum(len(g) for g in groups),
-        "rounds": rounds,
-    }
-    return Ps, result.get_solution_result().name, success, stats
+    return _schedule_solution(solve, excess, groups, first)
 
 
 def _node_rate(maps, thetas, step, Ps):
@@ -1300,45 +1284,25 @@ def certify_rate_bounded(
     if max(radii) >= 1.0 - margin:
         out.reason = f"a node's own spectral radius is {max(radii):.6f}"
         return out
+    problem = (search, V, family, thetas, step, mid_maps, left_out)
     for tied in (False, True):
         # The neighbour-wise program asks more than the tied one: its
         # failure is not the family's.
         out.tied = tied
-        _bisect_schedule(
-            out,
-            search,
-            V,
-            family,
-            thetas,
-            step,
-            mid_maps,
-            left_out,
-            solver,
-            margin,
-            bisections,
-        )
+        _bisect_schedule(out, problem, solver, margin, bisections)
         if out.status == "certified":
             break
     return out
 
 
-def _bisect_schedule(
-    out,
-    search,
-    V,
-    family,
-    thetas,
-    step,
-    mid_maps,
-    left_out,
-    solver,
-    margin,
-    bisections,
-):
-    """Fills ``out`` from one program (``out.tied``): the first P(theta)
+def _bisect_schedule(out, problem, solver, margin, bisections):
+    """Fills ``out`` from one program (``out.tied``) on ``problem``
+    (search maps, their basis V, the family, the grid, the step, the
+    midpoints' maps, what is left out): the first P(theta)
     sits on its LMI's boundary at gamma = 1 - 10 margin, leaving no room
     for the chord's miss, so the decay rate is bisected towards the
     nodes' largest radius until a P passes the check."""
+    search, V, family, thetas, step, mid_maps, left_out = problem
     lo, gamma, best = max(out.spectral_radii), 1.0 - 10 * margin, None
     for attempt in range(bisections + 1):
         P_ws, status, success, out.inequalities = solve_rate_bounded(
