@@ -854,7 +854,7 @@ def _schedule_keys(maps, thetas, step) -> List[List[Tuple]]:
     ]
 
 
-def schedule_rate(maps, thetas, step, Ps, keys=None) -> Tuple[float, int]:
+def schedule_rate(maps, thetas, step, Ps) -> Tuple[float, int]:
     """(rate, cell): the least gamma for which every coefficient of
     :func:`_polya_terms` is positive semidefinite with these P_i (its P
     part is positive definite, so per coefficient the square root of the
@@ -864,7 +864,7 @@ def schedule_rate(maps, thetas, step, Ps, keys=None) -> Tuple[float, int]:
     ``step``."""
     maps = _per_node(maps)
     rate, worst = 0.0, 0
-    for group in keys or _schedule_keys(maps, thetas, step):
+    for group in _schedule_keys(maps, thetas, step):
         for c, a, sign, m, e in group:
             Pt, At = _polya_terms(
                 maps[c][a], maps[c + 1][a], c, sign, m, thetas, step
@@ -1286,8 +1286,9 @@ def certify_rate_bounded(
         return out
     problem = (search, V, family, thetas, step, mid_maps, left_out)
     for tied in (False, True):
-        # The neighbour-wise program asks more than the tied one: its
-        # failure is not the family's.
+        # The neighbour-wise program is the cheaper, but it asks each
+        # node's map to decay into its neighbours' P: its failure is not
+        # the family's.
         out.tied = tied
         _bisect_schedule(out, problem, solver, margin, bisections)
         if out.status == "certified":
