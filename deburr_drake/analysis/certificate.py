@@ -864,11 +864,13 @@ def schedule_rate(maps, thetas, step, Ps) -> Tuple[float, int]:
     ``step``."""
     maps = _per_node(maps)
     rate, worst = 0.0, 0
-    for group in _schedule_keys(maps, thetas, step):
-        for c, a, sign, m, e in group:
-            Pt, At = _polya_terms(
-                maps[c][a], maps[c + 1][a], c, sign, m, thetas, step
-            )[e]
+    quads = {
+        key[:4] for group in _schedule_keys(maps, thetas, step) for key in group
+    }
+    for c, a, sign, m in sorted(quads):
+        for Pt, At in _polya_terms(
+            maps[c][a], maps[c + 1][a], c, sign, m, thetas, step
+        ):
             r = _generalized_root(_value(At, Ps), _value(Pt, Ps))
             if r > rate:
                 rate, worst = r, c
@@ -1304,6 +1306,9 @@ def _bisect_schedule(out, problem, solver, margin, bisections):
     for the chord's miss, so the decay rate is bisected towards the
     nodes' largest radius until a P passes the check."""
     search, V, family, thetas, step, mid_maps, left_out = problem
+    # What ``out`` holds is this program's alone: a P and check left by
+    # the other program would be recorded under this one's name.
+    out.Ps, out.check, out.reason = None, None, ""
     lo, gamma, best = max(out.spectral_radii), 1.0 - 10 * margin, None
     for attempt in range(bisections + 1):
         P_ws, status, success, out.inequalities = solve_rate_bounded(
