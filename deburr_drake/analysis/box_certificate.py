@@ -94,11 +94,25 @@ ROOM_BISECTIONS = 6
 SCHEDULE_NODES = 9
 #: The parameters that are constants of a run (a material's cutting
 #: coefficient and contact threshold, the controller model's mass error)
-#: and the cells of the grid over each: a Lyapunov function per cell
-#: proves every constant value of the box, not values that jump between
-#: cells (the stiffness varies along the edge and the slopes with the
-#: adaptation: they stay time-varying).
-CONSTANT_CELLS = {"k_c": 5, "mass_scale": 1, "c0": 1}
+#: and the cells of the first grid over each: a Lyapunov function per
+#: cell proves every constant value of the box, not values that jump
+#: between cells (the stiffness varies along the edge: it stays
+#: time-varying). A fuzzy slope that is held at the operating point
+#: (:func:`slope_held`) is a constant too, in one cell at first.
+CONSTANT_CELLS = {"k_c": 1, "mass_scale": 1, "c0": 1}
+#: The affine slope model's largest miss of the true map (relative to
+#: the slopes' change of it) with which it is used; finite-difference
+#: round-off is about 1e-8.
+SLOPE_MODEL_TOLERANCE = 1e-6
+#: How many times a cell that is not certified may be halved along one
+#: constant (down to 1/16 of its range), and how many cells are tried
+#: at most: the search's cost is a program per cell tried.
+MAX_HALVINGS = 4
+MAX_CELLS = 80
+#: A held slope may be halved more: near a slope of zero the loop's
+#: lightly damped pair turns with it (docs/certify.md), and the halvings
+#: towards that end are geometric (down to 1/512 of the range).
+MAX_SLOPE_HALVINGS = 9
 #: The box's parameters by short key (``certify``'s ``only``).
 BOX_KEYS = {
     "part.material.hydroelastic_modulus": "stiffness",
@@ -127,8 +141,9 @@ PROVES = (
     "every vertex map)"
 )
 DOES_NOT_PROVE = (
-    "a constant parameter (k_c, c0, the mass scale) jumping between the "
-    "cells of its grid while the loop runs, loss of contact, burr "
+    "a constant parameter (k_c, c0, the mass scale, a held slope) "
+    "jumping between the cells of its grid while the loop runs, a held "
+    "slope once its s leaves the adaptation's dead zone, loss of contact, burr "
     "impacts, the depth^1.4 contact away from the operating point, the "
     "outer loop and the adaptation's own dynamics (frozen), a negative "
     "slope of the fuzzy surface, the feed's range and other poses along "
@@ -155,9 +170,11 @@ C_HAT = (
 
 
 def _fuzzy_point(op) -> List[Dict]:
-    """[{axis, s0, slope}] per fuzzy axis: the operating s_k (m/s) and
-    the learned surface's local slope there (N s/m)."""
+    """[{axis, s0, slope, held}] per fuzzy axis: the operating s_k (m/s),
+    the learned surface's local slope there (N s/m) and why the slope is
+    a constant of the loop there (:func:`slope_held`, None if not)."""
     controller = op.diagram.GetSubsystemByName("controller")
+    fuzzy = op.scenario.controller.fuzzy
     cc = controller.GetMyContextFromRoot(op.context)
     diagnostics = controller.GetOutputPort("diagnostics").Eval(cc)
     s = CONTROLLER_DIAGNOSTICS.get(diagnostics, "s")
@@ -172,8 +189,38 @@ def _fuzzy_point(op) -> List[Dict]:
             rb.evaluate(theta[k], y0, s[axis] + h)
             - rb.evaluate(theta[k], y0, s[axis] - h)
         ) / (2 * h)
-        out.append({"axis": int(axis), "s0": float(s[axis]), "slope": slope})
+        out.append(
+            {
+                "axis": int(axis),
+                "s0": float(s[axis]),
+                "slope": slope,
+                "held": slope_held(rb, float(s[axis]), theta[k], fuzzy),
+            }
+        )
     return out
+
+
+def slope_held(rb, s0: float, theta, fuzzy) -> Optional[str]:
+    """Why the surface's slope on ``rb``'s axis is a constant of the loop
+    near the operating point (None when it is not): the rules do not
+    adapt, or the operating s_k is inside the adaptation's dead zone,
+    where the law (35) is zero for every |s_k| below its half-width (not
+    only to first order), and the slope bound pulls no weight."""
+    if not fuzzy.adapt:
+        return "the rules do not adapt"
+    hw = rb.resolved_dead_zone_half_width
+    if abs(s0) >= hw:
+        return None
+    max_slope = float(fuzzy.max_slope) if fuzzy.max_slope > 0 else np.inf
+    pull = rb.slope_rate(theta, max_slope, float(fuzzy.max_slope_rate))
+    if np.any(pull != 0.0):
+        return None
+    return (
+        f"the operating s ({s0 * 1e3:.3g} mm/s) is inside the adaptation's "
+        f"dead zone ({hw * 1e3:.3g} mm/s): its rules do not move while "
+        f"|s| stays below {hw * 1e3:.3g} mm/s, and no slope is beyond the "
+        "bound"
+    )
 
 
 def _pivoted_slope(k: int, added: float, s0: float) -> Callable:
@@ -255,6 +302,7 @@ class _Maps:
         # Each map once per certify call: cells share their corners.
         self.taken: Dict[tuple, np.ndarray] = {}
         self.moved, self.residuals = [], []
+        self.affine = True
 
     def frozen(self, fields) -> FrozenMap:
         key = tuple(sorted(fields.items()))
@@ -265,10 +313,69 @@ class _Maps:
         return self._frozen[key]
 
     def __call__(self, values) -> np.ndarray:
+        """The map at ``values``: the fuzzy slopes are gains of the held
+        actuation (u_f gains slope x (s_k - s0) about the same steady
+        state), and the one-period map is affine in them, so it is taken
+        from the true maps at the slopes' low ends and at each one's high
+        end alone (:meth:`slope_model_miss` measures the rest)."""
+        slopes = [p for p in self.box if p["field"] is None]
+        if not self.affine:
+            return self.true(values)
+        low = {**values, **{p["name"]: p["range"][0] for p in slopes}}
+        base = self.true(low)
+        A = base
+        for p in slopes:
+            lo, hi = p["range"]
+            t = (values[p["name"]] - lo) / (hi - lo)
+            if t != 0.0:
+                A = A + t * (self.true({**low, p["name"]: hi}) - base)
+        return A
+
+    def true(self, values) -> np.ndarray:
+        """The map taken at ``values`` (each once per certify call)."""
         key = tuple(sorted(values.items()))
         if key not in self.taken:
             self.taken[key] = self._take(values)
         return self.taken[key]
+
+    def check_slope_model(self) -> Dict:
+        """The affine slope model's miss at the box's nominal values
+        (:meth:`slope_model_miss`); a model that misses by more than
+        ``SLOPE_MODEL_TOLERANCE`` is not used: every map is then a true
+        one."""
+        out = self.slope_model_miss({p["name"]: p["nominal"] for p in self.box})
+        self.affine = out.get("miss_at_nominal", 0.0) <= SLOPE_MODEL_TOLERANCE
+        out["used"] = self.affine
+        return out
+
+    def slope_model_miss(self, values) -> Dict:
+        """The affine slope model against the true map at ``values``
+        (relative to the map's change over the slopes' ranges, balanced as
+        the map): finite-difference round-off when it holds."""
+        affine, self.affine = self.affine, True
+        A, model = self.true(values), self(values)
+        self.affine = affine
+        slopes = [p for p in self.box if p["field"] is None]
+        if not slopes:
+            return {"slopes": 0}
+        balanced = _balancer(A)
+        low = {**values, **{p["name"]: p["range"][0] for p in slopes}}
+        change = sum(
+            np.linalg.norm(
+                balanced(
+                    self.true({**low, p["name"]: p["range"][1]})
+                    - self.true(low)
+                )
+            )
+            for p in slopes
+        )
+        return {
+            "maps": "affine in the fuzzy slopes, from the true maps at their "
+            "low ends and at each one's high end",
+            "miss_at_nominal": float(
+                np.linalg.norm(balanced(model - A)) / max(change, 1e-300)
+            ),
+        }
 
     def _take(self, values) -> np.ndarray:
         box = self.box
@@ -334,6 +441,7 @@ def _box(op) -> List[Dict]:
                     "range": [0.0, max_slope],
                     "fuzzy_index": k,
                     "s0": point["s0"],
+                    "held": point["held"],
                 }
             )
     return box
@@ -487,11 +595,16 @@ def _rate_step(op, p, period: float) -> Dict:
 
 
 def _slopes_by_move(box, maps) -> List[int]:
-    """The indices in ``box`` of the fuzzy slopes, the one whose ends move
-    the map most (balanced by the nominal map's scaling) first."""
+    """The indices in ``box`` of the moving fuzzy slopes (not held as
+    constants), the one whose ends move the map most (balanced by the
+    nominal map's scaling) first."""
     balanced = _balancer(maps["A0"])
     return sorted(
-        (j for j, p in enumerate(box) if p["field"] is None),
+        (
+            j
+            for j, p in enumerate(box)
+            if p["field"] is None and not p.get("constant")
+        ),
         key=lambda j: (
             -np.linalg.norm(balanced(maps["ends"][j][1] - maps["ends"][j][0]))
         ),
@@ -499,11 +612,15 @@ def _slopes_by_move(box, maps) -> List[int]:
 
 
 def _slope_ends(box, maps, solver):
-    """(index in ``box``, certificate) of the first slope (in
-    :func:`_slopes_by_move`'s order) whose two ends, with the nominal map,
-    have no common P (the whole family then has none: the program on it
-    need not run); (None, None) if every slope's do."""
-    for j in _slopes_by_move(box, maps):
+    """(index in ``box``, certificate) of the first slope (the held ones,
+    then the moving ones in :func:`_slopes_by_move`'s order) whose two
+    ends, with the nominal map, have no common P (the whole family then
+    has none: the program on it need not run); (None, None) if every
+    slope's do."""
+    held = [
+        j for j, p in enumerate(box) if p["field"] is None and p.get("constant")
+    ]
+    for j in held + _slopes_by_move(box, maps):
         cert = certify_family(
             [maps["A0"], *maps["ends"][j]],
             maps["labels"],
@@ -630,6 +747,7 @@ _BOX_FIELDS = (
     "nominal",
     "range",
     "s0",
+    "held",
     "constant",
 )
 
@@ -648,9 +766,10 @@ def _select_box(box: List[Dict], only: Optional[List[str]]) -> List[Dict]:
     return [p for p in box if p["key"] in only]
 
 
-def _common_quadratic(family, box, maps, axes, solver, bisections):
+def _common_quadratic(family, box, maps, axes, solver, bisections, name):
     """(certificate, what the corners leave out) of one common quadratic
-    Lyapunov function of ``family``."""
+    Lyapunov function of ``family`` (``name``: its breaking map searched
+    for when there is none)."""
 
     def room(cert):
         return "status" not in _model_error(cert, box, maps, axes)
@@ -664,6 +783,7 @@ def _common_quadratic(family, box, maps, axes, solver, bisections):
         solver=solver,
         bisections=max(bisections, ROOM_BISECTIONS),
         enough=None if bisections else room,
+        name_breaking=name,
     )
     error = _model_error(cert, box, maps, axes) if cert.P is not None else {}
     return cert, error
@@ -707,7 +827,7 @@ def _schedule_worth_trying(cert, error: Dict, box: List[Dict]) -> bool:
     return (
         error.get("status", cert.status) != "certified"
         and max(cert.spectral_radii) < 1.0
-        and any(p["field"] is None for p in box)
+        and any(p["field"] is None and not p.get("constant") for p in box)
     )
 
 
@@ -732,6 +852,74 @@ def _cells(box: List[Dict], cells: Dict[str, int]) -> List[List[Dict]]:
     return out
 
 
+def _halves(cell: List[Dict], j: int) -> List[List[Dict]]:
+    """The two halves of ``cell`` along its constant ``j``."""
+    lo, hi = cell[j]["range"]
+    out = []
+    for a, b in ((lo, 0.5 * (lo + hi)), (0.5 * (lo + hi), hi)):
+        half = [dict(p) for p in cell]
+        half[j].update(
+            range=[a, b],
+            nominal=0.5 * (a + b),
+            halvings=cell[j].get("halvings", 0) + 1,
+        )
+        out.append(half)
+    return out
+
+
+def _open_constants(cell: List[Dict]) -> List[int]:
+    """The constants of ``cell`` that may still be halved."""
+    return [
+        j
+        for j, p in enumerate(cell)
+        if p.get("constant")
+        and p.get("halvings", 0)
+        < (MAX_SLOPE_HALVINGS if p["field"] is None else MAX_HALVINGS)
+    ]
+
+
+def _split_axis(cell: List[Dict], result: Dict) -> Optional[int]:
+    """The constant to halve a cell that is not certified along: a held
+    slope whose ends have no common P, else the constant whose range in
+    the cell moves the map most; None when the cell has a map unstable
+    by itself (no narrower cell takes it out) or no constant to halve."""
+    candidates = _open_constants(cell)
+    if not candidates or not result["_stable"]:
+        return None
+    if result.get("_ends_failed") in candidates:
+        return result["_ends_failed"]
+    return max(candidates, key=lambda j: result["_moves"][j])
+
+
+def search_cells(
+    grid: List[List[Dict]],
+    try_cell: Callable[[List[Dict], bool], Dict],
+    max_cells: int = MAX_CELLS,
+) -> List[Dict]:
+    """Every cell's result: the cells of ``grid`` tried in order
+    (``try_cell(cell, splittable)``); one that is not certified is
+    halved (:func:`_split_axis`) and its halves tried in its place. The
+    search stops at a cell that is not certified and cannot be halved
+    (or after ``max_cells`` tries): the certificate holds only if it
+    ends with every cell tried certified or halved."""
+    pending, results = list(grid), []
+    while pending:
+        cell = pending.pop(0)
+        splittable = (
+            bool(_open_constants(cell)) and len(results) + 1 < max_cells
+        )
+        result = try_cell(cell, splittable)
+        results.append(result)
+        if result["status"] == "certified":
+            continue
+        j = _split_axis(cell, result) if splittable else None
+        if j is None:
+            break
+        result["halved"] = cell[j]["key"]
+        pending[:0] = _halves(cell, j)
+    return results
+
+
 def _stable(family) -> bool:
     """Every map's own spectral radius below 1 (else the family's program
     names the unstable one at once)."""
@@ -741,9 +929,11 @@ def _stable(family) -> bool:
     )
 
 
-def _certify_cell(op, box, maps_at, options, say) -> Dict:
+def _certify_cell(op, box, maps_at, options, say, splittable=False) -> Dict:
     """The certificate of one cell's box (every parameter time-varying
-    within it): the common quadratic P, then, if it fails, P(slope)."""
+    within it): the common quadratic P, then, if it fails and the cell
+    will not be halved (``splittable`` False) and is one of the first
+    grid's, P(slope) of a slope that is not held."""
     solver, threshold, bisections = options
     timings = {}
     t1 = time.perf_counter()
@@ -760,13 +950,13 @@ def _certify_cell(op, box, maps_at, options, say) -> Dict:
     family = [A0] + [m for pair in ends for m in pair] + corners
     names = _map_names(box, signs)
     t2 = time.perf_counter()
-    k, cert = (
-        _slope_ends(box, maps, solver) if _stable(family) else (None, None)
-    )
+    stable = _stable(family)
+    k, cert = _slope_ends(box, maps, solver) if stable else (None, None)
+    ends_failed = k
     if cert is None:
         say(f"common Lyapunov function of {len(family)} maps ({solver})")
         cert, error = _common_quadratic(
-            family, box, maps, axes, solver, bisections
+            family, box, maps, axes, solver, bisections, not splittable
         )
     else:
         # A subset with no common P: the family has none either.
@@ -776,10 +966,22 @@ def _certify_cell(op, box, maps_at, options, say) -> Dict:
         error = {"common_quadratic_family": f"the ends of {box[k]['key']}"}
     timings["program_s"] = time.perf_counter() - t2
     scheduled = None
-    if _schedule_worth_trying(cert, error, box):
+    # A held slope's ends with no common P, at the other parameters'
+    # nominal values, have none for any P of a moving slope either; and a
+    # halved cell's schedule is a program over nodes x corners that can
+    # run for tens of minutes (docs/certify.md): only the first grid's.
+    held_failed = k is not None and box[k].get("constant")
+    halved = any(p.get("halvings", 0) for p in box)
+    if (
+        not splittable
+        and not held_failed
+        and not halved
+        and _schedule_worth_trying(cert, error, box)
+    ):
         t3 = time.perf_counter()
-        # Else the slope that moves the map most.
-        k = _slopes_by_move(box, maps)[0] if k is None else k
+        # Else the moving slope that moves the map most.
+        if k is None or box[k].get("constant"):
+            k = _slopes_by_move(box, maps)[0]
         scheduled = _scheduled(op, box, maps_at, maps, axes, k, solver, say)
         timings["scheduled_s"] = time.perf_counter() - t3
     result = cert.to_dict()
@@ -794,6 +996,10 @@ def _certify_cell(op, box, maps_at, options, say) -> Dict:
     result["timings_s"] = timings
     result["box"] = [{k: p[k] for k in _BOX_FIELDS if k in p} for p in box]
     result["_maps"] = {"family": family, "names": names}
+    # What the search over cells halves by (search_cells).
+    balanced = _balancer(A0)
+    result["_moves"] = [np.linalg.norm(balanced(hi - lo)) for lo, hi in ends]
+    result["_ends_failed"], result["_stable"] = ends_failed, stable
     result["sampling_period_s"] = maps["period"]
     result["labels"] = maps["labels"]
     return result
@@ -803,6 +1009,7 @@ def _cell_record(cell: Dict) -> Dict:
     """What certificate.json says of one cell."""
     keys = (
         "status",
+        "halved",
         "decay_rate_per_period",
         "decay_rate_with_model_error",
         "P_condition",
@@ -821,32 +1028,67 @@ def _cell_record(cell: Dict) -> Dict:
 
 def _worst_cell(results: List[Dict]) -> Dict:
     """The cell that decides: the last tried when it is not certified (the
-    search stops at the first), else the one with the largest decay rate
-    with what its corners leave out."""
+    search stops there), else the certified one with the largest decay
+    rate with what its corners leave out."""
     if results[-1]["status"] != "certified":
         return results[-1]
     return max(
-        results,
+        _leaves(results),
         key=lambda r: (
             r.get("decay_rate_with_model_error") or r["decay_rate_per_period"]
         ),
     )
 
 
-def _proves_cells(proves: str, cells: List[Dict]) -> str:
+def _leaves(results: List[Dict]) -> List[Dict]:
+    """The cells that were not halved: the certificate's own."""
+    return [r for r in results if "halved" not in r]
+
+
+def _proves_cells(proves: str, box: List[Dict], results: List[Dict]) -> str:
     """What a certificate over cells of constants proves."""
-    constants = [p["name"] for p in cells[0] if p.get("constant")]
+    constants = [p for p in results[0]["_cell"] if p.get("constant")]
     if not constants:
         return proves
     proves = proves.replace(
         "of the parameters within the box", "of the other parameters"
     )
-    return (
-        f"for every constant value of the {', '.join(constants)} within the "
-        f"box (a Lyapunov function for each of the {len(cells)} cells of a "
-        "grid over them, each also covering their variation within its "
-        f"cell): {proves}"
+    held = "".join(
+        f" ({p['key']} is held: {p['held']})" for p in box if p.get("held")
     )
+    return (
+        f"for every constant value of the "
+        f"{', '.join(p['name'] for p in constants)} within the box (a "
+        f"Lyapunov function for each of the {len(_leaves(results))} cells "
+        "of a grid over them, each also covering their variation within "
+        f"its cell){held}: {proves}"
+    )
+
+
+def _first_grid(box: List[Dict], cells: Optional[Dict[str, int]]) -> Dict:
+    """The first grid's cells by key: ``cells``, or ``CONSTANT_CELLS``
+    with one cell along each held slope ({}: no constants)."""
+    if cells is not None:
+        return cells
+    held = {p["key"]: 1 for p in box if p.get("held")}
+    return {**held, **CONSTANT_CELLS}
+
+
+def _constants_text(cell: List[Dict]) -> str:
+    return (
+        ", ".join(
+            f"{p['key']} {p['range'][0]:.4g}-{p['range'][1]:.4g}"
+            for p in cell
+            if p.get("constant")
+        )
+        or "the box"
+    )
+
+
+def _tried_text(results: List[Dict]) -> str:
+    halved = len(results) - len(_leaves(results))
+    certified = sum(r["status"] == "certified" for r in results)
+    return f"{len(results)} tried: {certified} certified, {halved} halved"
 
 
 def certify(
@@ -870,9 +1112,10 @@ def certify(
     rate); each map at its steady state after ``settle_periods`` periods
     (:func:`steady_context`); ``only``: the parameters by key (``BOX_KEYS``,
     ``slope_x1``...; []: the nominal map), the others nominal; ``cells``:
-    the constants' cells by key (``CONSTANT_CELLS`` by default; {}: every
-    parameter time-varying), a certificate per cell, the search stopping
-    at the first cell not certified."""
+    the first grid's cells by key (``CONSTANT_CELLS`` and one along each
+    held slope by default; {}: every parameter time-varying), a
+    certificate per cell, a cell not certified halved
+    (:func:`search_cells`) until one cannot be."""
     say = progress or (lambda message: None)
     t0 = time.perf_counter()
     run_scenario = at_numerics(scenario, numerics)
@@ -881,15 +1124,19 @@ def certify(
     timings = {"operating_point_s": time.perf_counter() - t0}
     box = _select_box(_box(op), only)
     maps_at = _Maps(op, box, settle_periods)
-    grid = _cells(box, CONSTANT_CELLS if cells is None else cells)
-    results = []
-    for i, cell in enumerate(grid):
-        if len(grid) > 1:
-            say(f"cell {i + 1} of {len(grid)}")
-        options = (solver, vertex_threshold, bisections)
-        results.append(_certify_cell(op, cell, maps_at, options, say))
-        if results[-1]["status"] != "certified":
-            break
+    slope_model = maps_at.check_slope_model()
+    grid = _cells(box, _first_grid(box, cells))
+    options = (solver, vertex_threshold, bisections)
+
+    tried = itertools.count(1)
+
+    def try_cell(cell, splittable):
+        say(f"cell {next(tried)}: {_constants_text(cell)}")
+        result = _certify_cell(op, cell, maps_at, options, say, splittable)
+        result["_cell"] = cell
+        return result
+
+    results = search_cells(grid, try_cell)
     result = dict(_worst_cell(results))
     for r in results:
         for k, v in r["timings_s"].items():
@@ -902,7 +1149,8 @@ def certify(
             "operating_point": op.summary(),
             "box": [{k: p[k] for k in _BOX_FIELDS if k in p} for p in box],
             "constant_cells": [_cell_record(r) for r in results],
-            "cells_tried": f"{len(results)} of {len(grid)}",
+            "cells_tried": _tried_text(results),
+            "slope_model": slope_model,
             "contact_estimates": C_HAT,
             "steady_state": {
                 "settle_periods": settle_periods,
@@ -910,7 +1158,7 @@ def certify(
                 "largest_desired_force_residual_N": max(maps_at.residuals),
             },
             "vertices": len(maps_at.taken),
-            "proves": _proves_cells(result["proves"], grid),
+            "proves": _proves_cells(result["proves"], box, results),
             "does_not_prove": DOES_NOT_PROVE,
             "timings_s": {**timings, "total": time.perf_counter() - t0},
             "_maps": {
@@ -964,10 +1212,15 @@ def certificate_summary(result: Dict) -> str:
         )
     cells = result.get("constant_cells", [])
     if len(cells) > 1 or (cells and cells[0]["constants"]):
+        # The halved cells are in certificate.json; the leaves decide.
         lines.append(
             "  a certificate per cell of the constants: "
-            f"{result['cells_tried']} cells tried, "
-            + ", ".join(f"{c['status']} ({_cell_text(c)})" for c in cells)
+            f"{result['cells_tried']}; "
+            + ", ".join(
+                f"{c['status']} ({_cell_text(c)})"
+                for c in cells
+                if not c.get("halved")
+            )
         )
     # With a slope scheduled, the common P's break is what led to it.
     broken = "the common P " if result.get("scheduled") else ""

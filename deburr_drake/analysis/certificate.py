@@ -549,15 +549,19 @@ def _breaking_map(search, family, V, radii, solver, margin, gamma) -> tuple:
     )
 
 
-def _by_program(cert, search, family, V, radii, solver, margin, hi):
+def _by_program(cert, search, family, V, radii, solver, margin, hi, name):
     """The program's P at decay rate ``hi`` (None when there is none, with
-    ``cert`` then not_certified naming the breaking map, or inconclusive
-    when the solver's P fails the check); ``cert`` records the solve."""
+    ``cert`` then not_certified naming the breaking map when ``name``, or
+    inconclusive when the solver's P fails the check); ``cert`` records
+    the solve."""
     solution, check = _feasible(search, hi, solver, margin, V, family)
     cert.solves, cert.check = 1, check
     cert.solver_status = solution.status
     if not solution.success:
         cert.status = "not_certified"
+        if not name:
+            cert.breaking_reason = "no common P of the family"
+            return None
         index, reason, solves = _breaking_map(
             search, family, V, radii, solver, margin, hi
         )
@@ -586,6 +590,7 @@ def certify_family(
     bisections: int = 8,
     neutral_tolerance: float = 1e-6,
     enough: Optional[Callable[[Certificate], bool]] = None,
+    name_breaking: bool = True,
 ) -> Certificate:
     """The certificate of the family ``maps`` (``maps[0]`` nominal) over
     states ``labels``: reduced (:func:`reduce_family`); P searched in the
@@ -598,7 +603,9 @@ def certify_family(
     no P exists) for the best decay rate, or, with ``enough``, until
     ``enough(cert)`` (the checked P so far) says it is enough (each step is
     a solve). Infeasible: not_certified, with the breaking map; solved but
-    failing the check: inconclusive."""
+    failing the check: inconclusive. ``name_breaking`` False: an
+    infeasible family's breaking map is not searched for (a bisection of
+    solves; a caller that splits the family next has no use for it)."""
     reduced = reduce_family(maps, labels, neutral_tolerance=neutral_tolerance)
     family = reduced.maps
     radii = [float(np.max(np.abs(np.linalg.eigvals(A)))) for A in family]
@@ -633,7 +640,9 @@ def certify_family(
             best, cert.check, cert.found_by = P, check, FOUND_BY_NOMINAL
             hi = min(hi, check["decay_rate"])
     if best is None:
-        best = _by_program(cert, search, family, V, radii, solver, margin, hi)
+        best = _by_program(
+            cert, search, family, V, radii, solver, margin, hi, name_breaking
+        )
         if best is None:
             return cert
     lo = max(radii)

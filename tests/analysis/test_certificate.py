@@ -536,3 +536,90 @@ def test_a_slope_whose_ends_have_no_common_p_is_found_before_the_family():
     assert k == 2 and cert.status == "not_certified"
     maps["ends"][2] = (0.3 * np.eye(2), 0.7 * np.eye(2))
     assert _slope_ends(box, maps, "Clarabel") == (None, None)
+
+
+def _turned_try(cell, splittable):
+    """A cell of the constant theta of the turned family, certified by
+    one P of its centre's and ends' maps (the result keys search_cells
+    reads)."""
+    lo, hi = cell[0]["range"]
+    mid = 0.5 * (lo + hi)
+    a, b, m = _turned(lo), _turned(hi), _turned(mid)
+    cert = certify_family([m, a, b], ["a", "b"], bisections=6)
+    status = cert.status
+    if status == "certified":
+        miss = p_norm(cert.reduced.transform(m - 0.5 * (a + b)), cert.P)
+        status = "certified" if cert.decay_rate + miss < 1.0 else "inconclusive"
+    radii = max(np.max(np.abs(np.linalg.eigvals(A))) for A in (a, b, m))
+    return {
+        "status": status,
+        "range": [lo, hi],
+        "_stable": radii < 1.0,
+        "_moves": [np.linalg.norm(b - a)],
+        "_ends_failed": None,
+    }
+
+
+def test_a_cell_that_is_not_certified_is_halved_until_its_halves_are():
+    from deburr_drake.analysis.box_certificate import search_cells
+
+    box = [
+        {
+            "key": "theta",
+            "field": "f",
+            "range": [0.0, np.pi / 2],
+            "nominal": np.pi / 4,
+            "constant": True,
+        }
+    ]
+    results = search_cells([box], _turned_try)
+    leaves = [r for r in results if "halved" not in r]
+    assert all(r["status"] == "certified" for r in leaves)
+    # The whole range has no common P: it was halved, and the certified
+    # cells tile the range without a gap.
+    assert results[0]["halved"] == "theta" and len(leaves) > 1
+    edges = sorted(r["range"] for r in leaves)
+    assert edges[0][0] == 0.0 and edges[-1][1] == pytest.approx(np.pi / 2)
+    for (_, hi), (lo, _) in zip(edges[:-1], edges[1:]):
+        assert hi == lo
+    # A cell that cannot be halved any more ends the search uncertified.
+    narrow = search_cells([box], _turned_try, max_cells=1)
+    assert len(narrow) == 1 and narrow[0]["status"] != "certified"
+    assert "halved" not in narrow[0]
+
+
+def test_a_cell_with_a_map_unstable_by_itself_is_not_halved():
+    from deburr_drake.analysis.box_certificate import search_cells
+
+    box = [{"key": "c", "field": "f", "range": [0.0, 1.0], "constant": True}]
+
+    def unstable(cell, splittable):
+        return {"status": "not_certified", "_stable": False, "_moves": [1.0]}
+
+    results = search_cells([box], unstable)
+    assert len(results) == 1 and "halved" not in results[0]
+
+
+def test_a_slope_is_held_only_inside_the_dead_zone_and_within_its_bound():
+    from deburr_drake.analysis.box_certificate import slope_held
+    from deburr_drake.config.control import FuzzyConfig
+    from deburr_drake.math.fuzzy import RuleBase
+
+    rb = RuleBase(
+        m=2, upsilon=5, delta0=0.01, deltak=0.004, dead_zone_half_width=3e-4
+    )
+    fuzzy = FuzzyConfig(max_slope=3000.0)
+    j = np.arange(-5, 6)
+    # A surface of slope 1000 N s/m along s_k: within the bound.
+    theta = np.tile(1000.0 * j * 0.004, (11, 1)).ravel()
+    assert "dead zone" in slope_held(rb, 2.4e-4, theta, fuzzy)
+    assert slope_held(rb, -2.4e-4, theta, fuzzy) is not None
+    # Outside the dead zone the law moves the rules.
+    assert slope_held(rb, 8.7e-4, theta, fuzzy) is None
+    # A slope beyond the bound anywhere: the bound pulls the rules.
+    steep = theta.copy()
+    steep[5] += 100.0
+    assert slope_held(rb, 2.4e-4, steep, fuzzy) is None
+    # Rules that do not adapt hold whatever s is.
+    fuzzy.adapt = False
+    assert slope_held(rb, 8.7e-4, steep, fuzzy) == "the rules do not adapt"
