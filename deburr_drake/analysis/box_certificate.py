@@ -98,8 +98,10 @@ SCHEDULE_NODES = 9
 #: cell proves every constant value of the box, not values that jump
 #: between cells (the stiffness varies along the edge: it stays
 #: time-varying). A fuzzy slope that is held at the operating point
-#: (:func:`slope_held`) is a constant too, in one cell at first.
-CONSTANT_CELLS = {"k_c": 1, "mass_scale": 1, "c0": 1}
+#: (:func:`slope_held`) is a constant too, in one cell at first. k_c
+#: starts in 4: over its whole range its curvature alone (0.0072 in P's
+#: norm on paper) is more than the slowest mode leaves (0.0014).
+CONSTANT_CELLS = {"k_c": 4, "mass_scale": 1, "c0": 1}
 #: The affine slope model's largest miss of the true map (relative to
 #: the slopes' change of it) with which it is used; finite-difference
 #: round-off is about 1e-8.
@@ -766,10 +768,11 @@ def _select_box(box: List[Dict], only: Optional[List[str]]) -> List[Dict]:
     return [p for p in box if p["key"] in only]
 
 
-def _common_quadratic(family, box, maps, axes, solver, bisections, name):
+def _common_quadratic(family, box, maps, axes, solver, bisections, final):
     """(certificate, what the corners leave out) of one common quadratic
-    Lyapunov function of ``family`` (``name``: its breaking map searched
-    for when there is none)."""
+    Lyapunov function of ``family`` (``final``: the cell will not be
+    halved, so its breaking map is searched for when there is none, and
+    its decay rate bisected for room)."""
 
     def room(cert):
         return "status" not in _model_error(cert, box, maps, axes)
@@ -777,13 +780,15 @@ def _common_quadratic(family, box, maps, axes, solver, bisections, name):
     # The first P sits on its LMI's boundary at gamma = 1 - 1e-5: the
     # decay rate is bisected until it leaves room for what the corners
     # leave out (asked for bisections: all of them, for the best rate).
+    # A cell that will be halved is not: halving quarters the curvature,
+    # and on paper a bisection's solve near the least rate takes ~100 s.
     cert = certify_family(
         family,
         maps["labels"],
         solver=solver,
-        bisections=max(bisections, ROOM_BISECTIONS),
+        bisections=max(bisections, ROOM_BISECTIONS if final else 0),
         enough=None if bisections else room,
-        name_breaking=name,
+        name_breaking=final,
     )
     error = _model_error(cert, box, maps, axes) if cert.P is not None else {}
     return cert, error
@@ -882,12 +887,18 @@ def _split_axis(cell: List[Dict], result: Dict) -> Optional[int]:
     """The constant to halve a cell that is not certified along: a held
     slope whose ends have no common P, else the constant whose range in
     the cell moves the map most; None when the cell has a map unstable
-    by itself (no narrower cell takes it out) or no constant to halve."""
+    by itself (no narrower cell takes it out), a moving slope whose ends
+    at the cell's centre have no common P (a schedule's job, tried on the
+    first grid's cells, not a narrower cell's) or no constant to
+    halve."""
     candidates = _open_constants(cell)
+    ends = result.get("_ends_failed")
     if not candidates or not result["_stable"]:
         return None
-    if result.get("_ends_failed") in candidates:
-        return result["_ends_failed"]
+    if ends is not None and not cell[ends].get("constant"):
+        return None
+    if ends in candidates:
+        return ends
     return max(candidates, key=lambda j: result["_moves"][j])
 
 
@@ -972,8 +983,11 @@ def _certify_cell(op, box, maps_at, options, say, splittable=False) -> Dict:
     # run for tens of minutes (docs/certify.md): only the first grid's.
     held_failed = k is not None and box[k].get("constant")
     halved = any(p.get("halvings", 0) for p in box)
+    # A moving slope's ends with no common P are not taken out by a
+    # narrower cell of the constants (search_cells does not halve it).
+    moving_failed = k is not None and not held_failed
     if (
-        not splittable
+        (moving_failed or not splittable)
         and not held_failed
         and not halved
         and _schedule_worth_trying(cert, error, box)
@@ -1134,6 +1148,8 @@ def certify(
         say(f"cell {next(tried)}: {_constants_text(cell)}")
         result = _certify_cell(op, cell, maps_at, options, say, splittable)
         result["_cell"] = cell
+        why = result.get("breaking_reason")
+        say(f"{result['status']}" + (f": {why}" if why else ""))
         return result
 
     results = search_cells(grid, try_cell)

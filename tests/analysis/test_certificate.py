@@ -600,6 +600,38 @@ def test_a_cell_with_a_map_unstable_by_itself_is_not_halved():
     assert len(results) == 1 and "halved" not in results[0]
 
 
+def test_a_cell_is_halved_along_a_held_slope_whose_ends_fail_not_a_moving_one():
+    from deburr_drake.analysis.box_certificate import search_cells
+
+    box = [
+        {"key": "c", "field": "f", "range": [0.0, 1.0], "constant": True},
+        {"key": "held", "field": None, "range": [0.0, 1.0], "constant": True},
+        {"key": "moving", "field": None, "range": [0.0, 1.0]},
+    ]
+
+    def ends_fail(j):
+        def try_cell(cell, splittable):
+            return {
+                "status": "not_certified",
+                "_stable": True,
+                "_moves": [1.0, 0.1, 5.0],
+                "_ends_failed": j,
+            }
+
+        return try_cell
+
+    # The held slope's ends: halved along it, though c moves the map more.
+    held = search_cells([box], ends_fail(1), max_cells=3)
+    assert held[0]["halved"] == "held"
+    # No ends fail: along the constant that moves the map most (the
+    # moving slope is not a constant).
+    none = search_cells([box], ends_fail(None), max_cells=3)
+    assert none[0]["halved"] == "c"
+    # The moving slope's ends: not halved at all.
+    moving = search_cells([box], ends_fail(2))
+    assert len(moving) == 1 and "halved" not in moving[0]
+
+
 def test_a_slope_is_held_only_inside_the_dead_zone_and_within_its_bound():
     from deburr_drake.analysis.box_certificate import slope_held
     from deburr_drake.config.control import FuzzyConfig
