@@ -772,7 +772,7 @@ def _common_quadratic(family, box, maps, axes, solver, bisections, final):
     """(certificate, what the corners leave out) of one common quadratic
     Lyapunov function of ``family`` (``final``: the cell will not be
     halved, so its breaking map is searched for when there is none, and
-    its decay rate bisected for room)."""
+    its decay rate bisected for room; else one step of it)."""
 
     def room(cert):
         return "status" not in _model_error(cert, box, maps, axes)
@@ -780,13 +780,14 @@ def _common_quadratic(family, box, maps, axes, solver, bisections, final):
     # The first P sits on its LMI's boundary at gamma = 1 - 1e-5: the
     # decay rate is bisected until it leaves room for what the corners
     # leave out (asked for bisections: all of them, for the best rate).
-    # A cell that will be halved is not: halving quarters the curvature,
-    # and on paper a bisection's solve near the least rate takes ~100 s.
+    # A cell that will be halved gets one step (halfway to the largest
+    # spectral radius): halving quarters the curvature, and on paper a
+    # solve near the least rate takes ~100 s.
     cert = certify_family(
         family,
         maps["labels"],
         solver=solver,
-        bisections=max(bisections, ROOM_BISECTIONS if final else 0),
+        bisections=max(bisections, ROOM_BISECTIONS if final else 1),
         enough=None if bisections else room,
         name_breaking=final,
     )
@@ -885,8 +886,10 @@ def _open_constants(cell: List[Dict]) -> List[int]:
 
 def _split_axis(cell: List[Dict], result: Dict) -> Optional[int]:
     """The constant to halve a cell that is not certified along: a held
-    slope whose ends have no common P, else the constant whose range in
-    the cell moves the map most; None when the cell has a map unstable
+    slope whose ends have no common P; for a P that leaves no room
+    (inconclusive), the constant whose curvature is the most of what the
+    corners leave out; else the constant whose range in the cell moves
+    the map most; None when the cell has a map unstable
     by itself (no narrower cell takes it out), a moving slope whose ends
     at the cell's centre have no common P (a schedule's job, tried on the
     first grid's cells, not a narrower cell's) or no constant to
@@ -899,6 +902,11 @@ def _split_axis(cell: List[Dict], result: Dict) -> Optional[int]:
         return None
     if ends in candidates:
         return ends
+    if result["status"] == "inconclusive" and result.get("model_error"):
+        # A P that leaves no room for what the corners leave out: the
+        # constant whose curvature is the most of it.
+        left_out = [e["p_norm"] for e in result["model_error"]]
+        return max(candidates, key=lambda j: left_out[j])
     return max(candidates, key=lambda j: result["_moves"][j])
 
 

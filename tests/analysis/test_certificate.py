@@ -627,6 +627,18 @@ def test_a_cell_is_halved_along_a_held_slope_whose_ends_fail_not_a_moving_one():
     # moving slope is not a constant).
     none = search_cells([box], ends_fail(None), max_cells=3)
     assert none[0]["halved"] == "c"
+
+    # A P without room for the curvature: along the constant whose
+    # curvature is the most of it.
+    def no_room(cell, splittable):
+        return {
+            "status": "inconclusive",
+            "_stable": True,
+            "_moves": [1.0, 0.1, 5.0],
+            "model_error": [{"p_norm": 1e-5}, {"p_norm": 1e-3}, {"p_norm": 0}],
+        }
+
+    assert search_cells([box], no_room, max_cells=3)[0]["halved"] == "held"
     # The moving slope's ends: not halved at all.
     moving = search_cells([box], ends_fail(2))
     assert len(moving) == 1 and "halved" not in moving[0]
