@@ -319,19 +319,8 @@ class _Maps:
         actuation (u_f gains slope x (s_k - s0) about the same steady
         state), and the one-period map is affine in them, so it is taken
         from the true maps at the slopes' low ends and at each one's high
-        end alone (:meth:`slope_model_miss` measures the rest)."""
-        slopes = [p for p in self.box if p["field"] is None]
-        if not self.affine:
-            return self.true(values)
-        low = {**values, **{p["name"]: p["range"][0] for p in slopes}}
-        base = self.true(low)
-        A = base
-        for p in slopes:
-            lo, hi = p["range"]
-            t = (values[p["name"]] - lo) / (hi - lo)
-            if t != 0.0:
-                A = A + t * (self.true({**low, p["name"]: hi}) - base)
-        return A
+        end alone (:meth:`check_slope_model` measures the rest)."""
+        return self._affine(values) if self.affine else self.true(values)
 
     def true(self, values) -> np.ndarray:
         """The map taken at ``values`` (each once per certify call)."""
@@ -340,43 +329,49 @@ class _Maps:
             self.taken[key] = self._take(values)
         return self.taken[key]
 
-    def check_slope_model(self) -> Dict:
-        """The affine slope model's miss at the box's nominal values
-        (:meth:`slope_model_miss`); a model that misses by more than
-        ``SLOPE_MODEL_TOLERANCE`` is not used: every map is then a true
-        one."""
-        out = self.slope_model_miss({p["name"]: p["nominal"] for p in self.box})
-        self.affine = out.get("miss_at_nominal", 0.0) <= SLOPE_MODEL_TOLERANCE
-        out["used"] = self.affine
-        return out
-
-    def slope_model_miss(self, values) -> Dict:
-        """The affine slope model against the true map at ``values``
-        (relative to the map's change over the slopes' ranges, balanced as
-        the map): finite-difference round-off when it holds."""
-        affine, self.affine = self.affine, True
-        A, model = self.true(values), self(values)
-        self.affine = affine
+    def _slope_steps(self, values):
+        """(base, [(slope, change)]): the true map at ``values`` with every
+        slope at its low end, and each slope's change of it over its
+        range."""
         slopes = [p for p in self.box if p["field"] is None]
-        if not slopes:
-            return {"slopes": 0}
-        balanced = _balancer(A)
         low = {**values, **{p["name"]: p["range"][0] for p in slopes}}
-        change = sum(
-            np.linalg.norm(
-                balanced(
-                    self.true({**low, p["name"]: p["range"][1]})
-                    - self.true(low)
-                )
-            )
+        base = self.true(low)
+        return base, [
+            (p, self.true({**low, p["name"]: p["range"][1]}) - base)
             for p in slopes
-        )
+        ]
+
+    def _affine(self, values) -> np.ndarray:
+        base, steps = self._slope_steps(values)
+        A = base
+        for p, change in steps:
+            lo, hi = p["range"]
+            t = (values[p["name"]] - lo) / (hi - lo)
+            if t != 0.0:
+                A = A + t * change
+        return A
+
+    def check_slope_model(self) -> Dict:
+        """The affine slope model against the true map at the box's
+        nominal values (relative to the slopes' change of the map,
+        balanced as the map: finite-difference round-off when it holds);
+        a model that misses by more than ``SLOPE_MODEL_TOLERANCE`` is not
+        used: every map is then a true one."""
+        values = {p["name"]: p["nominal"] for p in self.box}
+        _, steps = self._slope_steps(values)
+        if not steps:
+            return {"slopes": 0, "used": self.affine}
+        A = self.true(values)
+        balanced = _balancer(A)
+        change = sum(np.linalg.norm(balanced(D)) for _, D in steps)
+        miss = float(np.linalg.norm(balanced(self._affine(values) - A)))
+        miss /= max(float(change), 1e-300)
+        self.affine = miss <= SLOPE_MODEL_TOLERANCE
         return {
             "maps": "affine in the fuzzy slopes, from the true maps at their "
             "low ends and at each one's high end",
-            "miss_at_nominal": float(
-                np.linalg.norm(balanced(model - A)) / max(change, 1e-300)
-            ),
+            "miss_at_nominal": miss,
+            "used": self.affine,
         }
 
     def _take(self, values) -> np.ndarray:
@@ -995,14 +990,13 @@ def _certify_cell(op, box, maps_at, options, say, splittable=False) -> Dict:
     # narrower cell of the constants (search_cells does not halve it).
     moving_failed = k is not None and not held_failed
     if (
-        (moving_failed or not splittable)
-        and not held_failed
+        (moving_failed or not (splittable or held_failed))
         and not halved
         and _schedule_worth_trying(cert, error, box)
     ):
         t3 = time.perf_counter()
         # Else the moving slope that moves the map most.
-        if k is None or box[k].get("constant"):
+        if k is None:
             k = _slopes_by_move(box, maps)[0]
         scheduled = _scheduled(op, box, maps_at, maps, axes, k, solver, say)
         timings["scheduled_s"] = time.perf_counter() - t3
