@@ -542,10 +542,13 @@ def _model_error(cert, box, maps, axes) -> Dict:
     for j, (p, (lo, hi), mid) in enumerate(
         zip(box, maps["ends"], maps["mids"])
     ):
+        entry = {"parameter": p["name"]}
         bound = p_norm(cert.reduced.transform(mid - 0.5 * (lo + hi)), cert.P)
         if j not in axes:
-            bound += p_norm(cert.reduced.transform(0.5 * (hi - lo)), cert.P)
-        left_out.append({"parameter": p["name"], "p_norm": bound})
+            half = p_norm(cert.reduced.transform(0.5 * (hi - lo)), cert.P)
+            entry["half_range_p_norm"] = half
+            bound += half
+        left_out.append({**entry, "p_norm": bound})
     miss = sum(c["p_norm"] for c in left_out)
     out = {
         "model_error": left_out,
@@ -558,6 +561,33 @@ def _model_error(cert, box, maps, axes) -> Dict:
             f"leave out {miss:.3g} is not below 1"
         )
     return out
+
+
+def _axes_for_room(cert, error: Dict) -> List[int]:
+    """The parameters without a corner axis to give one when ``cert``'s P
+    leaves no room (inconclusive) for what the corners leave out: by
+    their half-ranges in P's norm, largest first, until the rest fits in
+    what the decay rate leaves (all of them if it never does). A corner
+    is the true map, so it takes the half-range out where a narrower cell
+    of the constants would not (their corners are already axes)."""
+    if error.get("status") != "inconclusive":
+        return []
+    halves = sorted(
+        (
+            (e["half_range_p_norm"], j)
+            for j, e in enumerate(error["model_error"])
+            if "half_range_p_norm" in e
+        ),
+        reverse=True,
+    )
+    left = error["decay_rate_with_model_error"] - cert.decay_rate
+    added = []
+    for half, j in halves:
+        if cert.decay_rate + left < 1.0:
+            break
+        added.append(j)
+        left -= half
+    return added
 
 
 def _rate_step(op, p, period: float) -> Dict:
@@ -943,6 +973,44 @@ def _stable(family) -> bool:
     )
 
 
+def _family(maps_at, box, maps, axes, say):
+    """(maps, names): the nominal map, each parameter's ends and the true
+    maps at the corners of ``axes``."""
+    corners, signs = _corners(maps_at, box, axes)
+    say(f"maps at the {len(corners)} corners")
+    family = [maps["A0"]] + [m for pair in maps["ends"] for m in pair]
+    return family + corners, _map_names(box, signs)
+
+
+def _common_with_room(maps_at, box, maps, at, options, splittable, say):
+    """(certificate, what the corners leave out, axes, maps, names) of
+    one common quadratic P of the family ``at`` (axes, maps, names); when
+    its P leaves no room for the half-ranges of parameters without a
+    corner axis, once more with their corners too
+    (:func:`_axes_for_room`)."""
+    solver, _, bisections = options
+    axes, family, names = at
+    say(f"common Lyapunov function of {len(family)} maps ({solver})")
+    cert, error = _common_quadratic(
+        family, box, maps, axes, solver, bisections, not splittable
+    )
+    added = _axes_for_room(cert, error)
+    if not added:
+        return cert, error, axes, family, names
+    say(
+        "corner axes for "
+        + ", ".join(box[j]["key"] for j in added)
+        + ": their half-ranges leave no room"
+    )
+    axes = sorted(axes + added)
+    family, names = _family(maps_at, box, maps, axes, say)
+    say(f"common Lyapunov function of {len(family)} maps ({solver})")
+    cert, error = _common_quadratic(
+        family, box, maps, axes, solver, bisections, not splittable
+    )
+    return cert, error, axes, family, names
+
+
 def _certify_cell(op, box, maps_at, options, say, splittable=False) -> Dict:
     """The certificate of one cell's box (every parameter time-varying
     within it): the common quadratic P, then, if it fails and the cell
@@ -958,20 +1026,17 @@ def _certify_cell(op, box, maps_at, options, say, splittable=False) -> Dict:
     # instead costs more than the room the slowest mode leaves.
     constants = {j for j, p in enumerate(box) if p.get("constant")}
     axes = sorted(set(_corner_axes(A0, ends, threshold)) | constants)
-    corners, signs = _corners(maps_at, box, axes)
-    say(f"maps at the {len(corners)} corners")
+    family, names = _family(maps_at, box, maps, axes, say)
     timings["maps_s"] = time.perf_counter() - t1
-    family = [A0] + [m for pair in ends for m in pair] + corners
-    names = _map_names(box, signs)
     t2 = time.perf_counter()
     stable = _stable(family)
     k, cert = _slope_ends(box, maps, solver) if stable else (None, None)
     ends_failed = k
     if cert is None:
-        say(f"common Lyapunov function of {len(family)} maps ({solver})")
-        cert, error = _common_quadratic(
-            family, box, maps, axes, solver, bisections, not splittable
+        cert, error, axes, family, names = _common_with_room(
+            maps_at, box, maps, (axes, family, names), options, splittable, say
         )
+        stable = _stable(family)
     else:
         # A subset with no common P: the family has none either.
         say(f"no common Lyapunov function of the ends of {box[k]['key']}")

@@ -667,3 +667,43 @@ def test_a_slope_is_held_only_inside_the_dead_zone_and_within_its_bound():
     # Rules that do not adapt hold whatever s is.
     fuzzy.adapt = False
     assert slope_held(rb, 8.7e-4, steep, fuzzy) == "the rules do not adapt"
+
+
+def test_a_half_range_that_leaves_no_room_gets_a_corner_axis():
+    from deburr_drake.analysis.box_certificate import (
+        _axes_for_room,
+        _common_with_room,
+        _family,
+    )
+
+    A0 = np.diag([0.95, 0.5])
+    Ba = np.diag([0.02, 0.0])
+    Bb = np.array([[0.0, 0.0], [0.45, 0.0]])
+
+    def maps_at(values):
+        return A0 + values["a"] * Ba + values["b"] * Bb
+
+    box = [
+        {"name": n, "key": n, "nominal": 0.0, "range": [-1.0, 1.0]}
+        for n in "ab"
+    ]
+    maps = {
+        "A0": A0,
+        "ends": [(A0 - B, A0 + B) for B in (Ba, Bb)],
+        # Affine in both: no curvature.
+        "mids": [A0, A0],
+        "labels": ["x", "y"],
+    }
+    family, names = _family(maps_at, box, maps, [0], lambda m: None)
+    assert len(family) == 7 and names[-1].startswith("corner")
+    options = ("Clarabel", 1e-2, 0)
+    cert, error, axes, family, _ = _common_with_room(
+        maps_at, box, maps, ([0], family, names), options, False, print
+    )
+    # b's half-range bounded in P's norm left no room; its corners (the
+    # true maps, lower triangular with the nominal eigenvalues) do.
+    assert axes == [0, 1] and len(family) == 9
+    assert cert.status == "certified" and "status" not in error
+    assert "half_range_p_norm" not in error["model_error"][1]
+    # Nothing is added to a P that leaves room.
+    assert _axes_for_room(cert, error) == []
