@@ -10,7 +10,8 @@ at an earlier design), so the bisection looks for the highest certified
 cutoff, from a low end that must itself be certified.
 
     python scripts/certified_limits.py --scenario paper \\
-        --limits sliding orientation cutoff --box stiffness k_c --json OUT
+        --limits sliding orientation cutoff --box stiffness k_c --json OUT \\
+        --plot limits.png
 
 Each trial is a whole certificate: the run to the operating point at the
 trial's value, the maps, the program.
@@ -20,16 +21,12 @@ import argparse
 import json
 
 from deburr_drake.analysis.box_certificate import certified_limit
+from deburr_drake.analysis.limits_plot import (
+    SIMULATED,
+    plot_certified_limits,
+    simulated_text,
+)
 from deburr_drake.config import load_scenario
-
-#: Analyze's simulated limits at refined numerics
-#: (docs/stability-measurements.md, "limits").
-SIMULATED = {
-    ("paper", "sliding"): "5742-5828 N s/m",
-    ("paper", "orientation"): "412.5-431.2 N m s/rad",
-    ("paper", "cutoff"): "none in 120-199.9 Hz (both ends stable)",
-    ("paper_6dof", "sliding"): "4500-4650 N s/m",
-}
 
 
 def _limits(scenario):
@@ -83,6 +80,11 @@ def main():
     parser.add_argument("--numerics", default="shipped")
     parser.add_argument("--tolerance", type=float, default=0.02)
     parser.add_argument("--json", default=None)
+    parser.add_argument(
+        "--plot",
+        default=None,
+        help="a PNG of the trials against the simulated limits",
+    )
     args = parser.parse_args()
 
     scenario = load_scenario(args.scenario)
@@ -107,13 +109,23 @@ def main():
             only=args.box,
             progress=lambda m: print(f"  {m}", flush=True),
         )
-        simulated = SIMULATED.get((scenario.name, name), "-")
+        simulated = SIMULATED.get((scenario.name, name))
         print(
             f"  certified {result['certified']}, refused "
-            f"{result['refused']} {unit}; simulated (refined): {simulated}",
+            f"{result['refused']} {unit}; simulated (refined): "
+            f"{simulated_text(simulated, unit)}",
             flush=True,
         )
         out[name] = {**result, "unit": unit, "simulated": simulated}
+    if args.plot:
+        box = (
+            "the whole box"
+            if args.box is None
+            else (" ".join(args.box) or "the nominal map")
+        )
+        plot_certified_limits(
+            out, args.plot, title=f"{scenario.name}: certified over {box}"
+        )
     if args.json:
         with open(args.json, "w") as f:
             json.dump(

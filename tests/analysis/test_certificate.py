@@ -707,3 +707,44 @@ def test_a_half_range_that_leaves_no_room_gets_a_corner_axis():
     assert "half_range_p_norm" not in error["model_error"][1]
     # Nothing is added to a P that leaves room.
     assert _axes_for_room(cert, error) == []
+
+
+def test_the_limits_figure_marks_each_trial_and_both_brackets(tmp_path):
+    from deburr_drake.analysis.limits_plot import (
+        SIMULATED,
+        plot_certified_limits,
+        simulated_text,
+    )
+
+    limits = {
+        "sliding": {
+            "unit": "N s/m",
+            "certified": 5506.25,
+            "refused": 5565.625,
+            "trials": [
+                {"value": 400.0, "status": "certified"},
+                {"value": 8000.0, "status": "no_operating_point"},
+                {"value": 5565.625, "status": "not_certified"},
+            ],
+            "simulated": SIMULATED[("paper", "sliding")],
+        }
+    }
+    axes = plot_certified_limits(limits, tmp_path / "limits.png")
+    assert (tmp_path / "limits.png").stat().st_size > 0
+    ax = axes["sliding"]
+    xs = [line.get_xdata()[0] for line in ax.get_lines()]
+    assert xs[:3] == [400.0, 8000.0, 5565.625]
+    # The certified and refused values' lines, the simulated bracket.
+    assert 5506.25 in xs and xs.count(5565.625) == 2
+    (span,) = ax.patches
+    x0, x1 = span.get_x(), span.get_x() + span.get_width()
+    assert (x0, x1) == pytest.approx((5742.0, 5828.0))
+    labels = ax.get_legend().get_texts()
+    assert {t.get_text() for t in labels} == {
+        "certified",
+        "no_operating_point",
+        "not_certified",
+    }
+    assert simulated_text(SIMULATED[("paper", "cutoff")], "Hz") == (
+        "none in 120-199.9 Hz (both ends stable)"
+    )
