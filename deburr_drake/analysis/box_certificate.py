@@ -793,11 +793,13 @@ def _select_box(box: List[Dict], only: Optional[List[str]]) -> List[Dict]:
     return [p for p in box if p["key"] in only]
 
 
-def _common_quadratic(family, box, maps, axes, solver, bisections, final):
+def _common_quadratic(family, box, maps, axes, options, final, candidates):
     """(certificate, what the corners leave out) of one common quadratic
     Lyapunov function of ``family`` (``final``: the cell will not be
     halved, so its breaking map is searched for when there is none, and
-    its decay rate bisected for room; else one step of it)."""
+    its decay rate bisected for room; else one step of it), ``candidates``
+    (forms on the state) tried before the program."""
+    solver, _, bisections = options
 
     def room(cert):
         return "status" not in _model_error(cert, box, maps, axes)
@@ -815,6 +817,7 @@ def _common_quadratic(family, box, maps, axes, solver, bisections, final):
         bisections=max(bisections, ROOM_BISECTIONS if final else 1),
         enough=None if bisections else room,
         name_breaking=final,
+        candidates=candidates,
     )
     error = _model_error(cert, box, maps, axes) if cert.P is not None else {}
     return cert, error
@@ -984,15 +987,15 @@ def _family(maps_at, box, maps, axes, say):
 
 def _common_with_room(maps_at, box, maps, at, options, splittable, say):
     """(certificate, what the corners leave out, axes, maps, names) of
-    one common quadratic P of the family ``at`` (axes, maps, names); when
-    its P leaves no room for the half-ranges of parameters without a
-    corner axis, once more with their corners too
-    (:func:`_axes_for_room`)."""
-    solver, _, bisections = options
-    axes, family, names = at
-    say(f"common Lyapunov function of {len(family)} maps ({solver})")
+    one common quadratic P of the family ``at`` (axes, maps, names,
+    candidates: forms on the state tried first); when its P leaves no
+    room for the half-ranges of parameters without a corner axis, once
+    more with their corners too (:func:`_axes_for_room`), that P a
+    candidate."""
+    axes, family, names, candidates = at
+    say(f"common Lyapunov function of {len(family)} maps ({options[0]})")
     cert, error = _common_quadratic(
-        family, box, maps, axes, solver, bisections, not splittable
+        family, box, maps, axes, options, not splittable, candidates
     )
     added = _axes_for_room(cert, error)
     if not added:
@@ -1004,18 +1007,23 @@ def _common_with_room(maps_at, box, maps, at, options, splittable, say):
     )
     axes = sorted(axes + added)
     family, names = _family(maps_at, box, maps, axes, say)
-    say(f"common Lyapunov function of {len(family)} maps ({solver})")
+    say(f"common Lyapunov function of {len(family)} maps ({options[0]})")
+    first = cert.reduced.form_on_state(cert.P)
     cert, error = _common_quadratic(
-        family, box, maps, axes, solver, bisections, not splittable
+        family, box, maps, axes, options, not splittable, [first]
     )
     return cert, error, axes, family, names
 
 
-def _certify_cell(op, box, maps_at, options, say, splittable=False) -> Dict:
+def _certify_cell(
+    op, box, maps_at, options, say, splittable=False, candidates=()
+) -> Dict:
     """The certificate of one cell's box (every parameter time-varying
-    within it): the common quadratic P, then, if it fails and the cell
-    will not be halved (``splittable`` False) and is one of the first
-    grid's, P(slope) of a slope that is not held."""
+    within it): the common quadratic P (``candidates``, forms on the
+    state such as a neighbouring cell's P, tried before the program),
+    then, if it fails and the cell will not be halved (``splittable``
+    False) and is one of the first grid's, P(slope) of a slope that is
+    not held."""
     solver, threshold, bisections = options
     timings = {}
     t1 = time.perf_counter()
@@ -1034,7 +1042,13 @@ def _certify_cell(op, box, maps_at, options, say, splittable=False) -> Dict:
     ends_failed = k
     if cert is None:
         cert, error, axes, family, names = _common_with_room(
-            maps_at, box, maps, (axes, family, names), options, splittable, say
+            maps_at,
+            box,
+            maps,
+            (axes, family, names, candidates),
+            options,
+            splittable,
+            say,
         )
         stable = _stable(family)
     else:
@@ -1081,6 +1095,8 @@ def _certify_cell(op, box, maps_at, options, say, splittable=False) -> Dict:
     balanced = _balancer(A0)
     result["_moves"] = [np.linalg.norm(balanced(hi - lo)) for lo, hi in ends]
     result["_ends_failed"], result["_stable"] = ends_failed, stable
+    if cert.P is not None:
+        result["_P_on_state"] = cert.reduced.form_on_state(cert.P)
     result["sampling_period_s"] = maps["period"]
     result["labels"] = maps["labels"]
     return result
@@ -1210,10 +1226,18 @@ def certify(
     options = (solver, vertex_threshold, bisections)
 
     tried = itertools.count(1)
+    # The latest cells' P (forms on the state), newest first: the search
+    # tries a cell's halves, a half's sibling and the next cell of the
+    # grid after it, and a neighbour's P often serves (no program).
+    latest = []
 
     def try_cell(cell, splittable):
         say(f"cell {next(tried)}: {_constants_text(cell)}")
-        result = _certify_cell(op, cell, maps_at, options, say, splittable)
+        result = _certify_cell(
+            op, cell, maps_at, options, say, splittable, tuple(latest)
+        )
+        if "_P_on_state" in result:
+            latest[:] = [result.pop("_P_on_state")] + latest[:1]
         result["_cell"] = cell
         why = result.get("breaking_reason")
         say(f"{result['status']}" + (f": {why}" if why else ""))
