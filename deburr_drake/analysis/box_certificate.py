@@ -115,6 +115,9 @@ MAX_CELLS = 80
 #: lightly damped pair turns with it (docs/certify.md), and the halvings
 #: towards that end are geometric (down to 1/512 of the range).
 MAX_SLOPE_HALVINGS = 9
+#: How many of the latest cells' P each cell tries before its program (a
+#: cell's halves, a half's sibling and the grid's next cell are near it).
+NEIGHBOUR_CANDIDATES = 2
 #: The box's parameters by short key (``certify``'s ``only``).
 BOX_KEYS = {
     "part.material.hydroelastic_modulus": "stiffness",
@@ -1114,6 +1117,8 @@ def _cell_record(cell: Dict) -> Dict:
         "breaking_reason",
         "scheduled",
         "vertices",
+        "found_by",
+        "solves",
     )
     return {
         "constants": {
@@ -1230,14 +1235,16 @@ def certify(
     # tries a cell's halves, a half's sibling and the next cell of the
     # grid after it, and a neighbour's P often serves (no program).
     latest = []
+    keep = NEIGHBOUR_CANDIDATES
 
     def try_cell(cell, splittable):
         say(f"cell {next(tried)}: {_constants_text(cell)}")
         result = _certify_cell(
             op, cell, maps_at, options, say, splittable, tuple(latest)
         )
-        if "_P_on_state" in result:
-            latest[:] = [result.pop("_P_on_state")] + latest[:1]
+        P = result.pop("_P_on_state", None)
+        if P is not None and keep:
+            latest[:] = [P] + latest[: keep - 1]
         result["_cell"] = cell
         why = result.get("breaking_reason")
         say(f"{result['status']}" + (f": {why}" if why else ""))
