@@ -1018,25 +1018,49 @@ def _common_with_room(maps_at, box, maps, at, options, splittable, say):
     return cert, error, axes, family, names
 
 
-def _certify_cell(
-    op, box, maps_at, options, say, splittable=False, candidates=()
-) -> Dict:
-    """The certificate of one cell's box (every parameter time-varying
-    within it): the common quadratic P (``candidates``, forms on the
-    state such as a neighbouring cell's P, tried before the program),
-    then, if it fails and the cell will not be halved (``splittable``
-    False) and is one of the first grid's, P(slope) of a slope that is
-    not held."""
-    solver, threshold, bisections = options
-    timings = {}
-    t1 = time.perf_counter()
-    maps = box_maps(maps_at, box, say)
-    A0, ends = maps["A0"], maps["ends"]
+def _cell_axes(box, maps, threshold, hinted) -> List[int]:
+    """A cell's corner axes: the parameters whose half-range moves the
+    map by more than ``threshold``, the constants, and those ``hinted``
+    (keys)."""
     # A constant's cell gets a corner axis whatever its size: its P must
     # serve the cell's corners, and a half-range bounded in P's norm
     # instead costs more than the room the slowest mode leaves.
     constants = {j for j, p in enumerate(box) if p.get("constant")}
-    axes = sorted(set(_corner_axes(A0, ends, threshold)) | constants)
+    hinted = {j for j, p in enumerate(box) if p["key"] in hinted}
+    moving = _corner_axes(maps["A0"], maps["ends"], threshold)
+    return sorted(set(moving) | constants | hinted)
+
+
+def _search_fields(result, box, maps, cert, ends_stable):
+    """What :func:`search_cells` and :func:`certify` read of a cell's
+    result: how far each parameter's range moves the map (halving's
+    order), which slope's ends failed, whether every map is stable, and
+    the cell's P as a form on the state (a neighbour's candidate)."""
+    balanced = _balancer(maps["A0"])
+    result["_moves"] = [
+        np.linalg.norm(balanced(hi - lo)) for lo, hi in maps["ends"]
+    ]
+    result["_ends_failed"], result["_stable"] = ends_stable
+    if cert.P is not None:
+        result["_P_on_state"] = cert.reduced.form_on_state(cert.P)
+
+
+def _certify_cell(
+    op, box, maps_at, options, say, splittable=False, hints=None
+) -> Dict:
+    """The certificate of one cell's box (every parameter time-varying
+    within it): the common quadratic P, then, if it fails and the cell
+    will not be halved (``splittable`` False) and is one of the first
+    grid's, P(slope) of a slope that is not held. ``hints`` from the
+    cells tried before: ``candidates`` (forms on the state, tried before
+    the program) and ``axes`` (keys given a corner axis whatever their
+    size: an earlier cell's half-range left no room)."""
+    hints = hints or {}
+    solver, threshold, bisections = options
+    timings = {}
+    t1 = time.perf_counter()
+    maps = box_maps(maps_at, box, say)
+    axes = first_axes = _cell_axes(box, maps, threshold, hints.get("axes", ()))
     family, names = _family(maps_at, box, maps, axes, say)
     timings["maps_s"] = time.perf_counter() - t1
     t2 = time.perf_counter()
@@ -1048,7 +1072,7 @@ def _certify_cell(
             maps_at,
             box,
             maps,
-            (axes, family, names, candidates),
+            (axes, family, names, hints.get("candidates", ())),
             options,
             splittable,
             say,
@@ -1094,12 +1118,8 @@ def _certify_cell(
     result["timings_s"] = timings
     result["box"] = [{k: p[k] for k in _BOX_FIELDS if k in p} for p in box]
     result["_maps"] = {"family": family, "names": names}
-    # What the search over cells halves by (search_cells).
-    balanced = _balancer(A0)
-    result["_moves"] = [np.linalg.norm(balanced(hi - lo)) for lo, hi in ends]
-    result["_ends_failed"], result["_stable"] = ends_failed, stable
-    if cert.P is not None:
-        result["_P_on_state"] = cert.reduced.form_on_state(cert.P)
+    _search_fields(result, box, maps, cert, (ends_failed, stable))
+    result["_added_axes"] = [box[j]["key"] for j in axes if j not in first_axes]
     result["sampling_period_s"] = maps["period"]
     result["labels"] = maps["labels"]
     return result
@@ -1193,6 +1213,35 @@ def _tried_text(results: List[Dict]) -> str:
     return f"{len(results)} tried: {certified} certified, {halved} halved"
 
 
+def _cell_trier(op, maps_at, options, say) -> Callable:
+    """:func:`search_cells`'s ``try_cell``: each cell certified
+    (:func:`_certify_cell`) with what the cells before it leave: the
+    latest ``NEIGHBOUR_CANDIDATES`` P (forms on the state, newest first:
+    the search tries a cell's halves, a half's sibling and the grid's
+    next cell one after the other) and the parameters whose half-range
+    left a cell's P no room (a corner axis in every cell after it: one
+    program per cell less)."""
+    tried = itertools.count(1)
+    latest, axes = [], set()
+
+    def try_cell(cell, splittable):
+        say(f"cell {next(tried)}: {_constants_text(cell)}")
+        hints = {"candidates": tuple(latest), "axes": frozenset(axes)}
+        result = _certify_cell(
+            op, cell, maps_at, options, say, splittable, hints
+        )
+        axes.update(result.pop("_added_axes"))
+        P = result.pop("_P_on_state", None)
+        if P is not None and NEIGHBOUR_CANDIDATES:
+            latest[:] = [P] + latest[: NEIGHBOUR_CANDIDATES - 1]
+        result["_cell"] = cell
+        why = result.get("breaking_reason")
+        say(f"{result['status']}" + (f": {why}" if why else ""))
+        return result
+
+    return try_cell
+
+
 def certify(
     scenario: Scenario,
     *,
@@ -1229,28 +1278,7 @@ def certify(
     slope_model = maps_at.check_slope_model()
     grid = _cells(box, _first_grid(box, cells))
     options = (solver, vertex_threshold, bisections)
-
-    tried = itertools.count(1)
-    # The latest cells' P (forms on the state), newest first: the search
-    # tries a cell's halves, a half's sibling and the next cell of the
-    # grid after it, and a neighbour's P often serves (no program).
-    latest = []
-    keep = NEIGHBOUR_CANDIDATES
-
-    def try_cell(cell, splittable):
-        say(f"cell {next(tried)}: {_constants_text(cell)}")
-        result = _certify_cell(
-            op, cell, maps_at, options, say, splittable, tuple(latest)
-        )
-        P = result.pop("_P_on_state", None)
-        if P is not None and keep:
-            latest[:] = [P] + latest[: keep - 1]
-        result["_cell"] = cell
-        why = result.get("breaking_reason")
-        say(f"{result['status']}" + (f": {why}" if why else ""))
-        return result
-
-    results = search_cells(grid, try_cell)
+    results = search_cells(grid, _cell_trier(op, maps_at, options, say))
     result = dict(_worst_cell(results))
     for r in results:
         for k, v in r["timings_s"].items():

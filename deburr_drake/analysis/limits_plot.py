@@ -40,8 +40,9 @@ def simulated_text(simulated: Optional[Dict], unit: str) -> str:
 def plot_certified_limits(limits: Dict, path, *, title: str = ""):
     """A PNG at ``path``: a panel per entry of ``limits`` ({name: {unit,
     certified, refused, trials [{value, status}], simulated}} as
-    ``scripts/certified_limits.py`` writes them). Returns the figure's
-    axes by name."""
+    ``scripts/certified_limits.py`` writes them; with ``lowest`` {certified,
+    refused}, the low end of the certified values too). Returns the
+    figure's axes by name."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -49,7 +50,7 @@ def plot_certified_limits(limits: Dict, path, *, title: str = ""):
 
     names = list(limits)
     fig, axs = plt.subplots(
-        len(names), 1, figsize=(7.0, 1.9 * len(names)), squeeze=False
+        len(names), 1, figsize=(8.5, 1.9 * len(names)), squeeze=False
     )
     out = {}
     for ax, name in zip(axs[:, 0], names):
@@ -62,10 +63,11 @@ def plot_certified_limits(limits: Dict, path, *, title: str = ""):
                 color=_COLOURS.get(trial["status"], "tab:red"),
                 label=trial["status"],
             )
-        if limit.get("certified") is not None:
-            ax.axvline(limit["certified"], color="tab:green", ls="-")
-        if limit.get("refused") is not None:
-            ax.axvline(limit["refused"], color="tab:red", ls="--")
+        for end in (limit, limit.get("lowest") or {}):
+            if end.get("certified") is not None:
+                ax.axvline(end["certified"], color="tab:green", ls="-")
+            if end.get("refused") is not None:
+                ax.axvline(end["refused"], color="tab:red", ls="--")
         simulated = limit.get("simulated")
         if simulated:
             lo, hi = simulated.get(
@@ -80,7 +82,11 @@ def plot_certified_limits(limits: Dict, path, *, title: str = ""):
         for h, label in zip(*ax.get_legend_handles_labels()):
             handles.setdefault(label, h)
         ax.legend(
-            handles.values(), handles.keys(), fontsize=7, loc="upper left"
+            handles.values(),
+            handles.keys(),
+            fontsize=7,
+            loc="upper left",
+            bbox_to_anchor=(1.01, 1.0),
         )
         ax.set_ylim(0.0, 1.6)
         ax.set_yticks([])

@@ -727,6 +727,7 @@ def test_the_limits_figure_marks_each_trial_and_both_brackets(tmp_path):
                 {"value": 5565.625, "status": "not_certified"},
             ],
             "simulated": SIMULATED[("paper", "sliding")],
+            "lowest": {"certified": 1000.0, "refused": 900.0},
         }
     }
     axes = plot_certified_limits(limits, tmp_path / "limits.png")
@@ -736,6 +737,8 @@ def test_the_limits_figure_marks_each_trial_and_both_brackets(tmp_path):
     assert xs[:3] == [400.0, 8000.0, 5565.625]
     # The certified and refused values' lines, the simulated bracket.
     assert 5506.25 in xs and xs.count(5565.625) == 2
+    # The low end's certified and refused values.
+    assert xs[-2:] == [1000.0, 900.0]
     (span,) = ax.patches
     x0, x1 = span.get_x(), span.get_x() + span.get_width()
     assert (x0, x1) == pytest.approx((5742.0, 5828.0))
@@ -798,3 +801,23 @@ def test_a_solver_that_stops_without_an_answer_is_inconclusive(monkeypatch):
     cert = certify_family([0.5 * np.eye(2), A1, A2], ["x", "y"])
     assert cert.status == "inconclusive"
     assert "kSolverSpecificError" in cert.breaking_reason
+
+
+def test_a_cells_corner_axes_are_the_moving_the_constant_and_the_hinted():
+    from deburr_drake.analysis.box_certificate import _cell_axes
+
+    A0 = np.diag([0.9, 0.5])
+    small = 1e-4 * np.ones((2, 2))
+    box = [
+        {"key": "moves", "field": "f"},
+        {"key": "still", "field": "f"},
+        {"key": "constant", "field": "f", "constant": True},
+    ]
+    maps = {
+        "A0": A0,
+        "ends": [(A0 - 0.1 * np.eye(2), A0 + 0.1 * np.eye(2))]
+        + [(A0 - small, A0 + small)] * 2,
+    }
+    assert _cell_axes(box, maps, 1e-2, ()) == [0, 2]
+    # A parameter an earlier cell gave a corner axis keeps it.
+    assert _cell_axes(box, maps, 1e-2, {"still"}) == [0, 1, 2]
