@@ -115,9 +115,6 @@ MAX_CELLS = 80
 #: lightly damped pair turns with it (docs/certify.md), and the halvings
 #: towards that end are geometric (down to 1/512 of the range).
 MAX_SLOPE_HALVINGS = 9
-#: How many of the latest cells' P each cell tries before its program (a
-#: cell's halves, a half's sibling and the grid's next cell are near it).
-NEIGHBOUR_CANDIDATES = 2
 #: The box's parameters by short key (``certify``'s ``only``).
 BOX_KEYS = {
     "part.material.hydroelastic_modulus": "stiffness",
@@ -796,12 +793,11 @@ def _select_box(box: List[Dict], only: Optional[List[str]]) -> List[Dict]:
     return [p for p in box if p["key"] in only]
 
 
-def _common_quadratic(family, box, maps, axes, options, final, candidates):
+def _common_quadratic(family, box, maps, axes, options, final):
     """(certificate, what the corners leave out) of one common quadratic
     Lyapunov function of ``family`` (``final``: the cell will not be
     halved, so its breaking map is searched for when there is none, and
-    its decay rate bisected for room; else one step of it), ``candidates``
-    (forms on the state) tried before the program."""
+    its decay rate bisected for room; else one step of it)."""
     solver, _, bisections = options
 
     def room(cert):
@@ -820,7 +816,6 @@ def _common_quadratic(family, box, maps, axes, options, final, candidates):
         bisections=max(bisections, ROOM_BISECTIONS if final else 1),
         enough=None if bisections else room,
         name_breaking=final,
-        candidates=candidates,
     )
     error = _model_error(cert, box, maps, axes) if cert.P is not None else {}
     return cert, error
@@ -990,15 +985,14 @@ def _family(maps_at, box, maps, axes, say):
 
 def _common_with_room(maps_at, box, maps, at, options, splittable, say):
     """(certificate, what the corners leave out, axes, maps, names) of
-    one common quadratic P of the family ``at`` (axes, maps, names,
-    candidates: forms on the state tried first); when its P leaves no
-    room for the half-ranges of parameters without a corner axis, once
-    more with their corners too (:func:`_axes_for_room`), that P a
-    candidate."""
-    axes, family, names, candidates = at
+    one common quadratic P of the family ``at`` (axes, maps, names); when
+    its P leaves no room for the half-ranges of parameters without a
+    corner axis, once more with their corners too
+    (:func:`_axes_for_room`)."""
+    axes, family, names = at
     say(f"common Lyapunov function of {len(family)} maps ({options[0]})")
     cert, error = _common_quadratic(
-        family, box, maps, axes, options, not splittable, candidates
+        family, box, maps, axes, options, not splittable
     )
     added = _axes_for_room(cert, error)
     if not added:
@@ -1011,9 +1005,8 @@ def _common_with_room(maps_at, box, maps, at, options, splittable, say):
     axes = sorted(axes + added)
     family, names = _family(maps_at, box, maps, axes, say)
     say(f"common Lyapunov function of {len(family)} maps ({options[0]})")
-    first = cert.reduced.form_on_state(cert.P)
     cert, error = _common_quadratic(
-        family, box, maps, axes, options, not splittable, [first]
+        family, box, maps, axes, options, not splittable
     )
     return cert, error, axes, family, names
 
@@ -1031,36 +1024,31 @@ def _cell_axes(box, maps, threshold, hinted) -> List[int]:
     return sorted(set(moving) | constants | hinted)
 
 
-def _search_fields(result, box, maps, cert, ends_stable):
-    """What :func:`search_cells` and :func:`certify` read of a cell's
-    result: how far each parameter's range moves the map (halving's
-    order), which slope's ends failed, whether every map is stable, and
-    the cell's P as a form on the state (a neighbour's candidate)."""
+def _search_fields(result, maps, ends_stable):
+    """What :func:`search_cells` reads of a cell's result: how far each
+    parameter's range moves the map (halving's order), which slope's
+    ends failed, whether every map is stable."""
     balanced = _balancer(maps["A0"])
     result["_moves"] = [
         np.linalg.norm(balanced(hi - lo)) for lo, hi in maps["ends"]
     ]
     result["_ends_failed"], result["_stable"] = ends_stable
-    if cert.P is not None:
-        result["_P_on_state"] = cert.reduced.form_on_state(cert.P)
 
 
 def _certify_cell(
-    op, box, maps_at, options, say, splittable=False, hints=None
+    op, box, maps_at, options, say, splittable=False, carried=()
 ) -> Dict:
     """The certificate of one cell's box (every parameter time-varying
     within it): the common quadratic P, then, if it fails and the cell
     will not be halved (``splittable`` False) and is one of the first
-    grid's, P(slope) of a slope that is not held. ``hints`` from the
-    cells tried before: ``candidates`` (forms on the state, tried before
-    the program) and ``axes`` (keys given a corner axis whatever their
-    size: an earlier cell's half-range left no room)."""
-    hints = hints or {}
+    grid's, P(slope) of a slope that is not held. ``carried``: keys given a
+    corner axis whatever their size (an earlier cell's half-range left
+    no room)."""
     solver, threshold, bisections = options
     timings = {}
     t1 = time.perf_counter()
     maps = box_maps(maps_at, box, say)
-    axes = first_axes = _cell_axes(box, maps, threshold, hints.get("axes", ()))
+    axes = first_axes = _cell_axes(box, maps, threshold, carried)
     family, names = _family(maps_at, box, maps, axes, say)
     timings["maps_s"] = time.perf_counter() - t1
     t2 = time.perf_counter()
@@ -1072,7 +1060,7 @@ def _certify_cell(
             maps_at,
             box,
             maps,
-            (axes, family, names, hints.get("candidates", ())),
+            (axes, family, names),
             options,
             splittable,
             say,
@@ -1118,7 +1106,7 @@ def _certify_cell(
     result["timings_s"] = timings
     result["box"] = [{k: p[k] for k in _BOX_FIELDS if k in p} for p in box]
     result["_maps"] = {"family": family, "names": names}
-    _search_fields(result, box, maps, cert, (ends_failed, stable))
+    _search_fields(result, maps, (ends_failed, stable))
     result["_added_axes"] = [box[j]["key"] for j in axes if j not in first_axes]
     result["sampling_period_s"] = maps["period"]
     result["labels"] = maps["labels"]
@@ -1215,25 +1203,18 @@ def _tried_text(results: List[Dict]) -> str:
 
 def _cell_trier(op, maps_at, options, say) -> Callable:
     """:func:`search_cells`'s ``try_cell``: each cell certified
-    (:func:`_certify_cell`) with what the cells before it leave: the
-    latest ``NEIGHBOUR_CANDIDATES`` P (forms on the state, newest first:
-    the search tries a cell's halves, a half's sibling and the grid's
-    next cell one after the other) and the parameters whose half-range
-    left a cell's P no room (a corner axis in every cell after it: one
-    program per cell less)."""
+    (:func:`_certify_cell`) with a corner axis for every parameter whose
+    half-range left an earlier cell's P no room (one program per cell
+    less)."""
     tried = itertools.count(1)
-    latest, axes = [], set()
+    carried = set()
 
     def try_cell(cell, splittable):
         say(f"cell {next(tried)}: {_constants_text(cell)}")
-        hints = {"candidates": tuple(latest), "axes": frozenset(axes)}
         result = _certify_cell(
-            op, cell, maps_at, options, say, splittable, hints
+            op, cell, maps_at, options, say, splittable, frozenset(carried)
         )
-        axes.update(result.pop("_added_axes"))
-        P = result.pop("_P_on_state", None)
-        if P is not None and NEIGHBOUR_CANDIDATES:
-            latest[:] = [P] + latest[: NEIGHBOUR_CANDIDATES - 1]
+        carried.update(result.pop("_added_axes"))
         result["_cell"] = cell
         why = result.get("breaking_reason")
         say(f"{result['status']}" + (f": {why}" if why else ""))

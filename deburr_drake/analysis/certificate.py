@@ -114,7 +114,6 @@ FOUND_BY_PROGRAM = "the semidefinite program"
 #: The solution result of a program shown to have no solution; any other
 #: failure is the solver's, not a proof.
 INFEASIBLE = "kInfeasibleConstraints"
-FOUND_BY_NEIGHBOUR = "a neighbouring family's P, given as a candidate"
 
 _SOLVERS = {
     "Clarabel": ClarabelSolver,
@@ -168,24 +167,6 @@ class ReducedFamily:
         M = np.asarray(M, float)[np.ix_(self.keep, self.keep)]
         M = M * (1.0 / self.scale)[:, None] * self.scale[None, :]
         return self.basis.T @ M @ self.basis
-
-    def form_on_state(self, P: np.ndarray) -> np.ndarray:
-        """Q on the original state with x^T Q x = y^T P y for x in the
-        certified coordinates' span (x_kept = diag(scale) basis y): a
-        Lyapunov function another family's reduction can take
-        (:meth:`form_from_state`); zero on the overwritten states."""
-        n = len(self.kept) + len(self.overwritten)
-        R = self.basis.T * (1.0 / self.scale)[None, :]  # y from x_kept
-        Q = np.zeros((n, n))
-        Q[np.ix_(self.keep, self.keep)] = R.T @ P @ R
-        return Q
-
-    def form_from_state(self, Q: np.ndarray) -> np.ndarray:
-        """P on the certified coordinates of the quadratic form x^T Q x on
-        the original state (the inverse of :meth:`form_on_state` on the
-        same reduction)."""
-        E = self.basis * self.scale[:, None]  # x_kept from y
-        return E.T @ Q[np.ix_(self.keep, self.keep)] @ E
 
 
 def _overwritten(maps: Sequence[np.ndarray]) -> np.ndarray:
@@ -611,29 +592,6 @@ def _by_program(cert, search, family, V, radii, solver, margin, hi, name):
     return solution.P
 
 
-def _by_candidate(cert, reduced, candidates, V, search, margin):
-    """The first candidate that passes the check on ``reduced``'s maps
-    (``cert`` records its check and where it came from): each of
-    ``candidates`` (forms on the original state), then the nominal map's
-    own Lyapunov function (lifted from the search coordinates); None
-    when none does."""
-    family = reduced.maps
-
-    def tried():
-        for Q in candidates:
-            yield reduced.form_from_state(Q), FOUND_BY_NEIGHBOUR
-        P_w = nominal_lyapunov(search)
-        if P_w is not None:
-            yield lift(P_w, V, family, margin), FOUND_BY_NOMINAL
-
-    for P, found_by in tried():
-        check = check_lyapunov(family, P, margin=margin)
-        if check["passed"]:
-            cert.check, cert.found_by = check, found_by
-            return P
-    return None
-
-
 def certify_family(
     maps: Sequence[np.ndarray],
     labels: Sequence[str],
@@ -644,7 +602,6 @@ def certify_family(
     neutral_tolerance: float = 1e-6,
     enough: Optional[Callable[[Certificate], bool]] = None,
     name_breaking: bool = True,
-    candidates: Sequence[np.ndarray] = (),
 ) -> Certificate:
     """The certificate of the family ``maps`` (``maps[0]`` nominal) over
     states ``labels``: reduced (:func:`reduce_family`); P searched in the
@@ -659,10 +616,7 @@ def certify_family(
     a solve). Infeasible: not_certified, with the breaking map; solved but
     failing the check: inconclusive. ``name_breaking`` False: an
     infeasible family's breaking map is not searched for (a bisection of
-    solves; a caller that splits the family next has no use for it).
-    ``candidates``: quadratic forms on the original state
-    (:meth:`ReducedFamily.form_on_state`, a neighbouring family's P) tried
-    before the nominal map's, each checked as any P is."""
+    solves; a caller that splits the family next has no use for it)."""
     reduced = reduce_family(maps, labels, neutral_tolerance=neutral_tolerance)
     family = reduced.maps
     radii = [float(np.max(np.abs(np.linalg.eigvals(A)))) for A in family]
@@ -687,9 +641,15 @@ def certify_family(
         cert.status, cert.breaking = "not_certified", worst
         cert.breaking_reason = f"its own spectral radius is {radii[worst]:.6f}"
         return cert
-    best = _by_candidate(cert, reduced, candidates, V, search, margin)
-    if best is not None:
-        hi = min(hi, cert.check["decay_rate"])
+    best = None
+    # The cheap candidate: the nominal map's own Lyapunov function.
+    P_w = nominal_lyapunov(search)
+    if P_w is not None:
+        P = lift(P_w, V, family, margin)
+        check = check_lyapunov(family, P, margin=margin)
+        if check["passed"]:
+            best, cert.check, cert.found_by = P, check, FOUND_BY_NOMINAL
+            hi = min(hi, check["decay_rate"])
     if best is None:
         best = _by_program(
             cert, search, family, V, radii, solver, margin, hi, name_breaking

@@ -698,7 +698,7 @@ def test_a_half_range_that_leaves_no_room_gets_a_corner_axis():
     assert len(family) == 7 and names[-1].startswith("corner")
     options = ("Clarabel", 1e-2, 0)
     cert, error, axes, family, _ = _common_with_room(
-        maps_at, box, maps, ([0], family, names, ()), options, False, print
+        maps_at, box, maps, ([0], family, names), options, False, print
     )
     # b's half-range bounded in P's norm left no room; its corners (the
     # true maps, lower triangular with the nominal eigenvalues) do.
@@ -751,44 +751,6 @@ def test_the_limits_figure_marks_each_trial_and_both_brackets(tmp_path):
     assert simulated_text(SIMULATED[("paper", "cutoff")], "Hz") == (
         "none in 120-199.9 Hz (both ends stable)"
     )
-
-
-def test_a_neighbouring_familys_p_is_taken_on_the_state_and_checked():
-    from deburr_drake.analysis.certificate import FOUND_BY_NEIGHBOUR
-
-    # The known family with a third, held state every map overwrites,
-    # and the first map's rows in other units.
-    def held(A, unit):
-        D = np.diag([unit, 1.0])
-        out = np.zeros((3, 3))
-        out[:2, :2] = D @ A @ np.linalg.inv(D)
-        out[:2, 2] = [0.3, -0.1]
-        return out
-
-    labels = ["a", "b", "u"]
-    first = [held(A, 10.0) for A in _known_family()]
-    cert = certify_family(first, labels, bisections=0)
-    assert cert.status == "certified" and cert.reduced.overwritten == ["u"]
-    Q = cert.reduced.form_on_state(cert.P)
-    assert np.allclose(cert.reduced.form_from_state(Q), cert.P)
-    # A neighbour: the maps turned a little, balanced otherwise.
-    near = [held(A, 10.0) for A in _known_family()]
-    near = [near[0]] + [0.999 * A for A in near[1:]]
-    shifted = certify_family(near, labels, bisections=0, candidates=[Q])
-    assert shifted.found_by == FOUND_BY_NEIGHBOUR and shifted.solves == 0
-    assert shifted.decay_rate == pytest.approx(
-        max(p_norm(A, shifted.P) for A in shifted.reduced.maps)
-    )
-    # The same form read back on the state decays every neighbour's map
-    # as the certificate says (x^T Q x along x+ = A x from the image).
-    x = near[2] @ np.array([0.4, -1.0, 2.0])
-    y = near[1] @ x
-    assert y @ Q @ y <= shifted.decay_rate**2 * (x @ Q @ x) * (1 + 1e-9)
-    # A candidate that fails the check is not taken.
-    bad = certify_family(
-        near, labels, bisections=0, candidates=[np.diag([1.0, 1e-6, 0.0])]
-    )
-    assert bad.status == "certified" and bad.found_by != FOUND_BY_NEIGHBOUR
 
 
 def test_a_solver_that_stops_without_an_answer_is_inconclusive(monkeypatch):
