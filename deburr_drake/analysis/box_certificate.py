@@ -1005,23 +1005,23 @@ def _common_with_room(maps_at, box, maps, at, options, splittable, say):
     axes = sorted(axes + added)
     family, names = _family(maps_at, box, maps, axes, say)
     say(f"common Lyapunov function of {len(family)} maps ({options[0]})")
+    first = cert.solves
     cert, error = _common_quadratic(
         family, box, maps, axes, options, not splittable
     )
+    cert.solves += first
     return cert, error, axes, family, names
 
 
-def _cell_axes(box, maps, threshold, hinted) -> List[int]:
+def _cell_axes(box, maps, threshold) -> List[int]:
     """A cell's corner axes: the parameters whose half-range moves the
-    map by more than ``threshold``, the constants, and those ``hinted``
-    (keys)."""
+    map by more than ``threshold``, and the constants."""
     # A constant's cell gets a corner axis whatever its size: its P must
     # serve the cell's corners, and a half-range bounded in P's norm
     # instead costs more than the room the slowest mode leaves.
     constants = {j for j, p in enumerate(box) if p.get("constant")}
-    hinted = {j for j, p in enumerate(box) if p["key"] in hinted}
     moving = _corner_axes(maps["A0"], maps["ends"], threshold)
-    return sorted(set(moving) | constants | hinted)
+    return sorted(set(moving) | constants)
 
 
 def _search_fields(result, maps, ends_stable):
@@ -1035,20 +1035,16 @@ def _search_fields(result, maps, ends_stable):
     result["_ends_failed"], result["_stable"] = ends_stable
 
 
-def _certify_cell(
-    op, box, maps_at, options, say, splittable=False, carried=()
-) -> Dict:
+def _certify_cell(op, box, maps_at, options, say, splittable=False) -> Dict:
     """The certificate of one cell's box (every parameter time-varying
     within it): the common quadratic P, then, if it fails and the cell
     will not be halved (``splittable`` False) and is one of the first
-    grid's, P(slope) of a slope that is not held. ``carried``: keys given a
-    corner axis whatever their size (an earlier cell's half-range left
-    no room)."""
+    grid's, P(slope) of a slope that is not held."""
     solver, threshold, bisections = options
     timings = {}
     t1 = time.perf_counter()
     maps = box_maps(maps_at, box, say)
-    axes = first_axes = _cell_axes(box, maps, threshold, carried)
+    axes = _cell_axes(box, maps, threshold)
     family, names = _family(maps_at, box, maps, axes, say)
     timings["maps_s"] = time.perf_counter() - t1
     t2 = time.perf_counter()
@@ -1107,7 +1103,6 @@ def _certify_cell(
     result["box"] = [{k: p[k] for k in _BOX_FIELDS if k in p} for p in box]
     result["_maps"] = {"family": family, "names": names}
     _search_fields(result, maps, (ends_failed, stable))
-    result["_added_axes"] = [box[j]["key"] for j in axes if j not in first_axes]
     result["sampling_period_s"] = maps["period"]
     result["labels"] = maps["labels"]
     return result
@@ -1203,18 +1198,12 @@ def _tried_text(results: List[Dict]) -> str:
 
 def _cell_trier(op, maps_at, options, say) -> Callable:
     """:func:`search_cells`'s ``try_cell``: each cell certified
-    (:func:`_certify_cell`) with a corner axis for every parameter whose
-    half-range left an earlier cell's P no room (one program per cell
-    less)."""
+    (:func:`_certify_cell`), its outcome said."""
     tried = itertools.count(1)
-    carried = set()
 
     def try_cell(cell, splittable):
         say(f"cell {next(tried)}: {_constants_text(cell)}")
-        result = _certify_cell(
-            op, cell, maps_at, options, say, splittable, frozenset(carried)
-        )
-        carried.update(result.pop("_added_axes"))
+        result = _certify_cell(op, cell, maps_at, options, say, splittable)
         result["_cell"] = cell
         why = result.get("breaking_reason")
         say(f"{result['status']}" + (f": {why}" if why else ""))

@@ -763,23 +763,3 @@ def test_a_solver_that_stops_without_an_answer_is_inconclusive(monkeypatch):
     cert = certify_family([0.5 * np.eye(2), A1, A2], ["x", "y"])
     assert cert.status == "inconclusive"
     assert "kSolverSpecificError" in cert.breaking_reason
-
-
-def test_a_cells_corner_axes_are_the_moving_the_constant_and_the_hinted():
-    from deburr_drake.analysis.box_certificate import _cell_axes
-
-    A0 = np.diag([0.9, 0.5])
-    small = 1e-4 * np.ones((2, 2))
-    box = [
-        {"key": "moves", "field": "f"},
-        {"key": "still", "field": "f"},
-        {"key": "constant", "field": "f", "constant": True},
-    ]
-    maps = {
-        "A0": A0,
-        "ends": [(A0 - 0.1 * np.eye(2), A0 + 0.1 * np.eye(2))]
-        + [(A0 - small, A0 + small)] * 2,
-    }
-    assert _cell_axes(box, maps, 1e-2, ()) == [0, 2]
-    # A parameter an earlier cell gave a corner axis keeps it.
-    assert _cell_axes(box, maps, 1e-2, {"still"}) == [0, 1, 2]
