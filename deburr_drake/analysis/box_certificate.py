@@ -2,17 +2,19 @@
 over a box of parameters, each map taken at the steady state its own
 parameters produce.
 
-The box, the values the loop can be at:
+The box, the values the loop can be at, is the scenario's
+``uncertainty`` section (a range of one value leaves its parameter out):
 
-- the robust margin's parameters and ranges
+- the robust margin's parameters
   (:data:`deburr_drake.analysis.robust.UNCERTAIN_PARAMETERS`: contact
   stiffness, c0, the cutting coefficient, the model mass scale; the burr
   height only enters on a burr, and the operating point is off them);
 - the fuzzy surface's slope on each fuzzy axis: the total local slope
-  d u_f / d s_k at the operating s_k, from 0 to the projection bound
-  ``controller.fuzzy.max_slope``. The law bounds |slope| by it; a
-  negative total slope is left out (below -K_k the total gain on s_k is
-  negative and the loop unstable: docs/certify.md). A slope is changed
+  d u_f / d s_k at the operating s_k, by default from 0 to the projection
+  bound ``controller.fuzzy.max_slope``, widened to take in the slope the
+  rules have learned. The law bounds |slope| by it; the default leaves
+  the negative half out (below -K_k the total gain on s_k is negative
+  and the loop unstable: docs/certify.md). A slope is changed
   about the operating s_k (theta_ij += (slope - learned) (j Delta_k -
   s_k)), so u_f and the operating point stay where they are: only the
   map's gain moves.
@@ -147,9 +149,9 @@ DOES_NOT_PROVE = (
     "jumping between the cells of its grid while the loop runs, a held "
     "slope once its s leaves the adaptation's dead zone, loss of contact, burr "
     "impacts, the depth^1.4 contact away from the operating point, the "
-    "outer loop and the adaptation's own dynamics (frozen), a negative "
-    "slope of the fuzzy surface, the feed's range and other poses along "
-    "the edge (not in the box)"
+    "outer loop and the adaptation's own dynamics (frozen), parameter "
+    "values outside the box's ranges (a fuzzy slope's included), the "
+    "feed's range and other poses along the edge (not in the box)"
 )
 
 
@@ -406,12 +408,13 @@ class _Maps:
 
 def _box(op) -> List[Dict]:
     """[{name, field, unit, nominal, range}] (a fuzzy slope: field None,
-    with its axis' index and operating s0): the parameters and their
-    ranges."""
+    with its axis' index and operating s0): the parameters of the
+    scenario's ``uncertainty`` box whose ranges hold more than one value,
+    and their ranges."""
     scenario = op.scenario
     box = []
     for p in UNCERTAIN_PARAMETERS:
-        if p.field is None:
+        if p.field is None or not p.varied(scenario):
             continue  # the burr height: off the burrs it is not in the map
         nominal, low, high = p.values(scenario)
         box.append(
@@ -427,21 +430,44 @@ def _box(op) -> List[Dict]:
     max_slope = float(scenario.controller.fuzzy.max_slope)
     if np.isfinite(max_slope) and max_slope > 0:
         for k, point in enumerate(_fuzzy_point(op)):
-            box.append(
-                {
-                    "key": f"slope_x{point['axis'] + 1}",
-                    "name": f"fuzzy surface slope on x{point['axis'] + 1} "
-                    "(total, at the operating s)",
-                    "field": None,
-                    "unit": "N s/m",
-                    "nominal": point["slope"],
-                    "range": [0.0, max_slope],
-                    "fuzzy_index": k,
-                    "s0": point["s0"],
-                    "held": point["held"],
-                }
-            )
+            fractions = scenario.uncertainty.fuzzy_slope
+            entry = _slope_entry(point, fractions, max_slope)
+            if entry is not None:
+                box.append({**entry, "fuzzy_index": k})
     return box
+
+
+def _slope_entry(point: Dict, fractions, max_slope: float) -> Optional[Dict]:
+    """The box's entry of one fuzzy axis' slope (``point`` from
+    :func:`_fuzzy_point`): its range ``fractions`` of ``max_slope``,
+    widened to take in the slope the rules have learned (the operating
+    point is in the box; ``widened`` says so); None when that leaves one
+    value."""
+    if fractions[0] == fractions[1]:
+        return None  # out of the box: at the learned slope
+    low, high = (float(f) * max_slope for f in fractions)
+    learned = float(point["slope"])
+    widened = None
+    if not low <= learned <= high:
+        widened = (
+            f"widened from [{low:.6g}, {high:.6g}] N s/m to take in the "
+            f"learned slope {learned:.6g} N s/m"
+        )
+        low, high = min(low, learned), max(high, learned)
+    entry = {
+        "key": f"slope_x{point['axis'] + 1}",
+        "name": f"fuzzy surface slope on x{point['axis'] + 1} "
+        "(total, at the operating s)",
+        "field": None,
+        "unit": "N s/m",
+        "nominal": learned,
+        "range": [low, high],
+        "s0": point["s0"],
+        "held": point["held"],
+    }
+    if widened:
+        entry["widened"] = widened
+    return entry
 
 
 def _labels(frozen: FrozenMap) -> List[str]:
@@ -775,6 +801,7 @@ _BOX_FIELDS = (
     "range",
     "s0",
     "held",
+    "widened",
     "constant",
 )
 

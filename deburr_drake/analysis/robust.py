@@ -2,13 +2,15 @@
 over ranges of the parameters a user does not know exactly, at a steady
 point of the run.
 
-The ranges are relative to the scenario's own values, so they apply to any
-scenario; the defaults are the Monte Carlo study's
+The ranges are the scenario's ``uncertainty`` section
+(:class:`deburr_drake.config.UncertaintyConfig`), relative to its own
+values; the defaults are the Monte Carlo study's
 (``studies/robustness.yaml``): the contact stiffness (the part's
 hydroelastic modulus) and c0 +-50 %, the cutting coefficient +-30 %, the
 burr height 0-2 times the scenario's (0-2 mm for the paper's 1 mm burrs),
 and the controller's model mass scale +-0.2 around its value (the paper's
-1.2: the model 20 % heavy, here 0-40 %).
+1.2: the model 20 % heavy, here 0-40 %). A range of one value leaves its
+parameter out.
 
 The search: each parameter alone at both ends of its range (the others at
 the scenario's values), then the corner where every parameter sits at the
@@ -33,56 +35,59 @@ __all__ = ["UncertainParameter", "UNCERTAIN_PARAMETERS", "robust_margin"]
 
 @dataclass
 class UncertainParameter:
-    """``field`` by dotted name (None: ``burr_scale``), its range as
-    (low, high) factors of the scenario's value (``additive``: offsets
-    added to it)."""
+    """``field`` by dotted name (None: ``burr_scale``), its range the
+    scenario's ``uncertainty.<range>``: (low, high) factors of the
+    scenario's value (``additive``: offsets added to it)."""
 
     name: str
     field: Optional[str]
-    low: float
-    high: float
+    range: str
     unit: str
     additive: bool = False
 
     def values(self, scenario: Scenario) -> Tuple[float, float, float]:
         """(nominal, low, high) in the field's unit."""
+        low, high = getattr(scenario.uncertainty, self.range)
         if self.field is None:
-            return 1.0, self.low, self.high
+            return 1.0, low, high
         v = float(get_field(scenario, self.field))
         if self.additive:
-            return v, v + self.low, v + self.high
-        return v, v * self.low, v * self.high
+            return v, v + low, v + high
+        return v, v * low, v * high
+
+    def varied(self, scenario: Scenario) -> bool:
+        """Whether the scenario's range of it holds more than one value."""
+        low, high = getattr(scenario.uncertainty, self.range)
+        return high > low
 
 
-#: The default ranges (module docstring).
+#: The parameters and their ranges' fields in ``uncertainty``.
 UNCERTAIN_PARAMETERS = (
     UncertainParameter(
         "contact stiffness (hydroelastic modulus)",
         "part.material.hydroelastic_modulus",
-        0.5,
-        1.5,
+        "hydroelastic_modulus",
         "Pa",
     ),
     UncertainParameter(
         "c0 (contact threshold force)",
         "process.contact_threshold_force",
-        0.5,
-        1.5,
+        "contact_threshold_force",
         "N",
     ),
     UncertainParameter(
         "cutting coefficient k_c",
         "process.cutting_coefficient",
-        0.7,
-        1.3,
+        "cutting_coefficient",
         "N s/m^3",
     ),
-    UncertainParameter("burr height (x the scenario's)", None, 0.0, 2.0, "-"),
+    UncertainParameter(
+        "burr height (x the scenario's)", None, "burr_height", "-"
+    ),
     UncertainParameter(
         "model mass scale",
         "controller.model_mass_scale",
-        -0.2,
-        0.2,
+        "model_mass_scale",
         "-",
         additive=True,
     ),
@@ -130,7 +135,11 @@ def robust_margin(
     parameters [{name, field, unit, range}], method} at the state
     ``context`` of ``diagram`` (a run of ``scenario``)."""
     say = progress or (lambda m: None)
-    active = [p for p in parameters if p.field is not None or on_burr]
+    active = [
+        p
+        for p in parameters
+        if (p.field is not None or on_burr) and p.varied(scenario)
+    ]
     nominal = {p.name: p.values(scenario)[0] for p in active}
     maps: List[Dict] = []
 

@@ -10,7 +10,8 @@ The layer on ``math``: it imports nothing else of the package (the pure geometry
 checks a profile edge), so a scenario (or a study of 200) is read and validated
 before any Drake system exists. The modules: ``checks`` (:class:`ConfigError`),
 ``control`` (the paper's controller), ``cell`` (the simulated cell),
-``scenario`` (the whole, its files and dotted field names). Import the names
+``scenario`` (the whole, its files and dotted field names), ``uncertainty``
+(the box of the robust margin and the certificate). Import the names
 from here.
 """
 
@@ -59,9 +60,11 @@ from deburr_drake.config.scenario import (
     scenario_path,
     set_field,
 )
+from deburr_drake.config.uncertainty import UncertaintyConfig
 
 __all__ = [
     "ConfigError",
+    "UncertaintyConfig",
     "JobConfig",
     "JobEdgeConfig",
     "PartConfig",

@@ -37,6 +37,7 @@ from deburr_drake.config.control import (
 )
 from deburr_drake.config.job import JobConfig
 from deburr_drake.config.localisation import LocalisationConfig
+from deburr_drake.config.uncertainty import UncertaintyConfig
 
 __all__ = [
     "SimulationConfig",
@@ -134,6 +135,7 @@ class Scenario:
     faults: FaultsConfig = field(default_factory=FaultsConfig)
     localisation: LocalisationConfig = field(default_factory=LocalisationConfig)
     job: JobConfig = field(default_factory=JobConfig)
+    uncertainty: UncertaintyConfig = field(default_factory=UncertaintyConfig)
 
     def validate(self):
         # The default output directory is out/<name>: a plain file name.
@@ -153,6 +155,7 @@ class Scenario:
         self._check_tool_on_part()
         self._check_localisation()
         self._check_periods()
+        self.uncertainty.check_mass_scale(self.controller.model_mass_scale)
         return self
 
     def _check_tool_on_part(self):
