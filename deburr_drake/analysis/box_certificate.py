@@ -49,7 +49,7 @@ from __future__ import annotations
 import copy
 import itertools
 import time
-from typing import Callable, Dict, List, Optional
+from typing import Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 from pydrake.systems.analysis import (
@@ -409,12 +409,12 @@ class _Maps:
 def _box(op) -> List[Dict]:
     """[{name, field, unit, nominal, range}] (a fuzzy slope: field None,
     with its axis' index and operating s0): the parameters of the
-    scenario's ``uncertainty`` box whose ranges hold more than one value,
-    and their ranges."""
+    scenario's ``uncertainty`` box and their ranges (a range of one
+    value: out of the box, :func:`_select_box`)."""
     scenario = op.scenario
     box = []
     for p in UNCERTAIN_PARAMETERS:
-        if p.field is None or not p.varied(scenario):
+        if p.field is None:
             continue  # the burr height: off the burrs it is not in the map
         nominal, low, high = p.values(scenario)
         box.append(
@@ -431,24 +431,24 @@ def _box(op) -> List[Dict]:
     if np.isfinite(max_slope) and max_slope > 0:
         for k, point in enumerate(_fuzzy_point(op)):
             fractions = scenario.uncertainty.fuzzy_slope
-            entry = _slope_entry(point, fractions, max_slope)
-            if entry is not None:
-                box.append({**entry, "fuzzy_index": k})
+            box.append(
+                {**_slope_entry(point, fractions, max_slope), "fuzzy_index": k}
+            )
     return box
 
 
-def _slope_entry(point: Dict, fractions, max_slope: float) -> Optional[Dict]:
+def _slope_entry(point: Dict, fractions, max_slope: float) -> Dict:
     """The box's entry of one fuzzy axis' slope (``point`` from
     :func:`_fuzzy_point`): its range ``fractions`` of ``max_slope``,
     widened to take in the slope the rules have learned (the operating
-    point is in the box; ``widened`` says so); None when that leaves one
-    value."""
-    if fractions[0] == fractions[1]:
-        return None  # out of the box: at the learned slope
+    point is in the box; ``widened`` says so); fractions of one value:
+    the learned slope alone (out of the box)."""
     low, high = (float(f) * max_slope for f in fractions)
     learned = float(point["slope"])
     widened = None
-    if not low <= learned <= high:
+    if fractions[0] == fractions[1]:
+        low = high = learned
+    elif not low <= learned <= high:
         widened = (
             f"widened from [{low:.6g}, {high:.6g}] N s/m to take in the "
             f"learned slope {learned:.6g} N s/m"
@@ -806,18 +806,39 @@ _BOX_FIELDS = (
 )
 
 
-def _select_box(box: List[Dict], only: Optional[List[str]]) -> List[Dict]:
-    """The box's parameters named in ``only`` (all with None); an unknown
-    name is refused before any map is taken."""
-    if only is None:
-        return box
-    unknown = set(only) - {p["key"] for p in box}
-    if unknown:
-        raise ValueError(
-            f"unknown box parameters {sorted(unknown)}: allowed "
-            f"{[p['key'] for p in box]}"
-        )
-    return [p for p in box if p["key"] in only]
+def _select_box(
+    box: List[Dict], only: Optional[List[str]]
+) -> Tuple[List[Dict], List[Dict]]:
+    """(in, out): the box's parameters named in ``only`` (all with None)
+    whose ranges hold more than one value, and the others (at their
+    nominal values); an unknown name is refused before any map is
+    taken."""
+    if only is not None:
+        unknown = set(only) - {p["key"] for p in box}
+        if unknown:
+            raise ValueError(
+                f"unknown box parameters {sorted(unknown)}: allowed "
+                f"{[p['key'] for p in box]}"
+            )
+    chosen = [
+        p
+        for p in box
+        if (only is None or p["key"] in only) and p["range"][1] > p["range"][0]
+    ]
+    return chosen, [p for p in box if p not in chosen]
+
+
+def _does_not_prove(left_out: List[Dict]) -> str:
+    """``DOES_NOT_PROVE``, and the fuzzy slopes left out of the box
+    although their rules move at the operating point."""
+    moving = [p["key"] for p in left_out if "s0" in p and not p["held"]]
+    if not moving:
+        return DOES_NOT_PROVE
+    return (
+        f"{DOES_NOT_PROVE}; {' and '.join(moving)}, which the adaptation "
+        "moves at the operating point, left out of the box (held at the "
+        "learned value)"
+    )
 
 
 def _common_quadratic(family, box, maps, axes, options, final):
@@ -1270,7 +1291,7 @@ def certify(
     say(f"operating point: {after_contact:g} s of cutting ({numerics})")
     op = find_operating_point(run_scenario, after_contact=after_contact)
     timings = {"operating_point_s": time.perf_counter() - t0}
-    box = _select_box(_box(op), only)
+    box, left_out = _select_box(_box(op), only)
     maps_at = _Maps(op, box, settle_periods)
     slope_model = maps_at.check_slope_model()
     grid = _cells(box, _first_grid(box, cells))
@@ -1298,7 +1319,7 @@ def certify(
             },
             "vertices": len(maps_at.taken),
             "proves": _proves_cells(result["proves"], box, results),
-            "does_not_prove": DOES_NOT_PROVE,
+            "does_not_prove": _does_not_prove(left_out),
             "timings_s": {**timings, "total": time.perf_counter() - t0},
             "_maps": {
                 "family": maps["family"],

@@ -97,8 +97,10 @@ def test_the_certificates_box_is_the_scenarios(monkeypatch):
         [-7.8, 0.3 * 3818.59],
     )
     monkeypatch.setattr(box_certificate, "_fuzzy_point", lambda op: points)
-    box = {p["key"]: p for p in box_certificate._box(op)}
+    box, left_out = box_certificate._select_box(box_certificate._box(op), None)
+    box = {p["key"]: p for p in box}
     # c0 holds one value: out of the box, at the scenario's value.
+    assert [p["key"] for p in left_out] == ["c0"]
     assert set(box) == {
         "stiffness",
         "k_c",
@@ -121,6 +123,16 @@ def test_a_slope_range_of_one_value_leaves_the_slope_at_the_learned_one(
     monkeypatch,
 ):
     op, points = _op("uncertainty: {fuzzy_slope: [0.5, 0.5]}", [100.0, 200.0])
+    points[1]["held"] = "inside the dead zone"
     monkeypatch.setattr(box_certificate, "_fuzzy_point", lambda op: points)
-    keys = [p["key"] for p in box_certificate._box(op)]
-    assert keys == ["stiffness", "c0", "k_c", "mass_scale"]
+    box, left_out = box_certificate._select_box(box_certificate._box(op), None)
+    assert [p["key"] for p in box] == ["stiffness", "c0", "k_c", "mass_scale"]
+    assert [p["range"] for p in left_out] == [[100.0, 100.0], [200.0, 200.0]]
+    # The certificate names the slope left out while its rules move.
+    text = box_certificate._does_not_prove(left_out)
+    assert text.startswith(box_certificate.DOES_NOT_PROVE)
+    assert "slope_x1, which the adaptation moves" in text
+    assert "slope_x2" not in text
+    assert box_certificate._does_not_prove(left_out[1:]) == (
+        box_certificate.DOES_NOT_PROVE
+    )
