@@ -65,6 +65,7 @@ from deburr_drake.analysis.certificate import (
     certify_family,
     certify_rate_bounded,
     p_norm,
+    reduce_family,
 )
 from deburr_drake.analysis.operating_point import (
     DEFAULT_TIME_AFTER_CONTACT,
@@ -75,6 +76,7 @@ from deburr_drake.analysis.robust import UNCERTAIN_PARAMETERS
 from deburr_drake.analysis.sampled import FrozenMap
 from deburr_drake.config import Scenario
 from deburr_drake.control.layout import CHAMFER_STATE, CONTROLLER_DIAGNOSTICS
+from deburr_drake.math.switching import DWELLS, periodic_growth
 from deburr_drake.runs.simulation import set_monitor
 
 #: A parameter whose half-range moves the map by more than this fraction
@@ -1179,6 +1181,92 @@ def _cell_record(cell: Dict) -> Dict:
     }
 
 
+def _switch_pairs(cell: List[Dict]):
+    """(j, values at j's low end, at its high end) for each time-varying
+    parameter j of ``cell``, the constants at each corner of the cell and
+    the other time-varying parameters at each of their ends."""
+    varying = [j for j, p in enumerate(cell) if not p.get("constant")]
+    constants = [j for j, p in enumerate(cell) if p.get("constant")]
+    for corner in itertools.product((-1.0, 1.0), repeat=len(constants)):
+        for j in varying:
+            others = [k for k in varying if k != j]
+            for at in itertools.product((-1.0, 1.0), repeat=len(others)):
+                sign = [0.0] * len(cell)
+                for k, si in zip(constants + others, corner + at):
+                    sign[k] = si
+                ends = [sign[:j] + [e] + sign[j + 1 :] for e in (-1.0, 1.0)]
+                yield j, _values(cell, ends[0]), _values(cell, ends[1])
+
+
+def switching_growth(maps_at, cell: List[Dict], labels) -> Optional[Dict]:
+    """The largest growth per period found with one time-varying
+    parameter of ``cell`` switched periodically between its ends
+    (:func:`deburr_drake.math.switching.periodic_growth`; the pairs of
+    :func:`_switch_pairs`); the search stops at a growth above 1, which
+    no Lyapunov function of any form can certify. None: nothing varies."""
+    best, pairs = None, 0
+    for j, low, high in _switch_pairs(cell):
+        pair = [maps_at(low), maps_at(high)]
+        growth, dwell = periodic_growth(*reduce_family(pair, labels).maps)
+        pairs += 1
+        if best is None or growth > best["growth_per_period"]:
+            name = cell[j]["name"]
+            best = {
+                "growth_per_period": growth,
+                "switched": name,
+                "ends": list(cell[j]["range"]),
+                "dwell_periods": list(dwell),
+                "others": {k: v for k, v in low.items() if k != name},
+            }
+        if growth > 1.0 + CHECK_MARGIN:
+            break
+    return best and {**best, "pairs": pairs, "dwells": list(DWELLS)}
+
+
+def _add_switching(result: Dict, results: List[Dict], maps_at, say) -> None:
+    """``result`` (not certified) with ``switching``: the growth found
+    under switching in the cell that decides (none when a map there is
+    unstable by itself: that decides already); an inconclusive cell in
+    which the loop grows is not certified."""
+    cell = results[-1]
+    if result["status"] == "certified" or not cell.get("_stable"):
+        return
+    say("switching: periodic variations of the time-varying parameters")
+    labels = _labels(maps_at.frozen({}))
+    record = switching_growth(maps_at, cell["_cell"], labels)
+    if record is None:
+        return
+    record["text"] = _switching_text(record)
+    say(record["text"])
+    result["switching"] = record
+    if record["growth_per_period"] > 1.0 + CHECK_MARGIN:
+        result["status"] = "not_certified"
+        result["breaking_reason"] = record["text"]
+
+
+def _switching_text(record: Dict) -> str:
+    """What the switching search found, in one line."""
+    g, (p, q) = record["growth_per_period"], record["dwell_periods"]
+    lo, hi = record["ends"]
+    held = (
+        f"{record['switched']} held {p} periods at {lo:.6g} and {q} at "
+        f"{hi:.6g}, over and over"
+    )
+    if g > 1.0 + CHECK_MARGIN:
+        return (
+            f"the loop grows under a variation within the box: {held}, "
+            f"grows by {g:.6f} per period; no Lyapunov function of any form "
+            "proves it stable for variations however fast"
+        )
+    return (
+        f"no growth found under periodic switching ({record['pairs']} pairs "
+        f"of ends, dwells up to {max(record['dwells'])} periods): the "
+        f"largest, {g:.6f} per period ({held}), is a lower bound of the "
+        "joint spectral radius; the quadratic function fails, not (as far as "
+        "this search sees) the loop"
+    )
+
+
 def _worst_cell(results: List[Dict]) -> Dict:
     """The cell that decides: the last tried when it is not certified (the
     search stops there), else the certified one with the largest decay
@@ -1301,6 +1389,7 @@ def certify(
     for r in results:
         for k, v in r["timings_s"].items():
             timings[k] = timings.get(k, 0.0) + v
+    _add_switching(result, results, maps_at, say)
     maps = result.pop("_maps")
     result.update(
         {

@@ -763,3 +763,78 @@ def test_a_solver_that_stops_without_an_answer_is_inconclusive(monkeypatch):
     cert = certify_family([0.5 * np.eye(2), A1, A2], ["x", "y"])
     assert cert.status == "inconclusive"
     assert "kSolverSpecificError" in cert.breaking_reason
+
+
+def _shear_maps(top):
+    """values -> the shear pair alpha [[1, 1], [0, 1]] (parameter "a" at
+    its low end) or alpha [[1, 0], [1, 1]] (at its high end), alpha = 0.5
+    + (top - 0.5) c: each map of radius alpha, their alternation
+    growing by alpha (1 + sqrt 5) / 2 per period."""
+
+    def maps_at(values):
+        alpha = 0.5 + (top - 0.5) * values["c"]
+        shear = (
+            [[1.0, 1.0], [0.0, 1.0]]
+            if values["a"] == 0.0
+            else [
+                [1.0, 0.0],
+                [1.0, 1.0],
+            ]
+        )
+        return alpha * np.array(shear)
+
+    return maps_at
+
+
+_SWITCHED_CELL = [
+    {"name": "a", "key": "a", "range": [0.0, 1.0], "nominal": 0.5},
+    {
+        "name": "c",
+        "key": "c",
+        "range": [0.0, 1.0],
+        "nominal": 0.5,
+        "constant": True,
+    },
+]
+
+
+def test_switching_that_grows_refuses_the_box_whatever_the_function(
+    monkeypatch,
+):
+    from deburr_drake.analysis import box_certificate as bc
+
+    labels = ["x", "y"]
+    record = bc.switching_growth(_shear_maps(0.7), _SWITCHED_CELL, labels)
+    # Found at the constant's high corner (alpha 0.7), the first pair
+    # that grows: the search stops there.
+    assert record["growth_per_period"] == pytest.approx(0.7 * (1 + 5**0.5) / 2)
+    assert record["switched"] == "a" and record["others"] == {"c": 1.0}
+    assert record["dwell_periods"] == [1, 1] and record["pairs"] == 2
+    # An inconclusive cell in which the loop grows is not certified.
+    result = {"status": "inconclusive", "breaking_reason": "no room"}
+    cells = [{"_stable": True, "_cell": _SWITCHED_CELL}]
+    maps = _shear_maps(0.7)
+    maps.frozen = lambda fields: None
+    monkeypatch.setattr(bc, "_labels", lambda frozen: labels)
+    bc._add_switching(result, cells, maps, lambda m: None)
+    assert result["status"] == "not_certified"
+    assert "grows by 1.132" in result["breaking_reason"]
+    assert "a held 1 periods at 0 and 1 at 1" in result["breaking_reason"]
+    # A map unstable by itself decides already: no search.
+    result = {"status": "not_certified"}
+    bc._add_switching(result, [{"_stable": False}], maps, lambda m: None)
+    assert "switching" not in result
+
+
+def test_switching_that_does_not_grow_says_what_it_bounds():
+    from deburr_drake.analysis import box_certificate as bc
+
+    record = bc.switching_growth(_shear_maps(0.6), _SWITCHED_CELL, ["x", "y"])
+    assert record["growth_per_period"] == pytest.approx(0.6 * (1 + 5**0.5) / 2)
+    assert record["pairs"] == 2
+    text = bc._switching_text(record)
+    assert text.startswith("no growth found under periodic switching")
+    assert "lower bound of the joint spectral radius" in text
+    # Nothing time-varying: nothing to switch.
+    fixed = [dict(_SWITCHED_CELL[1])]
+    assert bc.switching_growth(_shear_maps(0.6), fixed, ["x", "y"]) is None
