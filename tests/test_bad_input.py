@@ -19,6 +19,14 @@ CASES = {
         ["certify", "--set", "sensor.cutoff_frequency=fast"],
         ["sensor.cutoff_frequency=fast", "VALUE must be a number"],
     ),
+    "certify over a box that leaves out the scenario's own value": (
+        [
+            "certify",
+            "--scenario-text",
+            "uncertainty: {cutting_coefficient: [1.1, 1.3]}",
+        ],
+        ["uncertainty.cutting_coefficient = [1.1, 1.3]", "holding 1"],
+    ),
     "certify over a box parameter that does not exist": (
         ["certify", "--box", "stiffness", "burr"],
         ["--box 'burr' is invalid", "slope_x2"],

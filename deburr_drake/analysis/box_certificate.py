@@ -990,14 +990,18 @@ def search_cells(
     grid: List[List[Dict]],
     try_cell: Callable[[List[Dict], bool], Dict],
     max_cells: int = MAX_CELLS,
+    results: Optional[List[Dict]] = None,
 ) -> List[Dict]:
     """Every cell's result: the cells of ``grid`` tried in order
     (``try_cell(cell, splittable)``); one that is not certified is
     halved (:func:`_split_axis`) and its halves tried in its place. The
     search stops at a cell that is not certified and cannot be halved
     (or after ``max_cells`` tries): the certificate holds only if it
-    ends with every cell tried certified or halved."""
-    pending, results = list(grid), []
+    ends with every cell tried certified or halved. ``results``: the
+    list each result is appended to as it comes (what an interrupted
+    search has finished)."""
+    pending = list(grid)
+    results = [] if results is None else results
     while pending:
         cell = pending.pop(0)
         splittable = (
@@ -1223,6 +1227,21 @@ def switching_growth(maps_at, cell: List[Dict], labels) -> Optional[Dict]:
     return best and {**best, "pairs": pairs, "dwells": list(DWELLS)}
 
 
+def _search(grid, trier) -> Tuple[List[Dict], str]:
+    """(results, stop reason): :func:`search_cells`, or what it finished
+    when interrupted (SIGINT; SIGTERM as the CLI turns it into one),
+    with "interrupted"; interrupted before a cell was finished, the
+    interruption goes on."""
+    results: List[Dict] = []
+    try:
+        search_cells(grid, trier, results=results)
+    except KeyboardInterrupt:
+        if not results:
+            raise
+        return results, "interrupted"
+    return results, "search_ended"
+
+
 def _add_switching(result: Dict, results: List[Dict], maps_at, say) -> None:
     """``result`` (not certified) with ``switching``: the growth found
     under switching in the cell that decides (none when a map there is
@@ -1384,12 +1403,19 @@ def certify(
     slope_model = maps_at.check_slope_model()
     grid = _cells(box, _first_grid(box, cells))
     options = (solver, vertex_threshold, bisections)
-    results = search_cells(grid, _cell_trier(op, maps_at, options, say))
+    results, stopped = _search(grid, _cell_trier(op, maps_at, options, say))
     result = dict(_worst_cell(results))
     for r in results:
         for k, v in r["timings_s"].items():
             timings[k] = timings.get(k, 0.0) + v
-    _add_switching(result, results, maps_at, say)
+    if stopped == "interrupted":
+        result["status"] = "inconclusive"
+        result["breaking_reason"] = (
+            f"interrupted: the search did not end ({_tried_text(results)})"
+        )
+    else:
+        _add_switching(result, results, maps_at, say)
+    result["stop_reason"] = stopped
     maps = result.pop("_maps")
     result.update(
         {

@@ -17,6 +17,7 @@ _CERTIFY_OUTPUTS = ("certificate.json", "maps.npz")
 def _certify(args) -> int:
     import json
     from pathlib import Path
+    import signal
 
     import numpy as np
 
@@ -48,26 +49,50 @@ def _certify(args) -> int:
     def say(message):
         print(f"  {message}", flush=True)
 
-    result = analysis.certify(
-        scenario,
-        numerics=args.numerics,
-        solver=args.solver,
-        bisections=args.bisections,
-        only=args.box,
-        progress=say,
-    )
+    received = []
+
+    def on_term(number, frame):
+        # As Ctrl-C: the cells finished so far are written.
+        received.append(number)
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, on_term)
+    try:
+        result = analysis.certify(
+            scenario,
+            numerics=args.numerics,
+            solver=args.solver,
+            bisections=args.bisections,
+            only=args.box,
+            progress=say,
+        )
+    except KeyboardInterrupt:
+        result = {
+            "scenario": scenario.name,
+            "status": "inconclusive",
+            "stop_reason": "interrupted",
+            "breaking_reason": "interrupted before a cell was finished",
+        }
+    finally:
+        signal.signal(signal.SIGTERM, previous)
     result["settings"] = settings
-    maps = result.pop("_maps")
     path = out / "certificate.json"
+    maps = result.pop("_maps", None)
     path.write_text(json.dumps(result, indent=2) + "\n")
-    np.savez_compressed(
-        out / "maps.npz",
-        maps=np.array(maps["family"]),
-        names=np.array(maps["names"]),
-        labels=np.array(maps["labels"]),
-    )
-    print(analysis.certificate_summary(result))
+    if maps is not None:
+        np.savez_compressed(
+            out / "maps.npz",
+            maps=np.array(maps["family"]),
+            names=np.array(maps["names"]),
+            labels=np.array(maps["labels"]),
+        )
+        print(analysis.certificate_summary(result))
+    else:
+        (out / "maps.npz").unlink(missing_ok=True)  # not this run's
     print(f"\nwrote {path}")
+    if result["stop_reason"] == "interrupted":
+        print(f"interrupted: {result['breaking_reason']}")
+        return 143 if received else 130
     return 0
 
 

@@ -838,3 +838,46 @@ def test_switching_that_does_not_grow_says_what_it_bounds():
     # Nothing time-varying: nothing to switch.
     fixed = [dict(_SWITCHED_CELL[1])]
     assert bc.switching_growth(_shear_maps(0.6), fixed, ["x", "y"]) is None
+
+
+def test_an_interrupted_search_keeps_the_cells_it_finished():
+    from deburr_drake.analysis import box_certificate as bc
+
+    cell = {"key": "c", "field": "c", "range": [0.0, 1.0], "constant": True}
+    grid = [[cell]] * 3
+    tried = []
+
+    def trier(cell, splittable):
+        if tried:
+            raise KeyboardInterrupt
+        tried.append(cell)
+        return {"status": "certified"}
+
+    results, stopped = bc._search(grid, trier)
+    assert stopped == "interrupted" and len(results) == 1
+    # Interrupted before a cell was finished: nothing to keep.
+    with pytest.raises(KeyboardInterrupt):
+        bc._search(
+            grid,
+            lambda cell, splittable: (_ for _ in ()).throw(KeyboardInterrupt),
+        )
+
+
+def test_certify_interrupted_writes_its_certificate_and_exits_130(
+    tmp_path, monkeypatch
+):
+    import json
+
+    from deburr_drake import analysis, cli
+
+    def interrupted(scenario, **options):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(analysis, "certify", interrupted)
+    (tmp_path / "maps.npz").write_text("an earlier run's")
+    code = cli.main(["certify", "--out", str(tmp_path), "--force"])
+    assert code == 130
+    written = json.loads((tmp_path / "certificate.json").read_text())
+    assert written["status"] == "inconclusive"
+    assert written["stop_reason"] == "interrupted"
+    assert not (tmp_path / "maps.npz").exists()
