@@ -91,7 +91,7 @@ def _certify(args) -> int:
         (out / "maps.npz").unlink(missing_ok=True)  # not this run's
     print(f"\nwrote {path}")
     if result["stop_reason"] == "interrupted":
-        print(f"interrupted: {result['breaking_reason']}")
+        print(result["breaking_reason"])
         return 143 if received else 130
     return 0
 
