@@ -1251,11 +1251,13 @@ def _add_switching(result: Dict, results: List[Dict], maps_at, say) -> None:
     if result["status"] == "certified" or not cell.get("_stable"):
         return
     say("switching: periodic variations of the time-varying parameters")
+    start = time.perf_counter()
     labels = _labels(maps_at.frozen({}))
     record = switching_growth(maps_at, cell["_cell"], labels)
     if record is None:
         return
     record["text"] = _switching_text(record)
+    record["time_s"] = time.perf_counter() - start
     say(record["text"])
     result["switching"] = record
     if record["growth_per_period"] > 1.0 + CHECK_MARGIN:
@@ -1503,6 +1505,9 @@ def certificate_summary(result: Dict) -> str:
         lines.append(f"  {broken}breaks at: {result['breaking_vertex']}")
     if result.get("breaking_reason"):
         lines.append(f"  why: {result['breaking_reason']}")
+    switching = result.get("switching")
+    if switching and switching["text"] != result.get("breaking_reason"):
+        lines.append(f"  switching: {switching['text']}")
     for m in result["separated_modes"]:
         lines.append(
             f"  separated: a mode at {m['eigenvalue'][0]:.6f} in {m['state']}"
