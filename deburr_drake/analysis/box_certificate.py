@@ -1186,41 +1186,43 @@ def _cell_record(cell: Dict) -> Dict:
 
 
 def _switch_pairs(cell: List[Dict]):
-    """(j, values at j's low end, at its high end) for each time-varying
-    parameter j of ``cell``, the constants at each corner of the cell and
-    the other time-varying parameters at each of their ends."""
+    """(values, values): every two corners of the time-varying parameters
+    of ``cell`` (one or several of them switched at once), the constants
+    at each corner of the cell."""
     varying = [j for j, p in enumerate(cell) if not p.get("constant")]
     constants = [j for j, p in enumerate(cell) if p.get("constant")]
-    for corner in itertools.product((-1.0, 1.0), repeat=len(constants)):
-        for j in varying:
-            others = [k for k in varying if k != j]
-            for at in itertools.product((-1.0, 1.0), repeat=len(others)):
+    corners = list(itertools.product((-1.0, 1.0), repeat=len(varying)))
+    for fixed in itertools.product((-1.0, 1.0), repeat=len(constants)):
+        for a, b in itertools.combinations(corners, 2):
+            ends = []
+            for corner in (a, b):
                 sign = [0.0] * len(cell)
-                for k, si in zip(constants + others, corner + at):
+                for k, si in zip(constants + varying, fixed + corner):
                     sign[k] = si
-                ends = [sign[:j] + [e] + sign[j + 1 :] for e in (-1.0, 1.0)]
-                yield j, _values(cell, ends[0]), _values(cell, ends[1])
+                ends.append(_values(cell, sign))
+            yield ends
 
 
 def switching_growth(maps_at, cell: List[Dict], labels) -> Optional[Dict]:
-    """The largest growth per period found with one time-varying
-    parameter of ``cell`` switched periodically between its ends
-    (:func:`deburr_drake.math.switching.periodic_growth`; the pairs of
-    :func:`_switch_pairs`); the search stops at a growth above 1, which
-    no Lyapunov function of any form can certify. None: nothing varies."""
+    """The largest growth per period found with the time-varying
+    parameters of ``cell`` switched periodically between two of their
+    corners (:func:`deburr_drake.math.switching.periodic_growth`; the
+    pairs of :func:`_switch_pairs`); the search stops at a growth above
+    1, which no Lyapunov function of any form can certify. None:
+    nothing varies."""
     best, pairs = None, 0
-    for j, low, high in _switch_pairs(cell):
+    for low, high in _switch_pairs(cell):
         pair = [maps_at(low), maps_at(high)]
         growth, dwell = periodic_growth(*reduce_family(pair, labels).maps)
         pairs += 1
         if best is None or growth > best["growth_per_period"]:
-            name = cell[j]["name"]
             best = {
                 "growth_per_period": growth,
-                "switched": name,
-                "ends": list(cell[j]["range"]),
+                "switched": {
+                    k: [v, high[k]] for k, v in low.items() if v != high[k]
+                },
                 "dwell_periods": list(dwell),
-                "others": {k: v for k, v in low.items() if k != name},
+                "others": {k: v for k, v in low.items() if v == high[k]},
             }
         if growth > 1.0 + CHECK_MARGIN:
             break
@@ -1268,11 +1270,12 @@ def _add_switching(result: Dict, results: List[Dict], maps_at, say) -> None:
 def _switching_text(record: Dict) -> str:
     """What the switching search found, in one line."""
     g, (p, q) = record["growth_per_period"], record["dwell_periods"]
-    lo, hi = record["ends"]
-    held = (
-        f"{record['switched']} held {p} periods at {lo:.6g} and {q} at "
-        f"{hi:.6g}, over and over"
-    )
+    switched = record["switched"]
+    at = [
+        ", ".join(f"{name} = {ends[i]:.6g}" for name, ends in switched.items())
+        for i in (0, 1)
+    ]
+    held = f"held {p} periods at {at[0]} and {q} at {at[1]}, over and over"
     if g > 1.0 + CHECK_MARGIN:
         return (
             f"the loop grows under a variation within the box: {held}, "
@@ -1281,7 +1284,7 @@ def _switching_text(record: Dict) -> str:
         )
     return (
         f"no growth found under periodic switching ({record['pairs']} pairs "
-        f"of ends, dwells up to {max(record['dwells'])} periods): the "
+        f"of corners, dwells up to {max(record['dwells'])} periods): the "
         f"largest, {g:.6f} per period ({held}), is a lower bound of the "
         "joint spectral radius; the quadratic function fails, not (as far as "
         "this search sees) the loop"

@@ -808,7 +808,8 @@ def test_switching_that_grows_refuses_the_box_whatever_the_function(
     # Found at the constant's high corner (alpha 0.7), the first pair
     # that grows: the search stops there.
     assert record["growth_per_period"] == pytest.approx(0.7 * (1 + 5**0.5) / 2)
-    assert record["switched"] == "a" and record["others"] == {"c": 1.0}
+    assert record["switched"] == {"a": [0.0, 1.0]}
+    assert record["others"] == {"c": 1.0}
     assert record["dwell_periods"] == [1, 1] and record["pairs"] == 2
     # An inconclusive cell in which the loop grows is not certified.
     result = {"status": "inconclusive", "breaking_reason": "no room"}
@@ -819,7 +820,7 @@ def test_switching_that_grows_refuses_the_box_whatever_the_function(
     bc._add_switching(result, cells, maps, lambda m: None)
     assert result["status"] == "not_certified"
     assert "grows by 1.132" in result["breaking_reason"]
-    assert "a held 1 periods at 0 and 1 at 1" in result["breaking_reason"]
+    assert "held 1 periods at a = 0 and 1 at a = 1" in result["breaking_reason"]
     # A map unstable by itself decides already: no search.
     result = {"status": "not_certified"}
     bc._add_switching(result, [{"_stable": False}], maps, lambda m: None)
@@ -881,3 +882,24 @@ def test_certify_interrupted_writes_its_certificate_and_exits_130(
     assert written["status"] == "inconclusive"
     assert written["stop_reason"] == "interrupted"
     assert not (tmp_path / "maps.npz").exists()
+
+
+def test_switching_tries_parameters_switched_together():
+    # Only a and b jumping together grow: a corner with one of them
+    # switched is a contraction.
+    from deburr_drake.analysis import box_certificate as bc
+
+    def maps_at(values):
+        a, b = values["a"], values["b"]
+        if a != b:
+            return 0.5 * np.eye(2)
+        return _shear_maps(0.7)({"a": a, "c": 1.0})
+
+    cell = [
+        {"name": "a", "key": "a", "range": [0.0, 1.0], "nominal": 0.5},
+        {"name": "b", "key": "b", "range": [0.0, 1.0], "nominal": 0.5},
+    ]
+    record = bc.switching_growth(maps_at, cell, ["x", "y"])
+    assert record["growth_per_period"] > 1.1
+    assert record["switched"] == {"a": [0.0, 1.0], "b": [0.0, 1.0]}
+    assert record["others"] == {}
