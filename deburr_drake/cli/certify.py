@@ -8,6 +8,7 @@ from deburr_drake.cli.common import (
     _load,
     _output_arguments,
     _scenario_arguments,
+    _sigterm_as_interrupt,
 )
 
 #: What ``certify`` writes into its output directory.
@@ -17,7 +18,6 @@ _CERTIFY_OUTPUTS = ("certificate.json", "maps.npz")
 def _certify(args) -> int:
     import json
     from pathlib import Path
-    import signal
 
     import numpy as np
 
@@ -49,32 +49,24 @@ def _certify(args) -> int:
     def say(message):
         print(f"  {message}", flush=True)
 
-    received = []
-
-    def on_term(number, frame):
-        # As Ctrl-C: the cells finished so far are written.
-        received.append(number)
-        raise KeyboardInterrupt
-
-    previous = signal.signal(signal.SIGTERM, on_term)
-    try:
-        result = analysis.certify(
-            scenario,
-            numerics=args.numerics,
-            solver=args.solver,
-            bisections=args.bisections,
-            only=args.box,
-            progress=say,
-        )
-    except KeyboardInterrupt:
-        result = {
-            "scenario": scenario.name,
-            "status": "inconclusive",
-            "stop_reason": "interrupted",
-            "breaking_reason": "interrupted before a cell was finished",
-        }
-    finally:
-        signal.signal(signal.SIGTERM, previous)
+    # As Ctrl-C: the cells finished so far are written.
+    with _sigterm_as_interrupt() as received:
+        try:
+            result = analysis.certify(
+                scenario,
+                numerics=args.numerics,
+                solver=args.solver,
+                bisections=args.bisections,
+                only=args.box,
+                progress=say,
+            )
+        except KeyboardInterrupt:
+            result = {
+                "scenario": scenario.name,
+                "status": "inconclusive",
+                "stop_reason": "interrupted",
+                "breaking_reason": "interrupted before a cell was finished",
+            }
     result["settings"] = settings
     path = out / "certificate.json"
     maps = result.pop("_maps", None)

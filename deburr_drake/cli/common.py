@@ -4,7 +4,9 @@ targets, the pre-flight, and the arguments every command takes."""
 
 from __future__ import annotations
 
+import contextlib
 import json
+import signal
 
 import numpy as np
 
@@ -90,6 +92,23 @@ def _check_writable_target(
         _bad(f"{what} {path} cannot be created: {probe} is not a directory")
     if not os.access(probe, os.W_OK | os.X_OK):
         _bad(f"{what} {path} cannot be written: no write permission in {probe}")
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """Within the block SIGTERM raises KeyboardInterrupt, as Ctrl-C does,
+    so a command keeps what it finished; yields the signals received."""
+    received = []
+
+    def on_term(number, frame):
+        received.append(number)
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, on_term)
+    try:
+        yield received
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _check_duration(duration):

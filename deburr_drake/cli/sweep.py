@@ -8,13 +8,13 @@ from deburr_drake.cli.common import (
     _bad,
     _check_writable_target,
     _preflight_argument,
+    _sigterm_as_interrupt,
 )
 
 
 def _sweep(args) -> int:
     import os
     from pathlib import Path
-    import signal
 
     from deburr_drake import sweep
 
@@ -38,20 +38,11 @@ def _sweep(args) -> int:
         f"{study.duration:g} s, output {out}/",
         flush=True,
     )
-    received = []
-
-    def on_term(number, frame):
-        # As Ctrl-C: cancel what is still running, keep what is finished.
-        received.append(number)
-        raise KeyboardInterrupt
-
-    previous = signal.signal(signal.SIGTERM, on_term)
-    try:
+    # As Ctrl-C: cancel what is still running, keep what is finished.
+    with _sigterm_as_interrupt() as received:
         outcome = sweep.run_sweep(
             study, runs, out, workers=workers, scheduler=args.scheduler
         )
-    finally:
-        signal.signal(signal.SIGTERM, previous)
     if outcome.ran == 0 and not outcome.interrupted:
         print(
             f"all {len(runs)} run(s) already have results in {out}/runs: "
