@@ -17,14 +17,14 @@ from typing import List
 
 from deburr_drake.config.checks import _require
 
-__all__ = ["UncertaintyConfig", "FACTOR_FIELDS"]
+__all__ = ["UncertaintyConfig"]
 
-#: The ranges that are factors of a scenario field, by their field here.
-FACTOR_FIELDS = {
-    "hydroelastic_modulus": "part.material.hydroelastic_modulus",
-    "contact_threshold_force": "process.contact_threshold_force",
-    "cutting_coefficient": "process.cutting_coefficient",
-}
+#: The ranges that are factors of a positive scenario field.
+_FACTORS = (
+    "hydroelastic_modulus",
+    "contact_threshold_force",
+    "cutting_coefficient",
+)
 
 
 def _pair(*values: float):
@@ -64,7 +64,7 @@ class UncertaintyConfig:
 
     def validate(self):
         o = "uncertainty"
-        for name in (*FACTOR_FIELDS, "burr_height"):
+        for name in (*_FACTORS, "burr_height"):
             low = _range(o, name, getattr(self, name), inside=1.0)
             _require(
                 low > 0 or name == "burr_height",

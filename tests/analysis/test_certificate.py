@@ -903,3 +903,19 @@ def test_switching_tries_parameters_switched_together():
     assert record["growth_per_period"] > 1.1
     assert record["switched"] == {"a": [0.0, 1.0], "b": [0.0, 1.0]}
     assert record["others"] == {}
+
+
+def test_a_switch_of_the_scheduled_slope_leaves_its_claim_open(monkeypatch):
+    # The schedule claims the slope only at its rate bound: the loop
+    # growing when the slope jumps does not refute it.
+    from deburr_drake.analysis import box_certificate as bc
+
+    monkeypatch.setattr(bc, "_labels", lambda frozen: ["x", "y"])
+    maps = _shear_maps(0.7)
+    maps.frozen = lambda fields: None
+    cell = {"_stable": True, "_cell": _SWITCHED_CELL, "scheduled": "a"}
+    result = {"status": "inconclusive", "breaking_reason": "schedule"}
+    bc._add_switching(result, [cell], maps, lambda m: None)
+    assert result["status"] == "inconclusive"
+    assert result["breaking_reason"] == "schedule"
+    assert result["switching"]["growth_per_period"] > 1.0
