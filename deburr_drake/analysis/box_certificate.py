@@ -848,7 +848,7 @@ def _common_quadratic(family, box, maps, axes, options, final):
     Lyapunov function of ``family`` (``final``: the cell will not be
     halved, so its breaking map is searched for when there is none, and
     its decay rate bisected for room; else one step of it)."""
-    solver, _, bisections = options
+    solver, _, bisections, seeds = options
 
     def room(cert):
         return "status" not in _model_error(cert, box, maps, axes)
@@ -859,6 +859,9 @@ def _common_quadratic(family, box, maps, axes, options, final):
     # A cell that will be halved gets one step (halfway to the largest
     # spectral radius): halving quarters the curvature, and on paper a
     # solve near the least rate takes ~100 s.
+    # Cells' families laid out alike (the same corner axes) bind at much
+    # the same maps: each program starts with those the last one held.
+    layout = (len(family), tuple(axes))
     cert = certify_family(
         family,
         maps["labels"],
@@ -866,7 +869,10 @@ def _common_quadratic(family, box, maps, axes, options, final):
         bisections=max(bisections, ROOM_BISECTIONS if final else 1),
         enough=None if bisections else room,
         name_breaking=final,
+        seed=seeds.get(layout, ()),
     )
+    if cert.held:
+        seeds[layout] = cert.held
     error = _model_error(cert, box, maps, axes) if cert.P is not None else {}
     return cert, error
 
@@ -1094,7 +1100,7 @@ def _certify_cell(op, box, maps_at, options, say, splittable=False) -> Dict:
     within it): the common quadratic P, then, if it fails and the cell
     will not be halved (``splittable`` False) and is one of the first
     grid's, P(slope) of a slope that is not held."""
-    solver, threshold, bisections = options
+    solver, threshold, bisections, _ = options
     timings = {}
     t1 = time.perf_counter()
     maps = box_maps(maps_at, box, say)
@@ -1414,7 +1420,8 @@ def certify(
     maps_at = _Maps(op, box, settle_periods)
     slope_model = maps_at.check_slope_model()
     grid = _cells(box, _first_grid(box, cells))
-    options = (solver, vertex_threshold, bisections)
+    # The last, the inequalities each family layout held (seeds).
+    options = (solver, vertex_threshold, bisections, {})
     results, stopped = _search(grid, _cell_trier(op, maps_at, options, say))
     result = dict(_worst_cell(results))
     for r in results:

@@ -258,9 +258,10 @@ class LmiSolution:
     status: str
     success: bool
     # How many of the maps' inequalities the program held when it ended,
-    # and in how many solves (constraint generation).
+    # and in how many solves (constraint generation); which ones.
     inequalities: int = 0
     rounds: int = 1
+    active: List[int] = field(default_factory=list)
 
 
 def _symmetric_basis(n: int) -> List[np.ndarray]:
@@ -327,14 +328,16 @@ def solve_common_lyapunov(
     *,
     solver: str = "Clarabel",
     epsilon: float = 1e-9,
+    first: Sequence[int] = (),
 ) -> LmiSolution:
     """P = P^T, P >= I, A_i^T P A_i - gamma^2 P <= -epsilon I for all i,
     P <= kappa I with kappa minimised (a well-conditioned P), by
     ``solver`` (Clarabel, CSDP or SCS, all shipped with the wheel), the
     inequalities generated as they bind (:func:`_generate`: from the
-    nominal map and the one of largest radius). The LMIs are written in
-    P's basis (``AddLinearMatrixInequalityConstraint``) rather than as
-    symbolic products, which grow as n^3 expressions."""
+    nominal map, the one of largest radius and the maps ``first``, those
+    that bound an earlier solve of a family laid out alike). The LMIs are
+    written in P's basis (``AddLinearMatrixInequalityConstraint``) rather
+    than as symbolic products, which grow as n^3 expressions."""
     n = maps[0].shape[0]
     eye = np.eye(n)
 
@@ -356,7 +359,7 @@ def solve_common_lyapunov(
         solve,
         lambda solution, i: p_norm(maps[i], solution[0]) - gamma,
         [list(range(len(maps)))],
-        {0, int(np.argmax(radii))},
+        {0, int(np.argmax(radii))} | {i for i in first if 0 <= i < len(maps)},
     )
     return LmiSolution(
         P=P,
@@ -365,6 +368,7 @@ def solve_common_lyapunov(
         success=success,
         inequalities=len(active),
         rounds=rounds,
+        active=sorted(active),
     )
 
 
@@ -476,6 +480,9 @@ class Certificate:
     solves: int = 0
     found_by: Optional[str] = None
     search_dimension: int = 0
+    # The maps whose inequalities the programs held (constraint
+    # generation), by index: a later family laid out alike starts there.
+    held: List[int] = field(default_factory=list)
 
     def to_dict(self) -> Dict:
         r = self.reduced
@@ -501,12 +508,13 @@ class Certificate:
         }
 
 
-def _feasible(maps, gamma, solver, margin, V=None, family=None):
+def _feasible(maps, gamma, solver, margin, V=None, family=None, first=()):
     """(solution, check or None): the program at ``gamma`` on ``maps``
-    and its check; with the search basis ``V``, ``maps`` are the
-    ``family``'s in V's coordinates, and the solution's P is lifted to the
-    family's and checked there."""
-    solution = solve_common_lyapunov(maps, gamma, solver=solver)
+    (its inequalities generated from ``first`` on) and its check; with
+    the search basis ``V``, ``maps`` are the ``family``'s in V's
+    coordinates, and the solution's P is lifted to the family's and
+    checked there."""
+    solution = solve_common_lyapunov(maps, gamma, solver=solver, first=first)
     if not solution.success:
         return solution, None
     if V is None:
@@ -556,8 +564,11 @@ def _by_program(cert, search, family, V, radii, solver, margin, hi, name):
     """The program's P at decay rate ``hi`` (None when there is none, with
     ``cert`` then not_certified naming the breaking map when ``name``, or
     inconclusive when the solver's P fails the check); ``cert`` records
-    the solve."""
-    solution, check = _feasible(search, hi, solver, margin, V, family)
+    the solve, and the inequalities it held (``held``, its start)."""
+    solution, check = _feasible(
+        search, hi, solver, margin, V, family, first=cert.held
+    )
+    cert.held = sorted(set(cert.held) | set(solution.active))
     cert.solves, cert.check = 1, check
     cert.solver_status = solution.status
     if not solution.success and solution.status != INFEASIBLE:
@@ -602,6 +613,7 @@ def certify_family(
     neutral_tolerance: float = 1e-6,
     enough: Optional[Callable[[Certificate], bool]] = None,
     name_breaking: bool = True,
+    seed: Sequence[int] = (),
 ) -> Certificate:
     """The certificate of the family ``maps`` (``maps[0]`` nominal) over
     states ``labels``: reduced (:func:`reduce_family`); P searched in the
@@ -616,7 +628,11 @@ def certify_family(
     a solve). Infeasible: not_certified, with the breaking map; solved but
     failing the check: inconclusive. ``name_breaking`` False: an
     infeasible family's breaking map is not searched for (a bisection of
-    solves; a caller that splits the family next has no use for it)."""
+    solves; a caller that splits the family next has no use for it).
+    ``seed``: maps (by index) whose inequalities every program starts
+    with, as the bisection's solves start with those the solves before
+    them held (``held``): the answer is the full program's whatever the
+    start, which only saves the rounds of generating them."""
     reduced = reduce_family(maps, labels, neutral_tolerance=neutral_tolerance)
     family = reduced.maps
     radii = [float(np.max(np.abs(np.linalg.eigvals(A)))) for A in family]
@@ -633,6 +649,7 @@ def certify_family(
         reduced=reduced,
         spectral_radii=radii,
         search_dimension=int(V.shape[1]),
+        held=sorted(i for i in seed if 0 <= i < len(family)),
     )
     worst = int(np.argmax(radii))
     if radii[worst] >= 1.0 - margin:
@@ -656,13 +673,27 @@ def certify_family(
         )
         if best is None:
             return cert
-    lo = max(radii)
     cert.P, cert.decay_rate = best, cert.check["decay_rate"]
+    bounds = (max(radii), hi)
+    _bisect_rate(
+        cert, (search, family, V), solver, margin, bounds, bisections, enough
+    )
+    return cert
+
+
+def _bisect_rate(cert, maps, solver, margin, bounds, bisections, enough):
+    """``cert`` with the decay rate bisected ``bisections`` times within
+    ``bounds`` (lo, hi), or until ``enough(cert)``; ``maps``: (search,
+    family, V) as :func:`_feasible` takes them."""
+    (search, family, V), (lo, hi) = maps, bounds
     for _ in range(bisections):
         if enough is not None and enough(cert):
             break
         gamma = 0.5 * (lo + hi)
-        trial, trial_check = _feasible(search, gamma, solver, margin, V, family)
+        trial, trial_check = _feasible(
+            search, gamma, solver, margin, V, family, first=cert.held
+        )
+        cert.held = sorted(set(cert.held) | set(trial.active))
         cert.solves += 1
         if trial.success and trial_check["passed"]:
             hi, cert.P, cert.check = gamma, trial.P, trial_check
@@ -671,7 +702,6 @@ def certify_family(
             cert.found_by = FOUND_BY_PROGRAM
         else:
             lo = gamma
-    return cert
 
 
 # -- A Lyapunov function per cell of parameters that are constant ----------

@@ -696,7 +696,7 @@ def test_a_half_range_that_leaves_no_room_gets_a_corner_axis():
     }
     family, names = _family(maps_at, box, maps, [0], lambda m: None)
     assert len(family) == 7 and names[-1].startswith("corner")
-    options = ("Clarabel", 1e-2, 0)
+    options = ("Clarabel", 1e-2, 0, {})
     cert, error, axes, family, _ = _common_with_room(
         maps_at, box, maps, ([0], family, names), options, False, print
     )
@@ -754,7 +754,7 @@ def test_the_limits_figure_marks_each_trial_and_both_brackets(tmp_path):
 
 
 def test_a_solver_that_stops_without_an_answer_is_inconclusive(monkeypatch):
-    def stopped(maps, gamma, *, solver="Clarabel", epsilon=1e-9):
+    def stopped(maps, gamma, *, solver="Clarabel", epsilon=1e-9, first=()):
         return LmiSolution(None, solver, "kSolverSpecificError", False)
 
     monkeypatch.setattr(certificate, "solve_common_lyapunov", stopped)
@@ -919,3 +919,26 @@ def test_a_switch_of_the_scheduled_slope_leaves_its_claim_open(monkeypatch):
     assert result["status"] == "inconclusive"
     assert result["breaking_reason"] == "schedule"
     assert result["switching"]["growth_per_period"] > 1.0
+
+
+def test_a_program_started_from_the_inequalities_that_bound_needs_one_round():
+    # Contractions in one norm: a common P exists; generated from the
+    # nominal map and the largest radius it takes rounds, started from
+    # the inequalities that bound it takes one, with the same answer.
+    rng = np.random.default_rng(11)
+    T = rng.standard_normal((5, 5)) + 3 * np.eye(5)
+    maps = []
+    for _ in range(30):
+        Q, _ = np.linalg.qr(rng.standard_normal((5, 5)))
+        maps.append(T @ (0.9 * Q) @ np.linalg.inv(T))
+    cold = certificate.solve_common_lyapunov(maps, 0.99)
+    assert cold.success and cold.rounds > 1
+    warm = certificate.solve_common_lyapunov(maps, 0.99, first=cold.active)
+    assert warm.success and warm.rounds == 1
+    assert warm.active == cold.active
+    cert = certify_family(maps, [str(i) for i in range(5)], bisections=2)
+    seeded = certify_family(
+        maps, [str(i) for i in range(5)], bisections=2, seed=cert.held
+    )
+    assert seeded.status == cert.status == "certified"
+    assert seeded.decay_rate == pytest.approx(cert.decay_rate, abs=1e-6)
