@@ -12,6 +12,8 @@ cutoff, from a low end that must itself be certified.
     python scripts/certified_limits.py --scenario paper \\
         --limits sliding orientation cutoff --box stiffness k_c --json OUT \\
         --plot limits.png
+    python scripts/certified_limits.py --scenario paper --limits orientation \\
+        --scenario-text 'uncertainty: {fuzzy_slope: [0.05, 1.0]}'
 
 Each trial is a whole certificate: the run to the operating point at the
 trial's value, the maps, the program.
@@ -56,6 +58,12 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scenario", default="paper")
     parser.add_argument(
+        "--scenario-text",
+        default=None,
+        help="YAML overrides of the scenario, e.g. its box: "
+        "'uncertainty: {fuzzy_slope: [0.05, 1.0]}'",
+    )
+    parser.add_argument(
         "--limits",
         nargs="+",
         default=["sliding", "orientation", "cutoff"],
@@ -94,7 +102,7 @@ def main():
     )
     args = parser.parse_args()
 
-    scenario = load_scenario(args.scenario)
+    scenario = load_scenario(args.scenario, text=args.scenario_text)
     defaults = {
         "sliding": (400.0, 8000.0),
         "orientation": (20.0, 800.0),
@@ -131,13 +139,20 @@ def main():
             if args.box is None
             else (" ".join(args.box) or "the nominal map")
         )
+        if args.scenario_text:
+            box += f" ({args.scenario_text})"
         plot_certified_limits(
             out, args.plot, title=f"{scenario.name}: certified over {box}"
         )
     if args.json:
         with open(args.json, "w") as f:
             json.dump(
-                {"scenario": scenario.name, "box": args.box, "limits": out},
+                {
+                    "scenario": scenario.name,
+                    "scenario_text": args.scenario_text,
+                    "box": args.box,
+                    "limits": out,
+                },
                 f,
                 indent=2,
             )
