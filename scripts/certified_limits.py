@@ -28,7 +28,7 @@ from deburr_drake.analysis.limits_plot import (
     plot_certified_limits,
     simulated_text,
 )
-from deburr_drake.config import load_scenario
+from deburr_drake.config import ConfigError, load_scenario
 
 
 def _limits(scenario):
@@ -102,7 +102,10 @@ def main():
     )
     args = parser.parse_args()
 
-    scenario = load_scenario(args.scenario, text=args.scenario_text)
+    try:
+        scenario = load_scenario(args.scenario, text=args.scenario_text)
+    except ConfigError as error:
+        raise SystemExit(f"certified_limits.py: {error}") from None
     defaults = {
         "sliding": (400.0, 8000.0),
         "orientation": (20.0, 800.0),
