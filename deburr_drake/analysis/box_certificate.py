@@ -833,7 +833,9 @@ def _select_box(
 def _does_not_prove(left_out: List[Dict]) -> str:
     """``DOES_NOT_PROVE``, and the fuzzy slopes left out of the box
     although their rules move at the operating point."""
-    moving = [p["key"] for p in left_out if "s0" in p and not p["held"]]
+    moving = [
+        p["key"] for p in left_out if p["field"] is None and not p["held"]
+    ]
     if not moving:
         return DOES_NOT_PROVE
     return (
@@ -1261,8 +1263,7 @@ def _add_switching(result: Dict, results: List[Dict], maps_at, say) -> None:
         return
     say("switching: periodic variations of the time-varying parameters")
     start = time.perf_counter()
-    labels = _labels(maps_at.frozen({}))
-    record = switching_growth(maps_at, cell["_cell"], labels)
+    record = switching_growth(maps_at, cell["_cell"], cell["labels"])
     if record is None:
         return
     record["text"] = _switching_text(record)
@@ -1420,7 +1421,8 @@ def certify(
     maps_at = _Maps(op, box, settle_periods)
     slope_model = maps_at.check_slope_model()
     grid = _cells(box, _first_grid(box, cells))
-    # The last, the inequalities each family layout held (seeds).
+    # The last: the maps whose inequalities bound the last program of
+    # each family layout, where the next one of that layout starts.
     options = (solver, vertex_threshold, bisections, {})
     results, stopped = _search(grid, _cell_trier(op, maps_at, options, say))
     result = dict(_worst_cell(results))

@@ -798,9 +798,7 @@ _SWITCHED_CELL = [
 ]
 
 
-def test_switching_that_grows_refuses_the_box_whatever_the_function(
-    monkeypatch,
-):
+def test_switching_that_grows_refuses_the_box_whatever_the_function():
     from deburr_drake.analysis import box_certificate as bc
 
     labels = ["x", "y"]
@@ -813,10 +811,8 @@ def test_switching_that_grows_refuses_the_box_whatever_the_function(
     assert record["dwell_periods"] == [1, 1] and record["pairs"] == 2
     # An inconclusive cell in which the loop grows is not certified.
     result = {"status": "inconclusive", "breaking_reason": "no room"}
-    cells = [{"_stable": True, "_cell": _SWITCHED_CELL}]
+    cells = [{"_stable": True, "_cell": _SWITCHED_CELL, "labels": labels}]
     maps = _shear_maps(0.7)
-    maps.frozen = lambda fields: None
-    monkeypatch.setattr(bc, "_labels", lambda frozen: labels)
     bc._add_switching(result, cells, maps, lambda m: None)
     assert result["status"] == "not_certified"
     assert "grows by 1.132" in result["breaking_reason"]
@@ -905,15 +901,18 @@ def test_switching_tries_parameters_switched_together():
     assert record["others"] == {}
 
 
-def test_a_switch_of_the_scheduled_slope_leaves_its_claim_open(monkeypatch):
+def test_a_switch_of_the_scheduled_slope_leaves_its_claim_open():
     # The schedule claims the slope only at its rate bound: the loop
     # growing when the slope jumps does not refute it.
     from deburr_drake.analysis import box_certificate as bc
 
-    monkeypatch.setattr(bc, "_labels", lambda frozen: ["x", "y"])
     maps = _shear_maps(0.7)
-    maps.frozen = lambda fields: None
-    cell = {"_stable": True, "_cell": _SWITCHED_CELL, "scheduled": "a"}
+    cell = {
+        "_stable": True,
+        "_cell": _SWITCHED_CELL,
+        "scheduled": "a",
+        "labels": ["x", "y"],
+    }
     result = {"status": "inconclusive", "breaking_reason": "schedule"}
     bc._add_switching(result, [cell], maps, lambda m: None)
     assert result["status"] == "inconclusive"
