@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from deburr_drake.cli.common import (
     _check_writable_target,
+    _interrupted_exit_code,
     _load,
     _output_arguments,
     _scenario_arguments,
@@ -84,7 +85,7 @@ def _certify(args) -> int:
     print(f"\nwrote {path}")
     if result["stop_reason"] == "interrupted":
         print(result["breaking_reason"])
-        return 143 if received else 130
+        return _interrupted_exit_code(received)
     return 0
 
 

@@ -119,12 +119,16 @@ def _check_duration(duration):
         )
 
 
-def _exit_code(log, signal_number) -> int:
-    import signal
+def _interrupted_exit_code(received) -> int:
+    """130 (SIGINT, Ctrl-C), or 143 when SIGTERM is among the signals
+    ``received``."""
+    return 143 if signal.SIGTERM in received else EXIT_CODES["interrupted"]
 
+
+def _exit_code(log, signal_number) -> int:
     reason = log.stop_reason
-    if reason == "interrupted" and signal_number == signal.SIGTERM:
-        return 143
+    if reason == "interrupted":
+        return _interrupted_exit_code([signal_number])
     return EXIT_CODES.get(reason.split(":", 1)[0], 1)
 
 

@@ -7,6 +7,7 @@ import sys
 from deburr_drake.cli.common import (
     _bad,
     _check_writable_target,
+    _interrupted_exit_code,
     _preflight_argument,
     _sigterm_as_interrupt,
 )
@@ -64,7 +65,7 @@ def _sweep(args) -> int:
             f"interrupted: the {summary['runs_finished']} finished run(s) "
             "are kept; the same command resumes"
         )
-        return 143 if received else 130
+        return _interrupted_exit_code(received)
     return 1 if outcome.errors else 0
 
 
