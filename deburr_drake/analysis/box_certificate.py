@@ -96,6 +96,12 @@ ROOM_BISECTIONS = 6
 #: step: on the paper arm pairs of x2 slope maps 0 and 1000 N s/m apart
 #: have a common P and 0 and 2000 none, so cells of at most ~500 N s/m.
 SCHEDULE_NODES = 9
+#: Most pieces a time-varying parameter's range is cut into (doubled
+#: while its curvature is the largest of what a cell's corners leave
+#: out): a constant's cell is halved instead, but a parameter that varies
+#: while the loop runs needs one P over its whole range, and only more
+#: vertices along it shrink its chords' miss (a quarter per doubling).
+MAX_PIECES = 8
 #: The parameters that are constants of a run (a material's cutting
 #: coefficient and contact threshold, the controller model's mass error)
 #: and the cells of the first grid over each: a Lyapunov function per
@@ -481,13 +487,33 @@ def _labels(frozen: FrozenMap) -> List[str]:
     return labels
 
 
+def _nodes(p: Dict) -> List[float]:
+    """The values of parameter ``p`` at which it gets vertices: its
+    range's ends, and the ends of its pieces when it is cut into some
+    (:func:`_more_pieces`)."""
+    return list(p.get("nodes") or p["range"])
+
+
 def box_maps(maps: _Maps, box, say=lambda m: None) -> Dict:
-    """{A0, ends [(A_lo, A_hi)], mids, labels, period}: the one-period
-    maps (``maps``) at the nominal values, at both ends and at the
-    midpoint of every parameter of ``box``."""
+    """{A0, ends, mids, curvatures, labels, period}: the one-period maps
+    of :func:`_parameter_maps`, the states' labels and the period."""
+    frozen = maps.frozen({})
+    return {
+        **_parameter_maps(maps, box, say),
+        "labels": _labels(frozen),
+        "period": frozen.period,
+    }
+
+
+def _parameter_maps(maps, box, say=lambda m: None) -> Dict:
+    """{A0, ends [(A_lo, A_hi)], mids, curvatures}: the one-period maps
+    (``maps``) at the nominal values, at both ends and at the midpoint of
+    every parameter of ``box``; ``curvatures``: per parameter, each
+    piece's midpoint map less the chord through its ends (one piece: the
+    whole range)."""
     nominal = {p["name"]: p["nominal"] for p in box}
     A0 = maps(nominal)
-    ends, mids = [], []
+    ends, mids, curvatures = [], [], []
     for p in box:
         lo, hi = p["range"]
         ends.append(tuple(maps({**nominal, p["name"]: v}) for v in (lo, hi)))
@@ -497,15 +523,19 @@ def box_maps(maps: _Maps, box, say=lambda m: None) -> Dict:
         mids.append(
             A0 if centred else maps({**nominal, p["name"]: 0.5 * (lo + hi)})
         )
+        nodes = _nodes(p)
+        if len(nodes) == 2:
+            curvatures.append([mids[-1] - 0.5 * (ends[-1][0] + ends[-1][1])])
+        else:
+            at = [maps({**nominal, p["name"]: v}) for v in nodes]
+            curvatures.append(
+                [
+                    maps({**nominal, p["name"]: 0.5 * (a + b)}) - 0.5 * (A + B)
+                    for a, b, A, B in zip(nodes, nodes[1:], at, at[1:])
+                ]
+            )
         say(f"maps at the ends of {p['name']}")
-    frozen = maps.frozen({})
-    return {
-        "A0": A0,
-        "ends": ends,
-        "mids": mids,
-        "labels": _labels(frozen),
-        "period": frozen.period,
-    }
+    return {"A0": A0, "ends": ends, "mids": mids, "curvatures": curvatures}
 
 
 def _balancer(A0: np.ndarray) -> Callable:
@@ -526,12 +556,6 @@ def _values(box, signs) -> Dict[str, float]:
     }
 
 
-def _value_text(box, signs) -> str:
-    return ", ".join(
-        f"{name} = {v:g}" for name, v in _values(box, signs).items()
-    )
-
-
 def _corner_axes(A0, ends, threshold) -> List[int]:
     """The parameters whose half-range moves the (balanced) map by more
     than ``threshold`` of its norm: each gets a corner axis; the others'
@@ -546,32 +570,36 @@ def _corner_axes(A0, ends, threshold) -> List[int]:
 
 
 def _corners(maps: _Maps, box, axes):
-    """(maps, signs): the true maps at every corner of ``axes``, the other
-    parameters nominal. The parameters' effects do not add up (their cross
-    terms), so corners of a model built from the ends would not do."""
-    corners, signs = [], []
+    """(maps, points): the true maps at every corner of ``axes`` (at every
+    node of a parameter cut into pieces), the other parameters nominal.
+    The parameters' effects do not add up (their cross terms), so corners
+    of a model built from the ends would not do."""
+    corners, points = [], []
     if not axes:
-        return corners, signs
-    for corner in itertools.product((-1.0, 1.0), repeat=len(axes)):
-        sign = [0.0] * len(box)
-        for si, k in zip(corner, axes):
-            sign[k] = si
-        corners.append(maps(_values(box, sign)))
-        signs.append(sign)
-    return corners, signs
+        return corners, points
+    nominal = {p["name"]: p["nominal"] for p in box}
+    for values in itertools.product(*[_nodes(box[k]) for k in axes]):
+        point = {**nominal}
+        point.update({box[k]["name"]: v for k, v in zip(axes, values)})
+        corners.append(maps(point))
+        points.append(point)
+    return corners, points
 
 
 def _model_error(cert, box, maps, axes) -> Dict:
     """What the corners leave out, in P's norm: the curvature of each
-    parameter's map (its midpoint map against the chord through its ends)
-    and the half-range of those without a corner axis; the status
-    inconclusive when the decay rate plus it is not below 1."""
+    parameter's map (its midpoint map against the chord through its ends,
+    the worst piece's when it is cut into pieces) and the half-range of
+    those without a corner axis; the status inconclusive when the decay
+    rate plus it is not below 1."""
     left_out = []
-    for j, (p, (lo, hi), mid) in enumerate(
-        zip(box, maps["ends"], maps["mids"])
-    ):
+    for j, (p, (lo, hi)) in enumerate(zip(box, maps["ends"])):
         entry = {"parameter": p["name"]}
-        bound = p_norm(cert.reduced.transform(mid - 0.5 * (lo + hi)), cert.P)
+        pieces = maps["curvatures"][j]
+        # The parameter is in one piece at a time: the worst piece's chord.
+        bound = max(p_norm(cert.reduced.transform(E), cert.P) for E in pieces)
+        if len(pieces) > 1:
+            entry["pieces"] = len(pieces)
         if j not in axes:
             half = p_norm(cert.reduced.transform(0.5 * (hi - lo)), cert.P)
             entry["half_range_p_norm"] = half
@@ -693,9 +721,9 @@ def _schedule_left_out(box, maps, axes, k) -> List:
     those without a corner axis), for :func:`certify_rate_bounded` to bound
     in P(slope)."""
     left_out = []
-    for j, (q, (a, b), mid) in enumerate(zip(box, maps["ends"], maps["mids"])):
+    for j, (q, (a, b)) in enumerate(zip(box, maps["ends"])):
         if j != k:
-            Es = [mid - 0.5 * (a + b)]
+            Es = list(maps["curvatures"][j])
             if j not in axes:
                 Es.append(0.5 * (b - a))
             left_out.append((q["name"], Es))
@@ -805,6 +833,7 @@ _BOX_FIELDS = (
     "held",
     "widened",
     "constant",
+    "nodes",
 )
 
 
@@ -900,13 +929,16 @@ def _with_schedule(result: Dict, scheduled: Optional[Dict]) -> str:
     )
 
 
-def _map_names(box: List[Dict], signs) -> List[str]:
+def _map_names(box: List[Dict], points) -> List[str]:
     """The family's maps by name: nominal, each parameter's ends, then
     the corners."""
     return (
         ["nominal"]
         + [f"{p['name']} = {v:g}" for p in box for v in p["range"]]
-        + ["corner: " + _value_text(box, s) for s in signs]
+        + [
+            "corner: " + ", ".join(f"{k} = {v:g}" for k, v in q.items())
+            for q in points
+        ]
     )
 
 
@@ -1039,39 +1071,74 @@ def _stable(family) -> bool:
 def _family(maps_at, box, maps, axes, say):
     """(maps, names): the nominal map, each parameter's ends and the true
     maps at the corners of ``axes``."""
-    corners, signs = _corners(maps_at, box, axes)
+    corners, points = _corners(maps_at, box, axes)
     say(f"maps at the {len(corners)} corners")
     family = [maps["A0"]] + [m for pair in maps["ends"] for m in pair]
-    return family + corners, _map_names(box, signs)
+    return family + corners, _map_names(box, points)
+
+
+def _more_pieces(box, error: Dict, axes) -> Optional[int]:
+    """The time-varying parameter to cut into twice as many pieces, when
+    a P leaves no room (inconclusive) for what the corners leave out and
+    that parameter's curvature is the most of it; None when the most is
+    a constant's (a narrower cell shrinks it), a slope's (its map is
+    affine), a half-range (:func:`_axes_for_room`'s) or a parameter
+    already in ``MAX_PIECES``."""
+    if error.get("status") != "inconclusive":
+        return None
+    left_out = [e["p_norm"] for e in error["model_error"]]
+    j = int(np.argmax(left_out))
+    p = box[j]
+    if (
+        p.get("constant")
+        or p["field"] is None
+        or j not in axes
+        or len(_nodes(p)) - 1 >= MAX_PIECES
+    ):
+        return None
+    return j
 
 
 def _common_with_room(maps_at, box, maps, at, options, splittable, say):
     """(certificate, what the corners leave out, axes, maps, names) of
     one common quadratic P of the family ``at`` (axes, maps, names); when
-    its P leaves no room for the half-ranges of parameters without a
-    corner axis, once more with their corners too
-    (:func:`_axes_for_room`)."""
+    its P leaves no room for what the corners leave out, once more with
+    the corners of the parameters whose half-ranges leave none
+    (:func:`_axes_for_room`), then with a time-varying parameter whose
+    curvature is the most of it cut into twice the pieces
+    (:func:`_more_pieces`) until it fits or neither helps (``box`` and
+    ``maps`` then hold the pieces)."""
     axes, family, names = at
-    say(f"common Lyapunov function of {len(family)} maps ({options[0]})")
-    cert, error = _common_quadratic(
-        family, box, maps, axes, options, not splittable
-    )
+    solves = 0
+
+    def solve(family):
+        nonlocal solves
+        say(f"common Lyapunov function of {len(family)} maps ({options[0]})")
+        cert, error = _common_quadratic(
+            family, box, maps, axes, options, not splittable
+        )
+        solves += cert.solves
+        return cert, error
+
+    cert, error = solve(family)
     added = _axes_for_room(cert, error)
-    if not added:
-        return cert, error, axes, family, names
-    say(
-        "corner axes for "
-        + ", ".join(box[j]["key"] for j in added)
-        + ": their half-ranges leave no room"
-    )
-    axes = sorted(axes + added)
-    family, names = _family(maps_at, box, maps, axes, say)
-    say(f"common Lyapunov function of {len(family)} maps ({options[0]})")
-    first = cert.solves
-    cert, error = _common_quadratic(
-        family, box, maps, axes, options, not splittable
-    )
-    cert.solves += first
+    if added:
+        say(
+            "corner axes for "
+            + ", ".join(box[j]["key"] for j in added)
+            + ": their half-ranges leave no room"
+        )
+        axes = sorted(axes + added)
+        family, names = _family(maps_at, box, maps, axes, say)
+        cert, error = solve(family)
+    while (j := _more_pieces(box, error, axes)) is not None:
+        pieces = 2 * (len(_nodes(box[j])) - 1)
+        box[j]["nodes"] = np.linspace(*box[j]["range"], pieces + 1).tolist()
+        say(f"{box[j]['key']} in {pieces} pieces: its curvature leaves no room")
+        maps.update(_parameter_maps(maps_at, box))
+        family, names = _family(maps_at, box, maps, axes, say)
+        cert, error = solve(family)
+    cert.solves = solves
     return cert, error, axes, family, names
 
 

@@ -223,7 +223,8 @@ def test_what_the_corners_leave_out_is_added_to_the_decay_rate():
     cert = certify_family([A0] + [m for e in ends for m in e], ["x", "y"])
     assert cert.status == "certified"
     box = [{"name": "a"}, {"name": "b"}]
-    out = _model_error(cert, box, {"ends": ends, "mids": mids}, [0])
+    curvatures = [[m - 0.5 * (lo + hi)] for m, (lo, hi) in zip(mids, ends)]
+    out = _model_error(cert, box, {"ends": ends, "curvatures": curvatures}, [0])
     a, b = out["model_error"]
     assert a["p_norm"] == pytest.approx(
         p_norm(cert.reduced.transform(0.05 * np.eye(2)), cert.P)
@@ -236,10 +237,18 @@ def test_what_the_corners_leave_out_is_added_to_the_decay_rate():
     )
     assert "status" not in out
     # A curvature that takes the rate to 1: inconclusive.
-    out = _model_error(
-        cert, box, {"ends": ends, "mids": [A0 + np.eye(2), A0]}, [0]
-    )
+    curvatures[0] = [np.eye(2)]
+    out = _model_error(cert, box, {"ends": ends, "curvatures": curvatures}, [0])
     assert out["status"] == "inconclusive"
+    # Cut into pieces, the parameter is in one at a time: the worst one's
+    # chord counts, not their sum.
+    curvatures[0] = [0.01 * np.eye(2), 0.05 * np.eye(2)]
+    out = _model_error(cert, box, {"ends": ends, "curvatures": curvatures}, [0])
+    a = out["model_error"][0]
+    assert a["pieces"] == 2
+    assert a["p_norm"] == pytest.approx(
+        p_norm(cert.reduced.transform(0.05 * np.eye(2)), cert.P)
+    )
 
 
 def test_the_certified_limit_lies_between_a_certified_and_a_refused_value(
@@ -692,6 +701,7 @@ def test_a_half_range_that_leaves_no_room_gets_a_corner_axis():
         "ends": [(A0 - B, A0 + B) for B in (Ba, Bb)],
         # Affine in both: no curvature.
         "mids": [A0, A0],
+        "curvatures": [[0 * A0], [0 * A0]],
         "labels": ["x", "y"],
     }
     family, names = _family(maps_at, box, maps, [0], lambda m: None)
@@ -707,6 +717,74 @@ def test_a_half_range_that_leaves_no_room_gets_a_corner_axis():
     assert "half_range_p_norm" not in error["model_error"][1]
     # Nothing is added to a P that leaves room.
     assert _axes_for_room(cert, error) == []
+
+
+def _curved_box(constant):
+    """A map curved along a time-varying ``a`` in [-1, 1]: 0.98 at both
+    ends, 0.88 at the centre, so the chord through the ends misses the
+    centre by 0.1 and one piece leaves no room (0.98 + 0.1), two neither
+    (+ 0.025), four do (+ 0.00625)."""
+    A0 = np.diag([0.88, 0.5])
+
+    def maps_at(values):
+        return A0 + 0.1 * values["a"] ** 2 * np.diag([1.0, 0.0])
+
+    box = [
+        {
+            "name": "a",
+            "key": "a",
+            "field": "f",
+            "nominal": 0.0,
+            "range": [-1.0, 1.0],
+            "constant": constant,
+        }
+    ]
+    ends = (maps_at({"a": -1.0}), maps_at({"a": 1.0}))
+    maps = {
+        "A0": A0,
+        "ends": [ends],
+        "mids": [A0],
+        "curvatures": [[A0 - 0.5 * (ends[0] + ends[1])]],
+        "labels": ["x", "y"],
+    }
+    return maps_at, box, maps
+
+
+def test_a_time_varying_parameter_is_cut_into_pieces_until_its_chords_fit():
+    from deburr_drake.analysis.box_certificate import (
+        _common_with_room,
+        _family,
+    )
+
+    maps_at, box, maps = _curved_box(constant=False)
+    family, names = _family(maps_at, box, maps, [0], lambda m: None)
+    options = ("Clarabel", 1e-2, 0, {})
+    cert, error, axes, family, names = _common_with_room(
+        maps_at, box, maps, ([0], family, names), options, False, print
+    )
+    assert cert.status == "certified" and "status" not in error
+    # Four pieces: a vertex at each of their five ends.
+    assert box[0]["nodes"] == [-1.0, -0.5, 0.0, 0.5, 1.0]
+    assert sum(n.startswith("corner") for n in names) == 5
+    (a,) = error["model_error"]
+    assert a["pieces"] == 4
+    assert a["p_norm"] == pytest.approx(0.00625, rel=1e-3)
+    assert error["decay_rate_with_model_error"] < 1.0
+
+
+def test_a_constant_is_not_cut_into_pieces_its_cell_is_halved():
+    from deburr_drake.analysis.box_certificate import (
+        _common_with_room,
+        _family,
+    )
+
+    maps_at, box, maps = _curved_box(constant=True)
+    family, names = _family(maps_at, box, maps, [0], lambda m: None)
+    options = ("Clarabel", 1e-2, 0, {})
+    cert, error, _, _, _ = _common_with_room(
+        maps_at, box, maps, ([0], family, names), options, False, print
+    )
+    assert error["status"] == "inconclusive" and "nodes" not in box[0]
 
 
 def test_the_limits_figure_marks_each_trial_and_both_brackets(tmp_path):
