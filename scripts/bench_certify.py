@@ -28,9 +28,17 @@ def main():
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     cells = result["constant_cells"]
     solves = sum(c["solves"] or 0 for c in cells)
+    pieces = {}
+    for c in cells:
+        for key, n in c.get("pieces", {}).items():
+            pieces[key] = max(pieces.get(key, 1), n)
+    cut = "".join(f"; {k} in up to {n} pieces" for k, n in pieces.items())
     print(
         f"{result['status']}, {result['cells_tried']}; {solves} programs "
-        f"solved; {result['vertices']} true maps; CPU {cpu:.1f} s, wall "
+        f"solved; {result['vertices']} true maps; worst cell "
+        f"{result.get('decay_rate_per_period') or float('nan'):.6f}, "
+        f"{result.get('decay_rate_with_model_error') or float('nan'):.6f} "
+        f"with what its corners leave out{cut}; CPU {cpu:.1f} s, wall "
         f"{wall:.1f} s",
         flush=True,
     )

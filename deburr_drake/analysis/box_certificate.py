@@ -1080,23 +1080,27 @@ def _family(maps_at, box, maps, axes, say):
 def _more_pieces(box, error: Dict, axes) -> Optional[int]:
     """The time-varying parameter to cut into twice as many pieces, when
     a P leaves no room (inconclusive) for what the corners leave out and
-    that parameter's curvature is the most of it; None when the most is
-    a constant's (a narrower cell shrinks it), a slope's (its map is
-    affine), a half-range (:func:`_axes_for_room`'s) or a parameter
-    already in ``MAX_PIECES``."""
+    that parameter's curvature is either the most of it or all that
+    keeps the rest from fitting; None for a constant (a narrower cell
+    shrinks its curvature), a slope (its map is affine), a parameter
+    without a corner axis (:func:`_axes_for_room`'s) or one already in
+    ``MAX_PIECES``."""
     if error.get("status") != "inconclusive":
         return None
     left_out = [e["p_norm"] for e in error["model_error"]]
-    j = int(np.argmax(left_out))
-    p = box[j]
-    if (
-        p.get("constant")
-        or p["field"] is None
-        or j not in axes
-        or len(_nodes(p)) - 1 >= MAX_PIECES
-    ):
-        return None
-    return j
+    rest = error["decay_rate_with_model_error"] - 1.0
+    for j in np.argsort(left_out)[::-1]:
+        p = box[j]
+        if (
+            p.get("constant")
+            or p["field"] is None
+            or j not in axes
+            or len(_nodes(p)) - 1 >= MAX_PIECES
+        ):
+            continue
+        if left_out[j] == max(left_out) or rest < left_out[j]:
+            return int(j)
+    return None
 
 
 def _common_with_room(maps_at, box, maps, at, options, splittable, say):
@@ -1255,6 +1259,10 @@ def _cell_record(cell: Dict) -> Dict:
     return {
         "constants": {
             p["key"]: p["range"] for p in cell["box"] if p.get("constant")
+        },
+        # The time-varying parameters cut into pieces (_more_pieces).
+        "pieces": {
+            p["key"]: len(p["nodes"]) - 1 for p in cell["box"] if p.get("nodes")
         },
         **{k: cell.get(k) for k in keys},
     }

@@ -1019,3 +1019,55 @@ def test_a_program_started_from_the_inequalities_that_bound_needs_one_round():
     )
     assert seeded.status == cert.status == "certified"
     assert seeded.decay_rate == pytest.approx(cert.decay_rate, abs=1e-6)
+
+
+def test_a_time_varying_curvature_that_alone_keeps_the_rest_from_fitting_is_cut():
+    from deburr_drake.analysis.box_certificate import (
+        _common_with_room,
+        _family,
+    )
+
+    # Both maps decay at 0.95 at their corners; the time-varying "a" is
+    # curved by 0.03, the constant "c" by 0.04 (the most): 1.02 in all,
+    # but without a's curvature the rest fits, so "a" is cut in two
+    # (0.0075): 0.9975.
+    def maps_at(values):
+        a, c = values["a"], values["c"]
+        return np.diag([0.95 - 0.03 * (1 - a**2), 0.95 - 0.04 * (1 - c**2)])
+
+    box = [
+        {
+            "name": n,
+            "key": n,
+            "field": "f",
+            "nominal": 0.0,
+            "range": [-1.0, 1.0],
+            "constant": n == "c",
+        }
+        for n in "ac"
+    ]
+    A0 = maps_at({"a": 0.0, "c": 0.0})
+    ends = [
+        (
+            maps_at({**{"a": 0.0, "c": 0.0}, n: -1.0}),
+            maps_at({"a": 0.0, "c": 0.0, n: 1.0}),
+        )
+        for n in "ac"
+    ]
+    maps = {
+        "A0": A0,
+        "ends": ends,
+        "mids": [A0, A0],
+        "curvatures": [[A0 - 0.5 * (lo + hi)] for lo, hi in ends],
+        "labels": ["x", "y"],
+    }
+    family, names = _family(maps_at, box, maps, [0, 1], lambda m: None)
+    options = ("Clarabel", 1e-2, 0, {})
+    cert, error, _, _, _ = _common_with_room(
+        maps_at, box, maps, ([0, 1], family, names), options, False, print
+    )
+    assert box[0]["nodes"] == [-1.0, 0.0, 1.0] and "nodes" not in box[1]
+    assert cert.status == "certified" and "status" not in error
+    assert error["decay_rate_with_model_error"] == pytest.approx(
+        0.9975, abs=1e-4
+    )
