@@ -27,6 +27,10 @@ CASES = {
         ],
         ["uncertainty.cutting_coefficient = [1.1, 1.3]", "holding 1"],
     ),
+    "certify with a time limit that is not positive": (
+        ["certify", "--max-time", "0"],
+        ["--max-time 0 is invalid", "positive number of seconds"],
+    ),
     "certify over a box parameter that does not exist": (
         ["certify", "--box", "stiffness", "burr"],
         ["--box 'burr' is invalid", "slope_x2"],

@@ -62,10 +62,13 @@ import scipy.linalg
 from deburr_drake.analysis.along import at_numerics
 from deburr_drake.analysis.certificate import (
     CHECK_MARGIN,
+    OutOfTime,
     certify_family,
     certify_rate_bounded,
+    check_deadline,
     p_norm,
     reduce_family,
+    solve_deadline,
 )
 from deburr_drake.analysis.operating_point import (
     DEFAULT_TIME_AFTER_CONTACT,
@@ -336,6 +339,7 @@ class _Maps:
         """The map taken at ``values`` (each once per certify call)."""
         key = tuple(sorted(values.items()))
         if key not in self.taken:
+            check_deadline()
             self.taken[key] = self._take(values)
         return self.taken[key]
 
@@ -1315,7 +1319,9 @@ def switching_growth(maps_at, cell: List[Dict], labels) -> Optional[Dict]:
 def _search(grid, trier) -> Tuple[List[Dict], str]:
     """(results, stop reason): :func:`search_cells`, or what it finished
     when interrupted (SIGINT; SIGTERM as the CLI turns it into one),
-    with "interrupted"; interrupted before a cell was finished, the
+    with "interrupted", or when its time ran out
+    (:func:`~deburr_drake.analysis.certificate.solve_deadline`), with
+    "time_limit"; interrupted before a cell was finished, the
     interruption goes on."""
     results: List[Dict] = []
     try:
@@ -1324,6 +1330,8 @@ def _search(grid, trier) -> Tuple[List[Dict], str]:
         if not results:
             raise
         return results, "interrupted"
+    except OutOfTime:
+        return results, "time_limit"
     return results, "search_ended"
 
 
@@ -1473,6 +1481,7 @@ def certify(
     only: Optional[List[str]] = None,
     cells: Optional[Dict[str, int]] = None,
     progress: Optional[Callable[[str], None]] = None,
+    max_time: Optional[float] = None,
 ) -> Dict:
     """certificate.json's dict (SI units) of ``scenario``'s sampled loop
     over the box (module docstring) at the operating point
@@ -1485,7 +1494,11 @@ def certify(
     the first grid's cells by key (``CONSTANT_CELLS`` and one along each
     held slope by default; {}: every parameter time-varying), a
     certificate per cell, a cell not certified halved
-    (:func:`search_cells`) until one cannot be."""
+    (:func:`search_cells`) until one cannot be. ``max_time``: seconds
+    (wall) after which no program or map starts (a running program
+    stops at its solver's time limit): the certificate is then
+    inconclusive with the cells finished (``stop_reason`` time_limit),
+    and the switching search still runs on the cell that decides."""
     say = progress or (lambda message: None)
     t0 = time.perf_counter()
     run_scenario = at_numerics(scenario, numerics)
@@ -1499,17 +1512,27 @@ def certify(
     # The last: the maps whose inequalities bound the last program of
     # each family layout, where the next one of that layout starts.
     options = (solver, vertex_threshold, bisections, {})
-    results, stopped = _search(grid, _cell_trier(op, maps_at, options, say))
+    # The operating point's time counts: max_time is the command's.
+    left = None if max_time is None else max_time - (time.perf_counter() - t0)
+    with solve_deadline(None if left is None else time.monotonic() + left):
+        results, stopped = _search(grid, _cell_trier(op, maps_at, options, say))
+    if not results:
+        return _out_of_time(op, box, grid[0], maps_at, max_time, say)
     result = dict(_worst_cell(results))
     for r in results:
         for k, v in r["timings_s"].items():
             timings[k] = timings.get(k, 0.0) + v
-    if stopped == "interrupted":
+    if stopped != "search_ended":
         result["status"] = "inconclusive"
-        result["breaking_reason"] = (
-            f"interrupted: the search did not end ({_tried_text(results)})"
+        why = (
+            "interrupted"
+            if stopped == "interrupted"
+            else f"the time limit ({max_time:g} s) ran out"
         )
-    else:
+        result["breaking_reason"] = (
+            f"{why}: the search did not end ({_tried_text(results)})"
+        )
+    if stopped != "interrupted":
         _add_switching(result, results, maps_at, say)
     result["stop_reason"] = stopped
     maps = result.pop("_maps")
@@ -1539,6 +1562,41 @@ def certify(
             },
         }
     )
+    return result
+
+
+def _out_of_time(op, box, cell, maps_at, max_time, say) -> Dict:
+    """certificate.json's dict when the time limit ran out before a cell
+    was finished: inconclusive, with what the switching search finds on
+    the first cell (a growth there proves that no Lyapunov function
+    certifies the box for variations however fast; a moving slope's
+    rate-bounded schedule stays open)."""
+    timed = (
+        f"the time limit ({max_time:g} s) ran out before a cell was finished"
+    )
+    say(timed)
+    result = {
+        "scenario": op.scenario.name,
+        "status": "inconclusive",
+        "stop_reason": "time_limit",
+        "breaking_reason": timed,
+        "operating_point": op.summary(),
+        "box": [{k: p[k] for k in _BOX_FIELDS if k in p} for p in box],
+    }
+    cell = [{**p} for p in cell]
+    moving = [
+        p["name"] for p in cell if p["field"] is None and not p.get("constant")
+    ]
+    first = {"_cell": cell, "_stable": True, "scheduled": None}
+    first["labels"] = _labels(maps_at.frozen({}))
+    _add_switching(result, [first], maps_at, say)
+    record = result.get("switching")
+    if record:
+        if set(moving) & set(record["switched"]):
+            # What grows is a switch of a slope that moves at a bounded
+            # rate: a schedule of it may still certify the box.
+            result["status"] = "inconclusive"
+        result["breaking_reason"] = f"{timed}; {record['text']}"
     return result
 
 
@@ -1606,7 +1664,9 @@ def certificate_summary(result: Dict) -> str:
         lines.append(
             f"  separated: a mode at {m['eigenvalue'][0]:.6f} in {m['state']}"
         )
-    lines.append(f"  proves: {result['proves']}")
+    # Not certified, it is the claim that was tried, not a proof.
+    proves = "proves" if result["status"] == "certified" else "would prove"
+    lines.append(f"  {proves}: {result['proves']}")
     lines.append(f"  does not prove: {result['does_not_prove']}")
     lines.append(f"  wall time {result['timings_s']['total']:.1f} s")
     return "\n".join(lines)

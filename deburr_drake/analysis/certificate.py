@@ -49,7 +49,10 @@ P-norm of the maps below 1 by ``margin``); a P that fails is
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 from dataclasses import dataclass, field
+import time
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -58,6 +61,7 @@ from pydrake.solvers import (
     CsdpSolver,
     MathematicalProgram,
     ScsSolver,
+    SolverOptions,
 )
 import scipy.linalg
 
@@ -68,6 +72,9 @@ __all__ = [
     "Certificate",
     "reduce_family",
     "solve_common_lyapunov",
+    "solve_deadline",
+    "check_deadline",
+    "OutOfTime",
     "check_lyapunov",
     "certify_family",
     "p_norm",
@@ -120,6 +127,62 @@ _SOLVERS = {
     "CSDP": CsdpSolver,
     "SCS": ScsSolver,
 }
+
+
+#: Each solver's own time limit (seconds), set to what is left before
+#: the deadline of :func:`solve_deadline`; CSDP has none, so its solves
+#: are only kept from starting after it.
+_TIME_LIMIT_OPTIONS = {"Clarabel": "time_limit", "SCS": "time_limit_secs"}
+
+#: The time.monotonic() by which every program must have ended (None: no
+#: limit): a context value, so that the programs deep in a search need
+#: not carry it.
+_DEADLINE: contextvars.ContextVar[Optional[float]] = contextvars.ContextVar(
+    "certificate_deadline", default=None
+)
+
+
+class OutOfTime(Exception):
+    """A program or a map was about to start after the deadline of
+    :func:`solve_deadline`."""
+
+
+@contextlib.contextmanager
+def solve_deadline(deadline: Optional[float]):
+    """Within the block, every program is given what is left before
+    ``deadline`` (time.monotonic(); None: no limit) as its solver's time
+    limit, and one that would start after it raises :class:`OutOfTime`
+    (:func:`check_deadline`)."""
+    token = _DEADLINE.set(deadline)
+    try:
+        yield
+    finally:
+        _DEADLINE.reset(token)
+
+
+def check_deadline() -> Optional[float]:
+    """The seconds left before the deadline (None: no limit); raises
+    :class:`OutOfTime` when none are."""
+    deadline = _DEADLINE.get()
+    if deadline is None:
+        return None
+    left = deadline - time.monotonic()
+    if left <= 0.0:
+        raise OutOfTime("the time limit ran out")
+    return left
+
+
+def _solve(prog: MathematicalProgram, solver: str):
+    """``prog`` solved by ``solver``, stopped at the deadline: a solver
+    stopped by its time limit gives neither a P nor a proof that none
+    exists (its status is not kInfeasibleConstraints: inconclusive)."""
+    left = check_deadline()
+    options = SolverOptions()
+    if left is not None and solver in _TIME_LIMIT_OPTIONS:
+        options.SetOption(
+            _SOLVERS[solver].id(), _TIME_LIMIT_OPTIONS[solver], left
+        )
+    return _SOLVERS[solver]().Solve(prog, None, options)
 
 
 @dataclass
@@ -350,7 +413,7 @@ def solve_common_lyapunov(
                 [-epsilon * eye] + [gamma**2 * E - A.T @ E @ A for E in basis],
                 variables,
             )
-        result = _SOLVERS[solver]().Solve(prog)
+        result = _solve(prog, solver)
         success = result.is_success()
         return (result.GetSolution(P) if success else None, result, success)
 
@@ -957,7 +1020,7 @@ def _per_node(maps) -> List[List[np.ndarray]]:
 
 def _solved(prog, Ps, solver):
     """(the P_i's values or None, the result, success)."""
-    result = _SOLVERS[solver]().Solve(prog)
+    result = _solve(prog, solver)
     success = result.is_success()
     values = [result.GetSolution(P) for P in Ps] if success else None
     return values, result, success

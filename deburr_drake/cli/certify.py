@@ -12,6 +12,10 @@ from deburr_drake.cli.common import (
     _sigterm_as_interrupt,
 )
 
+#: The search's default time limit (s): paper_6dof's slope schedule has
+#: run for 30 min without an answer, and a command should end by itself.
+MAX_TIME = 1800.0
+
 #: What ``certify`` writes into its output directory.
 _CERTIFY_OUTPUTS = ("certificate.json", "maps.npz")
 
@@ -41,6 +45,11 @@ def _certify(args) -> int:
                 raise ConfigError(
                     f"--box {key!r} is invalid: allowed {', '.join(allowed)}"
                 )
+    if not args.max_time > 0:
+        raise ConfigError(
+            f"--max-time {args.max_time:g} is invalid: a positive number "
+            "of seconds"
+        )
     out = Path(args.out or f"out/{scenario.name}/certificate")
     _check_writable_target(
         out, "--out", args.force, is_dir=True, names=_CERTIFY_OUTPUTS
@@ -60,6 +69,7 @@ def _certify(args) -> int:
                 bisections=args.bisections,
                 only=args.box,
                 progress=say,
+                max_time=args.max_time,
             )
         except KeyboardInterrupt:
             result = {
@@ -83,8 +93,9 @@ def _certify(args) -> int:
     else:
         (out / "maps.npz").unlink(missing_ok=True)  # not this run's
     print(f"\nwrote {path}")
-    if result["stop_reason"] == "interrupted":
+    if result["stop_reason"] in ("interrupted", "time_limit"):
         print(result["breaking_reason"])
+    if result["stop_reason"] == "interrupted":
         return _interrupted_exit_code(received)
     return 0
 
@@ -129,6 +140,17 @@ def _add_certify_parser(subparsers):
         help="certify over these parameters of the box only, the others "
         "at their nominal values (stiffness, c0, k_c, mass_scale, "
         "slope_x1, slope_x2; none: the nominal map alone; default: all)",
+    )
+    p.add_argument(
+        "--max-time",
+        type=float,
+        default=MAX_TIME,
+        metavar="SECONDS",
+        help="stop the search after this many seconds (wall, the run to "
+        "the operating point included): the certificate is then "
+        "inconclusive with the cells finished, and says whether the loop "
+        "grows under a variation within the box (default %(default)g: "
+        "half an hour)",
     )
     p.add_argument(
         "--solver",

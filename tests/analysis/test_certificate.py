@@ -1021,7 +1021,7 @@ def test_a_program_started_from_the_inequalities_that_bound_needs_one_round():
     assert seeded.decay_rate == pytest.approx(cert.decay_rate, abs=1e-6)
 
 
-def test_a_time_varying_curvature_that_alone_keeps_the_rest_from_fitting_is_cut():
+def test_a_curvature_that_alone_keeps_the_rest_from_fitting_is_cut():
     from deburr_drake.analysis.box_certificate import (
         _common_with_room,
         _family,
@@ -1071,3 +1071,120 @@ def test_a_time_varying_curvature_that_alone_keeps_the_rest_from_fitting_is_cut(
     assert error["decay_rate_with_model_error"] == pytest.approx(
         0.9975, abs=1e-4
     )
+
+
+def test_a_search_out_of_time_keeps_the_cells_it_finished():
+    from deburr_drake.analysis import box_certificate as bc
+    from deburr_drake.analysis.certificate import OutOfTime
+
+    cell = {"key": "c", "field": "c", "range": [0.0, 1.0], "constant": True}
+    tried = []
+
+    def trier(cell, splittable):
+        if len(tried) == 2:
+            raise OutOfTime("the time limit ran out")
+        tried.append(cell)
+        return {"status": "certified"}
+
+    results, stopped = bc._search([[cell]] * 3, trier)
+    assert stopped == "time_limit" and len(results) == 2
+
+
+def test_no_program_starts_after_the_deadline_and_one_running_gets_the_rest(
+    monkeypatch,
+):
+    import time
+
+    from pydrake.solvers import ClarabelSolver
+
+    from deburr_drake.analysis import certificate
+
+    maps = [0.9 * _rotation(t) for t in (0.1, 0.5)]
+    with certificate.solve_deadline(time.monotonic() - 1.0):
+        with pytest.raises(certificate.OutOfTime):
+            certify_family(maps, ["x", "y"])
+    limits = []
+
+    class Recording(ClarabelSolver):
+        def Solve(self, prog, guess, options):
+            limits.append(options.options.get("Clarabel", {}).get("time_limit"))
+            return super().Solve(prog, guess, options)
+
+    monkeypatch.setitem(certificate._SOLVERS, "Clarabel", Recording)
+    with certificate.solve_deadline(time.monotonic() + 100.0):
+        assert certify_family(maps, ["x", "y"]).status == "certified"
+    assert limits and all(0.0 < t <= 100.0 for t in limits)
+    # Without a deadline: no limit given, and none checked.
+    limits.clear()
+    assert certify_family(maps, ["x", "y"]).status == "certified"
+    assert limits and all(t is None for t in limits)
+    assert certificate.check_deadline() is None
+
+
+def _out_of_time_case(moving):
+    """(op, cell) for :func:`_out_of_time`: the shear pair's cell, ``a``
+    a moving fuzzy slope or a time-varying stiffness."""
+    from types import SimpleNamespace
+
+    cell = [
+        {**_SWITCHED_CELL[0], "field": None if moving else "f"},
+        {**_SWITCHED_CELL[1], "field": "g"},
+    ]
+    op = SimpleNamespace(scenario=SimpleNamespace(name="s"), summary=dict)
+    return op, cell
+
+
+@pytest.mark.parametrize("moving", [True, False])
+def test_out_of_time_before_a_cell_still_says_whether_the_loop_grows(
+    monkeypatch, moving
+):
+    from deburr_drake.analysis import box_certificate as bc
+
+    op, cell = _out_of_time_case(moving)
+    shear = _shear_maps(0.7)
+
+    class MapsAt:
+        def __call__(self, values):
+            return shear(values)
+
+        def frozen(self, fields):
+            return None
+
+    monkeypatch.setattr(bc, "_labels", lambda frozen: ["x", "y"])
+    result = bc._out_of_time(op, cell, cell, MapsAt(), 60.0, print)
+    assert result["stop_reason"] == "time_limit"
+    assert result["switching"]["growth_per_period"] > 1.0
+    # A moving slope's switch leaves its rate-bounded schedule open; a
+    # stiffness's refuses the box whatever the function.
+    assert result["status"] == ("inconclusive" if moving else "not_certified")
+    assert "time limit (60 s) ran out" in result["breaking_reason"]
+
+
+@pytest.mark.parametrize(
+    "status, stop, said",
+    [
+        ("certified", "search_ended", "  proves: "),
+        ("inconclusive", "time_limit", "  would prove: "),
+        ("not_certified", "search_ended", "  would prove: "),
+    ],
+)
+def test_the_summary_claims_a_proof_only_of_a_certified_box(status, stop, said):
+    from deburr_drake.analysis.box_certificate import certificate_summary
+
+    result = {
+        "scenario": "s",
+        "status": status,
+        "stop_reason": stop,
+        "vertices": 3,
+        "numerics": "shipped",
+        "solver": "Clarabel",
+        "solver_status": "kSolutionFound",
+        "decay_rate_per_period": None,
+        "separated_modes": [],
+        "proves": "the loop is stable",
+        "does_not_prove": "loss of contact",
+        "timings_s": {"total": 1.0},
+    }
+    lines = certificate_summary(result).splitlines()
+    assert f"{said}the loop is stable" in lines
+    assert "  does not prove: loss of contact" in lines
