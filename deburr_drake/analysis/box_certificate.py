@@ -1495,12 +1495,12 @@ def certify(
     held slope by default; {}: every parameter time-varying), a
     certificate per cell, a cell not certified halved
     (:func:`search_cells`) until one cannot be. ``max_time``: seconds
-    (wall) after which no program or map starts (a running program
-    stops at its solver's time limit): the certificate is then
-    inconclusive with the cells finished (``stop_reason`` time_limit),
-    and the switching search still runs on the cell that decides."""
+    (wall) after which no program or map starts, a running solve stops
+    at its solver's time limit, and the cells finished decide
+    (:func:`_ended`, :func:`_out_of_time`)."""
     say = progress or (lambda message: None)
     t0 = time.perf_counter()
+    deadline = None if max_time is None else time.monotonic() + max_time
     run_scenario = at_numerics(scenario, numerics)
     say(f"operating point: {after_contact:g} s of cutting ({numerics})")
     op = find_operating_point(run_scenario, after_contact=after_contact)
@@ -1512,9 +1512,7 @@ def certify(
     # The last: the maps whose inequalities bound the last program of
     # each family layout, where the next one of that layout starts.
     options = (solver, vertex_threshold, bisections, {})
-    # The operating point's time counts: max_time is the command's.
-    left = None if max_time is None else max_time - (time.perf_counter() - t0)
-    with solve_deadline(None if left is None else time.monotonic() + left):
+    with solve_deadline(deadline):
         results, stopped = _search(grid, _cell_trier(op, maps_at, options, say))
     if not results:
         return _out_of_time(op, box, grid[0], maps_at, max_time, say)
@@ -1522,19 +1520,7 @@ def certify(
     for r in results:
         for k, v in r["timings_s"].items():
             timings[k] = timings.get(k, 0.0) + v
-    if stopped != "search_ended":
-        result["status"] = "inconclusive"
-        why = (
-            "interrupted"
-            if stopped == "interrupted"
-            else f"the time limit ({max_time:g} s) ran out"
-        )
-        result["breaking_reason"] = (
-            f"{why}: the search did not end ({_tried_text(results)})"
-        )
-    if stopped != "interrupted":
-        _add_switching(result, results, maps_at, say)
-    result["stop_reason"] = stopped
+    _ended(result, results, stopped, max_time, maps_at, say)
     maps = result.pop("_maps")
     result.update(
         {
@@ -1563,6 +1549,25 @@ def certify(
         }
     )
     return result
+
+
+def _ended(result, results, stopped, max_time, maps_at, say) -> None:
+    """``result`` (the deciding cell's) with how the search ended: a
+    search that did not end is inconclusive; unless interrupted, the
+    switching search runs on the deciding cell (:func:`_add_switching`)."""
+    if stopped != "search_ended":
+        result["status"] = "inconclusive"
+        why = (
+            "interrupted"
+            if stopped == "interrupted"
+            else f"the time limit ({max_time:g} s) ran out"
+        )
+        result["breaking_reason"] = (
+            f"{why}: the search did not end ({_tried_text(results)})"
+        )
+    if stopped != "interrupted":
+        _add_switching(result, results, maps_at, say)
+    result["stop_reason"] = stopped
 
 
 def _out_of_time(op, box, cell, maps_at, max_time, say) -> Dict:
