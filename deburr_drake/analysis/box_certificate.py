@@ -442,7 +442,7 @@ def _box(op) -> List[Dict]:
     max_slope = float(scenario.controller.fuzzy.max_slope)
     if np.isfinite(max_slope) and max_slope > 0:
         for k, point in enumerate(_fuzzy_point(op)):
-            fractions = scenario.uncertainty.fuzzy_slope
+            fractions = scenario.uncertainty.slope_fractions(point["axis"])
             box.append(
                 {**_slope_entry(point, fractions, max_slope), "fuzzy_index": k}
             )

@@ -156,6 +156,7 @@ class Scenario:
         self._check_localisation()
         self._check_periods()
         self.uncertainty.check_mass_scale(self.controller.model_mass_scale)
+        self.uncertainty.check_axes(self.controller.fuzzy.axes)
         return self
 
     def _check_tool_on_part(self):

@@ -13,7 +13,7 @@ operating point is in the box. A range of one value (``[1, 1]``, offsets
 
 from dataclasses import dataclass, field
 import math
-from typing import List
+from typing import Dict, List
 
 from deburr_drake.config.checks import _require
 
@@ -25,6 +25,10 @@ _FACTORS = (
     "contact_threshold_force",
     "cutting_coefficient",
 )
+
+
+# A Dict's values are list[float], not typing.List: Drake's YAML reader
+# cannot build the latter inside a Dict.
 
 
 def _pair(*values: float):
@@ -61,6 +65,10 @@ class UncertaintyConfig:
     # the slope the rules have learned is widened to take it in, and the
     # certificate says so
     fuzzy_slope: List[float] = _pair(0.0, 1.0)
+    # -, x controller.fuzzy.max_slope: fuzzy_slope for one axis of
+    # controller.fuzzy.axes by name (x1, x2, x3), e.g. {x2: [0.05, 1.0]};
+    # the axes not named take fuzzy_slope
+    fuzzy_slope_per_axis: Dict[str, list[float]] = field(default_factory=dict)
 
     def validate(self):
         o = "uncertainty"
@@ -73,15 +81,25 @@ class UncertaintyConfig:
                 "a factor > 0 (the parameter itself must stay positive)",
             )
         _range(o, "model_mass_scale", self.model_mass_scale, inside=0.0)
-        low = _range(o, "fuzzy_slope", self.fuzzy_slope, inside=None)
-        high = self.fuzzy_slope[1]
-        _require(
-            -1.0 <= low and high <= 1.0,
-            f"{o}.fuzzy_slope",
-            self.fuzzy_slope,
-            "fractions in [-1, 1] of controller.fuzzy.max_slope (the "
-            "projection bounds the slope's size by it)",
-        )
+        _slope_fractions(o, "fuzzy_slope", self.fuzzy_slope)
+        for axis, fractions in self.fuzzy_slope_per_axis.items():
+            _slope_fractions(o, f"fuzzy_slope_per_axis.{axis}", fractions)
+
+    def check_axes(self, axes: List[int]):
+        """Each axis named in ``fuzzy_slope_per_axis`` is a fuzzy one."""
+        names = [f"x{a + 1}" for a in axes]
+        for axis in self.fuzzy_slope_per_axis:
+            _require(
+                axis in names,
+                f"uncertainty.fuzzy_slope_per_axis.{axis}",
+                self.fuzzy_slope_per_axis[axis],
+                f"an axis of controller.fuzzy.axes: {', '.join(names)}",
+            )
+
+    def slope_fractions(self, axis: int) -> List[float]:
+        """The fuzzy slope's range on task ``axis`` (0, 1, 2), as
+        fractions of controller.fuzzy.max_slope."""
+        return self.fuzzy_slope_per_axis.get(f"x{axis + 1}", self.fuzzy_slope)
 
     def check_mass_scale(self, model_mass_scale: float):
         """The model's masses stay positive over the range."""
@@ -93,6 +111,18 @@ class UncertaintyConfig:
             f"an offset > -{model_mass_scale:g} (controller.model_mass_scale: "
             "the model's masses stay positive)",
         )
+
+
+def _slope_fractions(owner: str, name: str, value) -> None:
+    """A fuzzy slope's range: fractions in [-1, 1] of max_slope."""
+    low = _range(owner, name, value, inside=None)
+    _require(
+        -1.0 <= low and value[1] <= 1.0,
+        f"{owner}.{name}",
+        value,
+        "fractions in [-1, 1] of controller.fuzzy.max_slope (the "
+        "projection bounds the slope's size by it)",
+    )
 
 
 def _range(owner: str, name: str, value, inside) -> float:

@@ -44,6 +44,16 @@ from deburr_drake.config import ConfigError, load_scenario
             "fractions in [-1, 1]",
         ),
         (
+            "{fuzzy_slope_per_axis: {x2: [0.5, 1.5]}}",
+            "uncertainty.fuzzy_slope_per_axis.x2 = [0.5, 1.5] is invalid: "
+            "allowed fractions in [-1, 1]",
+        ),
+        (
+            "{fuzzy_slope_per_axis: {x3: [0.0, 1.0]}}",
+            "uncertainty.fuzzy_slope_per_axis.x3 = [0.0, 1.0] is invalid: "
+            "allowed an axis of controller.fuzzy.axes: x1, x2",
+        ),
+        (
             "{burr_height: [0.5]}",
             "uncertainty.burr_height = [0.5] is invalid: allowed a range "
             "[low, high] of two finite numbers",
@@ -135,4 +145,20 @@ def test_a_slope_range_of_one_value_leaves_the_slope_at_the_learned_one(
     assert "slope_x2" not in text
     assert box_certificate._does_not_prove(left_out[1:]) == (
         box_certificate.DOES_NOT_PROVE
+    )
+
+
+def test_a_slope_range_per_axis_overrides_the_others(monkeypatch):
+    op, points = _op(
+        "uncertainty: {fuzzy_slope: [0.0, 1.0], "
+        "fuzzy_slope_per_axis: {x2: [0.05, 1.0]}}",
+        [100.0, 200.0],
+    )
+    monkeypatch.setattr(box_certificate, "_fuzzy_point", lambda op: points)
+    box, _ = box_certificate._select_box(box_certificate._box(op), None)
+    box = {p["key"]: p for p in box}
+    max_slope = op.scenario.controller.fuzzy.max_slope
+    assert box["slope_x1"]["range"] == [0.0, pytest.approx(max_slope)]
+    assert box["slope_x2"]["range"] == pytest.approx(
+        [0.05 * max_slope, max_slope]
     )
