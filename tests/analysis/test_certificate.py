@@ -750,18 +750,24 @@ def _curved_box(constant):
     return maps_at, box, maps
 
 
-def test_a_time_varying_parameter_is_cut_into_pieces_until_its_chords_fit():
+def _with_room(maps_at, box, maps, axes):
+    """:func:`_common_with_room` of the family on ``axes``, the cell not
+    to be halved."""
     from deburr_drake.analysis.box_certificate import (
         _common_with_room,
         _family,
     )
 
-    maps_at, box, maps = _curved_box(constant=False)
-    family, names = _family(maps_at, box, maps, [0], lambda m: None)
+    family, names = _family(maps_at, box, maps, axes, lambda m: None)
     options = ("Clarabel", 1e-2, 0, {})
-    cert, error, axes, family, names = _common_with_room(
-        maps_at, box, maps, ([0], family, names), options, False, print
+    return _common_with_room(
+        maps_at, box, maps, (axes, family, names), options, False, print
     )
+
+
+def test_a_time_varying_parameter_is_cut_into_pieces_until_its_chords_fit():
+    maps_at, box, maps = _curved_box(constant=False)
+    cert, error, axes, family, names = _with_room(maps_at, box, maps, [0])
     assert cert.status == "certified" and "status" not in error
     # Four pieces: a vertex at each of their five ends.
     assert box[0]["nodes"] == [-1.0, -0.5, 0.0, 0.5, 1.0]
@@ -773,17 +779,8 @@ def test_a_time_varying_parameter_is_cut_into_pieces_until_its_chords_fit():
 
 
 def test_a_constant_is_not_cut_into_pieces_its_cell_is_halved():
-    from deburr_drake.analysis.box_certificate import (
-        _common_with_room,
-        _family,
-    )
-
     maps_at, box, maps = _curved_box(constant=True)
-    family, names = _family(maps_at, box, maps, [0], lambda m: None)
-    options = ("Clarabel", 1e-2, 0, {})
-    cert, error, _, _, _ = _common_with_room(
-        maps_at, box, maps, ([0], family, names), options, False, print
-    )
+    cert, error, _, _, _ = _with_room(maps_at, box, maps, [0])
     assert error["status"] == "inconclusive" and "nodes" not in box[0]
 
 
@@ -1022,11 +1019,6 @@ def test_a_program_started_from_the_inequalities_that_bound_needs_one_round():
 
 
 def test_a_curvature_that_alone_keeps_the_rest_from_fitting_is_cut():
-    from deburr_drake.analysis.box_certificate import (
-        _common_with_room,
-        _family,
-    )
-
     # Both maps decay at 0.95 at their corners; the time-varying "a" is
     # curved by 0.03, the constant "c" by 0.04 (the most): 1.02 in all,
     # but without a's curvature the rest fits, so "a" is cut in two
@@ -1061,11 +1053,7 @@ def test_a_curvature_that_alone_keeps_the_rest_from_fitting_is_cut():
         "curvatures": [[A0 - 0.5 * (lo + hi)] for lo, hi in ends],
         "labels": ["x", "y"],
     }
-    family, names = _family(maps_at, box, maps, [0, 1], lambda m: None)
-    options = ("Clarabel", 1e-2, 0, {})
-    cert, error, _, _, _ = _common_with_room(
-        maps_at, box, maps, ([0, 1], family, names), options, False, print
-    )
+    cert, error, _, _, _ = _with_room(maps_at, box, maps, [0, 1])
     assert box[0]["nodes"] == [-1.0, 0.0, 1.0] and "nodes" not in box[1]
     assert cert.status == "certified" and "status" not in error
     assert error["decay_rate_with_model_error"] == pytest.approx(
