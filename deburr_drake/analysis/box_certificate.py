@@ -727,7 +727,8 @@ def _schedule_left_out(box, maps, axes, k) -> List:
     left_out = []
     for j, (q, (a, b)) in enumerate(zip(box, maps["ends"])):
         if j != k:
-            Es = list(maps["curvatures"][j])
+            # One piece at a time: the worst one's chord counts.
+            Es = [tuple(maps["curvatures"][j])]
             if j not in axes:
                 Es.append(0.5 * (b - a))
             left_out.append((q["name"], Es))

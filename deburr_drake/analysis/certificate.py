@@ -1220,7 +1220,9 @@ def check_rate_bounded(
     any P within ``step`` of it (a ratio of convex combinations is at most
     the largest ratio of their terms), added to the rate; ``left_out``
     [(name, [E, ...])]: what other parameters' corners leave out, each E
-    bounded likewise over every cell, added too."""
+    bounded likewise over every cell, added too (an E that is a tuple:
+    alternatives, of which one holds at a time, the worst added: a
+    parameter's pieces)."""
     thetas = np.asarray(thetas, float)
     Ps = [0.5 * (P + P.T) for P in Ps]
     eigs = [np.linalg.eigvalsh(P) for P in Ps]
@@ -1245,7 +1247,13 @@ def check_rate_bounded(
     errors = []
     if positive:
         errors = [
-            {"parameter": name, "p_norm": sum(bound(E) for E in Es)}
+            {
+                "parameter": name,
+                "p_norm": sum(
+                    max(map(bound, E)) if isinstance(E, tuple) else bound(E)
+                    for E in Es
+                ),
+            }
             for name, Es in (left_out or [])
         ]
     total = rate + miss + sum(e["p_norm"] for e in errors)
@@ -1339,10 +1347,13 @@ def _reduced_schedule(maps, mids, labels, left_out):
     it = iter(reduced.maps)
     family = [[next(it) for _ in node] for node in nodes]
     mid_maps = [[next(it) for _ in cell] for cell in cells] or None
-    left_out = [
-        (name, [reduced.transform(E) for E in Es])
-        for name, Es in (left_out or [])
-    ]
+
+    def transform(E):
+        if isinstance(E, tuple):
+            return tuple(map(reduced.transform, E))
+        return reduced.transform(E)
+
+    left_out = [(name, list(map(transform, Es))) for name, Es in left_out or []]
     return reduced, family, mid_maps, left_out
 
 

@@ -1176,3 +1176,21 @@ def test_the_summary_claims_a_proof_only_of_a_certified_box(status, stop, said):
     lines = certificate_summary(result).splitlines()
     assert f"{said}the loop is stable" in lines
     assert "  does not prove: loss of contact" in lines
+
+
+def test_a_schedule_counts_the_worst_of_alternatives_and_the_sum_of_the_rest():
+    from deburr_drake.analysis.certificate import check_rate_bounded
+
+    A = 0.5 * np.eye(2)
+    small, large = 0.1 * np.eye(2), 0.2 * np.eye(2)
+
+    def left(entries):
+        check = check_rate_bounded(
+            [A, A], [0.0, 1.0], 0.1, [np.eye(2)] * 2, left_out=entries
+        )
+        return check["model_error"][0]["p_norm"]
+
+    # A parameter's pieces hold one at a time; its half-range adds.
+    assert left([("p", [(small, large)])]) == pytest.approx(0.2)
+    assert left([("p", [small, large])]) == pytest.approx(0.3)
+    assert left([("p", [(small, large), small])]) == pytest.approx(0.3)
