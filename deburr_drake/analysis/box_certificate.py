@@ -1336,12 +1336,15 @@ def _search(grid, trier) -> Tuple[List[Dict], str]:
     return results, "search_ended"
 
 
-def _add_switching(result: Dict, results: List[Dict], maps_at, say) -> None:
+def _add_switching(
+    result: Dict, results: List[Dict], maps_at, say, rate_bounded=None
+) -> None:
     """``result`` (not certified) with ``switching``: the growth found
     under switching in the cell that decides (none when a map there is
     unstable by itself: that decides already); an inconclusive cell in
     which the loop grows is not certified, unless what grows is a switch
-    of the slope its schedule claimed only at a bounded rate."""
+    of a slope claimed only at a bounded rate (``rate_bounded``, by name;
+    None: the slope the cell's schedule claimed)."""
     cell = results[-1]
     if result["status"] == "certified" or not cell.get("_stable"):
         return
@@ -1354,12 +1357,15 @@ def _add_switching(result: Dict, results: List[Dict], maps_at, say) -> None:
     record["time_s"] = time.perf_counter() - start
     say(record["text"])
     result["switching"] = record
-    # A slope scheduled was claimed only at its rate bound, which a
-    # switch of it breaks: that claim stays open.
-    scheduled = [
-        p["name"] for p in cell["_cell"] if p["key"] == cell.get("scheduled")
-    ]
-    refutes = not set(scheduled) & set(record["switched"])
+    # A slope claimed only at its rate bound is not refuted by a switch
+    # of it, which breaks that bound: that claim stays open.
+    if rate_bounded is None:
+        rate_bounded = [
+            p["name"]
+            for p in cell["_cell"]
+            if p["key"] == cell.get("scheduled")
+        ]
+    refutes = not set(rate_bounded) & set(record["switched"])
     if record["growth_per_period"] > 1.0 + CHECK_MARGIN and refutes:
         result["status"] = "not_certified"
         result["breaking_reason"] = record["text"]
@@ -1589,20 +1595,16 @@ def _out_of_time(op, box, cell, maps_at, max_time, say) -> Dict:
         "operating_point": op.summary(),
         "box": [{k: p[k] for k in _BOX_FIELDS if k in p} for p in box],
     }
-    cell = [{**p} for p in cell]
+    # The cell's schedule was not reached or not finished: every moving
+    # slope may still be claimed at its rate bound.
     moving = [
         p["name"] for p in cell if p["field"] is None and not p.get("constant")
     ]
-    first = {"_cell": cell, "_stable": True, "scheduled": None}
+    first = {"_cell": cell, "_stable": True}
     first["labels"] = _labels(maps_at.frozen({}))
-    _add_switching(result, [first], maps_at, say)
-    record = result.get("switching")
-    if record:
-        if set(moving) & set(record["switched"]):
-            # What grows is a switch of a slope that moves at a bounded
-            # rate: a schedule of it may still certify the box.
-            result["status"] = "inconclusive"
-        result["breaking_reason"] = f"{timed}; {record['text']}"
+    _add_switching(result, [first], maps_at, say, rate_bounded=moving)
+    if "switching" in result:
+        result["breaking_reason"] = f"{timed}; {result['switching']['text']}"
     return result
 
 

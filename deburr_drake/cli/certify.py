@@ -92,9 +92,9 @@ def _certify(args) -> int:
         print(analysis.certificate_summary(result))
     else:
         (out / "maps.npz").unlink(missing_ok=True)  # not this run's
-    print(f"\nwrote {path}")
-    if result["stop_reason"] in ("interrupted", "time_limit"):
+        # No cell finished: no summary, only why.
         print(result["breaking_reason"])
+    print(f"\nwrote {path}")
     if result["stop_reason"] == "interrupted":
         return _interrupted_exit_code(received)
     return 0
