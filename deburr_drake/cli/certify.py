@@ -12,8 +12,9 @@ from deburr_drake.cli.common import (
     _sigterm_as_interrupt,
 )
 
-#: The search's default time limit (s): paper_6dof's slope schedule has
-#: run for 30 min without an answer, and a command should end by itself.
+#: The search's default time limit (s): a slope schedule's program can
+#: run for tens of minutes without an answer, and a command should end
+#: by itself.
 MAX_TIME = 1800.0
 
 #: What ``certify`` writes into its output directory.
